@@ -1,0 +1,69 @@
+//! Command-line interface: parses arguments and dispatches to one module per subcommand.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+pub mod analyze;
+pub mod centroid;
+pub mod frf;
+pub mod merge;
+pub mod render;
+pub mod study;
+pub mod upsample;
+
+/// Vision-based vibration and modal measurement: Monte Carlo studies of motion blur and
+/// analysis of camera + accelerometer recordings, running the firmware-core code.
+#[derive(Debug, Parser)]
+#[command(name = "host-harness", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a Monte Carlo study (grandstand or cantilever) and write summary, realizations,
+    /// FRF bands and plots.
+    Study(study::Args),
+    /// Combine the outputs of `study --shard K/N` runs into one study output.
+    Merge(merge::Args),
+    /// Centroid of the thresholded target in PNG/TIFF frames; CSV on stdout.
+    Centroid(centroid::Args),
+    /// H1 frequency response and coherence of two CSV columns (streaming Welch).
+    Frf(frf::Args),
+    /// Fourier upsampling of a CSV column from one rate to another.
+    Upsample(upsample::Args),
+    /// Analyse a real recording: image sequence + accelerometer CSV -> FRFs and modes.
+    Analyze(analyze::Args),
+    /// Write PNG frames of the simulated target, sharp and blurred.
+    Render(render::Args),
+}
+
+/// Runs the command line; the error is returned to `main` for the exit code.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Study(a) => study::run(a),
+        Command::Merge(a) => merge::run(a),
+        Command::Centroid(a) => centroid::run(a),
+        Command::Frf(a) => frf::run(a),
+        Command::Upsample(a) => upsample::run(a),
+        Command::Analyze(a) => analyze::run(a),
+        Command::Render(a) => render::run(a),
+    }
+}
+
+/// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            if e.chain().any(|c| c.is::<crate::BadInput>()) {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+    }
+}

@@ -1,0 +1,39 @@
+//! # host-harness
+//!
+//! The `std` side of the toolkit: Monte Carlo studies that simulate the whole vision-based
+//! vibration measurement (structure, excitation, transducers, camera image formation with
+//! motion blur) and push the simulated frames and signals **through `firmware-core` itself**,
+//! plus command-line tools that run the same firmware code on real recordings.
+//!
+//! Physics is kept apart from plumbing:
+//!
+//! | module | what |
+//! |---|---|
+//! | [`model`] | structures (modal models) and excitations, exact discretisation |
+//! | [`transducer`] | load cell, laser and accelerometer noise models |
+//! | [`imaging`] | camera image formation: EPSA translation, motion blur, lens, noise |
+//! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards |
+//! | [`stats`] | means, standard deviations, percentiles, histograms |
+//! | [`report`] | CSV rows, tables and plots (pure writers) |
+//! | [`csvio`] | reading numeric CSV columns with errors naming row and column |
+//! | [`cli`] | argument parsing and the subcommands |
+
+pub mod cli;
+pub mod csvio;
+pub mod imaging;
+pub mod model;
+pub mod report;
+pub mod stats;
+pub mod study;
+pub mod transducer;
+
+/// An error caused by the user's input (a file, a field, a flag value). The binary exits with
+/// code 2 when the error chain contains one; other failures exit with 1.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BadInput(pub String);
+
+/// Shorthand to build an [`anyhow::Error`] carrying [`BadInput`].
+pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(BadInput(msg.into()))
+}
