@@ -4,6 +4,11 @@
 #[allow(dead_code)]
 mod util;
 
+mod analyze;
+mod centroid;
+mod signal;
+mod study;
+
 #[test]
 fn help_lists_every_subcommand() {
     let out = util::harness(&["--help"]);
