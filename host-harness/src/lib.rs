@@ -14,7 +14,8 @@
 //! | [`imaging`] | camera image formation: EPSA translation, motion blur, lens, noise |
 //! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
-//! | [`report`] | CSV rows, tables and plots (pure writers) |
+//! | [`report`] | CSV rows and the printed table (pure writers) |
+//! | [`plots`] | PNG and SVG figures of study results |
 //! | [`csvio`] | reading numeric CSV columns with errors naming row and column |
 //! | [`cli`] | argument parsing and the subcommands |
 
@@ -22,6 +23,7 @@ pub mod cli;
 pub mod csvio;
 pub mod imaging;
 pub mod model;
+pub mod plots;
 pub mod report;
 pub mod stats;
 pub mod study;
