@@ -750,3 +750,17 @@ mod tests {
         assert!(format!("{e}").contains("line 1"));
     }
 }
+
+mod cantilever;
+mod grandstand;
+
+pub use cantilever::Cantilever;
+pub use grandstand::Grandstand;
+
+/// The scenario a configuration describes.
+pub fn scenario_for(cfg: &StudyConfig) -> anyhow::Result<Box<dyn Scenario>> {
+    Ok(match cfg.preset {
+        Preset::Grandstand => Box::new(Grandstand::new(cfg)?),
+        Preset::Cantilever => Box::new(Cantilever::new(cfg)?),
+    })
+}

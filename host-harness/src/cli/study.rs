@@ -1,10 +1,164 @@
-//! `host-harness study` (under construction).
+//! `host-harness study`: run a Monte Carlo study and write its outputs.
 
-/// Arguments of `host-harness study`.
+use crate::study::{self, Execution, Preset, Shard, StudyConfig};
+use anyhow::Context as _;
+use std::path::PathBuf;
+
+/// Arguments of `host-harness study`. Without arguments: the grandstand preset at a run count
+/// that finishes in about a minute on two cores.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scenario preset (ignored fields come from it).
+    #[arg(long, value_enum, conflicts_with = "config")]
+    pub preset: Option<Preset>,
+    /// Study file (TOML) with the fields of the resolved `config.toml`; flags override it.
+    #[arg(long, value_name = "FILE.toml")]
+    pub config: Option<PathBuf>,
+    /// Number of Monte Carlo runs (the paper used 1000).
+    #[arg(long)]
+    pub runs: Option<u64>,
+    /// Exposure times in ms, comma separated (grandstand default 40,60,...,180).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub exposures_ms: Option<Vec<f64>>,
+    /// Master seed; the same seed gives identical numbers whatever the thread count.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Method-uncertainty variant: modal parameters fixed at their means, only excitation and
+    /// transducer noise vary (paper section 4.4).
+    #[arg(long)]
+    pub fixed_structure: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Output directory (default: out/<preset>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Continue an interrupted study in --out: runs already in its runs.jsonl are kept.
+    #[arg(long)]
+    pub resume: bool,
+    /// Compute only shard K of N (runs r with r mod N = K-1); combine with `host-harness merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Do not write the PNG/SVG figures.
+    #[arg(long)]
+    pub no_plots: bool,
+}
+
+/// Resolves the configuration from preset, study file and flags.
+pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
+    let mut cfg = match &args.config {
+        Some(p) => StudyConfig::from_toml_file(p)?,
+        None => StudyConfig::preset(args.preset.unwrap_or(Preset::Grandstand)),
+    };
+    if let Some(r) = args.runs {
+        cfg.runs = r;
+    }
+    if let Some(e) = &args.exposures_ms {
+        cfg.exposures_ms = e.clone();
+    }
+    if let Some(s) = args.seed {
+        cfg.seed = s;
+    }
+    if args.fixed_structure {
+        cfg.fixed_structure = true;
+    }
+    cfg.validate()?;
+    Ok(cfg)
+}
 
 /// Runs `host-harness study`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`study` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let cfg = resolve(&args)?;
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::ALL,
+    };
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(match cfg.preset {
+            Preset::Grandstand => "grandstand",
+            Preset::Cantilever => "cantilever",
+        })
+    });
+    let scenario = study::scenario_for(&cfg)?;
+    eprintln!(
+        "{} study: {} runs x {} exposures ({} ms), seed {}{}{} -> {}",
+        scenario.name(),
+        cfg.runs,
+        cfg.exposures_ms.len(),
+        cfg.exposures_ms
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+        cfg.seed,
+        if cfg.fixed_structure {
+            ", fixed structure"
+        } else {
+            ""
+        },
+        if shard == Shard::ALL {
+            String::new()
+        } else {
+            format!(", shard {}/{}", shard.index, shard.count)
+        },
+        out.display()
+    );
+    let started = std::time::Instant::now();
+    let exec = Execution {
+        out: out.clone(),
+        resume: args.resume,
+        threads: args.threads,
+        shard,
+        progress: true,
+    };
+    let records = study::execute(&cfg, scenario.as_ref(), &exec)?;
+    let elapsed = started.elapsed();
+    finish(&cfg, scenario.as_ref(), &records, &out, !args.no_plots)?;
+    eprintln!("{} runs in {:.1} s", records.len(), elapsed.as_secs_f64());
+    if shard != Shard::ALL {
+        eprintln!(
+            "this is shard {}/{}: combine all shard directories with `host-harness merge DIR... --out DIR`",
+            shard.index, shard.count
+        );
+    }
+    Ok(())
+}
+
+/// Aggregates, writes CSV files and plots, prints the table. Shared by `study` and `merge`.
+pub fn finish(
+    cfg: &StudyConfig,
+    scenario: &dyn study::Scenario,
+    records: &[study::RunRecord],
+    out: &std::path::Path,
+    plots: bool,
+) -> anyhow::Result<()> {
+    let outputs = study::aggregate(cfg, scenario, records)?;
+    let mut written = study::write_outputs(out, scenario, &outputs)?;
+    if plots {
+        let p = crate::plots::StudyPlots {
+            title: scenario.name(),
+            amplitude_unit: scenario.amplitude_unit(),
+            summary: &outputs.summary,
+            realizations: &outputs.realizations,
+            frf_band: &outputs.frf_band,
+        };
+        written.extend(
+            crate::plots::write_study_plots(out, &p)
+                .with_context(|| format!("cannot write the figures in {}", out.display()))?,
+        );
+    }
+    println!(
+        "{}",
+        crate::report::table(&outputs.summary, scenario.amplitude_unit())
+    );
+    for (e, lost, frames, failed) in study::lost_by_exposure(&outputs) {
+        println!(
+            "exposure {e} ms: {lost} of {frames} frames lost (filled by interpolation), {failed} failed runs (> 5 % lost, left out)"
+        );
+    }
+    for n in scenario.notes() {
+        println!("note: {n}");
+    }
+    println!("wrote {} files in {}", written.len() + 2, out.display());
+    Ok(())
 }

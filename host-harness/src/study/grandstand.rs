@@ -1,0 +1,33 @@
+//! The grandstand scenario (being written).
+
+use super::{RunRecord, Scenario, StudyConfig};
+use rand_chacha::ChaCha8Rng;
+
+/// The grandstand scenario.
+#[derive(Debug)]
+pub struct Grandstand {}
+
+impl Grandstand {
+    /// Builds the scenario from a resolved configuration.
+    pub fn new(_cfg: &StudyConfig) -> anyhow::Result<Self> {
+        anyhow::bail!("the grandstand scenario is not implemented yet")
+    }
+}
+
+impl Scenario for Grandstand {
+    fn name(&self) -> &'static str {
+        "grandstand"
+    }
+    fn amplitude_unit(&self) -> &'static str {
+        ""
+    }
+    fn bands(&self) -> Vec<(f64, f64)> {
+        Vec::new()
+    }
+    fn frf_freqs(&self) -> Vec<f64> {
+        Vec::new()
+    }
+    fn run(&self, _run: u64, _rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord> {
+        anyhow::bail!("not implemented")
+    }
+}
