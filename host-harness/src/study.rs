@@ -520,7 +520,7 @@ pub fn aggregate(
             let v = &r.vision[ei];
             lost.push((r.run, exp, v.lost_frames, v.frames, v.failed));
         }
-        for m in 0..bands.len() {
+        for (m, nat_m) in nat.iter().enumerate() {
             let tr: Vec<PeakRecord> = records
                 .iter()
                 .filter_map(|r| peaks_of(&r.transducer, m))
@@ -541,7 +541,7 @@ pub fn aggregate(
                     sigma_f_hz: stats::std_dev(&f).unwrap_or(f64::NAN),
                     mu_a: stats::mean(&a).unwrap_or(f64::NAN),
                     sigma_a: stats::std_dev(&a).unwrap_or(f64::NAN),
-                    e2pr: exp / 1000.0 * nat[m],
+                    e2pr: exp / 1000.0 * nat_m,
                     chi_mu: None,
                     chi_sigma: None,
                 }
