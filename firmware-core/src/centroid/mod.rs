@@ -57,7 +57,7 @@ mod tests;
 use core::fmt;
 
 pub use kernel::{
-    row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, RowSums, BLOCK, LANES,
+    row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, RowSums, BLOCK,
 };
 pub use multi::{BoundingBox, MultiCentroider, Target};
 

@@ -421,6 +421,30 @@ fn accumulators_hold_the_largest_frame() {
     // The row kernel agrees with that closed form on a full row.
     let full = vec![u16::MAX; MAX_DIM];
     assert_eq!(row_weighted_u16(&full, 0), row);
+    let full8 = vec![u8::MAX; MAX_DIM];
+    let n32 = n as u32;
+    let binary = RowSums {
+        pixels: n32,
+        weight: n32,
+        sum_x: n * (n - 1) / 2,
+        max: 255,
+    };
+    assert_eq!(row_binary_u8(&full8, 0), binary);
+    assert_eq!(
+        row_binary_u16(&full, 0),
+        RowSums {
+            max: 65535,
+            ..binary
+        }
+    );
+    assert_eq!(
+        row_weighted_u8(&full8, 0),
+        RowSums {
+            weight: n32 * 255,
+            sum_x: 255 * n * (n - 1) / 2,
+            ..binary
+        }
+    );
     let mut m = Moments::default();
     for y in 0..n {
         m.add_row(&row, 0, y);
