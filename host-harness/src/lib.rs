@@ -19,11 +19,13 @@
 //! | [`csvio`] | reading numeric CSV columns with errors naming row and column |
 //! | [`cli`] | argument parsing and the subcommands |
 
+pub mod analysis;
 pub mod cli;
 pub mod csvio;
 pub mod imaging;
 pub mod model;
 pub mod plots;
+pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;

@@ -1,0 +1,1 @@
+//! Synthetic recordings (being written).
