@@ -1,1 +1,1183 @@
-//! (under construction)
+//! Streaming Welch estimator of the H1 frequency response and the coherence (SPEC 2.4).
+//!
+//! Samples of the input channel `x` (force, base acceleration) and the output channel `y`
+//! (displacement, tip acceleration) are pushed as they arrive, in chunks of any size. The
+//! estimator keeps one segment of each channel and the accumulated spectra
+//!
+//! ```text
+//! Pxx[k] = sum_s |X_s[k]|^2      Pyy[k] = sum_s |Y_s[k]|^2      Pxy[k] = sum_s conj(X_s[k]) Y_s[k]
+//! ```
+//!
+//! over the segments `s`, never the whole record. Per segment of `nperseg` samples the
+//! estimator subtracts the segment mean (detrend [`Detrend::Constant`], optional), multiplies by
+//! the window (periodic Hann, periodic Hamming or rectangular, as `scipy.signal.get_window`),
+//! zero-pads to `nfft` and transforms with the exact arbitrary-length [`crate::dft`].
+//! Then
+//!
+//! ```text
+//! H1[k] = Pxy[k] / Pxx[k]        coherence[k] = |Pxy[k]|^2 / (Pxx[k] Pyy[k])
+//! ```
+//!
+//! at the bin frequencies `f_k = k fs / nfft`, `k = 0 ..= nfft / 2`. This is exactly what
+//! `scipy.signal.csd` / `scipy.signal.welch` compute with the same window, `nperseg`,
+//! `noverlap`, `nfft` and `detrend` and default arguments otherwise (`average='mean'`, no
+//! boundary extension, no padding of the last segment): segments start at sample 0 and every
+//! `nperseg - noverlap` samples after it, and only complete segments are used (the trailing
+//! samples wait in the buffer for more data). scipy's density scaling and one-sided doubling are
+//! common factors of all three spectra and cancel in H1 and the coherence; scipy's convention
+//! `Pxy = conj(X) Y` is used, so H1 is the transfer function from `x` to `y`.
+//!
+//! # Numerics
+//! Both channels go through **one** complex DFT as `x + i y`; the two spectra are separated by
+//! Hermitian symmetry (`X[k] = (Z[k] + conj Z[n-k]) / 2`, `Y[k] = (Z[k] - conj Z[n-k]) / 2i`),
+//! which halves the work. Before the transform each channel is scaled by a power of two so
+//! that its largest sample lies in `[0.5, 1)`: the scaling is exact, and it keeps a small channel
+//! (displacement in metres) from drowning in the rounding errors of a large one (force in
+//! newtons) that shares the transform. The spectra are accumulated in `f32`; H1 and the
+//! coherence are formed in `f64` on read-out, so they cannot overflow.
+//!
+//! # Robustness
+//! Nothing panics and no accessor returns NaN. A segment that contains a non-finite sample, or
+//! one whose magnitude exceeds [`MAX_SAMPLE_ABS`] (which could overflow the `f32` sums), is not
+//! accumulated: it is counted by [`WelchH1::skipped_segments`]. Before the first accumulated
+//! segment H1 and the coherence are "not available" (`None` / [`WelchError::NoSegments`]).
+//! At a bin where `Pxx == 0` (an input with no energy there) H1 is reported as 0 and the
+//! coherence as 0; where `Pyy == 0` the coherence is 0.
+//!
+//! # Memory
+//! The capacities are const generics: `SEG >= nperseg` samples per channel, `NFFT >= nfft`
+//! (the transform buffer and the accumulators), `SCRATCH >=` [`crate::dft::scratch_len`]`(nfft)`
+//! (zero for powers of two). The state holds the window and the two segment buffers
+//! (`3 SEG` `f32`), the transform buffer (`NFFT` complex), the accumulators packed in a
+//! "half-complex" layout (`2 NFFT` `f32`, see [`WelchH1`]) and the DFT scratch (`SCRATCH`
+//! complex): about `12 SEG + 16 NFFT + 8 SCRATCH` bytes, e.g. 56 KiB for
+//! `WelchH1<2048, 2048, 0>`. Large instances belong in a `static` (MCU) or a `Box` (host).
+//!
+//! ```
+//! use firmware_core::spectrum::{Detrend, Window, WelchConfig, WelchH1};
+//! let config = WelchConfig {
+//!     fs_hz: 100.0,
+//!     nperseg: 64,
+//!     noverlap: 32,
+//!     nfft: 64,
+//!     window: Window::Hann,
+//!     detrend: Detrend::Constant,
+//! };
+//! let mut welch = WelchH1::<64, 64, 0>::try_new(config).unwrap();
+//! let x: Vec<f32> = (0..640).map(|i| libm::sinf(0.37 * i as f32) + libm::cosf(1.3 * i as f32)).collect();
+//! let y: Vec<f32> = x.iter().map(|v| 2.0 * v).collect();
+//! welch.push(&x, &y).unwrap();
+//! assert_eq!(welch.segments(), 19);
+//! let h = welch.h1(10).unwrap();
+//! assert!((h.re - 2.0).abs() < 1e-5 && h.im.abs() < 1e-5);
+//! ```
+
+use crate::dft::{self, Dft, DftError, Direction};
+use crate::Complex32;
+use core::fmt;
+
+/// Largest sample magnitude that is accumulated. A segment with a larger (or non-finite) sample
+/// is skipped, so that the `f32` spectra cannot overflow (|X|^2 stays below about
+/// `(nperseg 1e9)^2`, far from `f32::MAX` for any practical number of segments).
+pub const MAX_SAMPLE_ABS: f32 = 1.0e9;
+
+/// Window applied to each segment. Periodic ("DFT-even") windows, as scipy's default
+/// `scipy.signal.get_window(name, nperseg)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Window {
+    /// Periodic Hann: `w[n] = 0.5 - 0.5 cos(2 pi n / nperseg)` (scipy `'hann'`).
+    #[default]
+    Hann,
+    /// Periodic Hamming: `w[n] = 0.54 - 0.46 cos(2 pi n / nperseg)` (scipy `'hamming'`).
+    Hamming,
+    /// Rectangular, all ones (scipy `'boxcar'`).
+    Rect,
+}
+
+impl Window {
+    /// Value of the window of length `len` at sample `n` (`0 <= n < len`; other `n` give the
+    /// periodic continuation). Computed in `f64` and rounded once, so it matches scipy to the
+    /// last bit of `f32` in practice.
+    pub fn value(self, n: usize, len: usize) -> f32 {
+        let c = || {
+            if len == 0 {
+                1.0
+            } else {
+                libm::cos(2.0 * core::f64::consts::PI * (n % len) as f64 / len as f64)
+            }
+        };
+        match self {
+            Window::Hann => (0.5 - 0.5 * c()) as f32,
+            Window::Hamming => (0.54 - 0.46 * c()) as f32,
+            Window::Rect => 1.0,
+        }
+    }
+}
+
+/// Detrending applied to each segment before windowing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Detrend {
+    /// Subtract the segment mean (scipy `detrend='constant'`, its default).
+    #[default]
+    Constant,
+    /// Use the samples as they are (scipy `detrend=False`).
+    None,
+}
+
+/// Settings of a Welch estimate. Checked once by [`WelchH1::try_new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WelchConfig {
+    /// Sampling rate of both channels, in Hz. Finite and > 0; only used for the bin
+    /// frequencies.
+    pub fs_hz: f32,
+    /// Samples per segment, `1 ..= SEG`.
+    pub nperseg: usize,
+    /// Samples shared by consecutive segments, `0 ..= nperseg - 1` (segments start every
+    /// `nperseg - noverlap` samples).
+    pub noverlap: usize,
+    /// Transform length (segment zero-padded to it), `nperseg ..= NFFT`, and a length that
+    /// [`crate::dft`] supports (any length whose odd part is small; all lengths up to 32768 and
+    /// every power of two up to 32768).
+    pub nfft: usize,
+    /// Segment window.
+    pub window: Window,
+    /// Segment detrending.
+    pub detrend: Detrend,
+}
+
+impl WelchConfig {
+    /// scipy's defaults for a record of `len` samples: Hann window, `nperseg = min(256, len)`,
+    /// `noverlap = nperseg / 2`, `nfft = nperseg`, constant detrend.
+    pub fn scipy_default(fs_hz: f32, len: usize) -> Self {
+        let nperseg = if len < 256 { len } else { 256 };
+        WelchConfig {
+            fs_hz,
+            nperseg,
+            noverlap: nperseg / 2,
+            nfft: nperseg,
+            window: Window::Hann,
+            detrend: Detrend::Constant,
+        }
+    }
+
+    /// Number of output bins, `nfft / 2 + 1` (DC to Nyquist, one-sided).
+    pub const fn bins(&self) -> usize {
+        self.nfft / 2 + 1
+    }
+
+    /// Bin spacing `fs / nfft`, in Hz.
+    pub fn df_hz(&self) -> f32 {
+        if self.nfft == 0 {
+            0.0
+        } else {
+            self.fs_hz / self.nfft as f32
+        }
+    }
+
+    /// Number of complete segments a record of `len` samples yields (what scipy averages).
+    pub const fn segments_in(&self, len: usize) -> usize {
+        if self.nperseg == 0 || self.noverlap >= self.nperseg || len < self.nperseg {
+            0
+        } else {
+            (len - self.nperseg) / (self.nperseg - self.noverlap) + 1
+        }
+    }
+}
+
+/// Why a configuration is rejected, or a call cannot be served.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum WelchError {
+    /// `fs_hz` is not finite or not positive.
+    SampleRate,
+    /// `nperseg` is 0 or larger than the segment capacity `SEG`.
+    SegmentLength {
+        /// Requested `nperseg`.
+        nperseg: usize,
+        /// Capacity `SEG` of the estimator.
+        capacity: usize,
+    },
+    /// `noverlap >= nperseg`.
+    Overlap {
+        /// Requested `noverlap`.
+        noverlap: usize,
+        /// Requested `nperseg`.
+        nperseg: usize,
+    },
+    /// `nfft < nperseg` or `nfft` larger than the transform capacity `NFFT`.
+    FftLength {
+        /// Requested `nfft`.
+        nfft: usize,
+        /// Requested `nperseg` (lower bound).
+        nperseg: usize,
+        /// Capacity `NFFT` of the estimator (upper bound).
+        capacity: usize,
+    },
+    /// The DFT of length `nfft` cannot be planned.
+    Dft(DftError),
+    /// The DFT of length `nfft` needs more scratch than the capacity `SCRATCH`.
+    Scratch {
+        /// Scratch values the transform needs ([`crate::dft::scratch_len`]).
+        needed: usize,
+        /// Capacity `SCRATCH` of the estimator.
+        capacity: usize,
+    },
+    /// [`WelchH1::push`] got chunks of different lengths for `x` and `y` (nothing was consumed).
+    ChunkLengths {
+        /// Length of the `x` chunk.
+        x: usize,
+        /// Length of the `y` chunk.
+        y: usize,
+    },
+    /// No segment has been accumulated yet: H1 and the coherence are not available.
+    NoSegments,
+}
+
+impl fmt::Display for WelchError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WelchError::SampleRate => write!(f, "sampling rate must be finite and positive"),
+            WelchError::SegmentLength { nperseg, capacity } => write!(
+                f,
+                "nperseg = {nperseg} is outside 1..={capacity} (the segment capacity)"
+            ),
+            WelchError::Overlap { noverlap, nperseg } => write!(
+                f,
+                "noverlap = {noverlap} must be smaller than nperseg = {nperseg}"
+            ),
+            WelchError::FftLength {
+                nfft,
+                nperseg,
+                capacity,
+            } => write!(
+                f,
+                "nfft = {nfft} is outside {nperseg}..={capacity} (nperseg ..= transform capacity)"
+            ),
+            WelchError::Dft(e) => write!(f, "nfft: {e}"),
+            WelchError::Scratch { needed, capacity } => write!(
+                f,
+                "the transform needs {needed} scratch values, the capacity is {capacity}"
+            ),
+            WelchError::ChunkLengths { x, y } => write!(
+                f,
+                "x and y chunks differ in length ({x} and {y} samples); nothing was consumed"
+            ),
+            WelchError::NoSegments => write!(f, "no complete segment has been accumulated yet"),
+        }
+    }
+}
+
+impl core::error::Error for WelchError {}
+
+impl From<DftError> for WelchError {
+    fn from(e: DftError) -> Self {
+        WelchError::Dft(e)
+    }
+}
+
+/// Scratch capacity to give [`WelchH1`] for transforms of length `nfft` (0 for powers of two;
+/// 0 also for unsupported lengths, which [`WelchH1::try_new`] rejects anyway). Usable in const
+/// context: `WelchH1<1111, 5000, { scratch_capacity(5000) }>`.
+pub const fn scratch_capacity(nfft: usize) -> usize {
+    match dft::scratch_len(nfft) {
+        Some(n) => n,
+        None => 0,
+    }
+}
+
+/// Accumulated (unscaled) spectra at one bin: sums over the segments of `|X|^2`, `|Y|^2` and
+/// `conj(X) Y`, with `X` and `Y` the DFTs of the detrended, windowed segments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sums {
+    /// Sum of `|X[k]|^2`.
+    pub pxx: f32,
+    /// Sum of `|Y[k]|^2`.
+    pub pyy: f32,
+    /// Sum of `conj(X[k]) Y[k]`.
+    pub pxy: Complex32,
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for Sums {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "Sums {{ pxx: {}, pyy: {}, pxy: ({}, {}) }}",
+            self.pxx,
+            self.pyy,
+            self.pxy.re,
+            self.pxy.im
+        )
+    }
+}
+
+/// Streaming Welch H1 estimator with capacities `SEG` (samples per segment), `NFFT` (transform
+/// length) and `SCRATCH` (DFT scratch values, see [`scratch_capacity`]).
+///
+/// Build it with [`try_new`](Self::try_new), feed it with [`push`](Self::push), read it with
+/// [`h1`](Self::h1), [`coherence`](Self::coherence), [`freq`](Self::freq) or the slice
+/// fillers. [`reset`](Self::reset) starts a new estimate with the same settings and
+/// [`reconfigure`](Self::reconfigure) with new ones, so one (boxed or static) instance can serve
+/// many records without being moved again.
+///
+/// The accumulators use a half-complex layout: `auto[k] = Pxx[k]` for `k <= nfft/2` and
+/// `auto[nfft - k] = Pyy[k]` for `0 < k < nfft/2`, likewise `cross[k] = Re Pxy[k]` and
+/// `cross[nfft - k] = Im Pxy[k]`; `Pyy` at DC and Nyquist live in two scalars and `Im Pxy` there
+/// is exactly zero (real signals). This stores the `2 nfft + 4` accumulated values in `2 NFFT`
+/// floats plus two.
+#[derive(Debug, Clone)]
+pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
+    config: WelchConfig,
+    dft: Dft,
+    window: [f32; SEG],
+    xseg: [f32; SEG],
+    yseg: [f32; SEG],
+    /// Samples currently held in `xseg`/`yseg`.
+    fill: usize,
+    work: [Complex32; NFFT],
+    scratch: [Complex32; SCRATCH],
+    auto: [f32; NFFT],
+    cross: [f32; NFFT],
+    pyy_dc: f32,
+    pyy_nyquist: f32,
+    segments: u32,
+    skipped: u32,
+}
+
+/// Logs the settings and counters, not the buffers.
+#[cfg(feature = "defmt")]
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> defmt::Format
+    for WelchH1<SEG, NFFT, SCRATCH>
+{
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "WelchH1 {{ config: {}, segments: {}, skipped: {}, pending: {} }}",
+            self.config,
+            self.segments,
+            self.skipped,
+            self.fill
+        )
+    }
+}
+
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFFT, SCRATCH> {
+    /// Checks `config` against the capacities and builds an empty estimator.
+    ///
+    /// Errors: [`WelchError::SampleRate`], [`WelchError::SegmentLength`],
+    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`],
+    /// [`WelchError::Scratch`].
+    pub fn try_new(config: WelchConfig) -> Result<Self, WelchError> {
+        let dft = Self::check(&config)?;
+        let mut s = WelchH1 {
+            config,
+            dft,
+            window: [0.0; SEG],
+            xseg: [0.0; SEG],
+            yseg: [0.0; SEG],
+            fill: 0,
+            work: [Complex32::new(0.0, 0.0); NFFT],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+            auto: [0.0; NFFT],
+            cross: [0.0; NFFT],
+            pyy_dc: 0.0,
+            pyy_nyquist: 0.0,
+            segments: 0,
+            skipped: 0,
+        };
+        s.fill_window();
+        Ok(s)
+    }
+
+    /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
+    /// estimate. On error the estimator is left unchanged.
+    pub fn reconfigure(&mut self, config: WelchConfig) -> Result<(), WelchError> {
+        self.dft = Self::check(&config)?;
+        self.config = config;
+        self.fill_window();
+        self.reset();
+        Ok(())
+    }
+
+    /// Forgets all pushed samples and accumulated segments; keeps the settings.
+    pub fn reset(&mut self) {
+        self.fill = 0;
+        self.auto.iter_mut().for_each(|v| *v = 0.0);
+        self.cross.iter_mut().for_each(|v| *v = 0.0);
+        self.pyy_dc = 0.0;
+        self.pyy_nyquist = 0.0;
+        self.segments = 0;
+        self.skipped = 0;
+    }
+
+    fn check(c: &WelchConfig) -> Result<Dft, WelchError> {
+        if !(c.fs_hz.is_finite() && c.fs_hz > 0.0) {
+            return Err(WelchError::SampleRate);
+        }
+        if c.nperseg == 0 || c.nperseg > SEG {
+            return Err(WelchError::SegmentLength {
+                nperseg: c.nperseg,
+                capacity: SEG,
+            });
+        }
+        if c.noverlap >= c.nperseg {
+            return Err(WelchError::Overlap {
+                noverlap: c.noverlap,
+                nperseg: c.nperseg,
+            });
+        }
+        if c.nfft < c.nperseg || c.nfft > NFFT {
+            return Err(WelchError::FftLength {
+                nfft: c.nfft,
+                nperseg: c.nperseg,
+                capacity: NFFT,
+            });
+        }
+        let dft = Dft::try_new(c.nfft)?;
+        if dft.scratch_len() > SCRATCH {
+            return Err(WelchError::Scratch {
+                needed: dft.scratch_len(),
+                capacity: SCRATCH,
+            });
+        }
+        Ok(dft)
+    }
+
+    fn fill_window(&mut self) {
+        let n = self.config.nperseg;
+        let w = self.config.window;
+        for (i, v) in self.window.iter_mut().enumerate() {
+            *v = if i < n { w.value(i, n) } else { 0.0 };
+        }
+    }
+
+    /// The settings in force.
+    pub fn config(&self) -> &WelchConfig {
+        &self.config
+    }
+
+    /// Number of output bins, `nfft / 2 + 1`.
+    pub fn bins(&self) -> usize {
+        self.config.bins()
+    }
+
+    /// Bin spacing `fs / nfft`, in Hz.
+    pub fn df_hz(&self) -> f32 {
+        self.config.df_hz()
+    }
+
+    /// Frequency of bin `k`, in Hz: `k * df_hz()` (in `f32`; the same formula
+    /// [`crate::peaks::pick`] uses). Meaningful for `k < bins()`.
+    pub fn freq(&self, k: usize) -> f32 {
+        k as f32 * self.df_hz()
+    }
+
+    /// Segments accumulated so far.
+    pub fn segments(&self) -> u32 {
+        self.segments
+    }
+
+    /// Complete segments that were not accumulated because they contained a non-finite sample
+    /// or one larger than [`MAX_SAMPLE_ABS`] in magnitude.
+    pub fn skipped_segments(&self) -> u32 {
+        self.skipped
+    }
+
+    /// Samples waiting in the segment buffer (always `< nperseg`).
+    pub fn pending(&self) -> usize {
+        self.fill
+    }
+
+    /// Pushes a chunk of samples of both channels (`x[i]` and `y[i]` taken at the same time).
+    /// Every time `nperseg` samples are buffered a segment is transformed and accumulated, and
+    /// the last `noverlap` samples are kept for the next one. The result does not depend on how
+    /// the record is cut into chunks: pushing it sample by sample, in random chunks or at once
+    /// gives bit-identical spectra.
+    ///
+    /// Errors: [`WelchError::ChunkLengths`] if `x.len() != y.len()`; then nothing is consumed.
+    pub fn push(&mut self, x: &[f32], y: &[f32]) -> Result<(), WelchError> {
+        if x.len() != y.len() {
+            return Err(WelchError::ChunkLengths {
+                x: x.len(),
+                y: y.len(),
+            });
+        }
+        let nperseg = self.config.nperseg;
+        let (mut x, mut y) = (x, y);
+        while !x.is_empty() {
+            let room = nperseg.saturating_sub(self.fill);
+            let take = room.min(x.len());
+            let (xh, xt) = x.split_at(take);
+            let (yh, yt) = y.split_at(take.min(y.len()));
+            if let (Some(xd), Some(yd)) = (
+                self.xseg.get_mut(self.fill..self.fill + take),
+                self.yseg.get_mut(self.fill..self.fill + take),
+            ) {
+                xd.copy_from_slice(xh);
+                yd.copy_from_slice(yh);
+            }
+            self.fill += take;
+            (x, y) = (xt, yt);
+            if self.fill >= nperseg {
+                self.process_segment();
+                let step = nperseg - self.config.noverlap;
+                if let (Some(xs), Some(ys)) =
+                    (self.xseg.get_mut(..nperseg), self.yseg.get_mut(..nperseg))
+                {
+                    xs.copy_within(step.., 0);
+                    ys.copy_within(step.., 0);
+                }
+                self.fill = self.config.noverlap;
+            }
+            if take == 0 && self.fill < nperseg {
+                // unreachable with a valid configuration; guarantees termination regardless
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Transforms the full segment in `xseg`/`yseg` and accumulates it.
+    fn process_segment(&mut self) {
+        let n = self.config.nperseg;
+        let nfft = self.config.nfft;
+        let (Some(xs), Some(ys), Some(w)) =
+            (self.xseg.get(..n), self.yseg.get(..n), self.window.get(..n))
+        else {
+            return;
+        };
+        let detrend = self.config.detrend == Detrend::Constant;
+        let (Some((mx, sx)), Some((my, sy))) = (prepare(xs, detrend), prepare(ys, detrend)) else {
+            self.skipped = self.skipped.saturating_add(1);
+            return;
+        };
+        let Some(work) = self.work.get_mut(..nfft) else {
+            return;
+        };
+        // z = (x - mean) * w / sx + i (y - mean) * w / sy, zero-padded to nfft
+        let (isx, isy) = (1.0 / sx, 1.0 / sy);
+        for (j, z) in work.iter_mut().enumerate() {
+            *z = match (xs.get(j), ys.get(j), w.get(j)) {
+                (Some(&a), Some(&b), Some(&wj)) => {
+                    Complex32::new((a - mx) * wj * isx, (b - my) * wj * isy)
+                }
+                _ => Complex32::new(0.0, 0.0),
+            };
+        }
+        if self
+            .dft
+            .process(work, &mut self.scratch, Direction::Forward)
+            .is_err()
+        {
+            return;
+        }
+        let bins = nfft / 2 + 1;
+        for k in 0..bins {
+            let zk = work.get(k).copied().unwrap_or_default();
+            let zn = work
+                .get((nfft - k) % nfft)
+                .copied()
+                .unwrap_or_default()
+                .conj();
+            // X = (Zk + conj Zn) / 2, Y = (Zk - conj Zn) / 2i, then undo the exact scalings
+            let xk = (zk + zn) * 0.5;
+            let d = zk - zn;
+            let yk = Complex32::new(d.im * 0.5, -d.re * 0.5);
+            let pxx = xk.norm_sqr() * sx * sx;
+            let pyy = yk.norm_sqr() * sy * sy;
+            let pxy = Complex32::new(
+                (xk.re * yk.re + xk.im * yk.im) * sx * sy,
+                (xk.re * yk.im - xk.im * yk.re) * sx * sy,
+            );
+            if let Some(a) = self.auto.get_mut(k) {
+                *a += pxx;
+            }
+            if let Some(c) = self.cross.get_mut(k) {
+                *c += pxy.re;
+            }
+            match mirror(k, nfft) {
+                Some(m) => {
+                    if let Some(a) = self.auto.get_mut(m) {
+                        *a += pyy;
+                    }
+                    if let Some(c) = self.cross.get_mut(m) {
+                        *c += pxy.im;
+                    }
+                }
+                None if k == 0 => self.pyy_dc += pyy,
+                None => self.pyy_nyquist += pyy,
+            }
+        }
+        self.segments = self.segments.saturating_add(1);
+    }
+
+    /// Accumulated spectra at bin `k` (`None` if `k >= bins()`). Divide by
+    /// [`segments`](Self::segments) for the mean over segments.
+    pub fn sums(&self, k: usize) -> Option<Sums> {
+        let nfft = self.config.nfft;
+        if k >= self.bins() {
+            return None;
+        }
+        let pxx = self.auto.get(k).copied()?;
+        let re = self.cross.get(k).copied()?;
+        let (pyy, im) = match mirror(k, nfft) {
+            Some(m) => (self.auto.get(m).copied()?, self.cross.get(m).copied()?),
+            None if k == 0 => (self.pyy_dc, 0.0),
+            None => (self.pyy_nyquist, 0.0),
+        };
+        Some(Sums {
+            pxx,
+            pyy,
+            pxy: Complex32::new(re, im),
+        })
+    }
+
+    /// H1 at bin `k`: `Pxy / Pxx` (formed in `f64`). `None` before the first accumulated
+    /// segment or if `k >= bins()`. A bin where `Pxx == 0` gives 0.
+    pub fn h1(&self, k: usize) -> Option<Complex32> {
+        if self.segments == 0 {
+            return None;
+        }
+        self.sums(k).map(|s| h1_of(&s))
+    }
+
+    /// Magnitude-squared coherence at bin `k`: `|Pxy|^2 / (Pxx Pyy)` (in `f64`, clamped to
+    /// `[0, 1]`). `None` before the first accumulated segment or if `k >= bins()`. A bin where
+    /// `Pxx == 0` or `Pyy == 0` gives 0.
+    pub fn coherence(&self, k: usize) -> Option<f32> {
+        if self.segments == 0 {
+            return None;
+        }
+        self.sums(k).map(|s| coherence_of(&s))
+    }
+
+    /// Writes H1 of bins `0 .. min(out.len(), bins())` into `out` and returns how many were
+    /// written. Error: [`WelchError::NoSegments`] before the first accumulated segment.
+    pub fn fill_h1(&self, out: &mut [Complex32]) -> Result<usize, WelchError> {
+        if self.segments == 0 {
+            return Err(WelchError::NoSegments);
+        }
+        let mut n = 0;
+        for (k, o) in out.iter_mut().enumerate().take(self.bins()) {
+            if let Some(s) = self.sums(k) {
+                *o = h1_of(&s);
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Writes the coherence of bins `0 .. min(out.len(), bins())` into `out` and returns how
+    /// many were written. Error: [`WelchError::NoSegments`] before the first accumulated
+    /// segment.
+    pub fn fill_coherence(&self, out: &mut [f32]) -> Result<usize, WelchError> {
+        if self.segments == 0 {
+            return Err(WelchError::NoSegments);
+        }
+        let mut n = 0;
+        for (k, o) in out.iter_mut().enumerate().take(self.bins()) {
+            if let Some(s) = self.sums(k) {
+                *o = coherence_of(&s);
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// Index of the mirrored slot of bin `k` in the half-complex layout, `None` at DC and Nyquist.
+fn mirror(k: usize, nfft: usize) -> Option<usize> {
+    if k > 0 && 2 * k < nfft {
+        Some(nfft - k)
+    } else {
+        None
+    }
+}
+
+/// Segment mean (or 0 without detrending) and a power-of-two scale that brings the largest
+/// detrended magnitude into `[0.5, 1)`. `None` if a sample is non-finite or too large.
+fn prepare(s: &[f32], detrend: bool) -> Option<(f32, f32)> {
+    let mut sum = 0.0f32;
+    let mut comp = 0.0f32;
+    for &v in s {
+        if v.is_nan() || libm::fabsf(v) > MAX_SAMPLE_ABS {
+            return None;
+        }
+        // Kahan summation: the mean stays accurate for long segments with an offset
+        let t = v - comp;
+        let u = sum + t;
+        comp = (u - sum) - t;
+        sum = u;
+    }
+    let mean = if detrend && !s.is_empty() {
+        sum / s.len() as f32
+    } else {
+        0.0
+    };
+    let peak = s.iter().fold(0.0f32, |m, &v| m.max(libm::fabsf(v - mean)));
+    let scale = if peak > 0.0 {
+        // exponent e with peak = f 2^e, f in [0.5, 1); clamp so 2^e is a normal f32
+        let (_, e) = libm::frexpf(peak);
+        libm::ldexpf(1.0, e.clamp(-120, 120))
+    } else {
+        1.0
+    };
+    Some((mean, scale))
+}
+
+fn h1_of(s: &Sums) -> Complex32 {
+    if s.pxx.is_nan() || s.pxx <= 0.0 {
+        return Complex32::new(0.0, 0.0);
+    }
+    let d = s.pxx as f64;
+    Complex32::new((s.pxy.re as f64 / d) as f32, (s.pxy.im as f64 / d) as f32)
+}
+
+fn coherence_of(s: &Sums) -> f32 {
+    if s.pxx.is_nan() || s.pyy.is_nan() || s.pxx <= 0.0 || s.pyy <= 0.0 {
+        return 0.0;
+    }
+    let (re, im) = (s.pxy.re as f64, s.pxy.im as f64);
+    let c = (re * re + im * im) / (s.pxx as f64 * s.pyy as f64);
+    if c > 1.0 {
+        1.0
+    } else if c >= 0.0 {
+        c as f32
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    /// Capacities for every test length (an odd length n <= 128 needs at most 3n scratch).
+    type W = WelchH1<64, 128, 384>;
+
+    fn cfg(nperseg: usize, noverlap: usize, nfft: usize, window: Window) -> WelchConfig {
+        WelchConfig {
+            fs_hz: 100.0,
+            nperseg,
+            noverlap,
+            nfft,
+            window,
+            detrend: Detrend::Constant,
+        }
+    }
+
+    /// Deterministic pseudo-random samples in [-0.5, 0.5) (LCG).
+    fn noise(n: usize, seed: u64) -> Vec<f32> {
+        let mut s = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 40) as f32 / (1u64 << 24) as f32) - 0.5
+            })
+            .collect()
+    }
+
+    /// y = x through a resonant two-pole filter plus a little independent noise.
+    fn system(n: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
+        let x = noise(n, seed);
+        let e = noise(n, seed + 1);
+        let (mut y1, mut y2) = (0.0f32, 0.0f32);
+        let y = x
+            .iter()
+            .zip(&e)
+            .map(|(&xi, &ei)| {
+                let v = xi + 1.6 * y1 - 0.8 * y2;
+                y2 = y1;
+                y1 = v;
+                v + 0.2 * ei
+            })
+            .collect();
+        (x, y)
+    }
+
+    fn all_bits<const S: usize, const N: usize, const C: usize>(w: &WelchH1<S, N, C>) -> Vec<u32> {
+        (0..w.bins())
+            .flat_map(|k| {
+                let s = w.sums(k).unwrap();
+                [
+                    s.pxx.to_bits(),
+                    s.pyy.to_bits(),
+                    s.pxy.re.to_bits(),
+                    s.pxy.im.to_bits(),
+                ]
+            })
+            .collect()
+    }
+
+    /// Naive f64 reference: direct DFT per segment, separate for x and y.
+    fn reference(x: &[f32], y: &[f32], c: &WelchConfig) -> Vec<(f64, f64, (f64, f64))> {
+        let bins = c.nfft / 2 + 1;
+        let mut acc = vec![(0.0, 0.0, (0.0, 0.0)); bins];
+        let step = c.nperseg - c.noverlap;
+        let mut start = 0;
+        while start + c.nperseg <= x.len() {
+            let seg = |s: &[f32]| -> Vec<f64> {
+                let s = &s[start..start + c.nperseg];
+                let m = if c.detrend == Detrend::Constant {
+                    s.iter().map(|&v| v as f64).sum::<f64>() / s.len() as f64
+                } else {
+                    0.0
+                };
+                s.iter()
+                    .enumerate()
+                    .map(|(j, &v)| {
+                        let ph = 2.0 * std::f64::consts::PI * j as f64 / c.nperseg as f64;
+                        let w = match c.window {
+                            Window::Hann => 0.5 - 0.5 * ph.cos(),
+                            Window::Hamming => 0.54 - 0.46 * ph.cos(),
+                            Window::Rect => 1.0,
+                        };
+                        (v as f64 - m) * w
+                    })
+                    .collect()
+            };
+            let (xs, ys) = (seg(x), seg(y));
+            for (k, a) in acc.iter_mut().enumerate() {
+                let dft = |s: &[f64]| {
+                    s.iter().enumerate().fold((0.0, 0.0), |(re, im), (j, &v)| {
+                        let ph =
+                            -2.0 * std::f64::consts::PI * ((j * k) % c.nfft) as f64 / c.nfft as f64;
+                        (re + v * ph.cos(), im + v * ph.sin())
+                    })
+                };
+                let (xr, xi) = dft(&xs);
+                let (yr, yi) = dft(&ys);
+                a.0 += xr * xr + xi * xi;
+                a.1 += yr * yr + yi * yi;
+                a.2 .0 += xr * yr + xi * yi;
+                a.2 .1 += xr * yi - xi * yr;
+            }
+            start += step;
+        }
+        acc
+    }
+
+    #[test]
+    fn matches_naive_f64_reference() {
+        let (x, y) = system(700, 3);
+        for (c, shift) in [
+            (cfg(64, 32, 64, Window::Hann), 0.0),
+            (cfg(50, 10, 96, Window::Hamming), 3.0),
+            (cfg(37, 0, 37, Window::Rect), 0.0),
+            (
+                WelchConfig {
+                    detrend: Detrend::None,
+                    ..cfg(60, 45, 75, Window::Hann)
+                },
+                0.25,
+            ),
+        ] {
+            let xo: Vec<f32> = x.iter().map(|v| v + shift).collect();
+            let mut w = W::try_new(c).unwrap();
+            w.push(&xo, &y).unwrap();
+            let want = reference(&xo, &y, &c);
+            assert_eq!(w.segments() as usize, c.segments_in(x.len()));
+            let maxx = want.iter().map(|a| a.0).fold(0.0, f64::max);
+            let maxy = want.iter().map(|a| a.1).fold(0.0, f64::max);
+            for (k, r) in want.iter().enumerate() {
+                let s = w.sums(k).unwrap();
+                // errors relative to the largest bin (DFT rounding is relative to the energy)
+                assert!((s.pxx as f64 - r.0).abs() < 1e-5 * maxx, "{c:?} bin {k}");
+                assert!((s.pyy as f64 - r.1).abs() < 1e-5 * maxy, "{c:?} bin {k}");
+                let m = (maxx * maxy).sqrt();
+                assert!((s.pxy.re as f64 - r.2 .0).abs() < 1e-5 * m, "{c:?} bin {k}");
+                assert!((s.pxy.im as f64 - r.2 .1).abs() < 1e-5 * m, "{c:?} bin {k}");
+                let h = w.h1(k).unwrap();
+                let hr = (r.2 .0 / r.0, r.2 .1 / r.0);
+                let habs = (hr.0 * hr.0 + hr.1 * hr.1).sqrt();
+                let coh = (r.2 .0 * r.2 .0 + r.2 .1 * r.2 .1) / (r.0 * r.1);
+                if coh > 0.1 {
+                    let e = ((h.re as f64 - hr.0).powi(2) + (h.im as f64 - hr.1).powi(2)).sqrt();
+                    assert!(e < 1e-4 * habs, "{c:?} bin {k}: {h} vs {hr:?}");
+                    assert!((w.coherence(k).unwrap() as f64 - coh).abs() < 1e-4);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn identity_and_gain() {
+        let (x, _) = system(1000, 9);
+        for window in [Window::Hann, Window::Hamming, Window::Rect] {
+            for gain in [1.0f32, 2.0, -0.5] {
+                let y: Vec<f32> = x.iter().map(|v| gain * v).collect();
+                let mut w = W::try_new(cfg(64, 16, 96, window)).unwrap();
+                w.push(&x, &y).unwrap();
+                for k in 0..w.bins() {
+                    let h = w.h1(k).unwrap();
+                    assert!(
+                        (h.re - gain).abs() <= 4.0 * f32::EPSILON * gain.abs()
+                            && h.im.abs() <= 4.0 * f32::EPSILON,
+                        "{window:?} gain {gain} bin {k}: {h}"
+                    );
+                    let c = w.coherence(k).unwrap();
+                    assert!((c - 1.0).abs() <= 4.0 * f32::EPSILON, "bin {k}: {c}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn very_different_channel_scales() {
+        // force in newtons, displacement in metres: the shared transform must not drown y
+        let (x, y) = system(700, 5);
+        let xs: Vec<f32> = x.iter().map(|v| v * 1000.0).collect();
+        let ys: Vec<f32> = y.iter().map(|v| v * 1e-6).collect();
+        let c = cfg(64, 32, 64, Window::Hann);
+        let mut a = W::try_new(c).unwrap();
+        let mut b = W::try_new(c).unwrap();
+        a.push(&x, &y).unwrap();
+        b.push(&xs, &ys).unwrap();
+        for k in 0..a.bins() {
+            let (ha, hb) = (a.h1(k).unwrap(), b.h1(k).unwrap() * 1e9);
+            assert!(
+                (ha - hb).norm_sqr() <= 1e-10 * ha.norm_sqr(),
+                "bin {k}: {ha} {hb}"
+            );
+        }
+    }
+
+    #[test]
+    fn not_available_before_first_segment_and_zero_input() {
+        let c = cfg(64, 32, 64, Window::Hann);
+        let mut w = W::try_new(c).unwrap();
+        assert_eq!(w.h1(0), None);
+        assert_eq!(w.coherence(3), None);
+        let mut out = [Complex32::new(9.0, 9.0); 40];
+        assert_eq!(w.fill_h1(&mut out), Err(WelchError::NoSegments));
+        w.push(&[1.0; 63], &[1.0; 63]).unwrap();
+        assert_eq!((w.segments(), w.pending()), (0, 63));
+        assert_eq!(w.h1(1), None);
+        // a constant removed by the detrend leaves Pxx == 0 everywhere: H1 = 0, coherence 0
+        w.push(&[1.0], &[1.0]).unwrap();
+        assert_eq!((w.segments(), w.pending()), (1, 32));
+        for k in 0..w.bins() {
+            assert_eq!(w.h1(k), Some(Complex32::new(0.0, 0.0)));
+            assert_eq!(w.coherence(k), Some(0.0));
+        }
+        assert_eq!(w.h1(w.bins()), None);
+        assert_eq!(w.fill_h1(&mut out), Ok(33));
+        assert!(out[..33].iter().all(|v| *v == Complex32::new(0.0, 0.0)));
+        assert_eq!(out[33], Complex32::new(9.0, 9.0));
+        let mut coh = [5.0f32; 10];
+        assert_eq!(w.fill_coherence(&mut coh), Ok(10));
+        assert!(coh.iter().all(|v| *v == 0.0));
+        w.reset();
+        assert_eq!((w.segments(), w.pending(), w.h1(0)), (0, 0, None));
+    }
+
+    #[test]
+    fn non_finite_and_huge_segments_are_skipped() {
+        let (x, y) = system(64 * 4, 2);
+        let c = cfg(64, 0, 64, Window::Hann);
+        let mut clean = W::try_new(c).unwrap();
+        clean.push(&x[..64], &y[..64]).unwrap();
+        clean.push(&x[192..], &y[192..]).unwrap();
+        let mut w = W::try_new(c).unwrap();
+        let mut xb = x.clone();
+        let mut yb = y.clone();
+        xb[70] = f32::NAN;
+        yb[150] = 2.0e9;
+        w.push(&xb, &yb).unwrap();
+        assert_eq!((w.segments(), w.skipped_segments()), (2, 2));
+        assert_eq!(all_bits(&w), all_bits(&clean));
+        for k in 0..w.bins() {
+            assert!(w.h1(k).unwrap().re.is_finite() && w.coherence(k).unwrap().is_finite());
+        }
+    }
+
+    #[test]
+    fn rejects_invalid_configs() {
+        let ok = cfg(64, 32, 96, Window::Hann);
+        assert!(W::try_new(ok).is_ok());
+        for fs in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let e = W::try_new(WelchConfig { fs_hz: fs, ..ok }).unwrap_err();
+            assert_eq!(e, WelchError::SampleRate);
+        }
+        let e = W::try_new(WelchConfig { nperseg: 0, ..ok }).unwrap_err();
+        assert_eq!(
+            e,
+            WelchError::SegmentLength {
+                nperseg: 0,
+                capacity: 64
+            }
+        );
+        let e = W::try_new(WelchConfig { nperseg: 65, ..ok }).unwrap_err();
+        assert_eq!(
+            e,
+            WelchError::SegmentLength {
+                nperseg: 65,
+                capacity: 64
+            }
+        );
+        let e = W::try_new(WelchConfig { noverlap: 64, ..ok }).unwrap_err();
+        assert_eq!(
+            e,
+            WelchError::Overlap {
+                noverlap: 64,
+                nperseg: 64
+            }
+        );
+        let e = W::try_new(WelchConfig { nfft: 63, ..ok }).unwrap_err();
+        assert_eq!(
+            e,
+            WelchError::FftLength {
+                nfft: 63,
+                nperseg: 64,
+                capacity: 128
+            }
+        );
+        let e = W::try_new(WelchConfig { nfft: 129, ..ok }).unwrap_err();
+        assert!(matches!(e, WelchError::FftLength { nfft: 129, .. }));
+        // 120 = 8 * 15 needs more scratch than scratch_capacity(96) = 96 + 2 * 3 = 102
+        let e =
+            WelchH1::<64, 128, { scratch_capacity(96) }>::try_new(WelchConfig { nfft: 120, ..ok })
+                .unwrap_err();
+        assert_eq!(
+            e,
+            WelchError::Scratch {
+                needed: 150,
+                capacity: 102
+            }
+        );
+        assert!(WelchH1::<64, 128, { scratch_capacity(96) }>::try_new(ok).is_ok());
+        // a large prime is not supported by the DFT
+        let e = WelchH1::<4, 40000, 0>::try_new(WelchConfig {
+            nperseg: 4,
+            noverlap: 0,
+            nfft: 32771,
+            ..ok
+        })
+        .unwrap_err();
+        assert_eq!(e, WelchError::Dft(DftError::Unsupported { len: 32771 }));
+        // reconfigure rejects without touching the state
+        let mut w = W::try_new(ok).unwrap();
+        w.push(&[0.5; 70], &[0.25; 70]).unwrap();
+        assert!(w.reconfigure(WelchConfig { noverlap: 99, ..ok }).is_err());
+        assert_eq!((w.config(), w.segments()), (&ok, 1));
+        let new = cfg(32, 0, 32, Window::Rect);
+        w.reconfigure(new).unwrap();
+        assert_eq!((w.config(), w.segments(), w.bins()), (&new, 0, 17));
+        // unequal chunks consume nothing
+        assert_eq!(
+            w.push(&[1.0; 3], &[1.0; 2]),
+            Err(WelchError::ChunkLengths { x: 3, y: 2 })
+        );
+        assert_eq!(w.pending(), 0);
+        // every error has a message
+        assert!(std::format!("{e}").contains("32771"));
+    }
+
+    #[test]
+    fn windows_are_periodic_like_scipy() {
+        // scipy.signal.get_window('hann', 4) = [0, 0.5, 1, 0.5]; ('hamming', 4) = [0.08, 0.54, 1, 0.54]
+        let h: Vec<f32> = (0..4).map(|n| Window::Hann.value(n, 4)).collect();
+        assert_eq!(h, [0.0, 0.5, 1.0, 0.5]);
+        let h: Vec<f32> = (0..4).map(|n| Window::Hamming.value(n, 4)).collect();
+        let want = [0.08f32, 0.54, 1.0, 0.54];
+        for (a, b) in h.iter().zip(want) {
+            assert!((a - b).abs() < 1e-7);
+        }
+        assert_eq!(Window::Rect.value(3, 4), 1.0);
+    }
+
+    #[test]
+    fn bins_and_frequencies() {
+        let c = WelchConfig {
+            fs_hz: 50.0,
+            ..cfg(1111, 555, 5000, Window::Hamming)
+        };
+        assert_eq!(c.bins(), 2501);
+        // 100 s at 50 Hz: scipy averages 7 complete segments (the 8th would end at sample 5003)
+        assert_eq!(c.segments_in(5000), 7);
+        assert_eq!(c.segments_in(1110), 0);
+        let w = WelchH1::<1111, 5000, { scratch_capacity(5000) }>::try_new(c).unwrap();
+        assert!((w.freq(200) - 2.0).abs() < 1e-6);
+        assert!((w.freq(2500) - 25.0).abs() < 1e-5);
+        let odd = cfg(5, 2, 7, Window::Hann);
+        assert_eq!(odd.bins(), 4);
+        let d = WelchConfig::scipy_default(10.0, 100);
+        assert_eq!((d.nperseg, d.noverlap, d.nfft), (100, 50, 100));
+        let d = WelchConfig::scipy_default(10.0, 1000);
+        assert_eq!((d.nperseg, d.noverlap, d.nfft), (256, 128, 256));
+    }
+
+    #[test]
+    fn odd_nfft_and_tiny_lengths() {
+        // odd nfft (no Nyquist bin) and nfft 1 and 2 against the naive reference
+        let (x, y) = system(60, 4);
+        for c in [
+            cfg(5, 2, 7, Window::Hann),
+            cfg(1, 0, 1, Window::Rect),
+            cfg(2, 1, 2, Window::Rect),
+            WelchConfig {
+                detrend: Detrend::None,
+                ..cfg(1, 0, 2, Window::Rect)
+            },
+        ] {
+            let mut w = W::try_new(c).unwrap();
+            w.push(&x, &y).unwrap();
+            let want = reference(&x, &y, &c);
+            assert_eq!(want.len(), w.bins());
+            for (k, r) in want.iter().enumerate() {
+                let s = w.sums(k).unwrap();
+                let tol = 1e-5 * (1.0 + r.0 + r.1);
+                assert!((s.pxx as f64 - r.0).abs() < tol, "{c:?} {k}");
+                assert!((s.pyy as f64 - r.1).abs() < tol, "{c:?} {k}");
+                assert!((s.pxy.re as f64 - r.2 .0).abs() < tol, "{c:?} {k}");
+                assert!((s.pxy.im as f64 - r.2 .1).abs() < tol, "{c:?} {k}");
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        #[test]
+        fn chunking_does_not_change_a_bit(
+            seed in 0u64..1000,
+            len in 0usize..400,
+            nperseg in 1usize..=64,
+            ov in 0.0f64..1.0,
+            pad in 0usize..=32,
+            cuts in proptest::collection::vec(0usize..80, 0..20),
+        ) {
+            let noverlap = ((nperseg as f64 * ov) as usize).min(nperseg - 1);
+            let c = cfg(nperseg, noverlap, nperseg + pad, Window::Hamming);
+            prop_assume!(W::try_new(c).is_ok());
+            let (x, y) = system(len, seed);
+            let mut once = W::try_new(c).unwrap();
+            once.push(&x, &y).unwrap();
+            let mut single = W::try_new(c).unwrap();
+            for i in 0..len {
+                single.push(&x[i..i + 1], &y[i..i + 1]).unwrap();
+            }
+            let mut chunked = W::try_new(c).unwrap();
+            let mut at = 0usize;
+            for cut in cuts.iter().chain(std::iter::once(&usize::MAX)) {
+                let end = at.saturating_add(*cut).min(len);
+                chunked.push(&x[at..end], &y[at..end]).unwrap();
+                at = end;
+            }
+            prop_assert_eq!(once.segments() as usize, c.segments_in(len));
+            prop_assert_eq!(single.segments(), once.segments());
+            prop_assert_eq!(chunked.segments(), once.segments());
+            prop_assert_eq!(all_bits(&single), all_bits(&once));
+            prop_assert_eq!(all_bits(&chunked), all_bits(&once));
+        }
+    }
+}
