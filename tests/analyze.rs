@@ -1,1 +1,394 @@
-//! End-to-end tests of `analyze` (under construction).
+//! End-to-end tests of `host-harness analyze`: a hand-made recording with a closed-form answer,
+//! the frame formats (PNG directory, glob, multi-page TIFF), and one test per bad input.
+
+use crate::util::harness;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// A 1 s recording: a disk moving vertically in the image, `p(t) = sum P_i cos(w_i t)` pixels
+/// (image y, down), at 120 fps; accelerometers at 2048 Hz: `tip` is the true acceleration of
+/// the target (m/s^2, positive up, as `--axis y` reads the image), `base` a sine at each mode
+/// frequency plus a little broadband noise. Frequencies sit on FRF bins (1 Hz) so the record is
+/// periodic.
+struct Recording {
+    dir: PathBuf,
+    frames: PathBuf,
+    accel: PathBuf,
+}
+
+const FPS: f64 = 120.0;
+const FS: f64 = 2048.0;
+const MM_PER_PX: f64 = 0.1;
+/// (frequency Hz, displacement amplitude px, base amplitude m/s^2)
+const MODES: [(f64, f64, f64); 2] = [(8.0, 8.0, 0.5), (30.0, 1.5, 2.0)];
+
+fn position_px(t: f64) -> f64 {
+    MODES
+        .iter()
+        .map(|&(f, p, _)| p * (2.0 * PI * f * t).cos())
+        .sum()
+}
+
+/// Tip acceleration in m/s^2, positive up: -(d^2 p / dt^2) * mm/px / 1000.
+fn tip_acc(t: f64) -> f64 {
+    MODES
+        .iter()
+        .map(|&(f, p, _)| {
+            let w = 2.0 * PI * f;
+            w * w * p * (w * t).cos() * MM_PER_PX / 1000.0
+        })
+        .sum()
+}
+
+/// Disk of radius 6 px, level 200, anti-aliased by 4x4 supersampling, centre (12, 24 + p).
+fn disk(p: f64, w: u32, h: u32) -> Vec<u8> {
+    let (cx, cy, r) = (12.0, 24.0 + p, 6.0);
+    let mut v = vec![0u8; (w * h) as usize];
+    for j in 0..h {
+        for i in 0..w {
+            let mut hits = 0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    let x = i as f64 - 0.375 + 0.25 * a as f64;
+                    let y = j as f64 - 0.375 + 0.25 * b as f64;
+                    if (x - cx).powi(2) + (y - cy).powi(2) <= r * r {
+                        hits += 1;
+                    }
+                }
+            }
+            v[(j * w + i) as usize] = (200 * hits / 16) as u8;
+        }
+    }
+    v
+}
+
+const W: u32 = 24;
+const H: u32 = 48;
+
+fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDir, Recording) {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
+    let fdir = dir.join("frames");
+    std::fs::create_dir(&fdir).unwrap();
+    for k in 0..frames {
+        let img =
+            image::GrayImage::from_raw(W, H, disk(position_px(k as f64 / FPS), W, H)).unwrap();
+        img.save(fdir.join(format!("frame_{k}.png"))).unwrap();
+    }
+    let mut csv = String::from("t_s,base_acc,tip_acc\n");
+    let mut state = 7u64;
+    for j in 0..samples {
+        let t = j as f64 / FS;
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let noise = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.2;
+        let base: f64 = MODES
+            .iter()
+            .map(|&(f, _, b)| b * (2.0 * PI * f * t).sin())
+            .sum::<f64>()
+            + noise;
+        csv.push_str(&format!("{t},{base},{}\n", tip_acc(t)));
+    }
+    let accel = dir.join("accel.csv");
+    std::fs::write(&accel, csv).unwrap();
+    (
+        tmp,
+        Recording {
+            dir,
+            frames: fdir,
+            accel,
+        },
+    )
+}
+
+fn analyze(rec: &Recording, frames: &str, extra: &[&str]) -> std::process::Output {
+    let out = rec.dir.join("out");
+    let mut args = vec![
+        "analyze",
+        "--frames",
+        frames,
+        "--fps",
+        "120",
+        "--accel",
+        rec.accel.to_str().unwrap(),
+        "--fs",
+        "2048",
+        "--mm-per-px",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    if !extra.contains(&"--threshold") {
+        args.extend_from_slice(&["--threshold", "100"]);
+    }
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// `modes.csv` rows as (system, mode, f_hz, amplitude).
+fn read_modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
+    let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,e2pr"
+    );
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (
+                c[0].to_string(),
+                c[1].parse().unwrap(),
+                c[4].parse().unwrap(),
+                c[5].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The closed-form case: at each mode bin the base is a sine of amplitude B and the tip a
+/// cosine of amplitude A = w^2 P s, so |H1| = A / B (the broadband noise adds a little), and the
+/// vision path must measure the same as the accelerometer within the centroid's sub-pixel error.
+#[test]
+fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    // Rectangular window (the lines are periodic in the record: no leakage, so the H1 of the
+    // neighbouring bins does not tie with the line's), narrow bands around the lines, and the
+    // weighted centroid (linear in the image, so the
+    // anti-aliased disk's centroid is nearly exact): the base has little power between the
+    // lines, and the binary centroid's small position-periodic error (harmonics,
+    // intermodulation) divided by almost nothing would dominate |Im H1| there.
+    let o = analyze(
+        &rec,
+        rec.frames.to_str().unwrap(),
+        &[
+            "--exposure-ms",
+            "2",
+            "--bands",
+            "6-10,27-33",
+            "--mode",
+            "weighted",
+            "--threshold",
+            "0",
+            "--window",
+            "rect",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = rec.dir.join("out");
+    let modes = read_modes(&out);
+    assert_eq!(modes.len(), 4);
+    for (i, &(f, p, b)) in MODES.iter().enumerate() {
+        let w = 2.0 * PI * f;
+        let want = w * w * p * MM_PER_PX / 1000.0 / b;
+        let acc = &modes[i];
+        let vis = &modes[i + 2];
+        assert_eq!((acc.0.as_str(), acc.1), ("accelerometer", i + 1));
+        assert_eq!((vis.0.as_str(), vis.1), ("vision", i + 1));
+        assert_eq!(acc.2, f, "accelerometer mode {}", i + 1);
+        assert_eq!(vis.2, f, "vision mode {}", i + 1);
+        assert!((acc.3 / want - 1.0).abs() < 0.02, "acc {} vs {want}", acc.3);
+        assert!(
+            (vis.3 / acc.3 - 1.0).abs() < 0.01,
+            "vis {} vs acc {}",
+            vis.3,
+            acc.3
+        );
+    }
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains("lost frames: 0 of 120"), "{report}");
+    assert_eq!(String::from_utf8_lossy(&o.stdout), report);
+    let frf = std::fs::read_to_string(out.join("frf.csv")).unwrap();
+    assert!(frf.starts_with(
+        "freq_hz,acc_h1_re,acc_h1_im,acc_h1_abs,acc_coherence,vis_h1_re,vis_h1_im,vis_h1_abs,vis_coherence\n"
+    ));
+    assert_eq!(frf.lines().count(), 1 + 2048 / 2 + 1);
+    let disp = std::fs::read_to_string(out.join("displacement.csv")).unwrap();
+    assert_eq!(disp.lines().count(), 121);
+    // e2pr = exposure x frequency
+    let m = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+    assert!(
+        m.lines()
+            .nth(1)
+            .unwrap()
+            .ends_with(&format!(",{}", 0.002 * 8.0)),
+        "{m}"
+    );
+}
+
+#[test]
+fn glob_and_multipage_tiff_give_the_same_modes_as_the_directory() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reference = read_modes(&rec.dir.join("out"));
+
+    // a decoy file that the pattern must skip
+    std::fs::write(rec.frames.join("notes.txt"), "x").unwrap();
+    let pattern = rec.frames.join("frame_*.png");
+    let o = analyze(&rec, pattern.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(read_modes(&rec.dir.join("out")), reference);
+
+    // the same frames as one 16-bit multi-page TIFF (values x 257: same threshold crossing
+    // at T = 100 * 257)
+    let tif = rec.dir.join("frames.tif");
+    {
+        use tiff::encoder::{colortype::Gray16, TiffEncoder};
+        let f = std::fs::File::create(&tif).unwrap();
+        let mut enc = TiffEncoder::new(f).unwrap();
+        for k in 0..120 {
+            let px: Vec<u16> = disk(position_px(k as f64 / FPS), W, H)
+                .iter()
+                .map(|&v| u16::from(v) * 257)
+                .collect();
+            enc.write_image::<Gray16>(W, H, &px).unwrap();
+        }
+    }
+    let o = analyze(
+        &rec,
+        tif.to_str().unwrap(),
+        &["--threshold", &(100 * 257).to_string()],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(read_modes(&rec.dir.join("out")), reference);
+}
+
+fn assert_bad_input(o: &std::process::Output, needles: &[&str]) {
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(o));
+    let e = stderr(o);
+    for n in needles {
+        assert!(e.contains(n), "`{n}` not in: {e}");
+    }
+}
+
+#[test]
+fn missing_frames_are_an_error_naming_the_path() {
+    let (_tmp, rec) = make_recording(12, 205);
+    let missing = rec.dir.join("nowhere");
+    let o = analyze(&rec, missing.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["nowhere", "no such file or directory"]);
+    let empty = rec.dir.join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let o = analyze(&rec, empty.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["empty", "no *.png"]);
+    let pattern = rec.frames.join("shot_*.png");
+    let o = analyze(&rec, pattern.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["shot_*.png", "no file matches"]);
+}
+
+#[test]
+fn unreadable_or_colour_frames_are_errors_naming_the_file() {
+    // 12 frames at 120 fps = 0.1 s = 204.8 samples: use 15 frames (256 samples)
+    let (_tmp, rec) = make_recording(15, 256);
+    std::fs::write(rec.frames.join("frame_7.png"), b"not a png at all").unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["frame_7.png", "cannot decode"]);
+
+    let rgb = image::RgbImage::new(W, H);
+    rgb.save(rec.frames.join("frame_7.png")).unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["frame_7.png", "not a grey frame"]);
+
+    // a multi-page TIFF with a colour page 2
+    let tif = rec.dir.join("bad.tif");
+    {
+        use tiff::encoder::{colortype, TiffEncoder};
+        let f = std::fs::File::create(&tif).unwrap();
+        let mut enc = TiffEncoder::new(f).unwrap();
+        enc.write_image::<colortype::Gray8>(W, H, &disk(0.0, W, H))
+            .unwrap();
+        enc.write_image::<colortype::RGB8>(W, H, &vec![0u8; (3 * W * H) as usize])
+            .unwrap();
+    }
+    let o = analyze(&rec, tif.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["bad.tif page 2", "not a grey frame"]);
+}
+
+#[test]
+fn frame_count_not_matching_the_accelerometer_is_an_error_naming_both() {
+    // 15 frames need 256 samples; the CSV has 200
+    let (_tmp, rec) = make_recording(15, 200);
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["15 frames", "200 samples", "does not match"]);
+    // enough samples, but the offset pushes the frames past the end
+    let (_tmp, rec) = make_recording(15, 300);
+    let o = analyze(
+        &rec,
+        rec.frames.to_str().unwrap(),
+        &["--tick-offset", "1500", "--tick-hz", "30720"],
+    );
+    assert_bad_input(&o, &["15 frames", "300 samples"]);
+    // 14 frames at 120 fps are 238.93 samples at 2048 Hz: not an integer
+    let (_tmp, rec) = make_recording(14, 300);
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["14 frames", "not a whole number"]);
+}
+
+#[test]
+fn non_numeric_or_non_monotonic_csv_rows_are_errors_naming_the_row() {
+    let (_tmp, rec) = make_recording(15, 256);
+    let text = std::fs::read_to_string(&rec.accel).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    // row numbers as a spreadsheet shows them: header = row 1, lines[k] = row k + 1
+    let good = lines.clone();
+    lines[10] = "0.0044,abc,1.0".into();
+    std::fs::write(&rec.accel, lines.join("\n")).unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["accel.csv", "row 11", "`base_acc`", "not a number"]);
+
+    let mut lines = good.clone();
+    let prev: Vec<&str> = good[40].split(',').collect();
+    lines[41] = format!("{},1.0,1.0", prev[0]); // same time as row 41
+    std::fs::write(&rec.accel, lines.join("\n")).unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &["--time-col", "t_s"]);
+    assert_bad_input(&o, &["accel.csv", "row 42", "strictly increasing"]);
+    // without --time-col the time column is not read
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &["--input-col", "base"]);
+    assert_bad_input(&o, &["no column named `base`", "t_s, base_acc, tip_acc"]);
+}
+
+#[test]
+fn more_than_five_percent_lost_frames_fails_the_analysis() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let blank = image::GrayImage::new(W, H);
+    // 7 of 120 blank frames = 5.8 % > 5 %
+    for k in [3, 20, 21, 50, 77, 90, 119] {
+        blank
+            .save(rec.frames.join(format!("frame_{k}.png")))
+            .unwrap();
+    }
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["FAILED", "7 of 120 frames"]);
+    let out = rec.dir.join("out");
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains("ANALYSIS FAILED"), "{report}");
+    assert!(!out.join("modes.csv").exists());
+    // the per-frame record is still written, with the lost frames marked
+    let disp = std::fs::read_to_string(out.join("displacement.csv")).unwrap();
+    let lost: Vec<usize> = disp
+        .lines()
+        .skip(1)
+        .filter(|l| l.ends_with(",1"))
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(lost, vec![3, 20, 21, 50, 77, 90, 119]);
+
+    // 6 of 120 = 5 % is accepted and interpolated
+    image::GrayImage::from_raw(W, H, disk(position_px(3.0 / FPS), W, H))
+        .unwrap()
+        .save(rec.frames.join("frame_3.png"))
+        .unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains("lost frames: 6 of 120"), "{report}");
+}
