@@ -551,19 +551,21 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
             return;
         };
         let detrend = self.config.detrend == Detrend::Constant;
-        let (Some((mx, sx)), Some((my, sy))) = (prepare(xs, detrend), prepare(ys, detrend)) else {
+        let (Some(px), Some(py)) = (prepare(xs, detrend), prepare(ys, detrend)) else {
             self.skipped = self.skipped.saturating_add(1);
             return;
         };
+        let (sx, sy) = (px.scale, py.scale);
         let Some(work) = self.work.get_mut(..nfft) else {
             return;
         };
         // z = (x - mean) * w / sx + i (y - mean) * w / sy, zero-padded to nfft
         let (isx, isy) = (1.0 / sx, 1.0 / sy);
+        let (mx, lx, my, ly) = (px.hi, px.lo, py.hi, py.lo);
         for (j, z) in work.iter_mut().enumerate() {
             *z = match (xs.get(j), ys.get(j), w.get(j)) {
                 (Some(&a), Some(&b), Some(&wj)) => {
-                    Complex32::new((a - mx) * wj * isx, (b - my) * wj * isy)
+                    Complex32::new(((a - mx) - lx) * wj * isx, ((b - my) - ly) * wj * isy)
                 }
                 _ => Complex32::new(0.0, 0.0),
             };
@@ -698,27 +700,47 @@ fn mirror(k: usize, nfft: usize) -> Option<usize> {
     }
 }
 
-/// Segment mean (or 0 without detrending) and a power-of-two scale that brings the largest
-/// detrended magnitude into `[0.5, 1)`. `None` if a sample is non-finite or too large.
-fn prepare(s: &[f32], detrend: bool) -> Option<(f32, f32)> {
-    let mut sum = 0.0f32;
-    let mut comp = 0.0f32;
+/// What a segment of one channel needs before the transform.
+#[derive(Debug, Clone, Copy)]
+struct Prep {
+    /// Segment mean as an unevaluated sum `hi + lo` (0 without detrending).
+    hi: f32,
+    lo: f32,
+    /// Power of two that brings the largest detrended magnitude into `[0.5, 1)`.
+    scale: f32,
+}
+
+/// Mean and scale of one channel's segment; `None` if a sample is non-finite or larger than
+/// [`MAX_SAMPLE_ABS`].
+///
+/// The mean is kept in twice the `f32` precision (`hi + lo`): rounding it to one `f32` would
+/// shift every sample by the same error, and the window sums that bias into the lowest bins
+/// (`nperseg/2` times it at DC for Hann). The sum is an error-free-transformation ("TwoSum")
+/// accumulation, and the residual of the division is recovered exactly with an FMA.
+fn prepare(s: &[f32], detrend: bool) -> Option<Prep> {
+    let (mut sum, mut comp) = (0.0f32, 0.0f32);
     for &v in s {
         if v.is_nan() || libm::fabsf(v) > MAX_SAMPLE_ABS {
             return None;
         }
-        // Kahan summation: the mean stays accurate for long segments with an offset
-        let t = v - comp;
-        let u = sum + t;
-        comp = (u - sum) - t;
-        sum = u;
+        // TwoSum: t + err == sum + v exactly
+        let t = sum + v;
+        let bp = t - sum;
+        comp += (sum - (t - bp)) + (v - bp);
+        sum = t;
     }
-    let mean = if detrend && !s.is_empty() {
-        sum / s.len() as f32
+    let (hi, lo) = if detrend && !s.is_empty() {
+        let n = s.len() as f32;
+        let hi = sum / n;
+        // sum - hi n is exact in one FMA (the remainder of a rounded division is representable)
+        let rem = libm::fmaf(-hi, n, sum) + comp;
+        (hi, rem / n)
     } else {
-        0.0
+        (0.0, 0.0)
     };
-    let peak = s.iter().fold(0.0f32, |m, &v| m.max(libm::fabsf(v - mean)));
+    let peak = s
+        .iter()
+        .fold(0.0f32, |m, &v| m.max(libm::fabsf((v - hi) - lo)));
     let scale = if peak > 0.0 {
         // exponent e with peak = f 2^e, f in [0.5, 1); clamp so 2^e is a normal f32
         let (_, e) = libm::frexpf(peak);
@@ -726,7 +748,7 @@ fn prepare(s: &[f32], detrend: bool) -> Option<(f32, f32)> {
     } else {
         1.0
     };
-    Some((mean, scale))
+    Some(Prep { hi, lo, scale })
 }
 
 fn h1_of(s: &Sums) -> Complex32 {
