@@ -681,6 +681,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn lost_frames_are_interpolated_linearly() {
+        let mut v = [9.0, 1.0, 9.0, 9.0, 4.0, 9.0];
+        let ok = [false, true, false, false, true, false];
+        assert_eq!(fill_lost_frames(&mut v, &ok), 4);
+        assert_eq!(v, [1.0, 1.0, 2.0, 3.0, 4.0, 4.0]);
+        let mut v = [5.0, 6.0];
+        assert_eq!(fill_lost_frames(&mut v, &[false, false]), 2);
+        assert_eq!(v, [5.0, 6.0]);
+    }
+
+    #[test]
     fn shards_partition_the_runs() {
         let shards: Vec<Shard> = (1..=3)
             .map(|k| Shard::parse(&format!("{k}/3")).unwrap())
@@ -749,6 +760,80 @@ mod tests {
         let e = read_checkpoint(&p).unwrap_err();
         assert!(format!("{e}").contains("line 1"));
     }
+}
+
+/// Fills the values of lost frames (`valid[i] == false`) by linear interpolation between the
+/// neighbouring valid frames; lost frames before the first or after the last valid one take its
+/// value. Returns the number of lost frames; with no valid frame at all, nothing is changed and
+/// the count equals the length.
+pub fn fill_lost_frames(values: &mut [f64], valid: &[bool]) -> usize {
+    let n = values.len().min(valid.len());
+    let lost = valid[..n].iter().filter(|v| !**v).count();
+    let Some(first) = valid[..n].iter().position(|v| *v) else {
+        return lost;
+    };
+    let mut prev = first;
+    for i in 0..first {
+        values[i] = values[first];
+    }
+    for i in first + 1..n {
+        if valid[i] {
+            let gap = i - prev;
+            for j in prev + 1..i {
+                let w = (j - prev) as f64 / gap as f64;
+                values[j] = values[prev] * (1.0 - w) + values[i] * w;
+            }
+            prev = i;
+        }
+    }
+    for i in prev + 1..n {
+        values[i] = values[prev];
+    }
+    lost
+}
+
+/// Fraction of lost frames above which a vision run is reported as failed (SPEC 3.1).
+pub const MAX_LOST_FRACTION: f64 = 0.05;
+
+/// Streams `x` (input) and `y` (output) through a firmware-core Welch estimator, picks the
+/// peaks of `bands` with firmware-core's peak picking and keeps |H1| of the first `keep_bins`
+/// bins. `scale` multiplies H1 (unit conversion).
+pub fn measure_system<const SEG: usize, const NFFT: usize, const SCR: usize>(
+    welch: &mut firmware_core::spectrum::WelchH1<SEG, NFFT, SCR>,
+    x: &[f32],
+    y: &[f32],
+    bands: &[(f64, f64)],
+    keep_bins: usize,
+    scale: f64,
+) -> anyhow::Result<SystemRecord> {
+    welch.reset();
+    welch
+        .push(x, y)
+        .map_err(|e| anyhow::anyhow!("Welch estimator: {e}"))?;
+    let peaks = bands
+        .iter()
+        .map(|&(lo, hi)| {
+            firmware_core::peaks::pick_with(
+                welch.bins(),
+                welch.df_hz(),
+                (lo as f32, hi as f32),
+                false,
+                |k| welch.h1(k),
+            )
+            .map(|p| PeakRecord {
+                f_hz: p.f_hz as f64,
+                a: p.amplitude as f64 * scale,
+            })
+        })
+        .collect();
+    let frf_abs = (0..keep_bins.min(welch.bins()))
+        .map(|k| {
+            welch
+                .h1(k)
+                .map_or(f32::NAN, |h| (h.norm() as f64 * scale) as f32)
+        })
+        .collect();
+    Ok(SystemRecord { peaks, frf_abs })
 }
 
 mod cantilever;
