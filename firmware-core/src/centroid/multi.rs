@@ -76,6 +76,7 @@ impl Slot {
 /// [`reset`](Self::reset) for the next frame. Targets come in slot order (not sorted).
 /// Without ROI, columns past `W` are ignored and flagged [`Flags::CLIPPED`].
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MultiCentroider<const W: usize, const N: usize> {
     config: CentroidConfig,
     /// Labels of the previous region row: 0 = background, `k` = slot `k - 1`.
