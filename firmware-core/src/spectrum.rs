@@ -1167,6 +1167,27 @@ mod tests {
         }
     }
 
+    #[test]
+    fn state_size_is_the_documented_budget() {
+        // 3 SEG f32 (window, two segments) + NFFT complex (work) + 2 NFFT f32 (accumulators)
+        // + SCRATCH complex + a few words of settings and counters. This is the RAM an MCU
+        // needs for the estimator (README "Signal path figures").
+        fn check<const S: usize, const N: usize, const C: usize>() -> usize {
+            let size = core::mem::size_of::<WelchH1<S, N, C>>();
+            let buffers = 12 * S + 16 * N + 8 * C;
+            assert!(
+                size >= buffers && size <= buffers + 128,
+                "WelchH1<{S}, {N}, {C}>: {size} bytes, buffers {buffers}"
+            );
+            std::println!("size_of WelchH1<{S}, {N}, {C}> = {size} bytes");
+            size
+        }
+        assert!(check::<2048, 2048, 0>() < 58 * 1024);
+        assert!(check::<4096, 4096, 0>() < 115 * 1024);
+        check::<1111, 5000, { scratch_capacity(5000) }>();
+        check::<20480, 20480, { scratch_capacity(20480) }>();
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
         #[test]
