@@ -329,7 +329,7 @@ impl defmt::Format for Sums {
 /// `cross[nfft - k] = Im Pxy[k]`; `Pyy` at DC and Nyquist live in two scalars and `Im Pxy` there
 /// is exactly zero (real signals). This stores the `2 nfft + 4` accumulated values in `2 NFFT`
 /// floats plus two.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
     config: WelchConfig,
     dft: Dft,
@@ -346,6 +346,21 @@ pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
     pyy_nyquist: f32,
     segments: u32,
     skipped: u32,
+}
+
+/// Shows the settings and counters, not the buffers (tens of thousands of values).
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> fmt::Debug
+    for WelchH1<SEG, NFFT, SCRATCH>
+{
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("WelchH1")
+            .field("capacities", &(SEG, NFFT, SCRATCH))
+            .field("config", &self.config)
+            .field("segments", &self.segments)
+            .field("skipped", &self.skipped)
+            .field("pending", &self.fill)
+            .finish_non_exhaustive()
+    }
 }
 
 /// Logs the settings and counters, not the buffers.
@@ -999,6 +1014,8 @@ mod tests {
         let mut coh = [5.0f32; 10];
         assert_eq!(w.fill_coherence(&mut coh), Ok(10));
         assert!(coh.iter().all(|v| *v == 0.0));
+        let dbg = std::format!("{w:?}");
+        assert!(dbg.starts_with("WelchH1 {") && dbg.contains("segments: 1") && dbg.len() < 400);
         w.reset();
         assert_eq!((w.segments(), w.pending(), w.h1(0)), (0, 0, None));
     }
