@@ -1158,4 +1158,52 @@ mod tests {
             );
         }
     }
+
+    /// A fractional alignment (first frame 3.4 samples after the first accelerometer sample) is
+    /// rounded to sample 3 and the 0.4-sample residual delay is removed from the vision H1, so
+    /// both systems see the same complex H1 of a periodic test signal.
+    #[test]
+    fn fractional_alignment_residual_is_removed_from_the_vision_h1() {
+        let (fc, fa, n) = (120.0, 2048.0, 120usize);
+        let (f, amp) = (8.0, 3.0); // tip acceleration amplitude, m/s^2
+        let w = 2.0 * std::f64::consts::PI * f;
+        let offset = 3.4 / fa;
+        let tip = |t: f64| amp * (w * t).cos();
+        let samples = 2048 + 10;
+        let base: Vec<f64> = (0..samples)
+            .map(|j| (w * j as f64 / fa).sin() + 0.3 * (2.0 * w * j as f64 / fa).cos())
+            .collect();
+        let tip_acc: Vec<f64> = (0..samples).map(|j| tip(j as f64 / fa)).collect();
+        // displacement of the tip (mm): -a / w^2
+        let mm: Vec<f64> = (0..n)
+            .map(|k| -tip(offset + k as f64 / fc) / (w * w) * 1000.0)
+            .collect();
+        let disp = Displacement {
+            lost: vec![false; n],
+            lost_count: 0,
+            reference_px: 0.0,
+            mm,
+        };
+        let s = Settings {
+            frame_rate_hz: fc,
+            accel_rate_hz: fa,
+            time_offset_s: offset,
+            welch: WelchSettings {
+                window: Window::Rect,
+                ..WelchSettings::default()
+            },
+            bands: vec![(5.0, 10.0)],
+            exposure_s: None,
+        };
+        let a = analyze(&disp, &base, &tip_acc, &s).unwrap();
+        assert_eq!(a.alignment.start, 3);
+        assert!((a.alignment.residual_s * fa - 0.4).abs() < 1e-9);
+        let (ha, hv) = (a.acc_frf.h1[8], a.vis_frf.h1[8]);
+        assert!((hv - ha).norm() < 1e-3 * ha.norm(), "acc {ha} vs vis {hv}");
+        // without the correction the phase would differ by w * 0.4 / fa = 9.8 mrad
+        let uncorrected = hv * Complex64::from_polar(1.0, w * a.alignment.residual_s);
+        assert!((uncorrected - ha).norm() > 5e-3 * ha.norm());
+        assert_eq!(a.acc_modes[0].bin, 8);
+        assert_eq!(a.vis_modes[0].bin, 8);
+    }
 }
