@@ -788,6 +788,16 @@ pub fn displacement_csv(
     s
 }
 
+/// `x` with about 5 significant digits: fixed notation between 0.01 and 1e5, else scientific.
+fn significant(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || (0.01..1e5).contains(&a) {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
 /// The short human report: `inputs` (label, value) lines, lost frames, the modes of both
 /// systems and the vision / accelerometer ratios. `analysis` is `None` when the analysis
 /// failed before the FRFs (`failure` then says why).
@@ -846,13 +856,13 @@ pub fn report_text(
             .unwrap_or_else(|| "-".into());
         let _ = writeln!(
             s,
-            "{:<4}  {:<13}  {:<8.3}  {:<10.4}  {:<8.3}  {:<10.4}  {:<11.4}  {:<12.3}  {e2pr}",
+            "{:<4}  {:<13}  {:<8.3}  {:<10}  {:<8.3}  {:<10}  {:<11.4}  {:<12.3}  {e2pr}",
             i + 1,
             format!("{}-{}", am.band_hz.0, am.band_hz.1),
             am.f_hz,
-            am.amplitude,
+            significant(am.amplitude),
             vm.f_hz,
-            vm.amplitude,
+            significant(vm.amplitude),
             vm.amplitude / am.amplitude,
             vm.f_hz - am.f_hz
         );
