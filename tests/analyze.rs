@@ -280,6 +280,11 @@ fn missing_frames_are_an_error_naming_the_path() {
     let pattern = rec.frames.join("shot_*.png");
     let o = analyze(&rec, pattern.to_str().unwrap(), &[]);
     assert_bad_input(&o, &["shot_*.png", "no file matches"]);
+    // a frame missing from the numbered sequence
+    let (_tmp, rec) = make_recording(15, 256);
+    std::fs::remove_file(rec.frames.join("frame_9.png")).unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert_bad_input(&o, &["frame_8.png is followed by frame_10.png", "missing"]);
 }
 
 #[test]

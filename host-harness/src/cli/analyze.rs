@@ -292,6 +292,48 @@ fn sorted_files(dir: &Path, keep: impl Fn(&str) -> bool) -> anyhow::Result<Vec<P
     Ok(files.into_iter().map(|(_, p)| p).collect())
 }
 
+/// `(prefix, number, suffix)` around the last run of digits of a file name.
+fn split_number(name: &str) -> Option<(&str, u64, &str)> {
+    let end = name.rfind(|c: char| c.is_ascii_digit())? + 1;
+    let start = name[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    let n = name[start..end].parse().ok()?;
+    Some((&name[..start], n, &name[end..]))
+}
+
+/// Missing frames in a numbered sequence: when every name is `prefix<number>suffix` with one
+/// prefix and suffix, the numbers must be consecutive; a gap is an error naming the missing
+/// frame (a silently skipped frame would shift every later frame in time).
+pub fn check_numbering(files: &[PathBuf]) -> anyhow::Result<()> {
+    let names: Vec<&str> = files
+        .iter()
+        .filter_map(|p| p.file_name().and_then(|n| n.to_str()))
+        .collect();
+    let parts: Option<Vec<(&str, u64, &str)>> = names.iter().map(|n| split_number(n)).collect();
+    let Some(parts) = parts else {
+        return Ok(());
+    };
+    let Some(&(prefix, _, suffix)) = parts.first() else {
+        return Ok(());
+    };
+    if parts.iter().any(|&(p, _, s)| p != prefix || s != suffix) {
+        return Ok(());
+    }
+    for (w, n) in parts.windows(2).zip(names.windows(2)) {
+        if w[1].1 != w[0].1 + 1 {
+            return Err(bad_input(format!(
+                "frame numbering has a gap: {} is followed by {} (frame number {} is missing; \
+                 every frame must be present, a skipped frame would shift all later frames)",
+                n[0],
+                n[1],
+                w[0].1 + 1
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Resolves `--frames`: a directory, a file-name pattern, or a multi-page TIFF.
 pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
     let path = Path::new(spec);
@@ -303,6 +345,7 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
                 path.display()
             )));
         }
+        check_numbering(&files)?;
         return Ok(FrameSource::Files(files));
     }
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
@@ -321,6 +364,7 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
         if files.is_empty() {
             return Err(bad_input(format!("--frames {spec}: no file matches")));
         }
+        check_numbering(&files)?;
         return Ok(FrameSource::Files(files));
     }
     if path.is_file() {
@@ -681,6 +725,24 @@ mod tests {
         assert!(wildcard_match("*", "anything"));
         assert!(wildcard_match("a*b*c", "aXXbYYc"));
         assert!(!wildcard_match("a*b*c", "aXXbYY"));
+    }
+
+    #[test]
+    fn numbering_gaps_are_found() {
+        let p = |v: &[&str]| v.iter().map(PathBuf::from).collect::<Vec<_>>();
+        check_numbering(&p(&["f_008.png", "f_009.png", "f_010.png"])).unwrap();
+        let e = check_numbering(&p(&["f_008.png", "f_010.png"])).unwrap_err();
+        assert!(
+            format!("{e}").contains("f_008.png is followed by f_010.png"),
+            "{e}"
+        );
+        // mixed names: no numbering to check
+        check_numbering(&p(&["a1.png", "b7.png"])).unwrap();
+        check_numbering(&p(&["x.png", "y.png"])).unwrap();
+        assert_eq!(
+            split_number("cam2_frame_0012.tif"),
+            Some(("cam2_frame_", 12, ".tif"))
+        );
     }
 
     #[test]
