@@ -17,13 +17,16 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Frames: a directory (all *.png, *.tif, *.tiff in it, in natural name order, so
     /// frame_2 comes before frame_10), a pattern with `*`/`?` in the file name part
-    /// (`rec/frame_*.png`), or one multi-page TIFF. 8- or 16-bit grey.
+    /// (`rec/frame_*.png`), or one multi-page TIFF. 8- or 16-bit grey. Numbered files must
+    /// be consecutive (a gap is an error).
     #[arg(long, value_name = "DIR|GLOB|FILE.tif")]
     pub frames: String,
     /// Camera frame rate, frames per second.
     #[arg(long, value_name = "HZ")]
     pub fps: f64,
-    /// Accelerometer CSV (header row; values in m/s^2).
+    /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
+    /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
+    /// vision acceleration is computed in.
     #[arg(long, value_name = "FILE.csv")]
     pub accel: PathBuf,
     /// Accelerometer sample rate, Hz. `N * fs / fps` must be an integer.
