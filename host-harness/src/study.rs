@@ -836,8 +836,9 @@ pub fn measure_system<const SEG: usize, const NFFT: usize, const SCR: usize>(
     Ok(SystemRecord { peaks, frf_abs })
 }
 
-mod cantilever;
-mod grandstand;
+pub mod cantilever;
+pub mod grandstand;
+pub mod render;
 
 pub use cantilever::Cantilever;
 pub use grandstand::Grandstand;
