@@ -95,7 +95,7 @@ impl StudyConfig {
         match preset {
             Preset::Grandstand => StudyConfig {
                 preset,
-                runs: 40,
+                runs: 100,
                 exposures_ms: (0..8).map(|i| 40.0 + 20.0 * i as f64).collect(),
                 seed: 1,
                 fixed_structure: false,

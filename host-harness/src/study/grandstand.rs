@@ -212,6 +212,14 @@ pub fn simulate(rng: &mut ChaCha8Rng, fixed: bool, pad: usize) -> Realization {
     }
 }
 
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
 /// The smoothed impulse `F0 e alpha (t - t0) exp(-alpha (t - t0))` for `t >= t0`, else 0.
 pub fn impulse(t: f64, alpha: f64, f0: f64) -> f64 {
     if t < T0_S {
@@ -226,6 +234,9 @@ pub fn impulse(t: f64, alpha: f64, f0: f64) -> f64 {
 #[derive(Debug)]
 pub struct Grandstand {
     exposures_ms: Vec<f64>,
+    /// Path segments per precomputed ramp block: the largest step that divides the frame
+    /// period and every half exposure (in fine steps), so windows cover whole blocks.
+    block: usize,
     fixed: bool,
     target: DiskTarget,
 }
@@ -241,7 +252,18 @@ impl Grandstand {
                 "imaging options are not supported by the grandstand renderer yet; remove the [imaging] table"
             );
         }
+        let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
+        let mut block = FINE;
+        for e in &cfg.exposures_ms {
+            let half = e / 2.0 / dt_ms;
+            block = if (half - half.round()).abs() < 1e-9 {
+                gcd(block, half.round() as usize)
+            } else {
+                1
+            };
+        }
         Ok(Grandstand {
+            block: block.max(1),
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
             target: DiskTarget {
@@ -330,6 +352,7 @@ impl Scenario for Grandstand {
             .iter()
             .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
         let mut renderer = BlurRenderer::new(&self.target, lo, hi);
+        renderer.set_path(&path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let cfg = CentroidConfig::binary(THRESHOLD);
@@ -341,7 +364,7 @@ impl Scenario for Grandstand {
             let half = exp / 2.0 / dt_ms; // fine steps either side of the frame instant
             for i in 0..N {
                 let centre = (r.pad + i * FINE) as f64;
-                renderer.render(&path_px, centre - half, centre + half, &mut frame);
+                renderer.render(centre - half, centre + half, &mut frame);
                 let c = centroid_u8(&cfg, &frame, w, h, w)
                     .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
                 match c.position() {

@@ -69,6 +69,10 @@ pub struct BlurRenderer {
     column: Vec<f32>,
     scratch: Vec<Complex32>,
     seg: Segments,
+    path: Vec<f64>,
+    block: usize,
+    /// Ramp sums of consecutive blocks of path segments, `bins` values per block.
+    blocks: Vec<Complex32>,
 }
 
 impl std::fmt::Debug for BlurRenderer {
@@ -84,6 +88,8 @@ impl std::fmt::Debug for BlurRenderer {
 /// Segment coefficients, structure of arrays for vectorisation.
 #[derive(Debug, Default)]
 struct Segments {
+    /// weight
+    w: Vec<f32>,
     /// weight / theta
     c: Vec<f32>,
     zr: Vec<f32>,
@@ -100,6 +106,7 @@ struct Segments {
 impl Segments {
     fn clear(&mut self) {
         for v in [
+            &mut self.w,
             &mut self.c,
             &mut self.zr,
             &mut self.zi,
@@ -118,6 +125,7 @@ impl Segments {
         }
         let (zs, zc) = (-tau * mid / h).sin_cos();
         let (rs, rc) = theta.sin_cos();
+        self.w.push(weight as f32);
         self.c.push((weight / theta) as f32);
         self.zr.push(zc as f32);
         self.zi.push(zs as f32);
@@ -171,6 +179,9 @@ impl BlurRenderer {
             column: vec![0.0; height],
             scratch,
             seg: Segments::default(),
+            path: Vec::new(),
+            block: 1,
+            blocks: Vec::new(),
         }
     }
 
@@ -191,18 +202,49 @@ impl BlurRenderer {
         self.rest_x as f64
     }
 
-    /// Renders the frame exposed from fractional index `a` to `b` of `path` (displacements in
-    /// px at equally spaced instants, linearly interpolated between them) into `out`
-    /// (`width * height`, row-major, 8-bit, rounded to nearest and clamped). `a == b` gives a
-    /// sharp frame.
-    pub fn render(&mut self, path: &[f64], a: f64, b: f64, out: &mut [u8]) {
-        self.averaged_ramp(path, a, b);
-        self.synthesize(out);
+    /// Sets the displacement path (px, positive down, at equally spaced instants, linear in
+    /// between) and precomputes the ramp sums of blocks of `block` consecutive path segments,
+    /// so a frame's averaged ramp costs one add per block inside its exposure window instead of
+    /// one recurrence per segment (the same blocks serve every exposure and frame).
+    pub fn set_path(&mut self, path: &[f64], block: usize) {
+        self.path.clear();
+        self.path.extend_from_slice(path);
+        let block = block.max(1);
+        self.block = block;
+        let bins = self.ramp.len();
+        let segs = path.len().saturating_sub(1);
+        let nblocks = segs / block;
+        self.blocks.clear();
+        self.blocks.reserve(nblocks * bins);
+        let h = self.height as f64;
+        let mut acc = vec![Complex32::new(0.0, 0.0); bins];
+        for j in 0..nblocks {
+            self.seg.clear();
+            for i in j * block..(j + 1) * block {
+                let (da, db) = (path[i], path[i + 1]);
+                self.seg.push(1.0, 0.5 * (da + db), db - da, h);
+            }
+            ramp_sum(&mut self.seg, &mut acc);
+            self.blocks.extend_from_slice(&acc);
+        }
+    }
+
+    /// Renders the frame exposed from fractional path index `a` to `b` (see
+    /// [`set_path`](Self::set_path)) into `out` (`width * height`, row-major, 8-bit, rounded
+    /// to nearest and clamped). `a == b` gives a sharp frame.
+    pub fn render(&mut self, a: f64, b: f64, out: &mut [u8]) {
+        self.averaged_ramp(a, b);
+        let w = self.width;
+        self.columns(|x, col| {
+            for (y, v) in col.iter().enumerate() {
+                out[y * w + x] = (v + 0.5).clamp(0.0, 255.0) as u8;
+            }
+        });
     }
 
     /// Renders the float image (before quantisation) into `out` (`width * height`).
-    pub fn render_float(&mut self, path: &[f64], a: f64, b: f64, out: &mut [f32]) {
-        self.averaged_ramp(path, a, b);
+    pub fn render_float(&mut self, a: f64, b: f64, out: &mut [f32]) {
+        self.averaged_ramp(a, b);
         for v in out.iter_mut() {
             *v = 0.0;
         }
@@ -210,15 +252,6 @@ impl BlurRenderer {
         self.columns(|x, col| {
             for (y, v) in col.iter().enumerate() {
                 out[y * w + x] = *v;
-            }
-        });
-    }
-
-    fn synthesize(&mut self, out: &mut [u8]) {
-        let w = self.width;
-        self.columns(|x, col| {
-            for (y, v) in col.iter().enumerate() {
-                out[y * w + x] = (v + 0.5).clamp(0.0, 255.0) as u8;
             }
         });
     }
@@ -247,62 +280,110 @@ impl BlurRenderer {
         }
     }
 
-    /// A[k] for k = 0 ..= H/2 from the path between fractional indices a and b.
-    fn averaged_ramp(&mut self, path: &[f64], a: f64, b: f64) {
+    /// A[k] for k = 0 ..= H/2: the ramp averaged over the path between indices a and b.
+    fn averaged_ramp(&mut self, a: f64, b: f64) {
         let h = self.height as f64;
-        let at = |t: f64| -> f64 {
-            let i = t.floor().clamp(0.0, (path.len() - 1) as f64) as usize;
-            let j = (i + 1).min(path.len() - 1);
-            let f = (t - i as f64).clamp(0.0, 1.0);
-            path[i] * (1.0 - f) + path[j] * f
-        };
+        let bins = self.ramp.len();
         self.seg.clear();
         if b <= a {
-            self.seg.push(1.0, at(a), 0.0, h);
+            self.seg.push(1.0, at(&self.path, a), 0.0, h);
+            ramp_sum(&mut self.seg, &mut self.ramp);
+            return;
+        }
+        // whole blocks inside [a, b]
+        let bl = self.block as f64;
+        let nblocks = self.blocks.len() / bins.max(1);
+        let first_block = ((a / bl).ceil().max(0.0) as usize).min(nblocks);
+        let last_block = ((b / bl).floor().max(0.0) as usize).clamp(first_block, nblocks);
+        let (lo, hi) = if first_block < last_block {
+            (first_block as f64 * bl, last_block as f64 * bl)
         } else {
-            let total = b - a;
-            let mut t = a;
-            while t < b {
-                let next = (t.floor() + 1.0).min(b);
-                let (da, db) = (at(t), at(next));
-                self.seg
-                    .push((next - t) / total, 0.5 * (da + db), db - da, h);
-                t = next;
+            (b, b)
+        };
+        // the rest as single (possibly partial) segments, weight = duration in path steps
+        let mut seg = std::mem::take(&mut self.seg);
+        push_range(&self.path, &mut seg, a, lo.min(b), h);
+        if hi < b {
+            push_range(&self.path, &mut seg, hi, b, h);
+        }
+        ramp_sum(&mut seg, &mut self.ramp);
+        self.seg = seg;
+        for j in first_block..last_block {
+            for (r, v) in self
+                .ramp
+                .iter_mut()
+                .zip(&self.blocks[j * bins..(j + 1) * bins])
+            {
+                *r += v;
             }
         }
-        let s = &mut self.seg;
-        let n = s.c.len();
-        s.pzr.clear();
-        s.pzr.resize(n, 1.0);
-        s.pzi.clear();
-        s.pzi.resize(n, 0.0);
-        s.prr.clear();
-        s.prr.resize(n, 1.0);
-        s.pri.clear();
-        s.pri.resize(n, 0.0);
-        self.ramp[0] = Complex32::new(1.0, 0.0);
-        for k in 1..self.ramp.len() {
-            let (mut re, mut im) = (0.0f32, 0.0f32);
-            for i in 0..n {
-                let (zr, zi) = (
-                    s.pzr[i] * s.zr[i] - s.pzi[i] * s.zi[i],
-                    s.pzr[i] * s.zi[i] + s.pzi[i] * s.zr[i],
-                );
-                let (rr, ri) = (
-                    s.prr[i] * s.rr[i] - s.pri[i] * s.ri[i],
-                    s.prr[i] * s.ri[i] + s.pri[i] * s.rr[i],
-                );
-                s.pzr[i] = zr;
-                s.pzi[i] = zi;
-                s.prr[i] = rr;
-                s.pri[i] = ri;
-                let c = s.c[i] * ri;
-                re += c * zr;
-                im += c * zi;
-            }
-            let kk = 1.0 / k as f32;
-            self.ramp[k] = Complex32::new(re * kk, im * kk);
+        let inv = 1.0 / (b - a) as f32;
+        for r in self.ramp.iter_mut() {
+            *r *= inv;
         }
+    }
+}
+
+/// Position on `path` at fractional index `t` (clamped to the path; 0 for an empty path).
+fn at(p: &[f64], t: f64) -> f64 {
+    if p.is_empty() {
+        return 0.0;
+    }
+    let i = t.floor().clamp(0.0, (p.len() - 1) as f64) as usize;
+    let j = (i + 1).min(p.len() - 1);
+    let f = (t - i as f64).clamp(0.0, 1.0);
+    p[i] * (1.0 - f) + p[j] * f
+}
+
+/// Appends the path segments between fractional indices `from` and `to`, split at the path's
+/// samples, each weighted by its duration in path steps.
+fn push_range(path: &[f64], seg: &mut Segments, from: f64, to: f64, h: f64) {
+    let mut t = from;
+    while t < to {
+        let next = (t.floor() + 1.0).min(to);
+        let (da, db) = (at(path, t), at(path, next));
+        seg.push(next - t, 0.5 * (da + db), db - da, h);
+        t = next;
+    }
+}
+
+/// `out[k] = sum_s w_s exp(-i k a_s) sinc(k theta_s)` for the segments in `seg` (k = 0 ..
+/// out.len()), by recurrence over k, vectorised over the segments.
+fn ramp_sum(s: &mut Segments, out: &mut [Complex32]) {
+    let n = s.c.len();
+    s.pzr.clear();
+    s.pzr.resize(n, 1.0);
+    s.pzi.clear();
+    s.pzi.resize(n, 0.0);
+    s.prr.clear();
+    s.prr.resize(n, 1.0);
+    s.pri.clear();
+    s.pri.resize(n, 0.0);
+    if let Some(o) = out.first_mut() {
+        *o = Complex32::new(s.w.iter().sum(), 0.0);
+    }
+    for (k, o) in out.iter_mut().enumerate().skip(1) {
+        let (mut re, mut im) = (0.0f32, 0.0f32);
+        let it = s
+            .pzr
+            .iter_mut()
+            .zip(s.pzi.iter_mut())
+            .zip(s.prr.iter_mut().zip(s.pri.iter_mut()))
+            .zip(s.zr.iter().zip(&s.zi))
+            .zip(s.rr.iter().zip(&s.ri).zip(&s.c));
+        for ((((pzr, pzi), (prr, pri)), (zr, zi)), ((rr, ri), c)) in it {
+            let (a, b) = (*pzr * zr - *pzi * zi, *pzr * zi + *pzi * zr);
+            let (e, f) = (*prr * rr - *pri * ri, *prr * ri + *pri * rr);
+            *pzr = a;
+            *pzi = b;
+            *prr = e;
+            *pri = f;
+            let cf = c * f;
+            re += cf * a;
+            im += cf * b;
+        }
+        let kk = 1.0 / k as f32;
+        *o = Complex32::new(re * kk, im * kk);
     }
 }
 
@@ -334,7 +415,8 @@ mod tests {
         let mut r = BlurRenderer::new(&t, -10.0, 10.0);
         let (w, h) = (r.width(), r.height());
         let mut img = vec![0.0f32; w * h];
-        r.render_float(&[2.25], 0.0, 0.0, &mut img);
+        r.set_path(&[2.25], 1);
+        r.render_float(0.0, 0.0, &mut img);
         let (cx, cy) = (r.rest_x(), r.rest_y() + 2.25);
         let mut worst = 0.0f64;
         for y in 0..h {
@@ -348,13 +430,36 @@ mod tests {
     }
 
     #[test]
+    fn block_sums_equal_the_segment_by_segment_average() {
+        let path: Vec<f64> = (0..300)
+            .map(|i| 8.0 * (i as f64 * 0.05).sin() + 0.01 * i as f64)
+            .collect();
+        let mut r = BlurRenderer::new(&target(), -9.0, 12.0);
+        let (w, h) = (r.width(), r.height());
+        let (mut a, mut b) = (vec![0.0f32; w * h], vec![0.0f32; w * h]);
+        for (lo, hi) in [(12.3, 95.8), (40.0, 160.0), (0.0, 299.0), (5.5, 6.25)] {
+            r.set_path(&path, 1);
+            r.render_float(lo, hi, &mut a);
+            r.set_path(&path, 7);
+            r.render_float(lo, hi, &mut b);
+            let worst = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0f32, f32::max);
+            assert!(worst < 2e-3, "window {lo}..{hi}: {worst}");
+        }
+    }
+
+    #[test]
     fn integer_shift_equals_rotating_rows() {
         let mut r = BlurRenderer::new(&target(), -10.0, 10.0);
         let (w, h) = (r.width(), r.height());
         let mut a = vec![0.0f32; w * h];
         let mut b = vec![0.0f32; w * h];
-        r.render_float(&[0.0], 0.0, 0.0, &mut a);
-        r.render_float(&[3.0], 0.0, 0.0, &mut b);
+        r.set_path(&[0.0, 3.0], 1);
+        r.render_float(0.0, 0.0, &mut a);
+        r.render_float(1.0, 1.0, &mut b);
         a.rotate_right(3 * w);
         let worst = a
             .iter()
@@ -369,10 +474,12 @@ mod tests {
         let mut r = BlurRenderer::new(&target(), -10.0, 10.0);
         let (w, h) = (r.width(), r.height());
         let mut img = vec![0.0f32; w * h];
-        r.render_float(&[0.0], 0.0, 0.0, &mut img);
+        r.set_path(&[0.0], 1);
+        r.render_float(0.0, 0.0, &mut img);
         let c0 = weighted_cy(&img, w);
         for d in [0.1, 0.37, -0.73, 4.5] {
-            r.render_float(&[d], 0.0, 0.0, &mut img);
+            r.set_path(&[d], 1);
+            r.render_float(0.0, 0.0, &mut img);
             let c = weighted_cy(&img, w);
             assert!((c - c0 - d).abs() < 1e-3, "shift {d}: moved {}", c - c0);
         }
@@ -390,19 +497,16 @@ mod tests {
         let (w, h) = (r.width(), r.height());
         let mut img = vec![0.0f32; w * h];
         let mut c0 = vec![0.0f32; w * h];
-        r.render_float(&[0.0], 0.0, 0.0, &mut c0);
+        r.set_path(&[0.0], 1);
+        r.render_float(0.0, 0.0, &mut c0);
         let rest = weighted_cy(&c0, w);
+        r.set_path(&path, 10);
         // least-squares amplitude of the centroid sinusoid over whole periods
         let (mut ss, mut sc) = (0.0, 0.0);
         let frames = 300;
         for i in 0..frames {
             let centre = 500.0 + i as f64 * 10.0;
-            r.render_float(
-                &path,
-                centre - te * fine / 2.0,
-                centre + te * fine / 2.0,
-                &mut img,
-            );
+            r.render_float(centre - te * fine / 2.0, centre + te * fine / 2.0, &mut img);
             let y = weighted_cy(&img, w) - rest;
             let ph = std::f64::consts::TAU * f * centre / fine;
             ss += y * ph.sin();
