@@ -1,1 +1,434 @@
-//! (under construction)
+//! Fourier (zero-padding) upsampling of camera-rate displacement to the ADC rate (SPEC 2.2),
+//! optionally fused with the displacement-to-acceleration conversion of [`crate::convert`].
+//!
+//! A record of `n` samples becomes `m >= n` samples spanning the same time: `X = DFT_n(x)`;
+//! `Y` has `m` bins with `Y[k] = X[k]` for the positive and negative frequencies below `n/2`,
+//! zeros in between, and for even `n` the Nyquist bin `X[n/2]` split in half between `+n/2`
+//! and `-n/2`; `y = IDFT_m(Y) * m / n` (with the unnormalised inverse of [`crate::dft`] that is
+//! `sum / n`). This is `scipy.signal.resample`'s convention. `m == n` returns the input.
+//!
+//! The state owns its buffers, sized by const generics: `M >= m` complex work values and
+//! `SCRATCH >= max(scratch_len(n), scratch_len(m))` ([`scratch_capacity`]). 1200 -> 20480
+//! (10 s at 120 fps to 2048 Hz) needs `Upsampler<20480, { scratch_capacity(1200, 20480) }>`;
+//! 120 -> 2048 needs `Upsampler<2048, { scratch_capacity(120, 2048) }>` (about 17 KiB).
+
+use crate::dft::{scratch_len, Dft, DftError, Direction};
+use crate::Complex32;
+use core::f32::consts::PI;
+use core::fmt;
+
+/// Why an upsampler cannot be built or run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum UpsampleError {
+    /// `n` is zero or `m < n` (this type only upsamples).
+    Lengths {
+        /// Input length.
+        n: usize,
+        /// Output length.
+        m: usize,
+    },
+    /// `m` exceeds the work capacity `M`.
+    Capacity {
+        /// Output length asked for.
+        m: usize,
+        /// Capacity `M`.
+        capacity: usize,
+    },
+    /// The DFT scratch capacity is too small (see [`scratch_capacity`]).
+    Scratch {
+        /// Scratch values needed.
+        needed: usize,
+        /// Capacity `SCRATCH`.
+        capacity: usize,
+    },
+    /// A transform length is not supported by [`crate::dft`].
+    Dft(DftError),
+    /// The output rate is not an integer multiple of the input rate times `n`: `n * to / from`
+    /// is not an integer.
+    RateRatio,
+    /// A slice passed to `process` has the wrong length.
+    BufferLen {
+        /// Length expected.
+        expected: usize,
+        /// Length passed.
+        got: usize,
+    },
+}
+
+impl fmt::Display for UpsampleError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            UpsampleError::Lengths { n, m } => {
+                write!(f, "cannot upsample {n} samples to {m}: need 1 <= n <= m")
+            }
+            UpsampleError::Capacity { m, capacity } => {
+                write!(f, "output length {m} exceeds the capacity {capacity}")
+            }
+            UpsampleError::Scratch { needed, capacity } => write!(
+                f,
+                "DFT scratch needs {needed} values, the capacity is {capacity}"
+            ),
+            UpsampleError::Dft(e) => write!(f, "{e}"),
+            UpsampleError::RateRatio => write!(
+                f,
+                "the record length times the rate ratio is not an integer number of samples"
+            ),
+            UpsampleError::BufferLen { expected, got } => {
+                write!(f, "buffer has {got} values, {expected} expected")
+            }
+        }
+    }
+}
+
+impl core::error::Error for UpsampleError {}
+
+impl From<DftError> for UpsampleError {
+    fn from(e: DftError) -> Self {
+        UpsampleError::Dft(e)
+    }
+}
+
+/// Scratch capacity for upsampling `n -> m` (0 if a length is unsupported; `try_new` then
+/// rejects it). Usable in const context.
+pub const fn scratch_capacity(n: usize, m: usize) -> usize {
+    let a = match scratch_len(n) {
+        Some(v) => v,
+        None => 0,
+    };
+    let b = match scratch_len(m) {
+        Some(v) => v,
+        None => 0,
+    };
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `n * to / from` when it is an integer (rates in Hz as integers or exact ratios).
+pub const fn output_len(n: usize, from_hz: u32, to_hz: u32) -> Option<usize> {
+    if from_hz == 0 {
+        return None;
+    }
+    let num = n as u64 * to_hz as u64;
+    if num % from_hz as u64 != 0 {
+        return None;
+    }
+    Some((num / from_hz as u64) as usize)
+}
+
+/// Fourier upsampler from `n` to `m` samples with owned buffers (`M` work values, `SCRATCH`
+/// DFT scratch values).
+#[derive(Debug, Clone)]
+pub struct Upsampler<const M: usize, const SCRATCH: usize> {
+    n: usize,
+    m: usize,
+    fwd: Dft,
+    inv: Dft,
+    work: [Complex32; M],
+    scratch: [Complex32; SCRATCH],
+}
+
+impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
+    /// Plans `n -> m` (`1 <= n <= m <= M`).
+    pub fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
+        if n == 0 || m < n {
+            return Err(UpsampleError::Lengths { n, m });
+        }
+        if m > M {
+            return Err(UpsampleError::Capacity { m, capacity: M });
+        }
+        let fwd = Dft::try_new(n)?;
+        let inv = Dft::try_new(m)?;
+        let needed = if fwd.scratch_len() > inv.scratch_len() {
+            fwd.scratch_len()
+        } else {
+            inv.scratch_len()
+        };
+        if needed > SCRATCH {
+            return Err(UpsampleError::Scratch {
+                needed,
+                capacity: SCRATCH,
+            });
+        }
+        Ok(Upsampler {
+            n,
+            m,
+            fwd,
+            inv,
+            work: [Complex32::new(0.0, 0.0); M],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+        })
+    }
+
+    /// Plans the upsampling of `n` samples at `from_hz` to `to_hz` (integer rates; the output
+    /// length `n * to / from` must be an integer).
+    pub fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
+        match output_len(n, from_hz, to_hz) {
+            Some(m) => Self::try_new(n, m),
+            None => Err(UpsampleError::RateRatio),
+        }
+    }
+
+    /// Input length.
+    pub fn input_len(&self) -> usize {
+        self.n
+    }
+
+    /// Output length.
+    pub fn output_len(&self) -> usize {
+        self.m
+    }
+
+    /// Upsamples `input` (`n` values) into `output` (`m` values).
+    pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), UpsampleError> {
+        self.run(input, output, None)
+    }
+
+    /// Upsamples and converts displacement to acceleration in one pass (SPEC 2.3 fused with
+    /// 2.2): the spectrum is multiplied by `-(2 pi f)^2 * scale` (DC zeroed) before the inverse
+    /// transform. `fs_in_hz` is the input sampling rate (the bins are at `k fs_in / n`);
+    /// `scale` converts the input unit times s^-2 to the output unit (e.g. `1e-3` for mm in,
+    /// m/s^2 out).
+    pub fn process_acceleration(
+        &mut self,
+        input: &[f32],
+        output: &mut [f32],
+        fs_in_hz: f32,
+        scale: f32,
+    ) -> Result<(), UpsampleError> {
+        self.run(input, output, Some((fs_in_hz, scale)))
+    }
+
+    fn run(
+        &mut self,
+        input: &[f32],
+        output: &mut [f32],
+        accel: Option<(f32, f32)>,
+    ) -> Result<(), UpsampleError> {
+        let (n, m) = (self.n, self.m);
+        if input.len() != n {
+            return Err(UpsampleError::BufferLen {
+                expected: n,
+                got: input.len(),
+            });
+        }
+        if output.len() != m {
+            return Err(UpsampleError::BufferLen {
+                expected: m,
+                got: output.len(),
+            });
+        }
+        let work = &mut self.work[..m];
+        for (w, x) in work.iter_mut().zip(input) {
+            *w = Complex32::new(*x, 0.0);
+        }
+        self.fwd
+            .process(&mut work[..n], &mut self.scratch, Direction::Forward)?;
+        // bins kept on each side: positive 0 ..= pos - 1, negative 1 ..= neg
+        let even = n % 2 == 0;
+        let pos = if even { n / 2 } else { n.div_ceil(2) };
+        let neg = if even { n / 2 - 1 } else { (n - 1) / 2 };
+        let nyq = if even && n > 0 {
+            Some(work[n / 2] * 0.5)
+        } else {
+            None
+        };
+        if m > n {
+            // move the negative frequencies to the top; in ascending j no source is
+            // overwritten before it is moved (targets m - j lie above sources n - j' for j' > j)
+            for j in 1..=neg {
+                work[m - j] = work[n - j];
+            }
+            for w in work[pos..m - neg].iter_mut() {
+                *w = Complex32::new(0.0, 0.0);
+            }
+            if let Some(v) = nyq {
+                work[n / 2] = v;
+                work[m - n / 2] = v;
+            }
+        }
+        if let Some((fs, scale)) = accel {
+            let df = fs / n as f32;
+            work[0] = Complex32::new(0.0, 0.0);
+            for (k, w) in work.iter_mut().enumerate().skip(1) {
+                // signed frequency of bin k of the m-point spectrum (same bins as the input)
+                let kk = if k <= m / 2 {
+                    k as f32
+                } else {
+                    k as f32 - m as f32
+                };
+                let om = 2.0 * PI * kk * df;
+                *w *= -om * om * scale;
+            }
+        }
+        self.inv
+            .process(work, &mut self.scratch, Direction::Inverse)?;
+        let s = 1.0 / n as f32;
+        for (o, w) in output.iter_mut().zip(work.iter()) {
+            *o = w.re * s;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec;
+    use std::vec::Vec;
+
+    /// f64 reference: direct DFT, SPEC 2.2 bin mapping, direct inverse.
+    fn reference(x: &[f32], m: usize) -> Vec<f64> {
+        let n = x.len();
+        let tau = std::f64::consts::TAU;
+        let big: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                x.iter().enumerate().fold((0.0, 0.0), |(re, im), (j, v)| {
+                    let a = -tau * ((j * k) % n) as f64 / n as f64;
+                    (re + *v as f64 * a.cos(), im + *v as f64 * a.sin())
+                })
+            })
+            .collect();
+        let mut y = vec![(0.0, 0.0); m];
+        for k in 0..n {
+            let (re, im) = big[k];
+            if n % 2 == 0 && k == n / 2 {
+                y[n / 2].0 += re / 2.0;
+                y[n / 2].1 += im / 2.0;
+                y[m - n / 2].0 += re / 2.0;
+                y[m - n / 2].1 += im / 2.0;
+            } else if 2 * k < n {
+                y[k] = (re, im);
+            } else {
+                y[m - (n - k)] = (re, im);
+            }
+        }
+        (0..m)
+            .map(|t| {
+                y.iter().enumerate().fold(0.0, |acc, (k, (re, im))| {
+                    let a = tau * ((k * t) % m) as f64 / m as f64;
+                    acc + re * a.cos() - im * a.sin()
+                }) / n as f64
+            })
+            .collect()
+    }
+
+    fn signal(n: usize) -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                let t = i as f32;
+                (0.37 * t).sin() + 0.5 * (1.3 * t + 0.2).cos() + 0.01 * t
+            })
+            .collect()
+    }
+
+    fn check<const M: usize, const S: usize>(n: usize, m: usize) {
+        let x = signal(n);
+        let want = reference(&x, m);
+        let mut up = Upsampler::<M, S>::try_new(n, m).unwrap();
+        let mut y = vec![0.0f32; m];
+        up.process(&x, &mut y).unwrap();
+        let rms = (want.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
+        let err = y
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (*a as f64 - b).abs())
+            .fold(0.0, f64::max);
+        assert!(err / rms < 1e-5, "{n} -> {m}: max error {err} vs rms {rms}");
+    }
+
+    #[test]
+    fn matches_the_direct_reference_for_odd_and_even_lengths() {
+        check::<256, { scratch_capacity(15, 256) }>(15, 256);
+        check::<256, { scratch_capacity(16, 256) }>(16, 256);
+        check::<363, { scratch_capacity(121, 363) }>(121, 363);
+        check::<128, { scratch_capacity(75, 128) }>(75, 128);
+        check::<2048, { scratch_capacity(120, 2048) }>(120, 2048);
+        check::<101, { scratch_capacity(100, 101) }>(100, 101);
+        check::<100, { scratch_capacity(100, 100) }>(100, 100);
+    }
+
+    #[test]
+    fn band_limited_sinusoid_upsamples_to_its_analytic_values() {
+        // 7 cycles in 120 samples, upsampled to 2048: exact samples of the same sinusoid
+        let (n, m) = (120, 2048);
+        let x: Vec<f32> = (0..n)
+            .map(|i| (2.0 * PI * 7.0 * i as f32 / n as f32 + 0.3).sin())
+            .collect();
+        let mut up =
+            Upsampler::<2048, { scratch_capacity(120, 2048) }>::from_rates(n, 120, 2048).unwrap();
+        let mut y = vec![0.0f32; m];
+        up.process(&x, &mut y).unwrap();
+        for (i, v) in y.iter().enumerate() {
+            let want = libm::sinf(2.0 * PI * 7.0 * i as f32 / m as f32 + 0.3);
+            assert!((v - want).abs() < 2e-5, "sample {i}: {v} vs {want}");
+        }
+        // and the fused conversion gives -omega^2 times it (fs = 120 Hz -> f = 7 Hz)
+        let mut a = vec![0.0f32; m];
+        up.process_acceleration(&x, &mut a, 120.0, 1.0).unwrap();
+        let om = 2.0 * PI * 7.0;
+        for (i, v) in a.iter().enumerate() {
+            let want = -om * om * libm::sinf(2.0 * PI * 7.0 * i as f32 / m as f32 + 0.3);
+            // f32 rounding amplified by omega^2: 1e-4 of the peak
+            assert!(
+                (v - want).abs() < 1e-4 * om * om,
+                "sample {i}: {v} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn decimating_the_output_returns_the_input() {
+        // 1200 -> 20480 is not an integer ratio; 15 -> 256 neither; use 60 -> 240 (x4)
+        let x = signal(60);
+        let mut up = Upsampler::<240, { scratch_capacity(60, 240) }>::try_new(60, 240).unwrap();
+        let mut y = vec![0.0f32; 240];
+        up.process(&x, &mut y).unwrap();
+        for (i, v) in x.iter().enumerate() {
+            assert!((y[4 * i] - v).abs() < 1e-5, "sample {i}");
+        }
+    }
+
+    #[test]
+    fn rejects_bad_settings_and_buffers() {
+        type U = Upsampler<256, { scratch_capacity(15, 256) }>;
+        assert!(matches!(
+            U::try_new(0, 10),
+            Err(UpsampleError::Lengths { .. })
+        ));
+        assert!(matches!(
+            U::try_new(20, 10),
+            Err(UpsampleError::Lengths { .. })
+        ));
+        assert!(matches!(
+            U::try_new(15, 300),
+            Err(UpsampleError::Capacity { .. })
+        ));
+        assert!(matches!(
+            Upsampler::<256, 0>::try_new(15, 256),
+            Err(UpsampleError::Scratch { .. })
+        ));
+        assert_eq!(
+            U::from_rates(15, 120, 2047).err(),
+            Some(UpsampleError::RateRatio)
+        );
+        let mut u = U::try_new(15, 256).unwrap();
+        let mut out = [0.0f32; 255];
+        assert!(matches!(
+            u.process(&[0.0; 15], &mut out),
+            Err(UpsampleError::BufferLen { .. })
+        ));
+    }
+
+    #[test]
+    fn state_sizes() {
+        // RAM an MCU needs (listed in the README)
+        assert!(
+            core::mem::size_of::<Upsampler<2048, { scratch_capacity(120, 2048) }>>() < 20 * 1024
+        );
+    }
+}
