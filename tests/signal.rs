@@ -324,3 +324,86 @@ mod frf {
         assert!(err.contains("32768"), "{err}");
     }
 }
+
+mod upsample {
+    //! `host-harness upsample`: a band-limited sinusoid matches its analytic values; bad input
+    //! exits with code 2 naming the row, column or rates.
+
+    use crate::util::harness;
+
+    #[test]
+    fn sinusoid_120_to_2048_matches_the_analytic_values() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("x.csv");
+        let out = dir.path().join("y.csv");
+        let mut text = String::from("t,x\n");
+        let f = 7.0; // 7 Hz: whole cycles in 1 s at 120 fps
+        for i in 0..120 {
+            let t = i as f64 / 120.0;
+            text.push_str(&format!("{t},{}\n", (std::f64::consts::TAU * f * t).sin()));
+        }
+        std::fs::write(&input, text).unwrap();
+        let o = harness(&[
+            "upsample",
+            "--input",
+            input.to_str().unwrap(),
+            "--col",
+            "x",
+            "--from",
+            "120",
+            "--to",
+            "2048",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&out).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("t_s,value"));
+        let rows: Vec<(f64, f64)> = lines
+            .map(|l| {
+                let (a, b) = l.split_once(',').unwrap();
+                (a.parse().unwrap(), b.parse().unwrap())
+            })
+            .collect();
+        assert_eq!(rows.len(), 2048);
+        for (t, v) in rows {
+            let want = (std::f64::consts::TAU * f * t).sin();
+            assert!((v - want).abs() < 1e-4, "t = {t}: {v} vs {want}");
+        }
+    }
+
+    #[test]
+    fn bad_input_exits_2_with_a_precise_message() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("y.csv");
+        let cases: [(&str, &str, &[&str]); 4] = [
+            ("x\n1\nfoo\n", "x", &["row 3", "`x`"]),
+            ("x\n1\nNaN\n", "x", &["row 3", "not a finite"]),
+            ("x\n1\n2\n", "y", &["no column named `y`"]),
+            ("x\n1\n2\n3\n", "x", &["integer number of samples"]),
+        ];
+        for (i, (csv, col, needles)) in cases.iter().enumerate() {
+            let input = dir.path().join(format!("in{i}.csv"));
+            std::fs::write(&input, csv).unwrap();
+            let o = harness(&[
+                "upsample",
+                "--input",
+                input.to_str().unwrap(),
+                "--col",
+                col,
+                "--from",
+                "120",
+                "--to",
+                "2048",
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            assert_eq!(o.status.code(), Some(2), "case {i}");
+            let err = String::from_utf8_lossy(&o.stderr);
+            for n in *needles {
+                assert!(err.contains(n), "case {i}: `{n}` not in {err}");
+            }
+        }
+    }
+}
