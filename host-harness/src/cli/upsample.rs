@@ -3,7 +3,7 @@
 
 use crate::bad_input;
 use anyhow::Context as _;
-use firmware_core::upsample::{scratch_capacity, Upsampler};
+use firmware_core::upsample::Upsampler;
 use std::path::PathBuf;
 
 /// Largest output length this command handles (the host instantiation's capacity).
