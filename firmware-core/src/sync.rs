@@ -355,6 +355,81 @@ mod tests {
         pin.done();
     }
 
+    #[test]
+    fn pin_errors_are_propagated_and_the_edge_is_retried() {
+        use embedded_hal_mock::eh1::MockError;
+        use std::io::ErrorKind;
+        let plan = SyncPlan::try_new(2048, 120, 100_000, 61).unwrap();
+        let pin = Mock::new(&[
+            Transaction::set(State::High).with_error(MockError::Io(ErrorKind::NotConnected)),
+            Transaction::set(State::High),
+        ]);
+        let mut d = SyncDriver::new(pin, Steps { t: 0, step: 1 }, plan);
+        let mut events = Vec::new();
+        assert_eq!(
+            d.poll(|e| events.push(e)),
+            Err(MockError::Io(ErrorKind::NotConnected))
+        );
+        // nothing was reported for the tick whose edge failed
+        assert!(events.is_empty());
+        assert_eq!(d.poll(|e| events.push(e)), Ok(1));
+        assert_eq!(
+            events,
+            [
+                Event::Frame { index: 0, tick: 0 },
+                Event::Sample { index: 0, tick: 0 }
+            ]
+        );
+        let (mut pin, _) = d.release();
+        pin.done();
+    }
+
+    /// Records (tick, level) for every pin write; shares the tick with [`SharedTicks`].
+    struct EdgePin {
+        now: std::rc::Rc<core::cell::Cell<u32>>,
+        edges: Vec<(u32, bool)>,
+    }
+    impl embedded_hal::digital::ErrorType for EdgePin {
+        type Error = core::convert::Infallible;
+    }
+    impl OutputPin for EdgePin {
+        fn set_low(&mut self) -> Result<(), Self::Error> {
+            self.edges.push((self.now.get(), false));
+            Ok(())
+        }
+        fn set_high(&mut self) -> Result<(), Self::Error> {
+            self.edges.push((self.now.get(), true));
+            Ok(())
+        }
+    }
+    struct SharedTicks(std::rc::Rc<core::cell::Cell<u32>>);
+    impl TickSource for SharedTicks {
+        fn now(&mut self) -> u32 {
+            self.0.get()
+        }
+    }
+
+    #[test]
+    fn pulse_edges_fall_on_the_exact_ticks_when_polled_every_tick() {
+        // 2048 Hz / 120 fps, 2 ms exposure = 61 ticks: rising edges at 256 k, falling at 256 k + 61
+        let plan = SyncPlan::try_new(2048, 120, 100_000, 61).unwrap();
+        let now = std::rc::Rc::new(core::cell::Cell::new(0u32));
+        let pin = EdgePin {
+            now: now.clone(),
+            edges: Vec::new(),
+        };
+        let mut d = SyncDriver::new(pin, SharedTicks(now.clone()), plan);
+        for t in 0..(5 * 256) {
+            now.set(t);
+            d.poll(|_| {}).unwrap();
+        }
+        let (pin, _) = d.release();
+        let want: Vec<(u32, bool)> = (0..5u32)
+            .flat_map(|k| [(256 * k, true), (256 * k + 61, false)])
+            .collect();
+        assert_eq!(pin.edges, want);
+    }
+
     proptest::proptest! {
         #[test]
         fn counts_follow_the_rates_whatever_the_polling(
