@@ -1,0 +1,517 @@
+//! firmware-core on a Cortex-M4F (QEMU `mps2-an386`): the measurement chain's kernels run on
+//! the target, their results are checked against independent references computed here (naive
+//! loops, closed forms), and the instruction counts of the hot paths are bracketed by calls of
+//! [`bench_mark`] for the `libmarks.so` QEMU plugin (see `bench.sh`).
+//!
+//! Exit code (semihosting): 0 only if every check passed.
+//!
+//! Checks:
+//! * centroid of a 320 x 240 frame held in flash (one disk, 8- and 16-bit, binary and weighted)
+//!   against a naive double loop and against the disk's centre (exact by symmetry);
+//! * streaming Welch H1 (nperseg = nfft = 2048, Hann, 50 % overlap) of a 2048 Hz input/output
+//!   pair through a resonator with a known closed-form FRF: peak frequency and amplitude;
+//! * Fourier upsampling of a 120 fps record (1 s) to 2048 Hz, displacement and acceleration,
+//!   against the analytic band-limited signal;
+//! * the camera/ADC sync plan for 2048 Hz / 120 fps.
+//!
+//! Benchmarks (each between two `bench_mark` calls; the label is printed before the pair):
+//! centroid per mode and depth, one Welch segment pair for nperseg 1024/2048/4096, upsampling
+//! 120 -> 2048 and 1200 -> 20480.
+#![no_std]
+#![no_main]
+
+use core::f32::consts::PI;
+use core::hint::black_box;
+use core::panic::PanicInfo;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use firmware_core::centroid::{self, CentroidConfig, Mode};
+use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
+use firmware_core::upsample::{self, Upsampler};
+use firmware_core::{peaks, sync::SyncPlan, Complex32};
+
+// ---------------------------------------------------------------------------------------------
+// Instruction-count markers
+
+/// Marker for the `libmarks.so` plugin: it prints the instructions executed between
+/// consecutive calls.
+#[inline(never)]
+#[unsafe(no_mangle)]
+pub extern "C" fn bench_mark() {
+    // SAFETY: a `nop` has no effect; it only keeps the function from being merged or removed.
+    unsafe { core::arch::asm!("nop") }
+}
+
+/// Runs `f` between two markers, after printing `label` (bench.sh pairs labels and segments).
+#[inline(always)]
+fn measured<R>(label: &str, f: impl FnOnce() -> R) -> R {
+    hprintln!("bench: {}", label);
+    bench_mark();
+    let r = f();
+    bench_mark();
+    black_box(r)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The frame in flash
+
+const W: usize = 320;
+const H: usize = 240;
+/// Disk centre times two (half-pixel units) and radius: centre (171.5, 97.0), radius 20 px.
+const CX2: i32 = 343;
+const CY2: i32 = 194;
+const R: i32 = 20;
+const BACKGROUND: u16 = 10;
+const LEVEL: u16 = 200;
+const THRESHOLD: u16 = 100;
+
+const fn inside(x: usize, y: usize) -> bool {
+    let dx = 2 * x as i32 - CX2;
+    let dy = 2 * y as i32 - CY2;
+    dx * dx + dy * dy <= 4 * R * R
+}
+
+const fn disk_u8() -> [u8; W * H] {
+    let mut f = [BACKGROUND as u8; W * H];
+    let mut i = 0;
+    while i < W * H {
+        if inside(i % W, i / W) {
+            f[i] = LEVEL as u8;
+        }
+        i += 1;
+    }
+    f
+}
+
+const fn disk_u16() -> [u16; W * H] {
+    let mut f = [BACKGROUND * 64; W * H];
+    let mut i = 0;
+    while i < W * H {
+        if inside(i % W, i / W) {
+            f[i] = LEVEL * 64;
+        }
+        i += 1;
+    }
+    f
+}
+
+/// 8-bit frame in flash (76 800 B).
+static FRAME_U8: [u8; W * H] = disk_u8();
+/// 16-bit frame in flash (153 600 B), same scene times 64.
+static FRAME_U16: [u16; W * H] = disk_u16();
+
+/// Naive reference: (sum of weights, sum of x * w, sum of y * w) over pixels above `t`.
+fn naive_moments(px: impl Iterator<Item = u16>, t: u16, weighted: bool) -> (u64, u64, u64) {
+    let (mut w, mut sx, mut sy) = (0u64, 0u64, 0u64);
+    for (i, p) in px.enumerate() {
+        if p > t {
+            let wi = if weighted { u64::from(p - t) } else { 1 };
+            w += wi;
+            sx += wi * (i % W) as u64;
+            sy += wi * (i / W) as u64;
+        }
+    }
+    (w, sx, sy)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Signals
+
+/// Small deterministic generator (PCG-style LCG), uniform in [-1, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((self.0 >> 40) as f32 / (1u64 << 23) as f32) - 1.0
+    }
+}
+
+const FS: f32 = 2048.0;
+const F0: f32 = 180.0;
+const ZETA: f32 = 0.02;
+
+/// Resonator `y[n] = x[n] + a1 y[n-1] + a2 y[n-2]` with poles at `exp((-zeta +- i sqrt(1 -
+/// zeta^2)) w0 / fs)`: a sampled single-degree-of-freedom resonance at F0.
+struct Resonator {
+    a1: f32,
+    a2: f32,
+    y1: f32,
+    y2: f32,
+}
+impl Resonator {
+    fn new() -> Self {
+        let w0 = 2.0 * PI * F0 / FS;
+        let r = libm::expf(-ZETA * w0);
+        let th = w0 * libm::sqrtf(1.0 - ZETA * ZETA);
+        Resonator {
+            a1: 2.0 * r * libm::cosf(th),
+            a2: -r * r,
+            y1: 0.0,
+            y2: 0.0,
+        }
+    }
+    fn step(&mut self, x: f32) -> f32 {
+        let y = x + self.a1 * self.y1 + self.a2 * self.y2;
+        self.y2 = self.y1;
+        self.y1 = y;
+        y
+    }
+    /// Closed-form frequency response at `f` Hz: 1 / (1 - a1 z^-1 - a2 z^-2), z = e^{i w}.
+    fn response(&self, f: f32) -> Complex32 {
+        let w = 2.0 * PI * f / FS;
+        let z1 = Complex32::new(libm::cosf(w), -libm::sinf(w));
+        let z2 = z1 * z1;
+        let d = Complex32::new(1.0, 0.0) - z1 * self.a1 - z2 * self.a2;
+        Complex32::new(1.0, 0.0) / d
+    }
+}
+
+/// Camera-side test signal (mm): two sinusoids periodic in 1 s, below the 60 Hz Nyquist limit.
+fn camera_signal(t: f32) -> f32 {
+    3.0 * libm::sinf(2.0 * PI * 7.0 * t + 0.3) + 1.5 * libm::cosf(2.0 * PI * 32.0 * t)
+}
+/// Its second derivative (mm/s^2).
+fn camera_signal_acc(t: f32) -> f32 {
+    let (w1, w2) = (2.0 * PI * 7.0, 2.0 * PI * 32.0);
+    -3.0 * w1 * w1 * libm::sinf(w1 * t + 0.3) - 1.5 * w2 * w2 * libm::cosf(w2 * t)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The complete 2048-point pipeline, in static RAM
+
+const NSEG: usize = 2048;
+const CAM_N: usize = 120;
+const UP_SCRATCH: usize = upsample::scratch_capacity(CAM_N, NSEG);
+
+/// Everything a camera firmware needs for vision-channel H1 at 2048 Hz from a 120 fps camera:
+/// the Welch estimator (2048-point segments), the 120 -> 2048 upsampler, one second of camera
+/// samples, its upsampled copy and one second of ADC samples to pair it with.
+struct Pipeline {
+    welch: WelchH1<NSEG, NSEG, 0>,
+    up: Upsampler<NSEG, UP_SCRATCH>,
+    camera: [f32; CAM_N],
+    vision: [f32; NSEG],
+    adc: [f32; NSEG],
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checks
+
+struct Report {
+    failed: u32,
+}
+impl Report {
+    fn check(&mut self, name: &str, ok: bool) {
+        if ok {
+            hprintln!("ok   {}", name);
+        } else {
+            hprintln!("FAIL {}", name);
+            self.failed += 1;
+        }
+    }
+}
+
+fn check_centroids(rep: &mut Report) {
+    let f8 = black_box(&FRAME_U8);
+    let f16 = black_box(&FRAME_U16);
+    for (mode, weighted) in [(Mode::Binary, false), (Mode::Weighted, true)] {
+        // 8-bit
+        let ok = match CentroidConfig::try_new(THRESHOLD, mode, None, None) {
+            Ok(cfg) => match centroid::centroid_u8(&cfg, f8, W, H, W) {
+                Ok(c) => {
+                    let (w, sx, sy) =
+                        naive_moments(f8.iter().map(|&p| u16::from(p)), THRESHOLD, weighted);
+                    let pos = c.position();
+                    hprintln!("centroid u8  {:?}: {:?} (naive weight {})", mode, pos, w);
+                    let want = (sx as f64 / w as f64, sy as f64 / w as f64);
+                    pos.is_some_and(|(x, y)| {
+                        x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
+                    })
+                }
+                Err(_) => false,
+            },
+            Err(_) => false,
+        };
+        rep.check("centroid 8-bit vs naive loop and disk centre", ok);
+        // 16-bit
+        let t16 = THRESHOLD * 64;
+        let ok = match CentroidConfig::try_new(t16, mode, None, None) {
+            Ok(cfg) => match centroid::centroid_u16(&cfg, f16, W, H, W) {
+                Ok(c) => {
+                    let (w, sx, sy) = naive_moments(f16.iter().copied(), t16, weighted);
+                    let pos = c.position();
+                    hprintln!("centroid u16 {:?}: {:?} (naive weight {})", mode, pos, w);
+                    let want = (sx as f64 / w as f64, sy as f64 / w as f64);
+                    pos.is_some_and(|(x, y)| {
+                        x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
+                    })
+                }
+                Err(_) => false,
+            },
+            Err(_) => false,
+        };
+        rep.check("centroid 16-bit vs naive loop and disk centre", ok);
+    }
+}
+
+fn check_h1(rep: &mut Report, p: &mut Pipeline) {
+    let cfg = WelchConfig {
+        fs_hz: FS,
+        nperseg: NSEG,
+        noverlap: NSEG / 2,
+        nfft: NSEG,
+        window: Window::Hann,
+        detrend: Detrend::Constant,
+    };
+    if p.welch.reconfigure(cfg).is_err() {
+        rep.check("Welch configuration", false);
+        return;
+    }
+    let mut res = Resonator::new();
+    let mut rng = Lcg(2016);
+    // 16 s of input/output, pushed one second at a time (as an ADC DMA would deliver it)
+    let mut ok = true;
+    for _ in 0..16 {
+        for (x, y) in p.adc.iter_mut().zip(p.vision.iter_mut()) {
+            *x = rng.next();
+            *y = res.step(*x);
+        }
+        ok &= p.welch.push(&p.adc, &p.vision).is_ok();
+    }
+    rep.check("Welch push", ok && p.welch.segments() == 31);
+    let df = p.welch.df_hz();
+    let band = (100.0, 300.0);
+    let got = peaks::pick_with(p.welch.bins(), df, band, false, |k| p.welch.h1(k));
+    let want = peaks::pick_with(p.welch.bins(), df, band, false, |k| {
+        Some(res.response(k as f32 * df))
+    });
+    match (got, want) {
+        (Some(g), Some(w)) => {
+            hprintln!(
+                "H1 peak: {} Hz, |H1| {} (closed form: {} Hz, {})",
+                g.f_hz,
+                g.amplitude,
+                w.f_hz,
+                w.amplitude
+            );
+            rep.check("H1 resonance frequency = closed form", g.bin == w.bin);
+            rep.check(
+                "H1 resonance amplitude within 2 % of closed form",
+                libm::fabsf(g.amplitude / w.amplitude - 1.0) < 0.02,
+            );
+        }
+        _ => rep.check("H1 peaks found", false),
+    }
+}
+
+fn check_upsampling(rep: &mut Report, p: &mut Pipeline) {
+    for (j, v) in p.camera.iter_mut().enumerate() {
+        *v = camera_signal(j as f32 / 120.0);
+    }
+    // displacement
+    let ok = p.up.process(&p.camera, &mut p.vision).is_ok();
+    let err = p
+        .vision
+        .iter()
+        .enumerate()
+        .map(|(j, v)| libm::fabsf(v - camera_signal(j as f32 / FS)))
+        .fold(0.0f32, f32::max);
+    hprintln!("upsample 120 -> 2048: max error {} mm (amplitude 4.5)", err);
+    rep.check(
+        "upsampled displacement within 1e-4 of analytic",
+        ok && err < 4.5e-4,
+    );
+    // acceleration (fused -omega^2), mm -> mm/s^2
+    let ok =
+        p.up.process_acceleration(&p.camera, &mut p.vision, 120.0, 1.0)
+            .is_ok();
+    let peak = 1.5 * (2.0 * PI * 32.0) * (2.0 * PI * 32.0);
+    let err = p
+        .vision
+        .iter()
+        .enumerate()
+        .map(|(j, v)| libm::fabsf(v - camera_signal_acc(j as f32 / FS)))
+        .fold(0.0f32, f32::max);
+    hprintln!(
+        "upsample acceleration: max error {} mm/s^2 (peak {})",
+        err,
+        peak
+    );
+    rep.check(
+        "upsampled acceleration within 1e-4 of analytic",
+        ok && err < 1e-4 * peak,
+    );
+}
+
+fn check_sync(rep: &mut Report) {
+    let ok = SyncPlan::try_new(2048, 120, 1_000_000, 61)
+        .is_ok_and(|p| (p.tick_hz(), p.adc_div(), p.camera_div()) == (30_720, 15, 256));
+    rep.check(
+        "sync plan 2048 Hz / 120 fps: 30720 Hz, dividers 15 and 256",
+        ok,
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Benchmarks (results are not checked here; the checks above use the same code)
+
+fn bench_centroids() {
+    let f8 = black_box(&FRAME_U8);
+    let f16 = black_box(&FRAME_U16);
+    let b = CentroidConfig::binary(THRESHOLD);
+    let b16 = CentroidConfig::binary(THRESHOLD * 64);
+    let w = CentroidConfig::try_new(THRESHOLD, Mode::Weighted, None, None).ok();
+    let w16 = CentroidConfig::try_new(THRESHOLD * 64, Mode::Weighted, None, None).ok();
+    let _ = measured("centroid binary u8 76800", || {
+        centroid::centroid_u8(&b, f8, W, H, W)
+    });
+    measured("centroid binary u8 row-kernel 76800", || {
+        let mut s = 0u32;
+        for row in f8.chunks_exact(W) {
+            s = s.wrapping_add(centroid::row_binary_u8(black_box(row), 100).pixels);
+        }
+        s
+    });
+    if let Some(w) = w {
+        let _ = measured("centroid weighted u8 76800", || {
+            centroid::centroid_u8(&w, f8, W, H, W)
+        });
+    }
+    let _ = measured("centroid binary u16 76800", || {
+        centroid::centroid_u16(&b16, f16, W, H, W)
+    });
+    if let Some(w16) = w16 {
+        let _ = measured("centroid weighted u16 76800", || {
+            centroid::centroid_u16(&w16, f16, W, H, W)
+        });
+    }
+}
+
+/// One segment pair through a fresh estimator (noverlap 0: `N` samples = one segment).
+#[inline(never)]
+fn bench_welch<const N: usize>(x: &mut [f32; N], y: &mut [f32; N]) {
+    let cfg = WelchConfig {
+        fs_hz: FS,
+        nperseg: N,
+        noverlap: 0,
+        nfft: N,
+        window: Window::Hann,
+        detrend: Detrend::Constant,
+    };
+    let mut rng = Lcg(N as u64);
+    let mut res = Resonator::new();
+    for (a, b) in x.iter_mut().zip(y.iter_mut()) {
+        *a = rng.next();
+        *b = res.step(*a);
+    }
+    if let Ok(mut w) = WelchH1::<N, N, 0>::try_new(cfg) {
+        match N {
+            1024 => measured("welch segment pair 1024", || w.push(x, y)),
+            2048 => measured("welch segment pair 2048", || w.push(x, y)),
+            _ => measured("welch segment pair 4096", || w.push(x, y)),
+        }
+        .ok();
+        black_box(w.h1(1));
+    }
+}
+
+#[inline(never)]
+fn bench_upsample_20480() {
+    const N: usize = 1200;
+    const M: usize = 20480;
+    let mut input = [0.0f32; N];
+    let mut output = [0.0f32; M];
+    for (j, v) in input.iter_mut().enumerate() {
+        *v = camera_signal(j as f32 / 120.0);
+    }
+    if let Ok(mut up) = Upsampler::<M, { upsample::scratch_capacity(N, M) }>::try_new(N, M) {
+        measured("upsample 1200 -> 20480", || up.process(&input, &mut output)).ok();
+    }
+    black_box(&output);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+#[entry]
+fn main() -> ! {
+    hprintln!("mcu-demo: firmware-core on Cortex-M4F (QEMU mps2-an386)");
+    let mut rep = Report { failed: 0 };
+
+    let pipeline = match (
+        WelchH1::<NSEG, NSEG, 0>::try_new(WelchConfig::scipy_default(FS, NSEG)),
+        Upsampler::<NSEG, UP_SCRATCH>::try_new(CAM_N, NSEG),
+    ) {
+        (Ok(welch), Ok(up)) => cortex_m::singleton!(: Pipeline = Pipeline {
+            welch,
+            up,
+            camera: [0.0; CAM_N],
+            vision: [0.0; NSEG],
+            adc: [0.0; NSEG],
+        }),
+        _ => None,
+    };
+    let Some(p) = pipeline else {
+        hprintln!("FAIL pipeline construction");
+        debug::exit(debug::EXIT_FAILURE);
+        loop {}
+    };
+    hprintln!(
+        "ram: pipeline {} B (welch {} B, upsampler {} B, buffers {} B)",
+        core::mem::size_of::<Pipeline>(),
+        core::mem::size_of::<WelchH1<NSEG, NSEG, 0>>(),
+        core::mem::size_of::<Upsampler<NSEG, UP_SCRATCH>>(),
+        core::mem::size_of::<[f32; CAM_N]>() + 2 * core::mem::size_of::<[f32; NSEG]>()
+    );
+
+    check_centroids(&mut rep);
+    check_h1(&mut rep, p);
+    check_upsampling(&mut rep, p);
+    check_sync(&mut rep);
+
+    // benchmarks
+    measured("empty", || ());
+    bench_centroids();
+    bench_welch::<1024>(&mut [0.0; 1024], &mut [0.0; 1024]);
+    bench_welch::<2048>(&mut [0.0; 2048], &mut [0.0; 2048]);
+    bench_welch::<4096>(&mut [0.0; 4096], &mut [0.0; 4096]);
+    for (j, v) in p.camera.iter_mut().enumerate() {
+        *v = camera_signal(j as f32 / 120.0);
+    }
+    measured("upsample 120 -> 2048", || {
+        p.up.process(&p.camera, &mut p.vision)
+    })
+    .ok();
+    bench_upsample_20480();
+
+    if rep.failed == 0 {
+        hprintln!("mcu-demo: all checks passed");
+        debug::exit(debug::EXIT_SUCCESS);
+    } else {
+        hprintln!("mcu-demo: {} check(s) FAILED", rep.failed);
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    loop {}
+}
+
+#[cfg(not(feature = "panic-check"))]
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+#[cfg(feature = "panic-check")]
+#[panic_handler]
+fn panic(_info: &PanicInfo) -> ! {
+    extern "C" {
+        /// Deliberately undefined: referencing it makes the link fail if a panic path survives.
+        fn mcu_demo_panic_path_survived_optimisation() -> !;
+    }
+    // SAFETY: never runs; the symbol does not exist, so an image that could call it never links.
+    unsafe { mcu_demo_panic_path_survived_optimisation() }
+}
