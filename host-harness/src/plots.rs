@@ -1,21 +1,591 @@
-//! (under construction: being written)
-use crate::report::{FrfBandRow, RealizationRow, SummaryRow};
+//! PNG and SVG figures of study results (and an FRF figure for recordings), drawn with
+//! `plotters` and the bundled DejaVu Sans font (no system fontconfig needed).
+//!
+//! Study figures, each written as `NAME.png` and `NAME.svg`:
+//! * `frf_band`: mean |FRF| with its 90 % band (5th..95th percentile) per exposure, transducer
+//!   and vision overlaid, one panel per exposure;
+//! * `pdf_a`, `pdf_f`: density histograms of the picked amplitude and frequency, one panel per
+//!   mode, one curve per exposure (vision) plus the transducer;
+//! * `sigma_vs_mu`: sigma_a against mu_a across exposures, per mode;
+//! * `band_width`: width of the 90 % band against frequency, per exposure and system.
+
+use crate::report::{FrfBandRow, RealizationRow, SummaryRow, System};
+use anyhow::Context as _;
+use plotters::coord::Shift;
+use plotters::prelude::*;
 use std::path::{Path, PathBuf};
+
 /// Inputs of the study figures.
 #[derive(Debug)]
 pub struct StudyPlots<'a> {
-    /// Title.
+    /// Study name, used in titles.
     pub title: &'a str,
-    /// Unit of amplitudes.
+    /// Unit of the amplitudes.
     pub amplitude_unit: &'a str,
-    /// Summary rows.
+    /// `summary.csv` rows.
     pub summary: &'a [SummaryRow],
-    /// Realizations.
+    /// `realizations.csv` rows.
     pub realizations: &'a [RealizationRow],
-    /// FRF band rows.
+    /// `frf_band.csv` rows.
     pub frf_band: &'a [FrfBandRow],
 }
-/// Placeholder until the figures land: writes nothing.
-pub fn write_study_plots(_dir: &Path, _p: &StudyPlots) -> anyhow::Result<Vec<PathBuf>> {
-    Ok(Vec::new())
+
+type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+const FONT: &str = "sans-serif";
+const SIZE: (u32, u32) = (1400, 900);
+
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            FONT,
+            FontStyle::Normal,
+            include_bytes!("../assets/DejaVuSans.ttf"),
+        );
+    });
+}
+
+/// Colour of exposure `i` of `n` (blue to red).
+fn exposure_colour(i: usize, n: usize) -> RGBColor {
+    let t = if n <= 1 {
+        1.0
+    } else {
+        i as f64 / (n - 1) as f64
+    };
+    RGBColor(
+        (40.0 + 200.0 * t) as u8,
+        (90.0 + 40.0 * (1.0 - (2.0 * t - 1.0).abs())) as u8,
+        (220.0 - 190.0 * t) as u8,
+    )
+}
+
+const TRANSDUCER: RGBColor = RGBColor(30, 30, 30);
+
+/// Writes one figure as PNG and SVG through the same drawing function.
+fn both(
+    dir: &Path,
+    name: &str,
+    draw: &dyn Fn(DrawingArea<BitMapBackend, Shift>) -> DrawResult,
+    draw_svg: &dyn Fn(DrawingArea<SVGBackend, Shift>) -> DrawResult,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let png = dir.join(format!("{name}.png"));
+    let svg = dir.join(format!("{name}.svg"));
+    {
+        let root = BitMapBackend::new(&png, SIZE).into_drawing_area();
+        draw(root).map_err(|e| anyhow::anyhow!("{}: {e}", png.display()))?;
+    }
+    {
+        let root = SVGBackend::new(&svg, SIZE).into_drawing_area();
+        draw_svg(root).map_err(|e| anyhow::anyhow!("{}: {e}", svg.display()))?;
+    }
+    Ok(vec![png, svg])
+}
+
+macro_rules! figure {
+    ($dir:expr, $name:expr, $f:expr) => {
+        both($dir, $name, &|r| $f(r), &|r| $f(r))
+    };
+}
+
+fn exposures(rows: &[SummaryRow]) -> Vec<f64> {
+    let mut e: Vec<f64> = rows.iter().map(|r| r.exposure_ms).collect();
+    e.sort_by(f64::total_cmp);
+    e.dedup();
+    e
+}
+
+fn finite_range(v: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = v
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if lo.is_finite() && hi.is_finite() {
+        if hi > lo {
+            Some((lo, hi))
+        } else {
+            Some((lo - 0.5 * lo.abs().max(1e-9), hi + 0.5 * hi.abs().max(1e-9)))
+        }
+    } else {
+        None
+    }
+}
+
+/// Writes every study figure as PNG and SVG into `dir`; returns the paths written.
+pub fn write_study_plots(dir: &Path, p: &StudyPlots) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    if p.summary.is_empty() {
+        anyhow::bail!("no study results to plot");
+    }
+    let mut out = Vec::new();
+    out.extend(figure!(dir, "frf_band", |r| draw_frf_band(r, p, false))?);
+    out.extend(figure!(dir, "band_width", |r| draw_frf_band(r, p, true))?);
+    out.extend(figure!(dir, "pdf_a", |r| draw_pdfs(r, p, true))?);
+    out.extend(figure!(dir, "pdf_f", |r| draw_pdfs(r, p, false))?);
+    out.extend(figure!(dir, "sigma_vs_mu", |r| draw_sigma_mu(r, p))?);
+    Ok(out)
+}
+
+fn draw_frf_band<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    p: &StudyPlots,
+    width_only: bool,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let exps = exposures(p.summary);
+    let title = if width_only {
+        format!("{}: width of the 90 % band of |FRF| (p95 - p05)", p.title)
+    } else {
+        format!("{}: mean |FRF| and 90 % band per exposure", p.title)
+    };
+    let root = root.titled(&title, (FONT, 26))?;
+    let cols = (exps.len() as f64).sqrt().ceil().max(1.0) as usize;
+    let rows = exps.len().div_ceil(cols).max(1);
+    let panels = root.split_evenly((rows, cols));
+    let x_range = finite_range(p.frf_band.iter().map(|r| r.freq_hz)).unwrap_or((0.0, 1.0));
+    let value = |r: &FrfBandRow| {
+        if width_only {
+            r.p95_abs - r.p05_abs
+        } else {
+            r.p95_abs
+        }
+    };
+    let y_max = p
+        .frf_band
+        .iter()
+        .map(value)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        * 1.05;
+    for (panel, &e) in panels.iter().zip(&exps) {
+        let mut chart = ChartBuilder::on(panel)
+            .caption(format!("exposure {e} ms"), (FONT, 18))
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x_range.0..x_range.1, 0.0..y_max.max(1e-12))?;
+        chart
+            .configure_mesh()
+            .x_desc("frequency (Hz)")
+            .y_desc(format!("|FRF| ({})", p.amplitude_unit))
+            .label_style((FONT, 13))
+            .draw()?;
+        for (system, colour) in [
+            (System::Transducer, TRANSDUCER),
+            (System::Vision, RGBColor(210, 40, 40)),
+        ] {
+            let rows: Vec<&FrfBandRow> = p
+                .frf_band
+                .iter()
+                .filter(|r| r.system == system && r.exposure_ms == e)
+                .filter(|r| r.mean_abs.is_finite() && r.p05_abs.is_finite())
+                .collect();
+            if rows.is_empty() {
+                continue;
+            }
+            if width_only {
+                chart
+                    .draw_series(LineSeries::new(
+                        rows.iter().map(|r| (r.freq_hz, r.p95_abs - r.p05_abs)),
+                        colour.stroke_width(2),
+                    ))?
+                    .label(system.name())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
+            } else {
+                let band: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|r| (r.freq_hz, r.p95_abs))
+                    .chain(rows.iter().rev().map(|r| (r.freq_hz, r.p05_abs)))
+                    .collect();
+                chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
+                chart
+                    .draw_series(LineSeries::new(
+                        rows.iter().map(|r| (r.freq_hz, r.mean_abs)),
+                        colour.stroke_width(2),
+                    ))?
+                    .label(format!("{} mean, 90 % band shaded", system.name()))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
+            }
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+fn draw_pdfs<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    p: &StudyPlots,
+    amplitude: bool,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let what = if amplitude {
+        format!("resonant amplitude ({})", p.amplitude_unit)
+    } else {
+        "resonance frequency (Hz)".to_string()
+    };
+    let root = root.titled(
+        &format!("{}: PDF of the {what} per mode", p.title),
+        (FONT, 26),
+    )?;
+    let mut modes: Vec<usize> = p.summary.iter().map(|r| r.mode).collect();
+    modes.sort();
+    modes.dedup();
+    let exps = exposures(p.summary);
+    let panels = root.split_evenly((1, modes.len().max(1)));
+    let get = |r: &RealizationRow| if amplitude { r.a } else { r.f_hz };
+    for (panel, &m) in panels.iter().zip(&modes) {
+        let vals: Vec<&RealizationRow> = p.realizations.iter().filter(|r| r.mode == m).collect();
+        let Some((lo, hi)) = finite_range(vals.iter().map(|r| get(r))) else {
+            continue;
+        };
+        // curves: transducer (one exposure's rows, they repeat) and vision per exposure
+        let mut curves: Vec<(String, RGBColor, Vec<(f64, f64)>)> = Vec::new();
+        let bins = 30;
+        if let Some(&e0) = exps.first() {
+            let t: Vec<f64> = vals
+                .iter()
+                .filter(|r| r.system == System::Transducer && r.exposure_ms == e0)
+                .map(|r| get(r))
+                .collect();
+            curves.push((
+                "transducer".into(),
+                TRANSDUCER,
+                crate::stats::density_histogram(&t, lo, hi, bins),
+            ));
+        }
+        for (i, &e) in exps.iter().enumerate() {
+            let v: Vec<f64> = vals
+                .iter()
+                .filter(|r| r.system == System::Vision && r.exposure_ms == e)
+                .map(|r| get(r))
+                .collect();
+            curves.push((
+                format!("vision {e} ms"),
+                exposure_colour(i, exps.len()),
+                crate::stats::density_histogram(&v, lo, hi, bins),
+            ));
+        }
+        let y_max = curves
+            .iter()
+            .flat_map(|c| c.2.iter().map(|p| p.1))
+            .fold(0.0f64, f64::max)
+            * 1.1;
+        let mut chart = ChartBuilder::on(panel)
+            .caption(format!("mode {m}"), (FONT, 18))
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(lo..hi, 0.0..y_max.max(1e-12))?;
+        chart
+            .configure_mesh()
+            .x_desc(what.clone())
+            .y_desc("probability density")
+            .label_style((FONT, 13))
+            .draw()?;
+        for (label, colour, pts) in curves {
+            let width = if label == "transducer" { 3 } else { 2 };
+            chart
+                .draw_series(LineSeries::new(pts, colour.stroke_width(width)))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+fn draw_sigma_mu<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, p: &StudyPlots) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let root = root.titled(
+        &format!(
+            "{}: standard deviation against mean of the resonant amplitude across exposures",
+            p.title
+        ),
+        (FONT, 24),
+    )?;
+    let mut modes: Vec<usize> = p.summary.iter().map(|r| r.mode).collect();
+    modes.sort();
+    modes.dedup();
+    let panels = root.split_evenly((1, modes.len().max(1)));
+    for (panel, &m) in panels.iter().zip(&modes) {
+        let rows: Vec<&SummaryRow> = p
+            .summary
+            .iter()
+            .filter(|r| r.mode == m && r.mu_a.is_finite() && r.sigma_a.is_finite())
+            .collect();
+        let (Some(xr), Some(yr)) = (
+            finite_range(rows.iter().map(|r| r.mu_a)),
+            finite_range(rows.iter().map(|r| r.sigma_a)),
+        ) else {
+            continue;
+        };
+        let pad = |(a, b): (f64, f64)| (a - 0.1 * (b - a), b + 0.1 * (b - a));
+        let (xr, yr) = (pad(xr), pad(yr));
+        let mut chart = ChartBuilder::on(panel)
+            .caption(format!("mode {m}"), (FONT, 18))
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("mu_a ({})", p.amplitude_unit))
+            .y_desc(format!("sigma_a ({})", p.amplitude_unit))
+            .label_style((FONT, 13))
+            .draw()?;
+        let mut vis: Vec<&&SummaryRow> =
+            rows.iter().filter(|r| r.system == System::Vision).collect();
+        vis.sort_by(|a, b| a.exposure_ms.total_cmp(&b.exposure_ms));
+        let red = RGBColor(210, 40, 40);
+        chart
+            .draw_series(LineSeries::new(
+                vis.iter().map(|r| (r.mu_a, r.sigma_a)),
+                red.stroke_width(2),
+            ))?
+            .label("vision, by exposure")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2)));
+        chart.draw_series(vis.iter().map(|r| {
+            EmptyElement::at((r.mu_a, r.sigma_a))
+                + Circle::new((0, 0), 5, red.filled())
+                + Text::new(format!("{} ms", r.exposure_ms), (8, -14), (FONT, 13))
+        }))?;
+        if let Some(t) = rows.iter().find(|r| r.system == System::Transducer) {
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at((t.mu_a, t.sigma_a))
+                        + Cross::new((0, 0), 8, TRANSDUCER.stroke_width(3))
+                        + Text::new("transducer", (10, 6), (FONT, 13)),
+                ))?
+                .label("transducer")
+                .legend(|(x, y)| Cross::new((x + 10, y), 6, TRANSDUCER.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// One FRF magnitude figure with several labelled curves `(label, freq_hz, |H|)`, written as
+/// `path_stem.png` and `path_stem.svg`.
+pub fn write_frf_plot(
+    path_stem: &Path,
+    title: &str,
+    y_label: &str,
+    curves: &[(&str, &[f64], &[f64])],
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let dir = path_stem.parent().unwrap_or(Path::new("."));
+    let name = path_stem
+        .file_name()
+        .and_then(|n| n.to_str())
+        .context("plot path has no file name")?;
+    figure!(dir, name, |r| draw_curves(r, title, y_label, curves))
+}
+
+fn draw_curves<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    y_label: &str,
+    curves: &[(&str, &[f64], &[f64])],
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let xr = finite_range(curves.iter().flat_map(|c| c.1.iter().copied())).unwrap_or((0.0, 1.0));
+    let y_max = curves
+        .iter()
+        .flat_map(|c| c.2.iter().copied())
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        * 1.05;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (FONT, 24))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xr.0..xr.1, 0.0..y_max.max(1e-12))?;
+    chart
+        .configure_mesh()
+        .x_desc("frequency (Hz)")
+        .y_desc(y_label)
+        .label_style((FONT, 14))
+        .draw()?;
+    for (i, (label, f, a)) in curves.iter().enumerate() {
+        let colour = if i == 0 {
+            TRANSDUCER
+        } else {
+            exposure_colour(i, curves.len().max(2))
+        };
+        chart
+            .draw_series(LineSeries::new(
+                f.iter()
+                    .zip(a.iter())
+                    .filter(|(x, y)| x.is_finite() && y.is_finite())
+                    .map(|(x, y)| (*x, *y)),
+                colour.stroke_width(2),
+            ))?
+            .label(*label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 14))
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> (Vec<SummaryRow>, Vec<RealizationRow>, Vec<FrfBandRow>) {
+        let mut s = Vec::new();
+        let mut r = Vec::new();
+        let mut f = Vec::new();
+        for (i, e) in [40.0, 180.0].into_iter().enumerate() {
+            for m in 1..=2 {
+                for system in [System::Transducer, System::Vision] {
+                    let drop = if system == System::Vision {
+                        1.0 - 0.1 * i as f64
+                    } else {
+                        1.0
+                    };
+                    s.push(SummaryRow {
+                        system,
+                        exposure_ms: e,
+                        mode: m,
+                        runs: 5,
+                        mu_f_hz: 2.0 * m as f64,
+                        sigma_f_hz: 0.1,
+                        mu_a: 4.0 * drop,
+                        sigma_a: 0.3 * drop,
+                        e2pr: e / 1000.0 * 2.0,
+                        chi_mu: None,
+                        chi_sigma: None,
+                    });
+                    for run in 0..5 {
+                        r.push(RealizationRow {
+                            run,
+                            exposure_ms: e,
+                            system,
+                            mode: m,
+                            f_hz: 2.0 * m as f64 + 0.01 * run as f64,
+                            a: 4.0 * drop + 0.1 * run as f64,
+                        });
+                    }
+                }
+            }
+            for k in 0..50 {
+                for system in [System::Transducer, System::Vision] {
+                    let x = k as f64 * 0.1;
+                    let v = 1.0 / (1.0 + (x - 2.0).powi(2) * 10.0);
+                    f.push(FrfBandRow {
+                        system,
+                        exposure_ms: e,
+                        freq_hz: x,
+                        mean_abs: v,
+                        p05_abs: 0.8 * v,
+                        p95_abs: if k == 7 { f64::NAN } else { 1.2 * v },
+                    });
+                }
+            }
+        }
+        (s, r, f)
+    }
+
+    #[test]
+    fn study_figures_are_written_as_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let (s, r, f) = sample();
+        let p = StudyPlots {
+            title: "test",
+            amplitude_unit: "mm/kN",
+            summary: &s,
+            realizations: &r,
+            frf_band: &f,
+        };
+        let paths = write_study_plots(dir.path(), &p).unwrap();
+        assert_eq!(paths.len(), 10);
+        for path in paths {
+            let ext = path.extension().unwrap().to_str().unwrap().to_string();
+            if ext == "png" {
+                let img = image::open(&path).unwrap();
+                assert_eq!((img.width(), img.height()), SIZE);
+            } else {
+                let text = std::fs::read_to_string(&path).unwrap();
+                assert!(text.contains("<svg"), "{}", path.display());
+                assert!(text.contains("mode 1") || text.contains("exposure"));
+            }
+        }
+        let empty = StudyPlots {
+            title: "empty",
+            amplitude_unit: "",
+            summary: &[],
+            realizations: &[],
+            frf_band: &[],
+        };
+        assert!(write_study_plots(dir.path(), &empty).is_err());
+    }
+
+    #[test]
+    fn frf_figure() {
+        let dir = tempfile::tempdir().unwrap();
+        let f: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
+        let a: Vec<f64> = f.iter().map(|x| 1.0 / (1.0 + (x - 5.0).powi(2))).collect();
+        let paths = write_frf_plot(
+            &dir.path().join("frf"),
+            "t",
+            "|H|",
+            &[("acc", &f, &a), ("vis", &f, &a)],
+        )
+        .unwrap();
+        assert_eq!(paths.len(), 2);
+        assert!(paths.iter().all(|p| p.exists()));
+    }
 }
