@@ -60,6 +60,9 @@ fn exposure_colour(i: usize, n: usize) -> RGBColor {
     )
 }
 
+/// A labelled, coloured curve.
+type Curve = (String, RGBColor, Vec<(f64, f64)>);
+
 const TRANSDUCER: RGBColor = RGBColor(30, 30, 30);
 
 /// Writes one figure as PNG and SVG through the same drawing function.
@@ -258,7 +261,7 @@ where
             continue;
         };
         // curves: transducer (one exposure's rows, they repeat) and vision per exposure
-        let mut curves: Vec<(String, RGBColor, Vec<(f64, f64)>)> = Vec::new();
+        let mut curves: Vec<Curve> = Vec::new();
         let bins = 30;
         if let Some(&e0) = exps.first() {
             let t: Vec<f64> = vals
