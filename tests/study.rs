@@ -148,3 +148,36 @@ fn bad_arguments_exit_2_and_name_the_field() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("s.toml") && err.contains("runz"), "{err}");
 }
+
+#[test]
+fn render_writes_sharp_and_blurred_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frames");
+    let o = harness(&[
+        "render",
+        "--exposure-ms",
+        "180",
+        "--times",
+        "33.4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let sharp = image::open(out.join("frame_t33.4_sharp.png"))
+        .unwrap()
+        .to_luma8();
+    let blurred = image::open(out.join("frame_t33.4_exp180ms.png"))
+        .unwrap()
+        .to_luma8();
+    assert_eq!(sharp.dimensions(), blurred.dimensions());
+    // the sharp disk reaches its level 200; 180 ms of motion smear it below that
+    let max = |im: &image::GrayImage| im.pixels().map(|p| p.0[0]).max().unwrap();
+    assert_eq!(max(&sharp), 200);
+    assert!(max(&blurred) < 200, "blurred max {}", max(&blurred));
+    // the same total light: the blur redistributes it (sums within 1 %)
+    let sum = |im: &image::GrayImage| im.pixels().map(|p| p.0[0] as f64).sum::<f64>();
+    assert!((sum(&sharp) / sum(&blurred) - 1.0).abs() < 0.01);
+    let o = harness(&["render", "--times", "1e6", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--times"));
+}
