@@ -96,6 +96,22 @@ const fn disk_u16() -> [u16; W * H] {
     f
 }
 
+/// Worst case for the block skip of the 8-bit kernel: a bright pixel in every 5 (no 64-pixel
+/// block without a pixel above the threshold).
+const fn dense_u8() -> [u8; W * H] {
+    let mut f = [BACKGROUND as u8; W * H];
+    let mut i = 0;
+    while i < W * H {
+        if ((i % W) * 7 + (i / W) * 13) % 5 == 0 {
+            f[i] = LEVEL as u8;
+        }
+        i += 1;
+    }
+    f
+}
+
+/// Dense 8-bit frame in flash (76 800 B).
+static DENSE_U8: [u8; W * H] = dense_u8();
 /// 8-bit frame in flash (76 800 B).
 static FRAME_U8: [u8; W * H] = disk_u8();
 /// 16-bit frame in flash (153 600 B), same scene times 64.
@@ -258,6 +274,29 @@ fn check_centroids(rep: &mut Report) {
     }
 }
 
+fn check_dense(rep: &mut Report) {
+    let f = black_box(&DENSE_U8);
+    let cfg = CentroidConfig::binary(THRESHOLD);
+    let (w, sx, sy) = naive_moments(f.iter().map(|&p| u16::from(p)), THRESHOLD, false);
+    let want = ((sx as f64 / w as f64) as f32, (sy as f64 / w as f64) as f32);
+    let got = centroid::centroid_u8(&cfg, f, W, H, W).ok();
+    let pos = got.and_then(|c| c.position());
+    hprintln!(
+        "centroid u8 dense: {:?} pixels {:?} (naive {:?}, {})",
+        pos,
+        got.map(|c| c.pixels()),
+        want,
+        w
+    );
+    rep.check(
+        "centroid 8-bit dense frame vs naive loop",
+        got.is_some_and(|c| c.pixels() == w)
+            && pos.is_some_and(|(x, y)| {
+                libm::fabsf(x - want.0) < 1e-4 && libm::fabsf(y - want.1) < 1e-4
+            }),
+    );
+}
+
 fn check_h1(rep: &mut Report, p: &mut Pipeline) {
     let cfg = WelchConfig {
         fs_hz: FS,
@@ -376,6 +415,10 @@ fn bench_centroids() {
         }
         s
     });
+    let d8 = black_box(&DENSE_U8);
+    let _ = measured("centroid binary u8 dense 76800", || {
+        centroid::centroid_u8(&b, d8, W, H, W)
+    });
     if let Some(w) = w {
         let _ = measured("centroid weighted u8 76800", || {
             centroid::centroid_u8(&w, f8, W, H, W)
@@ -468,6 +511,7 @@ fn main() -> ! {
     );
 
     check_centroids(&mut rep);
+    check_dense(&mut rep);
     check_h1(&mut rep, p);
     check_upsampling(&mut rep, p);
     check_sync(&mut rep);

@@ -63,8 +63,19 @@ fn clip<P>(row: &[P]) -> &[P] {
 /// The single-target hot loop: per pixel a compare, two adds (count, masked x) and a max.
 /// 32-bit accumulators: `pixels <= 65 536`, `sum_x <= 65 535 * 65 536 / 2 < 2^31`.
 /// Rows longer than [`MAX_DIM`] pixels are clipped to it.
+///
+/// On 32-bit ARM (Cortex-M) this is the word-at-a-time SWAR kernel of the `m4` submodule
+/// (about 1 instruction per pixel on a mostly dark frame, measured by `mcu-demo/bench.sh`);
+/// there `max` is exact when `pixels > 0` (all the centroider reads it for) and 0 otherwise.
 pub fn row_binary_u8(row: &[u8], t: u8) -> RowSums {
-    row_binary(row, t)
+    #[cfg(target_arch = "arm")]
+    {
+        super::m4::row_binary_u8(row, t)
+    }
+    #[cfg(not(target_arch = "arm"))]
+    {
+        row_binary(row, t)
+    }
 }
 
 /// Binary mode, 16-bit pixels (same as [`row_binary_u8`]).

@@ -49,6 +49,8 @@
 //! than the supported width: the columns past it were ignored).
 
 mod kernel;
+#[cfg(any(test, target_arch = "arm"))]
+mod m4;
 mod multi;
 
 #[cfg(test)]

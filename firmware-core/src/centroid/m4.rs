@@ -1,0 +1,207 @@
+//! 32-bit ARM (Cortex-M4) version of the single-target binary 8-bit row kernel: four pixels per
+//! word load, SWAR byte compares and per-block sums, in safe Rust.
+//!
+//! Cortex-M has no vector unit LLVM can target from safe code (the DSP extension's `USUB8`/`SEL`
+//! are reachable only through unstable intrinsics or `asm!`, and the crate forbids `unsafe`), so
+//! the kernel works in plain 32-bit registers ("SIMD within a register"):
+//!
+//! * **compare**: with `H = 0x80808080` and `t < 128`, the top bit of each byte of
+//!   `((w | H) - (t + 1) * 0x01010101) | w` is set exactly for the bytes `> t` (setting the top
+//!   bit keeps every byte `>= 128 > t + 1 - 1`, so no byte borrows from its neighbour); for
+//!   `t >= 128`, `((w | H) - (t - 127) * 0x01010101) & w`. Shifted down and masked, that is a
+//!   word `m` of four 0/1 bytes: 4 instructions (ORR, SUB, ORR/AND, AND with shifted operand).
+//! * **sums**: per block of 16 words (64 pixels) `S += m` and `T += S` bytewise (`S <= 16`,
+//!   `T <= 136`, no carries); then `count = sum S_i`, and since `T_i = sum_j (16 - j) m_ji`,
+//!   `sum_x = x0 count + 4 (16 count - sum T_i) + sum i S_i`, each horizontal sum one multiply.
+//! * **skip**: a block whose 16 words OR-ed together have no byte above `t` has no pixel above
+//!   `t` (the OR is at least every byte): it costs one OR per word and one compare.
+//!
+//! The row maximum is computed exactly over the blocks that have a pixel above `t` (one more
+//! SWAR compare per word against the running maximum, a scalar pass only when it rises),
+//! which is all [`Centroider`](super::Centroider) reads it for (its saturation flag needs the
+//! largest value of a row with a hit, and every pixel above `t` is in such a block). For a row
+//! without any pixel above `t` the returned `max` is 0 on this path (documented on
+//! [`row_binary_u8`](super::row_binary_u8)).
+
+use super::kernel::RowSums;
+use super::MAX_DIM;
+
+const H: u32 = 0x8080_8080;
+const ONES: u32 = 0x0101_0101;
+/// Pixels per block (16 words): keeps the bytewise running sums below 256.
+const BLOCK_PX: usize = 64;
+
+/// 0x01 in each byte of `w` that is `> t` (the `HIGH` variant is for `t >= 128`); `k` is the
+/// per-byte constant (`t + 1` or `t - 127`) times [`ONES`].
+#[inline(always)]
+fn mask<const HIGH: bool>(w: u32, k: u32) -> u32 {
+    let d = (w | H).wrapping_sub(k);
+    let top = if HIGH { d & w } else { d | w };
+    (top >> 7) & ONES
+}
+
+/// Binary 8-bit row sums (see the module documentation); same `pixels`, `weight`, `sum_x` as
+/// the portable kernel, `max` exact when `pixels > 0`, else 0.
+pub(super) fn row_binary_u8(row: &[u8], t: u8) -> RowSums {
+    let row = row.get(..MAX_DIM).unwrap_or(row);
+    match constant(t) {
+        (k, true) => row_binary::<true>(row, t, k),
+        (k, false) => row_binary::<false>(row, t, k),
+    }
+}
+
+#[inline(always)]
+fn row_binary<const HIGH: bool>(row: &[u8], t: u8, k: u32) -> RowSums {
+    let mut pixels = 0u32;
+    let mut sum_x = 0u64;
+    // running maximum, starting at t: only the pixels above t can be a hit row's maximum
+    let mut max = t;
+    let mut x0 = 0u32;
+    let mut blocks = row.chunks_exact(BLOCK_PX);
+    for block in &mut blocks {
+        // skip test: no byte of the OR of the block's words above t => no pixel above t
+        let any = block.chunks_exact(4).fold(0u32, |a, b| {
+            a | <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes)
+        });
+        if mask::<HIGH>(any, k) != 0 {
+            let (count, inner, m) = block_sums::<HIGH>(block, k, max);
+            pixels += count;
+            sum_x += u64::from(x0) * u64::from(count) + u64::from(inner);
+            max = m;
+        }
+        x0 += BLOCK_PX as u32;
+    }
+    for (x, &p) in (x0..).zip(blocks.remainder()) {
+        if p > t {
+            pixels += 1;
+            sum_x += u64::from(x);
+            max = max.max(p);
+        }
+    }
+    RowSums {
+        pixels,
+        weight: pixels,
+        sum_x,
+        max: if pixels > 0 { u16::from(max) } else { 0 },
+    }
+}
+
+/// Per-byte constant for [`mask`] with threshold `t`, and whether it is the `HIGH` variant.
+#[inline(always)]
+fn constant(t: u8) -> (u32, bool) {
+    if t >= 128 {
+        (u32::from(t - 127) * ONES, true)
+    } else {
+        (u32::from(t + 1) * ONES, false)
+    }
+}
+
+/// Count, `sum_x` relative to the block start, and the largest of `cur` and the block's
+/// pixels, for one block of [`BLOCK_PX`] pixels (kept out of line so the skip loop keeps its
+/// words in registers). The maximum costs one more SWAR compare per word against `cur`, and a
+/// scalar pass only when some pixel exceeds `cur`.
+#[inline(never)]
+fn block_sums<const HIGH: bool>(block: &[u8], k: u32, cur: u8) -> (u32, u32, u8) {
+    let (kc, high_c) = constant(cur);
+    let (mut s, mut tt, mut above) = (0u32, 0u32, 0u32);
+    for b in block.chunks_exact(4) {
+        let w = <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes);
+        s = s.wrapping_add(mask::<HIGH>(w, k));
+        tt = tt.wrapping_add(s);
+        above |= if high_c {
+            mask::<true>(w, kc)
+        } else {
+            mask::<false>(w, kc)
+        };
+    }
+    // horizontal sums (no carries between bytes: S_i <= 16, T_i <= 136)
+    let count = s.wrapping_mul(ONES) >> 24;
+    let lane_x = s.wrapping_mul(0x0001_0203) >> 24;
+    let t16 = (tt & 0x00ff_00ff) + ((tt >> 8) & 0x00ff_00ff);
+    let tsum = t16.wrapping_mul(0x0001_0001) >> 16;
+    // sum_j j m_ji = 16 S_i - T_i >= 0
+    let inner = (16 * count).wrapping_sub(tsum).wrapping_mul(4) + lane_x;
+    let max = if above != 0 {
+        block.iter().fold(cur, |m, &p| m.max(p))
+    } else {
+        cur
+    };
+    (count, inner, max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn naive(row: &[u8], t: u8) -> RowSums {
+        let mut r = RowSums::default();
+        for (x, &p) in row.iter().enumerate() {
+            if p > t {
+                r.pixels += 1;
+                r.sum_x += x as u64;
+            }
+        }
+        r.weight = r.pixels;
+        if r.pixels > 0 {
+            r.max = u16::from(*row.iter().max().unwrap());
+        }
+        r
+    }
+
+    #[test]
+    fn mask_is_the_bytewise_compare_for_every_value_and_threshold() {
+        for t in 0..=255u8 {
+            let k = if t >= 128 {
+                u32::from(t - 127) * ONES
+            } else {
+                u32::from(t + 1) * ONES
+            };
+            for p in 0..=255u8 {
+                // the pixel in every lane, with neighbours at both extremes
+                for (lane, other) in [(0, 0u8), (1, 255), (2, 0), (3, 255)] {
+                    let mut b = [other; 4];
+                    b[lane] = p;
+                    let w = u32::from_le_bytes(b);
+                    let m = if t >= 128 {
+                        mask::<true>(w, k)
+                    } else {
+                        mask::<false>(w, k)
+                    };
+                    let want = u32::from_le_bytes(b.map(|v| u8::from(v > t)));
+                    assert_eq!(m, want, "t {t} p {p} lane {lane}");
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn matches_naive_on_random_rows(
+            row in proptest::collection::vec(any::<u8>(), 0..700),
+            t in any::<u8>(),
+            sparse in any::<bool>(),
+        ) {
+            // sparse rows exercise the block skip, dense ones the sums
+            let row: Vec<u8> = if sparse {
+                row.iter().map(|&p| if p > 250 { p } else { p % (t.max(1)) }).collect()
+            } else {
+                row
+            };
+            prop_assert_eq!(row_binary_u8(&row, t), naive(&row, t));
+        }
+    }
+
+    #[test]
+    fn full_rows_at_the_accumulator_bounds() {
+        for len in [64, 65_536, 65_600] {
+            let row = std::vec![255u8; len];
+            let got = row_binary_u8(&row, 0);
+            let n = len.min(MAX_DIM) as u64;
+            assert_eq!(got.pixels as u64, n);
+            assert_eq!(got.sum_x, n * (n - 1) / 2);
+            assert_eq!(got.max, 255);
+        }
+    }
+}
