@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 cargo build --release
 # the panic-freedom build: links only if no panic path survives optimisation
-# (panic-check build: added once it links)
+cargo build --release --features panic-check --target-dir target/panic-check
 elf=target/thumbv7em-none-eabihf/release/mcu-demo
 timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
   -semihosting-config enable=on,target=native -icount shift=0 -kernel "$elf"

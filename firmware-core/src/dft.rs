@@ -225,33 +225,46 @@ impl Dft {
             fft_pow2(data);
             return;
         }
-        let (reorder, work) = scratch.split_at_mut(n);
+        // `process` checked the buffer lengths; the checked accessors below keep the compiler
+        // from leaving panic paths in the image (see mcu-demo's panic-check build).
+        let Some((reorder, work)) = scratch.split_at_mut_checked(n) else {
+            return;
+        };
         // Bluestein: the spectrum of the chirp filter is the same for every column.
         if let Inner::Bluestein { l } = self.inner {
-            let (filt, _) = work.split_at_mut(l);
-            chirp_filter(m, filt);
+            if let Some(filt) = work.get_mut(..l) {
+                chirp_filter(m, filt);
+            }
         }
         // Step 1+2: for each n2, DFT of the strided column x[p*n1 + n2] (n1 < m), then twiddle,
         // written back to the same strided positions (so data[p*k1 + n2] = A_n2[k1] W^(n2 k1)).
         for n2 in 0..p {
             match self.inner {
                 Inner::Naive => {
-                    let (col, rest) = work.split_at_mut(m);
-                    let out = &mut rest[..m];
+                    let Some((col, rest)) = work.split_at_mut_checked(m) else {
+                        return;
+                    };
+                    let Some(out) = rest.get_mut(..m) else {
+                        return;
+                    };
                     for (n1, c) in col.iter_mut().enumerate() {
-                        *c = data[p * n1 + n2];
+                        *c = at(data, p * n1 + n2);
                     }
                     naive_dft(col, out);
                     for (k1, v) in out.iter().enumerate() {
-                        data[p * k1 + n2] = *v * twiddle(n2 * k1, n);
+                        put(data, p * k1 + n2, *v * twiddle(n2 * k1, n));
                     }
                 }
                 Inner::Bluestein { l } => {
-                    let (filt, rest) = work.split_at_mut(l);
-                    let conv = &mut rest[..l];
+                    let Some((filt, rest)) = work.split_at_mut_checked(l) else {
+                        return;
+                    };
+                    let Some(conv) = rest.get_mut(..l) else {
+                        return;
+                    };
                     for (n1, c) in conv.iter_mut().enumerate() {
                         *c = if n1 < m {
-                            data[p * n1 + n2] * chirp(n1, m)
+                            at(data, p * n1 + n2) * chirp(n1, m)
                         } else {
                             Complex32::new(0.0, 0.0)
                         };
@@ -264,25 +277,41 @@ impl Dft {
                     }
                     fft_pow2(conv);
                     let scale = 1.0 / l as f32;
-                    for k1 in 0..m {
-                        let y = conv[k1].conj() * scale * chirp(k1, m);
-                        data[p * k1 + n2] = y * twiddle(n2 * k1, n);
+                    for (k1, c) in conv.iter().take(m).enumerate() {
+                        let y = c.conj() * scale * chirp(k1, m);
+                        put(data, p * k1 + n2, y * twiddle(n2 * k1, n));
                     }
                 }
                 Inner::None => {}
             }
         }
         // Step 3: p-point FFT over n2 for each k1: rows data[p*k1 .. p*k1 + p] are contiguous.
-        for row in data.chunks_exact_mut(p) {
+        for row in data.chunks_exact_mut(p.max(1)) {
             fft_pow2(row);
         }
         // Output order: data[p*k1 + k2] = X[k1 + m*k2].
-        reorder.copy_from_slice(data);
+        for (r, d) in reorder.iter_mut().zip(data.iter()) {
+            *r = *d;
+        }
         for k1 in 0..m {
             for k2 in 0..p {
-                data[k1 + m * k2] = reorder[p * k1 + k2];
+                put(data, k1 + m * k2, at(reorder, p * k1 + k2));
             }
         }
+    }
+}
+
+/// `s[i]`, or zero past the end (never happens for planned lengths; no panic path).
+#[inline(always)]
+fn at(s: &[Complex32], i: usize) -> Complex32 {
+    s.get(i).copied().unwrap_or_default()
+}
+
+/// `s[i] = v`, ignored past the end (never happens for planned lengths; no panic path).
+#[inline(always)]
+fn put(s: &mut [Complex32], i: usize, v: Complex32) {
+    if let Some(d) = s.get_mut(i) {
+        *d = v;
     }
 }
 
@@ -295,7 +324,7 @@ fn conj_all(data: &mut [Complex32]) {
 /// `exp(-2 pi i r / n)` with `r` reduced modulo `n` first, so the angle stays accurate in f32.
 #[inline]
 fn twiddle(r: usize, n: usize) -> Complex32 {
-    let r = r % n;
+    let r = r.checked_rem(n).unwrap_or(0);
     if r == 0 {
         return Complex32::new(1.0, 0.0);
     }
@@ -306,7 +335,7 @@ fn twiddle(r: usize, n: usize) -> Complex32 {
 /// Bluestein chirp `exp(-i pi k^2 / m)`, with `k^2` reduced modulo `2m` in integers.
 #[inline]
 fn chirp(k: usize, m: usize) -> Complex32 {
-    let r = ((k as u64 * k as u64) % (2 * m as u64)) as f32;
+    let r = (k as u64 * k as u64).checked_rem(2 * m as u64).unwrap_or(0) as f32;
     let a = -PI * r / (m as f32);
     Complex32::new(libm::cosf(a), libm::sinf(a))
 }
@@ -320,9 +349,9 @@ fn chirp_filter(m: usize, filt: &mut [Complex32]) {
     }
     for k in 0..m {
         let c = chirp(k, m).conj();
-        filt[k] = c;
+        put(filt, k, c);
         if k != 0 {
-            filt[l - k] = c;
+            put(filt, l.wrapping_sub(k), c);
         }
     }
     fft_pow2(filt);

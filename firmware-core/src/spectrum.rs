@@ -532,8 +532,13 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 self.xseg.get_mut(self.fill..self.fill + take),
                 self.yseg.get_mut(self.fill..self.fill + take),
             ) {
-                xd.copy_from_slice(xh);
-                yd.copy_from_slice(yh);
+                // element loops: no length-mismatch panic path (the lengths are equal)
+                for (d, v) in xd.iter_mut().zip(xh) {
+                    *d = *v;
+                }
+                for (d, v) in yd.iter_mut().zip(yh) {
+                    *d = *v;
+                }
             }
             self.fill += take;
             (x, y) = (xt, yt);
@@ -543,8 +548,10 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 if let (Some(xs), Some(ys)) =
                     (self.xseg.get_mut(..nperseg), self.yseg.get_mut(..nperseg))
                 {
-                    xs.copy_within(step.., 0);
-                    ys.copy_within(step.., 0);
+                    if step <= xs.len() && step <= ys.len() {
+                        xs.copy_within(step.., 0);
+                        ys.copy_within(step.., 0);
+                    }
                 }
                 self.fill = self.config.noverlap;
             }
@@ -596,7 +603,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
         for k in 0..bins {
             let zk = work.get(k).copied().unwrap_or_default();
             let zn = work
-                .get((nfft - k) % nfft)
+                .get((nfft - k).checked_rem(nfft).unwrap_or(0))
                 .copied()
                 .unwrap_or_default()
                 .conj();

@@ -54,6 +54,40 @@ fn measured<R>(label: &str, f: impl FnOnce() -> R) -> R {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Printing without core's float formatting (its `flt2dec` keeps panic paths; see panic-check)
+
+/// An `f32` printed with 6 decimals through integer formatting.
+struct Fx(f32);
+impl core::fmt::Display for Fx {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let v = self.0;
+        if !v.is_finite() || libm::fabsf(v) >= 1.8e13 {
+            return f.write_str(if v.is_nan() { "NaN" } else { "out-of-range" });
+        }
+        let sign = if v < 0.0 { "-" } else { "" };
+        let scaled = libm::round(libm::fabs(f64::from(v)) * 1e6) as u64;
+        write!(
+            f,
+            "{}{}.{:06}",
+            sign,
+            scaled / 1_000_000,
+            scaled % 1_000_000
+        )
+    }
+}
+
+/// An optional centroid `(x, y)`.
+struct Pos(Option<(f32, f32)>);
+impl core::fmt::Display for Pos {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some((x, y)) => write!(f, "({}, {})", Fx(x), Fx(y)),
+            None => f.write_str("none"),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // The frame in flash
 
 const W: usize = 320;
@@ -242,7 +276,7 @@ fn check_centroids(rep: &mut Report) {
                     let (w, sx, sy) =
                         naive_moments(f8.iter().map(|&p| u16::from(p)), THRESHOLD, weighted);
                     let pos = c.position();
-                    hprintln!("centroid u8  {:?}: {:?} (naive weight {})", mode, pos, w);
+                    hprintln!("centroid u8  {:?}: {} (naive weight {})", mode, Pos(pos), w);
                     let want = (sx as f64 / w as f64, sy as f64 / w as f64);
                     pos.is_some_and(|(x, y)| {
                         x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
@@ -260,7 +294,7 @@ fn check_centroids(rep: &mut Report) {
                 Ok(c) => {
                     let (w, sx, sy) = naive_moments(f16.iter().copied(), t16, weighted);
                     let pos = c.position();
-                    hprintln!("centroid u16 {:?}: {:?} (naive weight {})", mode, pos, w);
+                    hprintln!("centroid u16 {:?}: {} (naive weight {})", mode, Pos(pos), w);
                     let want = (sx as f64 / w as f64, sy as f64 / w as f64);
                     pos.is_some_and(|(x, y)| {
                         x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
@@ -282,10 +316,10 @@ fn check_dense(rep: &mut Report) {
     let got = centroid::centroid_u8(&cfg, f, W, H, W).ok();
     let pos = got.and_then(|c| c.position());
     hprintln!(
-        "centroid u8 dense: {:?} pixels {:?} (naive {:?}, {})",
-        pos,
-        got.map(|c| c.pixels()),
-        want,
+        "centroid u8 dense: {} pixels {} (naive {}, {})",
+        Pos(pos),
+        got.map_or(0, |c| c.pixels()),
+        Pos(Some(want)),
         w
     );
     rep.check(
@@ -332,10 +366,10 @@ fn check_h1(rep: &mut Report, p: &mut Pipeline) {
         (Some(g), Some(w)) => {
             hprintln!(
                 "H1 peak: {} Hz, |H1| {} (closed form: {} Hz, {})",
-                g.f_hz,
-                g.amplitude,
-                w.f_hz,
-                w.amplitude
+                Fx(g.f_hz),
+                Fx(g.amplitude),
+                Fx(w.f_hz),
+                Fx(w.amplitude)
             );
             rep.check("H1 resonance frequency = closed form", g.bin == w.bin);
             rep.check(
@@ -359,7 +393,10 @@ fn check_upsampling(rep: &mut Report, p: &mut Pipeline) {
         .enumerate()
         .map(|(j, v)| libm::fabsf(v - camera_signal(j as f32 / FS)))
         .fold(0.0f32, f32::max);
-    hprintln!("upsample 120 -> 2048: max error {} mm (amplitude 4.5)", err);
+    hprintln!(
+        "upsample 120 -> 2048: max error {} mm (amplitude 4.5)",
+        Fx(err)
+    );
     rep.check(
         "upsampled displacement within 1e-4 of analytic",
         ok && err < 4.5e-4,
@@ -377,8 +414,8 @@ fn check_upsampling(rep: &mut Report, p: &mut Pipeline) {
         .fold(0.0f32, f32::max);
     hprintln!(
         "upsample acceleration: max error {} mm/s^2 (peak {})",
-        err,
-        peak
+        Fx(err),
+        Fx(peak)
     );
     rep.check(
         "upsampled acceleration within 1e-4 of analytic",
