@@ -136,7 +136,7 @@ const fn dense_u8() -> [u8; W * H] {
     let mut f = [BACKGROUND as u8; W * H];
     let mut i = 0;
     while i < W * H {
-        if ((i % W) * 7 + (i / W) * 13) % 5 == 0 {
+        if ((i % W) * 7 + (i / W) * 13).is_multiple_of(5) {
             f[i] = LEVEL as u8;
         }
         i += 1;
@@ -537,7 +537,9 @@ fn main() -> ! {
     let Some(p) = pipeline else {
         hprintln!("FAIL pipeline construction");
         debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        loop {
+            cortex_m::asm::wfi();
+        }
     };
     hprintln!(
         "ram: pipeline {} B (welch {} B, upsampler {} B, buffers {} B)",
@@ -575,7 +577,9 @@ fn main() -> ! {
         hprintln!("mcu-demo: {} check(s) FAILED", rep.failed);
         debug::exit(debug::EXIT_FAILURE);
     }
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
 
 #[cfg(not(feature = "panic-check"))]
@@ -583,7 +587,9 @@ fn main() -> ! {
 fn panic(info: &PanicInfo) -> ! {
     hprintln!("panic: {}", info);
     debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
 
 #[cfg(feature = "panic-check")]
