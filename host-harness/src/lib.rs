@@ -9,27 +9,23 @@
 //!
 //! | module | what |
 //! |---|---|
-//! | [`model`] | structures (modal models) and excitations, exact discretisation |
-//! | [`transducer`] | load cell, laser and accelerometer noise models |
-//! | [`imaging`] | camera image formation: EPSA translation, motion blur, lens, noise |
-//! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards |
+//! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards; its scenarios ([`study::grandstand`]: structure, excitation, transducers; [`study::cantilever`]) and the EPSA camera ([`study::render`]) |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`report`] | CSV rows and the printed table (pure writers) |
 //! | [`plots`] | PNG and SVG figures of study results |
 //! | [`csvio`] | reading numeric CSV columns with errors naming row and column |
+//! | [`recording`] | synthetic recordings (frames + accelerometer CSV) for `analyze` |
+//! | [`analysis`] | the rig chain on real recordings (centroid, upsampling, H1, modes) |
 //! | [`cli`] | argument parsing and the subcommands |
 
 pub mod analysis;
 pub mod cli;
 pub mod csvio;
-pub mod imaging;
-pub mod model;
 pub mod plots;
 pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;
-pub mod transducer;
 
 /// An error caused by the user's input (a file, a field, a flag value). The binary exits with
 /// code 2 when the error chain contains one; other failures exit with 1.
