@@ -210,6 +210,12 @@ fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
     assert_eq!(frf.lines().count(), 1 + 2048 / 2 + 1);
     let disp = std::fs::read_to_string(out.join("displacement.csv")).unwrap();
     assert_eq!(disp.lines().count(), 121);
+    for plot in ["frf.png", "frf.svg"] {
+        let len = std::fs::metadata(out.join(plot))
+            .map(|m| m.len())
+            .unwrap_or(0);
+        assert!(len > 1000, "{plot}: {len} bytes");
+    }
     // e2pr = exposure x frequency
     let m = std::fs::read_to_string(out.join("modes.csv")).unwrap();
     assert!(

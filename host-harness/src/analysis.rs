@@ -547,51 +547,42 @@ pub fn analyze(
     })
 }
 
-// TODO(firmware-core): the upsampling stage runs on the host (rustfft, f64) until
-// firmware-core's `upsample`/`convert` land; then it calls those.
-
 /// Fourier upsampling of the displacement (mm, `N` samples at `fc`) to `m` samples at `fa`,
-/// fused with the `-omega^2` differentiation and the mm -> m scaling: acceleration in m/s^2.
+/// fused with the `-omega^2` differentiation and the mm -> m scaling, with firmware-core's
+/// [`firmware_core::upsample::Upsampler::process_acceleration`] (`f32`): acceleration in m/s^2.
+///
+/// Runs on a helper thread with a large stack (the upsampler's fixed buffers are about
+/// 1.5 MiB at [`MAX_NFFT`]).
 pub fn vision_acceleration(
     disp_mm: &[f64],
     fc: f64,
     fa: f64,
     m: usize,
 ) -> anyhow::Result<Vec<f64>> {
-    use rustfft::FftPlanner;
+    use firmware_core::upsample::Upsampler;
     let n = disp_mm.len();
-    let _ = fc;
-    if n == 0 || m < n {
-        return Err(bad_input(format!(
-            "cannot upsample {n} frames to {m} samples"
-        )));
-    }
-    let mut planner = FftPlanner::<f64>::new();
-    let mut x: Vec<Complex64> = disp_mm.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-    planner.plan_fft_forward(n).process(&mut x);
-    let mut y = vec![Complex64::new(0.0, 0.0); m];
-    let half = n / 2;
-    for k in 1..n.div_ceil(2) {
-        y[k] = x[k];
-        y[m - k] = x[n - k];
-    }
-    if n % 2 == 0 && half > 0 {
-        y[half] = x[half] * 0.5;
-        y[m - half] += x[half] * 0.5;
-    }
-    let two_pi = 2.0 * std::f64::consts::PI;
-    for (k, v) in y.iter_mut().enumerate() {
-        let signed = if k <= m / 2 {
-            k as f64
-        } else {
-            k as f64 - m as f64
-        };
-        let w = two_pi * signed * fa / m as f64;
-        *v *= -w * w;
-    }
-    y[0] = Complex64::new(0.0, 0.0);
-    planner.plan_fft_inverse(m).process(&mut y);
-    Ok(y.iter().map(|v| v.re / n as f64 / 1000.0).collect())
+    let _ = fa;
+    let input: Vec<f32> = disp_mm.iter().map(|&v| v as f32).collect();
+    let run = move || -> Result<Vec<f32>, String> {
+        let mut up =
+            Upsampler::<MAX_NFFT, WELCH_SCRATCH>::try_new(n, m).map_err(|e| e.to_string())?;
+        let mut out = vec![0.0f32; m];
+        up.process_acceleration(&input, &mut out, fc as f32, 1.0e-3)
+            .map_err(|e| e.to_string())?;
+        Ok(out)
+    };
+    let out = std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(run)
+        .map_err(|e| anyhow::anyhow!("cannot start the upsampling thread: {e}"))?
+        .join()
+        .map_err(|_| anyhow::anyhow!("the upsampler panicked"))?
+        .map_err(|e| {
+            bad_input(format!(
+                "upsampling {n} frames to {m} samples (at most {MAX_NFFT}): {e}"
+            ))
+        })?;
+    Ok(out.into_iter().map(f64::from).collect())
 }
 
 /// Capacity of the firmware Welch estimator used on the host: segments and FFTs of up to
@@ -873,6 +864,49 @@ pub fn report_text(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Reference upsampling + -omega^2 (rustfft, f64, written from SPEC 2.2/2.3).
+    fn reference_vision_acceleration(
+        disp_mm: &[f64],
+        fc: f64,
+        fa: f64,
+        m: usize,
+    ) -> anyhow::Result<Vec<f64>> {
+        use rustfft::FftPlanner;
+        let n = disp_mm.len();
+        let _ = fc;
+        if n == 0 || m < n {
+            return Err(bad_input(format!(
+                "cannot upsample {n} frames to {m} samples"
+            )));
+        }
+        let mut planner = FftPlanner::<f64>::new();
+        let mut x: Vec<Complex64> = disp_mm.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+        planner.plan_fft_forward(n).process(&mut x);
+        let mut y = vec![Complex64::new(0.0, 0.0); m];
+        let half = n / 2;
+        for k in 1..n.div_ceil(2) {
+            y[k] = x[k];
+            y[m - k] = x[n - k];
+        }
+        if n % 2 == 0 && half > 0 {
+            y[half] = x[half] * 0.5;
+            y[m - half] += x[half] * 0.5;
+        }
+        let two_pi = 2.0 * std::f64::consts::PI;
+        for (k, v) in y.iter_mut().enumerate() {
+            let signed = if k <= m / 2 {
+                k as f64
+            } else {
+                k as f64 - m as f64
+            };
+            let w = two_pi * signed * fa / m as f64;
+            *v *= -w * w;
+        }
+        y[0] = Complex64::new(0.0, 0.0);
+        planner.plan_fft_inverse(m).process(&mut y);
+        Ok(y.iter().map(|v| v.re / n as f64 / 1000.0).collect())
+    }
 
     /// Window coefficients, periodic (scipy `get_window(..., fftbins=True)`).
     fn window_coeffs(w: Window, n: usize) -> Vec<f64> {
@@ -1215,5 +1249,28 @@ mod tests {
         assert!((uncorrected - ha).norm() > 5e-3 * ha.norm());
         assert_eq!(a.acc_modes[0].bin, 8);
         assert_eq!(a.vis_modes[0].bin, 8);
+    }
+
+    /// The firmware upsampler (f32) agrees with the f64 reference on a random record, 1200
+    /// frames at 120 fps to 2048 Hz.
+    #[test]
+    fn firmware_upsampling_matches_the_reference() {
+        let mut state = 5u64;
+        let x: Vec<f64> = (0..1200)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let got = vision_acceleration(&x, 120.0, 2048.0, 20480).unwrap();
+        let want = reference_vision_acceleration(&x, 120.0, 2048.0, 20480).unwrap();
+        let peak = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let worst = got
+            .iter()
+            .zip(&want)
+            .fold(0.0f64, |a, (g, w)| a.max((g - w).abs()));
+        assert!(worst < 1e-4 * peak, "worst {worst} of peak {peak}");
     }
 }

@@ -608,7 +608,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(a) = a {
         write(&args.out, "frf.csv", &analysis::frf_csv(a))?;
         write(&args.out, "modes.csv", &analysis::modes_csv(a))?;
-        let plots = write_plot(&args.out, a)?;
+        let plots = write_plot(&args.out, a, args.fps)?;
         let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"]
             .into_iter()
             .map(|f| args.out.join(f).display().to_string())
@@ -621,10 +621,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     result.map(|_| ())
 }
 
-fn write_plot(out: &Path, a: &analysis::Analysis) -> anyhow::Result<Vec<PathBuf>> {
-    // TODO(plots): call `crate::plots::write_frf_plot` once the plotting module offers it.
-    let _ = (out, a);
-    Ok(Vec::new())
+/// `frf.png` / `frf.svg`: |H1| of both systems up to the camera's Nyquist frequency (the vision
+/// path has no content above it).
+fn write_plot(out: &Path, a: &analysis::Analysis, fps: f64) -> anyhow::Result<Vec<PathBuf>> {
+    let keep = a
+        .acc_frf
+        .freq_hz
+        .iter()
+        .take_while(|&&f| f <= fps / 2.0)
+        .count();
+    let freq = &a.acc_frf.freq_hz[..keep];
+    let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
+    let acc: Vec<f64> = abs(&a.acc_frf.h1);
+    let vis: Vec<f64> = abs(&a.vis_frf.h1);
+    crate::plots::write_frf_plot(
+        &out.join("frf"),
+        "H1 of the recording: accelerometer and vision",
+        "|H1|",
+        &[("accelerometer", freq, &acc), ("vision", freq, &vis)],
+    )
 }
 
 fn describe_inputs(
