@@ -30,9 +30,10 @@
 //! (`erfc((d - r) / (sigma sqrt 2)) / 2`), 8 bit. A positive tip displacement moves the disk
 //! **up** in the image (the `--axis y` convention of `analyze`).
 //!
-//! TODO(imaging): the EPSA renderer of [`crate::imaging`] and the time-domain models of
-//! [`crate::model`] were not available when this was written; this module uses the exact
-//! frequency-domain response and the direct time-averaged renderer described above.
+//! This module keeps its own small physics (exact periodic frequency-domain response, direct
+//! time-averaged renderer) so that a recording has closed-form expected FRFs; the Monte Carlo
+//! studies use the time-domain models and the blur renderer under `study/`. TODO: render the
+//! recording's frames with the study's renderer too, so both paths share one image model.
 
 use crate::bad_input;
 use crate::study::Preset;
