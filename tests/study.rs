@@ -181,3 +181,50 @@ fn render_writes_sharp_and_blurred_frames() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--times"));
 }
+
+#[test]
+fn imaging_effects_from_a_study_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("s.toml");
+    std::fs::write(
+        &cfg,
+        "preset = \"grandstand\"\nruns = 2\nexposures_ms = [40.0]\n\n[imaging]\nbits = 12\nread_noise = 1.0\nshot_noise_e_per_level = 20.0\noptical_blur_sigma_px = 0.7\ngain = 1.1\n",
+    )
+    .unwrap();
+    let out = dir.path().join("o");
+    let o = harness(&[
+        "study",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plots",
+    ]);
+    ok(&o);
+    let written = read(&out.join("config.toml"));
+    assert!(written.contains("bits = 12"), "{written}");
+    // vision rows are present and the amplitude stays near the transducer's at 40 ms
+    let s = read(&out.join("summary.csv"));
+    let vis: Vec<f64> = s
+        .lines()
+        .filter(|l| l.starts_with("vision,40,1,"))
+        .map(|l| l.split(',').nth(6).unwrap().parse().unwrap())
+        .collect();
+    let tr: Vec<f64> = s
+        .lines()
+        .filter(|l| l.starts_with("transducer,40,1,"))
+        .map(|l| l.split(',').nth(6).unwrap().parse().unwrap())
+        .collect();
+    assert!((vis[0] / tr[0] - 1.0).abs() < 0.1, "{s}");
+    // an invalid option is refused with the field named
+    std::fs::write(&cfg, "preset = \"grandstand\"\n[imaging]\nbits = 10\n").unwrap();
+    let o = harness(&[
+        "study",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        dir.path().join("p").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("imaging.bits"));
+}

@@ -837,6 +837,7 @@ pub fn measure_system<const SEG: usize, const NFFT: usize, const SCR: usize>(
 }
 
 pub mod cantilever;
+pub mod effects;
 pub mod grandstand;
 pub mod render;
 

@@ -7,10 +7,11 @@ use super::{
     fill_lost_frames, measure_system, RunRecord, Scenario, StudyConfig, SystemRecord, VisionRecord,
     MAX_LOST_FRACTION,
 };
+use crate::study::effects::Effects;
 use crate::study::render::{BlurRenderer, DiskTarget};
-use firmware_core::centroid::{centroid_u8, CentroidConfig};
+use firmware_core::centroid::{centroid_u16, centroid_u8, CentroidConfig};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, StandardNormal};
 
@@ -233,6 +234,8 @@ pub fn impulse(t: f64, alpha: f64, f0: f64) -> f64 {
 /// The grandstand study.
 #[derive(Debug)]
 pub struct Grandstand {
+    /// Optional image-formation effects (identity by default: the fast 8-bit path).
+    effects: Effects,
     exposures_ms: Vec<f64>,
     /// Path segments per precomputed ramp block: the largest step that divides the frame
     /// period and every half exposure (in fine steps), so windows cover whole blocks.
@@ -247,11 +250,7 @@ impl Grandstand {
 
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
-        if cfg.imaging != Default::default() {
-            anyhow::bail!(
-                "imaging options are not supported by the grandstand renderer yet; remove the [imaging] table"
-            );
-        }
+        let effects = Effects::from_options(&cfg.imaging)?;
         let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
         let mut block = FINE;
         for e in &cfg.exposures_ms {
@@ -263,6 +262,7 @@ impl Grandstand {
             };
         }
         Ok(Grandstand {
+            effects,
             block: block.max(1),
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
@@ -355,18 +355,39 @@ impl Scenario for Grandstand {
         renderer.set_path(&path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let cfg = CentroidConfig::binary(THRESHOLD);
+        let plain = self.effects.is_identity();
+        let cfg = CentroidConfig::binary(if plain {
+            THRESHOLD
+        } else {
+            self.effects.threshold(THRESHOLD)
+        });
+        let noise_seed: u64 = if plain { 0 } else { rng.random() };
         let mut frame = vec![0u8; w * h];
+        let (mut fimg, mut frame16, mut scratch) = if plain {
+            (Vec::new(), Vec::new(), Vec::new())
+        } else {
+            (vec![0.0f32; w * h], vec![0u16; w * h], Vec::new())
+        };
         let mut vis = vec![0.0f64; N];
         let mut valid = vec![false; N];
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
-        for &exp in &self.exposures_ms {
+        for (ei, &exp) in self.exposures_ms.iter().enumerate() {
             let half = exp / 2.0 / dt_ms; // fine steps either side of the frame instant
+            let mut noise = ChaCha8Rng::seed_from_u64(noise_seed);
+            noise.set_stream(ei as u64);
             for i in 0..N {
                 let centre = (r.pad + i * FINE) as f64;
-                renderer.render(centre - half, centre + half, &mut frame);
-                let c = centroid_u8(&cfg, &frame, w, h, w)
-                    .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
+                let c = if plain {
+                    renderer.render(centre - half, centre + half, &mut frame);
+                    centroid_u8(&cfg, &frame, w, h, w)
+                } else {
+                    renderer.render_float(centre - half, centre + half, &mut fimg);
+                    self.effects
+                        .apply(&mut fimg, w, h, &mut noise, &mut scratch);
+                    self.effects.quantise(&fimg, &mut frame16);
+                    centroid_u16(&cfg, &frame16, w, h, w)
+                }
+                .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
                 match c.position() {
                     Some((_, cy)) => {
                         vis[i] = -(cy as f64 - rest_y) / PX_PER_MM;
