@@ -30,7 +30,7 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Output directory (default: out/<preset>).
+    /// Output directory (default: `out/<preset>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Continue an interrupted study in --out: runs already in its runs.jsonl are kept.
