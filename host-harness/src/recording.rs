@@ -694,7 +694,13 @@ pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<Recor
         args.join(" ")
     );
     for f in spec.natural_frequencies() {
-        let _ = write!(readme, " {f} Hz ({unit} = {:.4})", spec.frf(f).norm());
+        let a = spec.frf(f).norm();
+        let a = if a < 0.01 {
+            format!("{a:.4e}")
+        } else {
+            format!("{a:.2}")
+        };
+        let _ = write!(readme, " {f} Hz ({unit} = {a})");
     }
     readme.push_str(
         " for both systems (one record is one noisy estimate); see recording.toml for all \

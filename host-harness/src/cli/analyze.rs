@@ -621,15 +621,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     result.map(|_| ())
 }
 
-/// `frf.png` / `frf.svg`: |H1| of both systems up to the camera's Nyquist frequency (the vision
-/// path has no content above it).
+/// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
+/// camera's Nyquist frequency (the vision path has no content above it, and outside the
+/// excitation band H1 is noise over noise).
 fn write_plot(out: &Path, a: &analysis::Analysis, fps: f64) -> anyhow::Result<Vec<PathBuf>> {
-    let keep = a
-        .acc_frf
-        .freq_hz
+    let top = a
+        .acc_modes
         .iter()
-        .take_while(|&&f| f <= fps / 2.0)
-        .count();
+        .map(|m| m.band_hz.1 * 1.1)
+        .fold(0.0, f64::max);
+    let top = if top > 0.0 {
+        top.min(fps / 2.0)
+    } else {
+        fps / 2.0
+    };
+    let keep = a.acc_frf.freq_hz.iter().take_while(|&&f| f <= top).count();
     let freq = &a.acc_frf.freq_hz[..keep];
     let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
     let acc: Vec<f64> = abs(&a.acc_frf.h1);
