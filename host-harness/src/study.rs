@@ -413,11 +413,12 @@ pub fn execute(
     let new = Mutex::new(Vec::new());
     let bar = progress_bar(pending.len() as u64, exec.progress && !pending.is_empty());
     if !have.is_empty() {
-        bar.println(format!(
-            "resuming: {} runs already done, {} to go",
+        eprintln!(
+            "resuming {}: {} runs already done, {} to go",
+            exec.out.display(),
             have.len(),
             pending.len()
-        ));
+        );
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(exec.threads)

@@ -30,10 +30,12 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Output directory (default: `out/<preset>`).
+    /// Output directory. Default: `out/<preset>-<config hash>`, resumed automatically when
+    /// it exists (running the same command twice re-reports the finished study).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Continue an interrupted study in --out: runs already in its runs.jsonl are kept.
+    /// Continue an interrupted study in --out: runs already in its runs.jsonl are kept (implied
+    /// when --out is not given).
     #[arg(long)]
     pub resume: bool,
     /// Compute only shard K of N (runs r with r mod N = K-1); combine with `host-harness merge`.
@@ -66,6 +68,25 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
     Ok(cfg)
 }
 
+/// `out/<preset>-<hash of the resolved configuration>[-shard-K-of-N]`.
+pub fn default_out(cfg: &StudyConfig, shard: Shard) -> PathBuf {
+    // FNV-1a 64 of the resolved configuration's TOML: stable across runs and platforms
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in cfg.to_toml().bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    let preset = match cfg.preset {
+        Preset::Grandstand => "grandstand",
+        Preset::Cantilever => "cantilever",
+    };
+    let mut name = format!("{preset}-{:08x}", h >> 32);
+    if shard != Shard::ALL {
+        name.push_str(&format!("-shard-{}-of-{}", shard.index, shard.count));
+    }
+    PathBuf::from("out").join(name)
+}
+
 /// Runs `host-harness study`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = resolve(&args)?;
@@ -73,12 +94,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(s) => Shard::parse(s)?,
         None => Shard::ALL,
     };
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out").join(match cfg.preset {
-            Preset::Grandstand => "grandstand",
-            Preset::Cantilever => "cantilever",
-        })
-    });
+    // Without --out, the directory is named after the configuration, so running the same
+    // command again resumes (or just re-reports) that study instead of refusing to overwrite,
+    // and a different configuration never mixes with it.
+    let (out, resume) = match &args.out {
+        Some(o) => (o.clone(), args.resume),
+        None => (default_out(&cfg, shard), true),
+    };
     let scenario = study::scenario_for(&cfg)?;
     eprintln!(
         "{} study: {} runs x {} exposures ({} ms), seed {}{}{} -> {}",
@@ -106,7 +128,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let exec = Execution {
         out: out.clone(),
-        resume: args.resume,
+        resume,
         threads: args.threads,
         shard,
         progress: true,
@@ -161,4 +183,28 @@ pub fn finish(
     }
     println!("wrote {} files in {}", written.len() + 2, out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_directory_is_named_after_the_configuration() {
+        let a = StudyConfig::preset(Preset::Grandstand);
+        let mut b = a.clone();
+        b.runs += 1;
+        assert_eq!(
+            default_out(&a, Shard::ALL),
+            default_out(&a.clone(), Shard::ALL)
+        );
+        assert_ne!(default_out(&a, Shard::ALL), default_out(&b, Shard::ALL));
+        let s = Shard { index: 2, count: 3 };
+        assert!(default_out(&a, s)
+            .to_string_lossy()
+            .ends_with("-shard-2-of-3"));
+        assert!(default_out(&a, Shard::ALL)
+            .to_string_lossy()
+            .starts_with("out/grandstand-"));
+    }
 }
