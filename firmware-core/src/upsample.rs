@@ -431,4 +431,26 @@ mod tests {
             core::mem::size_of::<Upsampler<2048, { scratch_capacity(120, 2048) }>>() < 20 * 1024
         );
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// Upsampling by an integer factor L then keeping every L-th sample returns the input,
+        /// for any signal and any n (odd or even: the split Nyquist halves recombine there).
+        #[test]
+        fn decimation_returns_any_input(
+            n in 1usize..=64,
+            factor in 1usize..=8,
+            seed in proptest::collection::vec(-1.0f32..1.0, 64),
+        ) {
+            let m = n * factor;
+            let x = &seed[..n];
+            let mut up = Upsampler::<512, 8192>::try_new(n, m).unwrap();
+            let mut y = vec![0.0f32; m];
+            up.process(x, &mut y).unwrap();
+            for (i, v) in x.iter().enumerate() {
+                // f32 DFT rounding on inputs of magnitude <= 1
+                proptest::prop_assert!((y[factor * i] - v).abs() < 1e-4, "n {} L {} sample {}: {} vs {}", n, factor, i, y[factor * i], v);
+            }
+        }
+    }
 }
