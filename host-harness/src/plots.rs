@@ -354,7 +354,7 @@ where
         ) else {
             continue;
         };
-        let pad = |(a, b): (f64, f64)| (a - 0.1 * (b - a), b + 0.1 * (b - a));
+        let pad = |(a, b): (f64, f64)| (a - 0.1 * (b - a), b + 0.2 * (b - a));
         let (xr, yr) = (pad(xr), pad(yr));
         let mut chart = ChartBuilder::on(panel)
             .caption(format!("mode {m}"), (FONT, 18))
