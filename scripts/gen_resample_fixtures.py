@@ -34,6 +34,9 @@ CASES = [
 ]
 
 
+FS_IN = 120.0  # camera rate for the acceleration fixtures, Hz
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     rng = np.random.Generator(np.random.PCG64(2016))
@@ -51,6 +54,14 @@ def main():
             np.savetxt(os.path.join(OUT, f"{name}_x.csv"), x, fmt="%.9g")
             y = sig.resample(x.astype(np.float64), m)
             np.savetxt(os.path.join(OUT, f"{name}_y.csv"), y, fmt="%.12g")
+            # acceleration (SPEC 2.3) of the resampled signal for a camera at FS_IN Hz:
+            # FFT derivative in numpy, -omega^2 per bin (fftfreq), DC zeroed
+            fs_out = FS_IN * m / n
+            w = 2 * np.pi * np.fft.fftfreq(m, 1.0 / fs_out)
+            spec = -(w**2) * np.fft.fft(y)
+            spec[0] = 0.0
+            a = np.fft.ifft(spec).real
+            np.savetxt(os.path.join(OUT, f"{name}_a.csv"), a, fmt="%.9g")
 
 
 if __name__ == "__main__":
