@@ -47,11 +47,14 @@
 //! # Memory
 //! The capacities are const generics: `SEG >= nperseg` samples per channel, `NFFT >= nfft`
 //! (the transform buffer and the accumulators), `SCRATCH >=` [`crate::dft::scratch_len`]`(nfft)`
-//! (zero for powers of two). The state holds the window and the two segment buffers
-//! (`3 SEG` `f32`), the transform buffer (`NFFT` complex), the accumulators packed in a
-//! "half-complex" layout (`2 NFFT` `f32`, see [`WelchH1`]) and the DFT scratch (`SCRATCH`
-//! complex): about `12 SEG + 16 NFFT + 8 SCRATCH` bytes, e.g. 56 KiB for
-//! `WelchH1<2048, 2048, 0>`. Large instances belong in a `static` (MCU) or a `Box` (host).
+//! (zero for powers of two). The state holds the two segment buffers (`2 SEG` `f32`; the
+//! window is evaluated per sample, not stored), the transform buffer (`NFFT` complex), the
+//! accumulators packed in a "half-complex" layout (`2 NFFT` `f32`, see [`WelchAccumulator`])
+//! and the DFT scratch (`SCRATCH` complex): about `8 SEG + 16 NFFT + 8 SCRATCH` bytes, e.g.
+//! 48 KiB for `WelchH1<2048, 2048, 0>`. Large instances belong in a `static` (MCU) or a `Box`
+//! (host). [`WelchAccumulator`] is the estimate without the segment and transform buffers
+//! (`8 NFFT` bytes), for firmware that shares one work buffer between several transforms and
+//! cuts segments out of its own sample history ([`crate::pipeline`]).
 //!
 //! ```
 //! use firmware_core::spectrum::{Detrend, Window, WelchConfig, WelchH1};
@@ -110,6 +113,19 @@ impl Window {
         match self {
             Window::Hann => (0.5 - 0.5 * c()) as f32,
             Window::Hamming => (0.54 - 0.46 * c()) as f32,
+            Window::Rect => 1.0,
+        }
+    }
+
+    /// The same value in `f32` arithmetic only ([`crate::dft::cos_sin_turns`]): within about
+    /// 1e-7 of [`value`](Self::value), and cheap on a single-precision FPU. The estimators use
+    /// this one, per sample, instead of storing the window.
+    #[inline]
+    pub fn value_f32(self, n: usize, len: usize) -> f32 {
+        let c = || dft::cos_sin_turns(n, len).0;
+        match self {
+            Window::Hann => 0.5 - 0.5 * c(),
+            Window::Hamming => 0.54 - 0.46 * c(),
             Window::Rect => 1.0,
         }
     }
@@ -235,6 +251,14 @@ pub enum WelchError {
     },
     /// No segment has been accumulated yet: H1 and the coherence are not available.
     NoSegments,
+    /// A buffer passed to [`WelchAccumulator::add_segment`] has the wrong length (nothing was
+    /// accumulated).
+    BufferLen {
+        /// Length needed (`nperseg` for the segments, at least `nfft` for the work buffer).
+        expected: usize,
+        /// Length passed.
+        got: usize,
+    },
 }
 
 impl fmt::Display for WelchError {
@@ -267,6 +291,9 @@ impl fmt::Display for WelchError {
                 "x and y chunks differ in length ({x} and {y} samples); nothing was consumed"
             ),
             WelchError::NoSegments => write!(f, "no complete segment has been accumulated yet"),
+            WelchError::BufferLen { expected, got } => {
+                write!(f, "buffer has {got} values, {expected} expected")
+            }
         }
     }
 }
@@ -315,31 +342,24 @@ impl defmt::Format for Sums {
     }
 }
 
-/// Streaming Welch H1 estimator with capacities `SEG` (samples per segment), `NFFT` (transform
-/// length) and `SCRATCH` (DFT scratch values, see [`scratch_capacity`]).
-///
-/// Build it with [`try_new`](Self::try_new), feed it with [`push`](Self::push), read it with
-/// [`h1`](Self::h1), [`coherence`](Self::coherence), [`freq`](Self::freq) or the slice
-/// fillers. [`reset`](Self::reset) starts a new estimate with the same settings and
-/// [`reconfigure`](Self::reconfigure) with new ones, so one (boxed or static) instance can serve
-/// many records without being moved again.
+/// The accumulating half of a Welch H1 estimate: settings, the DFT plan and the accumulated
+/// spectra of [`NFFT`](Self) bins, **without** segment buffers or transform work space. Whole
+/// segments are added with [`add_segment`](Self::add_segment) from caller buffers, so a
+/// firmware can share one complex work buffer between this estimate and other transforms (an
+/// upsampler, see [`crate::pipeline`]) and cut segments straight out of its own sample
+/// history. [`WelchH1`] wraps it with the segment buffers for sample-by-sample streaming.
 ///
 /// The accumulators use a half-complex layout: `auto[k] = Pxx[k]` for `k <= nfft/2` and
 /// `auto[nfft - k] = Pyy[k]` for `0 < k < nfft/2`, likewise `cross[k] = Re Pxy[k]` and
 /// `cross[nfft - k] = Im Pxy[k]`; `Pyy` at DC and Nyquist live in two scalars and `Im Pxy` there
 /// is exactly zero (real signals). This stores the `2 nfft + 4` accumulated values in `2 NFFT`
-/// floats plus two.
+/// floats plus two. The window is evaluated per sample ([`crate::dft::cos_sin_turns`], `f32`)
+/// rather than stored, which saves `4 nperseg` bytes for about 30 instructions per sample on a
+/// Cortex-M4F.
 #[derive(Clone)]
-pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
+pub struct WelchAccumulator<const NFFT: usize> {
     config: WelchConfig,
     dft: Dft,
-    window: [f32; SEG],
-    xseg: [f32; SEG],
-    yseg: [f32; SEG],
-    /// Samples currently held in `xseg`/`yseg`.
-    fill: usize,
-    work: [Complex32; NFFT],
-    scratch: [Complex32; SCRATCH],
     auto: [f32; NFFT],
     cross: [f32; NFFT],
     pyy_dc: f32,
@@ -348,79 +368,63 @@ pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
     skipped: u32,
 }
 
-/// Shows the settings and counters, not the buffers (tens of thousands of values).
-impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> fmt::Debug
-    for WelchH1<SEG, NFFT, SCRATCH>
-{
+/// Shows the settings and counters, not the accumulators.
+impl<const NFFT: usize> fmt::Debug for WelchAccumulator<NFFT> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("WelchH1")
-            .field("capacities", &(SEG, NFFT, SCRATCH))
+        f.debug_struct("WelchAccumulator")
+            .field("capacity", &NFFT)
             .field("config", &self.config)
             .field("segments", &self.segments)
             .field("skipped", &self.skipped)
-            .field("pending", &self.fill)
             .finish_non_exhaustive()
     }
 }
 
-/// Logs the settings and counters, not the buffers.
+/// Logs the settings and counters, not the accumulators.
 #[cfg(feature = "defmt")]
-impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> defmt::Format
-    for WelchH1<SEG, NFFT, SCRATCH>
-{
+impl<const NFFT: usize> defmt::Format for WelchAccumulator<NFFT> {
     fn format(&self, f: defmt::Formatter<'_>) {
         defmt::write!(
             f,
-            "WelchH1 {{ config: {}, segments: {}, skipped: {}, pending: {} }}",
+            "WelchAccumulator {{ config: {}, segments: {}, skipped: {} }}",
             self.config,
             self.segments,
-            self.skipped,
-            self.fill
+            self.skipped
         )
     }
 }
 
-impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFFT, SCRATCH> {
-    /// Checks `config` against the capacities and builds an empty estimator.
+impl<const NFFT: usize> WelchAccumulator<NFFT> {
+    /// Checks `config` against the capacity and builds an empty estimate. `nperseg` is only
+    /// bounded by `nfft` here (the caller owns the segments).
     ///
     /// Errors: [`WelchError::SampleRate`], [`WelchError::SegmentLength`],
-    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`],
-    /// [`WelchError::Scratch`].
+    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`].
     pub fn try_new(config: WelchConfig) -> Result<Self, WelchError> {
         let dft = Self::check(&config)?;
-        let mut s = WelchH1 {
+        Ok(WelchAccumulator {
             config,
             dft,
-            window: [0.0; SEG],
-            xseg: [0.0; SEG],
-            yseg: [0.0; SEG],
-            fill: 0,
-            work: [Complex32::new(0.0, 0.0); NFFT],
-            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
             auto: [0.0; NFFT],
             cross: [0.0; NFFT],
             pyy_dc: 0.0,
             pyy_nyquist: 0.0,
             segments: 0,
             skipped: 0,
-        };
-        s.fill_window();
-        Ok(s)
+        })
     }
 
     /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
-    /// estimate. On error the estimator is left unchanged.
+    /// estimate. On error the estimate is left unchanged.
     pub fn reconfigure(&mut self, config: WelchConfig) -> Result<(), WelchError> {
         self.dft = Self::check(&config)?;
         self.config = config;
-        self.fill_window();
         self.reset();
         Ok(())
     }
 
-    /// Forgets all pushed samples and accumulated segments; keeps the settings.
+    /// Forgets all accumulated segments; keeps the settings.
     pub fn reset(&mut self) {
-        self.fill = 0;
         self.auto.iter_mut().for_each(|v| *v = 0.0);
         self.cross.iter_mut().for_each(|v| *v = 0.0);
         self.pyy_dc = 0.0;
@@ -433,10 +437,10 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
         if !(c.fs_hz.is_finite() && c.fs_hz > 0.0) {
             return Err(WelchError::SampleRate);
         }
-        if c.nperseg == 0 || c.nperseg > SEG {
+        if c.nperseg == 0 {
             return Err(WelchError::SegmentLength {
                 nperseg: c.nperseg,
-                capacity: SEG,
+                capacity: NFFT,
             });
         }
         if c.noverlap >= c.nperseg {
@@ -452,27 +456,18 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 capacity: NFFT,
             });
         }
-        let dft = Dft::try_new(c.nfft)?;
-        if dft.scratch_len() > SCRATCH {
-            return Err(WelchError::Scratch {
-                needed: dft.scratch_len(),
-                capacity: SCRATCH,
-            });
-        }
-        Ok(dft)
-    }
-
-    fn fill_window(&mut self) {
-        let n = self.config.nperseg;
-        let w = self.config.window;
-        for (i, v) in self.window.iter_mut().enumerate() {
-            *v = if i < n { w.value(i, n) } else { 0.0 };
-        }
+        Ok(Dft::try_new(c.nfft)?)
     }
 
     /// The settings in force.
     pub fn config(&self) -> &WelchConfig {
         &self.config
+    }
+
+    /// Scratch values [`add_segment`](Self::add_segment) needs
+    /// ([`crate::dft::scratch_len`]`(nfft)`, zero for powers of two).
+    pub fn scratch_len(&self) -> usize {
+        self.dft.scratch_len()
     }
 
     /// Number of output bins, `nfft / 2 + 1`.
@@ -502,103 +497,60 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
         self.skipped
     }
 
-    /// Samples waiting in the segment buffer (always `< nperseg`).
-    pub fn pending(&self) -> usize {
-        self.fill
-    }
-
-    /// Pushes a chunk of samples of both channels (`x[i]` and `y[i]` taken at the same time).
-    /// Every time `nperseg` samples are buffered a segment is transformed and accumulated, and
-    /// the last `noverlap` samples are kept for the next one. The result does not depend on how
-    /// the record is cut into chunks: pushing it sample by sample, in random chunks or at once
-    /// gives bit-identical spectra.
+    /// Detrends, windows, transforms and accumulates one segment: `x` and `y` hold exactly
+    /// `nperseg` samples of the two channels, `work` at least `nfft` values and `scratch` at
+    /// least [`scratch_len`](Self::scratch_len) (both are overwritten). Returns `Ok(true)` if
+    /// the segment was accumulated, `Ok(false)` if it was skipped (non-finite or too large a
+    /// sample, see [`skipped_segments`](Self::skipped_segments)).
     ///
-    /// Errors: [`WelchError::ChunkLengths`] if `x.len() != y.len()`; then nothing is consumed.
-    pub fn push(&mut self, x: &[f32], y: &[f32]) -> Result<(), WelchError> {
-        if x.len() != y.len() {
-            return Err(WelchError::ChunkLengths {
-                x: x.len(),
-                y: y.len(),
-            });
-        }
-        let nperseg = self.config.nperseg;
-        let (mut x, mut y) = (x, y);
-        while !x.is_empty() {
-            let room = nperseg.saturating_sub(self.fill);
-            let take = room.min(x.len());
-            let (xh, xt) = x.split_at(take);
-            let (yh, yt) = y.split_at(take.min(y.len()));
-            if let (Some(xd), Some(yd)) = (
-                self.xseg.get_mut(self.fill..self.fill + take),
-                self.yseg.get_mut(self.fill..self.fill + take),
-            ) {
-                // element loops: no length-mismatch panic path (the lengths are equal)
-                for (d, v) in xd.iter_mut().zip(xh) {
-                    *d = *v;
-                }
-                for (d, v) in yd.iter_mut().zip(yh) {
-                    *d = *v;
-                }
-            }
-            self.fill += take;
-            (x, y) = (xt, yt);
-            if self.fill >= nperseg {
-                self.process_segment();
-                let step = nperseg - self.config.noverlap;
-                if let (Some(xs), Some(ys)) =
-                    (self.xseg.get_mut(..nperseg), self.yseg.get_mut(..nperseg))
-                {
-                    if step <= xs.len() && step <= ys.len() {
-                        xs.copy_within(step.., 0);
-                        ys.copy_within(step.., 0);
-                    }
-                }
-                self.fill = self.config.noverlap;
-            }
-            if take == 0 && self.fill < nperseg {
-                // unreachable with a valid configuration; guarantees termination regardless
-                break;
-            }
-        }
-        Ok(())
-    }
-
-    /// Transforms the full segment in `xseg`/`yseg` and accumulates it.
-    fn process_segment(&mut self) {
+    /// Errors (nothing accumulated): [`WelchError::BufferLen`] for a wrong `x`, `y` or `work`
+    /// length, [`WelchError::Scratch`] for too small a `scratch`.
+    pub fn add_segment(
+        &mut self,
+        x: &[f32],
+        y: &[f32],
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) -> Result<bool, WelchError> {
         let n = self.config.nperseg;
         let nfft = self.config.nfft;
-        let (Some(xs), Some(ys), Some(w)) =
-            (self.xseg.get(..n), self.yseg.get(..n), self.window.get(..n))
-        else {
-            return;
+        for got in [x.len(), y.len()] {
+            if got != n {
+                return Err(WelchError::BufferLen { expected: n, got });
+            }
+        }
+        let Some(work) = work.get_mut(..nfft) else {
+            return Err(WelchError::BufferLen {
+                expected: nfft,
+                got: work.len(),
+            });
         };
+        if scratch.len() < self.dft.scratch_len() {
+            return Err(WelchError::Scratch {
+                needed: self.dft.scratch_len(),
+                capacity: scratch.len(),
+            });
+        }
         let detrend = self.config.detrend == Detrend::Constant;
-        let (Some(px), Some(py)) = (prepare(xs, detrend), prepare(ys, detrend)) else {
+        let (Some(px), Some(py)) = (prepare(x, detrend), prepare(y, detrend)) else {
             self.skipped = self.skipped.saturating_add(1);
-            return;
+            return Ok(false);
         };
         let (sx, sy) = (px.scale, py.scale);
-        let Some(work) = self.work.get_mut(..nfft) else {
-            return;
-        };
         // z = (x - mean) * w / sx + i (y - mean) * w / sy, zero-padded to nfft
         let (isx, isy) = (1.0 / sx, 1.0 / sy);
         let (mx, lx, my, ly) = (px.hi, px.lo, py.hi, py.lo);
+        let window = self.config.window;
         for (j, z) in work.iter_mut().enumerate() {
-            *z = match (xs.get(j), ys.get(j), w.get(j)) {
-                (Some(&a), Some(&b), Some(&wj)) => {
+            *z = match (x.get(j), y.get(j)) {
+                (Some(&a), Some(&b)) => {
+                    let wj = window.value_f32(j, n);
                     Complex32::new(((a - mx) - lx) * wj * isx, ((b - my) - ly) * wj * isy)
                 }
                 _ => Complex32::new(0.0, 0.0),
             };
         }
-        if self
-            .dft
-            .process(work, &mut self.scratch, Direction::Forward)
-            .is_err()
-        {
-            return;
-        }
+        self.dft.process(work, scratch, Direction::Forward)?;
         let bins = nfft / 2 + 1;
         for k in 0..bins {
             let zk = work.get(k).copied().unwrap_or_default();
@@ -637,6 +589,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
             }
         }
         self.segments = self.segments.saturating_add(1);
+        Ok(true)
     }
 
     /// Accumulated spectra at bin `k` (`None` if `k >= bins()`). Divide by
@@ -682,34 +635,264 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
     /// Writes H1 of bins `0 .. min(out.len(), bins())` into `out` and returns how many were
     /// written. Error: [`WelchError::NoSegments`] before the first accumulated segment.
     pub fn fill_h1(&self, out: &mut [Complex32]) -> Result<usize, WelchError> {
-        if self.segments == 0 {
-            return Err(WelchError::NoSegments);
-        }
-        let mut n = 0;
-        for (k, o) in out.iter_mut().enumerate().take(self.bins()) {
-            if let Some(s) = self.sums(k) {
-                *o = h1_of(&s);
-                n += 1;
-            }
-        }
-        Ok(n)
+        self.fill_with(out, h1_of)
     }
 
     /// Writes the coherence of bins `0 .. min(out.len(), bins())` into `out` and returns how
     /// many were written. Error: [`WelchError::NoSegments`] before the first accumulated
     /// segment.
     pub fn fill_coherence(&self, out: &mut [f32]) -> Result<usize, WelchError> {
+        self.fill_with(out, coherence_of)
+    }
+
+    fn fill_with<T>(&self, out: &mut [T], f: fn(&Sums) -> T) -> Result<usize, WelchError> {
         if self.segments == 0 {
             return Err(WelchError::NoSegments);
         }
         let mut n = 0;
         for (k, o) in out.iter_mut().enumerate().take(self.bins()) {
             if let Some(s) = self.sums(k) {
-                *o = coherence_of(&s);
+                *o = f(&s);
                 n += 1;
             }
         }
         Ok(n)
+    }
+}
+
+/// Streaming Welch H1 estimator with capacities `SEG` (samples per segment), `NFFT` (transform
+/// length) and `SCRATCH` (DFT scratch values, see [`scratch_capacity`]): a
+/// [`WelchAccumulator`] plus the two segment buffers, the transform buffer and the scratch.
+///
+/// Build it with [`try_new`](Self::try_new), feed it with [`push`](Self::push), read it with
+/// [`h1`](Self::h1), [`coherence`](Self::coherence), [`freq`](Self::freq) or the slice
+/// fillers. [`reset`](Self::reset) starts a new estimate with the same settings and
+/// [`reconfigure`](Self::reconfigure) with new ones, so one (boxed or static) instance can serve
+/// many records without being moved again.
+#[derive(Clone)]
+pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
+    acc: WelchAccumulator<NFFT>,
+    xseg: [f32; SEG],
+    yseg: [f32; SEG],
+    /// Samples currently held in `xseg`/`yseg`.
+    fill: usize,
+    work: [Complex32; NFFT],
+    scratch: [Complex32; SCRATCH],
+}
+
+/// Shows the settings and counters, not the buffers (tens of thousands of values).
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> fmt::Debug
+    for WelchH1<SEG, NFFT, SCRATCH>
+{
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("WelchH1")
+            .field("capacities", &(SEG, NFFT, SCRATCH))
+            .field("config", &self.acc.config)
+            .field("segments", &self.acc.segments)
+            .field("skipped", &self.acc.skipped)
+            .field("pending", &self.fill)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Logs the settings and counters, not the buffers.
+#[cfg(feature = "defmt")]
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> defmt::Format
+    for WelchH1<SEG, NFFT, SCRATCH>
+{
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "WelchH1 {{ config: {}, segments: {}, skipped: {}, pending: {} }}",
+            self.acc.config,
+            self.acc.segments,
+            self.acc.skipped,
+            self.fill
+        )
+    }
+}
+
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFFT, SCRATCH> {
+    /// Checks `config` against the capacities and builds an empty estimator.
+    ///
+    /// Errors: [`WelchError::SampleRate`], [`WelchError::SegmentLength`],
+    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`],
+    /// [`WelchError::Scratch`].
+    pub fn try_new(config: WelchConfig) -> Result<Self, WelchError> {
+        Self::check(&config)?;
+        Ok(WelchH1 {
+            acc: WelchAccumulator::try_new(config)?,
+            xseg: [0.0; SEG],
+            yseg: [0.0; SEG],
+            fill: 0,
+            work: [Complex32::new(0.0, 0.0); NFFT],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+        })
+    }
+
+    /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
+    /// estimate. On error the estimator is left unchanged.
+    pub fn reconfigure(&mut self, config: WelchConfig) -> Result<(), WelchError> {
+        Self::check(&config)?;
+        self.acc.reconfigure(config)?;
+        self.fill = 0;
+        Ok(())
+    }
+
+    /// Forgets all pushed samples and accumulated segments; keeps the settings.
+    pub fn reset(&mut self) {
+        self.fill = 0;
+        self.acc.reset();
+    }
+
+    /// [`WelchAccumulator::try_new`]'s checks plus the segment and scratch capacities, in the
+    /// order the errors are documented.
+    fn check(c: &WelchConfig) -> Result<(), WelchError> {
+        if !(c.fs_hz.is_finite() && c.fs_hz > 0.0) {
+            return Err(WelchError::SampleRate);
+        }
+        if c.nperseg == 0 || c.nperseg > SEG {
+            return Err(WelchError::SegmentLength {
+                nperseg: c.nperseg,
+                capacity: SEG,
+            });
+        }
+        let dft = WelchAccumulator::<NFFT>::check(c)?;
+        if dft.scratch_len() > SCRATCH {
+            return Err(WelchError::Scratch {
+                needed: dft.scratch_len(),
+                capacity: SCRATCH,
+            });
+        }
+        Ok(())
+    }
+
+    /// The accumulated estimate (settings, spectra, counters).
+    pub fn accumulator(&self) -> &WelchAccumulator<NFFT> {
+        &self.acc
+    }
+
+    /// The settings in force.
+    pub fn config(&self) -> &WelchConfig {
+        self.acc.config()
+    }
+
+    /// Number of output bins, `nfft / 2 + 1`.
+    pub fn bins(&self) -> usize {
+        self.acc.bins()
+    }
+
+    /// Bin spacing `fs / nfft`, in Hz.
+    pub fn df_hz(&self) -> f32 {
+        self.acc.df_hz()
+    }
+
+    /// Frequency of bin `k`, in Hz (see [`WelchAccumulator::freq`]).
+    pub fn freq(&self, k: usize) -> f32 {
+        self.acc.freq(k)
+    }
+
+    /// Segments accumulated so far.
+    pub fn segments(&self) -> u32 {
+        self.acc.segments()
+    }
+
+    /// Complete segments that were not accumulated because they contained a non-finite sample
+    /// or one larger than [`MAX_SAMPLE_ABS`] in magnitude.
+    pub fn skipped_segments(&self) -> u32 {
+        self.acc.skipped_segments()
+    }
+
+    /// Samples waiting in the segment buffer (always `< nperseg`).
+    pub fn pending(&self) -> usize {
+        self.fill
+    }
+
+    /// Pushes a chunk of samples of both channels (`x[i]` and `y[i]` taken at the same time).
+    /// Every time `nperseg` samples are buffered a segment is transformed and accumulated, and
+    /// the last `noverlap` samples are kept for the next one. The result does not depend on how
+    /// the record is cut into chunks: pushing it sample by sample, in random chunks or at once
+    /// gives bit-identical spectra.
+    ///
+    /// Errors: [`WelchError::ChunkLengths`] if `x.len() != y.len()`; then nothing is consumed.
+    pub fn push(&mut self, x: &[f32], y: &[f32]) -> Result<(), WelchError> {
+        if x.len() != y.len() {
+            return Err(WelchError::ChunkLengths {
+                x: x.len(),
+                y: y.len(),
+            });
+        }
+        let nperseg = self.acc.config.nperseg;
+        let (mut x, mut y) = (x, y);
+        while !x.is_empty() {
+            let room = nperseg.saturating_sub(self.fill);
+            let take = room.min(x.len());
+            let (xh, xt) = x.split_at(take);
+            let (yh, yt) = y.split_at(take.min(y.len()));
+            if let (Some(xd), Some(yd)) = (
+                self.xseg.get_mut(self.fill..self.fill + take),
+                self.yseg.get_mut(self.fill..self.fill + take),
+            ) {
+                // element loops: no length-mismatch panic path (the lengths are equal)
+                for (d, v) in xd.iter_mut().zip(xh) {
+                    *d = *v;
+                }
+                for (d, v) in yd.iter_mut().zip(yh) {
+                    *d = *v;
+                }
+            }
+            self.fill += take;
+            (x, y) = (xt, yt);
+            if self.fill >= nperseg {
+                if let (Some(xs), Some(ys)) =
+                    (self.xseg.get_mut(..nperseg), self.yseg.get_mut(..nperseg))
+                {
+                    // the capacities were checked by try_new: no error case is left
+                    let _ = self
+                        .acc
+                        .add_segment(xs, ys, &mut self.work, &mut self.scratch);
+                    let step = nperseg - self.acc.config.noverlap;
+                    if step <= xs.len() && step <= ys.len() {
+                        xs.copy_within(step.., 0);
+                        ys.copy_within(step.., 0);
+                    }
+                }
+                self.fill = self.acc.config.noverlap;
+            }
+            if take == 0 && self.fill < nperseg {
+                // unreachable with a valid configuration; guarantees termination regardless
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Accumulated spectra at bin `k` (see [`WelchAccumulator::sums`]).
+    pub fn sums(&self, k: usize) -> Option<Sums> {
+        self.acc.sums(k)
+    }
+
+    /// H1 at bin `k` (see [`WelchAccumulator::h1`]).
+    pub fn h1(&self, k: usize) -> Option<Complex32> {
+        self.acc.h1(k)
+    }
+
+    /// Coherence at bin `k` (see [`WelchAccumulator::coherence`]).
+    pub fn coherence(&self, k: usize) -> Option<f32> {
+        self.acc.coherence(k)
+    }
+
+    /// Writes H1 of bins `0 .. min(out.len(), bins())` into `out` and returns how many were
+    /// written. Error: [`WelchError::NoSegments`] before the first accumulated segment.
+    pub fn fill_h1(&self, out: &mut [Complex32]) -> Result<usize, WelchError> {
+        self.acc.fill_h1(out)
+    }
+
+    /// Writes the coherence of bins `0 .. min(out.len(), bins())` into `out` and returns how
+    /// many were written. Error: [`WelchError::NoSegments`] before the first accumulated
+    /// segment.
+    pub fn fill_coherence(&self, out: &mut [f32]) -> Result<usize, WelchError> {
+        self.acc.fill_coherence(out)
     }
 }
 
@@ -1192,13 +1375,92 @@ mod tests {
     }
 
     #[test]
+    fn accumulator_with_caller_buffers_matches_the_streaming_estimator_bit_for_bit() {
+        let c = cfg(100, 40, 128, Window::Hann);
+        let (x, y) = system(700, 3);
+        let mut w = WelchH1::<100, 128, 0>::try_new(c).unwrap();
+        w.push(&x, &y).unwrap();
+        let mut acc = WelchAccumulator::<128>::try_new(c).unwrap();
+        let mut work = vec![Complex32::new(0.0, 0.0); 200];
+        let mut start = 0;
+        while start + 100 <= x.len() {
+            let seg = start..start + 100;
+            let ok = acc.add_segment(&x[seg.clone()], &y[seg], &mut work, &mut []);
+            assert_eq!(ok, Ok(true));
+            start += 60;
+        }
+        assert_eq!(acc.segments(), w.segments());
+        assert_eq!(all_bits(&w), {
+            let mut v = Vec::new();
+            for k in 0..acc.bins() {
+                let s = acc.sums(k).unwrap();
+                v.extend([
+                    s.pxx.to_bits(),
+                    s.pyy.to_bits(),
+                    s.pxy.re.to_bits(),
+                    s.pxy.im.to_bits(),
+                ]);
+            }
+            v
+        });
+        // wrong buffers are errors and accumulate nothing
+        let before = acc.segments();
+        assert_eq!(
+            acc.add_segment(&x[..99], &y[..100], &mut work, &mut []),
+            Err(WelchError::BufferLen {
+                expected: 100,
+                got: 99
+            })
+        );
+        assert_eq!(
+            acc.add_segment(&x[..100], &y[..100], &mut work[..127], &mut []),
+            Err(WelchError::BufferLen {
+                expected: 128,
+                got: 127
+            })
+        );
+        let mut odd = WelchAccumulator::<120>::try_new(cfg(100, 40, 120, Window::Hann)).unwrap();
+        assert!(odd.scratch_len() > 0);
+        assert!(matches!(
+            odd.add_segment(&x[..100], &y[..100], &mut work, &mut []),
+            Err(WelchError::Scratch { .. })
+        ));
+        let mut scratch = vec![Complex32::new(0.0, 0.0); odd.scratch_len()];
+        assert_eq!(
+            odd.add_segment(&x[..100], &y[..100], &mut work, &mut scratch),
+            Ok(true)
+        );
+        // a non-finite sample skips the segment
+        let mut bad = x[..100].to_vec();
+        bad[7] = f32::NAN;
+        assert_eq!(
+            acc.add_segment(&bad, &y[..100], &mut work, &mut []),
+            Ok(false)
+        );
+        assert_eq!((acc.segments(), acc.skipped_segments()), (before, 1));
+    }
+
+    #[test]
+    fn f32_window_values_agree_with_the_f64_ones() {
+        for len in [1usize, 2, 7, 100, 1111, 2048, 4096] {
+            for n in 0..len {
+                for w in [Window::Hann, Window::Hamming, Window::Rect] {
+                    let (a, b) = (w.value(n, len), w.value_f32(n, len));
+                    assert!((a - b).abs() < 2e-7, "{w:?} {n}/{len}: {a} vs {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn state_size_is_the_documented_budget() {
-        // 3 SEG f32 (window, two segments) + NFFT complex (work) + 2 NFFT f32 (accumulators)
-        // + SCRATCH complex + a few words of settings and counters. This is the RAM an MCU
-        // needs for the estimator (README "Signal path figures").
+        // 2 SEG f32 (two segments; the window is computed, not stored) + NFFT complex (work)
+        // + 2 NFFT f32 (accumulators) + SCRATCH complex + a few words of settings and
+        // counters. This is the RAM an MCU needs for the estimator (README "Signal path
+        // figures").
         fn check<const S: usize, const N: usize, const C: usize>() -> usize {
             let size = core::mem::size_of::<WelchH1<S, N, C>>();
-            let buffers = 12 * S + 16 * N + 8 * C;
+            let buffers = 8 * S + 16 * N + 8 * C;
             assert!(
                 size >= buffers && size <= buffers + 128,
                 "WelchH1<{S}, {N}, {C}>: {size} bytes, buffers {buffers}"
@@ -1206,8 +1468,11 @@ mod tests {
             std::println!("size_of WelchH1<{S}, {N}, {C}> = {size} bytes");
             size
         }
-        assert!(check::<2048, 2048, 0>() < 58 * 1024);
-        assert!(check::<4096, 4096, 0>() < 115 * 1024);
+        assert!(check::<2048, 2048, 0>() < 49 * 1024);
+        assert!(check::<4096, 4096, 0>() < 97 * 1024);
+        // the accumulator alone: 2 NFFT f32
+        let acc = core::mem::size_of::<WelchAccumulator<2048>>();
+        assert!((8 * 2048..8 * 2048 + 128).contains(&acc), "{acc}");
         check::<1111, 5000, { scratch_capacity(5000) }>();
         check::<20480, 20480, { scratch_capacity(20480) }>();
     }

@@ -120,53 +120,38 @@ pub const fn output_len(n: usize, from_hz: u32, to_hz: u32) -> Option<usize> {
     Some((num / from_hz as u64) as usize)
 }
 
-/// Fourier upsampler from `n` to `m` samples with owned buffers (`M` work values, `SCRATCH`
-/// DFT scratch values).
-#[derive(Debug, Clone)]
-pub struct Upsampler<const M: usize, const SCRATCH: usize> {
+/// The plan of an `n -> m` Fourier upsampling (lengths and the two DFT plans), with no
+/// buffers: [`process_with`](Self::process_with) runs it in caller buffers, so a firmware can
+/// lend it the work buffer of another stage (the Welch estimate's, see [`crate::pipeline`]).
+/// [`Upsampler`] is the same with owned buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UpsamplePlan {
     n: usize,
     m: usize,
     fwd: Dft,
     inv: Dft,
-    work: [Complex32; M],
-    scratch: [Complex32; SCRATCH],
 }
 
-impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
-    /// Plans `n -> m` (`1 <= n <= m <= M`).
-    pub fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
+impl UpsamplePlan {
+    /// Plans `n -> m` (`1 <= n <= m`, both lengths supported by [`crate::dft`]).
+    pub const fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
         if n == 0 || m < n {
             return Err(UpsampleError::Lengths { n, m });
         }
-        if m > M {
-            return Err(UpsampleError::Capacity { m, capacity: M });
-        }
-        let fwd = Dft::try_new(n)?;
-        let inv = Dft::try_new(m)?;
-        let needed = if fwd.scratch_len() > inv.scratch_len() {
-            fwd.scratch_len()
-        } else {
-            inv.scratch_len()
+        let fwd = match Dft::try_new(n) {
+            Ok(d) => d,
+            Err(e) => return Err(UpsampleError::Dft(e)),
         };
-        if needed > SCRATCH {
-            return Err(UpsampleError::Scratch {
-                needed,
-                capacity: SCRATCH,
-            });
-        }
-        Ok(Upsampler {
-            n,
-            m,
-            fwd,
-            inv,
-            work: [Complex32::new(0.0, 0.0); M],
-            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
-        })
+        let inv = match Dft::try_new(m) {
+            Ok(d) => d,
+            Err(e) => return Err(UpsampleError::Dft(e)),
+        };
+        Ok(UpsamplePlan { n, m, fwd, inv })
     }
 
     /// Plans the upsampling of `n` samples at `from_hz` to `to_hz` (integer rates; the output
     /// length `n * to / from` must be an integer).
-    pub fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
+    pub const fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
         match output_len(n, from_hz, to_hz) {
             Some(m) => Self::try_new(n, m),
             None => Err(UpsampleError::RateRatio),
@@ -174,40 +159,41 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
     }
 
     /// Input length.
-    pub fn input_len(&self) -> usize {
+    pub const fn input_len(&self) -> usize {
         self.n
     }
 
     /// Output length.
-    pub fn output_len(&self) -> usize {
+    pub const fn output_len(&self) -> usize {
         self.m
     }
 
-    /// Upsamples `input` (`n` values) into `output` (`m` values).
-    pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), UpsampleError> {
-        self.run(input, output, None)
+    /// Scratch values [`process_with`](Self::process_with) needs (the larger of the two
+    /// transforms' [`crate::dft::scratch_len`]).
+    pub const fn scratch_len(&self) -> usize {
+        let (a, b) = (self.fwd.scratch_len(), self.inv.scratch_len());
+        if a > b {
+            a
+        } else {
+            b
+        }
     }
 
-    /// Upsamples and converts displacement to acceleration in one pass (SPEC 2.3 fused with
-    /// 2.2): the spectrum is multiplied by `-(2 pi f)^2 * scale` (DC zeroed) before the inverse
-    /// transform. `fs_in_hz` is the input sampling rate (the bins are at `k fs_in / n`);
-    /// `scale` converts the input unit times s^-2 to the output unit (e.g. `1e-3` for mm in,
-    /// m/s^2 out).
-    pub fn process_acceleration(
-        &mut self,
-        input: &[f32],
-        output: &mut [f32],
-        fs_in_hz: f32,
-        scale: f32,
-    ) -> Result<(), UpsampleError> {
-        self.run(input, output, Some((fs_in_hz, scale)))
-    }
-
-    fn run(
-        &mut self,
+    /// Upsamples `input` (`n` values) into `output` (`m` values) using `work` (at least `m`
+    /// values) and `scratch` (at least [`scratch_len`](Self::scratch_len)); both are
+    /// overwritten. With `accel = Some((fs_in_hz, scale))` the spectrum is multiplied by
+    /// `-(2 pi f)^2 * scale` before the inverse transform, as
+    /// [`Upsampler::process_acceleration`].
+    ///
+    /// Errors (nothing written to `output`): [`UpsampleError::BufferLen`] for a wrong `input`,
+    /// `output` or `work` length, [`UpsampleError::Scratch`] for too small a `scratch`.
+    pub fn process_with(
+        &self,
         input: &[f32],
         output: &mut [f32],
         accel: Option<(f32, f32)>,
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
     ) -> Result<(), UpsampleError> {
         let (n, m) = (self.n, self.m);
         if input.len() != n {
@@ -222,18 +208,31 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
                 got: output.len(),
             });
         }
-        let work = &mut self.work[..m];
+        let Some(work) = work.get_mut(..m) else {
+            return Err(UpsampleError::BufferLen {
+                expected: m,
+                got: work.len(),
+            });
+        };
+        if scratch.len() < self.scratch_len() {
+            return Err(UpsampleError::Scratch {
+                needed: self.scratch_len(),
+                capacity: scratch.len(),
+            });
+        }
         for (w, x) in work.iter_mut().zip(input) {
             *w = Complex32::new(*x, 0.0);
         }
-        self.fwd
-            .process(&mut work[..n], &mut self.scratch, Direction::Forward)?;
+        let Some(head) = work.get_mut(..n) else {
+            return Ok(());
+        };
+        self.fwd.process(head, scratch, Direction::Forward)?;
         // bins kept on each side: positive 0 ..= pos - 1, negative 1 ..= neg
         let even = n % 2 == 0;
         let pos = if even { n / 2 } else { n.div_ceil(2) };
         let neg = if even { n / 2 - 1 } else { (n - 1) / 2 };
-        let nyq = if even && n > 0 {
-            Some(work[n / 2] * 0.5)
+        let nyq = if even {
+            work.get(n / 2).map(|v| *v * 0.5)
         } else {
             None
         };
@@ -241,19 +240,30 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
             // move the negative frequencies to the top; in ascending j no source is
             // overwritten before it is moved (targets m - j lie above sources n - j' for j' > j)
             for j in 1..=neg {
-                work[m - j] = work[n - j];
+                if let Some(v) = work.get(n - j).copied() {
+                    if let Some(d) = work.get_mut(m - j) {
+                        *d = v;
+                    }
+                }
             }
-            for w in work[pos..m - neg].iter_mut() {
-                *w = Complex32::new(0.0, 0.0);
+            if let Some(mid) = work.get_mut(pos..m - neg) {
+                for w in mid.iter_mut() {
+                    *w = Complex32::new(0.0, 0.0);
+                }
             }
             if let Some(v) = nyq {
-                work[n / 2] = v;
-                work[m - n / 2] = v;
+                for i in [n / 2, m - n / 2] {
+                    if let Some(d) = work.get_mut(i) {
+                        *d = v;
+                    }
+                }
             }
         }
         if let Some((fs, scale)) = accel {
             let df = fs / n as f32;
-            work[0] = Complex32::new(0.0, 0.0);
+            if let Some(w0) = work.first_mut() {
+                *w0 = Complex32::new(0.0, 0.0);
+            }
             for (k, w) in work.iter_mut().enumerate().skip(1) {
                 // signed frequency of bin k of the m-point spectrum (same bins as the input)
                 let kk = if k <= m / 2 {
@@ -265,13 +275,97 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
                 *w *= -om * om * scale;
             }
         }
-        self.inv
-            .process(work, &mut self.scratch, Direction::Inverse)?;
+        self.inv.process(work, scratch, Direction::Inverse)?;
         let s = 1.0 / n as f32;
         for (o, w) in output.iter_mut().zip(work.iter()) {
             *o = w.re * s;
         }
         Ok(())
+    }
+}
+
+/// Fourier upsampler from `n` to `m` samples with owned buffers (`M` work values, `SCRATCH`
+/// DFT scratch values): an [`UpsamplePlan`] and its buffers.
+#[derive(Debug, Clone)]
+pub struct Upsampler<const M: usize, const SCRATCH: usize> {
+    plan: UpsamplePlan,
+    work: [Complex32; M],
+    scratch: [Complex32; SCRATCH],
+}
+
+impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
+    /// Plans `n -> m` (`1 <= n <= m <= M`).
+    pub fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
+        let plan = UpsamplePlan::try_new(n, m)?;
+        Self::with_plan(plan)
+    }
+
+    /// Plans the upsampling of `n` samples at `from_hz` to `to_hz` (integer rates; the output
+    /// length `n * to / from` must be an integer).
+    pub fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
+        Self::with_plan(UpsamplePlan::from_rates(n, from_hz, to_hz)?)
+    }
+
+    fn with_plan(plan: UpsamplePlan) -> Result<Self, UpsampleError> {
+        if plan.m > M {
+            return Err(UpsampleError::Capacity {
+                m: plan.m,
+                capacity: M,
+            });
+        }
+        if plan.scratch_len() > SCRATCH {
+            return Err(UpsampleError::Scratch {
+                needed: plan.scratch_len(),
+                capacity: SCRATCH,
+            });
+        }
+        Ok(Upsampler {
+            plan,
+            work: [Complex32::new(0.0, 0.0); M],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+        })
+    }
+
+    /// The plan (lengths and transforms).
+    pub fn plan(&self) -> &UpsamplePlan {
+        &self.plan
+    }
+
+    /// Input length.
+    pub fn input_len(&self) -> usize {
+        self.plan.n
+    }
+
+    /// Output length.
+    pub fn output_len(&self) -> usize {
+        self.plan.m
+    }
+
+    /// Upsamples `input` (`n` values) into `output` (`m` values).
+    pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), UpsampleError> {
+        self.plan
+            .process_with(input, output, None, &mut self.work, &mut self.scratch)
+    }
+
+    /// Upsamples and converts displacement to acceleration in one pass (SPEC 2.3 fused with
+    /// 2.2): the spectrum is multiplied by `-(2 pi f)^2 * scale` (DC zeroed) before the inverse
+    /// transform. `fs_in_hz` is the input sampling rate (the bins are at `k fs_in / n`);
+    /// `scale` converts the input unit times s^-2 to the output unit (e.g. `1e-3` for mm in,
+    /// m/s^2 out).
+    pub fn process_acceleration(
+        &mut self,
+        input: &[f32],
+        output: &mut [f32],
+        fs_in_hz: f32,
+        scale: f32,
+    ) -> Result<(), UpsampleError> {
+        self.plan.process_with(
+            input,
+            output,
+            Some((fs_in_hz, scale)),
+            &mut self.work,
+            &mut self.scratch,
+        )
     }
 }
 
