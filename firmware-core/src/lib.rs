@@ -19,6 +19,7 @@
 //! | [`convert`] | displacement to acceleration: spectrum times -omega^2, pixel to SI scaling |
 //! | [`spectrum`] | streaming Welch estimator of H1 and coherence |
 //! | [`peaks`] | resonance frequency and amplitude by peak picking of Im H1 in bands |
+//! | [`pipeline`] | the whole vision channel in one fixed working set: frames + ADC samples in, H1 out |
 //! | [`sync`] | camera trigger / ADC conversion schedule from one time base (`embedded-hal` 1.0) |
 //!
 //! Float maths goes through `libm`, so the same code compiles for the host and for
@@ -32,6 +33,7 @@ pub mod centroid;
 pub mod convert;
 pub mod dft;
 pub mod peaks;
+pub mod pipeline;
 pub mod spectrum;
 pub mod sync;
 pub mod upsample;
