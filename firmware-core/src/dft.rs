@@ -353,6 +353,44 @@ pub fn cos_sin_turns(r: usize, n: usize) -> (f32, f32) {
     }
 }
 
+/// `cos(2 pi r / n)` alone, as [`cos_sin_turns`] but evaluating one polynomial instead of
+/// two (the window functions need only the cosine).
+#[inline]
+pub fn cos_turns(r: usize, n: usize) -> f32 {
+    if n == 0 {
+        return 1.0;
+    }
+    let (oct, rem, nf) = match (u32::try_from(r), u32::try_from(n)) {
+        (Ok(r), Ok(n)) if n <= u32::MAX / 8 => {
+            let r = r.checked_rem(n).unwrap_or(0);
+            let t = 8 * r;
+            let oct = t.checked_div(n).unwrap_or(0);
+            (oct, (t - oct * n) as f32, n as f32)
+        }
+        _ => {
+            let (r, n) = (r as u64, n as u64);
+            let r = r.checked_rem(n).unwrap_or(0);
+            let t = r.saturating_mul(8);
+            let oct = t.checked_div(n).unwrap_or(0);
+            let rem = t - oct.saturating_mul(n).min(t);
+            (oct as u32, rem as f32, n as f32)
+        }
+    };
+    const FRAC_PI_4: f32 = core::f32::consts::FRAC_PI_4;
+    // cos of (q pi/2 + y): q = 0: cos y, 1: -sin y, 2: -cos y, 3: sin y; in odd octants
+    // cos y = sin x' and sin y = cos x' with x' = (n - rem) / n * pi / 4
+    let odd = oct & 1 == 1;
+    let q = (oct >> 1) & 3;
+    let x = if odd { (nf - rem) / nf } else { rem / nf } * FRAC_PI_4;
+    let use_sin = (q & 1 == 1) != odd;
+    let v = if use_sin { poly_sin(x) } else { poly_cos(x) };
+    if q == 1 || q == 2 {
+        -v
+    } else {
+        v
+    }
+}
+
 #[inline]
 fn cos_sin_turns_u32(r: u32, n: u32) -> (f32, f32) {
     if n == 0 {
@@ -402,16 +440,23 @@ fn octant_cos_sin(oct: u32, rem: f32, n: f32) -> (f32, f32) {
 /// Taylor polynomials of cos and sin on `[0, pi/4]` (truncation below 2e-9).
 #[inline(always)]
 fn poly_cos_sin(x: f32) -> (f32, f32) {
+    (poly_cos(x), poly_sin(x))
+}
+
+#[inline(always)]
+fn poly_cos(x: f32) -> f32 {
     let x2 = x * x;
-    let c = 1.0
-        + x2 * (-1.0 / 2.0
+    1.0 + x2
+        * (-1.0 / 2.0
             + x2 * (1.0 / 24.0
-                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0)))));
-    let s = x
-        * (1.0
-            + x2 * (-1.0 / 6.0
-                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))));
-    (c, s)
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0)))))
+}
+
+#[inline(always)]
+fn poly_sin(x: f32) -> f32 {
+    let x2 = x * x;
+    x * (1.0
+        + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))))
 }
 
 /// Spectrum of the Bluestein filter `b[k] = conj(chirp(|k|))` for `|k| < m`, circularly placed
@@ -543,6 +588,7 @@ mod tests {
             let step = (n / 4096).max(1);
             for r in (0..2 * n + 3).step_by(step) {
                 let (c, s) = cos_sin_turns(r, n);
+                assert_eq!(cos_turns(r, n).to_bits(), c.to_bits(), "cos_turns {r}/{n}");
                 let a = std::f64::consts::TAU * (r % n) as f64 / n as f64;
                 let e = (c as f64 - a.cos()).abs().max((s as f64 - a.sin()).abs());
                 worst = worst.max(e);

@@ -122,7 +122,7 @@ impl Window {
     /// this one, per sample, instead of storing the window.
     #[inline]
     pub fn value_f32(self, n: usize, len: usize) -> f32 {
-        let c = || dft::cos_sin_turns(n, len).0;
+        let c = || dft::cos_turns(n, len);
         match self {
             Window::Hann => 0.5 - 0.5 * c(),
             Window::Hamming => 0.54 - 0.46 * c(),
@@ -541,14 +541,27 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
         let (isx, isy) = (1.0 / sx, 1.0 / sy);
         let (mx, lx, my, ly) = (px.hi, px.lo, py.hi, py.lo);
         let window = self.config.window;
-        for (j, z) in work.iter_mut().enumerate() {
-            *z = match (x.get(j), y.get(j)) {
-                (Some(&a), Some(&b)) => {
-                    let wj = window.value_f32(j, n);
-                    Complex32::new(((a - mx) - lx) * wj * isx, ((b - my) - ly) * wj * isy)
+        let z = |j: usize, wj: f32| match (x.get(j), y.get(j)) {
+            (Some(&a), Some(&b)) => {
+                Complex32::new(((a - mx) - lx) * wj * isx, ((b - my) - ly) * wj * isy)
+            }
+            _ => Complex32::new(0.0, 0.0),
+        };
+        for v in work.iter_mut().skip(n) {
+            *v = Complex32::new(0.0, 0.0);
+        }
+        // periodic windows are symmetric, w[j] = w[n - j]: one evaluation serves both samples
+        for j in 0..=n / 2 {
+            let wj = window.value_f32(j, n);
+            if let Some(v) = work.get_mut(j) {
+                *v = z(j, wj);
+            }
+            let k = n - j;
+            if k != j && k < n {
+                if let Some(v) = work.get_mut(k) {
+                    *v = z(k, wj);
                 }
-                _ => Complex32::new(0.0, 0.0),
-            };
+            }
         }
         self.dft.process(work, scratch, Direction::Forward)?;
         let bins = nfft / 2 + 1;
