@@ -249,18 +249,23 @@ const PIPE_SCRATCH: usize = pipeline::scratch_capacity(CAM_N, NSEG, NSEG);
 /// frames and ADC samples in, upsampled acceleration, 2048-point Welch H1 out.
 type Pipeline = VisionH1<CAM_N, HIST, NSEG, PIPE_SCRATCH>;
 
+/// 2048-point Hann segments with 50 % overlap at 2048 Hz (1 Hz bins).
+fn welch_2048() -> WelchConfig {
+    WelchConfig {
+        fs_hz: FS,
+        nperseg: NSEG,
+        noverlap: NSEG / 2,
+        nfft: NSEG,
+        window: Window::Hann,
+        detrend: Detrend::Constant,
+    }
+}
+
 fn pipeline_config() -> PipelineConfig {
     PipelineConfig {
         frames_per_block: CAM_N,
         samples_per_block: NSEG,
-        welch: WelchConfig {
-            fs_hz: FS,
-            nperseg: NSEG,
-            noverlap: NSEG / 2,
-            nfft: NSEG,
-            window: Window::Hann,
-            detrend: Detrend::Constant,
-        },
+        welch: welch_2048(),
         // camera in mm, ADC in m/s^2
         acceleration_scale: Some(1e-3),
     }
@@ -359,15 +364,7 @@ fn check_dense(rep: &mut Report) {
 /// The estimator lives on the stack here; the static pipeline below holds its own.
 #[inline(never)]
 fn check_h1(rep: &mut Report) {
-    let cfg = WelchConfig {
-        fs_hz: FS,
-        nperseg: NSEG,
-        noverlap: NSEG / 2,
-        nfft: NSEG,
-        window: Window::Hann,
-        detrend: Detrend::Constant,
-    };
-    let Ok(mut welch) = WelchH1::<NSEG, NSEG, 0>::try_new(cfg) else {
+    let Ok(mut welch) = WelchH1::<NSEG, NSEG, 0>::try_new(welch_2048()) else {
         rep.check("Welch configuration", false);
         return;
     };
