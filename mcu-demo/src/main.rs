@@ -339,25 +339,29 @@ fn check_centroids(rep: &mut Report) {
 
 fn check_dense(rep: &mut Report) {
     let f = black_box(&DENSE_U8);
-    let cfg = CentroidConfig::binary(THRESHOLD);
-    let (w, sx, sy) = naive_moments(f.iter().map(|&p| u16::from(p)), THRESHOLD, false);
-    let want = ((sx as f64 / w as f64) as f32, (sy as f64 / w as f64) as f32);
-    let got = centroid::centroid_u8(&cfg, f, W, H, W).ok();
-    let pos = got.and_then(|c| c.position());
-    hprintln!(
-        "centroid u8 dense: {} pixels {} (naive {}, {})",
-        Pos(pos),
-        got.map_or(0, |c| c.pixels()),
-        Pos(Some(want)),
-        w
-    );
-    rep.check(
-        "centroid 8-bit dense frame vs naive loop",
-        got.is_some_and(|c| c.pixels() == w)
-            && pos.is_some_and(|(x, y)| {
+    for (mode, weighted) in [(Mode::Binary, false), (Mode::Weighted, true)] {
+        let Ok(cfg) = CentroidConfig::try_new(THRESHOLD, mode, None, None) else {
+            rep.check("centroid configuration", false);
+            continue;
+        };
+        let (w, sx, sy) = naive_moments(f.iter().map(|&p| u16::from(p)), THRESHOLD, weighted);
+        let want = ((sx as f64 / w as f64) as f32, (sy as f64 / w as f64) as f32);
+        let got = centroid::centroid_u8(&cfg, f, W, H, W).ok();
+        let pos = got.and_then(|c| c.position());
+        hprintln!(
+            "centroid u8 dense {:?}: {} (naive {}, weight {})",
+            mode,
+            Pos(pos),
+            Pos(Some(want)),
+            w
+        );
+        rep.check(
+            "centroid 8-bit dense frame vs naive loop",
+            pos.is_some_and(|(x, y)| {
                 libm::fabsf(x - want.0) < 1e-4 && libm::fabsf(y - want.1) < 1e-4
-            }),
-    );
+            }) && (weighted || got.is_some_and(|c| c.pixels() == w)),
+        );
+    }
 }
 
 /// Streaming H1 of a 2048 Hz input/output pair through a resonator with a closed-form FRF.
@@ -541,6 +545,9 @@ fn bench_centroids() {
     if let Some(w) = w {
         let _ = measured("centroid weighted u8 76800", || {
             centroid::centroid_u8(&w, f8, W, H, W)
+        });
+        let _ = measured("centroid weighted u8 dense 76800", || {
+            centroid::centroid_u8(&w, d8, W, H, W)
         });
     }
     let _ = measured("centroid binary u16 76800", || {

@@ -53,6 +53,8 @@ impl Pixel for u16 {
 }
 
 /// At most [`MAX_DIM`] pixels of `row` (the bounds above rely on it).
+// portable kernels; on 32-bit ARM the `m4` ones replace them (the host tests compare both)
+#[cfg_attr(target_arch = "arm", allow(dead_code))]
 #[inline(always)]
 fn clip<P>(row: &[P]) -> &[P] {
     row.get(..MAX_DIM).unwrap_or(row)
@@ -79,14 +81,31 @@ pub fn row_binary_u8(row: &[u8], t: u8) -> RowSums {
     }
 }
 
-/// Binary mode, 16-bit pixels (same as [`row_binary_u8`]).
+/// Binary mode, 16-bit pixels (same as [`row_binary_u8`]). On 32-bit ARM: blocks of 64 pixels
+/// whose OR is not above `t` are skipped (two pixels per word), `max` as on that path.
 pub fn row_binary_u16(row: &[u16], t: u16) -> RowSums {
-    row_binary(row, t)
+    #[cfg(target_arch = "arm")]
+    {
+        super::m4::row_binary_u16(row, t)
+    }
+    #[cfg(not(target_arch = "arm"))]
+    {
+        row_binary(row, t)
+    }
 }
 
 /// Weighted mode, 8-bit pixels: weight `value - t` for value `> t` (see [`row_weighted_u16`]).
+/// On 32-bit ARM: blocks of 64 pixels whose OR is not above `t` are skipped (four pixels per
+/// word load), `max` as on the binary ARM path.
 pub fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
-    row_weighted(row, t)
+    #[cfg(target_arch = "arm")]
+    {
+        super::m4::row_weighted_u8(row, t)
+    }
+    #[cfg(not(target_arch = "arm"))]
+    {
+        row_weighted(row, t)
+    }
 }
 
 /// Weighted mode, 16-bit pixels: weight `value - t` for value `> t`.
@@ -94,10 +113,20 @@ pub fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
 /// Blocks of [`BLOCK`] pixels keep a 32-bit block-local moment
 /// (`<= 65 535 * (255 * 256 / 2) < 2^31`), added to the 64-bit row moment as
 /// `local + x_block * weight_block`. Rows longer than [`MAX_DIM`] pixels are clipped to it.
+/// On 32-bit ARM: the block skip of [`row_binary_u16`].
 pub fn row_weighted_u16(row: &[u16], t: u16) -> RowSums {
-    row_weighted(row, t)
+    #[cfg(target_arch = "arm")]
+    {
+        super::m4::row_weighted_u16(row, t)
+    }
+    #[cfg(not(target_arch = "arm"))]
+    {
+        row_weighted(row, t)
+    }
 }
 
+// portable kernels; on 32-bit ARM the `m4` ones replace them (the host tests compare both)
+#[cfg_attr(target_arch = "arm", allow(dead_code))]
 #[inline(always)]
 fn row_binary<P: Pixel>(row: &[P], t: P) -> RowSums {
     let mut pixels = 0u32;
@@ -117,6 +146,8 @@ fn row_binary<P: Pixel>(row: &[P], t: P) -> RowSums {
     }
 }
 
+// portable kernels; on 32-bit ARM the `m4` ones replace them (the host tests compare both)
+#[cfg_attr(target_arch = "arm", allow(dead_code))]
 #[inline(always)]
 fn row_weighted<P: Pixel>(row: &[P], t: P) -> RowSums {
     let mut pixels = 0u32;

@@ -23,7 +23,7 @@
 //! without any pixel above `t` the returned `max` is 0 on this path (documented on
 //! [`row_binary_u8`](super::row_binary_u8)).
 
-use super::kernel::RowSums;
+use super::kernel::{Pixel, RowSums};
 use super::MAX_DIM;
 
 const H: u32 = 0x8080_8080;
@@ -129,6 +129,90 @@ fn block_sums<const HIGH: bool>(block: &[u8], k: u32, cur: u8) -> (u32, u32, u8)
     (count, inner, max)
 }
 
+// ---------------------------------------------------------------------------------------------
+// Weighted 8-bit and both 16-bit kernels: the same block skip, a scalar pass inside hit blocks
+
+/// OR of a block's 8-bit pixels, four per word load.
+#[inline(always)]
+fn or_u8(block: &[u8]) -> u8 {
+    let w = block.chunks_exact(4).fold(0u32, |a, b| {
+        a | <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes)
+    });
+    let w = w | (w >> 16);
+    (w | (w >> 8)) as u8
+}
+
+/// OR of a block's 16-bit pixels, two per word.
+#[inline(always)]
+fn or_u16(block: &[u16]) -> u16 {
+    let w = block.chunks_exact(2).fold(0u32, |a, c| match *c {
+        [lo, hi] => a | u32::from(lo) | (u32::from(hi) << 16),
+        _ => a,
+    });
+    (w | (w >> 16)) as u16
+}
+
+/// Weighted 8-bit row sums: blocks of [`BLOCK_PX`] pixels whose OR is not above `t` have no
+/// pixel above `t` and are skipped; the others take the portable per-pixel pass. Same
+/// `pixels`, `weight`, `sum_x` as the portable kernel, `max` exact when `pixels > 0`, else 0.
+pub(super) fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
+    row_sparse::<u8, true>(row, t, or_u8)
+}
+
+/// Binary 16-bit row sums (see [`row_weighted_u8`]).
+pub(super) fn row_binary_u16(row: &[u16], t: u16) -> RowSums {
+    row_sparse::<u16, false>(row, t, or_u16)
+}
+
+/// Weighted 16-bit row sums (see [`row_weighted_u8`]).
+pub(super) fn row_weighted_u16(row: &[u16], t: u16) -> RowSums {
+    row_sparse::<u16, true>(row, t, or_u16)
+}
+
+#[inline(always)]
+fn row_sparse<P: Pixel, const WEIGHTED: bool>(row: &[P], t: P, or: fn(&[P]) -> P) -> RowSums {
+    let row = row.get(..MAX_DIM).unwrap_or(row);
+    let (mut pixels, mut weight, mut sum_x, mut max) = (0u32, 0u32, 0u64, t);
+    let mut x0 = 0u32;
+    let mut blocks = row.chunks_exact(BLOCK_PX);
+    for block in &mut blocks {
+        if or(block) > t {
+            let (n, w, s, m) = block_pass::<P, WEIGHTED>(block, t, max);
+            pixels += n;
+            weight += w;
+            sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
+            max = m;
+        }
+        x0 += BLOCK_PX as u32;
+    }
+    let (n, w, s, m) = block_pass::<P, WEIGHTED>(blocks.remainder(), t, max);
+    pixels += n;
+    weight += w;
+    sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
+    RowSums {
+        pixels,
+        weight,
+        sum_x,
+        max: if pixels > 0 { m.into() } else { 0 },
+    }
+}
+
+/// Count, weight, block-local x moment (`<= 65 535 * 2016 < 2^27` for a block of 64) and the
+/// running maximum over one block (or the row's remainder, fewer than 64 pixels).
+#[inline(never)]
+fn block_pass<P: Pixel, const WEIGHTED: bool>(block: &[P], t: P, cur: P) -> (u32, u32, u32, P) {
+    let (mut n, mut w, mut s, mut m) = (0u32, 0u32, 0u32, cur);
+    for (x, &p) in (0u32..).zip(block) {
+        let above = u32::from(p > t);
+        let e = if WEIGHTED { p.excess(t) } else { above };
+        n += above;
+        w += e;
+        s += e * x;
+        m = m.max(p);
+    }
+    (n, w, s, m)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -190,6 +274,60 @@ mod tests {
                 row
             };
             prop_assert_eq!(row_binary_u8(&row, t), naive(&row, t));
+        }
+    }
+
+    /// Portable kernels with the ARM path's `max` convention (0 for a row without a hit).
+    fn portable<P: Copy>(f: fn(&[P], P) -> RowSums, row: &[P], t: P) -> RowSums {
+        let mut r = f(row, t);
+        if r.pixels == 0 {
+            r.max = 0;
+        }
+        r
+    }
+
+    proptest! {
+        #[test]
+        fn sparse_kernels_match_the_portable_ones(
+            row8 in proptest::collection::vec(any::<u8>(), 0..700),
+            row16 in proptest::collection::vec(any::<u16>(), 0..700),
+            t8 in any::<u8>(),
+            t16 in any::<u16>(),
+            sparse in any::<bool>(),
+        ) {
+            // sparse rows exercise the block skip, dense ones the per-pixel pass
+            let (row8, row16): (Vec<u8>, Vec<u16>) = if sparse {
+                (
+                    row8.iter().map(|&p| if p > 250 { p } else { p % t8.max(1) }).collect(),
+                    row16.iter().map(|&p| if p > 65_000 { p } else { p % t16.max(1) }).collect(),
+                )
+            } else {
+                (row8, row16)
+            };
+            use super::super::kernel as k;
+            prop_assert_eq!(row_weighted_u8(&row8, t8), portable(k::row_weighted_u8, &row8, t8));
+            prop_assert_eq!(row_binary_u16(&row16, t16), portable(k::row_binary_u16, &row16, t16));
+            prop_assert_eq!(
+                row_weighted_u16(&row16, t16),
+                portable(k::row_weighted_u16, &row16, t16)
+            );
+        }
+    }
+
+    #[test]
+    fn sparse_kernels_at_the_accumulator_bounds() {
+        for len in [64, 65_536, 65_600] {
+            let n = len.min(MAX_DIM) as u64;
+            let r = row_weighted_u16(&std::vec![u16::MAX; len], 0);
+            assert_eq!((r.pixels as u64, r.weight as u64), (n, n * 65_535));
+            assert_eq!(r.sum_x, 65_535 * n * (n - 1) / 2);
+            let r = row_binary_u16(&std::vec![u16::MAX; len], 0);
+            assert_eq!(
+                (r.pixels as u64, r.sum_x, r.max),
+                (n, n * (n - 1) / 2, u16::MAX)
+            );
+            let r = row_weighted_u8(&std::vec![255u8; len], 0);
+            assert_eq!((r.weight as u64, r.sum_x), (n * 255, 255 * n * (n - 1) / 2));
         }
     }
 
