@@ -13,7 +13,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 sh "$tools/build.sh" "$tmp" >/dev/null
 cargo build --release --quiet
-elf=target/thumbv7em-none-eabihf/release/mcu-demo
+# honour a CARGO_TARGET_DIR set by the caller (CI caches, shared target dirs)
+elf=${CARGO_TARGET_DIR:-target}/thumbv7em-none-eabihf/release/mcu-demo
 mark=$(arm-none-eabi-nm -t d "$elf" | awk '$3=="bench_mark"{printf "0x%x\n", $1 - $1 % 2}')
 timeout 600 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
   -semihosting-config enable=on,target=native -icount shift=0 \

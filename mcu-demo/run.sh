@@ -7,6 +7,7 @@ cd "$(dirname "$0")"
 cargo build --release
 # the panic-freedom build: links only if no panic path survives optimisation
 cargo build --release --features panic-check --target-dir target/panic-check
-elf=target/thumbv7em-none-eabihf/release/mcu-demo
+# honour a CARGO_TARGET_DIR set by the caller (CI caches, shared target dirs)
+elf=${CARGO_TARGET_DIR:-target}/thumbv7em-none-eabihf/release/mcu-demo
 timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
   -semihosting-config enable=on,target=native -icount shift=0 -kernel "$elf"
