@@ -342,28 +342,9 @@ pub fn check_time_column(t: &[f64], fs: f64, source: &str, first_row: usize) -> 
     Ok(())
 }
 
-/// Welch window.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Window {
-    /// Periodic Hann (scipy's default `hann`).
-    #[default]
-    Hann,
-    /// Periodic Hamming.
-    Hamming,
-    /// Rectangular (boxcar).
-    Rect,
-}
-
-impl Window {
-    /// `"hann"`, `"hamming"` or `"rect"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Window::Hann => "hann",
-            Window::Hamming => "hamming",
-            Window::Rect => "rect",
-        }
-    }
-}
+/// Welch window: firmware-core's own type (periodic Hann, the default; periodic Hamming;
+/// rectangular), so the settings reach the estimator in [`h1`] unchanged.
+pub use firmware_core::spectrum::Window;
 
 /// Welch H1 settings. The defaults are the cantilever rig's: one periodic Hann segment over the
 /// whole record (`nperseg = nfft =` record length), mean removed.
@@ -609,11 +590,7 @@ pub fn h1(
         nperseg,
         noverlap,
         nfft,
-        window: match w.window {
-            Window::Hann => firmware_core::spectrum::Window::Hann,
-            Window::Hamming => firmware_core::spectrum::Window::Hamming,
-            Window::Rect => firmware_core::spectrum::Window::Rect,
-        },
+        window: w.window,
         detrend: if w.detrend {
             Detrend::Constant
         } else {
