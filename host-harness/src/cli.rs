@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 pub mod analyze;
+pub mod args;
 pub mod centroid;
 pub mod frf;
 pub mod merge;

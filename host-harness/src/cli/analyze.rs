@@ -134,14 +134,8 @@ pub enum WindowArg {
     Rect,
 }
 
-/// `--detrend`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum DetrendArg {
-    /// Subtract each segment's mean.
-    Constant,
-    /// No detrending.
-    None,
-}
+/// `--detrend` (shared with the other subcommands that run Welch).
+pub use super::args::DetrendArg;
 
 /// Parsed `--bands`.
 #[derive(Debug, Clone, PartialEq)]

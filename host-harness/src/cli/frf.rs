@@ -47,14 +47,8 @@ pub enum WindowArg {
     Rect,
 }
 
-/// Segment detrending.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum DetrendArg {
-    /// Subtract each segment's mean.
-    Constant,
-    /// No detrending.
-    None,
-}
+/// `--detrend` (shared with the other subcommands that run Welch).
+pub use super::args::DetrendArg;
 
 /// Arguments of `host-harness frf`.
 #[derive(Debug, clap::Args)]
