@@ -60,10 +60,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let written = match args.preset {
-        Preset::Grandstand => render_grandstand(&args)?,
-        Preset::Cantilever => render_cantilever(&args)?,
+    let scene = match args.preset {
+        Preset::Grandstand => grandstand_scene(&args),
+        Preset::Cantilever => cantilever_scene(&args)?,
     };
+    let written = write_frames(&args.out, &scene, args.exposure_ms)?;
     for p in &written {
         println!("{}", p.display());
     }
@@ -71,23 +72,38 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes the sharp and the blurred frame at each time of `times` (seconds on the fine path of
-/// rate `fine_hz` whose index 0 is at time `-pad / fine_hz`).
-#[allow(clippy::too_many_arguments)]
-fn write_frames(
-    out: &Path,
-    target: &DiskTarget,
-    path_px: &[f64],
+/// What the camera of a preset looks at.
+#[derive(Debug)]
+struct Scene {
+    /// The target.
+    target: DiskTarget,
+    /// Displacement path, px (positive down), on the fine time base of rate `fine_hz` whose
+    /// index 0 is at time `-pad / fine_hz`.
+    path_px: Vec<f64>,
+    /// Fine steps of path before t = 0 (and at least as many after the record).
     pad: usize,
+    /// Rate of the fine time base, Hz.
     fine_hz: f64,
-    times: &[f64],
-    exposure_ms: f64,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let (lo, hi) = path_px
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-    let mut r = BlurRenderer::new(target, lo, hi);
-    r.set_path(path_px, 1);
+    /// Frame times, s: `--times` or the preset's default instants.
+    times: Vec<f64>,
+}
+
+/// Fine steps of path needed either side of a frame for the exposure window, plus a margin.
+fn pad_for(exposure_ms: f64, fine_hz: f64) -> usize {
+    (exposure_ms / 2000.0 * fine_hz).ceil() as usize + 2
+}
+
+/// Writes the sharp and the blurred frame at each time of `scene.times`.
+fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<Vec<PathBuf>> {
+    let Scene {
+        target,
+        path_px,
+        pad,
+        fine_hz,
+        times,
+    } = scene;
+    let (pad, fine_hz) = (*pad, *fine_hz);
+    let mut r = BlurRenderer::for_path(target, path_px, 1);
     let (w, h) = (r.width(), r.height());
     let mut frame = vec![0u8; w * h];
     let half = exposure_ms / 2000.0 * fine_hz;
@@ -117,58 +133,48 @@ fn write_frames(
     Ok(written)
 }
 
-fn render_grandstand(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
+fn grandstand_scene(args: &Args) -> Scene {
     let fine_hz = grandstand::FS_HZ * grandstand::FINE as f64;
-    let pad = (args.exposure_ms / 2000.0 * fine_hz).ceil() as usize + 2;
+    let pad = pad_for(args.exposure_ms, fine_hz);
     let mut rng = run_rng(args.seed, 0);
     let sim = grandstand::simulate(&mut rng, false, pad);
-    let path: Vec<f64> = sim
-        .fine_disp_m
-        .iter()
-        .map(|x| -x * 1000.0 * grandstand::PX_PER_MM)
-        .collect();
-    let times = args
-        .times
-        .clone()
-        .unwrap_or_else(|| vec![33.2, 33.4, 33.6, 34.0]);
-    let target = DiskTarget {
-        radius_px: 12.0,
-        level: 200.0,
-        edge_sigma_px: 1.5,
-    };
-    write_frames(
-        &args.out,
-        &target,
-        &path,
+    Scene {
+        target: DiskTarget {
+            radius_px: 12.0,
+            level: 200.0,
+            edge_sigma_px: 1.5,
+        },
+        path_px: sim
+            .fine_disp_m
+            .iter()
+            .map(|x| -x * 1000.0 * grandstand::PX_PER_MM)
+            .collect(),
         pad,
         fine_hz,
-        &times,
-        args.exposure_ms,
-    )
+        times: args
+            .times
+            .clone()
+            .unwrap_or_else(|| vec![33.2, 33.4, 33.6, 34.0]),
+    }
 }
 
-fn render_cantilever(args: &Args) -> anyhow::Result<Vec<PathBuf>> {
+fn cantilever_scene(args: &Args) -> anyhow::Result<Scene> {
     let spec = crate::recording::RecordingSpec::cantilever(args.seed, 0.0);
     let sim = crate::recording::simulate(&spec)?;
     let fine_hz = spec.fps * sim.fine_per_frame as f64;
-    let pad = (args.exposure_ms / 2000.0 * fine_hz).ceil() as usize + 2;
+    let pad = pad_for(args.exposure_ms, fine_hz);
     let n = sim.tip_mm.len();
-    let path: Vec<f64> = (0..n + 2 * pad)
-        .map(|i| -sim.tip_mm[(i + n - pad) % n] / spec.mm_per_px)
-        .collect();
-    let times = args.times.clone().unwrap_or_else(|| vec![1.0, 1.01, 1.02]);
-    let target = DiskTarget {
-        radius_px: 10.0,
-        level: 255.0,
-        edge_sigma_px: 0.5,
-    };
-    write_frames(
-        &args.out,
-        &target,
-        &path,
+    Ok(Scene {
+        target: DiskTarget {
+            radius_px: 10.0,
+            level: 255.0,
+            edge_sigma_px: 0.5,
+        },
+        path_px: (0..n + 2 * pad)
+            .map(|i| -sim.tip_mm[(i + n - pad) % n] / spec.mm_per_px)
+            .collect(),
         pad,
         fine_hz,
-        &times,
-        args.exposure_ms,
-    )
+        times: args.times.clone().unwrap_or_else(|| vec![1.0, 1.01, 1.02]),
+    })
 }

@@ -185,6 +185,18 @@ impl BlurRenderer {
         }
     }
 
+    /// A renderer sized for the displacement range of `path` (px, positive down) with `path`
+    /// set (see [`set_path`](Self::set_path) for `block`): what a camera looking at a target
+    /// that follows `path` needs.
+    pub fn for_path(target: &DiskTarget, path: &[f64], block: usize) -> BlurRenderer {
+        let (lo, hi) = path
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+        let mut r = BlurRenderer::new(target, lo, hi);
+        r.set_path(path, block);
+        r
+    }
+
     /// Frame width, px.
     pub fn width(&self) -> usize {
         self.width
