@@ -11,8 +11,10 @@
 
 use crate::report::{FrfBandRow, RealizationRow, SummaryRow, System};
 use anyhow::Context as _;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// Inputs of the study figures.
@@ -91,6 +93,101 @@ macro_rules! figure {
     };
 }
 
+/// The chart every figure draws in: `f64` on both axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Sizes of a chart, px: caption font, margin, axis label areas, tick and legend font.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    caption: u32,
+    margin: u32,
+    x_label_area: u32,
+    y_label_area: u32,
+    labels: u32,
+}
+
+/// One panel of a multi-panel study figure.
+const PANEL: Layout = Layout {
+    caption: 18,
+    margin: 8,
+    x_label_area: 36,
+    y_label_area: 60,
+    labels: 13,
+};
+
+/// The single chart of a figure ([`write_frf_plot`]).
+const SINGLE: Layout = Layout {
+    caption: 24,
+    margin: 10,
+    x_label_area: 40,
+    y_label_area: 70,
+    labels: 14,
+};
+
+/// A chart on `area` over `x` and `y`, its mesh and axis descriptions already drawn.
+fn build_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    layout: Layout,
+    caption: &str,
+    x: Range<f64>,
+    y: Range<f64>,
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<Chart<'a, DB>, Box<dyn std::error::Error>>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, layout.caption))
+        .margin(layout.margin)
+        .x_label_area_size(layout.x_label_area)
+        .y_label_area_size(layout.y_label_area)
+        .build_cartesian_2d(x, y)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style((FONT, layout.labels))
+        .draw()?;
+    Ok(chart)
+}
+
+/// Draws a line through `points` in `colour`, `width` px wide, labelled `label` in the legend
+/// with a short line of the same style.
+fn draw_line<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
+    points: impl IntoIterator<Item = (f64, f64)>,
+    colour: RGBColor,
+    width: u32,
+    label: impl Into<String>,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .draw_series(LineSeries::new(points, colour.stroke_width(width)))?
+        .label(label)
+        .legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width))
+        });
+    Ok(())
+}
+
+/// Draws the legend of `chart` in its upper right corner.
+fn draw_legend<'a, DB: DrawingBackend + 'a>(chart: &mut Chart<'a, DB>, layout: Layout) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .label_font((FONT, layout.labels))
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
+}
+
 fn exposures(rows: &[SummaryRow]) -> Vec<f64> {
     let mut e: Vec<f64> = rows.iter().map(|r| r.exposure_ms).collect();
     e.sort_by(f64::total_cmp);
@@ -165,18 +262,15 @@ where
         .fold(0.0f64, f64::max)
         * 1.05;
     for (panel, &e) in panels.iter().zip(&exps) {
-        let mut chart = ChartBuilder::on(panel)
-            .caption(format!("exposure {e} ms"), (FONT, 18))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x_range.0..x_range.1, 0.0..y_max.max(1e-12))?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency (Hz)")
-            .y_desc(format!("|FRF| ({})", p.amplitude_unit))
-            .label_style((FONT, 13))
-            .draw()?;
+        let mut chart = build_chart(
+            panel,
+            PANEL,
+            &format!("exposure {e} ms"),
+            x_range.0..x_range.1,
+            0.0..y_max.max(1e-12),
+            "frequency (Hz)",
+            &format!("|FRF| ({})", p.amplitude_unit),
+        )?;
         for (system, colour) in [
             (System::Transducer, TRANSDUCER),
             (System::Vision, RGBColor(210, 40, 40)),
@@ -191,15 +285,13 @@ where
                 continue;
             }
             if width_only {
-                chart
-                    .draw_series(LineSeries::new(
-                        rows.iter().map(|r| (r.freq_hz, r.p95_abs - r.p05_abs)),
-                        colour.stroke_width(2),
-                    ))?
-                    .label(system.name())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                    });
+                draw_line(
+                    &mut chart,
+                    rows.iter().map(|r| (r.freq_hz, r.p95_abs - r.p05_abs)),
+                    colour,
+                    2,
+                    system.name(),
+                )?;
             } else {
                 let band: Vec<(f64, f64)> = rows
                     .iter()
@@ -207,25 +299,16 @@ where
                     .chain(rows.iter().rev().map(|r| (r.freq_hz, r.p05_abs)))
                     .collect();
                 chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
-                chart
-                    .draw_series(LineSeries::new(
-                        rows.iter().map(|r| (r.freq_hz, r.mean_abs)),
-                        colour.stroke_width(2),
-                    ))?
-                    .label(format!("{} mean, 90 % band shaded", system.name()))
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                    });
+                draw_line(
+                    &mut chart,
+                    rows.iter().map(|r| (r.freq_hz, r.mean_abs)),
+                    colour,
+                    2,
+                    format!("{} mean, 90 % band shaded", system.name()),
+                )?;
             }
         }
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        draw_legend(&mut chart, PANEL)?;
     }
     root.present()?;
     Ok(())
@@ -292,35 +375,20 @@ where
             .flat_map(|c| c.2.iter().map(|p| p.1))
             .fold(0.0f64, f64::max)
             * 1.1;
-        let mut chart = ChartBuilder::on(panel)
-            .caption(format!("mode {m}"), (FONT, 18))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(lo..hi, 0.0..y_max.max(1e-12))?;
-        chart
-            .configure_mesh()
-            .x_desc(what.clone())
-            .y_desc("probability density")
-            .label_style((FONT, 13))
-            .draw()?;
+        let mut chart = build_chart(
+            panel,
+            PANEL,
+            &format!("mode {m}"),
+            lo..hi,
+            0.0..y_max.max(1e-12),
+            &what,
+            "probability density",
+        )?;
         for (label, colour, pts) in curves {
             let width = if label == "transducer" { 3 } else { 2 };
-            chart
-                .draw_series(LineSeries::new(pts, colour.stroke_width(width)))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(width))
-                });
+            draw_line(&mut chart, pts, colour, width, label)?;
         }
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        draw_legend(&mut chart, PANEL)?;
     }
     root.present()?;
     Ok(())
@@ -356,29 +424,26 @@ where
         };
         let pad = |(a, b): (f64, f64)| (a - 0.1 * (b - a), b + 0.2 * (b - a));
         let (xr, yr) = (pad(xr), pad(yr));
-        let mut chart = ChartBuilder::on(panel)
-            .caption(format!("mode {m}"), (FONT, 18))
-            .margin(8)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)?;
-        chart
-            .configure_mesh()
-            .x_desc(format!("mu_a ({})", p.amplitude_unit))
-            .y_desc(format!("sigma_a ({})", p.amplitude_unit))
-            .label_style((FONT, 13))
-            .draw()?;
+        let mut chart = build_chart(
+            panel,
+            PANEL,
+            &format!("mode {m}"),
+            xr.0..xr.1,
+            yr.0..yr.1,
+            &format!("mu_a ({})", p.amplitude_unit),
+            &format!("sigma_a ({})", p.amplitude_unit),
+        )?;
         let mut vis: Vec<&&SummaryRow> =
             rows.iter().filter(|r| r.system == System::Vision).collect();
         vis.sort_by(|a, b| a.exposure_ms.total_cmp(&b.exposure_ms));
         let red = RGBColor(210, 40, 40);
-        chart
-            .draw_series(LineSeries::new(
-                vis.iter().map(|r| (r.mu_a, r.sigma_a)),
-                red.stroke_width(2),
-            ))?
-            .label("vision, by exposure")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2)));
+        draw_line(
+            &mut chart,
+            vis.iter().map(|r| (r.mu_a, r.sigma_a)),
+            red,
+            2,
+            "vision, by exposure",
+        )?;
         chart.draw_series(vis.iter().map(|r| {
             EmptyElement::at((r.mu_a, r.sigma_a))
                 + Circle::new((0, 0), 5, red.filled())
@@ -394,14 +459,7 @@ where
                 .label("transducer")
                 .legend(|(x, y)| Cross::new((x + 10, y), 6, TRANSDUCER.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        draw_legend(&mut chart, PANEL)?;
     }
     root.present()?;
     Ok(())
@@ -441,44 +499,33 @@ where
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max)
         * 1.05;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, (FONT, 24))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(xr.0..xr.1, 0.0..y_max.max(1e-12))?;
-    chart
-        .configure_mesh()
-        .x_desc("frequency (Hz)")
-        .y_desc(y_label)
-        .label_style((FONT, 14))
-        .draw()?;
+    let mut chart = build_chart(
+        &root,
+        SINGLE,
+        title,
+        xr.0..xr.1,
+        0.0..y_max.max(1e-12),
+        "frequency (Hz)",
+        y_label,
+    )?;
     for (i, (label, f, a)) in curves.iter().enumerate() {
         let colour = if i == 0 {
             TRANSDUCER
         } else {
             exposure_colour(i, curves.len().max(2))
         };
-        chart
-            .draw_series(LineSeries::new(
-                f.iter()
-                    .zip(a.iter())
-                    .filter(|(x, y)| x.is_finite() && y.is_finite())
-                    .map(|(x, y)| (*x, *y)),
-                colour.stroke_width(2),
-            ))?
-            .label(*label)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
+        draw_line(
+            &mut chart,
+            f.iter()
+                .zip(a.iter())
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+                .map(|(x, y)| (*x, *y)),
+            colour,
+            2,
+            *label,
+        )?;
     }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 14))
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
+    draw_legend(&mut chart, SINGLE)?;
     root.present()?;
     Ok(())
 }
