@@ -796,6 +796,52 @@ pub fn fill_lost_frames(values: &mut [f64], valid: &[bool]) -> usize {
 /// Fraction of lost frames above which a vision run is reported as failed (SPEC 3.1).
 pub const MAX_LOST_FRACTION: f64 = 0.05;
 
+/// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
+/// `0..disp.len()` with `centroid(k)`, turns the centroid row `cy` (px) into the displacement
+/// with `to_disp`, fills the lost frames ([`fill_lost_frames`]) and, unless more than
+/// [`MAX_LOST_FRACTION`] of them were lost, measures the filled record (as `f32`) with
+/// `measure`. `disp` and `valid` are the caller's buffers, reused across exposures; `bands` is
+/// the number of mode bands (the empty peaks of a failed run).
+pub fn measure_vision<E: std::fmt::Display>(
+    exposure_ms: f64,
+    disp: &mut [f64],
+    valid: &mut [bool],
+    bands: usize,
+    mut centroid: impl FnMut(usize) -> Result<firmware_core::centroid::Centroid, E>,
+    to_disp: impl Fn(f32) -> f64,
+    measure: impl FnOnce(&[f32]) -> anyhow::Result<SystemRecord>,
+) -> anyhow::Result<VisionRecord> {
+    let frames = disp.len();
+    for k in 0..frames {
+        let c = centroid(k).map_err(|e| anyhow::anyhow!("frame {k}: {e}"))?;
+        match c.position() {
+            Some((_, cy)) => {
+                disp[k] = to_disp(cy);
+                valid[k] = true;
+            }
+            None => valid[k] = false,
+        }
+    }
+    let lost = fill_lost_frames(disp, valid) as u64;
+    let failed = lost as f64 > MAX_LOST_FRACTION * frames as f64;
+    let system = if failed {
+        SystemRecord {
+            peaks: vec![None; bands],
+            frf_abs: Vec::new(),
+        }
+    } else {
+        let d32: Vec<f32> = disp.iter().map(|v| *v as f32).collect();
+        measure(&d32)?
+    };
+    Ok(VisionRecord {
+        exposure_ms,
+        lost_frames: lost,
+        frames: frames as u64,
+        failed,
+        system,
+    })
+}
+
 /// Streams `x` (input) and `y` (output) through a firmware-core Welch estimator, picks the
 /// peaks of `bands` with firmware-core's peak picking and keeps |H1| of the first `keep_bins`
 /// bins. `scale` multiplies H1 (unit conversion).

@@ -13,10 +13,7 @@
 //! centroid with the threshold at half the level (127).
 
 use super::render::{BlurRenderer, DiskTarget};
-use super::{
-    fill_lost_frames, measure_system, PeakRecord, RunRecord, Scenario, StudyConfig, SystemRecord,
-    VisionRecord, MAX_LOST_FRACTION,
-};
+use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
 use crate::recording::{self, RecordingSpec, Rig};
 use firmware_core::centroid::{centroid_u8, CentroidConfig};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
@@ -150,16 +147,12 @@ impl Scenario for Cantilever {
         let path: Vec<f64> = (0..n + 2 * pad)
             .map(|i| to_px(sim.tip_mm[(i + n - pad) % n]))
             .collect();
-        let (lo, hi) = path
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
         let target = DiskTarget {
             radius_px: 10.0,
             level: LEVEL,
             edge_sigma_px: 0.5,
         };
-        let mut renderer = BlurRenderer::new(&target, lo, hi);
-        renderer.set_path(&path, 16);
+        let mut renderer = BlurRenderer::for_path(&target, &path, 16);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let cfg = CentroidConfig::binary(THRESHOLD);
@@ -172,40 +165,24 @@ impl Scenario for Cantilever {
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
         for &exp in &self.exposures_ms {
             let half = exp / 2000.0 * fine_hz;
-            for k in 0..FRAMES {
-                let centre = (pad + k * ppf) as f64;
-                renderer.render(centre - half, centre + half, &mut frame);
-                let c = centroid_u8(&cfg, &frame, w, h, w)
-                    .map_err(|e| anyhow::anyhow!("frame {k}: {e}"))?;
-                match c.position() {
-                    Some((_, cy)) => {
-                        disp[k] = -(cy as f64 - rest_y) * MM_PER_PX;
-                        valid[k] = true;
-                    }
-                    None => valid[k] = false,
-                }
-            }
-            let lost = fill_lost_frames(&mut disp, &valid) as u64;
-            let failed = lost as f64 > MAX_LOST_FRACTION * FRAMES as f64;
-            let system = if failed {
-                SystemRecord {
-                    peaks: vec![None::<PeakRecord>; bands.len()],
-                    frf_abs: Vec::new(),
-                }
-            } else {
-                let d32: Vec<f32> = disp.iter().map(|v| *v as f32).collect();
-                // mm -> m/s^2 in the same pass as the upsampling
-                up.process_acceleration(&d32, &mut acc, FPS as f32, 1e-3)
-                    .map_err(|e| anyhow::anyhow!("upsampling: {e}"))?;
-                measure_system(&mut welch, &base, &acc, &bands, Self::keep_bins(), 1.0)?
-            };
-            vision.push(VisionRecord {
-                exposure_ms: exp,
-                lost_frames: lost,
-                frames: FRAMES as u64,
-                failed,
-                system,
-            });
+            vision.push(measure_vision(
+                exp,
+                &mut disp,
+                &mut valid,
+                bands.len(),
+                |k| {
+                    let centre = (pad + k * ppf) as f64;
+                    renderer.render(centre - half, centre + half, &mut frame);
+                    centroid_u8(&cfg, &frame, w, h, w)
+                },
+                |cy| -(cy as f64 - rest_y) * MM_PER_PX,
+                |d32| {
+                    // mm -> m/s^2 in the same pass as the upsampling
+                    up.process_acceleration(d32, &mut acc, FPS as f32, 1e-3)
+                        .map_err(|e| anyhow::anyhow!("upsampling: {e}"))?;
+                    measure_system(&mut welch, &base, &acc, &bands, Self::keep_bins(), 1.0)
+                },
+            )?);
         }
         Ok(RunRecord {
             run,

@@ -3,10 +3,7 @@
 //! painted disk. Every run pushes its frames through firmware-core's centroiding, Welch H1 and
 //! peak picking.
 
-use super::{
-    fill_lost_frames, measure_system, RunRecord, Scenario, StudyConfig, SystemRecord, VisionRecord,
-    MAX_LOST_FRACTION,
-};
+use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
 use crate::study::effects::Effects;
 use crate::study::render::{BlurRenderer, DiskTarget};
 use firmware_core::centroid::{centroid_u16, centroid_u8, CentroidConfig};
@@ -348,11 +345,7 @@ impl Scenario for Grandstand {
             .iter()
             .map(|x| -x * 1000.0 * PX_PER_MM)
             .collect();
-        let (lo, hi) = path_px
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-        let mut renderer = BlurRenderer::new(&self.target, lo, hi);
-        renderer.set_path(&path_px, self.block);
+        let mut renderer = BlurRenderer::for_path(&self.target, &path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let plain = self.effects.is_identity();
@@ -375,52 +368,36 @@ impl Scenario for Grandstand {
             let half = exp / 2.0 / dt_ms; // fine steps either side of the frame instant
             let mut noise = ChaCha8Rng::seed_from_u64(noise_seed);
             noise.set_stream(ei as u64);
-            for i in 0..N {
-                let centre = (r.pad + i * FINE) as f64;
-                let c = if plain {
-                    renderer.render(centre - half, centre + half, &mut frame);
-                    centroid_u8(&cfg, &frame, w, h, w)
-                } else {
-                    renderer.render_float(centre - half, centre + half, &mut fimg);
-                    self.effects
-                        .apply(&mut fimg, w, h, &mut noise, &mut scratch);
-                    self.effects.quantise(&fimg, &mut frame16);
-                    centroid_u16(&cfg, &frame16, w, h, w)
-                }
-                .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
-                match c.position() {
-                    Some((_, cy)) => {
-                        vis[i] = -(cy as f64 - rest_y) / PX_PER_MM;
-                        valid[i] = true;
+            vision.push(measure_vision(
+                exp,
+                &mut vis,
+                &mut valid,
+                bands.len(),
+                |i| {
+                    let centre = (r.pad + i * FINE) as f64;
+                    if plain {
+                        renderer.render(centre - half, centre + half, &mut frame);
+                        centroid_u8(&cfg, &frame, w, h, w)
+                    } else {
+                        renderer.render_float(centre - half, centre + half, &mut fimg);
+                        self.effects
+                            .apply(&mut fimg, w, h, &mut noise, &mut scratch);
+                        self.effects.quantise(&fimg, &mut frame16);
+                        centroid_u16(&cfg, &frame16, w, h, w)
                     }
-                    None => valid[i] = false,
-                }
-            }
-            let lost = fill_lost_frames(&mut vis, &valid) as u64;
-            let failed = lost as f64 > MAX_LOST_FRACTION * N as f64;
-            let system = if failed {
-                SystemRecord {
-                    peaks: vec![None; bands.len()],
-                    frf_abs: Vec::new(),
-                }
-            } else {
-                let y: Vec<f32> = vis.iter().map(|v| *v as f32).collect();
-                measure_system(
-                    &mut welch,
-                    &r.force_meas_kn,
-                    &y,
-                    &bands,
-                    Self::keep_bins(),
-                    1.0,
-                )?
-            };
-            vision.push(VisionRecord {
-                exposure_ms: exp,
-                lost_frames: lost,
-                frames: N as u64,
-                failed,
-                system,
-            });
+                },
+                |cy| -(cy as f64 - rest_y) / PX_PER_MM,
+                |y| {
+                    measure_system(
+                        &mut welch,
+                        &r.force_meas_kn,
+                        y,
+                        &bands,
+                        Self::keep_bins(),
+                        1.0,
+                    )
+                },
+            )?);
         }
         Ok(RunRecord {
             run,
