@@ -1,5 +1,6 @@
 //! End-to-end tests of `host-harness study` and `merge`: reproducibility across thread counts,
-//! shards merged byte-identically, resume after an interruption, refusal to overwrite.
+//! shards merged byte-identically, resume after an interruption, refusal to overwrite or to mix
+//! runs of two model revisions.
 
 use crate::util::harness;
 use std::path::Path;
@@ -124,6 +125,41 @@ fn resume_after_interruption_gives_the_uninterrupted_numbers() {
         );
     }
     assert_eq!(read(&part.join("runs.jsonl")).lines().count(), 4);
+}
+
+#[test]
+fn runs_of_another_model_revision_are_never_mixed() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    ok(&study(&a, &[]));
+    let rev = host_harness::study::MODEL_REVISION;
+    assert_eq!(read(&a.join("model_revision.txt")).trim(), rev.to_string());
+    // a directory written by other code (here: before revisions were recorded) is not resumed
+    std::fs::remove_file(a.join("model_revision.txt")).unwrap();
+    let out = study(&a, &["--resume"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("model revision 1") && err.contains(&format!("revision {rev}")),
+        "{err}"
+    );
+    // nor merged with shards of this revision
+    let s1 = dir.path().join("s1");
+    let s2 = dir.path().join("s2");
+    ok(&study(&s1, &["--shard", "1/2"]));
+    ok(&study(&s2, &["--shard", "2/2"]));
+    std::fs::write(s2.join("model_revision.txt"), format!("{}\n", rev + 1)).unwrap();
+    let merged = dir.path().join("merged");
+    let out = harness(&[
+        "merge",
+        s1.to_str().unwrap(),
+        s2.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+        "--no-plots",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("same code"));
 }
 
 #[test]

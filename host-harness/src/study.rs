@@ -277,8 +277,37 @@ impl Shard {
     }
 }
 
+/// Revision of the simulation and measurement code whose results a study directory holds.
+/// Bump it with every change that alters a study's numbers (models, renderer, firmware-core
+/// numerics), so that a resumed or merged study never mixes runs of two code revisions: the
+/// revision is written to [`files::REVISION`], checked on `--resume` and by `merge`, and part of
+/// the default output directory's name.
+///
+/// History: 1 = everything before the file existed; 2 = `f32` twiddles and window in
+/// firmware-core's `dft`/`spectrum` (results move in the 6th significant digit).
+pub const MODEL_REVISION: u32 = 2;
+
+/// The revision recorded in study directory `dir` (1 when the file is absent: directories
+/// written before revisions were recorded).
+pub fn recorded_revision(dir: &Path) -> anyhow::Result<u32> {
+    let path = dir.join(files::REVISION);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => text.trim().parse().map_err(|_| {
+            bad_input(format!(
+                "{}: expected a model revision number, found {:?}",
+                path.display(),
+                text.trim()
+            ))
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(1),
+        Err(e) => Err(e).with_context(|| format!("cannot read {}", path.display())),
+    }
+}
+
 /// File names inside a study directory.
 pub mod files {
+    /// Model revision of the code that computed the runs ([`super::MODEL_REVISION`]).
+    pub const REVISION: &str = "model_revision.txt";
     /// Resolved configuration.
     pub const CONFIG: &str = "config.toml";
     /// Checkpoint: one JSON run record per line.
@@ -374,6 +403,16 @@ pub fn execute(
                 cfg_path.display()
             )));
         }
+        let revision = recorded_revision(&exec.out)?;
+        if revision != MODEL_REVISION {
+            return Err(bad_input(format!(
+                "--resume: {} holds runs of model revision {revision}, this build computes \
+                 revision {MODEL_REVISION}; mixing them would give a study of two code \
+                 versions. Start it again in a new --out (without --out, the default directory \
+                 already differs)",
+                exec.out.display()
+            )));
+        }
         let old_shard = std::fs::read_to_string(&shard_path).unwrap_or_else(|_| "1/1\n".into());
         if old_shard != shard_text {
             return Err(bad_input(format!(
@@ -395,6 +434,9 @@ pub fn execute(
     } else {
         std::fs::write(&cfg_path, cfg.to_toml())
             .with_context(|| format!("cannot write {}", cfg_path.display()))?;
+        let rev_path = exec.out.join(files::REVISION);
+        std::fs::write(&rev_path, format!("{MODEL_REVISION}\n"))
+            .with_context(|| format!("cannot write {}", rev_path.display()))?;
         if exec.shard != Shard::ALL {
             std::fs::write(&shard_path, &shard_text)?;
         }

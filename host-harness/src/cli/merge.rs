@@ -22,8 +22,23 @@ pub struct Args {
 /// Runs `host-harness merge`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut cfg: Option<StudyConfig> = None;
+    let mut revision: Option<u32> = None;
     let mut records = Vec::new();
     for dir in &args.dirs {
+        // runs of two code revisions must not be mixed (see study::MODEL_REVISION)
+        let rev = study::recorded_revision(dir)?;
+        match revision {
+            None => revision = Some(rev),
+            Some(first) if first != rev => {
+                return Err(bad_input(format!(
+                    "{}: runs of model revision {rev}, but {} holds revision {first}; only \
+                     shards computed by the same code can be merged",
+                    dir.display(),
+                    args.dirs[0].display()
+                )))
+            }
+            _ => {}
+        }
         let p = dir.join(files::CONFIG);
         let text = std::fs::read_to_string(&p)
             .map_err(|e| bad_input(format!("cannot read {}: {e}", p.display())))?;
@@ -70,6 +85,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )));
     }
     std::fs::write(args.out.join(files::CONFIG), cfg.to_toml())?;
+    if let Some(rev) = revision {
+        std::fs::write(args.out.join(files::REVISION), format!("{rev}\n"))?;
+    }
     let mut lines = String::new();
     for r in &records {
         lines.push_str(&serde_json::to_string(r)?);

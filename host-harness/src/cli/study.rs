@@ -68,11 +68,17 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
     Ok(cfg)
 }
 
-/// `out/<preset>-<hash of the resolved configuration>[-shard-K-of-N]`.
+/// `out/<preset>-<hash of the resolved configuration and the model revision>[-shard-K-of-N]`.
 pub fn default_out(cfg: &StudyConfig, shard: Shard) -> PathBuf {
-    // FNV-1a 64 of the resolved configuration's TOML: stable across runs and platforms
+    // FNV-1a 64 of the resolved configuration's TOML and the model revision: stable across
+    // runs and platforms; a new code revision starts a new directory instead of resuming
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in cfg.to_toml().bytes() {
+    let text = format!(
+        "{}model_revision = {}\n",
+        cfg.to_toml(),
+        study::MODEL_REVISION
+    );
+    for b in text.bytes() {
         h ^= b as u64;
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
