@@ -27,6 +27,12 @@
 //! after a segment ([`PipelineConfig::min_history`]). What `HIST` holds beyond that is the
 //! ADC's allowed lead over the camera ([`VisionH1::adc_headroom`]).
 //!
+//! # Lost frames and bad samples
+//! The pipeline assumes one value per frame period: fill a lost frame before pushing it (the
+//! host studies interpolate). A non-finite frame makes its whole upsampled block non-finite,
+//! and a non-finite ADC sample its neighbourhood: every segment that touches them is skipped
+//! and counted by [`WelchAccumulator::skipped_segments`], the rest of the estimate is kept.
+//!
 //! # Block edges
 //! Each block is upsampled on its own, as one period of a periodic signal (SPEC 2.2's
 //! definition applied per block): a response that does not complete whole periods in a block
@@ -539,6 +545,21 @@ mod tests {
         }
         assert_eq!(p.blocks(), 4);
         assert_eq!(sums_bits(p.welch()), reference(&cam, &adc, None));
+    }
+
+    #[test]
+    fn a_non_finite_frame_skips_the_segments_of_its_block_only() {
+        let (mut cam, adc) = records(6, 4);
+        cam[3 * N + 5] = f32::NAN;
+        let mut p = P::try_new(config(None)).unwrap();
+        for (c, a) in cam.chunks(N).zip(adc.chunks(M)) {
+            p.push_adc(a).unwrap();
+            p.push_frames(c).unwrap();
+        }
+        // block 3 covers samples 192..256: segments starting at 160, 192, 224 touch it
+        let w = p.welch();
+        assert_eq!((w.segments(), w.skipped_segments()), (8, 3));
+        assert!((0..w.bins()).all(|k| w.h1(k).is_some_and(|h| h.re.is_finite())));
     }
 
     #[test]
