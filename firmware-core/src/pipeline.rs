@@ -199,6 +199,26 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     }
 }
 
+/// Logs the settings and counters, not the buffers.
+#[cfg(feature = "defmt")]
+impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usize> defmt::Format
+    for VisionH1<CAM, HIST, WORK, SCRATCH>
+{
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "VisionH1 {{ config: {}, blocks: {}, segments: {}, skipped: {}, pending: ({}, {}, {}) }}",
+            self.config,
+            self.blocks,
+            self.welch.segments(),
+            self.welch.skipped_segments(),
+            self.cam_fill,
+            self.vis_fill,
+            self.adc_fill
+        )
+    }
+}
+
 impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usize>
     VisionH1<CAM, HIST, WORK, SCRATCH>
 {
