@@ -264,3 +264,54 @@ fn imaging_effects_from_a_study_file() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("imaging.bits"));
 }
+
+#[test]
+fn imaging_effects_in_the_cantilever_study() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("c.toml");
+    let base = "preset = \"cantilever\"\nruns = 3\nexposures_ms = [2.0]\n";
+    std::fs::write(
+        &cfg,
+        format!("{base}\n[imaging]\nbits = 12\nread_noise = 2.0\noptical_blur_sigma_px = 0.5\n"),
+    )
+    .unwrap();
+    let run = |name: &str, file: &Path| {
+        let out = dir.path().join(name);
+        ok(&harness(&[
+            "study",
+            "--config",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--no-plots",
+        ]));
+        out
+    };
+    let noisy = run("noisy", &cfg);
+    let plain_cfg = dir.path().join("p.toml");
+    std::fs::write(&plain_cfg, base).unwrap();
+    let plain = run("plain", &plain_cfg);
+    // the effects reach the frames: the vision realizations differ from the plain camera's,
+    // the accelerometer ones do not
+    let rows = |d: &Path, sys: &str| -> Vec<String> {
+        read(&d.join("realizations.csv"))
+            .lines()
+            .filter(|l| l.contains(&format!(",{sys},")))
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(rows(&noisy, "transducer").len(), 6);
+    assert_eq!(rows(&noisy, "transducer"), rows(&plain, "transducer"));
+    assert_ne!(rows(&noisy, "vision"), rows(&plain, "vision"));
+    // and mode 1 still follows the accelerometer at 2 ms (sinc = 0.9997)
+    let s = read(&noisy.join("summary.csv"));
+    let mu_a = |prefix: &str| -> f64 {
+        s.lines()
+            .find(|l| l.starts_with(prefix))
+            .and_then(|l| l.split(',').nth(6))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{prefix} in {s}"))
+    };
+    let chi = mu_a("vision,2,1,") / mu_a("transducer,2,1,");
+    assert!((chi - 1.0).abs() < 0.02, "chi {chi}\n{s}");
+}

@@ -10,15 +10,17 @@
 //! h ~ Uniform(h +/- 5 %). Frames are rendered by the separable EPSA renderer
 //! ([`super::render`]): a white disk (level 255) of radius 10 px, its edge smoothed by a
 //! Gaussian of 0.5 px so the image is band-limited and the phase shift exact; binary
-//! centroid with the threshold at half the level (127).
+//! centroid with the threshold at half the level (127). The `[imaging]` options of a study
+//! file (gain, distortion, optical blur, shot and read noise, bit depth) apply as in the
+//! grandstand ([`super::effects::Camera`]).
 
+use super::effects::{Camera, Effects};
 use super::render::{BlurRenderer, DiskTarget};
 use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
 use crate::recording::{self, RecordingSpec, Rig};
-use firmware_core::centroid::{centroid_u8, CentroidConfig};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::upsample::{self, Upsampler};
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -43,6 +45,8 @@ type Up = Upsampler<SAMPLES, { upsample::scratch_capacity(FRAMES, SAMPLES) }>;
 /// The cantilever study.
 #[derive(Debug)]
 pub struct Cantilever {
+    /// Optional image-formation effects (identity by default: the fast 8-bit path).
+    effects: Effects,
     exposures_ms: Vec<f64>,
     fixed: bool,
 }
@@ -55,9 +59,7 @@ impl Cantilever {
 
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
-        if cfg.imaging != Default::default() {
-            anyhow::bail!("imaging options are not supported by the cantilever renderer yet");
-        }
+        let effects = Effects::from_options(&cfg.imaging)?;
         let period_ms = 1000.0 / FPS;
         if let Some(e) = cfg.exposures_ms.iter().find(|e| **e >= period_ms) {
             return Err(crate::bad_input(format!(
@@ -65,6 +67,7 @@ impl Cantilever {
             )));
         }
         Ok(Cantilever {
+            effects,
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
         })
@@ -155,16 +158,19 @@ impl Scenario for Cantilever {
         let mut renderer = BlurRenderer::for_path(&target, &path, 16);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let cfg = CentroidConfig::binary(THRESHOLD);
-        let mut frame = vec![0u8; w * h];
+        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h);
+        // drawn only with effects, so the default study's streams are unchanged
+        let noise_seed: u64 = if camera.is_plain() { 0 } else { rng.random() };
         let mut disp = vec![0.0f64; FRAMES];
         let mut valid = vec![false; FRAMES];
         let mut up =
             Box::new(Up::try_new(FRAMES, SAMPLES).map_err(|e| anyhow::anyhow!("upsampler: {e}"))?);
         let mut acc = vec![0.0f32; SAMPLES];
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
-        for &exp in &self.exposures_ms {
+        for (ei, &exp) in self.exposures_ms.iter().enumerate() {
             let half = exp / 2000.0 * fine_hz;
+            let mut noise = ChaCha8Rng::seed_from_u64(noise_seed);
+            noise.set_stream(ei as u64);
             vision.push(measure_vision(
                 exp,
                 &mut disp,
@@ -172,8 +178,7 @@ impl Scenario for Cantilever {
                 bands.len(),
                 |k| {
                     let centre = (pad + k * ppf) as f64;
-                    renderer.render(centre - half, centre + half, &mut frame);
-                    centroid_u8(&cfg, &frame, w, h, w)
+                    camera.frame(&mut renderer, centre - half, centre + half, &mut noise)
                 },
                 |cy| -(cy as f64 - rest_y) * MM_PER_PX,
                 |d32| {

@@ -8,9 +8,84 @@
 //! level `v` to code `round(v * (2^bits - 1) / 255)`; the binary threshold is scaled the same
 //! way, so the same scene gives the same centroid at any bit depth without noise.
 
+use super::render::BlurRenderer;
 use super::ImagingOptions;
+use firmware_core::centroid::{centroid_u16, centroid_u8, Centroid, CentroidConfig, FrameError};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
+
+/// One simulated camera: EPSA exposure of a [`BlurRenderer`] path, the [`Effects`] and the
+/// firmware's binary centroid, with its frame buffers reused between frames. Identity effects
+/// take the fast path (8-bit render, `centroid_u8`); otherwise the float frame goes through
+/// [`Effects::apply`] and [`Effects::quantise`] to a `centroid_u16` at the scaled threshold.
+#[derive(Debug)]
+pub struct Camera {
+    effects: Effects,
+    config: CentroidConfig,
+    plain: bool,
+    w: usize,
+    h: usize,
+    frame: Vec<u8>,
+    fimg: Vec<f32>,
+    frame16: Vec<u16>,
+    scratch: Vec<f32>,
+}
+
+impl Camera {
+    /// A `w x h` camera with `effects` and the binary threshold `threshold` on the 8-bit scale.
+    pub fn new(effects: &Effects, threshold: u16, w: usize, h: usize) -> Camera {
+        let plain = effects.is_identity();
+        let config = CentroidConfig::binary(if plain {
+            threshold
+        } else {
+            effects.threshold(threshold)
+        });
+        let (fimg, frame16) = if plain {
+            (Vec::new(), Vec::new())
+        } else {
+            (vec![0.0f32; w * h], vec![0u16; w * h])
+        };
+        Camera {
+            effects: effects.clone(),
+            config,
+            plain,
+            w,
+            h,
+            frame: if plain { vec![0u8; w * h] } else { Vec::new() },
+            fimg,
+            frame16,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// True when the effects are the identity (no noise is drawn: callers need no noise
+    /// stream).
+    pub fn is_plain(&self) -> bool {
+        self.plain
+    }
+
+    /// Exposes the path from `a` to `b` (renderer steps), applies the effects (noise from
+    /// `noise`) and centroids the frame.
+    pub fn frame(
+        &mut self,
+        renderer: &mut BlurRenderer,
+        a: f64,
+        b: f64,
+        noise: &mut impl Rng,
+    ) -> Result<Centroid, FrameError> {
+        let (w, h) = (self.w, self.h);
+        if self.plain {
+            renderer.render(a, b, &mut self.frame);
+            centroid_u8(&self.config, &self.frame, w, h, w)
+        } else {
+            renderer.render_float(a, b, &mut self.fimg);
+            self.effects
+                .apply(&mut self.fimg, w, h, noise, &mut self.scratch);
+            self.effects.quantise(&self.fimg, &mut self.frame16);
+            centroid_u16(&self.config, &self.frame16, w, h, w)
+        }
+    }
+}
 
 /// The resolved effects (identity when built from default options).
 #[derive(Debug, Clone, PartialEq)]

@@ -4,9 +4,8 @@
 //! peak picking.
 
 use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
-use crate::study::effects::Effects;
+use crate::study::effects::{Camera, Effects};
 use crate::study::render::{BlurRenderer, DiskTarget};
-use firmware_core::centroid::{centroid_u16, centroid_u8, CentroidConfig};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -348,19 +347,8 @@ impl Scenario for Grandstand {
         let mut renderer = BlurRenderer::for_path(&self.target, &path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let plain = self.effects.is_identity();
-        let cfg = CentroidConfig::binary(if plain {
-            THRESHOLD
-        } else {
-            self.effects.threshold(THRESHOLD)
-        });
-        let noise_seed: u64 = if plain { 0 } else { rng.random() };
-        let mut frame = vec![0u8; w * h];
-        let (mut fimg, mut frame16, mut scratch) = if plain {
-            (Vec::new(), Vec::new(), Vec::new())
-        } else {
-            (vec![0.0f32; w * h], vec![0u16; w * h], Vec::new())
-        };
+        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h);
+        let noise_seed: u64 = if camera.is_plain() { 0 } else { rng.random() };
         let mut vis = vec![0.0f64; N];
         let mut valid = vec![false; N];
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
@@ -375,16 +363,7 @@ impl Scenario for Grandstand {
                 bands.len(),
                 |i| {
                     let centre = (r.pad + i * FINE) as f64;
-                    if plain {
-                        renderer.render(centre - half, centre + half, &mut frame);
-                        centroid_u8(&cfg, &frame, w, h, w)
-                    } else {
-                        renderer.render_float(centre - half, centre + half, &mut fimg);
-                        self.effects
-                            .apply(&mut fimg, w, h, &mut noise, &mut scratch);
-                        self.effects.quantise(&fimg, &mut frame16);
-                        centroid_u16(&cfg, &frame16, w, h, w)
-                    }
+                    camera.frame(&mut renderer, centre - half, centre + half, &mut noise)
                 },
                 |cy| -(cy as f64 - rest_y) / PX_PER_MM,
                 |y| {
