@@ -1,5 +1,8 @@
-//! 32-bit ARM (Cortex-M4) version of the single-target binary 8-bit row kernel: four pixels per
-//! word load, SWAR byte compares and per-block sums, in safe Rust.
+//! 32-bit ARM (Cortex-M4) versions of the single-target row kernels: four pixels per word
+//! load, SWAR byte compares and per-block sums, in safe Rust. The binary 8-bit kernel is
+//! described here; the weighted 8-bit one adds SWAR weights ([`weights`]) and 16-bit lane sums
+//! ([`block_weighted`]); the 16-bit kernels use the same block skip around the portable
+//! per-pixel pass ([`row_sparse`]).
 //!
 //! Cortex-M has no vector unit LLVM can target from safe code (the DSP extension's `USUB8`/`SEL`
 //! are reachable only through unstable intrinsics or `asm!`, and the crate forbids `unsafe`), so
@@ -153,10 +156,98 @@ fn or_u16(block: &[u16]) -> u16 {
 }
 
 /// Weighted 8-bit row sums: blocks of [`BLOCK_PX`] pixels whose OR is not above `t` have no
-/// pixel above `t` and are skipped; the others take the portable per-pixel pass. Same
-/// `pixels`, `weight`, `sum_x` as the portable kernel, `max` exact when `pixels > 0`, else 0.
+/// pixel above `t` and are skipped; the others take the SWAR pass of [`block_weighted`] (the
+/// row's remainder the scalar one). Same `pixels`, `weight`, `sum_x` as the portable kernel,
+/// `max` exact when `pixels > 0`, else 0.
 pub(super) fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
-    row_sparse::<u8, true>(row, t, or_u8)
+    let row = row.get(..MAX_DIM).unwrap_or(row);
+    match constant(t) {
+        (k, true) => row_weighted::<true>(row, t, k),
+        (k, false) => row_weighted::<false>(row, t, k),
+    }
+}
+
+#[inline(always)]
+fn row_weighted<const HIGH: bool>(row: &[u8], t: u8, k: u32) -> RowSums {
+    let (mut pixels, mut weight, mut sum_x, mut max) = (0u32, 0u32, 0u64, t);
+    let mut x0 = 0u32;
+    let mut blocks = row.chunks_exact(BLOCK_PX);
+    for block in &mut blocks {
+        if or_u8(block) > t {
+            let (n, w, s, m) = block_weighted::<HIGH>(block, t, k, max);
+            pixels += n;
+            weight += w;
+            sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
+            max = m;
+        }
+        x0 += BLOCK_PX as u32;
+    }
+    let (n, w, s, m) = block_pass::<u8, true>(blocks.remainder(), t, max);
+    pixels += n;
+    weight += w;
+    sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
+    RowSums {
+        pixels,
+        weight,
+        sum_x,
+        max: if pixels > 0 { u16::from(m) } else { 0 },
+    }
+}
+
+/// The weights `p - t` of the bytes of `w` above `t` (0 elsewhere), four lanes at once, given
+/// the lane mask `m` of [`mask`] (0x01 per lane above `t`). With the top bit of every lane set,
+/// `(w | H) - c` cannot borrow between lanes when `c < 128` per lane: for `t < 128`, `c = t`
+/// and a lane above `t` holds `p - t` (`p >= 128`) or `p - t + 128` (`p < 128`, top bit set);
+/// for `t >= 128`, `c = t - 128` and a lane above `t` (so `p >= 129`) holds `p - t + 128`.
+/// Clearing the added 128 is an XOR of the top bit, masked by the lanes where it was added.
+#[inline(always)]
+fn weights<const HIGH: bool>(w: u32, t: u8, m: u32) -> u32 {
+    let d = if HIGH {
+        ((w | H).wrapping_sub(u32::from(t.wrapping_sub(128)) * ONES)) ^ H
+    } else {
+        (w | H).wrapping_sub(u32::from(t) * ONES) ^ (H & !w)
+    };
+    d & m.wrapping_mul(0xff)
+}
+
+/// Count, weight, block-local x moment and running maximum of one block of [`BLOCK_PX`]
+/// 8-bit pixels, weighted mode, four pixels per word: the weights of even and odd lanes are
+/// summed in 16-bit halves (`S <= 16 * 255`, `T <= 136 * 255 < 2^16`, no carries), and as in
+/// [`block_sums`] `sum_x = 4 (16 weight - sum T_i) + sum i S_i`.
+#[inline(never)]
+fn block_weighted<const HIGH: bool>(block: &[u8], t: u8, k: u32, cur: u8) -> (u32, u32, u32, u8) {
+    const LO: u32 = 0x00ff_00ff;
+    let (kc, high_c) = constant(cur);
+    let (mut cnt, mut s_lo, mut s_hi, mut t_lo, mut t_hi, mut above) =
+        (0u32, 0u32, 0u32, 0u32, 0u32, 0u32);
+    for b in block.chunks_exact(4) {
+        let w = <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes);
+        let m = mask::<HIGH>(w, k);
+        let e = weights::<HIGH>(w, t, m);
+        cnt = cnt.wrapping_add(m);
+        s_lo = s_lo.wrapping_add(e & LO);
+        s_hi = s_hi.wrapping_add((e >> 8) & LO);
+        t_lo = t_lo.wrapping_add(s_lo);
+        t_hi = t_hi.wrapping_add(s_hi);
+        above |= if high_c {
+            mask::<true>(w, kc)
+        } else {
+            mask::<false>(w, kc)
+        };
+    }
+    let half = |v: u32| (v & 0xffff, v >> 16);
+    let ((s0, s2), (s1, s3)) = (half(s_lo), half(s_hi));
+    let ((t0, t2), (t1, t3)) = (half(t_lo), half(t_hi));
+    let count = cnt.wrapping_mul(ONES) >> 24;
+    let weight = s0 + s1 + s2 + s3;
+    // sum_j j e_ji = 16 S_i - T_i >= 0
+    let inner = (16 * weight - (t0 + t1 + t2 + t3)) * 4 + s1 + 2 * s2 + 3 * s3;
+    let max = if above != 0 {
+        block.iter().fold(cur, |m, &p| m.max(p))
+    } else {
+        cur
+    };
+    (count, weight, inner, max)
 }
 
 /// Binary 16-bit row sums (see [`row_weighted_u8`]).
@@ -255,6 +346,27 @@ mod tests {
                     };
                     let want = u32::from_le_bytes(b.map(|v| u8::from(v > t)));
                     assert_eq!(m, want, "t {t} p {p} lane {lane}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn weights_are_the_bytewise_excess_for_every_value_and_threshold() {
+        for t in 0..=255u8 {
+            let (k, high) = constant(t);
+            for p in 0..=255u8 {
+                for (lane, other) in [(0, 0u8), (1, 255), (2, 0), (3, 255)] {
+                    let mut b = [other; 4];
+                    b[lane] = p;
+                    let w = u32::from_le_bytes(b);
+                    let e = if high {
+                        weights::<true>(w, t, mask::<true>(w, k))
+                    } else {
+                        weights::<false>(w, t, mask::<false>(w, k))
+                    };
+                    let want = u32::from_le_bytes(b.map(|v| v.saturating_sub(t)));
+                    assert_eq!(e, want, "t {t} p {p} lane {lane}");
                 }
             }
         }
