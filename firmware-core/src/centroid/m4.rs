@@ -160,37 +160,13 @@ fn or_u16(block: &[u16]) -> u16 {
 /// row's remainder the scalar one). Same `pixels`, `weight`, `sum_x` as the portable kernel,
 /// `max` exact when `pixels > 0`, else 0.
 pub(super) fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
-    let row = row.get(..MAX_DIM).unwrap_or(row);
     match constant(t) {
-        (k, true) => row_weighted::<true>(row, t, k),
-        (k, false) => row_weighted::<false>(row, t, k),
-    }
-}
-
-#[inline(always)]
-fn row_weighted<const HIGH: bool>(row: &[u8], t: u8, k: u32) -> RowSums {
-    let (mut pixels, mut weight, mut sum_x, mut max) = (0u32, 0u32, 0u64, t);
-    let mut x0 = 0u32;
-    let mut blocks = row.chunks_exact(BLOCK_PX);
-    for block in &mut blocks {
-        if or_u8(block) > t {
-            let (n, w, s, m) = block_weighted::<HIGH>(block, t, k, max);
-            pixels += n;
-            weight += w;
-            sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
-            max = m;
+        (k, true) => {
+            row_sparse::<u8, true>(row, t, or_u8, |b, cur| block_weighted::<true>(b, t, k, cur))
         }
-        x0 += BLOCK_PX as u32;
-    }
-    let (n, w, s, m) = block_pass::<u8, true>(blocks.remainder(), t, max);
-    pixels += n;
-    weight += w;
-    sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
-    RowSums {
-        pixels,
-        weight,
-        sum_x,
-        max: if pixels > 0 { u16::from(m) } else { 0 },
+        (k, false) => row_sparse::<u8, true>(row, t, or_u8, |b, cur| {
+            block_weighted::<false>(b, t, k, cur)
+        }),
     }
 }
 
@@ -250,25 +226,32 @@ fn block_weighted<const HIGH: bool>(block: &[u8], t: u8, k: u32, cur: u8) -> (u3
     (count, weight, inner, max)
 }
 
-/// Binary 16-bit row sums (see [`row_weighted_u8`]).
+/// Binary 16-bit row sums (see [`row_weighted_u8`]; the per-pixel pass inside hit blocks).
 pub(super) fn row_binary_u16(row: &[u16], t: u16) -> RowSums {
-    row_sparse::<u16, false>(row, t, or_u16)
+    row_sparse::<u16, false>(row, t, or_u16, |b, cur| block_pass::<u16, false>(b, t, cur))
 }
 
-/// Weighted 16-bit row sums (see [`row_weighted_u8`]).
+/// Weighted 16-bit row sums (see [`row_binary_u16`]).
 pub(super) fn row_weighted_u16(row: &[u16], t: u16) -> RowSums {
-    row_sparse::<u16, true>(row, t, or_u16)
+    row_sparse::<u16, true>(row, t, or_u16, |b, cur| block_pass::<u16, true>(b, t, cur))
 }
 
+/// The block skip around `full`, the sums of one block of [`BLOCK_PX`] pixels given the running
+/// maximum; the row's remainder takes the per-pixel pass.
 #[inline(always)]
-fn row_sparse<P: Pixel, const WEIGHTED: bool>(row: &[P], t: P, or: fn(&[P]) -> P) -> RowSums {
+fn row_sparse<P: Pixel, const WEIGHTED: bool>(
+    row: &[P],
+    t: P,
+    or: fn(&[P]) -> P,
+    full: impl Fn(&[P], P) -> (u32, u32, u32, P),
+) -> RowSums {
     let row = row.get(..MAX_DIM).unwrap_or(row);
     let (mut pixels, mut weight, mut sum_x, mut max) = (0u32, 0u32, 0u64, t);
     let mut x0 = 0u32;
     let mut blocks = row.chunks_exact(BLOCK_PX);
     for block in &mut blocks {
         if or(block) > t {
-            let (n, w, s, m) = block_pass::<P, WEIGHTED>(block, t, max);
+            let (n, w, s, m) = full(block, max);
             pixels += n;
             weight += w;
             sum_x += u64::from(x0) * u64::from(w) + u64::from(s);
