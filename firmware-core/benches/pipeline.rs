@@ -1,7 +1,8 @@
-//! The complete vision channel on the host (`pipeline::VisionH1<120, 3328, 2048, 150>`, the
+//! The complete vision channel on the host (`pipeline::VisionH1<121, 2816, 2048, 150>`, the
 //! mcu-demo's configuration): one second of data, 120 frames and 2048 ADC samples pushed
-//! interleaved as they arrive, i.e. one block upsampled to acceleration and two 2048-point
-//! segments accumulated in steady state. Also prints the state size quoted in the README.
+//! interleaved as they arrive, i.e. two overlapped blocks upsampled to acceleration and two
+//! 2048-point segments accumulated in steady state. Also prints the state size quoted in the
+//! README.
 //!
 //! `cargo bench -p firmware-core --bench pipeline`
 
@@ -11,7 +12,7 @@ use firmware_core::spectrum::{Detrend, WelchConfig, Window};
 use std::hint::black_box;
 
 const SC: usize = scratch_capacity(120, 2048, 2048);
-type Demo = VisionH1<120, 3328, 2048, SC>;
+type Demo = VisionH1<121, 2816, 2048, SC>;
 
 fn config() -> PipelineConfig {
     PipelineConfig {
@@ -54,7 +55,7 @@ fn push_second(p: &mut Demo, frames: &[f32], adc: &[f32]) {
 
 fn benches(c: &mut Criterion) {
     println!(
-        "size_of VisionH1<120, 3328, 2048, {SC}>: {} bytes",
+        "size_of VisionH1<121, 2816, 2048, {SC}>: {} bytes",
         core::mem::size_of::<Demo>()
     );
     let (frames, adc) = second();

@@ -195,6 +195,39 @@ impl UpsamplePlan {
         work: &mut [Complex32],
         scratch: &mut [Complex32],
     ) -> Result<(), UpsampleError> {
+        if output.len() != self.m {
+            return Err(UpsampleError::BufferLen {
+                expected: self.m,
+                got: output.len(),
+            });
+        }
+        self.process_part(input, output, 0, accel, None, work, scratch)
+    }
+
+    /// As [`process_with`](Self::process_with), with two options for block-wise streaming
+    /// ([`crate::pipeline`]): only the output samples `first .. first + output.len()` are
+    /// written (`first + output.len() <= m`), and with `end_match = Some(next)`, `next` being
+    /// the sample that follows the block, the straight line through the first input sample
+    /// (at position 0) and `next` (at position `n`) is subtracted before the transform and
+    /// added back to the output (its second derivative is zero, so nothing is added with
+    /// `accel`). The subtraction removes the jump that the transform's periodic extension of a
+    /// block would otherwise see between its last and first samples (Gibbs ringing, amplified
+    /// by `omega^2` in the acceleration); a block that already holds whole periods has
+    /// `next == input[0]` and is left as it is.
+    ///
+    /// Errors: as [`process_with`](Self::process_with); [`UpsampleError::BufferLen`] with
+    /// `expected = m - first` when the range runs past `m`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn process_part(
+        &self,
+        input: &[f32],
+        output: &mut [f32],
+        first: usize,
+        accel: Option<(f32, f32)>,
+        end_match: Option<f32>,
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) -> Result<(), UpsampleError> {
         let (n, m) = (self.n, self.m);
         if input.len() != n {
             return Err(UpsampleError::BufferLen {
@@ -202,12 +235,18 @@ impl UpsamplePlan {
                 got: input.len(),
             });
         }
-        if output.len() != m {
+        if first > m || output.len() > m - first {
             return Err(UpsampleError::BufferLen {
-                expected: m,
+                expected: m.saturating_sub(first),
                 got: output.len(),
             });
         }
+        // the line a + slope * i through the first sample and the next block's (i in input
+        // samples)
+        let (a, slope) = match (end_match, input.first()) {
+            (Some(next), Some(&a)) => (a, (next - a) / n as f32),
+            _ => (0.0, 0.0),
+        };
         let Some(work) = work.get_mut(..m) else {
             return Err(UpsampleError::BufferLen {
                 expected: m,
@@ -220,8 +259,8 @@ impl UpsamplePlan {
                 capacity: scratch.len(),
             });
         }
-        for (w, x) in work.iter_mut().zip(input) {
-            *w = Complex32::new(*x, 0.0);
+        for (i, (w, x)) in work.iter_mut().zip(input).enumerate() {
+            *w = Complex32::new(*x - (a + slope * i as f32), 0.0);
         }
         let Some(head) = work.get_mut(..n) else {
             return Ok(());
@@ -277,8 +316,15 @@ impl UpsamplePlan {
         }
         self.inv.process(work, scratch, Direction::Inverse)?;
         let s = 1.0 / n as f32;
-        for (o, w) in output.iter_mut().zip(work.iter()) {
-            *o = w.re * s;
+        // the line on the output grid (output sample j is at input position j n / m)
+        let (a, slope) = if accel.is_some() {
+            (0.0, 0.0)
+        } else {
+            (a, slope * n as f32 / m as f32)
+        };
+        let kept = work.iter().skip(first);
+        for (j, (o, w)) in output.iter_mut().zip(kept).enumerate() {
+            *o = w.re * s + (a + slope * (first + j) as f32);
         }
         Ok(())
     }
@@ -485,6 +531,64 @@ mod tests {
         for (i, v) in x.iter().enumerate() {
             assert!((y[4 * i] - v).abs() < 1e-5, "sample {i}");
         }
+    }
+
+    #[test]
+    fn parts_and_end_matching() {
+        let (n, m) = (60, 256);
+        let plan = UpsamplePlan::try_new(n, m).unwrap();
+        let mut work = vec![Complex32::new(0.0, 0.0); m];
+        let mut scratch = vec![Complex32::new(0.0, 0.0); plan.scratch_len()];
+        let x = signal(n);
+        let mut full = vec![0.0f32; m];
+        plan.process_with(&x, &mut full, None, &mut work, &mut scratch)
+            .unwrap();
+        // a part is the same samples as the whole output
+        let mut part = vec![0.0f32; 100];
+        plan.process_part(&x, &mut part, 64, None, None, &mut work, &mut scratch)
+            .unwrap();
+        assert_eq!(part[..], full[64..164]);
+        assert_eq!(
+            plan.process_part(&x, &mut part, 157, None, None, &mut work, &mut scratch),
+            Err(UpsampleError::BufferLen {
+                expected: 99,
+                got: 100
+            })
+        );
+        // end matching: a ramp (whose periodic extension jumps) comes back exactly, and its
+        // acceleration is zero; without it the jump rings through the whole block
+        let ramp: Vec<f32> = (0..n).map(|i| 0.5 + 0.1 * i as f32).collect();
+        let want = |j: usize| 0.5 + 0.1 * (j * n) as f32 / m as f32;
+        plan.process_part(
+            &ramp,
+            &mut full,
+            0,
+            None,
+            Some(0.5 + 0.1 * n as f32),
+            &mut work,
+            &mut scratch,
+        )
+        .unwrap();
+        for (j, v) in full.iter().enumerate() {
+            assert!((v - want(j)).abs() < 1e-5, "sample {j}: {v} vs {}", want(j));
+        }
+        plan.process_part(
+            &ramp,
+            &mut full,
+            0,
+            Some((60.0, 1.0)),
+            Some(0.5 + 0.1 * n as f32),
+            &mut work,
+            &mut scratch,
+        )
+        .unwrap();
+        assert!(full.iter().all(|v| v.abs() < 1e-2), "{:?}", &full[..4]);
+        plan.process_with(&ramp, &mut full, None, &mut work, &mut scratch)
+            .unwrap();
+        let worst = (0..m)
+            .map(|j| (full[j] - want(j)).abs())
+            .fold(0.0, f32::max);
+        assert!(worst > 0.5, "without end matching: {worst}");
     }
 
     #[test]

@@ -240,14 +240,15 @@ fn camera_signal_acc(t: f32) -> f32 {
 const NSEG: usize = 2048;
 const CAM_N: usize = 120;
 const UP_SCRATCH: usize = upsample::scratch_capacity(CAM_N, NSEG);
-/// Vision history: one upsampled block (2048) + what a segment leaves over (1024) + 256 samples
-/// (125 ms) by which the ADC may run ahead of the camera.
-const HIST: usize = 3328;
+/// Sample histories: what a segment leaves over (1024) + the ADC's lead over the vision record
+/// when a block completes (3/4 block + one frame: 1554) + 238 samples (116 ms) of processing
+/// latency.
+const HIST: usize = 2816;
 const PIPE_SCRATCH: usize = pipeline::scratch_capacity(CAM_N, NSEG, NSEG);
 
 /// Everything a camera firmware needs for vision-channel H1 at 2048 Hz from a 120 fps camera:
 /// frames and ADC samples in, upsampled acceleration, 2048-point Welch H1 out.
-type Pipeline = VisionH1<CAM_N, HIST, NSEG, PIPE_SCRATCH>;
+type Pipeline = VisionH1<{ CAM_N + 1 }, HIST, NSEG, PIPE_SCRATCH>;
 
 /// 2048-point Hann segments with 50 % overlap at 2048 Hz (1 Hz bins).
 fn welch_2048() -> WelchConfig {
@@ -486,10 +487,12 @@ fn check_pipeline(rep: &mut Report, p: &mut Pipeline) {
     let ok = feed_pipeline(p, 0, 8);
     let w = p.welch();
     hprintln!("pipeline: {} blocks, {} segments", p.blocks(), w.segments());
-    // 8 s = 16384 samples: (16384 - 2048) / 1024 + 1 segments
+    // 8 s = 960 frames: blocks start every 60 frames and need the frame after them, the
+    // last at frame 780: 14 blocks, 14 x 1024 samples of vision record,
+    // (14336 - 2048) / 1024 + 1 = 13 segments
     rep.check(
-        "pipeline: 8 s of frames and ADC samples accepted, 8 blocks, 15 segments",
-        ok && p.blocks() == 8 && w.segments() == 15,
+        "pipeline: 8 s of frames and ADC samples accepted, 14 blocks, 13 segments",
+        ok && p.blocks() == 14 && w.segments() == 13,
     );
     // H1 = vision / ADC = 2 at the two tones (7 and 32 Hz; 1 Hz bins), coherence 1
     for k in [7usize, 32] {
@@ -666,7 +669,7 @@ fn main() -> ! {
     hprintln!(
         "ram: pipeline {} B (VisionH1<{}, {}, {}, {}>: frames + ADC in, 2048-point H1 out)",
         core::mem::size_of::<Pipeline>(),
-        CAM_N,
+        CAM_N + 1,
         HIST,
         NSEG,
         PIPE_SCRATCH
