@@ -8,27 +8,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use firmware_core::pipeline::{scratch_capacity, PipelineConfig, VisionH1};
-use firmware_core::spectrum::{Detrend, WelchConfig, Window};
 use std::hint::black_box;
 
 const SC: usize = scratch_capacity(120, 2048, 2048);
 type Demo = VisionH1<121, 2816, 2048, SC>;
-
-fn config() -> PipelineConfig {
-    PipelineConfig {
-        frames_per_block: 120,
-        samples_per_block: 2048,
-        welch: WelchConfig {
-            fs_hz: 2048.0,
-            nperseg: 2048,
-            noverlap: 1024,
-            nfft: 2048,
-            window: Window::Hann,
-            detrend: Detrend::Constant,
-        },
-        acceleration_scale: Some(1e-3),
-    }
-}
 
 /// One second of frames (mm) and ADC samples (m/s^2), two tones.
 fn second() -> (Vec<f32>, Vec<f32>) {
@@ -59,7 +42,10 @@ fn benches(c: &mut Criterion) {
         core::mem::size_of::<Demo>()
     );
     let (frames, adc) = second();
-    let mut p = Box::new(Demo::try_new(config()).expect("valid settings"));
+    let mut p = Box::new(
+        Demo::try_new(PipelineConfig::one_second_blocks(120, 2048, Some(1e-3)))
+            .expect("valid settings"),
+    );
     // steady state: two seconds in, so every further second cuts two segments
     push_second(&mut p, &frames, &adc);
     push_second(&mut p, &frames, &adc);

@@ -54,7 +54,7 @@
 //! is kept.
 
 use crate::dft;
-use crate::spectrum::{WelchAccumulator, WelchConfig, WelchError};
+use crate::spectrum::{Detrend, WelchAccumulator, WelchConfig, WelchError, Window};
 use crate::upsample::{UpsampleError, UpsamplePlan};
 use crate::Complex32;
 use core::fmt;
@@ -77,6 +77,25 @@ pub struct PipelineConfig {
 }
 
 impl PipelineConfig {
+    /// Blocks of one second (`fps` frames -> `fs` samples) and one-second Welch segments:
+    /// `nperseg = nfft = fs` (1 Hz bins), 50 % overlap, Hann, constant detrend. The mcu-demo's
+    /// setting is `one_second_blocks(120, 2048, Some(1e-3))` (mm in, m/s^2 out).
+    pub fn one_second_blocks(fps: usize, fs: usize, acceleration_scale: Option<f32>) -> Self {
+        PipelineConfig {
+            frames_per_block: fps,
+            samples_per_block: fs,
+            welch: WelchConfig {
+                fs_hz: fs as f32,
+                nperseg: fs,
+                noverlap: fs / 2,
+                nfft: fs,
+                window: Window::Hann,
+                detrend: Detrend::Constant,
+            },
+            acceleration_scale,
+        }
+    }
+
     /// Camera frame rate implied by the settings: `fs_adc * n / m`.
     pub fn frame_rate_hz(&self) -> f32 {
         if self.samples_per_block == 0 {
@@ -486,7 +505,7 @@ pub const fn scratch_capacity(n: usize, m: usize, nfft: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spectrum::{Detrend, WelchH1, Window};
+    use crate::spectrum::WelchH1;
     use core::f32::consts::PI;
     use proptest::prelude::*;
     use std::vec;
@@ -803,19 +822,7 @@ mod tests {
     #[test]
     fn the_demo_pipeline_fits_in_64_kib() {
         // one second of 120 fps -> 2048 Hz, 2048-point segments, 238 samples of extra ADC lead
-        let c = PipelineConfig {
-            frames_per_block: 120,
-            samples_per_block: 2048,
-            welch: WelchConfig {
-                fs_hz: 2048.0,
-                nperseg: 2048,
-                noverlap: 1024,
-                nfft: 2048,
-                window: Window::Hann,
-                detrend: Detrend::Constant,
-            },
-            acceleration_scale: Some(1e-3),
-        };
+        let c = PipelineConfig::one_second_blocks(120, 2048, Some(1e-3));
         assert_eq!(c.min_history(), 2578);
         const SC: usize = scratch_capacity(120, 2048, 2048);
         assert_eq!(SC, 150);

@@ -81,13 +81,7 @@ fn main() -> anyhow::Result<()> {
         }
         // the pipeline, fed as the data would arrive; its record starts at sample 512
         let mut p = Box::new(
-            Pipe::try_new(PipelineConfig {
-                frames_per_block: 120,
-                samples_per_block: SEG,
-                welch: welch_cfg(),
-                acceleration_scale: Some(1e-3),
-            })
-            .map_err(err)?,
+            Pipe::try_new(PipelineConfig::one_second_blocks(120, SEG, Some(1e-3))).map_err(err)?,
         );
         let mut next = 0;
         for (j, v) in frames.iter().enumerate() {

@@ -263,13 +263,8 @@ fn welch_2048() -> WelchConfig {
 }
 
 fn pipeline_config() -> PipelineConfig {
-    PipelineConfig {
-        frames_per_block: CAM_N,
-        samples_per_block: NSEG,
-        welch: welch_2048(),
-        // camera in mm, ADC in m/s^2
-        acceleration_scale: Some(1e-3),
-    }
+    // camera in mm, ADC in m/s^2; the Welch setting is welch_2048()
+    PipelineConfig::one_second_blocks(CAM_N, NSEG, Some(1e-3))
 }
 
 /// Base acceleration seen by the ADC (m/s^2) at time `t`: the second derivative of
