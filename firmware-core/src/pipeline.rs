@@ -34,17 +34,19 @@
 //! transform in turn, the window is computed rather than stored, and segments are not copied:
 //! the state is `4 CAM + 8 HIST + 16 WORK + 8 SCRATCH` bytes plus a few words. For 120 fps ->
 //! 2048 Hz blocks of one second, 2048-point segments with 50 % overlap and 238 samples
-//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 256 B (under 64 KiB; the mcu-demo prints
-//! it). The two separate owning types, `WelchH1<2048, 2048, 0>` and
-//! `Upsampler<2048, 150>`, would need 66 KiB before any sample buffer.
+//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 256 B (under
+//! 64 KiB; 57 140 B on the Cortex-M4, where the mcu-demo prints it). The two separate owning
+//! types, `WelchH1<2048, 2048, 0>` and `Upsampler<2048, 150>`, would need 66 KiB before any
+//! sample buffer.
 //!
 //! # Capacities
-//! `CAM >= n + 1` (`n` even); `m` a multiple of 4; `WORK >= m` and `>= nfft`; `SCRATCH >=` the larger
-//! DFT scratch of the upsampler and of the Welch transform (0 for powers of two; 150 for a
-//! 120-sample block); `HIST >=` [`PipelineConfig::min_history`]` = c + 3 m / 4 + ceil(m / n)`,
-//! where `c < nperseg` is the largest history left over after a segment and the rest the
-//! ADC's lead over the vision record just before a block completes. What `HIST` holds beyond that is
-//! the ADC's allowed extra lead (processing latency, [`VisionH1::adc_headroom`]).
+//! `CAM >= n + 1` (`n` even); `m` a multiple of 4; `WORK >= m` and `>= nfft`; `SCRATCH >=` the
+//! larger DFT scratch of the upsampler and of the Welch transform (0 for powers of two; 150
+//! for a 120-sample block); `HIST >=` [`PipelineConfig::min_history`]
+//! `= c + 3 m / 4 + ceil(m / n)`, where `c < nperseg` is the largest history left over after a
+//! segment and the rest the ADC's lead over the vision record just before a block completes.
+//! What `HIST` holds beyond that is the ADC's allowed extra lead (processing latency,
+//! [`VisionH1::adc_headroom`]).
 //!
 //! # Lost frames and bad samples
 //! The pipeline assumes one value per frame period: fill a lost frame before pushing it (the
@@ -261,7 +263,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     fn format(&self, f: defmt::Formatter<'_>) {
         defmt::write!(
             f,
-            "VisionH1 {{ config: {}, blocks: {}, segments: {}, skipped: {}, pending: ({}, {}, {}) }}",
+            "VisionH1 {{ config: {}, blocks: {}, segments: {}, skipped: {}, \
+             pending: ({}, {}, {}) }}",
             self.config,
             self.blocks,
             self.welch.segments(),
@@ -388,9 +391,10 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
 
     /// Pushes one camera sample (displacement, or centroid in pixels with a scale folded into
     /// [`PipelineConfig::acceleration_scale`]). Frame `n + 1` and every `n / 2`-th frame after
-    /// it complete a block, whose central half is upsampled and appended to the vision history,
-    /// and the segments it completes are accumulated. Error [`PipelineError::BlockPending`] (frame not consumed) while a complete
-    /// block waits for room because the ADC is behind.
+    /// it complete a block, whose central half is upsampled and appended to the vision
+    /// history, and the segments it completes are accumulated. Error
+    /// [`PipelineError::BlockPending`] (frame not consumed) while a complete block waits for
+    /// room because the ADC is behind.
     pub fn push_frame(&mut self, value: f32) -> Result<(), PipelineError> {
         let n = self.plan.input_len();
         if self.cam_fill > n {
@@ -422,8 +426,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         let (n, m) = (self.plan.input_len(), self.plan.output_len());
         let nperseg = self.config.welch.nperseg;
         let hop = nperseg - self.config.welch.noverlap;
+        let keep = m / 2;
         loop {
-            let keep = m / 2;
             // a block is complete with the frame after it (the end-matching line's end point)
             if self.cam_fill > n && self.vis_fill + keep <= HIST {
                 let accel = self
