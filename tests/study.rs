@@ -38,6 +38,26 @@ fn ok(out: &std::process::Output) {
     );
 }
 
+/// Runs the study as shards 1/2 and 2/2 into `dir/s1` and `dir/s2`.
+fn two_shards(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (s1, s2) = (dir.join("s1"), dir.join("s2"));
+    ok(&study(&s1, &["--shard", "1/2"]));
+    ok(&study(&s2, &["--shard", "2/2"]));
+    (s1, s2)
+}
+
+/// `host-harness merge s1 s2 --out out --no-plots`.
+fn merge(s1: &Path, s2: &Path, out: &Path) -> std::process::Output {
+    harness(&[
+        "merge",
+        s1.to_str().unwrap(),
+        s2.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plots",
+    ])
+}
+
 #[test]
 fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
     let dir = tempfile::tempdir().unwrap();
@@ -61,19 +81,9 @@ fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
     assert!(out.contains("mu_a") && out.contains("vision"), "{out}");
 
     // two shards merged give byte-identical outputs
-    let s1 = dir.path().join("s1");
-    let s2 = dir.path().join("s2");
-    ok(&study(&s1, &["--shard", "1/2"]));
-    ok(&study(&s2, &["--shard", "2/2"]));
+    let (s1, s2) = two_shards(dir.path());
     let merged = dir.path().join("merged");
-    ok(&harness(&[
-        "merge",
-        s1.to_str().unwrap(),
-        s2.to_str().unwrap(),
-        "--out",
-        merged.to_str().unwrap(),
-        "--no-plots",
-    ]));
+    ok(&merge(&s1, &s2, &merged));
     for f in ["summary.csv", "realizations.csv", "frf_band.csv"] {
         assert_eq!(
             read(&one.join(f)),
@@ -144,20 +154,9 @@ fn runs_of_another_model_revision_are_never_mixed() {
         "{err}"
     );
     // nor merged with shards of this revision
-    let s1 = dir.path().join("s1");
-    let s2 = dir.path().join("s2");
-    ok(&study(&s1, &["--shard", "1/2"]));
-    ok(&study(&s2, &["--shard", "2/2"]));
+    let (s1, s2) = two_shards(dir.path());
     std::fs::write(s2.join("model_revision.txt"), format!("{}\n", rev + 1)).unwrap();
-    let merged = dir.path().join("merged");
-    let out = harness(&[
-        "merge",
-        s1.to_str().unwrap(),
-        s2.to_str().unwrap(),
-        "--out",
-        merged.to_str().unwrap(),
-        "--no-plots",
-    ]);
+    let out = merge(&s1, &s2, &dir.path().join("merged"));
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("same code"));
 }

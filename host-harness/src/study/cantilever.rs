@@ -20,7 +20,7 @@ use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
 use crate::recording::{self, RecordingSpec, Rig};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::upsample::{self, Upsampler};
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -158,9 +158,7 @@ impl Scenario for Cantilever {
         let mut renderer = BlurRenderer::for_path(&target, &path, 16);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h);
-        // drawn only with effects, so the default study's streams are unchanged
-        let noise_seed: u64 = if camera.is_plain() { 0 } else { rng.random() };
+        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
         let mut disp = vec![0.0f64; FRAMES];
         let mut valid = vec![false; FRAMES];
         let mut up =
@@ -169,8 +167,7 @@ impl Scenario for Cantilever {
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
         for (ei, &exp) in self.exposures_ms.iter().enumerate() {
             let half = exp / 2000.0 * fine_hz;
-            let mut noise = ChaCha8Rng::seed_from_u64(noise_seed);
-            noise.set_stream(ei as u64);
+            camera.start_exposure(ei);
             vision.push(measure_vision(
                 exp,
                 &mut disp,
@@ -178,7 +175,7 @@ impl Scenario for Cantilever {
                 bands.len(),
                 |k| {
                     let centre = (pad + k * ppf) as f64;
-                    camera.frame(&mut renderer, centre - half, centre + half, &mut noise)
+                    camera.frame(&mut renderer, centre - half, centre + half)
                 },
                 |cy| -(cy as f64 - rest_y) * MM_PER_PX,
                 |d32| {

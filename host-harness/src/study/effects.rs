@@ -11,7 +11,7 @@
 use super::render::BlurRenderer;
 use super::ImagingOptions;
 use firmware_core::centroid::{centroid_u16, centroid_u8, Centroid, CentroidConfig, FrameError};
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
 /// One simulated camera: EPSA exposure of a [`BlurRenderer`] path, the [`Effects`] and the
@@ -29,12 +29,24 @@ pub struct Camera {
     fimg: Vec<f32>,
     frame16: Vec<u16>,
     scratch: Vec<f32>,
+    /// Seed of the noise streams (one per exposure); 0 and unused for identity effects.
+    noise_seed: u64,
+    noise: rand_chacha::ChaCha8Rng,
 }
 
 impl Camera {
     /// A `w x h` camera with `effects` and the binary threshold `threshold` on the 8-bit scale.
-    pub fn new(effects: &Effects, threshold: u16, w: usize, h: usize) -> Camera {
+    /// With effects, the seed of its noise streams is drawn from `rng` (nothing is drawn
+    /// otherwise, so the identity camera leaves a run's stream as it was).
+    pub fn new(
+        effects: &Effects,
+        threshold: u16,
+        w: usize,
+        h: usize,
+        rng: &mut impl Rng,
+    ) -> Camera {
         let plain = effects.is_identity();
+        let noise_seed: u64 = if plain { 0 } else { rng.random() };
         let config = CentroidConfig::binary(if plain {
             threshold
         } else {
@@ -55,23 +67,25 @@ impl Camera {
             fimg,
             frame16,
             scratch: Vec::new(),
+            noise_seed,
+            noise: rand_chacha::ChaCha8Rng::seed_from_u64(noise_seed),
         }
     }
 
-    /// True when the effects are the identity (no noise is drawn: callers need no noise
-    /// stream).
-    pub fn is_plain(&self) -> bool {
-        self.plain
+    /// Starts the noise stream of exposure `index`: every exposure of a run gets its own
+    /// stream of the run's noise seed, so the exposures do not depend on each other's draws.
+    pub fn start_exposure(&mut self, index: usize) {
+        self.noise = rand_chacha::ChaCha8Rng::seed_from_u64(self.noise_seed);
+        self.noise.set_stream(index as u64);
     }
 
-    /// Exposes the path from `a` to `b` (renderer steps), applies the effects (noise from
-    /// `noise`) and centroids the frame.
+    /// Exposes the path from `a` to `b` (renderer steps), applies the effects (noise from the
+    /// current exposure's stream) and centroids the frame.
     pub fn frame(
         &mut self,
         renderer: &mut BlurRenderer,
         a: f64,
         b: f64,
-        noise: &mut impl Rng,
     ) -> Result<Centroid, FrameError> {
         let (w, h) = (self.w, self.h);
         if self.plain {
@@ -80,7 +94,7 @@ impl Camera {
         } else {
             renderer.render_float(a, b, &mut self.fimg);
             self.effects
-                .apply(&mut self.fimg, w, h, noise, &mut self.scratch);
+                .apply(&mut self.fimg, w, h, &mut self.noise, &mut self.scratch);
             self.effects.quantise(&self.fimg, &mut self.frame16);
             centroid_u16(&self.config, &self.frame16, w, h, w)
         }

@@ -7,7 +7,7 @@ use super::{measure_system, measure_vision, RunRecord, Scenario, StudyConfig};
 use crate::study::effects::{Camera, Effects};
 use crate::study::render::{BlurRenderer, DiskTarget};
 use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, StandardNormal};
 
@@ -347,15 +347,13 @@ impl Scenario for Grandstand {
         let mut renderer = BlurRenderer::for_path(&self.target, &path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h);
-        let noise_seed: u64 = if camera.is_plain() { 0 } else { rng.random() };
+        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
         let mut vis = vec![0.0f64; N];
         let mut valid = vec![false; N];
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
         for (ei, &exp) in self.exposures_ms.iter().enumerate() {
             let half = exp / 2.0 / dt_ms; // fine steps either side of the frame instant
-            let mut noise = ChaCha8Rng::seed_from_u64(noise_seed);
-            noise.set_stream(ei as u64);
+            camera.start_exposure(ei);
             vision.push(measure_vision(
                 exp,
                 &mut vis,
@@ -363,7 +361,7 @@ impl Scenario for Grandstand {
                 bands.len(),
                 |i| {
                     let centre = (r.pad + i * FINE) as f64;
-                    camera.frame(&mut renderer, centre - half, centre + half, &mut noise)
+                    camera.frame(&mut renderer, centre - half, centre + half)
                 },
                 |cy| -(cy as f64 - rest_y) / PX_PER_MM,
                 |y| {
