@@ -378,7 +378,7 @@ fn more_than_five_percent_lost_frames_fails_the_analysis() {
             .unwrap();
     }
     let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
-    assert_bad_input(&o, &["FAILED", "7 of 120 frames"]);
+    assert_bad_input(&o, &["7 of 120 frames", "more than the 5 %"]);
     let out = rec.dir.join("out");
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
     assert!(report.contains("ANALYSIS FAILED"), "{report}");
@@ -481,9 +481,15 @@ fn synthetic_cantilever_recording_round_trip() {
             i + 1,
             acc.3
         );
+        // The binary centroid's quantisation noise (the pixel count changes in steps as the
+        // disk moves), times omega^2, adds to the vision amplitude at 32 Hz: measured 1.021 for
+        // mode 2 with the rig's camera (0.5 px Gaussian edge, threshold at half the level),
+        // 1.007 with the one-pixel linear edge recordings had before they used the study's
+        // renderer. Mode 1 (omega^2 20 times smaller) stays within 2 %.
+        let tol = if i == 0 { 0.02 } else { 0.03 };
         let ratio = vis.3 / acc.3;
         assert!(
-            (ratio - 1.0).abs() < 0.02,
+            (ratio - 1.0).abs() < tol,
             "mode {}: vision / accelerometer = {ratio}",
             i + 1
         );

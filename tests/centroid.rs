@@ -254,7 +254,7 @@ fn bad_files_are_named_and_the_others_still_processed() {
             r.stderr
         );
     }
-    assert!(r.stderr.contains("not a grey image"), "{}", r.stderr);
+    assert!(r.stderr.contains("not a grey frame"), "{}", r.stderr);
     assert!(r.stderr.contains("4 of 6"), "{}", r.stderr);
 }
 

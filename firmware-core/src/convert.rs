@@ -10,7 +10,10 @@
 //! factor as its mirror, so the output stays real.
 
 /// Standard gravity, m/s^2 (accelerometer channels in g convert with it).
-pub const STANDARD_GRAVITY: f32 = 9.806_65;
+pub const STANDARD_GRAVITY: f32 = STANDARD_GRAVITY_F64 as f32;
+
+/// Standard gravity in `f64` (the exact conventional value, for hosts that compute in `f64`).
+pub const STANDARD_GRAVITY_F64: f64 = 9.806_65;
 
 /// Millimetres to metres.
 pub const MM_TO_M: f32 = 1.0e-3;

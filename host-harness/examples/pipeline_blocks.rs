@@ -17,7 +17,7 @@ use firmware_core::peaks;
 use firmware_core::pipeline::{scratch_capacity, PipelineConfig, VisionH1};
 use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::upsample::{self, Upsampler};
-use host_harness::recording::{simulate, RecordingSpec};
+use host_harness::recording::RecordingSpec;
 
 const N: usize = 1200;
 const M: usize = 20480;
@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
     let mut ratios = vec![vec![Vec::new(); 2]; 2];
     for seed in 0..runs {
         let spec = RecordingSpec::cantilever(seed, 0.0);
-        let sim = simulate(&spec)?;
+        let sim = host_harness::model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
         let base: Vec<f32> = sim.input.iter().map(|v| *v as f32).collect();
         let frames: Vec<f32> = (0..N)
             .map(|k| sim.tip_mm[k * sim.fine_per_frame] as f32)

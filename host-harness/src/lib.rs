@@ -1,31 +1,40 @@
 //! # host-harness
 //!
 //! The `std` side of the toolkit: Monte Carlo studies that simulate the whole vision-based
-//! vibration measurement (structure, excitation, transducers, camera image formation with
-//! motion blur) and push the simulated frames and signals **through `firmware-core` itself**,
-//! plus command-line tools that run the same firmware code on real recordings.
+//! vibration measurement and push the simulated frames and signals **through `firmware-core`
+//! itself**, the analysis of real recordings with the same firmware code, and the `host-harness`
+//! command line. The method is described in `docs/method.md`, the command line in `docs/cli.md`,
+//! and the way data flows through these modules in `ARCHITECTURE.md`.
 //!
-//! Physics is kept apart from plumbing:
+//! Modules, in the order data flows:
 //!
 //! | module | what |
 //! |---|---|
-//! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards; its scenarios ([`study::grandstand`]: structure, excitation, transducers; [`study::cantilever`]) and the EPSA camera ([`study::render`]) |
+//! | [`model`] | the rigs: modal parameters and their PDFs, excitation, exact response, transducer noise, closed-form FRFs (one module per rig) |
+//! | [`imaging`] | the camera: targets, the EPSA renderer, image-formation effects, the `Camera` that ends in firmware-core's centroid |
+//! | [`chain`] | the host side of firmware-core: frames -> displacement (lost frames), two channels -> H1 -> peaks, upsampling to acceleration |
+//! | [`study`] | Monte Carlo studies: configuration, scenarios, runner (seeds, threads, shards), checkpoint, aggregation, merge |
+//! | [`recording`] | synthetic recordings (frames + transducer CSV) written from a model through the camera |
+//! | [`analysis`] | real recordings: frame loading, alignment, the chain, modes, reports |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
-//! | [`report`] | CSV rows and the printed table (pure writers) |
-//! | [`plots`] | PNG and SVG figures of study results |
-//! | [`csvio`] | reading numeric CSV columns with errors naming row and column |
-//! | [`recording`] | synthetic recordings (frames + accelerometer CSV) for `analyze` |
-//! | [`analysis`] | the rig chain on real recordings (centroid, upsampling, H1, modes) |
-//! | [`cli`] | argument parsing and the subcommands |
+//! | [`report`] | study rows (summary, realizations, FRF band) as CSV and the printed table |
+//! | [`plots`] | PNG and SVG figures |
+//! | [`csvio`] | numeric CSV columns with errors naming row and column |
+//! | [`cli`] | argument parsing and one module per subcommand |
+//! | [`testing`] | seeded noise for tests, examples and benchmarks |
 
 pub mod analysis;
+pub mod chain;
 pub mod cli;
 pub mod csvio;
+pub mod imaging;
+pub mod model;
 pub mod plots;
 pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;
+pub mod testing;
 
 /// An error caused by the user's input (a file, a field, a flag value). The binary exits with
 /// code 2 when the error chain contains one; other failures exit with 1.

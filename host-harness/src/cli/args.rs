@@ -1,14 +1,217 @@
 //! Argument types shared by several subcommands, so that a flag spelled the same way parses,
-//! and is described in `--help`, the same way everywhere.
-//!
-//! `--window` is not shared: `frf` and `analyze` describe its `rect` value differently in their
-//! help, and that text is part of the command-line interface.
+//! validates and is described in `--help` the same way everywhere: the Welch settings
+//! ([`WelchArgs`]), the centroid settings ([`CentroidArgs`]), `--bands` and `--roi`.
 
-/// Segment detrending (`--detrend` of `frf` and `analyze`).
+use crate::chain::frf::WelchSettings;
+use firmware_core::centroid::{CentroidConfig, Mode, Roi};
+use firmware_core::spectrum::{Detrend, Window};
+
+/// Segment window (periodic, as scipy's default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WindowArg {
+    /// Periodic Hann.
+    Hann,
+    /// Periodic Hamming.
+    Hamming,
+    /// Rectangular (scipy's `boxcar`).
+    Rect,
+}
+
+/// Segment detrending (`--detrend`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum DetrendArg {
     /// Subtract each segment's mean.
     Constant,
     /// No detrending.
     None,
+}
+
+/// The Welch estimator's flags (`frf`, `analyze`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct WelchArgs {
+    /// Segment window (periodic).
+    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    pub window: WindowArg,
+    /// Samples per segment, 1..=65536 [default: `frf` min(256, record length) as scipy;
+    /// `analyze` the whole record, one segment].
+    #[arg(long, value_name = "N")]
+    pub nperseg: Option<usize>,
+    /// Samples shared by consecutive segments, < nperseg [default: nperseg / 2; 0 for one
+    /// whole-record segment].
+    #[arg(long, value_name = "N")]
+    pub noverlap: Option<usize>,
+    /// Transform length (zero padding), nperseg..=65536 [default: nperseg].
+    #[arg(long, value_name = "N")]
+    pub nfft: Option<usize>,
+    /// Segment detrending.
+    #[arg(long, value_enum, default_value_t = DetrendArg::Constant)]
+    pub detrend: DetrendArg,
+}
+
+impl WelchArgs {
+    /// The settings these flags describe (sizes resolved later against the record).
+    pub fn settings(&self) -> WelchSettings {
+        WelchSettings {
+            window: match self.window {
+                WindowArg::Hann => Window::Hann,
+                WindowArg::Hamming => Window::Hamming,
+                WindowArg::Rect => Window::Rect,
+            },
+            nperseg: self.nperseg,
+            noverlap: self.noverlap,
+            nfft: self.nfft,
+            detrend: match self.detrend {
+                DetrendArg::Constant => Detrend::Constant,
+                DetrendArg::None => Detrend::None,
+            },
+        }
+    }
+}
+
+/// Weighting of the pixels above the threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModeArg {
+    /// Weight 1 for every pixel with value > T (the paper's method).
+    Binary,
+    /// Weight value - T for every pixel with value > T.
+    Weighted,
+}
+
+/// The centroid's flags (`centroid`, `analyze`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct CentroidArgs {
+    /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
+    /// frames a T of 255 or more selects nothing.
+    #[arg(long, value_name = "T")]
+    pub threshold: u16,
+    /// Pixel weighting.
+    #[arg(long, value_enum, default_value_t = ModeArg::Binary)]
+    pub mode: ModeArg,
+    /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
+    /// the frame; W, H >= 1); coordinates stay those of the full frame. Must lie inside every
+    /// frame.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_roi)]
+    pub roi: Option<Roi>,
+}
+
+impl CentroidArgs {
+    /// The firmware configuration, with an optional saturation level; errors name the setting.
+    pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
+        let mode = match self.mode {
+            ModeArg::Binary => Mode::Binary,
+            ModeArg::Weighted => Mode::Weighted,
+        };
+        CentroidConfig::try_new(self.threshold, mode, self.roi, saturation)
+            .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
+    }
+}
+
+/// Parses `--roi X,Y,W,H`.
+pub fn parse_roi(s: &str) -> Result<Roi, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y, w, h] = parts.as_slice() else {
+        return Err(format!(
+            "expected X,Y,W,H (four integers), got {} value(s)",
+            parts.len()
+        ));
+    };
+    let num = |name: &str, v: &str| {
+        v.parse::<u32>()
+            .map_err(|e| format!("{name} = {v:?} is not a non-negative integer: {e}"))
+    };
+    let roi = Roi {
+        x: num("X", x)?,
+        y: num("Y", y)?,
+        width: num("W", w)?,
+        height: num("H", h)?,
+    };
+    CentroidConfig::try_new(0, Mode::Binary, Some(roi), None).map_err(|e| e.to_string())?;
+    Ok(roi)
+}
+
+/// One band of `--bands`, with its text as given (its label in outputs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Band {
+    /// The band as the user wrote it (trimmed).
+    pub label: String,
+    /// Lower edge, Hz.
+    pub lo_hz: f64,
+    /// Upper edge, Hz.
+    pub hi_hz: f64,
+}
+
+/// Parsed `--bands LO-HI,LO-HI,...` (finite, `0 <= LO < HI`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bands(pub Vec<Band>);
+
+impl Bands {
+    /// `(lo, hi)` pairs in Hz.
+    pub fn pairs(&self) -> Vec<(f64, f64)> {
+        self.0.iter().map(|b| (b.lo_hz, b.hi_hz)).collect()
+    }
+}
+
+/// Parses `--bands`.
+pub fn parse_bands(s: &str) -> Result<Bands, String> {
+    let mut out = Vec::new();
+    for part in s.split(',') {
+        let label = part.trim();
+        let (lo, hi) = label
+            .split_once('-')
+            .ok_or_else(|| format!("band `{label}`: expected LO-HI in Hz, e.g. 1.5-2.25"))?;
+        let num = |v: &str| -> Result<f64, String> {
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("band `{label}`: `{}` is not a number", v.trim()))?;
+            if !x.is_finite() || x < 0.0 {
+                return Err(format!(
+                    "band `{label}`: `{}` is not a finite frequency >= 0",
+                    v.trim()
+                ));
+            }
+            Ok(x)
+        };
+        let (lo_hz, hi_hz) = (num(lo)?, num(hi)?);
+        if lo_hz >= hi_hz {
+            return Err(format!("band `{label}`: need LO < HI"));
+        }
+        out.push(Band {
+            label: label.to_string(),
+            lo_hz,
+            hi_hz,
+        });
+    }
+    Ok(Bands(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_parse_and_name_the_bad_one() {
+        let b = parse_bands("5-15, 25-45").unwrap();
+        assert_eq!(b.pairs(), vec![(5.0, 15.0), (25.0, 45.0)]);
+        assert_eq!(b.0[1].label, "25-45");
+        for (bad, why) in [
+            ("15-5", "LO < HI"),
+            ("5", "expected LO-HI"),
+            ("a-3", "not a number"),
+            ("1-inf", "finite"),
+            ("2-2", "LO < HI"),
+        ] {
+            let e = parse_bands(bad).unwrap_err();
+            assert!(e.contains(why) && e.contains(bad.trim()), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn roi_parses_four_integers() {
+        let r = parse_roi("1,2,30,40").unwrap();
+        assert_eq!((r.x, r.y, r.width, r.height), (1, 2, 30, 40));
+        for bad in ["1,2,3", "1,2,3,x", "-1,2,3,4", "0,0,0,4"] {
+            assert!(parse_roi(bad).is_err(), "{bad}");
+        }
+    }
 }

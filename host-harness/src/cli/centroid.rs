@@ -6,36 +6,20 @@
 //! naming it on stderr; the other files are still processed, and the command exits with code 2
 //! at the end.
 
+use super::args::CentroidArgs;
+use crate::analysis::frames::load_frame;
 use crate::bad_input;
-use firmware_core::centroid::{centroid_u16, centroid_u8, Centroid, CentroidConfig, Mode, Roi};
+use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// Weighting of the pixels above the threshold.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ModeArg {
-    /// Weight 1 for every pixel with value > T (the paper's method).
-    Binary,
-    /// Weight value - T for every pixel with value > T.
-    Weighted,
-}
 
 /// Arguments of `host-harness centroid`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = FLAGS_HELP, after_help = FLAGS_HELP)]
 pub struct Args {
-    /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
-    /// frames a T of 255 or more selects nothing.
-    #[arg(long, value_name = "T")]
-    pub threshold: u16,
-    /// Pixel weighting.
-    #[arg(long, value_enum, default_value_t = ModeArg::Binary)]
-    pub mode: ModeArg,
-    /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
-    /// the frame; W, H >= 1); coordinates stay those of the full frame. Must lie inside every
-    /// frame.
-    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_roi)]
-    pub roi: Option<Roi>,
+    /// Centroid settings.
+    #[command(flatten)]
+    pub centroid: CentroidArgs,
     /// Grey level at or above which a pixel counts as saturated (default: 255 for 8-bit, 65535
     /// for 16-bit frames); must be above T.
     #[arg(long, value_name = "LEVEL")]
@@ -60,49 +44,9 @@ Output (stdout): CSV with header file,cx,cy,pixels,flags
 Files that cannot be read or are not grey are reported on stderr; the others are still
 processed and the exit code is then 2.";
 
-/// Parses `X,Y,W,H`.
-fn parse_roi(s: &str) -> Result<Roi, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let [x, y, w, h] = parts.as_slice() else {
-        return Err(format!(
-            "expected X,Y,W,H (four integers), got {} value(s)",
-            parts.len()
-        ));
-    };
-    let num = |name: &str, v: &str| {
-        v.parse::<u32>()
-            .map_err(|e| format!("{name} = {v:?} is not a non-negative integer: {e}"))
-    };
-    let roi = Roi {
-        x: num("X", x)?,
-        y: num("Y", y)?,
-        width: num("W", w)?,
-        height: num("H", h)?,
-    };
-    CentroidConfig::try_new(0, Mode::Binary, Some(roi), None).map_err(|e| e.to_string())?;
-    Ok(roi)
-}
-
-/// Centroid of one grey frame file; errors name the file.
+/// Centroid of one grey frame file (its first page); errors name the file.
 pub fn centroid_file(config: &CentroidConfig, path: &Path) -> anyhow::Result<Centroid> {
-    let name = path.display();
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| bad_input(format!("{name}: cannot open: {e}")))?
-        .decode()
-        .map_err(|e| bad_input(format!("{name}: cannot decode as PNG or TIFF: {e}")))?;
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    let result = match &img {
-        image::DynamicImage::ImageLuma8(b) => centroid_u8(config, b.as_raw(), w, h, w),
-        image::DynamicImage::ImageLuma16(b) => centroid_u16(config, b.as_raw(), w, h, w),
-        other => {
-            return Err(bad_input(format!(
-                "{name}: not a grey image (colour type {:?}); centroid needs 8- or 16-bit grey",
-                other.color()
-            )))
-        }
-    };
-    result.map_err(|e| bad_input(format!("{name} ({w} x {h} pixels): {e}")))
+    load_frame(path)?.centroid(config, &path.display().to_string())
 }
 
 /// One CSV row: `file,cx,cy,pixels,flags` (cx, cy empty when there is no centroid).
@@ -122,12 +66,7 @@ fn row(file: &str, c: &Centroid) -> [String; 5] {
 
 /// Runs `host-harness centroid`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mode = match args.mode {
-        ModeArg::Binary => Mode::Binary,
-        ModeArg::Weighted => Mode::Weighted,
-    };
-    let config = CentroidConfig::try_new(args.threshold, mode, args.roi, args.saturation)
-        .map_err(|e| bad_input(format!("invalid settings: {e}")))?;
+    let config = args.centroid.config(args.saturation)?;
     let stdout = std::io::stdout();
     let mut out = csv::Writer::from_writer(stdout.lock());
     out.write_record(["file", "cx", "cy", "pixels", "flags"])?;

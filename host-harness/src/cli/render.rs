@@ -3,8 +3,10 @@
 //! accelerometer CSV) that `host-harness analyze` can read.
 
 use crate::bad_input;
-use crate::study::render::{BlurRenderer, DiskTarget};
-use crate::study::{grandstand, run_rng, Preset};
+use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
+use crate::model::{self, grandstand};
+use crate::recording::{camera_path, RecordingSpec};
+use crate::study::{run_rng, Preset};
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 
@@ -48,12 +50,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             dir,
         )?;
         println!(
-            "wrote a synthetic {} recording in {} ({files:?}); see {}",
-            match args.preset {
-                Preset::Grandstand => "grandstand",
-                Preset::Cantilever => "cantilever",
-            },
+            "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}",
+            args.preset.name(),
             dir.display(),
+            files.frame_count,
+            files.frame_size.0,
+            files.frame_size.1,
+            files.frames_dir.display(),
+            files.accel_csv.display(),
+            files.toml.display(),
             dir.join("README.txt").display()
         );
         return Ok(());
@@ -72,54 +77,42 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// What the camera of a preset looks at.
+/// What the camera of a preset looks at: the target and its path.
 #[derive(Debug)]
 struct Scene {
     /// The target.
     target: DiskTarget,
-    /// Displacement path, px (positive down), on the fine time base of rate `fine_hz` whose
-    /// index 0 is at time `-pad / fine_hz`.
-    path_px: Vec<f64>,
-    /// Fine steps of path before t = 0 (and at least as many after the record).
-    pad: usize,
-    /// Rate of the fine time base, Hz.
-    fine_hz: f64,
+    /// Its motion; fine step `pad` is t = 0.
+    path: TargetPath,
     /// Frame times, s: `--times` or the preset's default instants.
     times: Vec<f64>,
-}
-
-/// Fine steps of path needed either side of a frame for the exposure window, plus a margin.
-fn pad_for(exposure_ms: f64, fine_hz: f64) -> usize {
-    (exposure_ms / 2000.0 * fine_hz).ceil() as usize + 2
 }
 
 /// Writes the sharp and the blurred frame at each time of `scene.times`.
 fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<Vec<PathBuf>> {
     let Scene {
         target,
-        path_px,
-        pad,
-        fine_hz,
+        path,
         times,
     } = scene;
-    let (pad, fine_hz) = (*pad, *fine_hz);
-    let mut r = BlurRenderer::for_path(target, path_px, 1);
+    let mut r = BlurRenderer::for_path(target, &path.path_px, 1);
     let (w, h) = (r.width(), r.height());
     let mut frame = vec![0u8; w * h];
-    let half = exposure_ms / 2000.0 * fine_hz;
-    let span = path_px.len() as f64 / fine_hz;
+    let n = path.path_px.len();
+    let span = (n - 2 * path.pad) as f64 / path.fine_hz;
     let mut written = Vec::new();
     for &t in times {
-        let c = pad as f64 + t * fine_hz;
-        if !(t.is_finite() && c - half >= 0.0 && c + half <= (path_px.len() - 1) as f64) {
+        let c = path.pad as f64 + t * path.fine_hz;
+        let (a, b) = path.window(c, exposure_ms);
+        if !(t.is_finite() && a >= 0.0 && b <= (n - 1) as f64) {
             return Err(bad_input(format!(
-                "--times: {t} s is outside the simulated record (0 .. {:.1} s) with this exposure",
-                span - 2.0 * pad as f64 / fine_hz
+                "--times: {t} s is outside the simulated record (0 .. {span:.1} s) with this \
+                 exposure"
             )));
         }
         for (label, a, b) in [
             ("sharp".to_string(), c, c),
-            (format!("exp{exposure_ms}ms"), c - half, c + half),
+            (format!("exp{exposure_ms}ms"), a, b),
         ] {
             r.render(a, b, &mut frame);
             let p = out.join(format!("frame_t{t}_{label}.png"));
@@ -133,24 +126,24 @@ fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<V
     Ok(written)
 }
 
+/// The grandstand of run 0 of `--seed`, as the study simulates it.
 fn grandstand_scene(args: &Args) -> Scene {
     let fine_hz = grandstand::FS_HZ * grandstand::FINE as f64;
-    let pad = pad_for(args.exposure_ms, fine_hz);
+    let pad = TargetPath::pad_for(args.exposure_ms, fine_hz);
     let mut rng = run_rng(args.seed, 0);
     let sim = grandstand::simulate(&mut rng, false, pad);
     Scene {
-        target: DiskTarget {
-            radius_px: 12.0,
-            level: 200.0,
-            edge_sigma_px: 1.5,
+        target: grandstand::TARGET,
+        path: TargetPath {
+            path_px: sim
+                .fine_disp_m
+                .iter()
+                .map(|x| -x * 1000.0 * grandstand::PX_PER_MM)
+                .collect(),
+            pad,
+            fine_per_frame: grandstand::FINE,
+            fine_hz,
         },
-        path_px: sim
-            .fine_disp_m
-            .iter()
-            .map(|x| -x * 1000.0 * grandstand::PX_PER_MM)
-            .collect(),
-        pad,
-        fine_hz,
         times: args
             .times
             .clone()
@@ -158,23 +151,15 @@ fn grandstand_scene(args: &Args) -> Scene {
     }
 }
 
+/// The nominal cantilever, as a synthetic recording simulates it.
 fn cantilever_scene(args: &Args) -> anyhow::Result<Scene> {
-    let spec = crate::recording::RecordingSpec::cantilever(args.seed, 0.0);
-    let sim = crate::recording::simulate(&spec)?;
-    let fine_hz = spec.fps * sim.fine_per_frame as f64;
-    let pad = pad_for(args.exposure_ms, fine_hz);
-    let n = sim.tip_mm.len();
+    let mut spec = RecordingSpec::cantilever(args.seed, args.exposure_ms);
+    spec.exposure_ms = args.exposure_ms;
+    let sim = model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
+    let (path, _) = camera_path(&spec, &sim);
     Ok(Scene {
-        target: DiskTarget {
-            radius_px: 10.0,
-            level: 255.0,
-            edge_sigma_px: 0.5,
-        },
-        path_px: (0..n + 2 * pad)
-            .map(|i| -sim.tip_mm[(i + n - pad) % n] / spec.mm_per_px)
-            .collect(),
-        pad,
-        fine_hz,
+        target: spec.target,
+        path,
         times: args.times.clone().unwrap_or_else(|| vec![1.0, 1.01, 1.02]),
     })
 }

@@ -1,7 +1,6 @@
 //! `host-harness study`: run a Monte Carlo study and write its outputs.
 
 use crate::study::{self, Execution, Preset, Shard, StudyConfig};
-use anyhow::Context as _;
 use std::path::PathBuf;
 
 /// Arguments of `host-harness study`. Without arguments: the grandstand preset at a run count
@@ -141,7 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let records = study::execute(&cfg, scenario.as_ref(), &exec)?;
     let elapsed = started.elapsed();
-    finish(&cfg, scenario.as_ref(), &records, &out, !args.no_plots)?;
+    study::finish(&cfg, scenario.as_ref(), &records, &out, !args.no_plots)?;
     eprintln!("{} runs in {:.1} s", records.len(), elapsed.as_secs_f64());
     if shard != Shard::ALL {
         eprintln!(
@@ -149,45 +148,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             shard.index, shard.count
         );
     }
-    Ok(())
-}
-
-/// Aggregates, writes CSV files and plots, prints the table. Shared by `study` and `merge`.
-pub fn finish(
-    cfg: &StudyConfig,
-    scenario: &dyn study::Scenario,
-    records: &[study::RunRecord],
-    out: &std::path::Path,
-    plots: bool,
-) -> anyhow::Result<()> {
-    let outputs = study::aggregate(cfg, scenario, records)?;
-    let mut written = study::write_outputs(out, scenario, &outputs)?;
-    if plots {
-        let p = crate::plots::StudyPlots {
-            title: scenario.name(),
-            amplitude_unit: scenario.amplitude_unit(),
-            summary: &outputs.summary,
-            realizations: &outputs.realizations,
-            frf_band: &outputs.frf_band,
-        };
-        written.extend(
-            crate::plots::write_study_plots(out, &p)
-                .with_context(|| format!("cannot write the figures in {}", out.display()))?,
-        );
-    }
-    println!(
-        "{}",
-        crate::report::table(&outputs.summary, scenario.amplitude_unit())
-    );
-    for (e, lost, frames, failed) in study::lost_by_exposure(&outputs) {
-        println!(
-            "exposure {e} ms: {lost} of {frames} frames lost (filled by interpolation), {failed} failed runs (> 5 % lost, left out)"
-        );
-    }
-    for n in scenario.notes() {
-        println!("note: {n}");
-    }
-    println!("wrote {} files in {}", written.len() + 2, out.display());
     Ok(())
 }
 

@@ -1,0 +1,363 @@
+//! Frames of a recording from disk: a directory of numbered PNG/TIFF files, a file-name pattern,
+//! or one multi-page TIFF; 8- or 16-bit grey; decoded one at a time and centroided with
+//! firmware-core. Errors name the file (and page); a gap in numbered file names is a missing
+//! frame, never skipped silently.
+
+use crate::bad_input;
+use crate::chain::displacement::GreyFrame;
+use firmware_core::centroid::{Centroid, CentroidConfig};
+use std::cmp::Ordering;
+use std::path::{Path, PathBuf};
+
+/// Where the frames come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrameSource {
+    /// One file per frame, in order.
+    Files(Vec<PathBuf>),
+    /// One multi-page TIFF, one page per frame.
+    MultiPageTiff(PathBuf),
+}
+
+fn has_frame_ext(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "tif" | "tiff"))
+}
+
+fn is_tiff(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "tif" | "tiff"))
+}
+
+/// Natural order of names: runs of digits compare as numbers (`f2` < `f10`), the rest as text.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return Ordering::Equal,
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let na = a.iter().take_while(|c| c.is_ascii_digit()).count();
+                let nb = b.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (da, db) = (&a[..na], &b[..nb]);
+                let ta = trim_zeros(da);
+                let tb = trim_zeros(db);
+                let ord = ta.len().cmp(&tb.len()).then(ta.cmp(tb)).then(na.cmp(&nb));
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                a = &a[na..];
+                b = &b[nb..];
+            }
+            (Some(x), Some(y)) => {
+                if x != y {
+                    return x.cmp(y);
+                }
+                a = &a[1..];
+                b = &b[1..];
+            }
+        }
+    }
+}
+
+fn trim_zeros(d: &[u8]) -> &[u8] {
+    let z = d.iter().take_while(|&&c| c == b'0').count();
+    &d[z..]
+}
+
+/// Shell-like match of a file name against a pattern with `*` (any run) and `?` (one char).
+pub fn wildcard_match(pattern: &str, name: &str) -> bool {
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    let (mut pi, mut ni) = (0, 0);
+    let mut star: Option<(usize, usize)> = None;
+    while ni < n.len() {
+        if pi < p.len() && (p[pi] == '?' || p[pi] == n[ni]) {
+            pi += 1;
+            ni += 1;
+        } else if pi < p.len() && p[pi] == '*' {
+            star = Some((pi, ni));
+            pi += 1;
+        } else if let Some((sp, sn)) = star {
+            pi = sp + 1;
+            ni = sn + 1;
+            star = Some((sp, sn + 1));
+        } else {
+            return false;
+        }
+    }
+    p[pi..].iter().all(|&c| c == '*')
+}
+
+fn sorted_files(dir: &Path, keep: impl Fn(&str) -> bool) -> anyhow::Result<Vec<PathBuf>> {
+    let rd = std::fs::read_dir(dir)
+        .map_err(|e| bad_input(format!("cannot list {}: {e}", dir.display())))?;
+    let mut files: Vec<(String, PathBuf)> = Vec::new();
+    for entry in rd {
+        let entry = entry.map_err(|e| bad_input(format!("cannot list {}: {e}", dir.display())))?;
+        let path = entry.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        if path.is_file() && keep(name) {
+            files.push((name.to_string(), path));
+        }
+    }
+    files.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+    Ok(files.into_iter().map(|(_, p)| p).collect())
+}
+
+/// `(prefix, number, suffix)` around the last run of digits of a file name.
+fn split_number(name: &str) -> Option<(&str, u64, &str)> {
+    let end = name.rfind(|c: char| c.is_ascii_digit())? + 1;
+    let start = name[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    let n = name[start..end].parse().ok()?;
+    Some((&name[..start], n, &name[end..]))
+}
+
+/// Missing frames in a numbered sequence: when every name is `prefix<number>suffix` with one
+/// prefix and suffix, the numbers must be consecutive; a gap is an error naming the missing
+/// frame (a silently skipped frame would shift every later frame in time).
+pub fn check_numbering(files: &[PathBuf]) -> anyhow::Result<()> {
+    let names: Vec<&str> = files
+        .iter()
+        .filter_map(|p| p.file_name().and_then(|n| n.to_str()))
+        .collect();
+    let parts: Option<Vec<(&str, u64, &str)>> = names.iter().map(|n| split_number(n)).collect();
+    let Some(parts) = parts else {
+        return Ok(());
+    };
+    let Some(&(prefix, _, suffix)) = parts.first() else {
+        return Ok(());
+    };
+    if parts.iter().any(|&(p, _, s)| p != prefix || s != suffix) {
+        return Ok(());
+    }
+    for (w, n) in parts.windows(2).zip(names.windows(2)) {
+        if w[1].1 != w[0].1 + 1 {
+            return Err(bad_input(format!(
+                "frame numbering has a gap: {} is followed by {} (frame number {} is missing; \
+                 every frame must be present, a skipped frame would shift all later frames)",
+                n[0],
+                n[1],
+                w[0].1 + 1
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Resolves `--frames`: a directory, a file-name pattern, or a multi-page TIFF.
+pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
+    let path = Path::new(spec);
+    if path.is_dir() {
+        let files = sorted_files(path, |n| has_frame_ext(Path::new(n)))?;
+        if files.is_empty() {
+            return Err(bad_input(format!(
+                "{}: no *.png, *.tif or *.tiff frames in this directory",
+                path.display()
+            )));
+        }
+        check_numbering(&files)?;
+        return Ok(FrameSource::Files(files));
+    }
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    if name.contains(['*', '?']) {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if dir.to_string_lossy().contains(['*', '?']) {
+            return Err(bad_input(format!(
+                "--frames {spec}: wildcards are only supported in the file name, not in the \
+                 directory part"
+            )));
+        }
+        let files = sorted_files(dir, |n| wildcard_match(name, n))?;
+        if files.is_empty() {
+            return Err(bad_input(format!("--frames {spec}: no file matches")));
+        }
+        check_numbering(&files)?;
+        return Ok(FrameSource::Files(files));
+    }
+    if path.is_file() {
+        if is_tiff(path) {
+            return Ok(FrameSource::MultiPageTiff(path.to_path_buf()));
+        }
+        return Err(bad_input(format!(
+            "--frames {spec}: a single {} file is one frame; give a directory of frames, a \
+             pattern like dir/frame_*.png, or a multi-page TIFF",
+            path.extension().and_then(|e| e.to_str()).unwrap_or("image")
+        )));
+    }
+    Err(bad_input(format!(
+        "--frames {spec}: no such file or directory"
+    )))
+}
+
+/// Loads one 8- or 16-bit grey PNG/TIFF frame; errors name the file.
+pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
+    let img = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| bad_input(format!("{}: cannot open the frame: {e}", path.display())))?
+        .decode()
+        .map_err(|e| bad_input(format!("{}: cannot decode the frame: {e}", path.display())))?;
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    match img {
+        image::DynamicImage::ImageLuma8(b) => Ok(GreyFrame::U8 {
+            width,
+            height,
+            data: b.into_raw(),
+        }),
+        image::DynamicImage::ImageLuma16(b) => Ok(GreyFrame::U16 {
+            width,
+            height,
+            data: b.into_raw(),
+        }),
+        other => Err(bad_input(format!(
+            "{}: not a grey frame (colour type {:?}); 8- or 16-bit grey images are needed",
+            path.display(),
+            other.color()
+        ))),
+    }
+}
+
+/// Calls `f(label, frame)` for every page of a multi-page TIFF, in order; errors name the file
+/// and the page (1-based).
+pub fn for_each_tiff_page(
+    path: &Path,
+    mut f: impl FnMut(String, GreyFrame) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    use tiff::decoder::{Decoder, DecodingResult};
+    use tiff::ColorType;
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("{}: cannot open: {e}", path.display())))?;
+    let mut dec = Decoder::new(std::io::BufReader::new(file))
+        .map_err(|e| bad_input(format!("{}: not a readable TIFF: {e}", path.display())))?;
+    let mut page = 1usize;
+    loop {
+        let label = format!("{} page {page}", path.display());
+        let err = |e: tiff::TiffError| bad_input(format!("{label}: cannot decode: {e}"));
+        let (w, h) = dec.dimensions().map_err(err)?;
+        let ct = dec.colortype().map_err(err)?;
+        if !matches!(ct, ColorType::Gray(8) | ColorType::Gray(16)) {
+            return Err(bad_input(format!(
+                "{label}: not a grey frame (colour type {ct:?}); 8- or 16-bit grey is needed"
+            )));
+        }
+        let (width, height) = (w as usize, h as usize);
+        let frame = match dec.read_image().map_err(err)? {
+            DecodingResult::U8(data) => GreyFrame::U8 {
+                width,
+                height,
+                data,
+            },
+            DecodingResult::U16(data) => GreyFrame::U16 {
+                width,
+                height,
+                data,
+            },
+            _ => {
+                return Err(bad_input(format!(
+                    "{label}: unsupported sample format; 8- or 16-bit grey is needed"
+                )))
+            }
+        };
+        f(label.clone(), frame)?;
+        if !dec.more_images() {
+            return Ok(());
+        }
+        dec.next_image().map_err(|e| {
+            bad_input(format!(
+                "{} page {}: cannot decode: {e}",
+                path.display(),
+                page + 1
+            ))
+        })?;
+        page += 1;
+    }
+}
+
+/// Centroids every frame of `source` (one frame in memory at a time). Frames must all have the
+/// size of the first one.
+pub fn centroid_source(
+    source: &FrameSource,
+    config: &CentroidConfig,
+) -> anyhow::Result<Vec<Centroid>> {
+    let mut out = Vec::new();
+    let mut first: Option<(usize, usize, String)> = None;
+    let mut one = |label: String, frame: GreyFrame| -> anyhow::Result<()> {
+        let dims = frame.dimensions();
+        match &first {
+            None => first = Some((dims.0, dims.1, label.clone())),
+            Some((w, h, l)) if (*w, *h) != dims => {
+                return Err(bad_input(format!(
+                    "{label}: {}x{} pixels, but {l} is {w}x{h}: all frames must have one size",
+                    dims.0, dims.1
+                )))
+            }
+            Some(_) => {}
+        }
+        out.push(frame.centroid(config, &label)?);
+        Ok(())
+    };
+    match source {
+        FrameSource::Files(files) => {
+            for p in files {
+                let frame = load_frame(p)?;
+                one(p.display().to_string(), frame)?;
+            }
+        }
+        FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, &mut one)?,
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn natural_order_compares_digit_runs_as_numbers() {
+        let mut v = vec![
+            "f10.png", "f2.png", "f1.png", "f02.png", "g1.png", "f1a.png",
+        ];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            v,
+            ["f1.png", "f1a.png", "f2.png", "f02.png", "f10.png", "g1.png"]
+        );
+    }
+
+    #[test]
+    fn wildcards_match_like_a_shell() {
+        assert!(wildcard_match("frame_*.png", "frame_00012.png"));
+        assert!(!wildcard_match("frame_*.png", "frame_00012.tif"));
+        assert!(wildcard_match("f?.tif", "f1.tif"));
+        assert!(!wildcard_match("f?.tif", "f12.tif"));
+        assert!(wildcard_match("*", "anything"));
+        assert!(wildcard_match("a*b*c", "aXXbYYc"));
+        assert!(!wildcard_match("a*b*c", "aXXbYY"));
+    }
+
+    #[test]
+    fn numbering_gaps_are_found() {
+        let p = |v: &[&str]| v.iter().map(PathBuf::from).collect::<Vec<_>>();
+        check_numbering(&p(&["f_008.png", "f_009.png", "f_010.png"])).unwrap();
+        let e = check_numbering(&p(&["f_008.png", "f_010.png"])).unwrap_err();
+        assert!(
+            format!("{e}").contains("f_008.png is followed by f_010.png"),
+            "{e}"
+        );
+        // mixed names: no numbering to check
+        check_numbering(&p(&["a1.png", "b7.png"])).unwrap();
+        check_numbering(&p(&["x.png", "y.png"])).unwrap();
+        assert_eq!(
+            split_number("cam2_frame_0012.tif"),
+            Some(("cam2_frame_", 12, ".tif"))
+        );
+    }
+}

@@ -1,0 +1,253 @@
+//! Frames -> centroids -> displacement (method.md §2.1 and "Lost frames"): firmware-core's
+//! centroid of each frame, the pixel-to-millimetre conversion with its sign convention, and the
+//! one lost-frame policy of the toolkit.
+//!
+//! * **Sign.** Image `x` grows to the right and `y` grows *down*. With [`Axis::Y`] (the default)
+//!   the displacement is positive **upwards in the image**: `d = -(cy - cy_ref) * mm_per_px`;
+//!   with [`Axis::X`] it is positive to the right: `d = (cx - cx_ref) * mm_per_px`. `invert`
+//!   flips either.
+//! * **Lost frames.** A frame without any pixel above the threshold has no centroid. Its value
+//!   is interpolated linearly between the nearest valid frames before and after; lost frames at
+//!   the start or the end take the value of the nearest valid frame ([`fill_lost_frames`]). More
+//!   than [`MAX_LOST_FRACTION`] of lost frames makes a measurement fail: a study reports the run
+//!   as failed and leaves it out, an analysis stops with an error.
+
+use crate::bad_input;
+use firmware_core::centroid::{self, Centroid, CentroidConfig};
+
+/// Largest fraction of lost frames (no centroid) a measurement accepts: 5 %.
+pub const MAX_LOST_FRACTION: f64 = 0.05;
+
+/// Fills the values of lost frames (`valid[i] == false`) by linear interpolation between the
+/// neighbouring valid frames; lost frames before the first or after the last valid one take its
+/// value. Returns the number of lost frames; with no valid frame at all, nothing is changed and
+/// the count equals the length.
+pub fn fill_lost_frames(values: &mut [f64], valid: &[bool]) -> usize {
+    let n = values.len().min(valid.len());
+    let lost = valid[..n].iter().filter(|v| !**v).count();
+    let Some(first) = valid[..n].iter().position(|v| *v) else {
+        return lost;
+    };
+    let mut prev = first;
+    for i in 0..first {
+        values[i] = values[first];
+    }
+    for i in first + 1..n {
+        if valid[i] {
+            let gap = i - prev;
+            for j in prev + 1..i {
+                let w = (j - prev) as f64 / gap as f64;
+                values[j] = values[prev] * (1.0 - w) + values[i] * w;
+            }
+            prev = i;
+        }
+    }
+    for i in prev + 1..n {
+        values[i] = values[prev];
+    }
+    lost
+}
+
+/// Whether `lost` of `frames` lost frames exceed [`MAX_LOST_FRACTION`].
+pub fn too_many_lost(lost: usize, frames: usize) -> bool {
+    lost as f64 > MAX_LOST_FRACTION * frames as f64
+}
+
+/// A grey frame in memory, 8 or 16 bits per pixel, row-major without padding.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GreyFrame {
+    /// 8-bit pixels.
+    U8 {
+        /// Columns.
+        width: usize,
+        /// Rows.
+        height: usize,
+        /// `width * height` pixels, row 0 first.
+        data: Vec<u8>,
+    },
+    /// 16-bit pixels.
+    U16 {
+        /// Columns.
+        width: usize,
+        /// Rows.
+        height: usize,
+        /// `width * height` pixels, row 0 first.
+        data: Vec<u16>,
+    },
+}
+
+impl GreyFrame {
+    /// `(width, height)` in pixels.
+    pub fn dimensions(&self) -> (usize, usize) {
+        match self {
+            GreyFrame::U8 { width, height, .. } | GreyFrame::U16 { width, height, .. } => {
+                (*width, *height)
+            }
+        }
+    }
+
+    /// Centroid with the firmware-core single-target centroider. `label` names the frame (file,
+    /// page) in the error when its shape is inconsistent.
+    pub fn centroid(&self, config: &CentroidConfig, label: &str) -> anyhow::Result<Centroid> {
+        let r = match self {
+            GreyFrame::U8 {
+                width,
+                height,
+                data,
+            } => centroid::centroid_u8(config, data, *width, *height, *width),
+            GreyFrame::U16 {
+                width,
+                height,
+                data,
+            } => centroid::centroid_u16(config, data, *width, *height, *width),
+        };
+        r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
+    }
+}
+
+/// Which image axis carries the displacement (see the module documentation for the sign).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Axis {
+    /// Horizontal: positive to the right.
+    X,
+    /// Vertical: positive upwards in the image (image `y` grows down).
+    #[default]
+    Y,
+}
+
+impl Axis {
+    /// `"x"` or `"y"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Axis::X => "x",
+            Axis::Y => "y",
+        }
+    }
+}
+
+/// Pixel-to-millimetre conversion of the centroids.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DisplacementSettings {
+    /// Scale, millimetres per pixel (> 0).
+    pub mm_per_px: f64,
+    /// Image axis of the motion.
+    pub axis: Axis,
+    /// Flip the sign.
+    pub invert: bool,
+}
+
+/// Displacement record of the camera, one value per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Displacement {
+    /// Displacement, mm (lost frames interpolated), one per frame.
+    pub mm: Vec<f64>,
+    /// `true` for the frames that had no centroid.
+    pub lost: Vec<bool>,
+    /// Number of lost frames.
+    pub lost_count: usize,
+    /// Reference centroid coordinate along the axis (mean of the valid frames), pixels.
+    pub reference_px: f64,
+}
+
+impl Displacement {
+    /// Fraction of lost frames, 0..=1.
+    pub fn lost_fraction(&self) -> f64 {
+        if self.mm.is_empty() {
+            0.0
+        } else {
+            self.lost_count as f64 / self.mm.len() as f64
+        }
+    }
+
+    /// Whether more than [`MAX_LOST_FRACTION`] of the frames were lost.
+    pub fn failed(&self) -> bool {
+        too_many_lost(self.lost_count, self.mm.len())
+    }
+}
+
+/// Converts per-frame centroids to a displacement in mm (sign and reference: see the module
+/// documentation), filling the lost frames. Errors when no frame has a centroid. The lost
+/// fraction is *not* checked here ([`Displacement::failed`]).
+pub fn displacement_mm(
+    centroids: &[Centroid],
+    s: &DisplacementSettings,
+) -> anyhow::Result<Displacement> {
+    if !(s.mm_per_px.is_finite() && s.mm_per_px > 0.0) {
+        return Err(bad_input(format!(
+            "the scale must be a positive number of mm per pixel, got {}",
+            s.mm_per_px
+        )));
+    }
+    let mut coord: Vec<f64> = Vec::with_capacity(centroids.len());
+    let mut valid: Vec<bool> = Vec::with_capacity(centroids.len());
+    for c in centroids {
+        let p = c.position().map(|(x, y)| match s.axis {
+            Axis::X => f64::from(x),
+            Axis::Y => f64::from(y),
+        });
+        coord.push(p.unwrap_or(0.0));
+        valid.push(p.is_some());
+    }
+    let valid_count = valid.iter().filter(|v| **v).count();
+    if valid_count == 0 {
+        return Err(bad_input(format!(
+            "none of the {} frames has a pixel above the threshold: no centroid at all \
+             (check --threshold and --roi)",
+            centroids.len()
+        )));
+    }
+    let reference_px = coord
+        .iter()
+        .zip(&valid)
+        .filter(|(_, v)| **v)
+        .map(|(c, _)| c)
+        .sum::<f64>()
+        / valid_count as f64;
+    let lost_count = fill_lost_frames(&mut coord, &valid);
+    let sign = match (s.axis, s.invert) {
+        (Axis::X, false) | (Axis::Y, true) => 1.0,
+        (Axis::X, true) | (Axis::Y, false) => -1.0,
+    };
+    Ok(Displacement {
+        mm: coord
+            .iter()
+            .map(|c| sign * (c - reference_px) * s.mm_per_px)
+            .collect(),
+        lost: valid.iter().map(|v| !v).collect(),
+        lost_count,
+        reference_px,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lost_frames_are_interpolated_linearly() {
+        // (values, valid, lost count, filled values)
+        type Case<'a> = (&'a [f64], &'a [bool], usize, &'a [f64]);
+        let cases: [Case; 3] = [
+            (
+                &[9.0, 1.0, 9.0, 9.0, 4.0, 9.0],
+                &[false, true, false, false, true, false],
+                4,
+                &[1.0, 1.0, 2.0, 3.0, 4.0, 4.0],
+            ),
+            (&[5.0, 6.0], &[false, false], 2, &[5.0, 6.0]),
+            (&[1.0, 7.0, 3.0], &[true, true, true], 0, &[1.0, 7.0, 3.0]),
+        ];
+        for (values, valid, lost, want) in cases {
+            let mut v = values.to_vec();
+            assert_eq!(fill_lost_frames(&mut v, valid), lost, "{values:?}");
+            assert_eq!(v, want, "{values:?}");
+        }
+    }
+
+    #[test]
+    fn the_five_percent_rule() {
+        assert!(!too_many_lost(5, 100));
+        assert!(too_many_lost(6, 100));
+        assert!(!too_many_lost(0, 0));
+    }
+}

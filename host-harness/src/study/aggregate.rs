@@ -1,0 +1,300 @@
+//! From run records to the study outputs: the summary (mean and standard deviation per system,
+//! exposure and mode), the realizations, the FRF band and the lost frames, as typed rows; and
+//! writing them. Everything here is deterministic: the records come sorted by run.
+
+use super::{checkpoint::files, PeakRecord, RunRecord, Scenario, StudyConfig, SystemRecord};
+use crate::report::{FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::{bad_input, stats};
+use anyhow::Context as _;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Lost frames of one run at one exposure (a row of `lost_frames.csv`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LostFrames {
+    /// Run index.
+    pub run: u64,
+    /// Exposure time, ms.
+    pub exposure_ms: f64,
+    /// Frames without a centroid (filled by interpolation).
+    pub lost: u64,
+    /// Frames in the record.
+    pub frames: u64,
+    /// More than 5 % lost: the run is left out at this exposure.
+    pub failed: bool,
+}
+
+/// Lost frames of all runs at one exposure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LostByExposure {
+    /// Exposure time, ms.
+    pub exposure_ms: f64,
+    /// Frames without a centroid, summed over the runs.
+    pub lost: u64,
+    /// Frames, summed over the runs.
+    pub frames: u64,
+    /// Runs reported as failed at this exposure.
+    pub failed_runs: u64,
+}
+
+/// The study outputs computed from a complete, sorted set of run records.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outputs {
+    /// `summary.csv` rows.
+    pub summary: Vec<SummaryRow>,
+    /// `realizations.csv` rows.
+    pub realizations: Vec<RealizationRow>,
+    /// `frf_band.csv` rows.
+    pub frf_band: Vec<FrfBandRow>,
+    /// `lost_frames.csv` rows.
+    pub lost: Vec<LostFrames>,
+}
+
+fn peak_of(sys: &SystemRecord, mode: usize) -> Option<PeakRecord> {
+    sys.peaks.get(mode).copied().flatten()
+}
+
+/// Mean natural frequency of each mode over the runs (for the E2PR).
+fn mean_natural_frequencies(records: &[RunRecord], modes: usize) -> Vec<f64> {
+    (0..modes)
+        .map(|m| {
+            let v: Vec<f64> = records
+                .iter()
+                .filter_map(|r| r.natural_f_hz.get(m).copied())
+                .collect();
+            stats::mean(&v).unwrap_or(f64::NAN)
+        })
+        .collect()
+}
+
+/// The summary row of one system, exposure and mode from its picked peaks.
+fn summary_row(
+    system: System,
+    exposure_ms: f64,
+    mode: usize,
+    nat_hz: f64,
+    p: &[PeakRecord],
+) -> SummaryRow {
+    let f: Vec<f64> = p.iter().map(|p| p.f_hz).collect();
+    let a: Vec<f64> = p.iter().map(|p| p.a).collect();
+    SummaryRow {
+        system,
+        exposure_ms,
+        mode: mode + 1,
+        runs: p.len(),
+        mu_f_hz: stats::mean(&f).unwrap_or(f64::NAN),
+        sigma_f_hz: stats::std_dev(&f).unwrap_or(f64::NAN),
+        mu_a: stats::mean(&a).unwrap_or(f64::NAN),
+        sigma_a: stats::std_dev(&a).unwrap_or(f64::NAN),
+        e2pr: exposure_ms / 1000.0 * nat_hz,
+        chi_mu: None,
+        chi_sigma: None,
+    }
+}
+
+/// Transducer and vision summary rows of every mode at exposure `ei`.
+fn summary_at(
+    records: &[RunRecord],
+    ei: usize,
+    exposure_ms: f64,
+    nat: &[f64],
+    with_chi: bool,
+    out: &mut Vec<SummaryRow>,
+) {
+    for (m, nat_m) in nat.iter().enumerate() {
+        let tr: Vec<PeakRecord> = records
+            .iter()
+            .filter_map(|r| peak_of(&r.transducer, m))
+            .collect();
+        let vi: Vec<PeakRecord> = records
+            .iter()
+            .filter(|r| !r.vision[ei].failed)
+            .filter_map(|r| peak_of(&r.vision[ei].system, m))
+            .collect();
+        let t = summary_row(System::Transducer, exposure_ms, m, *nat_m, &tr);
+        let mut v = summary_row(System::Vision, exposure_ms, m, *nat_m, &vi);
+        if with_chi {
+            v.chi_mu = Some(v.mu_a / t.mu_a);
+            v.chi_sigma = Some(v.sigma_a / t.sigma_a);
+        }
+        out.push(t);
+        out.push(v);
+    }
+}
+
+/// Transducer and vision picks of every run at exposure `ei` (failed vision runs left out).
+fn realizations_at(
+    records: &[RunRecord],
+    ei: usize,
+    exposure_ms: f64,
+    modes: usize,
+    out: &mut Vec<RealizationRow>,
+) {
+    for r in records {
+        for (system, sys, ok) in [
+            (System::Transducer, &r.transducer, true),
+            (System::Vision, &r.vision[ei].system, !r.vision[ei].failed),
+        ] {
+            if !ok {
+                continue;
+            }
+            for m in 0..modes {
+                if let Some(p) = peak_of(sys, m) {
+                    out.push(RealizationRow {
+                        run: r.run,
+                        exposure_ms,
+                        system,
+                        mode: m + 1,
+                        f_hz: p.f_hz,
+                        a: p.a,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Mean |FRF| and its 5th/95th percentiles per bin up to `max_hz`, per system, at exposure `ei`.
+fn frf_band_at(
+    records: &[RunRecord],
+    ei: usize,
+    exposure_ms: f64,
+    freqs: &[f64],
+    max_hz: f64,
+    out: &mut Vec<FrfBandRow>,
+) {
+    let transducer: Vec<&Vec<f32>> = records.iter().map(|r| &r.transducer.frf_abs).collect();
+    let vision: Vec<&Vec<f32>> = records
+        .iter()
+        .filter(|r| !r.vision[ei].failed)
+        .map(|r| &r.vision[ei].system.frf_abs)
+        .collect();
+    for (system, curves) in [(System::Transducer, transducer), (System::Vision, vision)] {
+        if curves.is_empty() {
+            continue;
+        }
+        let mut col = Vec::with_capacity(curves.len());
+        for (k, &f) in freqs.iter().enumerate() {
+            if f > max_hz {
+                break;
+            }
+            col.clear();
+            col.extend(curves.iter().filter_map(|c| c.get(k).map(|v| *v as f64)));
+            col.sort_by(f64::total_cmp);
+            out.push(FrfBandRow {
+                system,
+                exposure_ms,
+                freq_hz: f,
+                mean_abs: stats::mean(&col).unwrap_or(f64::NAN),
+                p05_abs: stats::percentile_sorted(&col, 5.0).unwrap_or(f64::NAN),
+                p95_abs: stats::percentile_sorted(&col, 95.0).unwrap_or(f64::NAN),
+            });
+        }
+    }
+}
+
+/// Aggregates run records (sorted by run) into the study outputs. Deterministic.
+pub fn aggregate(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    records: &[RunRecord],
+) -> anyhow::Result<Outputs> {
+    if let Some(rec) = records
+        .iter()
+        .find(|r| r.vision.len() != cfg.exposures_ms.len())
+    {
+        return Err(bad_input(format!(
+            "run {}: {} vision records for {} exposures",
+            rec.run,
+            rec.vision.len(),
+            cfg.exposures_ms.len()
+        )));
+    }
+    let modes = scenario.bands().len();
+    let freqs = scenario.frf_freqs();
+    let nat = mean_natural_frequencies(records, modes);
+    let mut out = Outputs {
+        summary: Vec::new(),
+        realizations: Vec::new(),
+        frf_band: Vec::new(),
+        lost: Vec::new(),
+    };
+    for (ei, &exp) in cfg.exposures_ms.iter().enumerate() {
+        out.lost.extend(records.iter().map(|r| LostFrames {
+            run: r.run,
+            exposure_ms: exp,
+            lost: r.vision[ei].lost_frames,
+            frames: r.vision[ei].frames,
+            failed: r.vision[ei].failed,
+        }));
+        summary_at(
+            records,
+            ei,
+            exp,
+            &nat,
+            scenario.with_chi(),
+            &mut out.summary,
+        );
+        realizations_at(records, ei, exp, modes, &mut out.realizations);
+        frf_band_at(records, ei, exp, &freqs, cfg.frf_max_hz, &mut out.frf_band);
+    }
+    Ok(out)
+}
+
+/// `lost_frames.csv` bytes: `run,exposure_ms,lost_frames,frames,failed`.
+pub fn lost_frames_csv(lost: &[LostFrames]) -> Vec<u8> {
+    let mut s = String::from("run,exposure_ms,lost_frames,frames,failed\n");
+    for l in lost {
+        s.push_str(&format!(
+            "{},{},{},{},{}\n",
+            l.run, l.exposure_ms, l.lost, l.frames, l.failed
+        ));
+    }
+    s.into_bytes()
+}
+
+/// Writes the CSV outputs (and returns their paths). Plots are written separately.
+pub fn write_outputs(
+    dir: &Path,
+    scenario: &dyn Scenario,
+    out: &Outputs,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let items: [(&str, Vec<u8>); 4] = [
+        (
+            files::SUMMARY,
+            crate::report::summary_csv(&out.summary, scenario.with_chi()),
+        ),
+        (
+            files::REALIZATIONS,
+            crate::report::realizations_csv(&out.realizations),
+        ),
+        (files::FRF_BAND, crate::report::frf_band_csv(&out.frf_band)),
+        (files::LOST_FRAMES, lost_frames_csv(&out.lost)),
+    ];
+    let mut paths = Vec::new();
+    for (name, bytes) in items {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
+        paths.push(p);
+    }
+    Ok(paths)
+}
+
+/// Lost-frame counts per exposure, in increasing exposure.
+pub fn lost_by_exposure(out: &Outputs) -> Vec<LostByExposure> {
+    let mut m: BTreeMap<u64, LostByExposure> = BTreeMap::new();
+    for l in &out.lost {
+        let s = m.entry(l.exposure_ms.to_bits()).or_insert(LostByExposure {
+            exposure_ms: l.exposure_ms,
+            lost: 0,
+            frames: 0,
+            failed_runs: 0,
+        });
+        s.lost += l.lost;
+        s.frames += l.frames;
+        s.failed_runs += u64::from(l.failed);
+    }
+    let mut v: Vec<_> = m.into_values().collect();
+    v.sort_by(|a, b| a.exposure_ms.total_cmp(&b.exposure_ms));
+    v
+}

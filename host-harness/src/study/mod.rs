@@ -1,0 +1,181 @@
+//! The Monte Carlo studies (method.md §3.1, §3.2): a study is `runs` realizations of one
+//! scenario (grandstand or cantilever). Realization `r` draws everything random (structure,
+//! excitation, transducer noise) from one stream derived from `(seed, r)` alone, and every
+//! exposure of that run sees the same structure and excitation (as in the paper). Results
+//! therefore do not depend on the thread count, the scheduling, the sharding or on
+//! interruptions.
+//!
+//! - [`config`]: the resolved description of a study;
+//! - [`grandstand`], [`cantilever`]: the scenarios, one run each: the rig's model, the camera and
+//!   the firmware chain put together;
+//! - [`runner`]: random streams, shards, the parallel runner and resume;
+//! - [`checkpoint`]: `runs.jsonl`, the model revision, the file names;
+//! - [`aggregate`]: run records -> summary, realizations, FRF band and lost frames;
+//! - [`merge`]: the shards of one study -> its outputs.
+
+pub mod aggregate;
+pub mod cantilever;
+pub mod checkpoint;
+pub mod config;
+pub mod grandstand;
+pub mod merge;
+pub mod runner;
+
+pub use aggregate::{aggregate, write_outputs, LostFrames, Outputs};
+pub use cantilever::Cantilever;
+pub use checkpoint::{files, read_checkpoint, recorded_revision, MODEL_REVISION};
+pub use config::{ImagingOptions, Preset, StudyConfig};
+pub use grandstand::Grandstand;
+pub use runner::{execute, run_rng, Execution, Shard};
+
+use crate::chain::displacement::{fill_lost_frames, too_many_lost};
+pub use crate::chain::frf::{PeakRecord, SystemRecord};
+use anyhow::Context as _;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// The vision system at one exposure in one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VisionRecord {
+    /// Exposure time, ms.
+    pub exposure_ms: f64,
+    /// Frames in which no pixel passed the threshold (filled by interpolation).
+    pub lost_frames: u64,
+    /// Frames in the record.
+    pub frames: u64,
+    /// More than 5 % of the frames were lost: the run is reported as failed at this exposure
+    /// and left out of the statistics.
+    pub failed: bool,
+    /// The measurement (empty peaks when failed).
+    pub system: SystemRecord,
+}
+
+/// Everything one realization produced. One JSON line of `runs.jsonl`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    /// Run index.
+    pub run: u64,
+    /// Natural frequencies of the modes drawn for this run, Hz (for the E2PR).
+    pub natural_f_hz: Vec<f64>,
+    /// Transducer path (independent of the exposure).
+    pub transducer: SystemRecord,
+    /// Vision path, one per exposure in configuration order.
+    pub vision: Vec<VisionRecord>,
+}
+
+/// A simulated measurement: how to run one realization.
+pub trait Scenario: Sync {
+    /// Short name printed in titles.
+    fn name(&self) -> &'static str;
+    /// Unit of the resonant amplitudes.
+    fn amplitude_unit(&self) -> &'static str;
+    /// Mode bands `(lo, hi)` in Hz, one per reported mode.
+    fn bands(&self) -> Vec<(f64, f64)>;
+    /// Frequencies of the bins in [`SystemRecord::frf_abs`], Hz.
+    fn frf_freqs(&self) -> Vec<f64>;
+    /// Whether the summary carries `chi_mu`/`chi_sigma` (cantilever).
+    fn with_chi(&self) -> bool {
+        false
+    }
+    /// Runs realization `run`; `rng` is its private stream.
+    fn run(&self, run: u64, rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord>;
+    /// Optional notes printed with the summary (e.g. exposure longer than the frame period).
+    fn notes(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
+/// `0..disp.len()` with `centroid(k)`, turns the centroid row `cy` (px) into the displacement
+/// with `to_disp`, fills the lost frames ([`fill_lost_frames`]) and, unless too many of them were lost
+/// ([`crate::chain::displacement::MAX_LOST_FRACTION`]), measures the filled record (as `f32`) with
+/// `measure`. `disp` and `valid` are the caller's buffers, reused across exposures; `bands` is
+/// the number of mode bands (the empty peaks of a failed run).
+pub fn measure_vision<E: std::fmt::Display>(
+    exposure_ms: f64,
+    disp: &mut [f64],
+    valid: &mut [bool],
+    bands: usize,
+    mut centroid: impl FnMut(usize) -> Result<firmware_core::centroid::Centroid, E>,
+    to_disp: impl Fn(f32) -> f64,
+    measure: impl FnOnce(&[f32]) -> anyhow::Result<SystemRecord>,
+) -> anyhow::Result<VisionRecord> {
+    let frames = disp.len();
+    for k in 0..frames {
+        let c = centroid(k).map_err(|e| anyhow::anyhow!("frame {k}: {e}"))?;
+        match c.position() {
+            Some((_, cy)) => {
+                disp[k] = to_disp(cy);
+                valid[k] = true;
+            }
+            None => valid[k] = false,
+        }
+    }
+    let lost = fill_lost_frames(disp, valid) as u64;
+    let failed = too_many_lost(lost as usize, frames);
+    let system = if failed {
+        SystemRecord {
+            peaks: vec![None; bands],
+            frf_abs: Vec::new(),
+        }
+    } else {
+        let d32: Vec<f32> = disp.iter().map(|v| *v as f32).collect();
+        measure(&d32)?
+    };
+    Ok(VisionRecord {
+        exposure_ms,
+        lost_frames: lost,
+        frames: frames as u64,
+        failed,
+        system,
+    })
+}
+
+/// The scenario a configuration describes.
+pub fn scenario_for(cfg: &StudyConfig) -> anyhow::Result<Box<dyn Scenario>> {
+    Ok(match cfg.preset {
+        Preset::Grandstand => Box::new(Grandstand::new(cfg)?),
+        Preset::Cantilever => Box::new(Cantilever::new(cfg)?),
+    })
+}
+
+/// Aggregates, writes CSV files and plots, prints the table. Shared by `study` and `merge`
+/// (plots only when `plots`).
+pub fn finish(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    records: &[RunRecord],
+    out: &std::path::Path,
+    plots: bool,
+) -> anyhow::Result<()> {
+    let outputs = aggregate(cfg, scenario, records)?;
+    let mut written = write_outputs(out, scenario, &outputs)?;
+    if plots {
+        let p = crate::plots::StudyPlots {
+            title: scenario.name(),
+            amplitude_unit: scenario.amplitude_unit(),
+            summary: &outputs.summary,
+            realizations: &outputs.realizations,
+            frf_band: &outputs.frf_band,
+        };
+        written.extend(
+            crate::plots::write_study_plots(out, &p)
+                .with_context(|| format!("cannot write the figures in {}", out.display()))?,
+        );
+    }
+    println!(
+        "{}",
+        crate::report::table(&outputs.summary, scenario.amplitude_unit())
+    );
+    for l in aggregate::lost_by_exposure(&outputs) {
+        println!(
+            "exposure {} ms: {} of {} frames lost (filled by interpolation), {} failed runs (> 5 % lost, left out)",
+            l.exposure_ms, l.lost, l.frames, l.failed_runs
+        );
+    }
+    for n in scenario.notes() {
+        println!("note: {n}");
+    }
+    println!("wrote {} files in {}", written.len() + 2, out.display());
+    Ok(())
+}

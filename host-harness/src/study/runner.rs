@@ -1,0 +1,237 @@
+//! Running a study: one reproducible random stream per run, the runs of this process's shard
+//! computed in parallel (rayon) and appended to the checkpoint as each finishes, and the resume
+//! of an interrupted study (method.md §3.1 "Reproducibility").
+
+use super::checkpoint::{self, files, MODEL_REVISION};
+use super::{RunRecord, Scenario, StudyConfig};
+use crate::bad_input;
+use anyhow::Context as _;
+use rand::SeedableRng as _;
+use rand_chacha::ChaCha8Rng;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+/// The random stream of run `run`: ChaCha8 keyed by the master seed, one stream per run. It
+/// depends on nothing else, so results are the same for any thread count or shard layout.
+pub fn run_rng(seed: u64, run: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(run);
+    rng
+}
+
+/// Selection of the runs a process computes: shard `index` (1-based) of `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based shard number.
+    pub index: u64,
+    /// Number of shards.
+    pub count: u64,
+}
+
+impl Shard {
+    /// The whole study.
+    pub const ALL: Shard = Shard { index: 1, count: 1 };
+
+    /// Parses `K/N` with 1 <= K <= N.
+    pub fn parse(s: &str) -> anyhow::Result<Shard> {
+        let err = || bad_input(format!("--shard: `{s}` is not K/N with 1 <= K <= N"));
+        let (k, n) = s.split_once('/').ok_or_else(err)?;
+        let index: u64 = k.trim().parse().map_err(|_| err())?;
+        let count: u64 = n.trim().parse().map_err(|_| err())?;
+        if count == 0 || index == 0 || index > count {
+            return Err(err());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// Whether run `r` belongs to this shard (runs are dealt round-robin).
+    pub fn contains(&self, r: u64) -> bool {
+        r % self.count == self.index - 1
+    }
+}
+
+/// Options of one study execution (not part of the results).
+#[derive(Debug, Clone)]
+pub struct Execution {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Continue from `runs.jsonl` in `out`.
+    pub resume: bool,
+    /// Worker threads (0 = all cores).
+    pub threads: usize,
+    /// Runs computed by this process.
+    pub shard: Shard,
+    /// Show a progress bar (when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// Runs (or resumes) the runs of `shard` and returns all records in `out`, sorted by run.
+pub fn execute(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    exec: &Execution,
+) -> anyhow::Result<Vec<RunRecord>> {
+    cfg.validate()?;
+    std::fs::create_dir_all(&exec.out)
+        .with_context(|| format!("cannot create {}", exec.out.display()))?;
+    let cfg_path = exec.out.join(files::CONFIG);
+    let runs_path = exec.out.join(files::RUNS);
+    let shard_path = exec.out.join(files::SHARD);
+    let shard_text = format!("{}/{}\n", exec.shard.index, exec.shard.count);
+    let mut done = Vec::new();
+    if runs_path.exists() || cfg_path.exists() {
+        if !exec.resume {
+            return Err(bad_input(format!(
+                "{} already holds a study; pass --resume to continue it, or choose another --out",
+                exec.out.display()
+            )));
+        }
+        let old_text = std::fs::read_to_string(&cfg_path)
+            .with_context(|| format!("cannot read {}", cfg_path.display()))?;
+        let old: StudyConfig = toml::from_str(&old_text)
+            .map_err(|e| bad_input(format!("{}: {e}", cfg_path.display())))?;
+        if &old != cfg {
+            return Err(bad_input(format!(
+                "--resume: the configuration differs from the one in {} (resume with the same \
+                 preset, runs, exposures, seed and options)",
+                cfg_path.display()
+            )));
+        }
+        let revision = checkpoint::recorded_revision(&exec.out)?;
+        if revision != MODEL_REVISION {
+            return Err(bad_input(format!(
+                "--resume: {} holds runs of model revision {revision}, this build computes \
+                 revision {MODEL_REVISION}; mixing them would give a study of two code \
+                 versions. Start it again in a new --out (without --out, the default directory \
+                 already differs)",
+                exec.out.display()
+            )));
+        }
+        let old_shard = std::fs::read_to_string(&shard_path).unwrap_or_else(|_| "1/1\n".into());
+        if old_shard != shard_text {
+            return Err(bad_input(format!(
+                "--resume: {} holds shard {}, not {}",
+                exec.out.display(),
+                old_shard.trim(),
+                shard_text.trim()
+            )));
+        }
+        done = checkpoint::read_checkpoint(&runs_path)?;
+        // rewrite the checkpoint without a possibly truncated tail
+        let mut text = String::new();
+        for r in &done {
+            text.push_str(&serde_json::to_string(r)?);
+            text.push('\n');
+        }
+        std::fs::write(&runs_path, text)
+            .with_context(|| format!("cannot write {}", runs_path.display()))?;
+    } else {
+        std::fs::write(&cfg_path, cfg.to_toml())
+            .with_context(|| format!("cannot write {}", cfg_path.display()))?;
+        let rev_path = exec.out.join(files::REVISION);
+        std::fs::write(&rev_path, format!("{MODEL_REVISION}\n"))
+            .with_context(|| format!("cannot write {}", rev_path.display()))?;
+        if exec.shard != Shard::ALL {
+            std::fs::write(&shard_path, &shard_text)?;
+        }
+    }
+    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
+    let pending: Vec<u64> = (0..cfg.runs)
+        .filter(|r| exec.shard.contains(*r) && !have.contains(r))
+        .collect();
+
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&runs_path)
+        .with_context(|| format!("cannot open {}", runs_path.display()))?;
+    let sink = Mutex::new(file);
+    let new = Mutex::new(Vec::new());
+    let bar = progress_bar(pending.len() as u64, exec.progress && !pending.is_empty());
+    if !have.is_empty() {
+        eprintln!(
+            "resuming {}: {} runs already done, {} to go",
+            exec.out.display(),
+            have.len(),
+            pending.len()
+        );
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(exec.threads)
+        .stack_size(64 << 20)
+        .build()
+        .context("cannot start the worker threads")?;
+    let result: anyhow::Result<()> = pool.install(|| {
+        use rayon::prelude::*;
+        pending.par_iter().try_for_each(|&r| -> anyhow::Result<()> {
+            let mut rng = run_rng(cfg.seed, r);
+            let rec = scenario
+                .run(r, &mut rng)
+                .with_context(|| format!("run {r}"))?;
+            let line = serde_json::to_string(&rec)? + "\n";
+            {
+                let mut f = sink
+                    .lock()
+                    .map_err(|_| anyhow::anyhow!("checkpoint lock"))?;
+                f.write_all(line.as_bytes())
+                    .and_then(|_| f.flush())
+                    .with_context(|| format!("cannot append to {}", runs_path.display()))?;
+            }
+            new.lock()
+                .map_err(|_| anyhow::anyhow!("result lock"))?
+                .push(rec);
+            bar.inc(1);
+            Ok(())
+        })
+    });
+    bar.finish_and_clear();
+    result?;
+    done.extend(new.into_inner().unwrap_or_default());
+    done.sort_by_key(|r| r.run);
+    Ok(done)
+}
+
+fn progress_bar(len: u64, show: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal as _;
+    if !show || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs (eta {eta})",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_partition_the_runs() {
+        let shards: Vec<Shard> = (1..=3)
+            .map(|k| Shard::parse(&format!("{k}/3")).unwrap())
+            .collect();
+        for r in 0..100 {
+            assert_eq!(shards.iter().filter(|s| s.contains(r)).count(), 1);
+        }
+        for bad in ["0/2", "3/2", "1/0", "x", "1-2"] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn run_streams_depend_only_on_seed_and_run() {
+        use rand::Rng as _;
+        let a: u64 = run_rng(7, 3).random();
+        let b: u64 = run_rng(7, 3).random();
+        let c: u64 = run_rng(7, 4).random();
+        let d: u64 = run_rng(8, 3).random();
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+        assert_ne!(a, d);
+    }
+}
