@@ -10,6 +10,8 @@
 //! | module | what |
 //! |---|---|
 //! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards; its scenarios ([`study::grandstand`]: structure, excitation, transducers; [`study::cantilever`]) and the EPSA camera ([`study::render`]) |
+//! | [`uncertainty`] | JCGM 101 coverage intervals (7.7) and the adaptive Monte Carlo procedure (7.9) |
+//! | [`compensation`] | centroid exposure transfer measured through the renderer; firmware correction tables |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`report`] | CSV rows and the printed table (pure writers) |
 //! | [`plots`] | PNG and SVG figures of study results |
@@ -20,12 +22,14 @@
 
 pub mod analysis;
 pub mod cli;
+pub mod compensation;
 pub mod csvio;
 pub mod plots;
 pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;
+pub mod uncertainty;
 
 /// An error caused by the user's input (a file, a field, a flag value). The binary exits with
 /// code 2 when the error chain contains one; other failures exit with 1.
