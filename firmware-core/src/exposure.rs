@@ -313,7 +313,11 @@ pub fn compensate_dft(
     exposure_s: f32,
 ) -> Compensation {
     let n = bins.len();
-    let df = if n == 0 { 0.0 } else { sample_rate_hz / n as f32 };
+    let df = if n == 0 {
+        0.0
+    } else {
+        sample_rate_hz / n as f32
+    };
     compensate_with(transfer, bins, exposure_s, |k| {
         if 2 * k <= n {
             k as f32 * df
@@ -350,7 +354,8 @@ mod tests {
     #[test]
     fn sinc_matches_the_closed_form_and_its_zeros() {
         for x in [1e-6f32, 1e-4, 2e-3, 0.1, 0.5, 0.8, 1.3, 2.5] {
-            let want = (core::f64::consts::PI * x as f64).sin() / (core::f64::consts::PI * x as f64);
+            let want =
+                (core::f64::consts::PI * x as f64).sin() / (core::f64::consts::PI * x as f64);
             // f32 evaluation of sin(pi x)/(pi x): a few ulp of the argument near the zeros
             assert!((sinc_pi(x) as f64 - want).abs() < 2e-7, "{x}");
         }
@@ -423,7 +428,10 @@ mod tests {
         let mut bins = [Complex32::new(1.0, 1.0); 11];
         // df = 1 Hz, Te = 0.1 s: E2PR = k / 10, bins 0..=8 corrected
         let r = compensate_one_sided(&BoxTransfer, &mut bins, 1.0, 0.1);
-        assert_eq!((r.corrected, r.uncorrected, r.first_uncorrected), (9, 2, Some(9)));
+        assert_eq!(
+            (r.corrected, r.uncorrected, r.first_uncorrected),
+            (9, 2, Some(9))
+        );
         for (k, b) in bins.iter().enumerate().take(9) {
             let want = 1.0 / sinc_pi(k as f32 / 10.0);
             assert!((b.re - want).abs() < 1e-6 * want && b.re == b.im, "{k}");

@@ -666,7 +666,10 @@ mod tests {
         // is not (the length is flat at the optimum: the shorth converges as M^(-1/3), Kim &
         // Pollard 1990): at M = 10^6, (10^6)^(-1/3) sigma = 0.01 sigma, allowed twice that
         let len = s.short_hi - s.short_lo;
-        assert!((len - 2.0 * z * sd).abs() < 4.0 * se_q * 2f64.sqrt(), "{s:?}");
+        assert!(
+            (len - 2.0 * z * sd).abs() < 4.0 * se_q * 2f64.sqrt(),
+            "{s:?}"
+        );
         let centre = 0.5 * (s.short_hi + s.short_lo);
         assert!((centre - mu).abs() < 0.02 * sd, "{s:?}");
         // mean and its standard uncertainty
@@ -690,12 +693,27 @@ mod tests {
         // f(x_a) = lambda (1 - a)
         let se = |a: f64| (a * (1.0 - a) / m as f64).sqrt() / (lambda * (1.0 - a));
         // shortest: lower end is the sample minimum (mean 1 / (lambda M) = 5e-7)
-        assert!(s.short_lo >= 0.0 && s.short_lo < 20.0 / (lambda * m as f64), "{s:?}");
+        assert!(
+            s.short_lo >= 0.0 && s.short_lo < 20.0 / (lambda * m as f64),
+            "{s:?}"
+        );
         let hi = -(0.05f64).ln() / lambda;
-        assert!((s.short_hi - hi).abs() < 4.0 * se(0.95), "{} vs {hi}", s.short_hi);
+        assert!(
+            (s.short_hi - hi).abs() < 4.0 * se(0.95),
+            "{} vs {hi}",
+            s.short_hi
+        );
         let (lo, hi) = (-(0.975f64).ln() / lambda, -(0.025f64).ln() / lambda);
-        assert!((s.sym_lo - lo).abs() < 4.0 * se(0.025), "{} vs {lo}", s.sym_lo);
-        assert!((s.sym_hi - hi).abs() < 4.0 * se(0.975), "{} vs {hi}", s.sym_hi);
+        assert!(
+            (s.sym_lo - lo).abs() < 4.0 * se(0.025),
+            "{} vs {lo}",
+            s.sym_lo
+        );
+        assert!(
+            (s.sym_hi - hi).abs() < 4.0 * se(0.975),
+            "{} vs {hi}",
+            s.sym_hi
+        );
         // and the shortest is shorter than the symmetric one for a skewed sample
         assert!(s.short_hi - s.short_lo < s.sym_hi - s.sym_lo);
     }
