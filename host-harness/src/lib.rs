@@ -12,6 +12,7 @@
 //! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards; its scenarios ([`study::grandstand`]: structure, excitation, transducers; [`study::cantilever`]) and the EPSA camera ([`study::render`]) |
 //! | [`uncertainty`] | JCGM 101 coverage intervals (7.7) and the adaptive Monte Carlo procedure (7.9) |
 //! | [`compensation`] | centroid exposure transfer measured through the renderer; firmware correction tables |
+//! | [`plan`] | exposure planner: predicted ratio, longest exposure, residual after compensation, lost-frame risk |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`report`] | CSV rows and the printed table (pure writers) |
 //! | [`plots`] | PNG and SVG figures of study results |
@@ -24,6 +25,7 @@ pub mod analysis;
 pub mod cli;
 pub mod compensation;
 pub mod csvio;
+pub mod plan;
 pub mod plots;
 pub mod recording;
 pub mod report;
