@@ -129,8 +129,7 @@ pub struct BoxTransfer;
 
 impl ExposureTransfer for BoxTransfer {
     fn ratio(&self, e2pr_abs: f32) -> Option<f32> {
-        // `!(<=)` also rejects NaN
-        if !(e2pr_abs <= E2PR_LIMIT) {
+        if e2pr_abs.is_nan() || e2pr_abs > E2PR_LIMIT {
             return None;
         }
         Some(sinc_pi(e2pr_abs))
@@ -220,12 +219,9 @@ impl<const N: usize> CorrectionTable<N> {
     /// The linearly interpolated ratio at `e2pr_abs` (in `0 ..= max_e2pr`), without the
     /// [`E2PR_LIMIT`] and [`RATIO_FLOOR`] checks of [`ExposureTransfer::ratio`].
     pub fn interpolate(&self, e2pr_abs: f32) -> Option<f32> {
-        if !(e2pr_abs >= 0.0) {
-            return None;
-        }
         let u = e2pr_abs / self.step;
-        let last = (N - 1) as f32;
-        if !(u <= last) {
+        // also rejects NaN
+        if !(0.0..=(N - 1) as f32).contains(&u) {
             return None;
         }
         // u in [0, N - 1]: the cast truncates towards zero, then clamp to the last interval
@@ -238,7 +234,7 @@ impl<const N: usize> CorrectionTable<N> {
 
 impl<const N: usize> ExposureTransfer for CorrectionTable<N> {
     fn ratio(&self, e2pr_abs: f32) -> Option<f32> {
-        if !(e2pr_abs <= E2PR_LIMIT) {
+        if e2pr_abs.is_nan() || e2pr_abs > E2PR_LIMIT {
             return None;
         }
         self.interpolate(e2pr_abs).filter(|r| *r >= RATIO_FLOOR)
@@ -277,7 +273,7 @@ pub fn compensate_with(
     for (k, bin) in bins.iter_mut().enumerate() {
         match transfer.ratio(libm::fabsf(e2pr(freq_hz(k), exposure_s))) {
             Some(r) => {
-                *bin = *bin / r;
+                *bin /= r;
                 out.corrected += 1;
             }
             None => {
