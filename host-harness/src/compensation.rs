@@ -400,6 +400,62 @@ mod tests {
         );
     }
 
+    /// End to end, as the firmware would do it: a 2.5 Hz sinusoid filmed at 50 fps with a
+    /// centred 180 ms exposure (E2PR 0.45, between table nodes) and the binary centroid,
+    /// 10 s of frames, one DFT, divided by the table: the amplitude comes back.
+    #[test]
+    fn a_binary_table_compensates_a_filmed_sinusoid() {
+        let (amp, f, fps, te) = (5.0f64, 2.5f64, 50.0f64, 0.18f64);
+        let setup = TransferSetup::new(target(), 100, Mode::Binary, amp);
+        let table = correction_table::<17>(&setup, 0.05).unwrap();
+        // the camera: a 1 kHz path, frames every 20 path steps, exposure 180 steps
+        let fine = 1000.0;
+        let (n, margin) = (500usize, 200usize);
+        let path: Vec<f64> = (0..n * 20 + 2 * margin)
+            .map(|i| amp * (std::f64::consts::TAU * f * (i as f64 - margin as f64) / fine).sin())
+            .collect();
+        let mut r = BlurRenderer::for_path(&setup.target, &path, 10);
+        let (w, h) = (r.width(), r.height());
+        let mut frame = vec![0u8; w * h];
+        let config = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+        let half = 0.5 * te * fine;
+        let y: Vec<f64> = (0..n)
+            .map(|j| {
+                let c = (margin + 20 * j) as f64;
+                r.render(c - half, c + half, &mut frame);
+                centroid_u8(&config, &frame, w, h, w).unwrap().cy as f64
+            })
+            .collect();
+        // naive DFT (f64 reference), then the firmware's compensation in f32
+        let mut bins: Vec<firmware_core::Complex32> = (0..n)
+            .map(|k| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (j, v) in y.iter().enumerate() {
+                    let a = -std::f64::consts::TAU * (k * j % n) as f64 / n as f64;
+                    re += v * a.cos();
+                    im += v * a.sin();
+                }
+                firmware_core::Complex32::new(re as f32, im as f32)
+            })
+            .collect();
+        let k = (f * n as f64 / fps) as usize; // 25 cycles in 500 frames
+        let raw = 2.0 * bins[k].norm() as f64 / n as f64;
+        let report =
+            firmware_core::exposure::compensate_dft(&table, &mut bins, fps as f32, te as f32);
+        let fixed = 2.0 * bins[k].norm() as f64 / n as f64;
+        eprintln!(
+            "filmed: raw {:.4}, compensated {:.4} of {amp}",
+            raw / amp,
+            fixed / amp
+        );
+        // the blur costs about a quarter of the amplitude
+        assert!(raw / amp < 0.8, "raw {raw}");
+        // linear interpolation of a sinc-like curve on a 0.05 grid: h^2 pi^2 / 24 = 1e-3
+        assert!((fixed / amp - 1.0).abs() < 2e-3, "compensated {fixed}");
+        // bins above 0.8 / 0.18 = 4.44 Hz are left alone: |k| > 44.4
+        assert_eq!(report.first_uncorrected, Some(45));
+    }
+
     #[test]
     fn bad_setups_name_the_field() {
         let mut s = TransferSetup::new(target(), 100, Mode::Binary, 0.0);

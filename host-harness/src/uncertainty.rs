@@ -672,6 +672,14 @@ mod tests {
             "{s:?}"
         );
         let centre = 0.5 * (s.short_hi + s.short_lo);
+        eprintln!(
+            "normal: symmetric ({:.5}, {:.5}), shortest ({:.5}, {:.5}), want +/- {:.5}",
+            (s.sym_lo - mu) / sd,
+            (s.sym_hi - mu) / sd,
+            (s.short_lo - mu) / sd,
+            (s.short_hi - mu) / sd,
+            z
+        );
         assert!((centre - mu).abs() < 0.02 * sd, "{s:?}");
         // mean and its standard uncertainty
         assert!((s.u_mean - sd / (m as f64).sqrt()).abs() < 0.01 * s.u_mean);
