@@ -9,7 +9,8 @@
 //!   `sinc(pi f Te)` for the weighted centroid (the transfer the firmware divides by), the
 //!   transfer measured through the renderer ([`crate::compensation`]) for the binary centroid;
 //! * `max_exposure_ms`: the longest exposure whose predicted ratio stays `>= 1 - tolerance`
-//!   (first crossing, linear interpolation on a 0.0125 E2PR grid for the binary centroid);
+//!   (the sinc inverted by bisection; for the binary centroid the first crossing, linearly
+//!   interpolated on a 0.0125 E2PR grid);
 //! * `compensated_residual`: the relative amplitude error left after dividing by the
 //!   compensation the firmware would use: for the weighted centroid the transfer measured
 //!   through the renderer at the actual threshold against the sinc (zero only when the
@@ -27,7 +28,7 @@
 use crate::compensation::{correction_table, transfer_curve, CompensationError, TransferSetup};
 use crate::study::render::DiskTarget;
 use firmware_core::centroid::Mode;
-use firmware_core::exposure::{sinc_pi, BoxTransfer, ExposureTransfer};
+use firmware_core::exposure::{BoxTransfer, ExposureTransfer};
 
 /// One vibration mode to plan for.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,6 +113,39 @@ pub struct PlanRow {
     pub lost_frame_risk: f64,
 }
 
+/// The CSV header of the plan's rows (the command-line contract of issue 12).
+pub const PLAN_CSV_HEADER: [&str; 8] = [
+    "mode",
+    "f_hz",
+    "centroid",
+    "max_exposure_ms",
+    "e2pr",
+    "predicted_ratio",
+    "compensated_residual",
+    "lost_frame_risk",
+];
+
+impl PlanRow {
+    /// The row's CSV fields in the order of [`PLAN_CSV_HEADER`] (centroid as `binary` or
+    /// `weighted`; numbers with Rust's shortest round-trip formatting).
+    pub fn csv_record(&self) -> [String; 8] {
+        [
+            self.mode.to_string(),
+            self.f_hz.to_string(),
+            match self.centroid {
+                Mode::Weighted => "weighted",
+                _ => "binary",
+            }
+            .to_string(),
+            self.max_exposure_ms.to_string(),
+            self.e2pr.to_string(),
+            self.predicted_ratio.to_string(),
+            self.compensated_residual.to_string(),
+            self.lost_frame_risk.to_string(),
+        ]
+    }
+}
+
 /// Something the user should know before the test.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PlanWarning {
@@ -186,6 +220,16 @@ const GRID_STEP: f64 = 0.0125;
 const TABLE_NODES: usize = 17;
 const TABLE_STEP: f64 = 0.05;
 
+/// `sin(pi x) / (pi x)` in double precision.
+fn sinc(x: f64) -> f64 {
+    let z = std::f64::consts::PI * x;
+    if z.abs() < 1e-8 {
+        1.0
+    } else {
+        z.sin() / z
+    }
+}
+
 /// Lost-frame risk (see the module documentation).
 pub fn lost_frame_risk(target: &DiskTarget, threshold: f64, amplitude_px: f64, e2pr: f64) -> f64 {
     let swept = 2.0 * amplitude_px * (std::f64::consts::PI * e2pr.abs().min(0.5)).sin();
@@ -246,14 +290,22 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
         // the measured transfer of this centroid at the actual threshold, on the grid
         let curve = transfer_curve(&setup, &grid)?;
         let measured: Vec<(f64, f64)> = curve.iter().map(|p| (p.e2pr, p.ratio)).collect();
-        let predicted: Vec<(f64, f64)> = match input.centroid {
-            Mode::Weighted => grid
-                .iter()
-                .map(|&e| (e, sinc_pi(e as f32) as f64))
-                .collect(),
-            _ => measured.clone(),
+        let max_e2pr = match input.centroid {
+            // the sinc falls monotonically on [0, 1]: invert it by bisection
+            Mode::Weighted => {
+                let (mut lo, mut hi) = (0.0f64, 1.0f64);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if sinc(mid) >= floor {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo
+            }
+            _ => first_crossing(&measured, floor),
         };
-        let max_e2pr = first_crossing(&predicted, floor);
         let max_exposure_ms = 1000.0 * max_e2pr / m.f_hz;
         let exposure_ms = input.exposure_ms.unwrap_or(max_exposure_ms);
         let e2pr = m.f_hz * exposure_ms / 1000.0;
@@ -268,7 +320,7 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
             None => transfer_curve(&setup, &[e2pr])?[0].ratio,
         };
         let predicted_ratio = match input.centroid {
-            Mode::Weighted => sinc_pi(e2pr as f32) as f64,
+            Mode::Weighted => sinc(e2pr),
             _ => measured_at,
         };
         let compensation = match input.centroid {
@@ -322,6 +374,7 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
 mod tests {
     use super::*;
     use crate::compensation::centroid_transfer;
+    use firmware_core::exposure::sinc_pi;
 
     fn modes() -> Vec<PlanMode> {
         vec![
@@ -342,11 +395,15 @@ mod tests {
     fn weighted_plan_inverts_the_sinc() {
         let input = PlanInput::new(modes(), 12.0, 0.0, 50.0, 0.1, Mode::Weighted);
         let p = plan(&input).unwrap();
+        for r in &p.rows {
+            eprintln!("weighted plan: {}", r.csv_record().join(","));
+        }
         for (row, m) in p.rows.iter().zip(modes()) {
             // at the longest exposure the sinc is exactly 1 - tolerance
             let x = m.f_hz * row.max_exposure_ms / 1000.0;
-            assert!((sinc_pi(x as f32) as f64 - 0.9).abs() < 1e-4, "{row:?}");
-            assert!((row.predicted_ratio - 0.9).abs() < 1e-4, "{row:?}");
+            // (bisection to 1e-18, f32 sinc of the firmware: 1e-7)
+            assert!((sinc_pi(x as f32) as f64 - 0.9).abs() < 1e-6, "{row:?}");
+            assert!((row.predicted_ratio - 0.9).abs() < 1e-9, "{row:?}");
             // threshold at the background: the sinc compensation is exact to the rendering's
             // 8-bit rounding (compensation tests: < 2e-4)
             assert!(row.compensated_residual < 5e-4, "{row:?}");
@@ -365,6 +422,9 @@ mod tests {
     fn binary_plan_uses_the_rendered_transfer_and_its_table() {
         let mut input = PlanInput::new(modes(), 12.0, 0.5, 50.0, 0.1, Mode::Binary);
         let p = plan(&input).unwrap();
+        for r in &p.rows {
+            eprintln!("binary plan: {}", r.csv_record().join(","));
+        }
         let row = p.rows[1];
         // independent check: render the transfer at the recommended E2PR directly
         let setup = TransferSetup::new(input.target, 100, Mode::Binary, 3.0);
@@ -379,6 +439,29 @@ mod tests {
         assert!((p.rows[1].e2pr - 0.25).abs() < 1e-12);
         let direct = centroid_transfer(&setup, 0.25).unwrap().ratio;
         assert!((p.rows[1].predicted_ratio - direct).abs() < 2e-3);
+    }
+
+    #[test]
+    fn csv_record_follows_the_header() {
+        assert_eq!(
+            PLAN_CSV_HEADER.join(","),
+            "mode,f_hz,centroid,max_exposure_ms,e2pr,predicted_ratio,compensated_residual,\
+             lost_frame_risk"
+        );
+        let row = PlanRow {
+            mode: 2,
+            f_hz: 2.5,
+            centroid: Mode::Weighted,
+            max_exposure_ms: 102.5,
+            e2pr: 0.25625,
+            predicted_ratio: 0.9,
+            compensated_residual: 1e-4,
+            lost_frame_risk: 0.0,
+        };
+        assert_eq!(
+            row.csv_record().join(","),
+            "2,2.5,weighted,102.5,0.25625,0.9,0.0001,0"
+        );
     }
 
     #[test]
