@@ -411,7 +411,19 @@ mod tests {
         }
         // the same E2PR for both modes (the sinc depends on f Te only)
         assert!((p.rows[0].e2pr - p.rows[1].e2pr).abs() < 1e-6);
-        // 180 ms at 50 fps is longer than the 20 ms frame: warned
+        // a threshold above the background makes the weighted centroid nonlinear: the sinc
+        // compensation then leaves more behind
+        let mut half = input.clone();
+        half.threshold_frac = 0.5;
+        let ph = plan(&half).unwrap();
+        for (a, b) in p.rows.iter().zip(&ph.rows) {
+            eprintln!("weighted plan, threshold 0.5: {}", b.csv_record().join(","));
+            assert!(
+                b.compensated_residual > a.compensated_residual,
+                "{a:?} {b:?}"
+            );
+        }
+        // 125 ms at 50 fps is longer than the 20 ms frame: warned
         assert!(p
             .warnings
             .iter()
