@@ -16,6 +16,7 @@
 //! | [`centroid`] | thresholded centre of gravity of the target(s) in each frame, row-streaming |
 //! | [`dft`] | exact DFT of any length on top of power-of-two `microfft` (mixed radix + Bluestein) |
 //! | [`upsample`] | Fourier (zero-padding) resampling of camera-rate displacement to the ADC rate |
+//! | [`exposure`] | exposure (box) transfer, E2PR, and its compensation (sinc or a binary-centroid table) |
 //! | [`convert`] | displacement to acceleration: spectrum times -omega^2, pixel to SI scaling |
 //! | [`spectrum`] | streaming Welch estimator of H1 and coherence |
 //! | [`peaks`] | resonance frequency and amplitude by peak picking of Im H1 in bands |
@@ -32,6 +33,7 @@
 pub mod centroid;
 pub mod convert;
 pub mod dft;
+pub mod exposure;
 pub mod peaks;
 pub mod pipeline;
 pub mod spectrum;

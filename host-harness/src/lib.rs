@@ -11,12 +11,14 @@
 //! | module | what |
 //! |---|---|
 //! | [`model`] | the rigs: modal parameters and their PDFs, excitation, exact response, transducer noise, closed-form FRFs (one module per rig) |
-//! | [`imaging`] | the camera: targets, the EPSA renderer, image-formation effects, the `Camera` that ends in firmware-core's centroid |
+//! | [`imaging`] | the camera: targets, the EPSA renderer, image-formation effects, the `Camera` that ends in firmware-core's centroid, the exposure transfer of the centroid (compensation tables) |
 //! | [`chain`] | the host side of firmware-core: frames -> displacement (lost frames), two channels -> H1 -> peaks, upsampling to acceleration |
 //! | [`study`] | Monte Carlo studies: configuration, scenarios, runner (seeds, threads, shards), checkpoint, aggregation, merge |
 //! | [`recording`] | synthetic recordings (frames + transducer CSV) written from a model through the camera |
 //! | [`analysis`] | real recordings: frame loading, alignment, the chain, modes, reports |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
+//! | [`uncertainty`] | JCGM 101: coverage intervals, standard uncertainty of the mean, the adaptive Monte Carlo procedure |
+//! | [`plan`] | the exposure planner: per mode, the longest exposure meeting a tolerance, the compensated residual, the lost-frame risk |
 //! | [`report`] | study rows (summary, realizations, FRF band) as CSV and the printed table |
 //! | [`plots`] | PNG and SVG figures |
 //! | [`csvio`] | numeric CSV columns with errors naming row and column |
@@ -29,12 +31,14 @@ pub mod cli;
 pub mod csvio;
 pub mod imaging;
 pub mod model;
+pub mod plan;
 pub mod plots;
 pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;
 pub mod testing;
+pub mod uncertainty;
 
 /// An error caused by the user's input (a file, a field, a flag value). The binary exits with
 /// code 2 when the error chain contains one; other failures exit with 1.

@@ -9,6 +9,7 @@
 //! - [`TargetPath`]: the motion of a target in pixels on a fine time base, and which part of it a
 //!   frame of a given exposure integrates.
 
+pub mod compensation;
 pub mod effects;
 pub mod render;
 
