@@ -21,11 +21,14 @@
 pub mod analysis;
 pub mod cli;
 pub mod csvio;
+pub mod modal;
 pub mod plots;
 pub mod recording;
 pub mod report;
 pub mod stats;
 pub mod study;
+pub mod uff;
+pub mod video;
 
 /// An error caused by the user's input (a file, a field, a flag value). The binary exits with
 /// code 2 when the error chain contains one; other failures exit with 1.
