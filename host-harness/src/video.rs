@@ -48,6 +48,7 @@ use crate::analysis::GreyFrame;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
 /// Properties of an opened video.
@@ -132,7 +133,7 @@ pub enum VideoError {
         what: String,
     },
     /// The stream's time base is too coarse to check timestamps at the expected rate.
-    #[error("{path}: the stream's time base ({time_base_s} s) is too coarse to check frame times at {fps} fps")]
+    #[error("{path}: the stream's time base ({time_base_s} s) is too coarse to check frame times at {fps} fps; is that the video's frame rate?")]
     CoarseTimeBase {
         /// The file.
         path: PathBuf,
@@ -157,6 +158,17 @@ pub enum VideoError {
         /// Dropped frame, variable rate or other rate.
         what: String,
     },
+    /// The container declares more frames (its frame count, or its duration) than it has
+    /// timestamps for: the file is truncated, or frames are lost.
+    #[error("{path}: frames from {frame} on are missing: {what} (truncated or damaged file)")]
+    MissingFrames {
+        /// The file.
+        path: PathBuf,
+        /// First missing frame (the number of frames found).
+        frame: usize,
+        /// What the container declares.
+        what: String,
+    },
     /// The decoder's output ended inside a frame or before the last frame.
     #[error("{path}: frame {frame} of {frames}: the decoded stream ended ({got} of {needed} bytes of this frame; truncated or damaged file){stderr}")]
     Truncated {
@@ -173,8 +185,8 @@ pub enum VideoError {
         /// What ffmpeg said, if anything (prefixed by "; ffmpeg: ").
         stderr: String,
     },
-    /// ffmpeg failed (decoding error) after the frames were read, or gave more frames.
-    #[error("{path}: after frame {frame}: {what}")]
+    /// ffmpeg reports damaged data or fails, or gives more frames than the container lists.
+    #[error("{path}: frame {frame}: {what}")]
     DecodeFailed {
         /// The file.
         path: PathBuf,
@@ -241,6 +253,8 @@ pub struct VideoFrames {
     child: Child,
     stdout: ChildStdout,
     stderr: Option<JoinHandle<String>>,
+    /// What ffmpeg has said so far (its stderr, as it arrives).
+    said: Arc<Mutex<String>>,
     next: usize,
     bytes: Vec<u8>,
     finished: bool,
@@ -268,6 +282,7 @@ impl VideoFrames {
         let stream = probe_stream(path, ffprobe)?;
         let times_s = probe_times(path, ffprobe)?;
         check_times(path, &times_s, expected_fps, stream.time_base_s)?;
+        check_complete(path, &times_s, expected_fps, &stream)?;
         let out_fmt = match stream.bits {
             8 => "gray".to_string(),
             b @ (9 | 10 | 12 | 14 | 16) => format!("gray{b}le"),
@@ -279,7 +294,7 @@ impl VideoFrames {
             _ => 16,
         };
         let mut child = Command::new(ffmpeg)
-            .args(["-nostdin", "-v", "error", "-xerror", "-noautorotate"])
+            .args(["-nostdin", "-v", "warning", "-xerror", "-noautorotate"])
             .args(["-err_detect", "explode", "-i"])
             .arg(path)
             .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo"])
@@ -294,7 +309,11 @@ impl VideoFrames {
                 source,
             })?;
         let stdout = child.stdout.take().expect("stdout is piped");
-        let stderr = child.stderr.take().map(collect_stderr);
+        let said = Arc::new(Mutex::new(String::new()));
+        let stderr = child
+            .stderr
+            .take()
+            .map(|pipe| collect_stderr_into(pipe, Arc::clone(&said)));
         let bytes_per = if bits == 8 { 1 } else { 2 };
         Ok(VideoFrames {
             info: VideoInfo {
@@ -311,6 +330,7 @@ impl VideoFrames {
             child,
             stdout,
             stderr,
+            said,
             next: 0,
             bytes: vec![0; stream.width * stream.height * bytes_per],
             finished: false,
@@ -400,6 +420,17 @@ impl VideoFrames {
         Ok(Some(info))
     }
 
+    /// A line of ffmpeg's stderr from the decoder (`[<codec> @ 0x...] ...`): decoders that
+    /// conceal damage (FFV1's slice CRC, H.264's reference errors) say so only as a warning.
+    fn decoder_complaint(&self) -> Option<String> {
+        let said = self.said.lock().ok()?;
+        let prefix = format!("[{} @", self.info.codec);
+        let lib_prefix = format!("[lib{}", self.info.codec);
+        said.lines()
+            .find(|l| l.starts_with(&prefix) || l.starts_with(&lib_prefix))
+            .map(|l| l.trim().to_string())
+    }
+
     fn wrong_depth(&self, use_fn: &'static str) -> VideoError {
         VideoError::WrongDepth {
             path: self.info.path.clone(),
@@ -430,6 +461,17 @@ impl VideoFrames {
                 });
             }
             let status = self.child.wait().map_err(|e| self.io(e))?;
+            // The reader thread has the whole of stderr once the pipe closes.
+            if let Some(h) = self.stderr.take() {
+                let _text = h.join();
+            }
+            if let Some(line) = self.decoder_complaint() {
+                return Err(VideoError::DecodeFailed {
+                    path: self.info.path.clone(),
+                    frame: index,
+                    what: format!("the decoder reports damaged data: {line}"),
+                });
+            }
             if !status.success() {
                 return Err(VideoError::DecodeFailed {
                     path: self.info.path.clone(),
@@ -453,6 +495,17 @@ impl VideoFrames {
                 stderr: self.stderr_text(),
             });
         }
+        if let Some(line) = self.decoder_complaint() {
+            self.finished = true;
+            return Err(VideoError::DecodeFailed {
+                path: self.info.path.clone(),
+                frame: index,
+                what: format!(
+                    "the decoder reports damaged data in this frame or one of the next few it \
+                     is ahead by: {line}"
+                ),
+            });
+        }
         self.next += 1;
         Ok(Some(FrameInfo {
             index,
@@ -468,14 +521,13 @@ impl VideoFrames {
         }
     }
 
-    /// ffmpeg's stderr as "; ffmpeg: ..." (empty if it said nothing); only once the process
-    /// has ended (the reader thread finishes when the pipe closes).
+    /// ffmpeg's stderr as "; ffmpeg: ..." (empty if it said nothing); complete once the
+    /// process has ended (the reader thread finishes when the pipe closes).
     fn stderr_text(&mut self) -> String {
-        let text = self
-            .stderr
-            .take()
-            .and_then(|h| h.join().ok())
-            .unwrap_or_default();
+        if let Some(h) = self.stderr.take() {
+            let _text = h.join();
+        }
+        let text = self.said.lock().map(|s| s.clone()).unwrap_or_default();
         let text = text.trim();
         if text.is_empty() {
             String::new()
@@ -509,6 +561,31 @@ fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
     Ok(got)
 }
 
+/// Appends a child's stderr to `said` (at most the first 16 kB), read on a thread so the child
+/// never blocks on it; the returned text is empty.
+fn collect_stderr_into(
+    mut pipe: impl Read + Send + 'static,
+    said: Arc<Mutex<String>>,
+) -> JoinHandle<String> {
+    std::thread::spawn(move || {
+        const KEEP: usize = 16_000;
+        let mut chunk = [0u8; 4096];
+        loop {
+            match pipe.read(&mut chunk) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => {
+                    if let Ok(mut s) = said.lock() {
+                        if s.len() < KEEP {
+                            s.push_str(&String::from_utf8_lossy(&chunk[..n]));
+                        }
+                    }
+                }
+            }
+        }
+        String::new()
+    })
+}
+
 /// Keeps the last few kB of a child's stderr, read on a thread so the child never blocks on it.
 fn collect_stderr(mut pipe: impl Read + Send + 'static) -> JoinHandle<String> {
     std::thread::spawn(move || {
@@ -538,6 +615,10 @@ struct StreamProps {
     height: usize,
     bits: u32,
     time_base_s: f64,
+    /// Frame count from the container's header, where it has one (AVI, MP4, MOV).
+    nb_frames: Option<usize>,
+    /// Duration of the video stream, or of the file when it holds only the video stream.
+    duration_s: Option<f64>,
 }
 
 fn run_probe(path: &Path, ffprobe: &str, entries: &str, format: &str) -> Result<String, VideoError> {
@@ -565,38 +646,56 @@ fn probe_stream(path: &Path, ffprobe: &str) -> Result<StreamProps, VideoError> {
     let text = run_probe(
         path,
         ffprobe,
-        "stream=codec_name,width,height,pix_fmt,time_base",
-        "default=noprint_wrappers=1",
+        "stream=codec_name,width,height,pix_fmt,time_base,nb_frames,duration:format=duration,nb_streams",
+        "json",
     )?;
-    let field = |key: &str| -> Option<&str> {
-        text.lines()
-            .find_map(|l| l.strip_prefix(key)?.strip_prefix('='))
-            .map(str::trim)
-            .filter(|v| !v.is_empty() && *v != "N/A" && *v != "unknown")
-    };
     let missing = |what: &str| VideoError::NoVideoStream {
         path: path.into(),
         what: what.into(),
     };
-    let width: usize = field("width")
-        .and_then(|v| v.parse().ok())
-        .filter(|&v| v > 0)
-        .ok_or_else(|| missing("no frame width"))?;
-    let height: usize = field("height")
-        .and_then(|v| v.parse().ok())
-        .filter(|&v| v > 0)
-        .ok_or_else(|| missing("no frame height"))?;
-    let pix_fmt = field("pix_fmt").ok_or_else(|| missing("no pixel format"))?;
-    let time_base_s = field("time_base")
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|_| missing("ffprobe's answer is not JSON"))?;
+    let stream = &json["streams"][0];
+    if !stream.is_object() {
+        return Err(missing("no video stream"));
+    }
+    // ffprobe gives numbers for sizes and strings for the rest; "N/A" or absent when unknown.
+    let text_of = |v: &serde_json::Value| -> Option<String> {
+        let s = match v {
+            serde_json::Value::String(s) => s.clone(),
+            serde_json::Value::Number(n) => n.to_string(),
+            _ => return None,
+        };
+        (!s.is_empty() && s != "N/A" && s != "unknown").then_some(s)
+    };
+    let count = |v: &serde_json::Value| -> Option<usize> {
+        text_of(v)?.parse().ok().filter(|&n: &usize| n > 0)
+    };
+    let seconds = |v: &serde_json::Value| -> Option<f64> {
+        text_of(v)?.parse().ok().filter(|d: &f64| d.is_finite() && *d > 0.0)
+    };
+    let width = count(&stream["width"]).ok_or_else(|| missing("no frame width"))?;
+    let height = count(&stream["height"]).ok_or_else(|| missing("no frame height"))?;
+    let pix_fmt = text_of(&stream["pix_fmt"]).ok_or_else(|| missing("no pixel format"))?;
+    let time_base_s = text_of(&stream["time_base"])
+        .as_deref()
         .and_then(parse_rational)
         .ok_or_else(|| missing("no time base"))?;
+    let only_stream = count(&json["format"]["nb_streams"]) == Some(1);
+    let duration_s = seconds(&stream["duration"]).or_else(|| {
+        only_stream
+            .then(|| seconds(&json["format"]["duration"]))
+            .flatten()
+    });
     Ok(StreamProps {
-        codec: field("codec_name").unwrap_or("unknown").to_string(),
-        pix_fmt: pix_fmt.to_string(),
+        codec: text_of(&stream["codec_name"]).unwrap_or_else(|| "unknown".into()),
+        bits: component_bits(&pix_fmt),
+        pix_fmt,
         width,
         height,
-        bits: component_bits(pix_fmt),
         time_base_s,
+        nb_frames: count(&stream["nb_frames"]),
+        duration_s,
     })
 }
 
@@ -703,12 +802,57 @@ fn probe_times(path: &Path, ffprobe: &str) -> Result<Vec<f64>, VideoError> {
     Ok(times)
 }
 
+/// Tolerance on frame times: ffprobe prints microseconds (2 µs on a difference), plus one tick
+/// of the time base (each timestamp is rounded to the tick, a difference of two to one) unless
+/// the frame period is a whole number of ticks (AVI's 1/fps, MOV's 1/15360 at 120 fps: exact).
+fn time_tolerance(period: f64, time_base_s: f64) -> f64 {
+    let ticks = period / time_base_s;
+    if (ticks - ticks.round()).abs() < 1e-6 * ticks.max(1.0) {
+        2e-6
+    } else {
+        time_base_s + 2e-6
+    }
+}
+
+/// Checks that the container declares no more frames than it has timestamps for: its header's
+/// frame count, or its duration (the video stream's, or the file's when it holds only video).
+fn check_complete(
+    path: &Path,
+    times: &[f64],
+    fps: f64,
+    stream: &StreamProps,
+) -> Result<(), VideoError> {
+    let n = times.len();
+    if let Some(declared) = stream.nb_frames {
+        if declared != n {
+            return Err(VideoError::MissingFrames {
+                path: path.into(),
+                frame: n.min(declared),
+                what: format!("the container's header lists {declared} frames, it holds {n}"),
+            });
+        }
+    } else if let Some(duration) = stream.duration_s {
+        let period = 1.0 / fps;
+        let covered = times[n - 1] + period;
+        let tol = time_tolerance(period, stream.time_base_s);
+        if duration - covered > 0.5 * period + tol {
+            return Err(VideoError::MissingFrames {
+                path: path.into(),
+                frame: n,
+                what: format!(
+                    "the container declares {duration:.6} s (about {:.0} frames), its {n} frames cover {covered:.6} s",
+                    duration * fps
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Checks frame times (relative to the first) against `fps` (see the module documentation).
 fn check_times(path: &Path, times: &[f64], fps: f64, time_base_s: f64) -> Result<(), VideoError> {
     let period = 1.0 / fps;
-    // One tick of the time base (each timestamp is rounded to half a tick, a difference of two
-    // to one), plus ffprobe's printed microseconds.
-    let tol = time_base_s + 2e-6;
+    let tol = time_tolerance(period, time_base_s);
     if tol >= period / 3.0 {
         return Err(VideoError::CoarseTimeBase {
             path: path.into(),
@@ -799,7 +943,7 @@ impl Ffv1Writer {
         let fmt = if sixteen { "gray16le" } else { "gray" };
         let mut child = Command::new("ffmpeg")
             .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", fmt])
-            .args(["-s", &format!("{width}x{height}"), "-framerate", &format!("{fps}")])
+            .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
             .args(["-i", "-", "-c:v", "ffv1", "-level", "3", "-g", "1", "-slicecrc", "1"])
             .args(["-pix_fmt", fmt, "-f", "matroska"])
             .arg(path)
@@ -917,6 +1061,19 @@ impl Drop for Ffv1Writer {
         drop(self.stdin.take());
         let _status = self.child.wait();
     }
+}
+
+/// A frame rate as FFmpeg should read it: `p/q` when a denominator up to 10 010 gives it to
+/// 1e-12 (`120000/1001` for 119.88...), else the
+/// decimal.
+fn rate_string(fps: f64) -> String {
+    for q in 1..=10_010u32 {
+        let p = (fps * q as f64).round();
+        if p >= 1.0 && (p / q as f64 - fps).abs() <= 1e-12 * fps {
+            return format!("{p}/{q}");
+        }
+    }
+    format!("{fps}")
 }
 
 #[cfg(test)]
@@ -1080,13 +1237,14 @@ mod tests {
         // H.264 in MP4 as cameras write it: limited-range YUV 4:2:0 (here losslessly coded,
         // qp 0). Its Y plane is expanded back to full range, so the grey values come back to
         // within the rounding of the two range conversions: one level.
+        // (x264 needs even sizes: the top-left 32x16 pixels.)
         let mp4 = dir.path().join("c.mp4");
         encode(
             &raw,
             &mp4,
             &[
                 "-vf",
-                "scale=in_range=full:out_range=limited,format=yuv420p",
+                "crop=32:16:0:0,scale=in_range=full:out_range=limited,format=yuv420p",
                 "-color_range",
                 "tv",
                 "-c:v",
@@ -1097,10 +1255,15 @@ mod tests {
         );
         let got = read_all(&mp4, 120.0).unwrap();
         assert_eq!(got.len(), N);
+        let cropped: Vec<u8> = want
+            .iter()
+            .flat_map(|f| f.chunks(W).take(16).flat_map(|row| row[..32].to_vec()))
+            .collect();
+        assert_eq!(got.iter().map(Vec::len).sum::<usize>(), cropped.len());
         let worst = got
             .iter()
             .flatten()
-            .zip(want.iter().flatten())
+            .zip(&cropped)
             .map(|(a, b)| (*a as i32 - *b as i32).abs())
             .max()
             .unwrap();
@@ -1200,6 +1363,17 @@ mod tests {
                 assert!(e.to_string().contains("frame"), "{e}");
             }
         }
+        // AVI keeps its frame count in the header.
+        let raw = raw_file(dir.path());
+        let avi = dir.path().join("full.avi");
+        encode(&raw, &avi, &["-c:v", "ffv1", "-pix_fmt", "gray"]);
+        let avi_bytes = std::fs::read(&avi).unwrap();
+        let cut_avi = dir.path().join("cut.avi");
+        std::fs::write(&cut_avi, &avi_bytes[..avi_bytes.len() / 2]).unwrap();
+        let e = read_all(&cut_avi, 120.0).unwrap_err();
+        println!("truncated AVI: {e}");
+        assert!(e.to_string().contains("cut.avi"), "{e}");
+        assert!(matches!(e, VideoError::MissingFrames { .. } | VideoError::Truncated { .. }), "{e}");
         // Damaged bytes inside a frame (slice CRCs catch it).
         let mut bad = bytes.clone();
         let mid = bytes.len() / 2;
@@ -1257,6 +1431,14 @@ mod tests {
     }
 
     #[test]
+    fn rates_as_ffmpeg_reads_them() {
+        assert_eq!(rate_string(120.0), "120/1");
+        assert_eq!(rate_string(120_000.0 / 1001.0), "120000/1001");
+        assert_eq!(rate_string(2.5), "5/2");
+        assert_eq!(rate_string(std::f64::consts::PI), format!("{}", std::f64::consts::PI));
+    }
+
+    #[test]
     fn timestamp_check_closed_cases() {
         let p = Path::new("t.mkv");
         let regular: Vec<f64> = (0..100).map(|i| i as f64 / 120.0).collect();
@@ -1268,6 +1450,11 @@ mod tests {
         dropped.remove(40);
         let e = check_times(p, &dropped, 120.0, 1e-3).unwrap_err();
         assert!(matches!(e, VideoError::IrregularTimestamps { frame: 40, .. }));
+        // AVI counts frames (time base 1/fps): exact, and a 0.1 ms error is already irregular.
+        assert!(check_times(p, &regular, 120.0, 1.0 / 120.0).is_ok());
+        let mut late = regular.clone();
+        late[60] += 1e-4;
+        assert!(check_times(p, &late, 120.0, 1.0 / 120.0).is_err());
         // A time base of 1/50 s cannot resolve 120 fps.
         assert!(matches!(
             check_times(p, &regular, 120.0, 0.02),
