@@ -233,7 +233,9 @@ pub enum ModalError {
         f_hz: f64,
     },
     /// The given pole is not a damped oscillation (`f_hz > 0`, `0 < damping < 1`).
-    #[error("band {lo}-{hi} Hz: the pole {f_hz} Hz, damping {damping} is not a damped oscillation")]
+    #[error(
+        "band {lo}-{hi} Hz: the pole {f_hz} Hz, damping {damping} is not a damped oscillation"
+    )]
     InvalidPole {
         /// Lower end, Hz.
         lo: f64,
@@ -544,7 +546,8 @@ impl Problem {
                 continue;
             }
             for z in 0..ZETAS {
-                let zeta = 10f64.powf(-4.0 + z as f64 * (0.3f64.log10() + 4.0) / (ZETAS - 1) as f64);
+                let zeta =
+                    10f64.powf(-4.0 + z as f64 * (0.3f64.log10() + 4.0) / (ZETAS - 1) as f64);
                 let theta = [-zeta * wr, wr * (1.0 - zeta * zeta).sqrt()];
                 let c = self.cost(theta);
                 if c < best.1 {
@@ -563,7 +566,10 @@ impl Problem {
             // Central-difference Jacobian of the projected residual; the residual varies on the
             // scale of |Re p| (the half-power half-width), so steps are a small fraction of it.
             let step = 1e-4 * theta[0].abs();
-            let mut jac = [vec![0.0; eval.residual.len()], vec![0.0; eval.residual.len()]];
+            let mut jac = [
+                vec![0.0; eval.residual.len()],
+                vec![0.0; eval.residual.len()],
+            ];
             let mut ok = true;
             for (d, col) in jac.iter_mut().enumerate() {
                 let mut tp = theta;
@@ -618,7 +624,8 @@ impl Problem {
                     _ => lambda *= 4.0,
                 }
             }
-            let small = delta[0].abs() <= 1e-10 * theta[0].abs() && delta[1].abs() <= 1e-13 * theta[1];
+            let small =
+                delta[0].abs() <= 1e-10 * theta[0].abs() && delta[1].abs() <= 1e-13 * theta[1];
             if !accepted || small {
                 break;
             }
@@ -656,11 +663,7 @@ impl Problem {
             // R~ s~^a = R~ wc^-a (iw)^a
             lower_residual: Complex64::new(x[2], x[3]) * self.wc.powi(-ea),
             upper_residual: Complex64::new(x[4], x[5]) * self.wc.powi(-eb),
-            misfit: if norm > 0.0 {
-                (res / norm).sqrt()
-            } else {
-                0.0
-            },
+            misfit: if norm > 0.0 { (res / norm).sqrt() } else { 0.0 },
         }
     }
 }
@@ -758,7 +761,10 @@ mod tests {
 
     /// Euler-Bernoulli cantilever mode shapes at x / L (normalised so the tip is +-2).
     fn cantilever_shape(mode: usize, xi: f64) -> f64 {
-        let (bl, sigma) = [(1.875_104_068_7, 0.734_095_514_1), (4.694_091_132_9, 1.018_467_318_5)][mode];
+        let (bl, sigma) = [
+            (1.875_104_068_7, 0.734_095_514_1),
+            (4.694_091_132_9, 1.018_467_318_5),
+        ][mode];
         let b = bl * xi;
         b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
     }
@@ -807,7 +813,11 @@ mod tests {
             .collect();
         let fit = fit_mode(&f, &h, (5.0, 15.0), FrfForm::Accelerance).unwrap();
         assert!((fit.f_hz() - 7.1).abs() < 1e-9 * 7.1, "{}", fit.f_hz());
-        assert!((fit.damping() - 0.0115).abs() < 1e-7 * 0.0115, "{}", fit.damping());
+        assert!(
+            (fit.damping() - 0.0115).abs() < 1e-7 * 0.0115,
+            "{}",
+            fit.damping()
+        );
         assert!((fit.fit.residue - truth.residue).norm() < 1e-7 * truth.residue.norm());
         assert!((fit.fit.lower_residual - truth.lower_residual).norm() < 1e-7);
         assert!(fit.fit.misfit < 1e-10);
@@ -830,8 +840,16 @@ mod tests {
             };
             let h: Vec<Complex64> = f.iter().map(|&x| truth.evaluate(&p, form, x)).collect();
             let fit = fit_mode(&f, &h, (25.0, 45.0), form).unwrap();
-            assert!((fit.f_hz() - 32.4).abs() < 1e-8 * 32.4, "{form:?}: {}", fit.f_hz());
-            assert!((fit.damping() - 0.011).abs() < 1e-6 * 0.011, "{form:?}: {}", fit.damping());
+            assert!(
+                (fit.f_hz() - 32.4).abs() < 1e-8 * 32.4,
+                "{form:?}: {}",
+                fit.f_hz()
+            );
+            assert!(
+                (fit.damping() - 0.011).abs() < 1e-6 * 0.011,
+                "{form:?}: {}",
+                fit.damping()
+            );
         }
     }
 
@@ -908,8 +926,8 @@ mod tests {
             assert!((joint.pole.f_hz - RIG[m].0).abs() < 1e-4);
             // Shared pole from the tip FRF alone, residues for all:
             let tip_fit = fit_mode(&f, refs[4], *band, FrfForm::Accelerance).unwrap();
-            let given = fit_shape(&f, &refs, *band, FrfForm::Accelerance, Some(tip_fit.pole))
-                .unwrap();
+            let given =
+                fit_shape(&f, &refs, *band, FrfForm::Accelerance, Some(tip_fit.pole)).unwrap();
             let noisy = fit_shape(&f, &noisy_refs, *band, FrfForm::Accelerance, None).unwrap();
             let mac_noisy = mac(&noisy.shape, &truth);
             println!(

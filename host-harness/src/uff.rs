@@ -219,7 +219,9 @@ pub enum UffError {
         max: usize,
     },
     /// A direction code outside -6..=6.
-    #[error("UFF dataset 58, function {function_id}: direction {direction} is not a DOF code (-6..=6)")]
+    #[error(
+        "UFF dataset 58, function {function_id}: direction {direction} is not a DOF code (-6..=6)"
+    )]
     Direction {
         /// The dataset's function id.
         function_id: u32,
@@ -284,7 +286,13 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
             s.to_string()
         })
     };
-    const ID_FIELDS: [&str; 5] = ["ID line 1", "ID line 2", "ID line 3", "ID line 4", "ID line 5"];
+    const ID_FIELDS: [&str; 5] = [
+        "ID line 1",
+        "ID line 2",
+        "ID line 3",
+        "ID line 4",
+        "ID line 5",
+    ];
     let mut o = String::with_capacity(1200 + 42 * d.values.len());
     o.push_str("    -1\n    58\n");
     for (line, field) in d.id_lines.iter().zip(ID_FIELDS) {
@@ -469,7 +477,10 @@ mod tests {
         assert_eq!(fortran_e(0.0, 13, 5), "  0.00000e+00");
         assert_eq!(fortran_e(2048.0, 13, 5), "  2.04800e+03");
         assert_eq!(fortran_e(-2.5e-7, 20, 12), " -2.500000000000e-07");
-        assert_eq!(fortran_e(68.043_478_260_869_57, 20, 12), "  6.804347826087e+01");
+        assert_eq!(
+            fortran_e(68.043_478_260_869_57, 20, 12),
+            "  6.804347826087e+01"
+        );
         assert_eq!(fortran_e(1e-100, 20, 12), " 1.000000000000e-100");
     }
 
@@ -486,8 +497,30 @@ mod tests {
             direction: 3,
         };
         let datasets = [
-            Dataset58::acceleration_frf("tip accelerometer", 1, Dof { node: 0, direction: 3 }, input, 0.0, 0.1, &acc),
-            Dataset58::acceleration_frf("vision target 3", 2, Dof { node: 3, direction: 3 }, input, 5.0, 0.1, &tgt),
+            Dataset58::acceleration_frf(
+                "tip accelerometer",
+                1,
+                Dof {
+                    node: 0,
+                    direction: 3,
+                },
+                input,
+                0.0,
+                0.1,
+                &acc,
+            ),
+            Dataset58::acceleration_frf(
+                "vision target 3",
+                2,
+                Dof {
+                    node: 3,
+                    direction: 3,
+                },
+                input,
+                5.0,
+                0.1,
+                &tgt,
+            ),
         ];
         let bytes = write_file(&datasets).unwrap();
         let text = String::from_utf8(bytes).unwrap();
@@ -502,7 +535,10 @@ mod tests {
             assert_eq!((r.ord_type, r.n, r.spacing), (6, d.values.len(), 1));
             assert_eq!((r.f0, r.df), (d.f0_hz, 0.1));
             assert_eq!(r.chars[0], (18, 0, 0, 0, "Frequency".into(), "Hz".into()));
-            assert_eq!(r.chars[1], (12, 1, 0, 0, "Acceleration".into(), "m/s^2".into()));
+            assert_eq!(
+                r.chars[1],
+                (12, 1, 0, 0, "Acceleration".into(), "m/s^2".into())
+            );
             assert_eq!(r.chars[2], r.chars[1]);
             assert_eq!(r.chars[3], (0, 0, 0, 0, "NONE".into(), "NONE".into()));
             assert_eq!(r.values.len(), d.values.len());
@@ -533,14 +569,26 @@ mod tests {
         );
         let ok = [Complex64::new(1.0, 0.0)];
         let long = "x".repeat(81);
-        let e = write_dataset58(&Dataset58::acceleration_frf(&long, 8, dof, dof, 0.0, 0.1, &ok))
-            .unwrap_err();
+        let e = write_dataset58(&Dataset58::acceleration_frf(
+            &long, 8, dof, dof, 0.0, 0.1, &ok,
+        ))
+        .unwrap_err();
         assert!(e.to_string().contains("function 8: ID line 1"), "{e}");
-        let e = write_dataset58(&Dataset58::acceleration_frf("x", 9, dof, dof, 0.0, 0.0, &ok))
-            .unwrap_err();
+        let e = write_dataset58(&Dataset58::acceleration_frf(
+            "x", 9, dof, dof, 0.0, 0.0, &ok,
+        ))
+        .unwrap_err();
         assert!(matches!(e, UffError::Abscissa { function_id: 9, .. }));
-        let e = write_dataset58(&Dataset58::acceleration_frf("x", 9, dof, dof, 0.0, 0.1, &[]))
-            .unwrap_err();
+        let e = write_dataset58(&Dataset58::acceleration_frf(
+            "x",
+            9,
+            dof,
+            dof,
+            0.0,
+            0.1,
+            &[],
+        ))
+        .unwrap_err();
         assert_eq!(e, UffError::Empty { function_id: 9 });
     }
 }

@@ -401,10 +401,7 @@ impl VideoFrames {
 
     /// Reads the next frame of a deeper-than-8-bit video into `buf` (values in
     /// `0..2^bits`). `Ok(None)` after the last frame.
-    pub fn next_frame_u16(
-        &mut self,
-        buf: &mut Vec<u16>,
-    ) -> Result<Option<FrameInfo>, VideoError> {
+    pub fn next_frame_u16(&mut self, buf: &mut Vec<u16>) -> Result<Option<FrameInfo>, VideoError> {
         if self.info.bits == 8 {
             return Err(self.wrong_depth("next_frame_u8"));
         }
@@ -621,9 +618,21 @@ struct StreamProps {
     duration_s: Option<f64>,
 }
 
-fn run_probe(path: &Path, ffprobe: &str, entries: &str, format: &str) -> Result<String, VideoError> {
+fn run_probe(
+    path: &Path,
+    ffprobe: &str,
+    entries: &str,
+    format: &str,
+) -> Result<String, VideoError> {
     let out = Command::new(ffprobe)
-        .args(["-v", "error", "-select_streams", "v:0", "-show_entries", entries])
+        .args([
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            entries,
+        ])
         .args(["-of", format])
         .arg(path)
         .stdin(Stdio::null())
@@ -672,7 +681,10 @@ fn probe_stream(path: &Path, ffprobe: &str) -> Result<StreamProps, VideoError> {
         text_of(v)?.parse().ok().filter(|&n: &usize| n > 0)
     };
     let seconds = |v: &serde_json::Value| -> Option<f64> {
-        text_of(v)?.parse().ok().filter(|d: &f64| d.is_finite() && *d > 0.0)
+        text_of(v)?
+            .parse()
+            .ok()
+            .filter(|d: &f64| d.is_finite() && *d > 0.0)
     };
     let width = count(&stream["width"]).ok_or_else(|| missing("no frame width"))?;
     let height = count(&stream["height"]).ok_or_else(|| missing("no frame height"))?;
@@ -944,7 +956,18 @@ impl Ffv1Writer {
         let mut child = Command::new("ffmpeg")
             .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", fmt])
             .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
-            .args(["-i", "-", "-c:v", "ffv1", "-level", "3", "-g", "1", "-slicecrc", "1"])
+            .args([
+                "-i",
+                "-",
+                "-c:v",
+                "ffv1",
+                "-level",
+                "3",
+                "-g",
+                "1",
+                "-slicecrc",
+                "1",
+            ])
             .args(["-pix_fmt", fmt, "-f", "matroska"])
             .arg(path)
             .stdin(Stdio::piped())
@@ -980,9 +1003,7 @@ impl Ffv1Writer {
     /// Appends a 16-bit frame (a writer from [`Ffv1Writer::create_u16`]).
     pub fn write_frame_u16(&mut self, frame: &[u16]) -> Result<(), VideoError> {
         self.check(frame.len(), true)?;
-        self.send_frame(|bytes| {
-            bytes.extend(frame.iter().flat_map(|v| v.to_le_bytes()))
-        })
+        self.send_frame(|bytes| bytes.extend(frame.iter().flat_map(|v| v.to_le_bytes())))
     }
 
     fn check(&self, len: usize, sixteen: bool) -> Result<(), VideoError> {
@@ -1154,8 +1175,14 @@ mod tests {
         write_ffv1(&path);
         let mut v = VideoFrames::open(&path, 120.0).unwrap();
         let info = v.info().clone();
-        assert_eq!((info.width, info.height, info.bits, info.frames), (W, H, 8, N));
-        assert_eq!((info.codec.as_str(), info.pix_fmt.as_str()), ("ffv1", "gray"));
+        assert_eq!(
+            (info.width, info.height, info.bits, info.frames),
+            (W, H, 8, N)
+        );
+        assert_eq!(
+            (info.codec.as_str(), info.pix_fmt.as_str()),
+            ("ffv1", "gray")
+        );
         let mut frame_buf = GreyFrame::U8 {
             width: 0,
             height: 0,
@@ -1175,7 +1202,10 @@ mod tests {
             assert_eq!((*width, *height), (W, H));
             assert_eq!(data, &frame(k), "frame {k}");
             // Matroska keeps milliseconds: the container time is k / 120 s to half a ms.
-            assert!((fi.time_s - k as f64 / 120.0).abs() <= 0.0005 + 1e-9, "{fi:?}");
+            assert!(
+                (fi.time_s - k as f64 / 120.0).abs() <= 0.0005 + 1e-9,
+                "{fi:?}"
+            );
             // One buffer, reused (memory stays one frame).
             let ptr = data.as_ptr();
             if k > 0 {
@@ -1282,7 +1312,14 @@ mod tests {
         encode(
             &raw,
             &path,
-            &["-vf", "select='not(eq(n\\,5))'", "-vsync", "passthrough", "-c:v", "ffv1"],
+            &[
+                "-vf",
+                "select='not(eq(n\\,5))'",
+                "-vsync",
+                "passthrough",
+                "-c:v",
+                "ffv1",
+            ],
         );
         let e = VideoFrames::open(&path, 120.0).unwrap_err();
         let msg = e.to_string();
@@ -1290,7 +1327,10 @@ mod tests {
             matches!(e, VideoError::IrregularTimestamps { frame: 5, .. }),
             "{msg}"
         );
-        assert!(msg.contains("drop.mkv: frame 5") && msg.contains("dropped frame"), "{msg}");
+        assert!(
+            msg.contains("drop.mkv: frame 5") && msg.contains("dropped frame"),
+            "{msg}"
+        );
         assert!(e.is_bad_input());
     }
 
@@ -1373,7 +1413,13 @@ mod tests {
         let e = read_all(&cut_avi, 120.0).unwrap_err();
         println!("truncated AVI: {e}");
         assert!(e.to_string().contains("cut.avi"), "{e}");
-        assert!(matches!(e, VideoError::MissingFrames { .. } | VideoError::Truncated { .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                VideoError::MissingFrames { .. } | VideoError::Truncated { .. }
+            ),
+            "{e}"
+        );
         // Damaged bytes inside a frame (slice CRCs catch it).
         let mut bad = bytes.clone();
         let mid = bytes.len() / 2;
@@ -1407,7 +1453,10 @@ mod tests {
         assert!(matches!(e, VideoError::ProgramMissing { .. }));
         assert!(!e.is_bad_input());
         let msg = e.to_string();
-        assert!(msg.contains("ffprobe-not-here") && msg.contains("x.mkv"), "{msg}");
+        assert!(
+            msg.contains("ffprobe-not-here") && msg.contains("x.mkv"),
+            "{msg}"
+        );
         assert!(msg.contains("apt-get install ffmpeg"), "{msg}");
     }
 
@@ -1435,7 +1484,10 @@ mod tests {
         assert_eq!(rate_string(120.0), "120/1");
         assert_eq!(rate_string(120_000.0 / 1001.0), "120000/1001");
         assert_eq!(rate_string(2.5), "5/2");
-        assert_eq!(rate_string(std::f64::consts::PI), format!("{}", std::f64::consts::PI));
+        assert_eq!(
+            rate_string(std::f64::consts::PI),
+            format!("{}", std::f64::consts::PI)
+        );
     }
 
     #[test]
@@ -1449,7 +1501,10 @@ mod tests {
         let mut dropped = regular.clone();
         dropped.remove(40);
         let e = check_times(p, &dropped, 120.0, 1e-3).unwrap_err();
-        assert!(matches!(e, VideoError::IrregularTimestamps { frame: 40, .. }));
+        assert!(matches!(
+            e,
+            VideoError::IrregularTimestamps { frame: 40, .. }
+        ));
         // AVI counts frames (time base 1/fps): exact, and a 0.1 ms error is already irregular.
         assert!(check_times(p, &regular, 120.0, 1.0 / 120.0).is_ok());
         let mut late = regular.clone();
