@@ -706,20 +706,18 @@ impl Qr {
         let (m, n) = (self.m, self.n);
         let mut y = y.to_vec();
         for j in 0..n {
-            let vnorm2: f64 = (j..m).map(|r| self.a[j * m + r].powi(2)).sum();
-            let dot: f64 = (j..m).map(|r| self.a[j * m + r] * y[r]).sum();
+            let v = &self.a[j * m + j..(j + 1) * m];
+            let vnorm2: f64 = v.iter().map(|e| e * e).sum();
+            let dot: f64 = v.iter().zip(&y[j..]).map(|(e, yr)| e * yr).sum();
             let f = 2.0 * dot / vnorm2;
-            for r in j..m {
-                y[r] -= f * self.a[j * m + r];
+            for (yr, e) in y[j..].iter_mut().zip(v) {
+                *yr -= f * e;
             }
         }
         let mut x = [0.0; LINEAR];
         for j in (0..n).rev() {
-            let mut v = y[j];
-            for c in j + 1..n {
-                v -= self.a[c * m + j] * x[c];
-            }
-            x[j] = v / self.diag[j];
+            let upper: f64 = (j + 1..n).map(|c| self.a[c * m + j] * x[c]).sum();
+            x[j] = (y[j] - upper) / self.diag[j];
         }
         x
     }
