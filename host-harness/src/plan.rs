@@ -25,7 +25,9 @@
 //!
 //! When no exposure is given the row is evaluated at `max_exposure_ms`.
 
-use crate::imaging::compensation::{correction_table, transfer_curve, CompensationError, TransferSetup};
+use crate::imaging::compensation::{
+    correction_table, transfer_curve, CompensationError, TransferSetup,
+};
 use crate::imaging::DiskTarget;
 use firmware_core::centroid::Mode;
 use firmware_core::exposure::{BoxTransfer, ExposureTransfer};

@@ -32,7 +32,10 @@
 //!   dimensionless (acceleration over acceleration).
 
 pub mod frames;
+pub mod modal;
 pub mod report;
+pub mod uff;
+pub mod video;
 
 pub use crate::chain::displacement::{
     displacement_mm, Axis, Displacement, DisplacementSettings, GreyFrame, MAX_LOST_FRACTION,
