@@ -54,7 +54,7 @@ def main():
             np.savetxt(os.path.join(OUT, f"{name}_x.csv"), x, fmt="%.9g")
             y = sig.resample(x.astype(np.float64), m)
             np.savetxt(os.path.join(OUT, f"{name}_y.csv"), y, fmt="%.12g")
-            # acceleration (SPEC 2.3) of the resampled signal for a camera at FS_IN Hz:
+            # acceleration (method.md §2.3) of the resampled signal for a camera at FS_IN Hz:
             # FFT derivative in numpy, -omega^2 per bin (fftfreq), DC zeroed
             fs_out = FS_IN * m / n
             w = 2 * np.pi * np.fft.fftfreq(m, 1.0 / fs_out)

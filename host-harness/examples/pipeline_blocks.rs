@@ -4,7 +4,7 @@
 //!
 //! * the firmware pipeline (`firmware_core::pipeline::VisionH1`): blocks every half second,
 //!   end-matched, central half kept;
-//! * whole blocks, each upsampled on its own and kept entire (SPEC 2.2 applied per block).
+//! * whole blocks, each upsampled on its own and kept entire (method.md §2.2 applied per block).
 //!
 //! Same Welch settings for all (2048-point Hann segments, 50 % overlap, on the span the
 //! pipeline covers), noise-free camera (the exact tip displacement at the frame instants), the

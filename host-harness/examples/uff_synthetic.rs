@@ -1,5 +1,5 @@
 //! Writes a universal file (one dataset 58 per FRF) of the cantilever rig's closed-form FRFs
-//! (SPEC 3.2) at 0.1 Hz bins, for `scripts/check_uff.py` to read with pyuff and fit with
+//! (method.md §3.2) at 0.1 Hz bins, for `scripts/check_uff.py` to read with pyuff and fit with
 //! sdypy-EMA; prints our own fit of the same FRFs ([`host_harness::analysis::modal`]) to compare.
 //!
 //! FRFs, all acceleration over base acceleration: the tip accelerometer (node 101) and five

@@ -1,4 +1,4 @@
-//! Exposure planner (SPEC 3.4, issue 12): before a test, per mode, how much the exposure
+//! Exposure planner (method.md §3.4, issue 12): before a test, per mode, how much the exposure
 //! will lower the vision amplitude, the longest exposure within a tolerance, what remains
 //! after compensation, and whether frames will be lost. A pure function of its inputs
 //! ([`plan`]); the CLI prints or writes its rows.

@@ -13,7 +13,7 @@
 //!
 //! # Conventions
 //!
-//! * **Displacement sign.** Image `x` grows to the right and `y` grows *down* (SPEC 2.1). With
+//! * **Displacement sign.** Image `x` grows to the right and `y` grows *down* (method.md §2.1). With
 //!   [`Axis::Y`] (the default) the displacement is positive **upwards in the image**:
 //!   `d = -(cy - cy_ref) * mm_per_px`; with [`Axis::X`] it is positive to the right:
 //!   `d = (cx - cx_ref) * mm_per_px`. `invert` flips either. The reference `c_ref` is the mean
@@ -132,7 +132,7 @@ pub fn align(
 }
 
 /// Time offset (first frame minus first sample, s) from a tick offset on a common time base
-/// of `tick_hz` (SPEC 2.7).
+/// of `tick_hz` (method.md §2.7).
 pub fn tick_offset_to_seconds(ticks: i64, tick_hz: f64) -> anyhow::Result<f64> {
     if !(tick_hz.is_finite() && tick_hz > 0.0) {
         return Err(bad_input(format!(

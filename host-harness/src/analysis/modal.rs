@@ -1,4 +1,4 @@
-//! Modal parameters from complex FRFs (SPEC 3.6): natural frequency and damping ratio per
+//! Modal parameters from complex FRFs (method.md §3.6): natural frequency and damping ratio per
 //! resonance by a least-squares fit of a single-mode model with residual terms, residues per FRF
 //! for a shared pole, mode shapes from the residues, and the modal assurance criterion (MAC).
 //! Pure functions on in-memory arrays.
@@ -23,7 +23,7 @@
 //! `(iw)^-2` and `(iw)^0` for receptance, `(iw)^-1` and `(iw)^1` for mobility, `(iw)^0` and
 //! `(iw)^2` for accelerance. `R_L` and `R_U` are complex.
 //!
-//! The FRFs of this workspace (SPEC 3.2: tip over base acceleration, vision acceleration over
+//! The FRFs of this workspace (method.md §3.2: tip over base acceleration, vision acceleration over
 //! base acceleration) are **accelerance-like** ratios: for the base-excited cantilever
 //! `H(w) = 1 + sum_i c_i w^2 / (w_i^2 - w^2 + 2 i zeta_i w_i w)`, in which each mode is exactly a
 //! pole pair plus the constant `-c_i` and the rigid-base `1` is a constant: use
@@ -730,12 +730,12 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution as _, StandardNormal};
 
-    /// The cantilever rig of SPEC 3.2: (f Hz, damping, G phi at the tip).
+    /// The cantilever rig of method.md §3.2: (f Hz, damping, G phi at the tip).
     const RIG: [(f64, f64, f64); 2] = [(7.1, 0.0115, 1.566), (32.4, 0.011, -0.867)];
-    /// Bands of SPEC 3.2.
+    /// Bands of method.md §3.2.
     const BANDS: [(f64, f64); 2] = [(5.0, 15.0), (25.0, 45.0)];
 
-    /// Closed-form FRF of the base-excited modal model (SPEC 3.2), output over base
+    /// Closed-form FRF of the base-excited modal model (method.md §3.2), output over base
     /// acceleration, for a point whose participation-times-shape is `gphi[i]` per mode:
     /// `1 + sum_i gphi_i w^2 / (w_i^2 - w^2 + 2 i h_i w_i w)`.
     fn base_excited(f: f64, gphi: &[f64]) -> Complex64 {

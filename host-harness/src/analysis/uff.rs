@@ -1,5 +1,5 @@
 //! Universal file format (UFF) writer: dataset 58, "function at nodal DOF", ASCII, for FRFs
-//! (SPEC 3.6), so that the FRFs of a recording open in the modal tools test engineers already use
+//! (method.md §3.6), so that the FRFs of a recording open in the modal tools test engineers already use
 //! (pyuff, sdypy-EMA, commercial suites). A pure writer: it returns bytes; writing the file is
 //! the caller's step.
 //!

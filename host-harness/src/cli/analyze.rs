@@ -50,7 +50,7 @@ pub struct Args {
         conflicts_with = "tick_offset"
     )]
     pub time_offset_s: Option<f64>,
-    /// Same as --time-offset-s in ticks of the common time base --tick-hz (SPEC 2.7).
+    /// Same as --time-offset-s in ticks of the common time base --tick-hz (method.md §2.7).
     #[arg(
         long,
         value_name = "TICKS",

@@ -138,10 +138,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         shard,
         progress: true,
     };
-    let records = study::execute(&cfg, scenario.as_ref(), &exec)?;
+    let done = study::execute(&cfg, scenario.as_ref(), &exec)?;
     let elapsed = started.elapsed();
-    study::finish(&cfg, scenario.as_ref(), &records, &out, !args.no_plots)?;
-    eprintln!("{} runs in {:.1} s", records.len(), elapsed.as_secs_f64());
+    study::finish(&cfg, scenario.as_ref(), &done.records, &out, !args.no_plots)?;
+    eprintln!(
+        "{} runs computed in {:.1} s ({} in the study)",
+        done.computed,
+        elapsed.as_secs_f64(),
+        done.records.len()
+    );
     if shard != Shard::ALL {
         eprintln!(
             "this is shard {}/{}: combine all shard directories with `host-harness merge DIR... --out DIR`",

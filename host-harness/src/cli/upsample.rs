@@ -1,5 +1,5 @@
 //! `host-harness upsample`: Fourier upsampling of one CSV column through firmware-core's
-//! upsampler (f32, SPEC 2.2, the convention of `scipy.signal.resample`).
+//! upsampler (f32, method.md §2.2, the convention of `scipy.signal.resample`).
 
 use crate::bad_input;
 use anyhow::Context as _;

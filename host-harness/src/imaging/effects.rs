@@ -1,4 +1,4 @@
-//! Optional image-formation effects of SPEC 3.1, applied to the float frame after the EPSA
+//! Optional image-formation effects of method.md §3.1, applied to the float frame after the EPSA
 //! blur and before quantisation, each off by default: contrast gain, quadratic/cubic radial lens
 //! distortion (resampling), optical blur (Gaussian filter), sensor noise (shot + read) and the
 //! quantisation bit depth (8, 12 or 16 bits).

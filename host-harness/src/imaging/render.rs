@@ -1,5 +1,5 @@
 //! Fast motion-blurred frames of a disk target moving along the image `y` axis, by EPSA (exact
-//! phase shift and averaging, SPEC 3.1) made separable.
+//! phase shift and averaging, method.md §3.1) made separable.
 //!
 //! The target moves vertically only, so translating the reference image by `d` pixels is, for
 //! every column, multiplying the column's 1-D DFT along `y` by `exp(-2 pi i k d / H)`; and the

@@ -4,7 +4,6 @@
 use super::RunRecord;
 use crate::bad_input;
 use anyhow::Context as _;
-use std::io::BufRead as _;
 use std::path::Path;
 
 /// Revision of the simulation and measurement code whose results a study directory holds.
@@ -54,38 +53,162 @@ pub mod files {
     pub const FRF_BAND: &str = "frf_band.csv";
     /// Lost frames per run and exposure.
     pub const LOST_FRAMES: &str = "lost_frames.csv";
+    /// Lock file of a running study (holds the pid).
+    pub const LOCK: &str = ".lock";
 }
 
-/// Reads the run records of a checkpoint file. A last line cut short by an interruption is
-/// ignored (that run is simply computed again); any other bad line is an error naming it.
-pub fn read_checkpoint(path: &Path) -> anyhow::Result<Vec<RunRecord>> {
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+/// The run records of a checkpoint, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// The records, one per run, sorted by run.
+    pub records: Vec<RunRecord>,
+    /// Byte length of the complete lines (a torn last line is not counted).
+    pub valid_len: u64,
+    /// A last line cut short by an interruption was found (and is not in `records`).
+    pub torn_tail: bool,
+    /// Runs that appeared more than once with identical records (kept once).
+    pub duplicates: Vec<u64>,
+}
+
+/// Reads the run records of a checkpoint file (a missing file is an empty checkpoint). A last
+/// line without its newline that does not parse was cut short by an interruption: it is left out
+/// (that run is computed again) and reported in [`Checkpoint::torn_tail`]. A run recorded twice
+/// with identical records is kept once and reported; twice with different records is an error
+/// naming the run, as is any other bad line (named by its number).
+pub fn read_checkpoint(path: &Path) -> anyhow::Result<Checkpoint> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
         Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
     };
-    let lines: Vec<String> = std::io::BufReader::new(file)
-        .lines()
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let mut out = Vec::with_capacity(lines.len());
-    for (i, line) in lines.iter().enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        match serde_json::from_str::<RunRecord>(line) {
-            Ok(r) => out.push(r),
-            Err(_) if i + 1 == lines.len() => break,
-            Err(e) => {
+    let mut by_run: std::collections::BTreeMap<u64, RunRecord> = Default::default();
+    let (mut valid_len, mut torn_tail, mut duplicates) = (0u64, false, Vec::new());
+    let mut start = 0usize;
+    let mut line_no = 0usize;
+    while start < bytes.len() {
+        line_no += 1;
+        let end = bytes[start..]
+            .iter()
+            .position(|b| *b == b'\n')
+            .map(|p| start + p);
+        let line = &bytes[start..end.unwrap_or(bytes.len())];
+        let parsed = std::str::from_utf8(line)
+            .map_err(|e| e.to_string())
+            .and_then(|t| {
+                if t.trim().is_empty() {
+                    Ok(None)
+                } else {
+                    serde_json::from_str::<RunRecord>(t)
+                        .map(Some)
+                        .map_err(|e| e.to_string())
+                }
+            });
+        match (parsed, end) {
+            (Ok(rec), Some(e)) => {
+                if let Some(rec) = rec {
+                    if let Some(old) = by_run.get(&rec.run) {
+                        if *old != rec {
+                            return Err(bad_input(format!(
+                                "{}: line {line_no}: run {} is recorded twice with different \
+                                 results (two processes with different code or settings wrote \
+                                 this checkpoint); it cannot be resumed or merged",
+                                path.display(),
+                                rec.run
+                            )));
+                        }
+                        duplicates.push(rec.run);
+                    } else {
+                        by_run.insert(rec.run, rec);
+                    }
+                }
+                valid_len = e as u64 + 1;
+                start = e + 1;
+            }
+            // no newline: the last write was cut short
+            (_, None) => {
+                torn_tail = true;
+                break;
+            }
+            (Err(e), Some(_)) => {
                 return Err(bad_input(format!(
-                    "{}: line {}: not a run record: {e}",
-                    path.display(),
-                    i + 1
+                    "{}: line {line_no}: not a run record: {e}",
+                    path.display()
                 )))
             }
         }
     }
-    Ok(out)
+    Ok(Checkpoint {
+        records: by_run.into_values().collect(),
+        valid_len,
+        torn_tail,
+        duplicates,
+    })
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same directory, synced, renamed
+/// over `path`, and the directory synced, so that a reader (or a crash) sees the old file or the
+/// new one, never a part.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)?;
+        if let Ok(d) = std::fs::File::open(dir) {
+            d.sync_all().ok();
+        }
+        Ok(())
+    };
+    write().map_err(|e| {
+        std::fs::remove_file(&tmp).ok();
+        anyhow::Error::new(e).context(format!("cannot write {}", path.display()))
+    })
+}
+
+/// An exclusive lock on a study directory, held while the value lives (`flock` on
+/// `DIR/.lock`, which also records the holder's pid).
+#[derive(Debug)]
+pub struct DirLock {
+    _file: std::fs::File,
+}
+
+/// Takes the exclusive lock of study directory `dir`; a second process gets an error naming the
+/// holder's pid.
+pub fn lock_dir(dir: &Path) -> anyhow::Result<DirLock> {
+    use std::io::{Read as _, Seek as _, Write as _};
+    let path = dir.join(files::LOCK);
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            file.read_to_string(&mut holder).ok();
+            return Err(bad_input(format!(
+                "{} is in use by another host-harness process (pid {}); wait for it to finish, \
+                 or use another --out",
+                dir.display(),
+                holder.trim()
+            )));
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(e).with_context(|| format!("cannot lock {}", path.display()))
+        }
+    }
+    file.set_len(0)?;
+    file.rewind()?;
+    write!(file, "{}", std::process::id())?;
+    file.sync_all().ok();
+    Ok(DirLock { _file: file })
 }
 
 #[cfg(test)]
@@ -108,7 +231,20 @@ mod tests {
         };
         let line = serde_json::to_string(&rec).unwrap();
         std::fs::write(&p, format!("{line}\n{}", &line[..10])).unwrap();
-        assert_eq!(read_checkpoint(&p).unwrap(), vec![rec.clone()]);
+        let c = read_checkpoint(&p).unwrap();
+        assert_eq!(c.records, vec![rec.clone()]);
+        assert!(c.torn_tail);
+        assert_eq!(c.valid_len, line.len() as u64 + 1);
+        // an identical duplicate is kept once and reported; a different one is refused
+        std::fs::write(&p, format!("{line}\n{line}\n")).unwrap();
+        let c = read_checkpoint(&p).unwrap();
+        assert_eq!((c.records.len(), c.duplicates.clone()), (1, vec![3]));
+        let mut other = rec.clone();
+        other.natural_f_hz = vec![2.5];
+        let o = serde_json::to_string(&other).unwrap();
+        std::fs::write(&p, format!("{line}\n{o}\n")).unwrap();
+        let e = read_checkpoint(&p).unwrap_err();
+        assert!(format!("{e}").contains("run 3 is recorded twice"), "{e}");
         std::fs::write(&p, format!("{}\n{line}\n", &line[..10])).unwrap();
         let e = read_checkpoint(&p).unwrap_err();
         assert!(format!("{e}").contains("line 1"));

@@ -34,7 +34,7 @@ pub fn read_shards(dirs: &[PathBuf]) -> anyhow::Result<Merged> {
             .map_err(|e| bad_input(format!("cannot read {}: {e}", p.display())))?;
         let c: StudyConfig =
             toml::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", p.display())))?;
-        let records = read_checkpoint(&dir.join(files::RUNS))?;
+        let records = read_checkpoint(&dir.join(files::RUNS))?.records;
         let Some(m) = &mut merged else {
             merged = Some(Merged {
                 config: c,

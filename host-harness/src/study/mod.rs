@@ -26,7 +26,7 @@ pub use cantilever::Cantilever;
 pub use checkpoint::{files, read_checkpoint, recorded_revision, MODEL_REVISION};
 pub use config::{ImagingOptions, Preset, StudyConfig};
 pub use grandstand::Grandstand;
-pub use runner::{execute, run_rng, Execution, Shard};
+pub use runner::{execute, run_rng, Executed, Execution, Shard};
 
 use crate::chain::displacement::{fill_lost_frames, too_many_lost};
 pub use crate::chain::frf::{PeakRecord, SystemRecord};

@@ -2,7 +2,7 @@
 //! computed in parallel (rayon) and appended to the checkpoint as each finishes, and the resume
 //! of an interrupted study (method.md §3.1 "Reproducibility").
 
-use super::checkpoint::{self, files, MODEL_REVISION};
+use super::checkpoint::{self, files, DirLock, MODEL_REVISION};
 use super::{RunRecord, Scenario, StudyConfig};
 use crate::bad_input;
 use anyhow::Context as _;
@@ -66,81 +66,136 @@ pub struct Execution {
     pub progress: bool,
 }
 
-/// Runs (or resumes) the runs of `shard` and returns all records in `out`, sorted by run.
-pub fn execute(
+/// What an execution produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Executed {
+    /// Every run record in the directory, sorted by run.
+    pub records: Vec<RunRecord>,
+    /// Runs computed by this process (the others were found in the checkpoint).
+    pub computed: usize,
+}
+
+/// Most worker threads a study starts: more than this many per core only costs memory.
+pub const MAX_THREADS_PER_CORE: usize = 4;
+
+/// Worker threads for `pending` runs: `requested` (0 = all cores) capped at the pending runs
+/// and at [`MAX_THREADS_PER_CORE`] per core, with a warning when the request is cut.
+pub fn worker_threads(requested: usize, pending: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = cores * MAX_THREADS_PER_CORE;
+    let want = if requested == 0 { cores } else { requested };
+    let n = want.min(max).min(pending.max(1));
+    if requested > max {
+        eprintln!(
+            "warning: --threads {requested} capped at {max} ({MAX_THREADS_PER_CORE} per core on \
+             {cores} cores)"
+        );
+    }
+    n
+}
+
+/// Checks that the study in `out` is the one `cfg` describes (configuration, model revision,
+/// shard), so that a resume never mixes two studies.
+fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
+    let cfg_path = exec.out.join(files::CONFIG);
+    let old_text = std::fs::read_to_string(&cfg_path)
+        .with_context(|| format!("cannot read {}", cfg_path.display()))?;
+    let old: StudyConfig =
+        toml::from_str(&old_text).map_err(|e| bad_input(format!("{}: {e}", cfg_path.display())))?;
+    if &old != cfg {
+        return Err(bad_input(format!(
+            "--resume: the configuration differs from the one in {} (resume with the same \
+             preset, runs, exposures, seed and options)",
+            cfg_path.display()
+        )));
+    }
+    let revision = checkpoint::recorded_revision(&exec.out)?;
+    if revision != MODEL_REVISION {
+        return Err(bad_input(format!(
+            "--resume: {} holds runs of model revision {revision}, this build computes \
+             revision {MODEL_REVISION}; mixing them would give a study of two code \
+             versions. Start it again in a new --out (without --out, the default directory \
+             already differs)",
+            exec.out.display()
+        )));
+    }
+    let shard_text = format!("{}/{}\n", exec.shard.index, exec.shard.count);
+    let old_shard =
+        std::fs::read_to_string(exec.out.join(files::SHARD)).unwrap_or_else(|_| "1/1\n".into());
+    if old_shard != shard_text {
+        return Err(bad_input(format!(
+            "--resume: {} holds shard {}, not {}",
+            exec.out.display(),
+            old_shard.trim(),
+            shard_text.trim()
+        )));
+    }
+    Ok(())
+}
+
+/// Opens (or creates) the study directory under its lock and returns the runs already done.
+/// A new study's revision, shard and configuration are written atomically (the configuration
+/// last: its presence marks a study). On resume a torn last checkpoint line is cut off (the file
+/// is only ever shortened to its complete lines, never rewritten), identical duplicate records
+/// are reported.
+fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, Vec<RunRecord>)> {
+    std::fs::create_dir_all(&exec.out)
+        .with_context(|| format!("cannot create {}", exec.out.display()))?;
+    let lock = checkpoint::lock_dir(&exec.out)?;
+    let cfg_path = exec.out.join(files::CONFIG);
+    let runs_path = exec.out.join(files::RUNS);
+    if !(runs_path.exists() || cfg_path.exists()) {
+        checkpoint::write_atomic(
+            &exec.out.join(files::REVISION),
+            format!("{MODEL_REVISION}\n").as_bytes(),
+        )?;
+        if exec.shard != Shard::ALL {
+            let shard_text = format!("{}/{}\n", exec.shard.index, exec.shard.count);
+            checkpoint::write_atomic(&exec.out.join(files::SHARD), shard_text.as_bytes())?;
+        }
+        checkpoint::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
+        return Ok((lock, Vec::new()));
+    }
+    if !exec.resume {
+        return Err(bad_input(format!(
+            "{} already holds a study; pass --resume to continue it, or choose another --out",
+            exec.out.display()
+        )));
+    }
+    check_resumable(cfg, exec)?;
+    let ck = checkpoint::read_checkpoint(&runs_path)?;
+    if ck.torn_tail {
+        eprintln!(
+            "{}: dropped a last line cut short by an interruption (that run is computed again)",
+            runs_path.display()
+        );
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&runs_path)
+            .with_context(|| format!("cannot open {}", runs_path.display()))?;
+        f.set_len(ck.valid_len)?;
+        f.sync_all()?;
+    }
+    if !ck.duplicates.is_empty() {
+        eprintln!(
+            "{}: runs {:?} were recorded more than once with identical results; each is counted \
+             once",
+            runs_path.display(),
+            ck.duplicates
+        );
+    }
+    Ok((lock, ck.records))
+}
+
+/// Computes `pending` runs on `threads` workers, appending each record to the checkpoint (and
+/// syncing it) as soon as it is done; returns the new records.
+fn run_pending(
     cfg: &StudyConfig,
     scenario: &dyn Scenario,
     exec: &Execution,
+    pending: &[u64],
 ) -> anyhow::Result<Vec<RunRecord>> {
-    cfg.validate()?;
-    std::fs::create_dir_all(&exec.out)
-        .with_context(|| format!("cannot create {}", exec.out.display()))?;
-    let cfg_path = exec.out.join(files::CONFIG);
     let runs_path = exec.out.join(files::RUNS);
-    let shard_path = exec.out.join(files::SHARD);
-    let shard_text = format!("{}/{}\n", exec.shard.index, exec.shard.count);
-    let mut done = Vec::new();
-    if runs_path.exists() || cfg_path.exists() {
-        if !exec.resume {
-            return Err(bad_input(format!(
-                "{} already holds a study; pass --resume to continue it, or choose another --out",
-                exec.out.display()
-            )));
-        }
-        let old_text = std::fs::read_to_string(&cfg_path)
-            .with_context(|| format!("cannot read {}", cfg_path.display()))?;
-        let old: StudyConfig = toml::from_str(&old_text)
-            .map_err(|e| bad_input(format!("{}: {e}", cfg_path.display())))?;
-        if &old != cfg {
-            return Err(bad_input(format!(
-                "--resume: the configuration differs from the one in {} (resume with the same \
-                 preset, runs, exposures, seed and options)",
-                cfg_path.display()
-            )));
-        }
-        let revision = checkpoint::recorded_revision(&exec.out)?;
-        if revision != MODEL_REVISION {
-            return Err(bad_input(format!(
-                "--resume: {} holds runs of model revision {revision}, this build computes \
-                 revision {MODEL_REVISION}; mixing them would give a study of two code \
-                 versions. Start it again in a new --out (without --out, the default directory \
-                 already differs)",
-                exec.out.display()
-            )));
-        }
-        let old_shard = std::fs::read_to_string(&shard_path).unwrap_or_else(|_| "1/1\n".into());
-        if old_shard != shard_text {
-            return Err(bad_input(format!(
-                "--resume: {} holds shard {}, not {}",
-                exec.out.display(),
-                old_shard.trim(),
-                shard_text.trim()
-            )));
-        }
-        done = checkpoint::read_checkpoint(&runs_path)?;
-        // rewrite the checkpoint without a possibly truncated tail
-        let mut text = String::new();
-        for r in &done {
-            text.push_str(&serde_json::to_string(r)?);
-            text.push('\n');
-        }
-        std::fs::write(&runs_path, text)
-            .with_context(|| format!("cannot write {}", runs_path.display()))?;
-    } else {
-        std::fs::write(&cfg_path, cfg.to_toml())
-            .with_context(|| format!("cannot write {}", cfg_path.display()))?;
-        let rev_path = exec.out.join(files::REVISION);
-        std::fs::write(&rev_path, format!("{MODEL_REVISION}\n"))
-            .with_context(|| format!("cannot write {}", rev_path.display()))?;
-        if exec.shard != Shard::ALL {
-            std::fs::write(&shard_path, &shard_text)?;
-        }
-    }
-    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
-    let pending: Vec<u64> = (0..cfg.runs)
-        .filter(|r| exec.shard.contains(*r) && !have.contains(r))
-        .collect();
-
     let file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
@@ -149,16 +204,8 @@ pub fn execute(
     let sink = Mutex::new(file);
     let new = Mutex::new(Vec::new());
     let bar = progress_bar(pending.len() as u64, exec.progress && !pending.is_empty());
-    if !have.is_empty() {
-        eprintln!(
-            "resuming {}: {} runs already done, {} to go",
-            exec.out.display(),
-            have.len(),
-            pending.len()
-        );
-    }
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(exec.threads)
+        .num_threads(worker_threads(exec.threads, pending.len()))
         .stack_size(64 << 20)
         .build()
         .context("cannot start the worker threads")?;
@@ -175,7 +222,7 @@ pub fn execute(
                     .lock()
                     .map_err(|_| anyhow::anyhow!("checkpoint lock"))?;
                 f.write_all(line.as_bytes())
-                    .and_then(|_| f.flush())
+                    .and_then(|_| f.sync_data())
                     .with_context(|| format!("cannot append to {}", runs_path.display()))?;
             }
             new.lock()
@@ -187,9 +234,38 @@ pub fn execute(
     });
     bar.finish_and_clear();
     result?;
-    done.extend(new.into_inner().unwrap_or_default());
+    Ok(new.into_inner().unwrap_or_default())
+}
+
+/// Runs (or resumes) the runs of `exec.shard`, holding the directory's lock throughout, and
+/// returns all records in `exec.out`, sorted by run.
+pub fn execute(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    exec: &Execution,
+) -> anyhow::Result<Executed> {
+    cfg.validate()?;
+    let (_lock, mut done) = open_study(cfg, exec)?;
+    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
+    let pending: Vec<u64> = (0..cfg.runs)
+        .filter(|r| exec.shard.contains(*r) && !have.contains(r))
+        .collect();
+    if !have.is_empty() {
+        eprintln!(
+            "resuming {}: {} runs already done, {} to go",
+            exec.out.display(),
+            have.len(),
+            pending.len()
+        );
+    }
+    let new = run_pending(cfg, scenario, exec, &pending)?;
+    let computed = new.len();
+    done.extend(new);
     done.sort_by_key(|r| r.run);
-    Ok(done)
+    Ok(Executed {
+        records: done,
+        computed,
+    })
 }
 
 fn progress_bar(len: u64, show: bool) -> indicatif::ProgressBar {
