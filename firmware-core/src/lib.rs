@@ -40,3 +40,32 @@ pub mod upsample;
 
 /// Single-precision complex number used throughout the crate (the one `microfft` uses).
 pub use num_complex::Complex32;
+
+/// The `heapless` version this crate's types use (`MultiCentroider::targets` returns a
+/// `heapless::Vec`): use it through this re-export and one build never holds two versions.
+pub use heapless;
+
+/// A caller buffer has the wrong length: the one **run-time** error of the functions that work
+/// in caller-provided buffers ([`dft::Dft::process`], [`upsample::UpsamplePlan::process_with`],
+/// [`spectrum::WelchAccumulator::add_segment`]). Nothing was written when it is returned.
+/// Settings are checked once, by each stage's `try_new`, and have their own `ConfigError`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BufferError {
+    /// Length needed (for a scratch buffer: the least length).
+    pub expected: usize,
+    /// Length passed.
+    pub got: usize,
+}
+
+impl core::fmt::Display for BufferError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "buffer has {} values, {} expected",
+            self.got, self.expected
+        )
+    }
+}
+
+impl core::error::Error for BufferError {}

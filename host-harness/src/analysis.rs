@@ -85,12 +85,14 @@ pub fn centroid_frame(
             width,
             height,
             data,
-        } => centroid::centroid_u8(config, data, *width, *height, *width),
+        } => centroid::Frame::new(data, *width, *height, *width)
+            .and_then(|f| centroid::centroid(config, &f)),
         GreyFrame::U16 {
             width,
             height,
             data,
-        } => centroid::centroid_u16(config, data, *width, *height, *width),
+        } => centroid::Frame::new(data, *width, *height, *width)
+            .and_then(|f| centroid::centroid(config, &f)),
     };
     r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
 }
@@ -970,8 +972,6 @@ mod tests {
         })
     }
 
-    use firmware_core::centroid::Mode;
-
     #[test]
     fn interpolation_is_linear_between_neighbours_and_holds_at_the_ends() {
         let v = [None, Some(1.0), None, None, Some(4.0), None];
@@ -1001,7 +1001,7 @@ mod tests {
 
     #[test]
     fn displacement_sign_follows_the_documented_convention() {
-        let cfg = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+        let cfg = CentroidConfig::binary(100);
         // the target moves down the image by 2 px, then a lost frame, then back
         let frames = [
             disk_frame(32, 32, 15.0, 14.0, 4.0),

@@ -32,23 +32,79 @@ pub struct RowSums {
     pub max: u16,
 }
 
-/// Pixel types the kernels accept (8- and 16-bit grey).
-pub(crate) trait Pixel: Copy + Ord + Default + Into<u16> {
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for u8 {}
+    impl Sealed for u16 {}
+}
+
+/// Grey pixel types the centroiders accept: `u8` and `u16` (sealed). Every function that
+/// takes rows or a [`Frame`](super::Frame) is generic over it, in place of `_u8` / `_u16`
+/// twins; each type keeps its own kernels ([`row_binary_u8`], [`row_weighted_u16`], ...).
+pub trait Pixel: sealed::Sealed + Copy + Ord + Default + Into<u16> + 'static {
+    /// The largest code (255 or 65 535): the default saturation level.
+    const FULL: u16;
+
     /// `self - t` if `self > t`, else 0 (the weighted-mode weight).
+    #[doc(hidden)]
     fn excess(self, t: Self) -> u32;
+
+    /// The threshold `t` for this pixel type (8-bit: `t >= 255` selects nothing).
+    #[doc(hidden)]
+    fn threshold(t: u16) -> Self;
+
+    /// The row kernel of this type and mode.
+    #[doc(hidden)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums;
 }
 
 impl Pixel for u8 {
+    const FULL: u16 = 255;
+
     #[inline(always)]
     fn excess(self, t: Self) -> u32 {
         u32::from(self.saturating_sub(t))
     }
+
+    #[inline(always)]
+    fn threshold(t: u16) -> Self {
+        if t > 255 {
+            255
+        } else {
+            t as u8
+        }
+    }
+
+    #[inline(always)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
+        if binary {
+            row_binary_u8(row, t)
+        } else {
+            row_weighted_u8(row, t)
+        }
+    }
 }
 
 impl Pixel for u16 {
+    const FULL: u16 = u16::MAX;
+
     #[inline(always)]
     fn excess(self, t: Self) -> u32 {
         u32::from(self.saturating_sub(t))
+    }
+
+    #[inline(always)]
+    fn threshold(t: u16) -> Self {
+        t
+    }
+
+    #[inline(always)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
+        if binary {
+            row_binary_u16(row, t)
+        } else {
+            row_weighted_u16(row, t)
+        }
     }
 }
 

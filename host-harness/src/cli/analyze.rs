@@ -546,8 +546,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ModeArg::Binary => Mode::Binary,
         ModeArg::Weighted => Mode::Weighted,
     };
-    let config = CentroidConfig::try_new(args.threshold, mode, args.roi, None)
-        .map_err(|e| bad_input(format!("centroid settings: {e}")))?;
+    let config = CentroidConfig {
+        threshold: args.threshold,
+        mode,
+        roi: args.roi,
+        saturation: None,
+    }
+    .validate()
+    .map_err(|e| bad_input(format!("centroid settings: {e}")))?;
     let settings = Settings {
         frame_rate_hz: args.fps,
         accel_rate_hz: args.fs,

@@ -7,7 +7,7 @@
 //! at the end.
 
 use crate::bad_input;
-use firmware_core::centroid::{centroid_u16, centroid_u8, Centroid, CentroidConfig, Mode, Roi};
+use firmware_core::centroid::{centroid, Centroid, CentroidConfig, Frame, Mode, Roi};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -79,7 +79,10 @@ fn parse_roi(s: &str) -> Result<Roi, String> {
         width: num("W", w)?,
         height: num("H", h)?,
     };
-    CentroidConfig::try_new(0, Mode::Binary, Some(roi), None).map_err(|e| e.to_string())?;
+    CentroidConfig::binary(0)
+        .with_roi(roi)
+        .validate()
+        .map_err(|e| e.to_string())?;
     Ok(roi)
 }
 
@@ -93,8 +96,12 @@ pub fn centroid_file(config: &CentroidConfig, path: &Path) -> anyhow::Result<Cen
         .map_err(|e| bad_input(format!("{name}: cannot decode as PNG or TIFF: {e}")))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let result = match &img {
-        image::DynamicImage::ImageLuma8(b) => centroid_u8(config, b.as_raw(), w, h, w),
-        image::DynamicImage::ImageLuma16(b) => centroid_u16(config, b.as_raw(), w, h, w),
+        image::DynamicImage::ImageLuma8(b) => {
+            Frame::new(b.as_raw(), w, h, w).and_then(|f| centroid(config, &f))
+        }
+        image::DynamicImage::ImageLuma16(b) => {
+            Frame::new(b.as_raw(), w, h, w).and_then(|f| centroid(config, &f))
+        }
         other => {
             return Err(bad_input(format!(
                 "{name}: not a grey image (colour type {:?}); centroid needs 8- or 16-bit grey",
@@ -126,8 +133,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ModeArg::Binary => Mode::Binary,
         ModeArg::Weighted => Mode::Weighted,
     };
-    let config = CentroidConfig::try_new(args.threshold, mode, args.roi, args.saturation)
-        .map_err(|e| bad_input(format!("invalid settings: {e}")))?;
+    let config = CentroidConfig {
+        threshold: args.threshold,
+        mode,
+        roi: args.roi,
+        saturation: args.saturation,
+    }
+    .validate()
+    .map_err(|e| bad_input(format!("invalid settings: {e}")))?;
     let stdout = std::io::stdout();
     let mut out = csv::Writer::from_writer(stdout.lock());
     out.write_record(["file", "cx", "cy", "pixels", "flags"])?;
