@@ -749,7 +749,7 @@ impl Centroider {
     /// Pushes the next row of the frame (8- or 16-bit pixels, column 0 first). O(1) memory,
     /// infallible: rows past the region are skipped, columns past [`MAX_DIM`] are ignored and
     /// flagged [`Flags::CLIPPED`].
-    #[inline]
+    #[inline(always)]
     pub fn push_row<P: Pixel>(&mut self, row: &[P]) {
         let t = P::threshold(self.config.threshold);
         let sat = self.config.saturation_for(P::FULL);
@@ -762,10 +762,24 @@ impl Centroider {
     pub fn process<P: Pixel>(&mut self, frame: &Frame<'_, P>) -> Result<Centroid, FrameError> {
         self.config.check_region(frame, MAX_DIM)?;
         self.reset();
-        for row in frame.rows() {
-            self.push_row(row);
-        }
+        self.push_frame_rows(frame);
         Ok(self.result())
+    }
+
+    /// Pushes every row of `frame`, with the settings read once and the loop specialised
+    /// for the mode (the per-row overhead is a measurable part of a sparse frame's cost).
+    fn push_frame_rows<P: Pixel>(&mut self, frame: &Frame<'_, P>) {
+        let t = P::threshold(self.config.threshold);
+        let sat = self.config.saturation_for(P::FULL);
+        if self.config.mode == Mode::Binary {
+            for row in frame.rows() {
+                self.push(row, t, sat, |seg| P::row_sums(seg, t, true));
+            }
+        } else {
+            for row in frame.rows() {
+                self.push(row, t, sat, |seg| P::row_sums(seg, t, false));
+            }
+        }
     }
 
     #[inline(always)]
@@ -793,6 +807,33 @@ impl Centroider {
         self.last_row_hit = hit;
     }
 
+    /// [`push`](Self::push) for a region row `y` whose segment (`seg_len` pixels from column
+    /// `x0` of a row of `row_len`) went through the tracking window's one-pass kernel.
+    fn push_window(
+        &mut self,
+        w: &kernel::WindowSums,
+        y: u32,
+        x0: usize,
+        ends: bool,
+        row_len: usize,
+    ) {
+        self.next_y = y.saturating_add(1);
+        self.flags.set_if(Flags::CLIPPED, row_len > MAX_DIM);
+        let s = RowSums {
+            pixels: w.pixels,
+            weight: w.pixels,
+            sum_x: w.sum_x,
+            max: 0,
+        };
+        self.moments.add_row(&s, x0 as u64, u64::from(y));
+        let hit = w.pixels > 0;
+        let (y0, _) = self.config.rows();
+        let edge = y == y0 || ends;
+        self.flags.set_if(Flags::BORDER, hit && edge);
+        self.flags.set_if(Flags::SATURATED, hit && w.saturated);
+        self.last_row_hit = hit;
+    }
+
     /// The centroid of the rows pushed so far (the frame's result once its last row is in).
     pub fn result(&self) -> Centroid {
         let mut flags = self.flags;
@@ -814,6 +855,9 @@ pub fn centroid<P: Pixel>(
     config: &CentroidConfig,
     frame: &Frame<'_, P>,
 ) -> Result<Centroid, FrameError> {
-    let mut c = Centroider::try_new(*config).map_err(FrameError::Config)?;
-    c.process(frame)
+    let config = config.validate().map_err(FrameError::Config)?;
+    config.check_region(frame, MAX_DIM)?;
+    let mut c = Centroider::with(config);
+    c.push_frame_rows(frame);
+    Ok(c.result())
 }

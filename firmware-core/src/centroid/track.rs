@@ -38,7 +38,7 @@
 //! assert_eq!(tracker.rows(), (16, 27));
 //! ```
 
-use super::{Centroid, Centroider, ConfigError, Flags, Pixel, Roi, MAX_DIM};
+use super::{Centroid, Centroider, ConfigError, Flags, Mode, Pixel, Roi, MAX_DIM};
 
 /// Settings of a [`Tracker`]: plain data, checked once by [`Tracker::try_new`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -135,6 +135,9 @@ pub struct Tracker {
     inner: Centroider,
     /// The current frame's window; `None` while searching the whole area.
     window: Option<Roi>,
+    /// Rows `y0 .. y1` of the current frame (the window's, or the area's).
+    y0: u32,
+    y1: u32,
     extent: Extent,
 }
 
@@ -147,6 +150,8 @@ impl Tracker {
             config,
             inner: Centroider::with(config.centroid),
             window: None,
+            y0: 0,
+            y1: 0,
             extent: Extent::NONE,
         }
     }
@@ -158,10 +163,13 @@ impl Tracker {
             Ok(c) => c,
             Err(e) => return Err(e),
         };
+        let area = config.area();
         Ok(Tracker {
             config,
             inner: Centroider::with(config.centroid),
             window: None,
+            y0: area.y,
+            y1: area.y_end(),
             extent: Extent::NONE,
         })
     }
@@ -185,21 +193,43 @@ impl Tracker {
 
     /// Rows `y0 .. y1` the current frame needs (a driver may skip the others entirely).
     pub const fn rows(&self) -> (u32, u32) {
-        let r = match self.window {
-            Some(w) => w,
-            None => self.config.area(),
-        };
-        (r.y, r.y_end())
+        (self.y0, self.y1)
     }
 
     /// Pushes the next row of the frame (all `width` pixels, column 0 first). Rows outside
     /// the window are only counted; inside it, only the window's columns are read.
-    #[inline]
+    #[inline(always)]
     pub fn push_row<P: Pixel>(&mut self, row: &[P]) {
         let y = self.inner.next_y;
-        let (y0, y1) = self.rows();
-        if y < y0 || y >= y1 {
+        if y < self.y0 || y >= self.y1 {
             self.inner.next_y = y.saturating_add(1);
+            return;
+        }
+        let c = &self.inner.config;
+        let t = P::threshold(c.threshold);
+        let (x0, x1) = c.cols();
+        let seg = row.get(x0..x1.min(row.len())).unwrap_or(&[]);
+        let sat = c.saturation_for(P::FULL);
+        // only hits left of the extent so far, or right of it, can widen it
+        let e = self.extent;
+        let left = (e.x_min as usize).saturating_sub(x0);
+        let right = (e.x_max as usize + 1).saturating_sub(x0);
+        let right = if e.x_min > e.x_max { 0 } else { right };
+        if let Some(w) = P::window_sums(seg, t, sat, c.mode == Mode::Binary, left, right) {
+            // one pass for the sums, then the extent (binary 8-bit on ARM)
+            let ends = seg.first().is_some_and(|&p| p > t) || seg.last().is_some_and(|&p| p > t);
+            self.inner.push_window(&w, y, x0, ends, row.len());
+            if w.pixels > 0 {
+                let e = &mut self.extent;
+                if w.first != u32::MAX {
+                    e.x_min = e.x_min.min(x0 as u32 + w.first);
+                }
+                if w.last != u32::MAX {
+                    e.x_max = e.x_max.max(x0 as u32 + w.last);
+                }
+                e.y_min = e.y_min.min(y);
+                e.y_max = y;
+            }
             return;
         }
         self.inner.push_row(row);
@@ -218,6 +248,22 @@ impl Tracker {
                 e.y_max = y;
             }
         }
+    }
+
+    /// Processes a whole frame held in memory: only the rows of the window are read (the
+    /// others are not even visited), then [`finish_frame`](Self::finish_frame). Rows pushed
+    /// before are forgotten.
+    pub fn process<P: Pixel>(&mut self, frame: &super::Frame<'_, P>) -> Centroid {
+        self.inner.reset();
+        self.extent = Extent::NONE;
+        self.inner.next_y = self.y0;
+        for y in self.y0..self.y1 {
+            match frame.row(y as usize) {
+                Some(row) => self.push_row(row),
+                None => break,
+            }
+        }
+        self.finish_frame()
     }
 
     /// Ends the frame: returns its centroid and sets the window of the next one. In a window,
@@ -252,6 +298,11 @@ impl Tracker {
             }
         };
         self.window = next;
+        let rows = match next {
+            Some(w) => w,
+            None => area,
+        };
+        (self.y0, self.y1) = (rows.y, rows.y_end());
         let mut centroid = self.config.centroid;
         if next.is_some() {
             centroid.roi = next;
@@ -344,10 +395,15 @@ mod tests {
                 let want = full(&cfg, &f, w, h);
                 // after a frame with a target, the next one is processed in a window
                 prop_assert_eq!(t.window().is_some(), i > 0);
-                for row in f.chunks(w) {
-                    t.push_row(row);
-                }
-                let got = t.finish_frame();
+                // rows pushed one by one, or a frame in memory (window rows only)
+                let got = if i % 2 == 0 {
+                    for row in f.chunks(w) {
+                        t.push_row(row);
+                    }
+                    t.finish_frame()
+                } else {
+                    t.process(&Frame::new(&f, w, h, w).unwrap())
+                };
                 prop_assert_eq!(got, want);
             }
         }
