@@ -17,6 +17,20 @@
 //! Conventions (same as numpy/scipy): forward `X[k] = sum_j x[j] exp(-2 pi i j k / n)`;
 //! [`Direction::Inverse`] computes `sum_k X[k] exp(+2 pi i j k / n)` **without** the `1/n`
 //! factor.
+//!
+//! ```
+//! use firmware_core::dft::{scratch_len, Dft, Direction};
+//! use firmware_core::Complex32;
+//! // an exact 120-point DFT (not a power of two): a unit impulse has a flat spectrum
+//! const N: usize = 120;
+//! const SCRATCH: usize = match scratch_len(N) { Some(s) => s, None => 0 };
+//! let plan = Dft::try_new(N).unwrap();
+//! let mut x = [Complex32::new(0.0, 0.0); N];
+//! x[0] = Complex32::new(1.0, 0.0);
+//! let mut scratch = [Complex32::new(0.0, 0.0); SCRATCH];
+//! plan.process(&mut x, &mut scratch, Direction::Forward).unwrap();
+//! assert!(x.iter().all(|v| (v.re - 1.0).abs() < 1e-5 && v.im.abs() < 1e-5));
+//! ```
 
 use crate::{BufferError, Complex32};
 use core::fmt;

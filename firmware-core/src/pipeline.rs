@@ -54,6 +54,32 @@
 //! non-finite, and a non-finite ADC sample its neighbourhood: every segment that touches them
 //! is skipped and counted by [`WelchAccumulator::skipped_segments`], the rest of the estimate
 //! is kept.
+//!
+//! # Example
+//! ```
+//! use firmware_core::pipeline::{PipelineConfig, VisionH1};
+//! // 12 fps camera, 64 Hz ADC, one-second blocks; capacities from the settings
+//! const CONFIG: PipelineConfig = PipelineConfig::one_second_blocks(12, 64, None);
+//! type Pipeline = VisionH1<
+//!     { CONFIG.camera_capacity() },
+//!     { CONFIG.history_capacity(16) },
+//!     { CONFIG.work_capacity() },
+//!     { CONFIG.scratch_capacity() },
+//! >;
+//! let mut p = Pipeline::try_new(CONFIG).unwrap();
+//! let tone = |t: f32| libm::sinf(2.0 * core::f32::consts::PI * 3.0 * t);
+//! let mut next = 0;
+//! for j in 0..12 * 6 {
+//!     // the camera sees the motion; the ADC twice the motion (H1 = 1/2)
+//!     p.push_frame(tone(j as f32 / 12.0)).unwrap();
+//!     let until = (j + 1) * 64 / 12;
+//!     let adc: Vec<f32> = (next..until).map(|i| 2.0 * tone(i as f32 / 64.0)).collect();
+//!     p.push_adc(&adc).unwrap();
+//!     next = until;
+//! }
+//! let h = p.welch().h1(3).unwrap();
+//! assert!((h.re - 0.5).abs() < 1e-3 && h.im.abs() < 1e-3);
+//! ```
 
 use crate::dft;
 use crate::spectrum::{self, WelchAccumulator, WelchConfig};

@@ -11,6 +11,16 @@
 //! both streams exactly: frame `i` starts its exposure at tick `i * camera_div`, sample `j` is
 //! taken at tick `j * adc_div`, and the exposure centre is `exposure_ticks / 2` after the
 //! trigger.
+//!
+//! ```
+//! use firmware_core::sync::{SyncConfig, SyncPlan};
+//! // 2048 Hz ADC, 120 fps camera, a timer up to 1 MHz, 2 ms exposure
+//! let config = SyncConfig::new(2048, 120, 1_000_000);
+//! let plan = SyncPlan::try_new(config.with_exposure_ticks(SyncPlan::ticks_for(2e-3, 30_720)))
+//!     .unwrap();
+//! assert_eq!((plan.tick_hz(), plan.adc_div(), plan.camera_div()), (30_720, 15, 256));
+//! assert_eq!(plan.exposure_ticks(), 61);
+//! ```
 
 use core::fmt;
 use embedded_hal::digital::OutputPin;

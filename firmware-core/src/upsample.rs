@@ -11,6 +11,19 @@
 //! `SCRATCH >= max(scratch_len(n), scratch_len(m))` ([`scratch_capacity`]). 1200 -> 20480
 //! (10 s at 120 fps to 2048 Hz) needs `Upsampler<20480, { scratch_capacity(1200, 20480) }>`;
 //! 120 -> 2048 needs `Upsampler<2048, { scratch_capacity(120, 2048) }>` (about 17 KiB).
+//!
+//! ```
+//! use firmware_core::upsample::{scratch_capacity, Upsampler};
+//! // one second at 12 fps to 64 Hz, built in place in a `static` on an MCU:
+//! // `static mut UP: Up = Up::new();` then `configure`
+//! type Up = Upsampler<64, { scratch_capacity(12, 64) }>;
+//! let mut up = Up::try_new(12, 64).unwrap();
+//! let x: [f32; 12] = core::array::from_fn(|j| libm::sinf(2.0 * core::f32::consts::PI * j as f32 / 12.0));
+//! let mut y = [0.0f32; 64];
+//! up.process(&x, &mut y).unwrap();
+//! // the sinusoid at the new rate
+//! assert!((y[16] - 1.0).abs() < 1e-5);
+//! ```
 
 use crate::dft::{scratch_len, Dft, DftError, Direction};
 use crate::{BufferError, Complex32};

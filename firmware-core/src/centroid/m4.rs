@@ -327,10 +327,21 @@ fn window_binary<const HIGH: bool>(
     let mut or_all = 0u32;
     let mut x0 = 0u32;
     for block in seg.chunks(BLOCK_PX) {
-        let words = block.chunks_exact(4);
+        // four words per iteration (a window row is short: LLVM's own unrolling only pays for
+        // whole 64-pixel blocks)
+        let quads = block.chunks_exact(16);
+        let words = quads.remainder().chunks_exact(4);
         let tail = words.remainder();
         let n = (block.len() / 4) as u32;
         let (mut s, mut tt) = (0u32, 0u32);
+        for q in quads {
+            for b in q.chunks_exact(4) {
+                let w = word(b);
+                or_all |= w;
+                s = s.wrapping_add(mask::<HIGH>(w, k));
+                tt = tt.wrapping_add(s);
+            }
+        }
         for b in words {
             let w = word(b);
             or_all |= w;

@@ -16,10 +16,28 @@
 //! A camera DMA delivers lines, so everything works one row at a time:
 //! [`Centroider`] (one target: the centre of gravity of *all* pixels above `T`, O(1) memory) and
 //! [`MultiCentroider`] (connected components with 8-connectivity, a label buffer of one row of
-//! at most `W` pixels and at most `N` targets). [`centroid_u8`] and [`centroid_u16`] are the
-//! whole-frame conveniences (width, height, stride) on top of the single-target streamer.
-//! Configuration ([`CentroidConfig`], validated once by [`CentroidConfig::try_new`]) and state
-//! are separate types; after validation nothing can fail, nothing panics and nothing allocates.
+//! at most `W` pixels and at most `N` targets; results as a `heapless::Vec`), and
+//! [`track::Tracker`] (one target in a tracking window: only the rows and columns around the
+//! last position). Every function is generic over the pixel type ([`Pixel`]: `u8`, `u16`); a
+//! whole frame is a checked view, [`Frame`] (pixels, width, height, stride validated once), and
+//! [`centroid`] is the one-shot whole-frame convenience on top of the single-target streamer.
+//! Configuration ([`CentroidConfig`], checked once by [`CentroidConfig::validate`], which every
+//! `try_new` calls) and state are separate types; after validation nothing can fail, nothing
+//! panics and nothing allocates.
+//!
+//! ```
+//! use firmware_core::centroid::{CentroidConfig, Centroider, Flags};
+//! // a 3 x 3 target centred on column 5, row 2 of an 8-bit frame, pushed row by row
+//! let mut c = Centroider::try_new(CentroidConfig::binary(100)).unwrap();
+//! let dark = [0u8; 10];
+//! let lit = [0u8, 0, 0, 0, 200, 200, 200, 0, 0, 0];
+//! for row in [&dark, &lit, &lit, &lit, &dark] {
+//!     c.push_row(row);
+//! }
+//! let r = c.result();
+//! assert_eq!(r.position(), Some((5.0, 2.0)));
+//! assert_eq!((r.pixels(), r.flags), (9, Flags::NONE));
+//! ```
 //!
 //! # Exactness and overflow
 //!
