@@ -11,7 +11,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use firmware_core::centroid::{
-    centroid_u16, centroid_u8, row_binary_u8, CentroidConfig, Mode, MultiCentroider,
+    centroid, row_binary_u8, CentroidConfig, Frame, Mode, MultiCentroider,
 };
 
 fn disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
@@ -32,14 +32,22 @@ fn bench(c: &mut Criterion) {
     let frame16: Vec<u16> = frame.iter().map(|&v| u16::from(v) * 257).collect();
     let mut g = c.benchmark_group("centroid_640x480");
     g.throughput(Throughput::Elements((w * h) as u64));
+    let view = Frame::new(&frame, w, h, w).unwrap();
+    let view16 = Frame::new(&frame16, w, h, w).unwrap();
     for mode in [Mode::Binary, Mode::Weighted] {
-        let cfg = CentroidConfig::try_new(100, mode, None, None).unwrap();
+        let cfg = CentroidConfig {
+            mode,
+            ..CentroidConfig::binary(100)
+        };
         g.bench_function(format!("u8_{mode:?}").to_lowercase(), |b| {
-            b.iter(|| centroid_u8(black_box(&cfg), black_box(&frame), w, h, w))
+            b.iter(|| centroid(black_box(&cfg), black_box(&view)))
         });
-        let cfg16 = CentroidConfig::try_new(100 * 257, mode, None, None).unwrap();
+        let cfg16 = CentroidConfig {
+            mode,
+            ..CentroidConfig::binary(100 * 257)
+        };
         g.bench_function(format!("u16_{mode:?}").to_lowercase(), |b| {
-            b.iter(|| centroid_u16(black_box(&cfg16), black_box(&frame16), w, h, w))
+            b.iter(|| centroid(black_box(&cfg16), black_box(&view16)))
         });
     }
     g.bench_function("row_binary_u8_kernel", |b| {
@@ -54,7 +62,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("multi_target_u8_binary", |b| {
         let mut m = MultiCentroider::<640, 16>::try_new(CentroidConfig::binary(100)).unwrap();
         b.iter(|| {
-            m.process_u8(black_box(&frame), w, h, w).unwrap();
+            m.process(black_box(&view)).unwrap();
             m.count()
         })
     });
@@ -65,8 +73,9 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("centroid_40x200");
     g.throughput(Throughput::Elements((w * h) as u64));
     let cfg = CentroidConfig::binary(100);
+    let small = Frame::new(&small, w, h, w).unwrap();
     g.bench_function("u8_binary", |b| {
-        b.iter(|| centroid_u8(black_box(&cfg), black_box(&small), w, h, w))
+        b.iter(|| centroid(black_box(&cfg), black_box(&small)))
     });
     g.finish();
 }

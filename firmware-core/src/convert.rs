@@ -8,6 +8,21 @@
 //! The standalone conversion at the same rate is the `n -> n` case, offered here as
 //! [`Differentiator`]. For even `n` the Nyquist bin is multiplied by `-(2 pi fs/2)^2`, the same
 //! factor as its mirror, so the output stays real.
+//!
+//! ```
+//! use firmware_core::convert::{px_to_m_scale, px_to_mm, Differentiator};
+//! use firmware_core::upsample::scratch_capacity;
+//! // 0.1266 mm/px: a centroid of 10 px is 1.266 mm; mm s^-2 -> m/s^2 through px_to_m_scale
+//! assert!((px_to_mm(10.0, 0.1266) - 1.266).abs() < 1e-6);
+//! // the second derivative of cos(2 pi 4 t) over one period of 64 samples at 64 Hz
+//! const N: usize = 64;
+//! let mut d = Differentiator::<N, { scratch_capacity(N, N) }>::try_new(N, N).unwrap();
+//! let x: [f32; N] = core::array::from_fn(|j| libm::cosf(2.0 * core::f32::consts::PI * 4.0 * j as f32 / 64.0));
+//! let mut a = [0.0f32; N];
+//! d.process_acceleration(&x, &mut a, 64.0, px_to_m_scale(1.0) * 1e3).unwrap();
+//! let w2 = (2.0 * core::f32::consts::PI * 4.0f32).powi(2);
+//! assert!((a[0] + w2).abs() < 1e-3 * w2); // -omega^2 cos(0)
+//! ```
 
 /// Standard gravity, m/s^2 (accelerometer channels in g convert with it).
 pub const STANDARD_GRAVITY: f32 = STANDARD_GRAVITY_F64 as f32;

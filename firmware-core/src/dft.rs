@@ -17,8 +17,22 @@
 //! Conventions (same as numpy/scipy): forward `X[k] = sum_j x[j] exp(-2 pi i j k / n)`;
 //! [`Direction::Inverse`] computes `sum_k X[k] exp(+2 pi i j k / n)` **without** the `1/n`
 //! factor.
+//!
+//! ```
+//! use firmware_core::dft::{scratch_len, Dft, Direction};
+//! use firmware_core::Complex32;
+//! // an exact 120-point DFT (not a power of two): a unit impulse has a flat spectrum
+//! const N: usize = 120;
+//! const SCRATCH: usize = match scratch_len(N) { Some(s) => s, None => 0 };
+//! let plan = Dft::try_new(N).unwrap();
+//! let mut x = [Complex32::new(0.0, 0.0); N];
+//! x[0] = Complex32::new(1.0, 0.0);
+//! let mut scratch = [Complex32::new(0.0, 0.0); SCRATCH];
+//! plan.process(&mut x, &mut scratch, Direction::Forward).unwrap();
+//! assert!(x.iter().all(|v| (v.re - 1.0).abs() < 1e-5 && v.im.abs() < 1e-5));
+//! ```
 
-use crate::Complex32;
+use crate::{BufferError, Complex32};
 use core::fmt;
 
 /// Largest power-of-two transform `microfft` provides with the features this crate enables.
@@ -41,7 +55,8 @@ pub enum Direction {
     Inverse,
 }
 
-/// Why a transform cannot be planned or run.
+/// Why a transform cannot be planned (a configuration error; running a plan can only fail on
+/// a caller buffer of the wrong length, [`BufferError`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -54,13 +69,6 @@ pub enum DftError {
         /// Requested length.
         len: usize,
     },
-    /// A buffer passed to [`Dft::process`] has the wrong length.
-    BufferLen {
-        /// Length the plan needs.
-        expected: usize,
-        /// Length that was passed.
-        got: usize,
-    },
 }
 
 impl fmt::Display for DftError {
@@ -71,9 +79,6 @@ impl fmt::Display for DftError {
                 f,
                 "DFT length {len} is not supported: its odd part needs a convolution longer than {MAX_POW2}"
             ),
-            DftError::BufferLen { expected, got } => {
-                write!(f, "DFT buffer has {got} values, the plan needs {expected}")
-            }
         }
     }
 }
@@ -156,6 +161,15 @@ pub const fn scratch_len(n: usize) -> Option<usize> {
 }
 
 impl Dft {
+    /// The plan of no transform (length 0; `run` does nothing): the placeholder of an
+    /// unconfigured state (all zero bytes, so a `static` holding it lands in `.bss`).
+    pub(crate) const NONE: Dft = Dft {
+        n: 0,
+        p: 0,
+        m: 0,
+        inner: Inner::None,
+    };
+
     /// Plans a transform of length `n`.
     pub const fn try_new(n: usize) -> Result<Self, DftError> {
         if n == 0 {
@@ -194,18 +208,29 @@ impl Dft {
         data: &mut [Complex32],
         scratch: &mut [Complex32],
         dir: Direction,
-    ) -> Result<(), DftError> {
+    ) -> Result<(), BufferError> {
         if data.len() != self.n {
-            return Err(DftError::BufferLen {
+            return Err(BufferError {
                 expected: self.n,
                 got: data.len(),
             });
         }
         if scratch.len() < self.scratch_len() {
-            return Err(DftError::BufferLen {
+            return Err(BufferError {
                 expected: self.scratch_len(),
                 got: scratch.len(),
             });
+        }
+        self.run(data, scratch, dir);
+        Ok(())
+    }
+
+    /// [`process`](Self::process) for the crate's own callers, whose buffer lengths follow
+    /// from a validated configuration: infallible (a wrong length, impossible there, leaves
+    /// `data` untouched).
+    pub(crate) fn run(&self, data: &mut [Complex32], scratch: &mut [Complex32], dir: Direction) {
+        if self.n == 0 || data.len() != self.n || scratch.len() < self.scratch_len() {
+            return;
         }
         // Inverse through the forward transform: IDFT(x) = conj(DFT(conj(x))).
         if dir == Direction::Inverse {
@@ -215,7 +240,6 @@ impl Dft {
         if dir == Direction::Inverse {
             conj_all(data);
         }
-        Ok(())
     }
 
     fn forward(&self, data: &mut [Complex32], scratch: &mut [Complex32]) {
@@ -497,7 +521,8 @@ fn fft_pow2(buf: &mut [Complex32]) {
             match buf.len() {
                 $($n => {
                     if let Ok(a) = <&mut [Complex32; $n]>::try_from(buf) {
-                        let _ = c::$f(a);
+                        // in place: the returned reference is `a` itself (not a Result)
+                        let _in_place: &mut [Complex32; $n] = c::$f(a);
                     }
                 })*
                 _ => {}
@@ -677,7 +702,7 @@ mod tests {
         let mut s = [Complex32::new(0.0, 0.0); 64];
         assert!(matches!(
             plan.process(&mut d, &mut s, Direction::Forward),
-            Err(DftError::BufferLen {
+            Err(BufferError {
                 expected: 12,
                 got: 11
             })

@@ -22,6 +22,17 @@
 //! maximum of `|Im H1|` with both neighbours present and finite; otherwise the bin frequency is
 //! kept. The refinement changes **only the frequency**: the amplitude stays `|H1|` at the picked
 //! bin, so amplitudes are identical with and without refinement.
+//!
+//! ```
+//! use firmware_core::{peaks, Complex32};
+//! // a receptance-like H1 on 0.5 Hz bins whose |Im H1| peaks at bin 6 (3.0 Hz)
+//! let h1: Vec<Complex32> = (0..20)
+//!     .map(|k| Complex32::new(0.1, -1.0 / (1.0 + (k as f32 - 6.0).powi(2))))
+//!     .collect();
+//! let p = peaks::pick(&h1, 0.5, (1.0, 5.0), false).unwrap();
+//! assert_eq!((p.bin, p.f_hz), (6, 3.0));
+//! assert!((p.amplitude - (0.01f32 + 1.0).sqrt()).abs() < 1e-6);
+//! ```
 
 use crate::Complex32;
 

@@ -54,14 +54,61 @@
 //! non-finite, and a non-finite ADC sample its neighbourhood: every segment that touches them
 //! is skipped and counted by [`WelchAccumulator::skipped_segments`], the rest of the estimate
 //! is kept.
+//!
+//! # Example
+//! ```
+//! use firmware_core::pipeline::{PipelineConfig, VisionH1};
+//! // 12 fps camera, 64 Hz ADC, one-second blocks; capacities from the settings
+//! const CONFIG: PipelineConfig = PipelineConfig::one_second_blocks(12, 64, None);
+//! type Pipeline = VisionH1<
+//!     { CONFIG.camera_capacity() },
+//!     { CONFIG.history_capacity(16) },
+//!     { CONFIG.work_capacity() },
+//!     { CONFIG.scratch_capacity() },
+//! >;
+//! let mut p = Pipeline::try_new(CONFIG).unwrap();
+//! let tone = |t: f32| libm::sinf(2.0 * core::f32::consts::PI * 3.0 * t);
+//! let mut next = 0;
+//! for j in 0..12 * 6 {
+//!     // the camera sees the motion; the ADC twice the motion (H1 = 1/2)
+//!     p.push_frame(tone(j as f32 / 12.0)).unwrap();
+//!     let until = (j + 1) * 64 / 12;
+//!     let adc: Vec<f32> = (next..until).map(|i| 2.0 * tone(i as f32 / 64.0)).collect();
+//!     p.push_adc(&adc).unwrap();
+//!     next = until;
+//! }
+//! let h = p.welch().h1(3).unwrap();
+//! assert!((h.re - 0.5).abs() < 1e-3 && h.im.abs() < 1e-3);
+//! ```
 
 use crate::dft;
-use crate::spectrum::{Detrend, WelchAccumulator, WelchConfig, WelchError, Window};
-use crate::upsample::{UpsampleError, UpsamplePlan};
+use crate::spectrum::{self, WelchAccumulator, WelchConfig};
+use crate::upsample::{self, UpsamplePlan};
 use crate::Complex32;
 use core::fmt;
 
-/// Settings of a [`VisionH1`].
+/// Settings of a [`VisionH1`]: plain data, `const` constructors, and `const` capacity
+/// functions that size a [`VisionH1`] from the settings at compile time (no capacity numbers
+/// to copy from the documentation):
+///
+/// ```
+/// use firmware_core::pipeline::{PipelineConfig, VisionH1};
+/// const CONFIG: PipelineConfig = PipelineConfig::one_second_blocks(120, 2048, Some(1e-3));
+/// /// 116 ms of extra ADC lead (processing latency) on top of the least history.
+/// const LATENCY: usize = 238;
+/// type Pipeline = VisionH1<
+///     { CONFIG.camera_capacity() },
+///     { CONFIG.history_capacity(LATENCY) },
+///     { CONFIG.work_capacity() },
+///     { CONFIG.scratch_capacity() },
+/// >;
+/// // checked at compile time: an invalid setting does not build
+/// static PIPELINE: Pipeline = match Pipeline::try_new(CONFIG) {
+///     Ok(p) => p,
+///     Err(_) => panic!("invalid pipeline settings"),
+/// };
+/// assert_eq!(PIPELINE.adc_headroom(), 2816);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PipelineConfig {
@@ -79,27 +126,60 @@ pub struct PipelineConfig {
 }
 
 impl PipelineConfig {
+    /// All zero: the settings of an unconfigured pipeline (not valid).
+    const NONE: PipelineConfig = PipelineConfig {
+        frames_per_block: 0,
+        samples_per_block: 0,
+        welch: WelchConfig::NONE,
+        acceleration_scale: None,
+    };
+
     /// Blocks of one second (`fps` frames -> `fs` samples) and one-second Welch segments:
     /// `nperseg = nfft = fs` (1 Hz bins), 50 % overlap, Hann, constant detrend. The mcu-demo's
     /// setting is `one_second_blocks(120, 2048, Some(1e-3))` (mm in, m/s^2 out).
-    pub fn one_second_blocks(fps: usize, fs: usize, acceleration_scale: Option<f32>) -> Self {
+    pub const fn one_second_blocks(fps: usize, fs: usize, acceleration_scale: Option<f32>) -> Self {
         PipelineConfig {
             frames_per_block: fps,
             samples_per_block: fs,
-            welch: WelchConfig {
-                fs_hz: fs as f32,
-                nperseg: fs,
-                noverlap: fs / 2,
-                nfft: fs,
-                window: Window::Hann,
-                detrend: Detrend::Constant,
-            },
+            welch: WelchConfig::hann(fs as f32, fs),
             acceleration_scale,
         }
     }
 
+    /// `CAM` for these settings: one block of frames plus the frame after it (`n + 1`).
+    pub const fn camera_capacity(&self) -> usize {
+        self.frames_per_block + 1
+    }
+
+    /// `WORK` for these settings: the larger of the upsampled block (`m`) and the Welch
+    /// transform (`nfft`).
+    pub const fn work_capacity(&self) -> usize {
+        if self.samples_per_block > self.welch.nfft {
+            self.samples_per_block
+        } else {
+            self.welch.nfft
+        }
+    }
+
+    /// `SCRATCH` for these settings: the largest DFT scratch of the three transforms (0 when
+    /// all are powers of two).
+    pub const fn scratch_capacity(&self) -> usize {
+        scratch_capacity(
+            self.frames_per_block,
+            self.samples_per_block,
+            self.welch.nfft,
+        )
+    }
+
+    /// `HIST` for these settings and `latency` samples of extra ADC lead (how far the ADC may
+    /// run ahead of the camera beyond the least: processing latency):
+    /// [`min_history`](Self::min_history)` + latency`.
+    pub const fn history_capacity(&self, latency: usize) -> usize {
+        self.min_history() + latency
+    }
+
     /// Camera frame rate implied by the settings: `fs_adc * n / m`.
-    pub fn frame_rate_hz(&self) -> f32 {
+    pub const fn frame_rate_hz(&self) -> f32 {
         if self.samples_per_block == 0 {
             0.0
         } else {
@@ -135,15 +215,17 @@ const fn gcd(mut a: usize, mut b: usize) -> usize {
     a
 }
 
-/// Why a pipeline cannot be built, or a push was refused.
+/// Why a [`PipelineConfig`] cannot run in a [`VisionH1`] of the given capacities (checked
+/// once, by [`VisionH1::try_new`] or [`VisionH1::configure`]). Run-time refusals are
+/// [`PushError`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum PipelineError {
+pub enum ConfigError {
     /// The upsampling block is invalid (lengths, unsupported transform).
-    Upsample(UpsampleError),
+    Upsample(upsample::ConfigError),
     /// The Welch settings are invalid.
-    Welch(WelchError),
+    Welch(spectrum::ConfigError),
     /// Blocks must overlap by exactly half and keep a whole central half: `frames_per_block`
     /// even (at least 2) and `samples_per_block` a multiple of 4.
     BlockShape {
@@ -161,6 +243,51 @@ pub enum PipelineError {
         /// Capacity.
         capacity: usize,
     },
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConfigError::Upsample(e) => write!(f, "upsampling block: {e}"),
+            ConfigError::Welch(e) => write!(f, "welch: {e}"),
+            ConfigError::BlockShape { frames, samples } => write!(
+                f,
+                "blocks of {frames} frames -> {samples} samples: the frames must be an even \
+                 number and the samples a multiple of 4 (blocks overlap by half and keep their \
+                 central half)"
+            ),
+            ConfigError::Capacity {
+                what,
+                needed,
+                capacity,
+            } => write!(
+                f,
+                "capacity {what} = {capacity} is too small: {needed} needed"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+impl From<upsample::ConfigError> for ConfigError {
+    fn from(e: upsample::ConfigError) -> Self {
+        ConfigError::Upsample(e)
+    }
+}
+
+impl From<spectrum::ConfigError> for ConfigError {
+    fn from(e: spectrum::ConfigError) -> Self {
+        ConfigError::Welch(e)
+    }
+}
+
+/// A push refused for lack of room (heapless style: the item is not consumed, push it again
+/// later). The only run-time errors of a configured [`VisionH1`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum PushError {
     /// The ADC history is full: the ADC ran further ahead of the camera than `HIST` allows.
     /// Nothing of the refused chunk was consumed.
     AdcOverflow {
@@ -172,53 +299,29 @@ pub enum PipelineError {
     /// A complete block of frames is waiting for room in the vision history (the camera ran
     /// ahead of the ADC); the frame was not consumed. Push ADC samples first.
     BlockPending,
+    /// The pipeline was built by [`VisionH1::new`] and not configured yet (nothing was
+    /// consumed).
+    NotConfigured,
 }
 
-impl fmt::Display for PipelineError {
+impl fmt::Display for PushError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            PipelineError::Upsample(e) => write!(f, "upsampling block: {e}"),
-            PipelineError::Welch(e) => write!(f, "welch: {e}"),
-            PipelineError::BlockShape { frames, samples } => write!(
-                f,
-                "blocks of {frames} frames -> {samples} samples: the frames must be an even \
-                 number and the samples a multiple of 4 (blocks overlap by half and keep their \
-                 central half)"
-            ),
-            PipelineError::Capacity {
-                what,
-                needed,
-                capacity,
-            } => write!(
-                f,
-                "capacity {what} = {capacity} is too small: {needed} needed"
-            ),
-            PipelineError::AdcOverflow { offered, room } => write!(
+            PushError::AdcOverflow { offered, room } => write!(
                 f,
                 "ADC history full: {offered} samples offered, room for {room}; the ADC is too \
                  far ahead of the camera (nothing consumed)"
             ),
-            PipelineError::BlockPending => write!(
+            PushError::BlockPending => write!(
                 f,
                 "a block of frames waits for ADC samples; the frame was not consumed"
             ),
+            PushError::NotConfigured => write!(f, "the pipeline is not configured yet"),
         }
     }
 }
 
-impl core::error::Error for PipelineError {}
-
-impl From<UpsampleError> for PipelineError {
-    fn from(e: UpsampleError) -> Self {
-        PipelineError::Upsample(e)
-    }
-}
-
-impl From<WelchError> for PipelineError {
-    fn from(e: WelchError) -> Self {
-        PipelineError::Welch(e)
-    }
-}
+impl core::error::Error for PushError {}
 
 /// Camera + ADC -> upsampling (+ acceleration) -> streaming H1, in `4 CAM + 8 HIST + 16 WORK +
 /// 8 SCRATCH` bytes (see the [module documentation](self)).
@@ -279,34 +382,60 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
 impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usize>
     VisionH1<CAM, HIST, WORK, SCRATCH>
 {
-    /// Checks `config` against the capacities and builds an empty pipeline.
+    /// An unconfigured pipeline (pushes are refused with [`PushError::NotConfigured`]) whose
+    /// bytes are all zero: a `static` holding it lands in `.bss`, built in place with no
+    /// stack copy and no flash image; then [`configure`](Self::configure) it in place.
     ///
-    /// Errors: [`PipelineError::Upsample`], [`PipelineError::Welch`],
-    /// [`PipelineError::Capacity`].
-    pub fn try_new(config: PipelineConfig) -> Result<Self, PipelineError> {
-        let plan = UpsamplePlan::try_new(config.frames_per_block, config.samples_per_block)?;
-        let (frames, samples) = (config.frames_per_block, config.samples_per_block);
-        if frames < 2 || frames % 2 != 0 || samples % 4 != 0 {
-            return Err(PipelineError::BlockShape { frames, samples });
+    /// ```
+    /// use firmware_core::pipeline::{PipelineConfig, PushError, VisionH1};
+    /// const CONFIG: PipelineConfig = PipelineConfig::one_second_blocks(12, 64, None);
+    /// type Pipeline = VisionH1<
+    ///     { CONFIG.camera_capacity() },
+    ///     { CONFIG.history_capacity(0) },
+    ///     { CONFIG.work_capacity() },
+    ///     { CONFIG.scratch_capacity() },
+    /// >;
+    /// let mut p = Pipeline::new(); // on an MCU: `static mut P: Pipeline = Pipeline::new();`
+    /// assert_eq!(p.push_frame(0.0), Err(PushError::NotConfigured));
+    /// p.configure(CONFIG).unwrap();
+    /// assert_eq!(p.push_frame(0.0), Ok(()));
+    /// ```
+    pub const fn new() -> Self {
+        VisionH1 {
+            config: PipelineConfig::NONE,
+            plan: UpsamplePlan::NONE,
+            welch: WelchAccumulator::new(),
+            camera: [0.0; CAM],
+            cam_fill: 0,
+            vision: [0.0; HIST],
+            vis_fill: 0,
+            adc: [0.0; HIST],
+            adc_fill: 0,
+            adc_skip: 0,
+            work: [Complex32::new(0.0, 0.0); WORK],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+            blocks: 0,
         }
-        let welch = WelchAccumulator::<WORK>::try_new(config.welch)?;
-        let (n, m) = (plan.input_len(), plan.output_len());
-        let scratch = plan.scratch_len().max(welch.scratch_len());
-        let hist = config.min_history();
-        for (what, needed, capacity) in [
-            ("CAM", n + 1, CAM),
-            ("WORK", m, WORK),
-            ("SCRATCH", scratch, SCRATCH),
-            ("HIST", hist, HIST),
-        ] {
-            if needed > capacity {
-                return Err(PipelineError::Capacity {
-                    what,
-                    needed,
-                    capacity,
-                });
-            }
-        }
+    }
+
+    /// Whether the settings were set (by [`try_new`](Self::try_new) or
+    /// [`configure`](Self::configure)).
+    pub const fn is_configured(&self) -> bool {
+        self.plan.input_len() > 0
+    }
+
+    /// Checks `config` against the capacities and builds an empty pipeline. `const`: in a
+    /// `static` initialiser the pipeline is built in place and checked at compile time (see
+    /// [`PipelineConfig`]); [`configure`](Self::configure) changes the settings in place.
+    ///
+    /// Errors: [`ConfigError::Upsample`], [`ConfigError::Welch`],
+    /// [`ConfigError::BlockShape`], [`ConfigError::Capacity`].
+    pub const fn try_new(config: PipelineConfig) -> Result<Self, ConfigError> {
+        let (plan, welch) = match Self::check(&config) {
+            Ok(v) => v,
+            Err(e) => return Err(e),
+        };
+        let samples = config.samples_per_block;
         Ok(VisionH1 {
             config,
             plan,
@@ -324,8 +453,64 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         })
     }
 
+    /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
+    /// all samples and the estimate. On error nothing changes.
+    pub fn configure(&mut self, config: PipelineConfig) -> Result<(), ConfigError> {
+        let (plan, welch) = Self::check(&config)?;
+        self.config = config;
+        self.plan = plan;
+        self.welch = welch;
+        self.reset();
+        Ok(())
+    }
+
+    /// The settings checked against the capacities: the upsampling plan and an empty Welch
+    /// accumulator.
+    const fn check(
+        config: &PipelineConfig,
+    ) -> Result<(UpsamplePlan, WelchAccumulator<WORK>), ConfigError> {
+        let (frames, samples) = (config.frames_per_block, config.samples_per_block);
+        let plan = match UpsamplePlan::try_new(frames, samples) {
+            Ok(p) => p,
+            Err(e) => return Err(ConfigError::Upsample(e)),
+        };
+        if frames < 2 || frames % 2 != 0 || samples % 4 != 0 {
+            return Err(ConfigError::BlockShape { frames, samples });
+        }
+        let welch = match WelchAccumulator::<WORK>::try_new(config.welch) {
+            Ok(w) => w,
+            Err(e) => return Err(ConfigError::Welch(e)),
+        };
+        let (n, m) = (plan.input_len(), plan.output_len());
+        let scratch = if plan.scratch_len() > welch.scratch_len() {
+            plan.scratch_len()
+        } else {
+            welch.scratch_len()
+        };
+        let hist = config.min_history();
+        let checks = [
+            ("CAM", n + 1, CAM),
+            ("WORK", m, WORK),
+            ("SCRATCH", scratch, SCRATCH),
+            ("HIST", hist, HIST),
+        ];
+        let mut i = 0;
+        while i < checks.len() {
+            let (what, needed, capacity) = checks[i];
+            if needed > capacity {
+                return Err(ConfigError::Capacity {
+                    what,
+                    needed,
+                    capacity,
+                });
+            }
+            i += 1;
+        }
+        Ok((plan, welch))
+    }
+
     /// The settings.
-    pub fn config(&self) -> &PipelineConfig {
+    pub const fn config(&self) -> &PipelineConfig {
         &self.config
     }
 
@@ -340,12 +525,12 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     }
 
     /// Frames held for the next block (`n + 1` when a complete block waits for room, see
-    /// [`PipelineError::BlockPending`]).
+    /// [`PushError::BlockPending`]).
     pub fn pending_frames(&self) -> usize {
         self.cam_fill
     }
 
-    /// ADC samples that can be pushed now without [`PipelineError::AdcOverflow`].
+    /// ADC samples that can be pushed now without [`PushError::AdcOverflow`].
     pub fn adc_headroom(&self) -> usize {
         HIST - self.adc_fill.min(HIST)
     }
@@ -361,15 +546,18 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     }
 
     /// Pushes ADC samples (any chunk size) and accumulates every segment that both channels
-    /// now cover. Error [`PipelineError::AdcOverflow`] (nothing consumed) if the chunk does not
+    /// now cover. Error [`PushError::AdcOverflow`] (nothing consumed) if the chunk does not
     /// fit: the camera is more than `HIST - min_history` samples behind.
-    pub fn push_adc(&mut self, samples: &[f32]) -> Result<(), PipelineError> {
+    pub fn push_adc(&mut self, samples: &[f32]) -> Result<(), PushError> {
+        if !self.is_configured() {
+            return Err(PushError::NotConfigured);
+        }
         // the first m / 4 samples precede the vision record (see the module documentation)
         let skip = self.adc_skip.min(samples.len());
         let rest = samples.get(skip..).unwrap_or(&[]);
         let room = self.adc_headroom();
         if rest.len() > room {
-            return Err(PipelineError::AdcOverflow {
+            return Err(PushError::AdcOverflow {
                 offered: samples.len(),
                 room: room + skip,
             });
@@ -393,14 +581,17 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// [`PipelineConfig::acceleration_scale`]). Frame `n + 1` and every `n / 2`-th frame after
     /// it complete a block, whose central half is upsampled and appended to the vision
     /// history, and the segments it completes are accumulated. Error
-    /// [`PipelineError::BlockPending`] (frame not consumed) while a complete block waits for
+    /// [`PushError::BlockPending`] (frame not consumed) while a complete block waits for
     /// room because the ADC is behind.
-    pub fn push_frame(&mut self, value: f32) -> Result<(), PipelineError> {
+    pub fn push_frame(&mut self, value: f32) -> Result<(), PushError> {
         let n = self.plan.input_len();
+        if n == 0 {
+            return Err(PushError::NotConfigured);
+        }
         if self.cam_fill > n {
             self.advance();
             if self.cam_fill > n {
-                return Err(PipelineError::BlockPending);
+                return Err(PushError::BlockPending);
             }
         }
         if let Some(d) = self.camera.get_mut(self.cam_fill) {
@@ -412,8 +603,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     }
 
     /// Pushes frames in order with [`push_frame`](Self::push_frame); on
-    /// [`PipelineError::BlockPending`] returns how many were consumed with the error.
-    pub fn push_frames(&mut self, values: &[f32]) -> Result<(), (usize, PipelineError)> {
+    /// [`PushError::BlockPending`] returns how many were consumed with the error.
+    pub fn push_frames(&mut self, values: &[f32]) -> Result<(), (usize, PushError)> {
         for (i, v) in values.iter().enumerate() {
             self.push_frame(*v).map_err(|e| (i, e))?;
         }
@@ -427,6 +618,10 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         let nperseg = self.config.welch.nperseg;
         let hop = nperseg - self.config.welch.noverlap;
         let keep = m / 2;
+        if n == 0 || hop == 0 {
+            // unconfigured: nothing to do (and no loop without progress)
+            return;
+        }
         loop {
             // a block is complete with the frame after it (the end-matching line's end point)
             if self.cam_fill > n && self.vis_fill + keep <= HIST {
@@ -440,7 +635,7 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
                     self.vision.get_mut(self.vis_fill..self.vis_fill + keep),
                 ) {
                     // lengths and capacities were checked by try_new: no error case is left
-                    let _ = self.plan.process_part(
+                    self.plan.run_part(
                         input,
                         out,
                         m / 4,
@@ -467,9 +662,9 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             }
             if self.vis_fill >= nperseg && self.adc_fill >= nperseg {
                 if let (Some(x), Some(y)) = (self.adc.get(..nperseg), self.vision.get(..nperseg)) {
-                    let _ = self
-                        .welch
-                        .add_segment(x, y, &mut self.work, &mut self.scratch);
+                    // checked by try_new; a skipped (non-finite) segment is counted by `welch`
+                    self.welch
+                        .accumulate(x, y, &mut self.work, &mut self.scratch);
                 }
                 drop_front(&mut self.vision, &mut self.vis_fill, hop);
                 drop_front(&mut self.adc, &mut self.adc_fill, hop);
@@ -477,6 +672,14 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             }
             break;
         }
+    }
+}
+
+impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usize> Default
+    for VisionH1<CAM, HIST, WORK, SCRATCH>
+{
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -509,7 +712,7 @@ pub const fn scratch_capacity(n: usize, m: usize, nfft: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spectrum::WelchH1;
+    use crate::spectrum::{Detrend, WelchH1, Window};
     use core::f32::consts::PI;
     use proptest::prelude::*;
     use std::vec;
@@ -732,7 +935,7 @@ mod tests {
         // a chunk that does not fit is refused whole (its first M/4 samples would be dropped)
         assert_eq!(
             p.push_adc(&adc[..16 + 129]),
-            Err(PipelineError::AdcOverflow {
+            Err(PushError::AdcOverflow {
                 offered: 145,
                 room: 144
             })
@@ -741,7 +944,7 @@ mod tests {
         // camera ahead of the ADC: four blocks fill the vision history (32 samples each); the
         // fifth, complete after 37 frames, waits, and frame 37 is refused
         let (consumed, e) = p.push_frames(&cam).unwrap_err();
-        assert_eq!((consumed, e), (37, PipelineError::BlockPending));
+        assert_eq!((consumed, e), (37, PushError::BlockPending));
         assert_eq!((p.blocks(), p.pending_frames()), (4, N + 1));
         // the ADC catches up in chunks, the frames resume, and nothing was lost
         let mut j = consumed;
@@ -750,7 +953,7 @@ mod tests {
             match p.push_frames(&cam[j..]) {
                 Ok(()) => j = cam.len(),
                 Err((k, e)) => {
-                    assert_eq!(e, PipelineError::BlockPending);
+                    assert_eq!(e, PushError::BlockPending);
                     j += k;
                 }
             }
@@ -779,7 +982,7 @@ mod tests {
         let c = config(None);
         assert!(matches!(
             VisionH1::<12, 128, M, S>::try_new(c),
-            Err(PipelineError::Capacity {
+            Err(ConfigError::Capacity {
                 what: "CAM",
                 needed: 13,
                 capacity: 12
@@ -787,11 +990,11 @@ mod tests {
         ));
         assert!(matches!(
             VisionH1::<{ N + 1 }, 128, 32, S>::try_new(c),
-            Err(PipelineError::Welch(WelchError::FftLength { .. }))
+            Err(ConfigError::Welch(spectrum::ConfigError::FftLength { .. }))
         ));
         assert!(matches!(
             VisionH1::<{ N + 1 }, 128, M, 0>::try_new(c),
-            Err(PipelineError::Capacity {
+            Err(ConfigError::Capacity {
                 what: "SCRATCH",
                 ..
             })
@@ -800,7 +1003,7 @@ mod tests {
         assert_eq!(c.min_history(), 86);
         assert!(matches!(
             VisionH1::<{ N + 1 }, 85, M, S>::try_new(c),
-            Err(PipelineError::Capacity {
+            Err(ConfigError::Capacity {
                 what: "HIST",
                 needed: 86,
                 capacity: 85
@@ -810,7 +1013,7 @@ mod tests {
         bad.samples_per_block = 5;
         assert!(matches!(
             P::try_new(bad),
-            Err(PipelineError::Upsample(UpsampleError::Lengths { .. }))
+            Err(ConfigError::Upsample(upsample::ConfigError::Lengths { .. }))
         ));
         for (frames, samples) in [(11, 64), (12, 66)] {
             let mut bad = c;
@@ -818,7 +1021,7 @@ mod tests {
             bad.samples_per_block = samples;
             assert_eq!(
                 P::try_new(bad).err(),
-                Some(PipelineError::BlockShape { frames, samples })
+                Some(ConfigError::BlockShape { frames, samples })
             );
         }
     }
@@ -867,7 +1070,7 @@ mod tests {
                 match p.push_frames(&cam[j..f_end]) {
                     Ok(()) => j = f_end,
                     Err((k, e)) => {
-                        prop_assert_eq!(e, PipelineError::BlockPending);
+                        prop_assert_eq!(e, PushError::BlockPending);
                         j += k;
                     }
                 }

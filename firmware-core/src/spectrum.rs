@@ -76,6 +76,7 @@
 //! ```
 
 use crate::dft::{self, Dft, DftError, Direction};
+use crate::BufferError;
 use crate::Complex32;
 use core::fmt;
 
@@ -142,7 +143,9 @@ pub enum Detrend {
     None,
 }
 
-/// Settings of a Welch estimate. Checked once by [`WelchH1::try_new`].
+/// Settings of a Welch estimate: plain data with units and ranges on every field, `const`
+/// constructors for the usual cases, checked once by [`validate`](Self::validate) and, with
+/// the capacities, by [`WelchH1::try_new`] / [`WelchAccumulator::try_new`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WelchConfig {
@@ -165,9 +168,19 @@ pub struct WelchConfig {
 }
 
 impl WelchConfig {
+    /// All zero: the settings of an unconfigured estimator (not valid).
+    pub(crate) const NONE: WelchConfig = WelchConfig {
+        fs_hz: 0.0,
+        nperseg: 0,
+        noverlap: 0,
+        nfft: 0,
+        window: Window::Hann,
+        detrend: Detrend::Constant,
+    };
+
     /// scipy's defaults for a record of `len` samples: Hann window, `nperseg = min(256, len)`,
     /// `noverlap = nperseg / 2`, `nfft = nperseg`, constant detrend.
-    pub fn scipy_default(fs_hz: f32, len: usize) -> Self {
+    pub const fn scipy_default(fs_hz: f32, len: usize) -> Self {
         let nperseg = if len < 256 { len } else { 256 };
         WelchConfig {
             fs_hz,
@@ -179,13 +192,65 @@ impl WelchConfig {
         }
     }
 
+    /// `nperseg`-sample segments transformed without zero padding (`nfft = nperseg`), 50 %
+    /// overlap, periodic Hann, constant detrend: the usual setting.
+    pub const fn hann(fs_hz: f32, nperseg: usize) -> Self {
+        WelchConfig {
+            fs_hz,
+            nperseg,
+            noverlap: nperseg / 2,
+            nfft: nperseg,
+            window: Window::Hann,
+            detrend: Detrend::Constant,
+        }
+    }
+
+    /// Checks the settings that do not depend on a capacity: `fs_hz` finite and positive,
+    /// `nperseg >= 1`, `noverlap < nperseg`, `nfft >= nperseg` and supported by
+    /// [`crate::dft`]. Returns the transform plan. (The `capacity` of an error found here is
+    /// `usize::MAX`: no capacity is involved.)
+    pub const fn validate(&self) -> Result<Dft, ConfigError> {
+        self.check_within(usize::MAX)
+    }
+
+    /// [`validate`](Self::validate) with `nfft` bounded by a transform capacity, in the
+    /// order the errors are documented.
+    const fn check_within(&self, capacity: usize) -> Result<Dft, ConfigError> {
+        if !(self.fs_hz.is_finite() && self.fs_hz > 0.0) {
+            return Err(ConfigError::SampleRate);
+        }
+        if self.nperseg == 0 {
+            return Err(ConfigError::SegmentLength {
+                nperseg: self.nperseg,
+                capacity,
+            });
+        }
+        if self.noverlap >= self.nperseg {
+            return Err(ConfigError::Overlap {
+                noverlap: self.noverlap,
+                nperseg: self.nperseg,
+            });
+        }
+        if self.nfft < self.nperseg || self.nfft > capacity {
+            return Err(ConfigError::FftLength {
+                nfft: self.nfft,
+                nperseg: self.nperseg,
+                capacity,
+            });
+        }
+        match Dft::try_new(self.nfft) {
+            Ok(d) => Ok(d),
+            Err(e) => Err(ConfigError::Dft(e)),
+        }
+    }
+
     /// Number of output bins, `nfft / 2 + 1` (DC to Nyquist, one-sided).
     pub const fn bins(&self) -> usize {
         self.nfft / 2 + 1
     }
 
     /// Bin spacing `fs / nfft`, in Hz.
-    pub fn df_hz(&self) -> f32 {
+    pub const fn df_hz(&self) -> f32 {
         if self.nfft == 0 {
             0.0
         } else {
@@ -203,11 +268,13 @@ impl WelchConfig {
     }
 }
 
-/// Why a configuration is rejected, or a call cannot be served.
+/// Why a [`WelchConfig`] is rejected (by [`WelchConfig::validate`], or against the capacities
+/// by [`WelchAccumulator::try_new`] and [`WelchH1::try_new`]). Checked once; run-time errors
+/// are [`WelchError`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum WelchError {
+pub enum ConfigError {
     /// `fs_hz` is not finite or not positive.
     SampleRate,
     /// `nperseg` is 0 or larger than the segment capacity `SEG`.
@@ -242,6 +309,51 @@ pub enum WelchError {
         /// Capacity `SCRATCH` of the estimator.
         capacity: usize,
     },
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConfigError::SampleRate => write!(f, "sampling rate must be finite and positive"),
+            ConfigError::SegmentLength { nperseg, capacity } => write!(
+                f,
+                "nperseg = {nperseg} is outside 1..={capacity} (the segment capacity)"
+            ),
+            ConfigError::Overlap { noverlap, nperseg } => write!(
+                f,
+                "noverlap = {noverlap} must be smaller than nperseg = {nperseg}"
+            ),
+            ConfigError::FftLength {
+                nfft,
+                nperseg,
+                capacity,
+            } => write!(
+                f,
+                "nfft = {nfft} is outside {nperseg}..={capacity} (nperseg ..= transform capacity)"
+            ),
+            ConfigError::Dft(e) => write!(f, "nfft: {e}"),
+            ConfigError::Scratch { needed, capacity } => write!(
+                f,
+                "the transform needs {needed} scratch values, the capacity is {capacity}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+impl From<DftError> for ConfigError {
+    fn from(e: DftError) -> Self {
+        ConfigError::Dft(e)
+    }
+}
+
+/// Why a call on a configured estimator cannot be served (nothing was consumed or written).
+/// Configuration errors are [`ConfigError`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum WelchError {
     /// [`WelchH1::push`] got chunks of different lengths for `x` and `y` (nothing was consumed).
     ChunkLengths {
         /// Length of the `x` chunk.
@@ -251,58 +363,33 @@ pub enum WelchError {
     },
     /// No segment has been accumulated yet: H1 and the coherence are not available.
     NoSegments,
+    /// The estimator was built by `new()` and not configured yet (nothing was consumed).
+    NotConfigured,
     /// A buffer passed to [`WelchAccumulator::add_segment`] has the wrong length (nothing was
-    /// accumulated).
-    BufferLen {
-        /// Length needed (`nperseg` for the segments, at least `nfft` for the work buffer).
-        expected: usize,
-        /// Length passed.
-        got: usize,
-    },
+    /// accumulated): `nperseg` for the segments, at least `nfft` for the work buffer, at least
+    /// [`WelchAccumulator::scratch_len`] for the scratch.
+    Buffer(BufferError),
 }
 
 impl fmt::Display for WelchError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            WelchError::SampleRate => write!(f, "sampling rate must be finite and positive"),
-            WelchError::SegmentLength { nperseg, capacity } => write!(
-                f,
-                "nperseg = {nperseg} is outside 1..={capacity} (the segment capacity)"
-            ),
-            WelchError::Overlap { noverlap, nperseg } => write!(
-                f,
-                "noverlap = {noverlap} must be smaller than nperseg = {nperseg}"
-            ),
-            WelchError::FftLength {
-                nfft,
-                nperseg,
-                capacity,
-            } => write!(
-                f,
-                "nfft = {nfft} is outside {nperseg}..={capacity} (nperseg ..= transform capacity)"
-            ),
-            WelchError::Dft(e) => write!(f, "nfft: {e}"),
-            WelchError::Scratch { needed, capacity } => write!(
-                f,
-                "the transform needs {needed} scratch values, the capacity is {capacity}"
-            ),
             WelchError::ChunkLengths { x, y } => write!(
                 f,
                 "x and y chunks differ in length ({x} and {y} samples); nothing was consumed"
             ),
             WelchError::NoSegments => write!(f, "no complete segment has been accumulated yet"),
-            WelchError::BufferLen { expected, got } => {
-                write!(f, "buffer has {got} values, {expected} expected")
-            }
+            WelchError::NotConfigured => write!(f, "the estimator is not configured yet"),
+            WelchError::Buffer(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl core::error::Error for WelchError {}
 
-impl From<DftError> for WelchError {
-    fn from(e: DftError) -> Self {
-        WelchError::Dft(e)
+impl From<BufferError> for WelchError {
+    fn from(e: BufferError) -> Self {
+        WelchError::Buffer(e)
     }
 }
 
@@ -395,13 +482,38 @@ impl<const NFFT: usize> defmt::Format for WelchAccumulator<NFFT> {
 }
 
 impl<const NFFT: usize> WelchAccumulator<NFFT> {
+    /// An unconfigured estimate (accumulates nothing) to build in place in a `static` (all
+    /// zero bytes: `.bss`), then [`configure`](Self::configure).
+    pub const fn new() -> Self {
+        WelchAccumulator {
+            config: WelchConfig::NONE,
+            dft: Dft::NONE,
+            auto: [0.0; NFFT],
+            cross: [0.0; NFFT],
+            pyy_dc: 0.0,
+            pyy_nyquist: 0.0,
+            segments: 0,
+            skipped: 0,
+        }
+    }
+
+    /// Whether the settings were set (by [`try_new`](Self::try_new) or
+    /// [`configure`](Self::configure)).
+    pub const fn is_configured(&self) -> bool {
+        self.config.nperseg > 0
+    }
+
     /// Checks `config` against the capacity and builds an empty estimate. `nperseg` is only
     /// bounded by `nfft` here (the caller owns the segments).
     ///
-    /// Errors: [`WelchError::SampleRate`], [`WelchError::SegmentLength`],
-    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`].
-    pub fn try_new(config: WelchConfig) -> Result<Self, WelchError> {
-        let dft = Self::check(&config)?;
+    /// Errors: [`ConfigError::SampleRate`], [`ConfigError::SegmentLength`],
+    /// [`ConfigError::Overlap`], [`ConfigError::FftLength`], [`ConfigError::Dft`].
+    /// `const`: a `static` initialiser builds it in place, checked at compile time.
+    pub const fn try_new(config: WelchConfig) -> Result<Self, ConfigError> {
+        let dft = match Self::check(&config) {
+            Ok(d) => d,
+            Err(e) => return Err(e),
+        };
         Ok(WelchAccumulator {
             config,
             dft,
@@ -416,7 +528,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
 
     /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
     /// estimate. On error the estimate is left unchanged.
-    pub fn reconfigure(&mut self, config: WelchConfig) -> Result<(), WelchError> {
+    pub fn configure(&mut self, config: WelchConfig) -> Result<(), ConfigError> {
         self.dft = Self::check(&config)?;
         self.config = config;
         self.reset();
@@ -433,50 +545,28 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
         self.skipped = 0;
     }
 
-    fn check(c: &WelchConfig) -> Result<Dft, WelchError> {
-        if !(c.fs_hz.is_finite() && c.fs_hz > 0.0) {
-            return Err(WelchError::SampleRate);
-        }
-        if c.nperseg == 0 {
-            return Err(WelchError::SegmentLength {
-                nperseg: c.nperseg,
-                capacity: NFFT,
-            });
-        }
-        if c.noverlap >= c.nperseg {
-            return Err(WelchError::Overlap {
-                noverlap: c.noverlap,
-                nperseg: c.nperseg,
-            });
-        }
-        if c.nfft < c.nperseg || c.nfft > NFFT {
-            return Err(WelchError::FftLength {
-                nfft: c.nfft,
-                nperseg: c.nperseg,
-                capacity: NFFT,
-            });
-        }
-        Ok(Dft::try_new(c.nfft)?)
+    const fn check(c: &WelchConfig) -> Result<Dft, ConfigError> {
+        c.check_within(NFFT)
     }
 
     /// The settings in force.
-    pub fn config(&self) -> &WelchConfig {
+    pub const fn config(&self) -> &WelchConfig {
         &self.config
     }
 
     /// Scratch values [`add_segment`](Self::add_segment) needs
     /// ([`crate::dft::scratch_len`]`(nfft)`, zero for powers of two).
-    pub fn scratch_len(&self) -> usize {
+    pub const fn scratch_len(&self) -> usize {
         self.dft.scratch_len()
     }
 
     /// Number of output bins, `nfft / 2 + 1`.
-    pub fn bins(&self) -> usize {
+    pub const fn bins(&self) -> usize {
         self.config.bins()
     }
 
     /// Bin spacing `fs / nfft`, in Hz.
-    pub fn df_hz(&self) -> f32 {
+    pub const fn df_hz(&self) -> f32 {
         self.config.df_hz()
     }
 
@@ -487,13 +577,13 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     }
 
     /// Segments accumulated so far.
-    pub fn segments(&self) -> u32 {
+    pub const fn segments(&self) -> u32 {
         self.segments
     }
 
     /// Complete segments that were not accumulated because they contained a non-finite sample
     /// or one larger than [`MAX_SAMPLE_ABS`] in magnitude.
-    pub fn skipped_segments(&self) -> u32 {
+    pub const fn skipped_segments(&self) -> u32 {
         self.skipped
     }
 
@@ -503,8 +593,8 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// the segment was accumulated, `Ok(false)` if it was skipped (non-finite or too large a
     /// sample, see [`skipped_segments`](Self::skipped_segments)).
     ///
-    /// Errors (nothing accumulated): [`WelchError::BufferLen`] for a wrong `x`, `y` or `work`
-    /// length, [`WelchError::Scratch`] for too small a `scratch`.
+    /// Errors (nothing accumulated): [`WelchError::Buffer`] for a wrong `x`, `y` or `work`
+    /// length or too small a `scratch`.
     pub fn add_segment(
         &mut self,
         x: &[f32],
@@ -516,25 +606,48 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
         let nfft = self.config.nfft;
         for got in [x.len(), y.len()] {
             if got != n {
-                return Err(WelchError::BufferLen { expected: n, got });
+                return Err(BufferError { expected: n, got }.into());
             }
         }
-        let Some(work) = work.get_mut(..nfft) else {
-            return Err(WelchError::BufferLen {
+        if work.len() < nfft {
+            return Err(BufferError {
                 expected: nfft,
                 got: work.len(),
-            });
-        };
-        if scratch.len() < self.dft.scratch_len() {
-            return Err(WelchError::Scratch {
-                needed: self.dft.scratch_len(),
-                capacity: scratch.len(),
-            });
+            }
+            .into());
         }
+        if scratch.len() < self.dft.scratch_len() {
+            return Err(BufferError {
+                expected: self.dft.scratch_len(),
+                got: scratch.len(),
+            }
+            .into());
+        }
+        Ok(self.accumulate(x, y, work, scratch))
+    }
+
+    /// [`add_segment`](Self::add_segment) for the crate's own callers, whose buffers follow
+    /// from a validated configuration: infallible (buffers of the wrong length, impossible
+    /// there, accumulate nothing and return `false`).
+    pub(crate) fn accumulate(
+        &mut self,
+        x: &[f32],
+        y: &[f32],
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) -> bool {
+        let n = self.config.nperseg;
+        let nfft = self.config.nfft;
+        if n == 0 || x.len() != n || y.len() != n || scratch.len() < self.dft.scratch_len() {
+            return false;
+        }
+        let Some(work) = work.get_mut(..nfft) else {
+            return false;
+        };
         let detrend = self.config.detrend == Detrend::Constant;
         let (Some(px), Some(py)) = (prepare(x, detrend), prepare(y, detrend)) else {
             self.skipped = self.skipped.saturating_add(1);
-            return Ok(false);
+            return false;
         };
         let (sx, sy) = (px.scale, py.scale);
         // z = (x - mean) * w / sx + i (y - mean) * w / sy, zero-padded to nfft
@@ -563,7 +676,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
                 }
             }
         }
-        self.dft.process(work, scratch, Direction::Forward)?;
+        self.dft.run(work, scratch, Direction::Forward);
         let bins = nfft / 2 + 1;
         for k in 0..bins {
             let zk = work.get(k).copied().unwrap_or_default();
@@ -602,7 +715,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
             }
         }
         self.segments = self.segments.saturating_add(1);
-        Ok(true)
+        true
     }
 
     /// Accumulated spectra at bin `k` (`None` if `k >= bins()`). Divide by
@@ -680,7 +793,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
 /// Build it with [`try_new`](Self::try_new), feed it with [`push`](Self::push), read it with
 /// [`h1`](Self::h1), [`coherence`](Self::coherence), [`freq`](Self::freq) or the slice
 /// fillers. [`reset`](Self::reset) starts a new estimate with the same settings and
-/// [`reconfigure`](Self::reconfigure) with new ones, so one (boxed or static) instance can serve
+/// [`configure`](Self::configure) with new ones, so one (boxed or static) instance can serve
 /// many records without being moved again.
 #[derive(Clone)]
 pub struct WelchH1<const SEG: usize, const NFFT: usize, const SCRATCH: usize> {
@@ -726,15 +839,36 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> defmt::Format
 }
 
 impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFFT, SCRATCH> {
+    /// An unconfigured estimator ([`push`](Self::push) refuses with
+    /// [`WelchError::NotConfigured`]) to build in place in a `static` (all zero bytes:
+    /// `.bss`, no stack copy), then [`configure`](Self::configure).
+    pub const fn new() -> Self {
+        WelchH1 {
+            acc: WelchAccumulator::new(),
+            xseg: [0.0; SEG],
+            yseg: [0.0; SEG],
+            fill: 0,
+            work: [Complex32::new(0.0, 0.0); NFFT],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+        }
+    }
+
     /// Checks `config` against the capacities and builds an empty estimator.
     ///
-    /// Errors: [`WelchError::SampleRate`], [`WelchError::SegmentLength`],
-    /// [`WelchError::Overlap`], [`WelchError::FftLength`], [`WelchError::Dft`],
-    /// [`WelchError::Scratch`].
-    pub fn try_new(config: WelchConfig) -> Result<Self, WelchError> {
-        Self::check(&config)?;
+    /// Errors: [`ConfigError::SampleRate`], [`ConfigError::SegmentLength`],
+    /// [`ConfigError::Overlap`], [`ConfigError::FftLength`], [`ConfigError::Dft`],
+    /// [`ConfigError::Scratch`]. `const`: a `static` initialiser builds it in place, checked
+    /// at compile time.
+    pub const fn try_new(config: WelchConfig) -> Result<Self, ConfigError> {
+        if let Err(e) = Self::check(&config) {
+            return Err(e);
+        }
+        let acc = match WelchAccumulator::try_new(config) {
+            Ok(a) => a,
+            Err(e) => return Err(e),
+        };
         Ok(WelchH1 {
-            acc: WelchAccumulator::try_new(config)?,
+            acc,
             xseg: [0.0; SEG],
             yseg: [0.0; SEG],
             fill: 0,
@@ -745,9 +879,9 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
 
     /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
     /// estimate. On error the estimator is left unchanged.
-    pub fn reconfigure(&mut self, config: WelchConfig) -> Result<(), WelchError> {
+    pub fn configure(&mut self, config: WelchConfig) -> Result<(), ConfigError> {
         Self::check(&config)?;
-        self.acc.reconfigure(config)?;
+        self.acc.configure(config)?;
         self.fill = 0;
         Ok(())
     }
@@ -760,19 +894,22 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
 
     /// [`WelchAccumulator::try_new`]'s checks plus the segment and scratch capacities, in the
     /// order the errors are documented.
-    fn check(c: &WelchConfig) -> Result<(), WelchError> {
+    const fn check(c: &WelchConfig) -> Result<(), ConfigError> {
         if !(c.fs_hz.is_finite() && c.fs_hz > 0.0) {
-            return Err(WelchError::SampleRate);
+            return Err(ConfigError::SampleRate);
         }
         if c.nperseg == 0 || c.nperseg > SEG {
-            return Err(WelchError::SegmentLength {
+            return Err(ConfigError::SegmentLength {
                 nperseg: c.nperseg,
                 capacity: SEG,
             });
         }
-        let dft = WelchAccumulator::<NFFT>::check(c)?;
+        let dft = match WelchAccumulator::<NFFT>::check(c) {
+            Ok(d) => d,
+            Err(e) => return Err(e),
+        };
         if dft.scratch_len() > SCRATCH {
-            return Err(WelchError::Scratch {
+            return Err(ConfigError::Scratch {
                 needed: dft.scratch_len(),
                 capacity: SCRATCH,
             });
@@ -781,22 +918,22 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
     }
 
     /// The accumulated estimate (settings, spectra, counters).
-    pub fn accumulator(&self) -> &WelchAccumulator<NFFT> {
+    pub const fn accumulator(&self) -> &WelchAccumulator<NFFT> {
         &self.acc
     }
 
     /// The settings in force.
-    pub fn config(&self) -> &WelchConfig {
+    pub const fn config(&self) -> &WelchConfig {
         self.acc.config()
     }
 
     /// Number of output bins, `nfft / 2 + 1`.
-    pub fn bins(&self) -> usize {
+    pub const fn bins(&self) -> usize {
         self.acc.bins()
     }
 
     /// Bin spacing `fs / nfft`, in Hz.
-    pub fn df_hz(&self) -> f32 {
+    pub const fn df_hz(&self) -> f32 {
         self.acc.df_hz()
     }
 
@@ -806,18 +943,18 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
     }
 
     /// Segments accumulated so far.
-    pub fn segments(&self) -> u32 {
+    pub const fn segments(&self) -> u32 {
         self.acc.segments()
     }
 
     /// Complete segments that were not accumulated because they contained a non-finite sample
     /// or one larger than [`MAX_SAMPLE_ABS`] in magnitude.
-    pub fn skipped_segments(&self) -> u32 {
+    pub const fn skipped_segments(&self) -> u32 {
         self.acc.skipped_segments()
     }
 
     /// Samples waiting in the segment buffer (always `< nperseg`).
-    pub fn pending(&self) -> usize {
+    pub const fn pending(&self) -> usize {
         self.fill
     }
 
@@ -827,8 +964,12 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
     /// the record is cut into chunks: pushing it sample by sample, in random chunks or at once
     /// gives bit-identical spectra.
     ///
-    /// Errors: [`WelchError::ChunkLengths`] if `x.len() != y.len()`; then nothing is consumed.
+    /// Errors (nothing is consumed): [`WelchError::ChunkLengths`] if `x.len() != y.len()`,
+    /// [`WelchError::NotConfigured`] before the settings are set.
     pub fn push(&mut self, x: &[f32], y: &[f32]) -> Result<(), WelchError> {
+        if !self.acc.is_configured() {
+            return Err(WelchError::NotConfigured);
+        }
         if x.len() != y.len() {
             return Err(WelchError::ChunkLengths {
                 x: x.len(),
@@ -860,10 +1001,10 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 if let (Some(xs), Some(ys)) =
                     (self.xseg.get_mut(..nperseg), self.yseg.get_mut(..nperseg))
                 {
-                    // the capacities were checked by try_new: no error case is left
-                    let _ = self
-                        .acc
-                        .add_segment(xs, ys, &mut self.work, &mut self.scratch);
+                    // the capacities were checked by try_new: no error case is left (a skipped,
+                    // non-finite segment is counted by the accumulator)
+                    self.acc
+                        .accumulate(xs, ys, &mut self.work, &mut self.scratch);
                     let step = nperseg - self.acc.config.noverlap;
                     if step <= xs.len() && step <= ys.len() {
                         xs.copy_within(step.., 0);
@@ -906,6 +1047,20 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
     /// segment.
     pub fn fill_coherence(&self, out: &mut [f32]) -> Result<usize, WelchError> {
         self.acc.fill_coherence(out)
+    }
+}
+
+impl<const NFFT: usize> Default for WelchAccumulator<NFFT> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> Default
+    for WelchH1<SEG, NFFT, SCRATCH>
+{
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -1249,12 +1404,12 @@ mod tests {
         assert!(W::try_new(ok).is_ok());
         for fs in [0.0, -1.0, f32::NAN, f32::INFINITY] {
             let e = W::try_new(WelchConfig { fs_hz: fs, ..ok }).unwrap_err();
-            assert_eq!(e, WelchError::SampleRate);
+            assert_eq!(e, ConfigError::SampleRate);
         }
         let e = W::try_new(WelchConfig { nperseg: 0, ..ok }).unwrap_err();
         assert_eq!(
             e,
-            WelchError::SegmentLength {
+            ConfigError::SegmentLength {
                 nperseg: 0,
                 capacity: 64
             }
@@ -1262,7 +1417,7 @@ mod tests {
         let e = W::try_new(WelchConfig { nperseg: 65, ..ok }).unwrap_err();
         assert_eq!(
             e,
-            WelchError::SegmentLength {
+            ConfigError::SegmentLength {
                 nperseg: 65,
                 capacity: 64
             }
@@ -1270,7 +1425,7 @@ mod tests {
         let e = W::try_new(WelchConfig { noverlap: 64, ..ok }).unwrap_err();
         assert_eq!(
             e,
-            WelchError::Overlap {
+            ConfigError::Overlap {
                 noverlap: 64,
                 nperseg: 64
             }
@@ -1278,21 +1433,21 @@ mod tests {
         let e = W::try_new(WelchConfig { nfft: 63, ..ok }).unwrap_err();
         assert_eq!(
             e,
-            WelchError::FftLength {
+            ConfigError::FftLength {
                 nfft: 63,
                 nperseg: 64,
                 capacity: 128
             }
         );
         let e = W::try_new(WelchConfig { nfft: 129, ..ok }).unwrap_err();
-        assert!(matches!(e, WelchError::FftLength { nfft: 129, .. }));
+        assert!(matches!(e, ConfigError::FftLength { nfft: 129, .. }));
         // 120 = 8 * 15 needs more scratch than scratch_capacity(96) = 96 + 2 * 3 = 102
         let e =
             WelchH1::<64, 128, { scratch_capacity(96) }>::try_new(WelchConfig { nfft: 120, ..ok })
                 .unwrap_err();
         assert_eq!(
             e,
-            WelchError::Scratch {
+            ConfigError::Scratch {
                 needed: 150,
                 capacity: 102
             }
@@ -1306,14 +1461,14 @@ mod tests {
             ..ok
         })
         .unwrap_err();
-        assert_eq!(e, WelchError::Dft(DftError::Unsupported { len: 32771 }));
-        // reconfigure rejects without touching the state
+        assert_eq!(e, ConfigError::Dft(DftError::Unsupported { len: 32771 }));
+        // configure rejects without touching the state
         let mut w = W::try_new(ok).unwrap();
         w.push(&[0.5; 70], &[0.25; 70]).unwrap();
-        assert!(w.reconfigure(WelchConfig { noverlap: 99, ..ok }).is_err());
+        assert!(w.configure(WelchConfig { noverlap: 99, ..ok }).is_err());
         assert_eq!((w.config(), w.segments()), (&ok, 1));
         let new = cfg(32, 0, 32, Window::Rect);
-        w.reconfigure(new).unwrap();
+        w.configure(new).unwrap();
         assert_eq!((w.config(), w.segments(), w.bins()), (&new, 0, 17));
         // unequal chunks consume nothing
         assert_eq!(
@@ -1420,23 +1575,23 @@ mod tests {
         let before = acc.segments();
         assert_eq!(
             acc.add_segment(&x[..99], &y[..100], &mut work, &mut []),
-            Err(WelchError::BufferLen {
+            Err(WelchError::Buffer(BufferError {
                 expected: 100,
                 got: 99
-            })
+            }))
         );
         assert_eq!(
             acc.add_segment(&x[..100], &y[..100], &mut work[..127], &mut []),
-            Err(WelchError::BufferLen {
+            Err(WelchError::Buffer(BufferError {
                 expected: 128,
                 got: 127
-            })
+            }))
         );
         let mut odd = WelchAccumulator::<120>::try_new(cfg(100, 40, 120, Window::Hann)).unwrap();
         assert!(odd.scratch_len() > 0);
         assert!(matches!(
             odd.add_segment(&x[..100], &y[..100], &mut work, &mut []),
-            Err(WelchError::Scratch { .. })
+            Err(WelchError::Buffer(BufferError { .. }))
         ));
         let mut scratch = vec![Complex32::new(0.0, 0.0); odd.scratch_len()];
         assert_eq!(

@@ -11,15 +11,26 @@
 //! both streams exactly: frame `i` starts its exposure at tick `i * camera_div`, sample `j` is
 //! taken at tick `j * adc_div`, and the exposure centre is `exposure_ticks / 2` after the
 //! trigger.
+//!
+//! ```
+//! use firmware_core::sync::{SyncConfig, SyncPlan};
+//! // 2048 Hz ADC, 120 fps camera, a timer up to 1 MHz, 2 ms exposure
+//! let config = SyncConfig::new(2048, 120, 1_000_000);
+//! let plan = SyncPlan::try_new(config.with_exposure_ticks(SyncPlan::ticks_for(2e-3, 30_720)))
+//!     .unwrap();
+//! assert_eq!((plan.tick_hz(), plan.adc_div(), plan.camera_div()), (30_720, 15, 256));
+//! assert_eq!(plan.exposure_ticks(), 61);
+//! ```
 
 use core::fmt;
 use embedded_hal::digital::OutputPin;
 
-/// Why a synchronisation plan is impossible.
+/// Why a synchronisation plan is impossible (a [`SyncConfig`] rejected once, by
+/// [`SyncPlan::try_new`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum SyncError {
+pub enum ConfigError {
     /// A rate is zero.
     ZeroRate,
     /// The least common multiple of the two rates exceeds the timer's maximum tick rate.
@@ -38,15 +49,15 @@ pub enum SyncError {
     },
 }
 
-impl fmt::Display for SyncError {
+impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SyncError::ZeroRate => write!(f, "ADC and camera rates must be non-zero"),
-            SyncError::NoCommonTick { needed_hz, max_hz } => write!(
+            ConfigError::ZeroRate => write!(f, "ADC and camera rates must be non-zero"),
+            ConfigError::NoCommonTick { needed_hz, max_hz } => write!(
                 f,
                 "the rates need a common tick of {needed_hz} Hz, above the timer's {max_hz} Hz"
             ),
-            SyncError::Exposure {
+            ConfigError::Exposure {
                 exposure_ticks,
                 frame_ticks,
             } => write!(
@@ -57,7 +68,46 @@ impl fmt::Display for SyncError {
     }
 }
 
-impl core::error::Error for SyncError {}
+impl core::error::Error for ConfigError {}
+
+/// Settings of a [`SyncPlan`]: rates in integer Hz and the exposure in ticks of the common
+/// time base. Plain data; checked once by [`SyncPlan::try_new`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SyncConfig {
+    /// ADC conversion rate, Hz, >= 1.
+    pub adc_hz: u32,
+    /// Camera trigger (frame) rate, Hz, >= 1.
+    pub camera_hz: u32,
+    /// Fastest tick rate the timer can count at, Hz: the least common multiple of the two
+    /// rates must not exceed it.
+    pub timer_max_hz: u32,
+    /// Exposure (trigger pulse width), ticks of the common time base, `1 ..= frame period - 1`
+    /// (see [`SyncPlan::ticks_for`] to convert seconds).
+    pub exposure_ticks: u32,
+}
+
+impl SyncConfig {
+    /// ADC at `adc_hz`, camera at `camera_hz`, on a timer of at most `timer_max_hz`, with the
+    /// shortest exposure (one tick); set [`exposure_ticks`](Self::exposure_ticks) after.
+    pub const fn new(adc_hz: u32, camera_hz: u32, timer_max_hz: u32) -> Self {
+        SyncConfig {
+            adc_hz,
+            camera_hz,
+            timer_max_hz,
+            exposure_ticks: 1,
+        }
+    }
+
+    /// The same with an exposure of `exposure_ticks` ticks.
+    #[must_use]
+    pub const fn with_exposure_ticks(self, exposure_ticks: u32) -> Self {
+        SyncConfig {
+            exposure_ticks,
+            ..self
+        }
+    }
+}
 
 /// Tick rate and dividers for one ADC rate and one camera rate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,19 +132,20 @@ impl SyncPlan {
     /// Plans ADC conversions at `adc_hz` and camera triggers at `camera_hz` (both integer Hz)
     /// on a timer that ticks at most at `timer_max_hz`, with an exposure (trigger pulse width)
     /// of `exposure_ticks` ticks of the common time base (`1 ..= frame period - 1`).
-    pub const fn try_new(
-        adc_hz: u32,
-        camera_hz: u32,
-        timer_max_hz: u32,
-        exposure_ticks: u32,
-    ) -> Result<Self, SyncError> {
+    pub const fn try_new(config: SyncConfig) -> Result<Self, ConfigError> {
+        let SyncConfig {
+            adc_hz,
+            camera_hz,
+            timer_max_hz,
+            exposure_ticks,
+        } = config;
         if adc_hz == 0 || camera_hz == 0 {
-            return Err(SyncError::ZeroRate);
+            return Err(ConfigError::ZeroRate);
         }
         let g = gcd(adc_hz as u64, camera_hz as u64);
         let lcm = adc_hz as u64 / g * camera_hz as u64;
         if lcm > timer_max_hz as u64 {
-            return Err(SyncError::NoCommonTick {
+            return Err(ConfigError::NoCommonTick {
                 needed_hz: lcm,
                 max_hz: timer_max_hz,
             });
@@ -102,7 +153,7 @@ impl SyncPlan {
         let tick_hz = lcm as u32;
         let camera_div = tick_hz / camera_hz;
         if exposure_ticks == 0 || exposure_ticks >= camera_div {
-            return Err(SyncError::Exposure {
+            return Err(ConfigError::Exposure {
                 exposure_ticks,
                 frame_ticks: camera_div,
             });
@@ -288,7 +339,8 @@ mod tests {
     fn paper_rates_give_30720_hz_with_dividers_15_and_256() {
         let exp = SyncPlan::ticks_for(0.002, 30_720);
         assert_eq!(exp, 61);
-        let p = SyncPlan::try_new(2048, 120, 100_000_000, exp).unwrap();
+        let p = SyncPlan::try_new(SyncConfig::new(2048, 120, 100_000_000).with_exposure_ticks(exp))
+            .unwrap();
         assert_eq!(
             (p.tick_hz(), p.adc_div(), p.camera_div()),
             (30_720, 15, 256)
@@ -298,30 +350,31 @@ mod tests {
     #[test]
     fn impossible_pairs_are_rejected() {
         assert_eq!(
-            SyncPlan::try_new(0, 120, 1_000_000, 1),
-            Err(SyncError::ZeroRate)
+            SyncPlan::try_new(SyncConfig::new(0, 120, 1_000_000).with_exposure_ticks(1)),
+            Err(ConfigError::ZeroRate)
         );
         // coprime large rates: lcm = 999_983 * 1_000_003 > u32
         assert!(matches!(
-            SyncPlan::try_new(999_983, 1_000_003, u32::MAX, 1),
-            Err(SyncError::NoCommonTick { .. })
+            SyncPlan::try_new(SyncConfig::new(999_983, 1_000_003, u32::MAX).with_exposure_ticks(1)),
+            Err(ConfigError::NoCommonTick { .. })
         ));
         assert!(matches!(
-            SyncPlan::try_new(2048, 120, 20_000, 1),
-            Err(SyncError::NoCommonTick {
+            SyncPlan::try_new(SyncConfig::new(2048, 120, 20_000).with_exposure_ticks(1)),
+            Err(ConfigError::NoCommonTick {
                 needed_hz: 30_720,
                 max_hz: 20_000
             })
         ));
         assert!(matches!(
-            SyncPlan::try_new(2048, 120, 100_000, 256),
-            Err(SyncError::Exposure { .. })
+            SyncPlan::try_new(SyncConfig::new(2048, 120, 100_000).with_exposure_ticks(256)),
+            Err(ConfigError::Exposure { .. })
         ));
     }
 
     #[test]
     fn trigger_pulses_and_stamps_for_the_first_two_frames() {
-        let plan = SyncPlan::try_new(2048, 120, 100_000, 61).unwrap();
+        let plan =
+            SyncPlan::try_new(SyncConfig::new(2048, 120, 100_000).with_exposure_ticks(61)).unwrap();
         let pin = Mock::new(&[
             Transaction::set(State::High),
             Transaction::set(State::Low),
@@ -359,7 +412,8 @@ mod tests {
     fn pin_errors_are_propagated_and_the_edge_is_retried() {
         use embedded_hal_mock::eh1::MockError;
         use std::io::ErrorKind;
-        let plan = SyncPlan::try_new(2048, 120, 100_000, 61).unwrap();
+        let plan =
+            SyncPlan::try_new(SyncConfig::new(2048, 120, 100_000).with_exposure_ticks(61)).unwrap();
         let pin = Mock::new(&[
             Transaction::set(State::High).with_error(MockError::Io(ErrorKind::NotConnected)),
             Transaction::set(State::High),
@@ -412,7 +466,8 @@ mod tests {
     #[test]
     fn pulse_edges_fall_on_the_exact_ticks_when_polled_every_tick() {
         // 2048 Hz / 120 fps, 2 ms exposure = 61 ticks: rising edges at 256 k, falling at 256 k + 61
-        let plan = SyncPlan::try_new(2048, 120, 100_000, 61).unwrap();
+        let plan =
+            SyncPlan::try_new(SyncConfig::new(2048, 120, 100_000).with_exposure_ticks(61)).unwrap();
         let now = std::rc::Rc::new(core::cell::Cell::new(0u32));
         let pin = EdgePin {
             now: now.clone(),
@@ -435,7 +490,7 @@ mod tests {
         fn counts_follow_the_rates_whatever_the_polling(
             adc in 1u32..5000, cam in 1u32..500, step in 1u32..700, polls in 1usize..400,
         ) {
-            let Ok(plan) = SyncPlan::try_new(adc, cam, 10_000_000, 1) else {
+            let Ok(plan) = SyncPlan::try_new(SyncConfig::new(adc, cam, 10_000_000).with_exposure_ticks(1)) else {
                 return Ok(());
             };
             let mut d = SyncDriver::new(AnyPin, Steps { t: u32::MAX - 1000, step }, plan);

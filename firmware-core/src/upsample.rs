@@ -11,17 +11,31 @@
 //! `SCRATCH >= max(scratch_len(n), scratch_len(m))` ([`scratch_capacity`]). 1200 -> 20480
 //! (10 s at 120 fps to 2048 Hz) needs `Upsampler<20480, { scratch_capacity(1200, 20480) }>`;
 //! 120 -> 2048 needs `Upsampler<2048, { scratch_capacity(120, 2048) }>` (about 17 KiB).
+//!
+//! ```
+//! use firmware_core::upsample::{scratch_capacity, Upsampler};
+//! // one second at 12 fps to 64 Hz, built in place in a `static` on an MCU:
+//! // `static mut UP: Up = Up::new();` then `configure`
+//! type Up = Upsampler<64, { scratch_capacity(12, 64) }>;
+//! let mut up = Up::try_new(12, 64).unwrap();
+//! let x: [f32; 12] = core::array::from_fn(|j| libm::sinf(2.0 * core::f32::consts::PI * j as f32 / 12.0));
+//! let mut y = [0.0f32; 64];
+//! up.process(&x, &mut y).unwrap();
+//! // the sinusoid at the new rate
+//! assert!((y[16] - 1.0).abs() < 1e-5);
+//! ```
 
 use crate::dft::{scratch_len, Dft, DftError, Direction};
-use crate::Complex32;
+use crate::{BufferError, Complex32};
 use core::f32::consts::PI;
 use core::fmt;
 
-/// Why an upsampler cannot be built or run.
+/// Why an upsampling plan or an [`Upsampler`] cannot be built (checked once; running a plan
+/// can only fail on a caller buffer of the wrong length, [`BufferError`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum UpsampleError {
+pub enum ConfigError {
     /// `n` is zero or `m < n` (this type only upsamples).
     Lengths {
         /// Input length.
@@ -48,45 +62,35 @@ pub enum UpsampleError {
     /// The output rate is not an integer multiple of the input rate times `n`: `n * to / from`
     /// is not an integer.
     RateRatio,
-    /// A slice passed to `process` has the wrong length.
-    BufferLen {
-        /// Length expected.
-        expected: usize,
-        /// Length passed.
-        got: usize,
-    },
 }
 
-impl fmt::Display for UpsampleError {
+impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            UpsampleError::Lengths { n, m } => {
+            ConfigError::Lengths { n, m } => {
                 write!(f, "cannot upsample {n} samples to {m}: need 1 <= n <= m")
             }
-            UpsampleError::Capacity { m, capacity } => {
+            ConfigError::Capacity { m, capacity } => {
                 write!(f, "output length {m} exceeds the capacity {capacity}")
             }
-            UpsampleError::Scratch { needed, capacity } => write!(
+            ConfigError::Scratch { needed, capacity } => write!(
                 f,
                 "DFT scratch needs {needed} values, the capacity is {capacity}"
             ),
-            UpsampleError::Dft(e) => write!(f, "{e}"),
-            UpsampleError::RateRatio => write!(
+            ConfigError::Dft(e) => write!(f, "{e}"),
+            ConfigError::RateRatio => write!(
                 f,
                 "the record length times the rate ratio is not an integer number of samples"
             ),
-            UpsampleError::BufferLen { expected, got } => {
-                write!(f, "buffer has {got} values, {expected} expected")
-            }
         }
     }
 }
 
-impl core::error::Error for UpsampleError {}
+impl core::error::Error for ConfigError {}
 
-impl From<DftError> for UpsampleError {
+impl From<DftError> for ConfigError {
     fn from(e: DftError) -> Self {
-        UpsampleError::Dft(e)
+        ConfigError::Dft(e)
     }
 }
 
@@ -133,28 +137,37 @@ pub struct UpsamplePlan {
 }
 
 impl UpsamplePlan {
+    /// The plan of nothing (`0 -> 0`): the placeholder of an unconfigured [`Upsampler`] or
+    /// pipeline (all zero bytes).
+    pub(crate) const NONE: UpsamplePlan = UpsamplePlan {
+        n: 0,
+        m: 0,
+        fwd: Dft::NONE,
+        inv: Dft::NONE,
+    };
+
     /// Plans `n -> m` (`1 <= n <= m`, both lengths supported by [`crate::dft`]).
-    pub const fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
+    pub const fn try_new(n: usize, m: usize) -> Result<Self, ConfigError> {
         if n == 0 || m < n {
-            return Err(UpsampleError::Lengths { n, m });
+            return Err(ConfigError::Lengths { n, m });
         }
         let fwd = match Dft::try_new(n) {
             Ok(d) => d,
-            Err(e) => return Err(UpsampleError::Dft(e)),
+            Err(e) => return Err(ConfigError::Dft(e)),
         };
         let inv = match Dft::try_new(m) {
             Ok(d) => d,
-            Err(e) => return Err(UpsampleError::Dft(e)),
+            Err(e) => return Err(ConfigError::Dft(e)),
         };
         Ok(UpsamplePlan { n, m, fwd, inv })
     }
 
     /// Plans the upsampling of `n` samples at `from_hz` to `to_hz` (integer rates; the output
     /// length `n * to / from` must be an integer).
-    pub const fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
+    pub const fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, ConfigError> {
         match output_len(n, from_hz, to_hz) {
             Some(m) => Self::try_new(n, m),
-            None => Err(UpsampleError::RateRatio),
+            None => Err(ConfigError::RateRatio),
         }
     }
 
@@ -185,8 +198,8 @@ impl UpsamplePlan {
     /// `-(2 pi f)^2 * scale` before the inverse transform, as
     /// [`Upsampler::process_acceleration`].
     ///
-    /// Errors (nothing written to `output`): [`UpsampleError::BufferLen`] for a wrong `input`,
-    /// `output` or `work` length, [`UpsampleError::Scratch`] for too small a `scratch`.
+    /// Errors (nothing written to `output`): [`BufferError`] for a wrong `input`, `output` or
+    /// `work` length or too small a `scratch`.
     pub fn process_with(
         &self,
         input: &[f32],
@@ -194,9 +207,9 @@ impl UpsamplePlan {
         accel: Option<(f32, f32)>,
         work: &mut [Complex32],
         scratch: &mut [Complex32],
-    ) -> Result<(), UpsampleError> {
+    ) -> Result<(), BufferError> {
         if output.len() != self.m {
-            return Err(UpsampleError::BufferLen {
+            return Err(BufferError {
                 expected: self.m,
                 got: output.len(),
             });
@@ -215,7 +228,7 @@ impl UpsamplePlan {
     /// by `omega^2` in the acceleration); a block that already holds whole periods has
     /// `next == input[0]` and is left as it is.
     ///
-    /// Errors: as [`process_with`](Self::process_with); [`UpsampleError::BufferLen`] with
+    /// Errors: as [`process_with`](Self::process_with); [`BufferError`] with
     /// `expected = m - first` when the range runs past `m`.
     #[allow(clippy::too_many_arguments)]
     pub fn process_part(
@@ -227,19 +240,53 @@ impl UpsamplePlan {
         end_match: Option<f32>,
         work: &mut [Complex32],
         scratch: &mut [Complex32],
-    ) -> Result<(), UpsampleError> {
+    ) -> Result<(), BufferError> {
         let (n, m) = (self.n, self.m);
         if input.len() != n {
-            return Err(UpsampleError::BufferLen {
+            return Err(BufferError {
                 expected: n,
                 got: input.len(),
             });
         }
         if first > m || output.len() > m - first {
-            return Err(UpsampleError::BufferLen {
+            return Err(BufferError {
                 expected: m.saturating_sub(first),
                 got: output.len(),
             });
+        }
+        if work.len() < m {
+            return Err(BufferError {
+                expected: m,
+                got: work.len(),
+            });
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError {
+                expected: self.scratch_len(),
+                got: scratch.len(),
+            });
+        }
+        self.run_part(input, output, first, accel, end_match, work, scratch);
+        Ok(())
+    }
+
+    /// [`process_part`](Self::process_part) for the crate's own callers, whose buffers follow
+    /// from a validated configuration: infallible (a buffer of the wrong length, impossible
+    /// there, leaves `output` untouched).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn run_part(
+        &self,
+        input: &[f32],
+        output: &mut [f32],
+        first: usize,
+        accel: Option<(f32, f32)>,
+        end_match: Option<f32>,
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) {
+        let (n, m) = (self.n, self.m);
+        if n == 0 || input.len() != n || first > m || output.len() > m - first {
+            return;
         }
         // the line a + slope * i through the first sample and the next block's (i in input
         // samples)
@@ -248,24 +295,18 @@ impl UpsamplePlan {
             _ => (0.0, 0.0),
         };
         let Some(work) = work.get_mut(..m) else {
-            return Err(UpsampleError::BufferLen {
-                expected: m,
-                got: work.len(),
-            });
+            return;
         };
         if scratch.len() < self.scratch_len() {
-            return Err(UpsampleError::Scratch {
-                needed: self.scratch_len(),
-                capacity: scratch.len(),
-            });
+            return;
         }
         for (i, (w, x)) in work.iter_mut().zip(input).enumerate() {
             *w = Complex32::new(*x - (a + slope * i as f32), 0.0);
         }
         let Some(head) = work.get_mut(..n) else {
-            return Ok(());
+            return;
         };
-        self.fwd.process(head, scratch, Direction::Forward)?;
+        self.fwd.run(head, scratch, Direction::Forward);
         // bins kept on each side: positive 0 ..= pos - 1, negative 1 ..= neg
         let even = n % 2 == 0;
         let pos = if even { n / 2 } else { n.div_ceil(2) };
@@ -314,7 +355,7 @@ impl UpsamplePlan {
                 *w *= -om * om * scale;
             }
         }
-        self.inv.process(work, scratch, Direction::Inverse)?;
+        self.inv.run(work, scratch, Direction::Inverse);
         let s = 1.0 / n as f32;
         // the line on the output grid (output sample j is at input position j n / m)
         let (a, slope) = if accel.is_some() {
@@ -326,7 +367,12 @@ impl UpsamplePlan {
         for (j, (o, w)) in output.iter_mut().zip(kept).enumerate() {
             *o = w.re * s + (a + slope * (first + j) as f32);
         }
-        Ok(())
+    }
+}
+
+impl<const M: usize, const SCRATCH: usize> Default for Upsampler<M, SCRATCH> {
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -340,30 +386,62 @@ pub struct Upsampler<const M: usize, const SCRATCH: usize> {
 }
 
 impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
-    /// Plans `n -> m` (`1 <= n <= m <= M`).
-    pub fn try_new(n: usize, m: usize) -> Result<Self, UpsampleError> {
-        let plan = UpsamplePlan::try_new(n, m)?;
-        Self::with_plan(plan)
+    /// An unconfigured upsampler (plan `0 -> 0`: `process` accepts only empty slices) to
+    /// build in place in a `static` (all zero bytes: `.bss`), then
+    /// [`configure`](Self::configure).
+    pub const fn new() -> Self {
+        Upsampler {
+            plan: UpsamplePlan::NONE,
+            work: [Complex32::new(0.0, 0.0); M],
+            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
+        }
+    }
+
+    /// Plans `n -> m` (`1 <= n <= m <= M`). `const`: a `static` initialiser builds it in
+    /// place, checked at compile time.
+    pub const fn try_new(n: usize, m: usize) -> Result<Self, ConfigError> {
+        match UpsamplePlan::try_new(n, m) {
+            Ok(plan) => Self::with_plan(plan),
+            Err(e) => Err(e),
+        }
     }
 
     /// Plans the upsampling of `n` samples at `from_hz` to `to_hz` (integer rates; the output
     /// length `n * to / from` must be an integer).
-    pub fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, UpsampleError> {
-        Self::with_plan(UpsamplePlan::from_rates(n, from_hz, to_hz)?)
+    pub const fn from_rates(n: usize, from_hz: u32, to_hz: u32) -> Result<Self, ConfigError> {
+        match UpsamplePlan::from_rates(n, from_hz, to_hz) {
+            Ok(plan) => Self::with_plan(plan),
+            Err(e) => Err(e),
+        }
     }
 
-    fn with_plan(plan: UpsamplePlan) -> Result<Self, UpsampleError> {
+    /// Re-plans in place for `plan` (checked against the capacities as in
+    /// [`try_new`](Self::try_new)); on error nothing changes.
+    pub fn configure(&mut self, plan: UpsamplePlan) -> Result<(), ConfigError> {
+        Self::check(&plan)?;
+        self.plan = plan;
+        Ok(())
+    }
+
+    const fn check(plan: &UpsamplePlan) -> Result<(), ConfigError> {
         if plan.m > M {
-            return Err(UpsampleError::Capacity {
+            return Err(ConfigError::Capacity {
                 m: plan.m,
                 capacity: M,
             });
         }
         if plan.scratch_len() > SCRATCH {
-            return Err(UpsampleError::Scratch {
+            return Err(ConfigError::Scratch {
                 needed: plan.scratch_len(),
                 capacity: SCRATCH,
             });
+        }
+        Ok(())
+    }
+
+    const fn with_plan(plan: UpsamplePlan) -> Result<Self, ConfigError> {
+        if let Err(e) = Self::check(&plan) {
+            return Err(e);
         }
         Ok(Upsampler {
             plan,
@@ -388,7 +466,7 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
     }
 
     /// Upsamples `input` (`n` values) into `output` (`m` values).
-    pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), UpsampleError> {
+    pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), BufferError> {
         self.plan
             .process_with(input, output, None, &mut self.work, &mut self.scratch)
     }
@@ -404,7 +482,7 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
         output: &mut [f32],
         fs_in_hz: f32,
         scale: f32,
-    ) -> Result<(), UpsampleError> {
+    ) -> Result<(), BufferError> {
         self.plan.process_with(
             input,
             output,
@@ -550,7 +628,7 @@ mod tests {
         assert_eq!(part[..], full[64..164]);
         assert_eq!(
             plan.process_part(&x, &mut part, 157, None, None, &mut work, &mut scratch),
-            Err(UpsampleError::BufferLen {
+            Err(BufferError {
                 expected: 99,
                 got: 100
             })
@@ -596,29 +674,29 @@ mod tests {
         type U = Upsampler<256, { scratch_capacity(15, 256) }>;
         assert!(matches!(
             U::try_new(0, 10),
-            Err(UpsampleError::Lengths { .. })
+            Err(ConfigError::Lengths { .. })
         ));
         assert!(matches!(
             U::try_new(20, 10),
-            Err(UpsampleError::Lengths { .. })
+            Err(ConfigError::Lengths { .. })
         ));
         assert!(matches!(
             U::try_new(15, 300),
-            Err(UpsampleError::Capacity { .. })
+            Err(ConfigError::Capacity { .. })
         ));
         assert!(matches!(
             Upsampler::<256, 0>::try_new(15, 256),
-            Err(UpsampleError::Scratch { .. })
+            Err(ConfigError::Scratch { .. })
         ));
         assert_eq!(
             U::from_rates(15, 120, 2047).err(),
-            Some(UpsampleError::RateRatio)
+            Some(ConfigError::RateRatio)
         );
         let mut u = U::try_new(15, 256).unwrap();
         let mut out = [0.0f32; 255];
         assert!(matches!(
             u.process(&[0.0; 15], &mut out),
-            Err(UpsampleError::BufferLen { .. })
+            Err(BufferError { .. })
         ));
     }
 

@@ -189,7 +189,11 @@ pub fn symmetric_interval(sorted: &[f64], p: f64) -> Result<CoverageInterval, Co
     let d = m - q;
     // 1-based r; d >= 1 so r >= 1 and r + q <= M
     // (M - q)/2 when it is an integer, else the integer part of (M - q + 1)/2
-    let r = if d % 2 == 0 { d / 2 } else { d.div_ceil(2) };
+    let r = if d.is_multiple_of(2) {
+        d / 2
+    } else {
+        d.div_ceil(2)
+    };
     Ok(CoverageInterval {
         lo: sorted[r - 1],
         hi: sorted[r + q - 1],

@@ -32,23 +32,127 @@ pub struct RowSums {
     pub max: u16,
 }
 
-/// Pixel types the kernels accept (8- and 16-bit grey).
-pub(crate) trait Pixel: Copy + Ord + Default + Into<u16> {
+/// What the tracking window needs from one row segment in binary 8-bit mode: the sums of
+/// [`row_binary_u8`] (without `max`), the first column above `t` left of `left` and the last
+/// one from `right` on (relative to the segment; `u32::MAX` when there is none: only what can
+/// widen the extent found so far is searched) and whether a pixel is at or above the
+/// saturation level. (Public only as the return type of a hidden [`Pixel`] method.)
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WindowSums {
+    pub pixels: u32,
+    pub sum_x: u64,
+    pub first: u32,
+    pub last: u32,
+    pub saturated: bool,
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for u8 {}
+    impl Sealed for u16 {}
+}
+
+/// Grey pixel types the centroiders accept: `u8` and `u16` (sealed). Every function that
+/// takes rows or a [`Frame`](super::Frame) is generic over it, in place of `_u8` / `_u16`
+/// twins; each type keeps its own kernels ([`row_binary_u8`], [`row_weighted_u16`], ...).
+pub trait Pixel: sealed::Sealed + Copy + Ord + Default + Into<u16> + 'static {
+    /// The largest code (255 or 65 535): the default saturation level.
+    const FULL: u16;
+
     /// `self - t` if `self > t`, else 0 (the weighted-mode weight).
+    #[doc(hidden)]
     fn excess(self, t: Self) -> u32;
+
+    /// The threshold `t` for this pixel type (8-bit: `t >= 255` selects nothing).
+    #[doc(hidden)]
+    fn threshold(t: u16) -> Self;
+
+    /// The row kernel of this type and mode.
+    #[doc(hidden)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums;
+
+    /// The one-pass kernel of the tracking window for this type and mode, if it has one
+    /// (binary 8-bit on 32-bit ARM); `sat` is the saturation level.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn window_sums(
+        _seg: &[Self],
+        _t: Self,
+        _sat: u16,
+        _binary: bool,
+        _left: usize,
+        _right: usize,
+    ) -> Option<WindowSums> {
+        None
+    }
 }
 
 impl Pixel for u8 {
+    const FULL: u16 = 255;
+
     #[inline(always)]
     fn excess(self, t: Self) -> u32 {
         u32::from(self.saturating_sub(t))
     }
+
+    #[inline(always)]
+    fn threshold(t: u16) -> Self {
+        if t > 255 {
+            255
+        } else {
+            t as u8
+        }
+    }
+
+    #[inline(always)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
+        if binary {
+            row_binary_u8(row, t)
+        } else {
+            row_weighted_u8(row, t)
+        }
+    }
+
+    #[cfg(any(test, target_arch = "arm"))]
+    #[inline(always)]
+    fn window_sums(
+        seg: &[Self],
+        t: Self,
+        sat: u16,
+        binary: bool,
+        left: usize,
+        right: usize,
+    ) -> Option<WindowSums> {
+        if binary {
+            let sat = if sat > 255 { 255 } else { sat as u8 };
+            Some(super::m4::window_binary_u8(seg, t, sat, left, right))
+        } else {
+            None
+        }
+    }
 }
 
 impl Pixel for u16 {
+    const FULL: u16 = u16::MAX;
+
     #[inline(always)]
     fn excess(self, t: Self) -> u32 {
         u32::from(self.saturating_sub(t))
+    }
+
+    #[inline(always)]
+    fn threshold(t: u16) -> Self {
+        t
+    }
+
+    #[inline(always)]
+    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
+        if binary {
+            row_binary_u16(row, t)
+        } else {
+            row_weighted_u16(row, t)
+        }
     }
 }
 
@@ -70,6 +174,7 @@ fn clip<P>(row: &[P]) -> &[P] {
 /// (1.1 instructions per pixel on a one-target 320 x 240 frame on a Cortex-M4, 5.4 when every
 /// 64-pixel block has a pixel above `t`; `mcu-demo/bench.sh`); there `max` is exact when
 /// `pixels > 0` (all the centroider reads it for) and 0 otherwise.
+#[inline(always)]
 pub fn row_binary_u8(row: &[u8], t: u8) -> RowSums {
     #[cfg(target_arch = "arm")]
     {
@@ -83,6 +188,7 @@ pub fn row_binary_u8(row: &[u8], t: u8) -> RowSums {
 
 /// Binary mode, 16-bit pixels (same as [`row_binary_u8`]). On 32-bit ARM: blocks of 64 pixels
 /// whose OR is not above `t` are skipped (two pixels per word), `max` as on that path.
+#[inline(always)]
 pub fn row_binary_u16(row: &[u16], t: u16) -> RowSums {
     #[cfg(target_arch = "arm")]
     {
@@ -97,6 +203,7 @@ pub fn row_binary_u16(row: &[u16], t: u16) -> RowSums {
 /// Weighted mode, 8-bit pixels: weight `value - t` for value `> t` (see [`row_weighted_u16`]).
 /// On 32-bit ARM: blocks of 64 pixels whose OR is not above `t` are skipped (four pixels per
 /// word load), `max` as on the binary ARM path.
+#[inline(always)]
 pub fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
     #[cfg(target_arch = "arm")]
     {
@@ -114,6 +221,7 @@ pub fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
 /// (`<= 65 535 * (255 * 256 / 2) < 2^31`), added to the 64-bit row moment as
 /// `local + x_block * weight_block`. Rows longer than [`MAX_DIM`] pixels are clipped to it.
 /// On 32-bit ARM: the block skip of [`row_binary_u16`].
+#[inline(always)]
 pub fn row_weighted_u16(row: &[u16], t: u16) -> RowSums {
     #[cfg(target_arch = "arm")]
     {

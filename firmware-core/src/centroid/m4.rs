@@ -26,7 +26,7 @@
 //! without any pixel above `t` the returned `max` is 0 on this path (documented on
 //! [`row_binary_u8`](super::row_binary_u8)).
 
-use super::kernel::{Pixel, RowSums};
+use super::kernel::{Pixel, RowSums, WindowSums};
 use super::MAX_DIM;
 
 const H: u32 = 0x8080_8080;
@@ -159,6 +159,7 @@ fn or_u16(block: &[u16]) -> u16 {
 /// pixel above `t` and are skipped; the others take the SWAR pass of [`block_weighted`] (the
 /// row's remainder the scalar one). Same `pixels`, `weight`, `sum_x` as the portable kernel,
 /// `max` exact when `pixels > 0`, else 0.
+#[inline(always)]
 pub(super) fn row_weighted_u8(row: &[u8], t: u8) -> RowSums {
     match constant(t) {
         (k, true) => {
@@ -287,9 +288,201 @@ fn block_pass<P: Pixel, const WEIGHTED: bool>(block: &[P], t: P, cur: P) -> (u32
     (n, w, s, m)
 }
 
+// ---------------------------------------------------------------------------------------------
+// Tracking window: binary 8-bit sums plus the hit extent in one pass
+
+/// [`WindowSums`] of `seg` (at most [`MAX_DIM`] pixels): blocks of up to 16 words with the
+/// bytewise running sums of [`block_sums`] for any number of words `n` (`sum_j j m_j =
+/// n S - T`), a bitmap of the words with a hit for the extent (the first and last hit word's
+/// mask are recomputed once per block), and the saturation test on the OR of the words (no
+/// byte of the OR at or above `sat`: no pixel is; otherwise an exact scalar pass). Inlined
+/// into the tracker's row loop: a window row is short, the call would be a good part of it.
+#[inline(always)]
+pub(crate) fn window_binary_u8(
+    seg: &[u8],
+    t: u8,
+    sat: u8,
+    left: usize,
+    right: usize,
+) -> WindowSums {
+    let seg = seg.get(..MAX_DIM).unwrap_or(seg);
+    match constant(t) {
+        (k, true) => window_binary::<true>(seg, t, k, sat, left, right),
+        (k, false) => window_binary::<false>(seg, t, k, sat, left, right),
+    }
+}
+
+#[inline(always)]
+fn window_binary<const HIGH: bool>(
+    seg: &[u8],
+    t: u8,
+    k: u32,
+    sat: u8,
+    left: usize,
+    right: usize,
+) -> WindowSums {
+    let word = |b: &[u8]| <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes);
+    // `seg` has at most MAX_DIM pixels: `sum_x <= 65 535 * 65 536 / 2 < 2^31` fits 32 bits
+    let (mut pixels, mut sum_x) = (0u32, 0u32);
+    let mut or_all = 0u32;
+    let mut x0 = 0u32;
+    for block in seg.chunks(BLOCK_PX) {
+        // four words per iteration (a window row is short: LLVM's own unrolling only pays for
+        // whole 64-pixel blocks)
+        let quads = block.chunks_exact(16);
+        let words = quads.remainder().chunks_exact(4);
+        let tail = words.remainder();
+        let n = (block.len() / 4) as u32;
+        let (mut s, mut tt) = (0u32, 0u32);
+        for q in quads {
+            for b in q.chunks_exact(4) {
+                let w = word(b);
+                or_all |= w;
+                s = s.wrapping_add(mask::<HIGH>(w, k));
+                tt = tt.wrapping_add(s);
+            }
+        }
+        for b in words {
+            let w = word(b);
+            or_all |= w;
+            s = s.wrapping_add(mask::<HIGH>(w, k));
+            tt = tt.wrapping_add(s);
+        }
+        if s != 0 {
+            let count = s.wrapping_mul(ONES) >> 24;
+            let lane_x = s.wrapping_mul(0x0001_0203) >> 24;
+            let t16 = (tt & 0x00ff_00ff) + ((tt >> 8) & 0x00ff_00ff);
+            let tsum = t16.wrapping_mul(0x0001_0001) >> 16;
+            let inner = (n * count).wrapping_sub(tsum).wrapping_mul(4) + lane_x;
+            pixels += count;
+            sum_x += x0 * count + inner;
+        }
+        let xt = x0 + 4 * n;
+        for (x, &p) in (xt..).zip(tail) {
+            or_all |= u32::from(p);
+            if p > t {
+                pixels += 1;
+                sum_x += x;
+            }
+        }
+        x0 += block.len() as u32;
+    }
+    if pixels == 0 {
+        return WindowSums {
+            pixels,
+            sum_x: 0,
+            first: u32::MAX,
+            last: u32::MAX,
+            saturated: false,
+        };
+    }
+    // saturation: no byte of the OR at or above `sat` => no pixel is (sat >= 1)
+    let (ks, high_s) = constant(sat.wrapping_sub(1));
+    let maybe = sat == 0
+        || if high_s {
+            mask::<true>(or_all, ks)
+        } else {
+            mask::<false>(or_all, ks)
+        } != 0;
+    WindowSums {
+        pixels,
+        sum_x: u64::from(sum_x),
+        first: first_hit::<HIGH>(seg.get(..left).unwrap_or(seg), t, k),
+        last: match seg.get(right..) {
+            Some(r) => last_hit::<HIGH>(r, t, k).map_or(u32::MAX, |i| i + right as u32),
+            None => u32::MAX,
+        },
+        saturated: maybe && seg.iter().any(|&p| p >= sat),
+    }
+}
+
+/// Index of the first pixel above `t` (a word at a time from the left), `u32::MAX` if none.
+#[inline(always)]
+fn first_hit<const HIGH: bool>(seg: &[u8], t: u8, k: u32) -> u32 {
+    let words = seg.chunks_exact(4);
+    let tail = words.remainder();
+    let mut x = 0u32;
+    for b in words {
+        let m = mask::<HIGH>(<[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes), k);
+        if m != 0 {
+            return x + m.trailing_zeros() / 8;
+        }
+        x += 4;
+    }
+    for &p in tail {
+        if p > t {
+            return x;
+        }
+        x += 1;
+    }
+    u32::MAX
+}
+
+/// Index of the last pixel above `t` (a word at a time from the right).
+#[inline(always)]
+fn last_hit<const HIGH: bool>(seg: &[u8], t: u8, k: u32) -> Option<u32> {
+    let whole = seg.len() - seg.len() % 4;
+    let (head, tail) = seg.split_at(whole.min(seg.len()));
+    for (i, &p) in tail.iter().enumerate().rev() {
+        if p > t {
+            return Some((whole + i) as u32);
+        }
+    }
+    let mut x = whole as u32;
+    for b in head.rchunks_exact(4) {
+        x -= 4;
+        let m = mask::<HIGH>(<[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes), k);
+        if m != 0 {
+            return Some(x + (31 - m.leading_zeros()) / 8);
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The tracking window kernel against a naive pass, on random segments of any length and
+    /// alignment, thresholds and saturation levels.
+    #[test]
+    fn window_kernel_matches_naive() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(15);
+        for _ in 0..20_000 {
+            let len = rng.random_range(0..300usize);
+            let dense = rng.random_range(0..4u8);
+            let seg: std::vec::Vec<u8> = (0..len)
+                .map(|_| match dense {
+                    0 => rng.random_range(0..=255),
+                    1 => {
+                        if rng.random_range(0..10) == 0 {
+                            200
+                        } else {
+                            10
+                        }
+                    }
+                    _ => rng.random_range(90..=110),
+                })
+                .collect();
+            let t: u8 = rng.random_range(0..=255);
+            let sat: u8 = rng.random_range(t.saturating_add(1)..=255).max(1);
+            let got = window_binary_u8(&seg, t, sat, seg.len(), 0);
+            let hits: std::vec::Vec<u32> = (0u32..)
+                .zip(&seg)
+                .filter(|(_, &p)| p > t)
+                .map(|(x, _)| x)
+                .collect();
+            assert_eq!(got.pixels as usize, hits.len());
+            assert_eq!(got.sum_x, hits.iter().map(|&x| u64::from(x)).sum::<u64>());
+            if let (Some(&a), Some(&b)) = (hits.first(), hits.last()) {
+                assert_eq!((got.first, got.last), (a, b), "{seg:?} t {t}");
+                assert_eq!(got.saturated, seg.iter().any(|&p| p >= sat));
+            } else {
+                assert!(got.first == u32::MAX && got.last == u32::MAX && !got.saturated);
+            }
+        }
+    }
     use proptest::prelude::*;
     use std::vec::Vec;
 

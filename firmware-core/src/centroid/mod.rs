@@ -16,10 +16,28 @@
 //! A camera DMA delivers lines, so everything works one row at a time:
 //! [`Centroider`] (one target: the centre of gravity of *all* pixels above `T`, O(1) memory) and
 //! [`MultiCentroider`] (connected components with 8-connectivity, a label buffer of one row of
-//! at most `W` pixels and at most `N` targets). [`centroid_u8`] and [`centroid_u16`] are the
-//! whole-frame conveniences (width, height, stride) on top of the single-target streamer.
-//! Configuration ([`CentroidConfig`], validated once by [`CentroidConfig::try_new`]) and state
-//! are separate types; after validation nothing can fail, nothing panics and nothing allocates.
+//! at most `W` pixels and at most `N` targets; results as a `heapless::Vec`), and
+//! [`track::Tracker`] (one target in a tracking window: only the rows and columns around the
+//! last position). Every function is generic over the pixel type ([`Pixel`]: `u8`, `u16`); a
+//! whole frame is a checked view, [`Frame`] (pixels, width, height, stride validated once), and
+//! [`centroid`] is the one-shot whole-frame convenience on top of the single-target streamer.
+//! Configuration ([`CentroidConfig`], checked once by [`CentroidConfig::validate`], which every
+//! `try_new` calls) and state are separate types; after validation nothing can fail, nothing
+//! panics and nothing allocates.
+//!
+//! ```
+//! use firmware_core::centroid::{CentroidConfig, Centroider, Flags};
+//! // a 3 x 3 target centred on column 5, row 2 of an 8-bit frame, pushed row by row
+//! let mut c = Centroider::try_new(CentroidConfig::binary(100)).unwrap();
+//! let dark = [0u8; 10];
+//! let lit = [0u8, 0, 0, 0, 200, 200, 200, 0, 0, 0];
+//! for row in [&dark, &lit, &lit, &lit, &dark] {
+//!     c.push_row(row);
+//! }
+//! let r = c.result();
+//! assert_eq!(r.position(), Some((5.0, 2.0)));
+//! assert_eq!((r.pixels(), r.flags), (9, Flags::NONE));
+//! ```
 //!
 //! # Exactness and overflow
 //!
@@ -52,6 +70,7 @@ mod kernel;
 #[cfg(any(test, target_arch = "arm"))]
 mod m4;
 mod multi;
+pub mod track;
 
 #[cfg(test)]
 mod tests;
@@ -59,7 +78,7 @@ mod tests;
 use core::fmt;
 
 pub use kernel::{
-    row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, RowSums, BLOCK,
+    row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, Pixel, RowSums, BLOCK,
 };
 pub use multi::{BoundingBox, MultiCentroider, Target};
 
@@ -79,6 +98,7 @@ pub enum Mode {
 
 /// Region of interest, in full-frame pixel coordinates: columns `x .. x + width`, rows
 /// `y .. y + height`. Valid when `width, height >= 1` and `x + width, y + height <= MAX_DIM`.
+/// The [`track`] module moves one from frame to frame (the tracking window).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Roi {
@@ -94,12 +114,12 @@ pub struct Roi {
 
 impl Roi {
     /// One past the last column.
-    const fn x_end(&self) -> u32 {
+    pub const fn x_end(&self) -> u32 {
         self.x.saturating_add(self.width)
     }
 
     /// One past the last row.
-    const fn y_end(&self) -> u32 {
+    pub const fn y_end(&self) -> u32 {
         self.y.saturating_add(self.height)
     }
 }
@@ -183,6 +203,9 @@ pub enum FrameError {
     },
     /// The configured ROI does not lie inside the frame.
     RoiOutsideFrame,
+    /// The settings are invalid (only from the one-shot [`centroid`], which takes an
+    /// unchecked [`CentroidConfig`]).
+    Config(ConfigError),
 }
 
 impl fmt::Display for FrameError {
@@ -201,6 +224,7 @@ impl fmt::Display for FrameError {
             FrameError::RoiOutsideFrame => {
                 write!(f, "region of interest does not lie inside the frame")
             }
+            FrameError::Config(e) => write!(f, "invalid settings: {e}"),
         }
     }
 }
@@ -325,58 +349,37 @@ impl fmt::Debug for Flags {
     }
 }
 
-/// Validated centroiding settings (threshold, mode, ROI, saturation level). `Copy`.
+/// Centroiding settings: plain data, `const` constructors for the usual cases, checked once
+/// by [`validate`](Self::validate) (which [`Centroider::try_new`],
+/// [`MultiCentroider::try_new`] and [`track::Tracker::try_new`] call). `Copy`.
+///
+/// ```
+/// use firmware_core::centroid::{CentroidConfig, Mode, Roi};
+/// const CONFIG: CentroidConfig = CentroidConfig::weighted(100)
+///     .with_roi(Roi { x: 8, y: 4, width: 64, height: 48 })
+///     .with_saturation(250);
+/// const _: () = assert!(CONFIG.validate().is_ok()); // checked at compile time
+/// assert_eq!(CONFIG.mode, Mode::Weighted);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CentroidConfig {
-    threshold: u16,
-    mode: Mode,
-    roi: Option<Roi>,
-    saturation: Option<u16>,
+    /// Threshold `T`, grey levels (0 ..= 65 535): a pixel counts when its value is `> T`.
+    /// For 8-bit frames a `T >= 255` selects nothing.
+    pub threshold: u16,
+    /// Weighting of the pixels above `T`.
+    pub mode: Mode,
+    /// Region of interest (non-empty, inside [`MAX_DIM`] x [`MAX_DIM`]); `None`: the whole
+    /// frame.
+    pub roi: Option<Roi>,
+    /// Grey level at or above which a pixel is saturated, above `threshold`; `None`: the
+    /// largest code of the pixel type (255 or 65 535). For 8-bit frames a level above 255
+    /// acts as 255.
+    pub saturation: Option<u16>,
 }
 
 impl CentroidConfig {
-    /// Validates the settings.
-    ///
-    /// * `threshold`: `T` in grey levels (0..=65 535); a pixel counts when its value is `> T`.
-    ///   For 8-bit frames a `T >= 255` selects nothing.
-    /// * `roi`: optional region of interest (non-empty, inside [`MAX_DIM`] x [`MAX_DIM`]).
-    /// * `saturation`: grey level at or above which a pixel is saturated; `None` means the
-    ///   largest code of the pixel type (255 for 8-bit, 65 535 for 16-bit). For 8-bit frames a
-    ///   level above 255 acts as 255. Must be above `threshold`.
-    pub const fn try_new(
-        threshold: u16,
-        mode: Mode,
-        roi: Option<Roi>,
-        saturation: Option<u16>,
-    ) -> Result<Self, ConfigError> {
-        if let Some(r) = roi {
-            if r.width == 0 || r.height == 0 {
-                return Err(ConfigError::EmptyRoi);
-            }
-            if r.x as u64 + r.width as u64 > MAX_DIM as u64
-                || r.y as u64 + r.height as u64 > MAX_DIM as u64
-            {
-                return Err(ConfigError::RoiTooLarge);
-            }
-        }
-        if let Some(s) = saturation {
-            if s <= threshold {
-                return Err(ConfigError::SaturationNotAboveThreshold {
-                    threshold,
-                    saturation: s,
-                });
-            }
-        }
-        Ok(CentroidConfig {
-            threshold,
-            mode,
-            roi,
-            saturation,
-        })
-    }
-
-    /// A binary-mode configuration with threshold `T`, no ROI and the default saturation level
+    /// Binary mode (the paper's) with threshold `T`, no ROI, the default saturation level
     /// (always valid).
     pub const fn binary(threshold: u16) -> Self {
         CentroidConfig {
@@ -387,33 +390,54 @@ impl CentroidConfig {
         }
     }
 
-    /// The threshold `T` (grey levels).
-    pub const fn threshold(&self) -> u16 {
-        self.threshold
-    }
-
-    /// The weighting mode.
-    pub const fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    /// The region of interest, if any.
-    pub const fn roi(&self) -> Option<Roi> {
-        self.roi
-    }
-
-    /// The configured saturation level, if any.
-    pub const fn saturation(&self) -> Option<u16> {
-        self.saturation
-    }
-
-    /// Threshold for 8-bit pixels (`T >= 255` selects nothing).
-    const fn threshold_u8(&self) -> u8 {
-        if self.threshold > 255 {
-            255
-        } else {
-            self.threshold as u8
+    /// Weighted mode with threshold `T`, no ROI, the default saturation level (always valid).
+    pub const fn weighted(threshold: u16) -> Self {
+        CentroidConfig {
+            mode: Mode::Weighted,
+            ..Self::binary(threshold)
         }
+    }
+
+    /// The same settings restricted to `roi`.
+    #[must_use]
+    pub const fn with_roi(self, roi: Roi) -> Self {
+        CentroidConfig {
+            roi: Some(roi),
+            ..self
+        }
+    }
+
+    /// The same settings with saturation level `level`.
+    #[must_use]
+    pub const fn with_saturation(self, level: u16) -> Self {
+        CentroidConfig {
+            saturation: Some(level),
+            ..self
+        }
+    }
+
+    /// Checks the settings and returns them: a non-empty ROI inside [`MAX_DIM`] x
+    /// [`MAX_DIM`], a saturation level above the threshold.
+    pub const fn validate(self) -> Result<Self, ConfigError> {
+        if let Some(r) = self.roi {
+            if r.width == 0 || r.height == 0 {
+                return Err(ConfigError::EmptyRoi);
+            }
+            if r.x as u64 + r.width as u64 > MAX_DIM as u64
+                || r.y as u64 + r.height as u64 > MAX_DIM as u64
+            {
+                return Err(ConfigError::RoiTooLarge);
+            }
+        }
+        if let Some(s) = self.saturation {
+            if s <= self.threshold {
+                return Err(ConfigError::SaturationNotAboveThreshold {
+                    threshold: self.threshold,
+                    saturation: s,
+                });
+            }
+        }
+        Ok(self)
     }
 
     /// Saturation level for pixels whose largest code is `full`.
@@ -440,34 +464,16 @@ impl CentroidConfig {
         }
     }
 
-    /// Checks a whole frame's shape against the limits and the ROI.
-    fn check_frame(
-        &self,
-        len: usize,
-        width: usize,
-        height: usize,
-        stride: usize,
-        max_width: usize,
-    ) -> Result<(), FrameError> {
-        if width == 0 || height == 0 {
-            return Err(FrameError::Empty);
-        }
+    /// Checks that the region (ROI, or the frame) fits a frame and a label buffer of
+    /// `max_width` pixels.
+    fn check_region<P>(&self, frame: &Frame<'_, P>, max_width: usize) -> Result<(), FrameError> {
+        let (width, height) = (frame.width(), frame.height());
         let region_width = match self.roi {
             Some(r) => r.width as usize,
             None => width,
         };
-        if width > MAX_DIM || height > MAX_DIM || region_width > max_width {
+        if region_width > max_width {
             return Err(FrameError::TooLarge { width, height });
-        }
-        if stride < width {
-            return Err(FrameError::Stride { stride, width });
-        }
-        let needed = (height - 1)
-            .checked_mul(stride)
-            .and_then(|n| n.checked_add(width))
-            .unwrap_or(usize::MAX);
-        if len < needed {
-            return Err(FrameError::BufferTooShort { needed, got: len });
         }
         if let Some(r) = self.roi {
             if r.x_end() as usize > width || r.y_end() as usize > height {
@@ -475,6 +481,104 @@ impl CentroidConfig {
             }
         }
         Ok(())
+    }
+}
+
+/// A checked view of a whole frame: `height` rows of `width` pixels, row `j` starting at
+/// `pixels[j * stride]` (`stride >= width` lets a frame live inside a wider buffer). The shape
+/// is validated once, by [`Frame::new`]; every function that takes a `Frame` then trusts it.
+///
+/// ```
+/// use firmware_core::centroid::{centroid, CentroidConfig, Frame};
+/// let mut pixels = [0u8; 6 * 4];
+/// pixels[2 * 6 + 3] = 200; // column 3, row 2
+/// let frame = Frame::new(&pixels, 6, 4, 6).unwrap();
+/// let c = centroid(&CentroidConfig::binary(100), &frame).unwrap();
+/// assert_eq!(c.position(), Some((3.0, 2.0)));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Frame<'a, P> {
+    pixels: &'a [P],
+    width: usize,
+    height: usize,
+    stride: usize,
+}
+
+impl<'a, P> Frame<'a, P> {
+    /// Checks the shape: `width, height` in `1 ..= MAX_DIM`, `stride >= width`, and
+    /// `pixels` holding at least `(height - 1) * stride + width` values.
+    pub const fn new(
+        pixels: &'a [P],
+        width: usize,
+        height: usize,
+        stride: usize,
+    ) -> Result<Self, FrameError> {
+        if width == 0 || height == 0 {
+            return Err(FrameError::Empty);
+        }
+        if width > MAX_DIM || height > MAX_DIM {
+            return Err(FrameError::TooLarge { width, height });
+        }
+        if stride < width {
+            return Err(FrameError::Stride { stride, width });
+        }
+        let needed = match (height - 1).checked_mul(stride) {
+            Some(v) => match v.checked_add(width) {
+                Some(n) => n,
+                None => usize::MAX,
+            },
+            None => usize::MAX,
+        };
+        if pixels.len() < needed {
+            return Err(FrameError::BufferTooShort {
+                needed,
+                got: pixels.len(),
+            });
+        }
+        Ok(Frame {
+            pixels,
+            width,
+            height,
+            stride,
+        })
+    }
+
+    /// Width, pixels.
+    pub const fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height, rows.
+    pub const fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Pixels from one row start to the next.
+    pub const fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// The pixel buffer.
+    pub const fn pixels(&self) -> &'a [P] {
+        self.pixels
+    }
+
+    /// Row `y` (exactly `width` pixels), `None` past the last row.
+    pub fn row(&self, y: usize) -> Option<&'a [P]> {
+        if y >= self.height {
+            return None;
+        }
+        let start = y * self.stride;
+        self.pixels.get(start..start + self.width)
+    }
+
+    /// The rows top to bottom, each exactly `width` pixels.
+    pub fn rows(&self) -> impl Iterator<Item = &'a [P]> + 'a {
+        let width = self.width;
+        self.pixels
+            .chunks(self.stride.max(1))
+            .take(self.height)
+            .map(move |r| r.get(..width).unwrap_or(r))
     }
 }
 
@@ -605,8 +709,32 @@ pub struct Centroider {
 }
 
 impl Centroider {
-    /// A centroider for one frame at a time with the given settings.
-    pub const fn new(config: CentroidConfig) -> Self {
+    /// A centroider with the all-zero settings [`CentroidConfig::binary`]`(0)` (valid, but
+    /// rarely what a firmware wants): a `static` built in place, then
+    /// [`configure`](Self::configure)d.
+    pub const fn new() -> Self {
+        Self::with(CentroidConfig::binary(0))
+    }
+
+    /// A centroider for one frame at a time with the given settings (checked by
+    /// [`CentroidConfig::validate`]). `const`: a `static` initialiser builds it in place,
+    /// checked at compile time.
+    pub const fn try_new(config: CentroidConfig) -> Result<Self, ConfigError> {
+        match config.validate() {
+            Ok(config) => Ok(Self::with(config)),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
+    /// the current frame. On error nothing changes.
+    pub fn configure(&mut self, config: CentroidConfig) -> Result<(), ConfigError> {
+        *self = Self::with(config.validate()?);
+        Ok(())
+    }
+
+    /// A fresh state for already validated settings.
+    const fn with(config: CentroidConfig) -> Self {
         Centroider {
             config,
             next_y: 0,
@@ -628,7 +756,7 @@ impl Centroider {
 
     /// Forgets the current frame; the next pushed row is row 0.
     pub fn reset(&mut self) {
-        *self = Centroider::new(self.config);
+        *self = Centroider::with(self.config);
     }
 
     /// Number of rows pushed since the last reset (saturates at `u32::MAX`).
@@ -636,42 +764,44 @@ impl Centroider {
         self.next_y
     }
 
-    /// Pushes the next 8-bit row of the frame.
-    pub fn push_row_u8(&mut self, row: &[u8]) {
-        let t = self.config.threshold_u8();
-        let sat = self.config.saturation_for(255);
+    /// Pushes the next row of the frame (8- or 16-bit pixels, column 0 first). O(1) memory,
+    /// infallible: rows past the region are skipped, columns past [`MAX_DIM`] are ignored and
+    /// flagged [`Flags::CLIPPED`].
+    #[inline(always)]
+    pub fn push_row<P: Pixel>(&mut self, row: &[P]) {
+        let t = P::threshold(self.config.threshold);
+        let sat = self.config.saturation_for(P::FULL);
         let binary = self.config.mode == Mode::Binary;
-        self.push(row, t, sat, |seg| {
-            if binary {
-                row_binary_u8(seg, t)
-            } else {
-                row_weighted_u8(seg, t)
-            }
-        });
+        self.push(row, t, sat, |seg| P::row_sums(seg, t, binary));
     }
 
-    /// Pushes the next 16-bit row of the frame.
-    pub fn push_row_u16(&mut self, row: &[u16]) {
-        let t = self.config.threshold;
-        let sat = self.config.saturation_for(u16::MAX);
-        let binary = self.config.mode == Mode::Binary;
-        self.push(row, t, sat, |seg| {
-            if binary {
-                row_binary_u16(seg, t)
-            } else {
-                row_weighted_u16(seg, t)
+    /// Resets, then processes a whole frame; error only when the configured ROI does not lie
+    /// inside the frame (then nothing changes).
+    pub fn process<P: Pixel>(&mut self, frame: &Frame<'_, P>) -> Result<Centroid, FrameError> {
+        self.config.check_region(frame, MAX_DIM)?;
+        self.reset();
+        self.push_frame_rows(frame);
+        Ok(self.result())
+    }
+
+    /// Pushes every row of `frame`, with the settings read once and the loop specialised
+    /// for the mode (the per-row overhead is a measurable part of a sparse frame's cost).
+    fn push_frame_rows<P: Pixel>(&mut self, frame: &Frame<'_, P>) {
+        let t = P::threshold(self.config.threshold);
+        let sat = self.config.saturation_for(P::FULL);
+        if self.config.mode == Mode::Binary {
+            for row in frame.rows() {
+                self.push(row, t, sat, |seg| P::row_sums(seg, t, true));
             }
-        });
+        } else {
+            for row in frame.rows() {
+                self.push(row, t, sat, |seg| P::row_sums(seg, t, false));
+            }
+        }
     }
 
     #[inline(always)]
-    fn push<P: kernel::Pixel>(
-        &mut self,
-        row: &[P],
-        t: P,
-        sat: u16,
-        kernel: impl FnOnce(&[P]) -> RowSums,
-    ) {
+    fn push<P: Pixel>(&mut self, row: &[P], t: P, sat: u16, kernel: impl FnOnce(&[P]) -> RowSums) {
         let y = self.next_y;
         self.next_y = y.saturating_add(1);
         let (y0, y1) = self.config.rows();
@@ -695,6 +825,33 @@ impl Centroider {
         self.last_row_hit = hit;
     }
 
+    /// [`push`](Self::push) for a region row `y` whose segment (`seg_len` pixels from column
+    /// `x0` of a row of `row_len`) went through the tracking window's one-pass kernel.
+    fn push_window(
+        &mut self,
+        w: &kernel::WindowSums,
+        y: u32,
+        x0: usize,
+        ends: bool,
+        row_len: usize,
+    ) {
+        self.next_y = y.saturating_add(1);
+        self.flags.set_if(Flags::CLIPPED, row_len > MAX_DIM);
+        let s = RowSums {
+            pixels: w.pixels,
+            weight: w.pixels,
+            sum_x: w.sum_x,
+            max: 0,
+        };
+        self.moments.add_row(&s, x0 as u64, u64::from(y));
+        let hit = w.pixels > 0;
+        let (y0, _) = self.config.rows();
+        let edge = y == y0 || ends;
+        self.flags.set_if(Flags::BORDER, hit && edge);
+        self.flags.set_if(Flags::SATURATED, hit && w.saturated);
+        self.last_row_hit = hit;
+    }
+
     /// The centroid of the rows pushed so far (the frame's result once its last row is in).
     pub fn result(&self) -> Centroid {
         let mut flags = self.flags;
@@ -703,48 +860,22 @@ impl Centroider {
     }
 }
 
-/// Rows `0 .. height` of a strided frame (each exactly `width` pixels); the shape is checked.
-fn rows_of<P>(
-    frame: &[P],
-    width: usize,
-    height: usize,
-    stride: usize,
-) -> impl Iterator<Item = &[P]> {
-    frame
-        .chunks(stride.max(1))
-        .take(height)
-        .map(move |r| r.get(..width).unwrap_or(r))
+impl Default for Centroider {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
-/// Single-target centroid of a whole 8-bit frame: `height` rows of `width` pixels, row `j`
-/// starting at `frame[j * stride]`. Allocation-free; the frame shape and ROI are checked.
-pub fn centroid_u8(
+/// Single-target centroid of a whole frame (8- or 16-bit), a one-shot convenience that
+/// checks the settings and the ROI against the frame (a streaming firmware builds a
+/// [`Centroider`] once and pushes rows). Allocation-free.
+pub fn centroid<P: Pixel>(
     config: &CentroidConfig,
-    frame: &[u8],
-    width: usize,
-    height: usize,
-    stride: usize,
+    frame: &Frame<'_, P>,
 ) -> Result<Centroid, FrameError> {
-    config.check_frame(frame.len(), width, height, stride, MAX_DIM)?;
-    let mut c = Centroider::new(*config);
-    for row in rows_of(frame, width, height, stride) {
-        c.push_row_u8(row);
-    }
-    Ok(c.result())
-}
-
-/// Single-target centroid of a whole 16-bit frame (see [`centroid_u8`]).
-pub fn centroid_u16(
-    config: &CentroidConfig,
-    frame: &[u16],
-    width: usize,
-    height: usize,
-    stride: usize,
-) -> Result<Centroid, FrameError> {
-    config.check_frame(frame.len(), width, height, stride, MAX_DIM)?;
-    let mut c = Centroider::new(*config);
-    for row in rows_of(frame, width, height, stride) {
-        c.push_row_u16(row);
-    }
+    let config = config.validate().map_err(FrameError::Config)?;
+    config.check_region(frame, MAX_DIM)?;
+    let mut c = Centroider::with(config);
+    c.push_frame_rows(frame);
     Ok(c.result())
 }

@@ -10,7 +10,8 @@
 //! might have joined one of them) and labelling goes on.
 
 use super::{
-    kernel::Pixel, Centroid, CentroidConfig, ConfigError, Flags, FrameError, Moments, MAX_DIM,
+    kernel::Pixel, Centroid, CentroidConfig, ConfigError, Flags, Frame, FrameError, Moments,
+    MAX_DIM,
 };
 
 /// Smallest rectangle holding every pixel of a target (inclusive, full-frame pixels).
@@ -96,19 +97,34 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         assert!(N >= 1 && N < u16::MAX as usize, "N must be in 1..65535");
     };
 
-    /// A multi-target centroider; fails when the ROI is wider than `W`. `W` (1..=65 536) and
-    /// `N` (1..65 535) are checked at compile time.
+    /// A multi-target centroider with the settings [`CentroidConfig::binary`]`(0)` (valid, but
+    /// rarely what a firmware wants): a `static` built in place, then
+    /// [`configure`](Self::configure)d.
+    pub const fn new() -> Self {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::CHECK;
+        MultiCentroider {
+            config: CentroidConfig::binary(0),
+            labels: [0; W],
+            slots: [Slot::FREE; N],
+            next_y: 0,
+            last_y: None,
+            flags: Flags::NONE,
+            dropped: 0,
+        }
+    }
+
+    /// A multi-target centroider; fails on invalid settings
+    /// ([`CentroidConfig::validate`]) or a ROI wider than `W`. `W` (1..=65 536) and `N`
+    /// (1..65 535) are checked at compile time. `const`: a `static` initialiser builds it in
+    /// place (the label buffer is `2 W` bytes), checked at compile time.
     pub const fn try_new(config: CentroidConfig) -> Result<Self, ConfigError> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
-        if let Some(r) = config.roi() {
-            if r.width as usize > W {
-                return Err(ConfigError::RoiTooWide {
-                    width: r.width,
-                    max: W,
-                });
-            }
-        }
+        let config = match Self::check(config) {
+            Ok(c) => c,
+            Err(e) => return Err(e),
+        };
         Ok(MultiCentroider {
             config,
             labels: [0; W],
@@ -118,6 +134,30 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
             flags: Flags::NONE,
             dropped: 0,
         })
+    }
+
+    /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
+    /// the current frame. On error nothing changes.
+    pub fn configure(&mut self, config: CentroidConfig) -> Result<(), ConfigError> {
+        self.config = Self::check(config)?;
+        self.reset();
+        Ok(())
+    }
+
+    const fn check(config: CentroidConfig) -> Result<CentroidConfig, ConfigError> {
+        let config = match config.validate() {
+            Ok(c) => c,
+            Err(e) => return Err(e),
+        };
+        if let Some(r) = config.roi {
+            if r.width as usize > W {
+                return Err(ConfigError::RoiTooWide {
+                    width: r.width,
+                    max: W,
+                });
+            }
+        }
+        Ok(config)
     }
 
     /// The settings.
@@ -140,52 +180,21 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         self.dropped
     }
 
-    /// Pushes the next 8-bit row of the frame.
-    pub fn push_row_u8(&mut self, row: &[u8]) {
-        let t = self.config.threshold_u8();
-        let sat = self.config.saturation_for(255);
+    /// Pushes the next row of the frame (8- or 16-bit pixels, column 0 first). Infallible:
+    /// components past the capacity are dropped and flagged [`Flags::CAPACITY`].
+    pub fn push_row<P: Pixel>(&mut self, row: &[P]) {
+        let t = P::threshold(self.config.threshold);
+        let sat = self.config.saturation_for(P::FULL);
         self.push(row, t, sat);
     }
 
-    /// Pushes the next 16-bit row of the frame.
-    pub fn push_row_u16(&mut self, row: &[u16]) {
-        let t = self.config.threshold();
-        let sat = self.config.saturation_for(u16::MAX);
-        self.push(row, t, sat);
-    }
-
-    /// Resets, then processes a whole 8-bit frame (`height` rows of `width` pixels, row `j` at
-    /// `frame[j * stride]`). Fails (before touching the state) on a bad shape, a ROI outside the
-    /// frame or a region wider than `W`.
-    pub fn process_u8(
-        &mut self,
-        frame: &[u8],
-        width: usize,
-        height: usize,
-        stride: usize,
-    ) -> Result<(), FrameError> {
-        self.config
-            .check_frame(frame.len(), width, height, stride, W)?;
+    /// Resets, then processes a whole frame. Fails (before touching the state) when the ROI
+    /// does not lie inside the frame or the region is wider than `W`.
+    pub fn process<P: Pixel>(&mut self, frame: &Frame<'_, P>) -> Result<(), FrameError> {
+        self.config.check_region(frame, W)?;
         self.reset();
-        for row in super::rows_of(frame, width, height, stride) {
-            self.push_row_u8(row);
-        }
-        Ok(())
-    }
-
-    /// Resets, then processes a whole 16-bit frame (see [`process_u8`](Self::process_u8)).
-    pub fn process_u16(
-        &mut self,
-        frame: &[u16],
-        width: usize,
-        height: usize,
-        stride: usize,
-    ) -> Result<(), FrameError> {
-        self.config
-            .check_frame(frame.len(), width, height, stride, W)?;
-        self.reset();
-        for row in super::rows_of(frame, width, height, stride) {
-            self.push_row_u16(row);
+        for row in frame.rows() {
+            self.push_row(row);
         }
         Ok(())
     }
@@ -260,7 +269,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         let (y0, y1) = self.config.rows();
         if y < y0 || y >= y1 {
             self.flags
-                .set_if(Flags::CLIPPED, self.config.roi().is_none() && y >= y1);
+                .set_if(Flags::CLIPPED, self.config.roi.is_none() && y >= y1);
             return;
         }
         let (x0, x1) = self.config.cols();
@@ -270,7 +279,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         let seg = row.get(x0..end).unwrap_or(&[]);
         let len = seg.len();
         let top = y == y0;
-        let binary = self.config.mode() == super::Mode::Binary;
+        let binary = self.config.mode == super::Mode::Binary;
 
         let mut up_left = 0u16;
         let mut left = 0u16;
@@ -344,9 +353,21 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         self.last_y = Some(y);
     }
 
-    /// Targets found so far (every connected component, in slot order). A target whose bottom
-    /// row is the last region row pushed gets [`Flags::BORDER`].
-    pub fn targets(&self) -> impl Iterator<Item = Target> + '_ {
+    /// Targets found so far (every connected component, in slot order), at most `N`. A target
+    /// whose bottom row is the last region row pushed gets [`Flags::BORDER`].
+    pub fn targets(&self) -> heapless::Vec<Target, N> {
+        let mut out = heapless::Vec::new();
+        for t in self.iter_targets() {
+            // at most N roots: never refused
+            if out.push(t).is_err() {
+                break;
+            }
+        }
+        out
+    }
+
+    /// The targets without collecting them.
+    fn iter_targets(&self) -> impl Iterator<Item = Target> + '_ {
         let frame = self.flags;
         let last_y = self.last_y;
         (1u16..)
@@ -364,7 +385,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
 
     /// Number of targets found so far.
     pub fn count(&self) -> usize {
-        self.targets().count()
+        self.iter_targets().count()
     }
 
     /// Frame-level flags: [`Flags::EMPTY`] when there is no target, [`Flags::CAPACITY`],
@@ -372,11 +393,17 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
     pub fn flags(&self) -> Flags {
         let mut f = self.flags;
         let mut any = false;
-        for t in self.targets() {
+        for t in self.iter_targets() {
             f |= t.centroid.flags;
             any = true;
         }
         f.set_if(Flags::EMPTY, !any);
         f
+    }
+}
+
+impl<const W: usize, const N: usize> Default for MultiCentroider<W, N> {
+    fn default() -> Self {
+        Self::new()
     }
 }

@@ -10,6 +10,49 @@ use rand_chacha::ChaCha8Rng;
 use std::vec;
 use std::vec::Vec;
 
+/// The one-shot centroid of a strided 8-bit frame (the former `centroid_u8`).
+fn centroid_u8(
+    cfg: &CentroidConfig,
+    px: &[u8],
+    w: usize,
+    h: usize,
+    stride: usize,
+) -> Result<Centroid, FrameError> {
+    Frame::new(px, w, h, stride).and_then(|f| centroid(cfg, &f))
+}
+
+/// The one-shot centroid of a strided 16-bit frame (the former `centroid_u16`).
+fn centroid_u16(
+    cfg: &CentroidConfig,
+    px: &[u16],
+    w: usize,
+    h: usize,
+    stride: usize,
+) -> Result<Centroid, FrameError> {
+    Frame::new(px, w, h, stride).and_then(|f| centroid(cfg, &f))
+}
+
+/// Settings from their four values, checked (the former `CentroidConfig::try_new`).
+fn config(
+    threshold: u16,
+    mode: Mode,
+    roi: Option<Roi>,
+    saturation: Option<u16>,
+) -> Result<CentroidConfig, ConfigError> {
+    CentroidConfig {
+        threshold,
+        mode,
+        roi,
+        saturation,
+    }
+    .validate()
+}
+
+/// A centroider for valid settings.
+fn centroider(cfg: CentroidConfig) -> Centroider {
+    Centroider::try_new(cfg).unwrap()
+}
+
 /// Naive reference: one double loop over the region, u128 sums, flags from their definitions.
 #[allow(clippy::too_many_arguments)]
 fn naive(
@@ -130,7 +173,7 @@ proptest! {
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (150u16..400).prop_map(Some)],
     ) {
-        let Ok(cfg) = CentroidConfig::try_new(t, mode, roi, sat) else {
+        let Ok(cfg) = config(t, mode, roi, sat) else {
             prop_assume!(false);
             unreachable!()
         };
@@ -149,7 +192,7 @@ proptest! {
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (30000u16..=65535).prop_map(Some)],
     ) {
-        let Ok(cfg) = CentroidConfig::try_new(t, mode, roi, sat) else {
+        let Ok(cfg) = config(t, mode, roi, sat) else {
             prop_assume!(false);
             unreachable!()
         };
@@ -197,13 +240,13 @@ proptest! {
         t in 0u16..255,
         mode in mode_strategy(),
     ) {
-        let cfg = CentroidConfig::try_new(t, mode, roi, None).unwrap();
+        let cfg = config(t, mode, roi, None).unwrap();
         let frame: Vec<u8> = px.iter().map(|&v| v as u8).collect();
         let whole = centroid_u8(&cfg, &frame, w, h, stride).unwrap();
-        let mut c = Centroider::new(cfg);
+        let mut c = centroider(cfg);
         for y in 0..h {
             let row: Vec<u8> = frame[y * stride..y * stride + w].to_vec();
-            c.push_row_u8(&row);
+            c.push_row(&row);
         }
         let streamed = c.result();
         prop_assert_eq!(streamed.moments, whole.moments);
@@ -213,7 +256,7 @@ proptest! {
         // After a reset the same centroider gives the same result again.
         c.reset();
         for y in 0..h {
-            c.push_row_u8(&frame[y * stride..y * stride + w]);
+            c.push_row(&frame[y * stride..y * stride + w]);
         }
         prop_assert_eq!(c.result(), whole);
     }
@@ -239,7 +282,7 @@ proptest! {
             }
             f
         };
-        let cfg = CentroidConfig::try_new(t, mode, None, None).unwrap();
+        let cfg = config(t, mode, None, None).unwrap();
         let a = centroid_u16(&cfg, &place(0, 0), fw, fh, fw).unwrap();
         let b = centroid_u16(&cfg, &place(dx, dy), fw, fh, fw).unwrap();
         prop_assert_eq!(a.flags, b.flags);
@@ -261,7 +304,7 @@ fn single_pixel_centroid_is_its_index() {
         let mut f = vec![10u8; w * h];
         f[j * w + i] = 200;
         for mode in [Mode::Binary, Mode::Weighted] {
-            let cfg = CentroidConfig::try_new(100, mode, None, None).unwrap();
+            let cfg = config(100, mode, None, None).unwrap();
             let c = centroid_u8(&cfg, &f, w, h, w).unwrap();
             assert_eq!(c.position(), Some((i as f32, j as f32)));
             assert_eq!(c.pixels(), 1);
@@ -287,7 +330,7 @@ fn smooth_disk(w: usize, h: usize, cx: f64, cy: f64, r: f64, sigma: f64, level: 
 fn weighted_smooth_disk_found_within_a_thousandth_of_a_pixel() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (w, h) = (64, 64);
-    let cfg = CentroidConfig::try_new(0, Mode::Weighted, None, None).unwrap();
+    let cfg = config(0, Mode::Weighted, None, None).unwrap();
     let mut worst = 0.0f64;
     for _ in 0..50 {
         let cx = 31.0 + rng.random::<f64>();
@@ -347,7 +390,7 @@ fn hard_disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
 fn binary_disk_matches_lattice_reference_and_true_centre() {
     let (w, h) = (64, 64);
     let r = 12.0;
-    let cfg = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+    let cfg = config(100, Mode::Binary, None, None).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let (mut bias_x, mut bias_y) = (0.0, 0.0);
     let runs = 400;
@@ -388,7 +431,7 @@ fn full_scale_4096_square_16_bit_frame_gives_exact_centre() {
         (Mode::Weighted, 0),
         (Mode::Weighted, 1000),
     ] {
-        let cfg = CentroidConfig::try_new(t, mode, None, None).unwrap();
+        let cfg = config(t, mode, None, None).unwrap();
         let c = centroid_u16(&cfg, &f, n, n, n).unwrap();
         let w = match mode {
             Mode::Binary => 1u128,
@@ -471,31 +514,31 @@ fn frame_with(w: usize, h: usize, pixels: &[(usize, usize, u8)]) -> Vec<u8> {
 #[test]
 fn flag_empty_when_nothing_above_threshold() {
     let f = frame_with(10, 8, &[(3, 3, 100)]);
-    let cfg = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+    let cfg = config(100, Mode::Binary, None, None).unwrap();
     let c = centroid_u8(&cfg, &f, 10, 8, 10).unwrap();
     assert_eq!(c.flags, Flags::EMPTY);
     assert_eq!((c.cx, c.cy, c.position()), (0.0, 0.0, None));
     // 8-bit frame with a threshold at or above 255 selects nothing, even full-scale pixels.
     let f = vec![255u8; 80];
-    let cfg = CentroidConfig::try_new(255, Mode::Weighted, None, None).unwrap();
+    let cfg = config(255, Mode::Weighted, None, None).unwrap();
     assert_eq!(
         centroid_u8(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
-    let cfg = CentroidConfig::try_new(300, Mode::Binary, None, None).unwrap();
+    let cfg = config(300, Mode::Binary, None, None).unwrap();
     assert_eq!(
         centroid_u8(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
     // 16-bit.
     let f = vec![65535u16; 80];
-    let cfg = CentroidConfig::try_new(65535, Mode::Binary, None, None).unwrap();
+    let cfg = config(65535, Mode::Binary, None, None).unwrap();
     assert_eq!(
         centroid_u16(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
     // A fresh streaming centroider has no centroid either.
-    assert_eq!(Centroider::new(cfg).result().flags, Flags::EMPTY);
+    assert_eq!(centroider(cfg).result().flags, Flags::EMPTY);
 }
 
 #[test]
@@ -514,7 +557,7 @@ fn flag_border_on_each_frame_and_roi_edge() {
         width: 7,
         height: 6,
     };
-    let cfg = CentroidConfig::try_new(50, Mode::Binary, Some(roi), None).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
     let at = |x, y| centroid_u8(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
     assert_eq!(at(5, 4).flags, Flags::NONE);
     for (x, y) in [(2, 4), (8, 4), (5, 1), (5, 6)] {
@@ -536,18 +579,18 @@ fn flag_border_on_each_frame_and_roi_edge() {
         width: 12,
         height: 100,
     };
-    let cfg = CentroidConfig::try_new(50, Mode::Binary, Some(roi), None).unwrap();
-    let mut c = Centroider::new(cfg);
+    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
+    let mut c = centroider(cfg);
     let f = frame_with(w, h, &[(5, 8, 200)]);
     for row in f.chunks(w) {
-        c.push_row_u8(row);
+        c.push_row(row);
     }
     assert_eq!(c.result().flags, Flags::BORDER);
     // A row shorter than the ROI: its last pixel is that row's right border.
-    let mut c = Centroider::new(cfg);
-    c.push_row_u8(&[0; 12]);
-    c.push_row_u8(&[0, 0, 0, 200]);
-    c.push_row_u8(&[0; 12]);
+    let mut c = centroider(cfg);
+    c.push_row(&[0u8; 12]);
+    c.push_row(&[0u8, 0, 0, 200]);
+    c.push_row(&[0u8; 12]);
     assert_eq!(c.result().flags, Flags::BORDER);
 }
 
@@ -574,7 +617,7 @@ fn flag_saturated_at_full_scale_or_configured_level() {
         Flags::SATURATED
     );
     // A 12-bit camera in a 16-bit container saturates at 4095.
-    let cfg = CentroidConfig::try_new(50, Mode::Weighted, None, Some(4095)).unwrap();
+    let cfg = config(50, Mode::Weighted, None, Some(4095)).unwrap();
     f16[27] = 4094;
     assert_eq!(
         centroid_u16(&cfg, &f16, w, h, w).unwrap().flags,
@@ -586,7 +629,7 @@ fn flag_saturated_at_full_scale_or_configured_level() {
         Flags::SATURATED
     );
     // Configured 8-bit level.
-    let cfg = CentroidConfig::try_new(50, Mode::Binary, None, Some(200)).unwrap();
+    let cfg = config(50, Mode::Binary, None, Some(200)).unwrap();
     let f = frame_with(w, h, &[(3, 3, 199)]);
     assert_eq!(centroid_u8(&cfg, &f, w, h, w).unwrap().flags, Flags::NONE);
     let f = frame_with(w, h, &[(3, 3, 200)]);
@@ -601,28 +644,28 @@ fn flag_saturated_at_full_scale_or_configured_level() {
         width: 3,
         height: 8,
     };
-    let cfg = CentroidConfig::try_new(50, Mode::Binary, Some(roi), None).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
     let f = frame_with(w, h, &[(1, 3, 100), (5, 3, 255)]);
     assert_eq!(centroid_u8(&cfg, &f, w, h, w).unwrap().flags, Flags::NONE);
 }
 
 #[test]
 fn flag_clipped_for_rows_longer_than_supported() {
-    let mut c = Centroider::new(CentroidConfig::binary(10));
+    let mut c = centroider(CentroidConfig::binary(10));
     let mut row = vec![0u8; MAX_DIM + 5];
     row[100] = 200;
     row[MAX_DIM + 2] = 200; // ignored
-    c.push_row_u8(&[0; 4]);
-    c.push_row_u8(&row);
-    c.push_row_u8(&[0; 4]);
+    c.push_row(&[0u8; 4]);
+    c.push_row(&row);
+    c.push_row(&[0u8; 4]);
     let r = c.result();
     assert_eq!(r.flags, Flags::CLIPPED);
     assert_eq!(r.position(), Some((100.0, 1.0)));
     // Multi-target: a row wider than the label buffer.
     let mut m = MultiCentroider::<8, 4>::try_new(CentroidConfig::binary(10)).unwrap();
-    m.push_row_u8(&[0; 8]);
-    m.push_row_u8(&[0, 200, 0, 0, 0, 0, 0, 0, 0, 200]);
-    m.push_row_u8(&[0; 8]);
+    m.push_row(&[0u8; 8]);
+    m.push_row(&[0u8, 200, 0, 0, 0, 0, 0, 0, 0, 200]);
+    m.push_row(&[0u8; 8]);
     assert_eq!(m.count(), 1);
     assert!(m.flags().contains(Flags::CLIPPED));
 }
@@ -652,22 +695,22 @@ fn invalid_settings_and_frames_are_rejected() {
         })
     };
     assert_eq!(
-        CentroidConfig::try_new(10, Mode::Binary, roi(0, 0, 0, 5), None),
+        config(10, Mode::Binary, roi(0, 0, 0, 5), None),
         Err(ConfigError::EmptyRoi)
     );
     assert_eq!(
-        CentroidConfig::try_new(10, Mode::Binary, roi(65000, 0, 600, 5), None),
+        config(10, Mode::Binary, roi(65000, 0, 600, 5), None),
         Err(ConfigError::RoiTooLarge)
     );
     assert_eq!(
-        CentroidConfig::try_new(10, Mode::Binary, roi(u32::MAX, 0, 600, 5), None),
+        config(10, Mode::Binary, roi(u32::MAX, 0, 600, 5), None),
         Err(ConfigError::RoiTooLarge)
     );
     assert!(matches!(
-        CentroidConfig::try_new(100, Mode::Binary, None, Some(100)),
+        config(100, Mode::Binary, None, Some(100)),
         Err(ConfigError::SaturationNotAboveThreshold { .. })
     ));
-    let cfg = CentroidConfig::try_new(10, Mode::Binary, roi(0, 0, 20, 5), None).unwrap();
+    let cfg = config(10, Mode::Binary, roi(0, 0, 20, 5), None).unwrap();
     assert!(matches!(
         MultiCentroider::<16, 4>::try_new(cfg),
         Err(ConfigError::RoiTooWide { width: 20, max: 16 })
@@ -701,7 +744,7 @@ fn invalid_settings_and_frames_are_rejected() {
             height: usize::MAX
         })
     );
-    let c = CentroidConfig::try_new(10, Mode::Binary, roi(5, 0, 6, 5), None).unwrap();
+    let c = config(10, Mode::Binary, roi(5, 0, 6, 5), None).unwrap();
     assert_eq!(
         centroid_u8(&c, &f, 10, 10, 10),
         Err(FrameError::RoiOutsideFrame)
@@ -794,10 +837,10 @@ proptest! {
         // frame_strategy's stride padding is dropped: use the first w * h values.
         let mut px: Vec<u8> = px.iter().map(|&v| v as u8).collect();
         px.resize(w * h, 0);
-        let cfg = CentroidConfig::try_new(u16::from(t), mode, roi, None).unwrap();
+        let cfg = config(u16::from(t), mode, roi, None).unwrap();
         let mut m = MultiCentroider::<48, 1024>::try_new(cfg).unwrap();
-        m.process_u8(&px, w, h, w).unwrap();
-        let mut got: Vec<_> = m.targets().map(|t| (t.centroid.moments, t.bbox, t.centroid.flags)).collect();
+        m.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
+        let mut got: Vec<_> = m.targets().into_iter().map(|t| (t.centroid.moments, t.bbox, t.centroid.flags)).collect();
         got.sort_by_key(|c| (c.1.y_min, c.1.x_min, c.0.sum_x));
         let want = naive_components(&px, w, h, t, mode, roi);
         prop_assert_eq!(&got, &want);
@@ -827,8 +870,8 @@ fn multi_target_merges_components_that_join_lower_down() {
         .flat_map(|r| r.bytes().map(|b| if b == b'#' { 200 } else { 0 }))
         .collect();
     let mut m = MultiCentroider::<16, 8>::try_new(CentroidConfig::binary(100)).unwrap();
-    m.process_u8(&px, w, h, w).unwrap();
-    let mut t: Vec<Target> = m.targets().collect();
+    m.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
+    let mut t: Vec<Target> = m.targets().into_iter().collect();
     t.sort_by_key(|t| t.bbox.x_min);
     assert_eq!(t.len(), 2);
     let arms = (0..h)
@@ -868,7 +911,7 @@ fn multi_target_capacity_exceeded_is_flagged_and_goes_on() {
         ],
     );
     let mut m = MultiCentroider::<12, 2>::try_new(CentroidConfig::binary(100)).unwrap();
-    m.process_u8(&f, 12, 5, 12).unwrap();
+    m.process(&Frame::new(&f, 12, 5, 12).unwrap()).unwrap();
     assert_eq!(m.count(), 2);
     assert_eq!(m.dropped_pixels(), 3);
     assert!(m.flags().contains(Flags::CAPACITY));
@@ -877,12 +920,13 @@ fn multi_target_capacity_exceeded_is_flagged_and_goes_on() {
     }
     // Enough capacity: no flag, every dot found; the same object is reused after process.
     let mut m = MultiCentroider::<12, 4>::try_new(CentroidConfig::binary(100)).unwrap();
-    m.process_u8(&f, 12, 5, 12).unwrap();
-    m.process_u8(&f, 12, 5, 12).unwrap();
+    m.process(&Frame::new(&f, 12, 5, 12).unwrap()).unwrap();
+    m.process(&Frame::new(&f, 12, 5, 12).unwrap()).unwrap();
     assert_eq!(m.count(), 4);
     assert_eq!(m.flags(), Flags::NONE);
     // Empty frame.
-    m.process_u8(&[0; 60], 12, 5, 12).unwrap();
+    m.process(&Frame::new(&[0u8; 60], 12, 5, 12).unwrap())
+        .unwrap();
     assert_eq!(m.flags(), Flags::EMPTY);
 }
 
@@ -898,10 +942,10 @@ fn multi_target_random_blobs_count() {
             .collect();
         let want = naive_components(&px, w, h, 100, Mode::Binary, None).len();
         let mut big = MultiCentroider::<64, 2048>::try_new(CentroidConfig::binary(100)).unwrap();
-        big.process_u8(&px, w, h, w).unwrap();
+        big.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
         assert_eq!(big.count(), want);
         let mut small = MultiCentroider::<64, 8>::try_new(CentroidConfig::binary(100)).unwrap();
-        small.process_u8(&px, w, h, w).unwrap();
+        small.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
         assert!(small.count() <= 8);
         assert_eq!(
             small.flags().contains(Flags::CAPACITY),
@@ -935,15 +979,15 @@ fn multi_target_16_bit_streaming_equals_whole_frame() {
         width: 40,
         height: 25,
     };
-    let cfg = CentroidConfig::try_new(999, Mode::Weighted, Some(roi), Some(60000)).unwrap();
+    let cfg = config(999, Mode::Weighted, Some(roi), Some(60000)).unwrap();
     let mut whole = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
-    whole.process_u16(&px, w, h, w).unwrap();
+    whole.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
     let mut streamed = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
     for row in px.chunks(w) {
-        streamed.push_row_u16(row);
+        streamed.push_row(row);
     }
-    let a: Vec<Target> = whole.targets().collect();
-    let b: Vec<Target> = streamed.targets().collect();
+    let a: Vec<Target> = whole.targets().into_iter().collect();
+    let b: Vec<Target> = streamed.targets().into_iter().collect();
     assert!(!a.is_empty());
     assert_eq!(a, b);
     // The components partition the pixels above the threshold: their moments add up to the

@@ -307,7 +307,7 @@ pub fn load_accel(
 mod tests {
     use super::*;
 
-    use firmware_core::centroid::{Centroid, CentroidConfig, Mode};
+    use firmware_core::centroid::{Centroid, CentroidConfig};
 
     fn disk_frame(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> GreyFrame {
         let mut data = vec![0u8; w * h];
@@ -327,7 +327,7 @@ mod tests {
 
     #[test]
     fn displacement_sign_follows_the_documented_convention() {
-        let cfg = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+        let cfg = CentroidConfig::binary(100);
         // the target moves down the image by 2 px, then a lost frame, then back
         let frames = [
             disk_frame(32, 32, 15.0, 14.0, 4.0),

@@ -436,7 +436,7 @@ mod tests {
             let mut j = i + 13;
             while lines[j] != "    -1" {
                 let l = lines[j];
-                assert!(l.len() % 40 == 0 && l.len() <= 80, "{l:?}");
+                assert!(l.len().is_multiple_of(40) && l.len() <= 80, "{l:?}");
                 for k in 0..l.len() / 40 {
                     values.push(Complex64::new(
                         col(l, 40 * k, 40 * k + 20),

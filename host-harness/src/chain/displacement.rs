@@ -94,12 +94,14 @@ impl GreyFrame {
                 width,
                 height,
                 data,
-            } => centroid::centroid_u8(config, data, *width, *height, *width),
+            } => centroid::Frame::new(data, *width, *height, *width)
+                .and_then(|f| centroid::centroid(config, &f)),
             GreyFrame::U16 {
                 width,
                 height,
                 data,
-            } => centroid::centroid_u16(config, data, *width, *height, *width),
+            } => centroid::Frame::new(data, *width, *height, *width)
+                .and_then(|f| centroid::centroid(config, &f)),
         };
         r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
     }

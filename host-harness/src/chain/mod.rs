@@ -85,7 +85,7 @@ mod tests {
             y[k] = x[k];
             y[m - k] = x[n - k];
         }
-        if n % 2 == 0 && half > 0 {
+        if n.is_multiple_of(2) && half > 0 {
             y[half] = x[half] * 0.5;
             y[m - half] += x[half] * 0.5;
         }

@@ -101,8 +101,14 @@ impl CentroidArgs {
             ModeArg::Binary => Mode::Binary,
             ModeArg::Weighted => Mode::Weighted,
         };
-        CentroidConfig::try_new(self.threshold, mode, self.roi, saturation)
-            .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
+        CentroidConfig {
+            threshold: self.threshold,
+            mode,
+            roi: self.roi,
+            saturation,
+        }
+        .validate()
+        .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
     }
 }
 
@@ -125,7 +131,10 @@ pub fn parse_roi(s: &str) -> Result<Roi, String> {
         width: num("W", w)?,
         height: num("H", h)?,
     };
-    CentroidConfig::try_new(0, Mode::Binary, Some(roi), None).map_err(|e| e.to_string())?;
+    CentroidConfig::binary(0)
+        .with_roi(roi)
+        .validate()
+        .map_err(|e| e.to_string())?;
     Ok(roi)
 }
 

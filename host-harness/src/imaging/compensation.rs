@@ -18,7 +18,7 @@
 //! The odd harmonics the binary centroid creates are not in the ratio.
 
 use crate::imaging::{BlurRenderer, DiskTarget};
-use firmware_core::centroid::{centroid_u8, CentroidConfig, Mode};
+use firmware_core::centroid::{centroid, CentroidConfig, Frame, Mode};
 use firmware_core::exposure::{CorrectionTable, TableError};
 
 /// What to measure the transfer of: target, centroid and motion.
@@ -187,8 +187,14 @@ pub fn transfer_curve(
     let mut renderer = BlurRenderer::for_path(&setup.target, &path, 16);
     let (w, h) = (renderer.width(), renderer.height());
     let mut frame = vec![0u8; w * h];
-    let config = CentroidConfig::try_new(setup.threshold, setup.mode, None, None)
-        .map_err(|e| CompensationError::Setup(e.to_string()))?;
+    let config = CentroidConfig {
+        threshold: setup.threshold,
+        mode: setup.mode,
+        roi: None,
+        saturation: None,
+    }
+    .validate()
+    .map_err(|e| CompensationError::Setup(e.to_string()))?;
     let k = setup.frames_per_period;
     let mut out = Vec::with_capacity(e2prs.len());
     let (mut ts, mut ys) = (Vec::with_capacity(k), Vec::with_capacity(k));
@@ -200,7 +206,8 @@ pub fn transfer_curve(
             let t = j as f64 / k as f64;
             let centre = lead as f64 + t * p as f64;
             renderer.render(centre - half, centre + half, &mut frame);
-            let c = centroid_u8(&config, &frame, w, h, w)
+            let c = Frame::new(&frame, w, h, w)
+                .and_then(|f| centroid(&config, &f))
                 .map_err(|e| CompensationError::Setup(format!("frame: {e}")))?;
             if let Some((_, cy)) = c.position() {
                 ts.push(t);
@@ -417,13 +424,16 @@ mod tests {
         let mut r = BlurRenderer::for_path(&setup.target, &path, 10);
         let (w, h) = (r.width(), r.height());
         let mut frame = vec![0u8; w * h];
-        let config = CentroidConfig::try_new(100, Mode::Binary, None, None).unwrap();
+        let config = CentroidConfig::binary(100);
         let half = 0.5 * te * fine;
         let y: Vec<f64> = (0..n)
             .map(|j| {
                 let c = (margin + 20 * j) as f64;
                 r.render(c - half, c + half, &mut frame);
-                centroid_u8(&config, &frame, w, h, w).unwrap().cy as f64
+                Frame::new(&frame, w, h, w)
+                    .and_then(|f| centroid(&config, &f))
+                    .unwrap()
+                    .cy as f64
             })
             .collect();
         // naive DFT (f64 reference), then the firmware's compensation in f32

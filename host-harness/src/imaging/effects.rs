@@ -10,7 +10,7 @@
 
 use super::render::BlurRenderer;
 use super::ImagingOptions;
-use firmware_core::centroid::{centroid_u16, centroid_u8, Centroid, CentroidConfig, FrameError};
+use firmware_core::centroid::{centroid, Centroid, CentroidConfig, Frame, FrameError};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -90,13 +90,13 @@ impl Camera {
         let (w, h) = (self.w, self.h);
         if self.plain {
             renderer.render(a, b, &mut self.frame);
-            centroid_u8(&self.config, &self.frame, w, h, w)
+            Frame::new(&self.frame, w, h, w).and_then(|f| centroid(&self.config, &f))
         } else {
             renderer.render_float(a, b, &mut self.fimg);
             self.effects
                 .apply(&mut self.fimg, w, h, &mut self.noise, &mut self.scratch);
             self.effects.quantise(&self.fimg, &mut self.frame16);
-            centroid_u16(&self.config, &self.frame16, w, h, w)
+            Frame::new(&self.frame16, w, h, w).and_then(|f| centroid(&self.config, &f))
         }
     }
 }

@@ -278,7 +278,7 @@ impl BlurRenderer {
                 *s = f * r * scale;
             }
             self.spec[0].im = 0.0;
-            if self.height % 2 == 0 {
+            if self.height.is_multiple_of(2) {
                 self.spec[last].im = 0.0;
             }
             // sizes come from the same plan, so this cannot fail
