@@ -6,6 +6,7 @@ mod util;
 
 mod analyze;
 mod centroid;
+mod robustness;
 mod signal;
 mod study;
 

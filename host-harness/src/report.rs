@@ -94,9 +94,14 @@ pub struct FrfBandRow {
 }
 
 /// Formats a float for CSV: shortest representation that round-trips (Rust's `Display`), so
-/// files are exact and identical for identical numbers.
+/// files are exact and identical for identical numbers. An undefined value (a standard deviation
+/// of one run, a mean of none) is an empty cell, never `NaN`.
 fn num(v: f64) -> String {
-    format!("{v}")
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
 }
 
 /// `summary.csv` bytes. `with_chi` adds the `chi_mu,chi_sigma` columns (cantilever).

@@ -42,6 +42,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.exposure_ms
         )));
     }
+    let record_ms = crate::study::StudyConfig::preset(args.preset).record_ms();
+    if args.exposure_ms > record_ms {
+        return Err(bad_input(format!(
+            "--exposure-ms {}: longer than the simulated record ({record_ms} ms)",
+            args.exposure_ms
+        )));
+    }
     if let Some(dir) = &args.recording {
         let files = crate::recording::write_synthetic_recording(
             args.preset,

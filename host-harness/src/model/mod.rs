@@ -141,38 +141,10 @@ fn rms(v: &[f64]) -> f64 {
 /// cantilever's accelerometer noise in g; the grandstand's SNRs).
 pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<SyntheticRun> {
     let (fine_per_frame, n) = acq.validate()?;
-    let fine_hz = acq.fs * acq.fine_per_sample as f64;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut planner = rustfft::FftPlanner::<f64>::new();
-    let df = fine_hz / n as f64;
-    // input spectrum on the fine grid
-    let mut input = vec![Complex64::new(0.0, 0.0); n];
-    match rig {
-        Rig::Cantilever(cantilever::Rig { band_hz, .. }) => {
-            // complex Gaussian on the band, Hermitian
-            for k in 1..n / 2 {
-                let f = k as f64 * df;
-                if f < band_hz.0 || f > band_hz.1 {
-                    continue;
-                }
-                let re: f64 = StandardNormal.sample(&mut rng);
-                let im: f64 = StandardNormal.sample(&mut rng);
-                input[k] = Complex64::new(re, im);
-                input[n - k] = input[k].conj();
-            }
-        }
-        Rig::Grandstand(test) => {
-            let mut held = 0.0;
-            for (j, v) in input.iter_mut().enumerate() {
-                if j % acq.fine_per_sample == 0 {
-                    let z: f64 = StandardNormal.sample(&mut rng);
-                    held = test.process_noise_n * z;
-                }
-                *v = Complex64::new(test.pulse(j as f64 / fine_hz) + held, 0.0);
-            }
-            planner.plan_fft_forward(n).process(&mut input);
-        }
-    }
+    let mut input = input_spectrum(rig, acq, n, &mut rng, &mut planner);
+    let df = acq.fine_hz() / n as f64;
     let mut tip_acc = vec![Complex64::new(0.0, 0.0); n];
     let mut tip_mm = vec![Complex64::new(0.0, 0.0); n];
     for k in 1..n {
@@ -196,7 +168,6 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
         ifft.process(buf);
     }
     // the inverse is unnormalised: one common factor, removed by the scaling below
-    let norm = 1.0 / n as f64;
     let scale = match rig {
         Rig::Cantilever(cantilever::Rig { tip_pp_mm, .. }) => {
             let (lo, hi) = tip_mm
@@ -206,11 +177,69 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
                 });
             tip_pp_mm / (hi - lo)
         }
-        Rig::Grandstand(_) => norm,
+        Rig::Grandstand(_) => 1.0 / n as f64,
     };
     let step = acq.fine_per_sample;
     let clean_in: Vec<f64> = input.iter().step_by(step).map(|v| v.re * scale).collect();
     let clean_tip: Vec<f64> = tip_acc.iter().step_by(step).map(|v| v.re * scale).collect();
+    let (input, tip_acc) = add_transducer_noise(rig, clean_in, clean_tip, &mut rng);
+    Ok(SyntheticRun {
+        input,
+        tip_acc,
+        tip_mm: tip_mm.iter().map(|v| v.re * scale).collect(),
+        fine_per_frame,
+    })
+}
+
+/// The input's spectrum on the fine grid of `n` steps: the cantilever's complex Gaussian on its
+/// band (Hermitian); the grandstand's pulse plus process noise held over each transducer sample,
+/// transformed.
+fn input_spectrum(
+    rig: &Rig,
+    acq: &Acquisition,
+    n: usize,
+    rng: &mut ChaCha8Rng,
+    planner: &mut rustfft::FftPlanner<f64>,
+) -> Vec<Complex64> {
+    let fine_hz = acq.fine_hz();
+    let df = fine_hz / n as f64;
+    let mut input = vec![Complex64::new(0.0, 0.0); n];
+    match rig {
+        Rig::Cantilever(cantilever::Rig { band_hz, .. }) => {
+            for k in 1..n / 2 {
+                let f = k as f64 * df;
+                if f < band_hz.0 || f > band_hz.1 {
+                    continue;
+                }
+                let re: f64 = StandardNormal.sample(rng);
+                let im: f64 = StandardNormal.sample(rng);
+                input[k] = Complex64::new(re, im);
+                input[n - k] = input[k].conj();
+            }
+        }
+        Rig::Grandstand(test) => {
+            let mut held = 0.0;
+            for (j, v) in input.iter_mut().enumerate() {
+                if j % acq.fine_per_sample == 0 {
+                    let z: f64 = StandardNormal.sample(rng);
+                    held = test.process_noise_n * z;
+                }
+                *v = Complex64::new(test.pulse(j as f64 / fine_hz) + held, 0.0);
+            }
+            planner.plan_fft_forward(n).process(&mut input);
+        }
+    }
+    input
+}
+
+/// The transducers' noise added to the clean input and tip records: the cantilever's
+/// accelerometer noise in g, the grandstand's signal-to-noise ratios.
+fn add_transducer_noise(
+    rig: &Rig,
+    clean_in: Vec<f64>,
+    clean_tip: Vec<f64>,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<f64>, Vec<f64>) {
     let (in_noise, tip_noise) = match rig {
         Rig::Cantilever(cantilever::Rig { accel_noise_g, .. }) => {
             (accel_noise_g * G0, accel_noise_g * G0)
@@ -224,17 +253,13 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
         clean
             .into_iter()
             .map(|v| {
-                let z: f64 = StandardNormal.sample(&mut rng);
+                let z: f64 = StandardNormal.sample(&mut *rng);
                 v + std * z
             })
             .collect()
     };
-    Ok(SyntheticRun {
-        input: noisy(clean_in, in_noise),
-        tip_acc: noisy(clean_tip, tip_noise),
-        tip_mm: tip_mm.iter().map(|v| v.re * scale).collect(),
-        fine_per_frame,
-    })
+    let input = noisy(clean_in, in_noise);
+    (input, noisy(clean_tip, tip_noise))
 }
 
 #[cfg(test)]

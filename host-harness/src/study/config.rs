@@ -65,6 +65,9 @@ struct StudyFile {
     imaging: ImagingOptions,
 }
 
+/// Most runs one study directory takes (see [`StudyConfig::validate`]).
+pub const MAX_RUNS: u64 = 1_000_000;
+
 impl StudyConfig {
     /// Defaults of a preset. The grandstand run count is what finishes in about a minute on two
     /// cores; the paper used 1000.
@@ -113,10 +116,35 @@ impl StudyConfig {
         })
     }
 
-    /// Checks the values; the message names the field.
+    /// Length of one simulated record of the preset, ms: the longest exposure that means
+    /// anything (and bounds the path a frame integrates).
+    pub fn record_ms(&self) -> f64 {
+        match self.preset {
+            Preset::Grandstand => crate::model::grandstand::DURATION_S * 1000.0,
+            Preset::Cantilever => {
+                1000.0 * crate::model::cantilever::FRAMES as f64 / crate::model::cantilever::FPS
+            }
+        }
+    }
+
+    /// Checks the values; the message names the field and the bound.
     pub fn validate(&self) -> anyhow::Result<()> {
         if self.runs == 0 {
             return Err(bad_input("runs: must be at least 1"));
+        }
+        if self.runs > MAX_RUNS {
+            return Err(bad_input(format!(
+                "runs: {} is more than one study directory holds ({MAX_RUNS}): every run keeps \
+                 about 10 kB in memory for the aggregation and 25 kB in runs.jsonl; split larger \
+                 studies into shards (--shard K/N) and merge them",
+                self.runs
+            )));
+        }
+        if let Some(e) = self.exposures_ms.iter().find(|e| **e > self.record_ms()) {
+            return Err(bad_input(format!(
+                "exposures_ms: {e} ms is longer than the simulated record ({} ms)",
+                self.record_ms()
+            )));
         }
         if self.exposures_ms.is_empty() {
             return Err(bad_input("exposures_ms: at least one exposure is needed"));

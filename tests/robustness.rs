@@ -1,0 +1,179 @@
+//! Adversarial end-to-end cases (issue 11): each fixed defect stays fixed. A study directory is
+//! locked, its checkpoint is never emptied or double counted, sizes are bounded, undefined
+//! statistics are empty cells.
+
+use crate::util::harness;
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+fn study(out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "study",
+        "--runs",
+        "3",
+        "--exposures-ms",
+        "40",
+        "--seed",
+        "5",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    harness(&args)
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_ok(o: &std::process::Output) {
+    assert!(
+        o.status.success(),
+        "exit {:?}: {}",
+        o.status.code(),
+        stderr(o)
+    );
+}
+
+#[test]
+fn a_second_process_on_a_running_study_is_refused_with_the_holders_pid() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s");
+    // a study long enough to still be running when the second one starts
+    let mut first = Command::new(env!("CARGO_BIN_EXE_host-harness"))
+        .args([
+            "study",
+            "--runs",
+            "40",
+            "--threads",
+            "1",
+            "--no-plots",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let lock = out.join(".lock");
+    let t0 = std::time::Instant::now();
+    while std::fs::read_to_string(&lock).map_or(true, |s| s.trim().is_empty()) {
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "the first study never took its lock"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let second = harness(&[
+        "study",
+        "--runs",
+        "40",
+        "--threads",
+        "1",
+        "--no-plots",
+        "--resume",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let still_running = first.try_wait().unwrap().is_none();
+    first.kill().ok();
+    first.wait().ok();
+    // 40 runs on one thread take many seconds: the first must still hold the lock
+    assert!(
+        still_running,
+        "the first study ended before the second started"
+    );
+    assert_eq!(second.status.code(), Some(2), "{}", stderr(&second));
+    let e = stderr(&second);
+    assert!(
+        e.contains("in use by another host-harness process") && e.contains(&first.id().to_string()),
+        "{e}"
+    );
+}
+
+#[test]
+fn duplicated_and_torn_checkpoint_lines_are_neither_counted_twice_nor_fatal() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    assert_ok(&study(&a, &[]));
+    assert_ok(&study(&b, &[]));
+    let runs = std::fs::read_to_string(b.join("runs.jsonl")).unwrap();
+    let first = runs.lines().next().unwrap();
+    // one identical duplicate and a torn last line
+    let tampered = format!("{runs}{first}\n{}", &first[..30]);
+    std::fs::write(b.join("runs.jsonl"), tampered).unwrap();
+    let o = study(&b, &["--resume"]);
+    assert_ok(&o);
+    let e = stderr(&o);
+    assert!(e.contains("recorded more than once"), "{e}");
+    assert!(e.contains("cut short"), "{e}");
+    let read = |d: &Path| std::fs::read_to_string(d.join("summary.csv")).unwrap();
+    assert_eq!(read(&a), read(&b), "the duplicate was counted");
+    // the torn line is gone, the file was cut back, not emptied
+    let after = std::fs::read_to_string(b.join("runs.jsonl")).unwrap();
+    assert!(
+        after.ends_with('\n') && after.lines().count() == 4,
+        "{after}"
+    );
+    // a run recorded twice with different results is refused
+    let changed = first.replace("\"natural_f_hz\":[", "\"natural_f_hz\":[9.5,");
+    assert_ne!(changed, first);
+    std::fs::write(b.join("runs.jsonl"), format!("{after}{changed}\n")).unwrap();
+    let o = study(&b, &["--resume"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("recorded twice with different results"));
+}
+
+#[test]
+fn sizes_from_one_flag_are_bounded_and_the_bound_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x");
+    for (args, needle) in [
+        (&["--runs", "1000000000000"][..], "1000000"),
+        (
+            &["--exposures-ms", "1e9"][..],
+            "longer than the simulated record",
+        ),
+    ] {
+        let mut a = vec!["study", "--no-plots", "--out", out.to_str().unwrap()];
+        a.extend(args);
+        let o = harness(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+    let o = harness(&[
+        "render",
+        "--exposure-ms",
+        "1e9",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("longer than the simulated record"));
+    // an absurd thread count is capped with a warning, and the study runs
+    let o = study(&dir.path().join("t"), &["--threads", "100000"]);
+    assert_ok(&o);
+    assert!(stderr(&o).contains("capped"), "{}", stderr(&o));
+}
+
+#[test]
+fn one_run_gives_empty_cells_not_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("one");
+    let o = harness(&[
+        "study",
+        "--runs",
+        "1",
+        "--exposures-ms",
+        "40",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let s = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert!(!s.contains("NaN"), "{s}");
+    // sigma of one run is undefined: an empty cell
+    assert!(s.lines().nth(1).unwrap().contains(",,"), "{s}");
+}
