@@ -21,6 +21,7 @@
 pub mod analysis;
 pub mod cli;
 pub mod csvio;
+pub mod fastpath;
 pub mod plots;
 pub mod recording;
 pub mod report;
