@@ -17,7 +17,8 @@
 #
 # Settings (environment): HOST_HARNESS (binary; default target/debug/host-harness, the one the
 # CI test step builds, else target/release/host-harness), CI_SLURM_RUNS (12),
-# CI_SLURM_EXPOSURES (40,180), CI_SLURM_SEED (3), CI_SLURM_TIMEOUT (seconds per wait, 300).
+# CI_SLURM_EXPOSURES (40,180), CI_SLURM_SEED (3), CI_SLURM_TIMEOUT (seconds per wait, 300),
+# CI_SLURM_KEEP=1 keeps the temporary directory (logs, outputs, slurm.conf).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -66,7 +67,7 @@ T=$(mktemp -d /tmp/vibcam-slurm.XXXXXX)
 chmod 700 "$T"
 mkdir -p "$T/munge" "$T/state" "$T/spool" "$T/logs" "$T/out"
 PIDS=()
-KEEP=0
+KEEP=${CI_SLURM_KEEP:-0}
 
 dump_logs() {
   for f in "$T"/slurmctld.log "$T"/slurmd.log "$T"/munge/munged.log "$T"/logs/*; do
@@ -203,11 +204,12 @@ say "reference done in $(($(date +%s) - t0)) s"
 # --- 4. the job array ------------------------------------------------------------------------
 # submit NAME: submits the array (one CPU per task, resumable) and prints its job id
 submit() {
-  sbatch --parsable --array=1-$TASKS --cpus-per-task=1 --mem=512M --time=00:10:00 \
+  # the study's settings travel in the environment (--export=ALL; a comma list cannot be
+  # passed as --export=VAR=a,b)
+  HOST_HARNESS=$HH OUT=$T/out/$1 RUNS=$RUNS SEED=$SEED EXPOSURES=$EXPOSURES \
+    sbatch --parsable --array=1-$TASKS --cpus-per-task=1 --mem=512M --time=00:10:00 \
     --job-name="vibcam-$1" --chdir="$ROOT" --open-mode=append \
-    --output="$T/logs/$1-%A_%a.log" \
-    --export="ALL,HOST_HARNESS=$HH,OUT=$T/out/$1,RUNS=$RUNS,SEED=$SEED,EXPOSURES=$EXPOSURES" \
-    scripts/slurm-study.sh
+    --output="$T/logs/$1-%A_%a.log" --export=ALL scripts/slurm-study.sh
 }
 
 # states of the array's tasks, one "TASKID STATE" line each
@@ -288,7 +290,9 @@ resumed=$(grep -E 'resuming .*: [0-9]+ runs already done, [0-9]+ to go' "$LOG2" 
   fail "the requeued task did not resume (no 'resuming' line in $LOG2)"
 echo "$resumed" | grep -Eq ': [1-9][0-9]* runs already done, [1-9][0-9]* to go' ||
   fail "the requeued task was not interrupted mid-run: $resumed"
-say "task 2 restarted $restarts time(s): $(echo "$resumed" | sed 's/.*: //')"
+say "task 2 restarted $restarts time(s): $(echo "$resumed" | sed 's/.*: //'); its log:"
+grep -E '^task |^resuming|runs in' "$LOG2" | sed 's/^/    /'
+
 merge_and_check requeue
 
 say "passed in $(($(date +%s) - STARTED)) s"
