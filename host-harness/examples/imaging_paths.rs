@@ -3,18 +3,40 @@
 //! * reference: EPSA render (`BlurRenderer::render`, 8-bit) + `firmware_core` binary centroid;
 //! * fast: `host_harness::fastpath::FastDiskCamera::frame` (only the rows the centroid needs).
 //!
-//! Both see the same runs (seed 1, runs 0, 1, ...), the study's 8 exposures (40 ... 180 ms)
+//! Times are CPU time of the thread (10 ms ticks). Both see the same runs (seed 1, runs 0, 1, ...), the study's 8 exposures (40 ... 180 ms)
 //! and 5000 frames each, and every centroid is compared.
 //!
 //! ```sh
-//! cargo run --release -p host-harness --example imaging_paths [RUNS]
+//! cargo run --release -p host-harness --example imaging_paths [RUNS] [aligned]
 //! ```
 use firmware_core::centroid::{centroid_u8, CentroidConfig};
 use host_harness::fastpath::FastDiskCamera;
 use host_harness::study::grandstand::{simulate, FINE, FS_HZ, N, PX_PER_MM, THRESHOLD};
 use host_harness::study::render::{BlurRenderer, DiskTarget};
 use host_harness::study::run_rng;
-use std::time::Instant;
+
+/// CPU seconds of the calling thread (`/proc/thread-self/stat`, 10 ms ticks), so that a busy
+/// machine does not inflate the figures; wall-clock seconds where that file is missing.
+fn cpu_seconds() -> f64 {
+    let ticks = std::fs::read_to_string("/proc/thread-self/stat")
+        .ok()
+        .and_then(|s| {
+            // fields after the command name's closing parenthesis; utime and stime are 14 and 15
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
+        });
+    match ticks {
+        Some(t) => t / 100.0,
+        None => {
+            static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+            START
+                .get_or_init(std::time::Instant::now)
+                .elapsed()
+                .as_secs_f64()
+        }
+    }
+}
 
 fn main() {
     let runs: u64 = std::env::args()
@@ -30,12 +52,18 @@ fn main() {
     let exposures_ms: Vec<f64> = (0..8).map(|i| 40.0 + 20.0 * i as f64).collect();
     let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
     let block = 10; // what Grandstand::new picks for these exposures
-    let pad = (180.0 / 2.0 / dt_ms) as usize + 1;
+                    // the study's rest padding before t = 0 (Grandstand::run), or with `aligned` rounded up to
+                    // a whole number of ramp blocks so that every exposure window covers whole blocks
+    let aligned = std::env::args().nth(2).as_deref() == Some("aligned");
+    let mut pad = (180.0 / 2.0 / dt_ms) as usize + 1;
+    if aligned {
+        pad = pad.div_ceil(block) * block;
+    }
     let config = CentroidConfig::binary(THRESHOLD);
 
-    let (mut t_ref, mut t_fast) = (0.0f64, 0.0f64);
+    let (mut t_ref, mut t_fast, mut t_ramp) = (0.0f64, 0.0f64, 0.0f64);
     let (mut frames, mut identical, mut worst) = (0u64, 0u64, 0.0f32);
-    let (mut evaluated, mut rendered) = (0u64, 0u64);
+    let (mut evaluated, mut rendered, mut columns) = (0u64, 0u64, 0u64);
     for run in 0..runs {
         let mut rng = run_rng(1, run);
         let r = simulate(&mut rng, false, pad);
@@ -46,7 +74,7 @@ fn main() {
             .collect();
         let mut renderer = BlurRenderer::for_path(&target, &path, block);
         let (w, h) = (renderer.width(), renderer.height());
-        let started = Instant::now();
+        let started = std::time::Instant::now();
         let mut fast = FastDiskCamera::new(&target, &renderer, THRESHOLD);
         let setup = started.elapsed().as_secs_f64();
         t_fast += setup;
@@ -59,19 +87,27 @@ fn main() {
                 let c = (r.pad + i * FINE) as f64;
                 (c - half, c + half)
             };
-            let started = Instant::now();
+            let started = cpu_seconds();
             for (i, out) in want.iter_mut().enumerate() {
                 let (a, b) = window(i);
                 renderer.render(a, b, &mut img);
                 *out = centroid_u8(&config, &img, w, h, w).expect("frame shape");
             }
-            t_ref += started.elapsed().as_secs_f64();
-            let started = Instant::now();
+            t_ref += cpu_seconds() - started;
+            let started = cpu_seconds();
             for (i, out) in got.iter_mut().enumerate() {
                 let (a, b) = window(i);
                 *out = fast.frame(&mut renderer, a, b).expect("frame shape");
             }
-            t_fast += started.elapsed().as_secs_f64();
+            t_fast += cpu_seconds() - started;
+            // the part of the fast path spent in the renderer's averaged ramp and path range
+            let started = cpu_seconds();
+            for i in 0..N {
+                let (a, b) = window(i);
+                std::hint::black_box(renderer.path_range(a, b));
+                std::hint::black_box(renderer.exposure_ramp(a, b));
+            }
+            t_ramp += cpu_seconds() - started;
             for (g, w) in got.iter().zip(&want) {
                 frames += 1;
                 if g == w {
@@ -82,6 +118,7 @@ fn main() {
         }
         evaluated += fast.stats().evaluated;
         rendered += fast.stats().rendered;
+        columns += fast.stats().columns_fft;
         println!(
             "run {run}: frame {w} x {h} px, path range {:.1} px, fast-path setup {:.0} us",
             path.iter().cloned().fold(f64::MIN, f64::max)
@@ -90,13 +127,29 @@ fn main() {
         );
     }
     let ns = |t: f64| t * 1e9 / frames as f64;
-    println!("{frames} frames ({runs} runs x {} exposures x {N})", exposures_ms.len());
-    println!("reference (EPSA render + quantise + centroid): {:>7.0} ns/frame", ns(t_ref));
-    println!("fast path (FastDiskCamera::frame)            : {:>7.0} ns/frame", ns(t_fast));
     println!(
-        "speed-up {:.1}x; identical centroids in {identical} of {frames} frames, largest |d cy| {worst:e} px; \
-         {:.1} rows evaluated per frame, {rendered} frames rendered (outside the domain)",
-        t_ref / t_fast,
-        evaluated as f64 / frames as f64
+        "{frames} frames ({runs} runs x {} exposures x {N}), pad {pad} fine steps",
+        exposures_ms.len()
+    );
+    println!(
+        "reference (EPSA render + quantise + centroid): {:>7.0} ns/frame",
+        ns(t_ref)
+    );
+    println!(
+        "fast path (FastDiskCamera::frame)            : {:>7.0} ns/frame",
+        ns(t_fast)
+    );
+    println!(
+        "  of which averaged ramp + path range         : {:>7.0} ns/frame",
+        ns(t_ramp)
+    );
+    println!(
+        "speed-up {:.1}x; identical centroids in {identical} of {frames} frames, largest |d cy| {worst:e} px",
+        t_ref / t_fast
+    );
+    println!(
+        "per frame: {:.2} rows evaluated one by one, {:.3} columns by inverse FFT; {rendered} frames rendered (outside the domain)",
+        evaluated as f64 / frames as f64,
+        columns as f64 / frames as f64
     );
 }

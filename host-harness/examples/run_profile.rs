@@ -1,4 +1,4 @@
-//! Where a grandstand run's time goes, stage by stage, with wall-clock timers on one core:
+//! Where a grandstand run's time goes, stage by stage, in CPU time of one thread (10 ms ticks):
 //! the stages of `Grandstand::run` redone with the same public functions (simulation, Welch
 //! H1s, renderer, imaging by either path, lost-frame filling), then `Grandstand::run` itself and
 //! the checkpoint line of its record, for comparison.
@@ -14,7 +14,29 @@ use host_harness::study::grandstand::{
 };
 use host_harness::study::render::{BlurRenderer, DiskTarget};
 use host_harness::study::{fill_lost_frames, measure_system, run_rng, Scenario, StudyConfig};
-use std::time::Instant;
+
+/// CPU seconds of the calling thread (`/proc/thread-self/stat`, 10 ms ticks), so that a busy
+/// machine does not inflate the figures; wall-clock seconds where that file is missing.
+fn cpu_seconds() -> f64 {
+    let ticks = std::fs::read_to_string("/proc/thread-self/stat")
+        .ok()
+        .and_then(|s| {
+            // fields after the command name's closing parenthesis; utime and stime are 14 and 15
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
+        });
+    match ticks {
+        Some(t) => t / 100.0,
+        None => {
+            static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+            START
+                .get_or_init(std::time::Instant::now)
+                .elapsed()
+                .as_secs_f64()
+        }
+    }
+}
 
 type Welch = WelchH1<NPERSEG, NFFT, { scratch_capacity(NFFT) }>;
 
@@ -62,14 +84,17 @@ fn main() {
     let config = CentroidConfig::binary(THRESHOLD);
     let mut s = Split::default();
     let t = |f: &mut dyn FnMut(), acc: &mut f64| {
-        let started = Instant::now();
+        let started = cpu_seconds();
         f();
-        *acc += started.elapsed().as_secs_f64();
+        *acc += cpu_seconds() - started;
     };
     for run in 0..runs {
         let mut rng = run_rng(1, run);
         let mut r = None;
-        t(&mut || r = Some(simulate(&mut rng, false, pad)), &mut s.simulate);
+        t(
+            &mut || r = Some(simulate(&mut rng, false, pad)),
+            &mut s.simulate,
+        );
         let r = r.expect("simulated");
         t(
             &mut || {
@@ -176,11 +201,20 @@ fn main() {
         cfg.exposures_ms.len()
     );
     let rows = [
-        ("simulate (modes, excitation, ZOH response, transducer noise)", s.simulate),
+        (
+            "simulate (modes, excitation, ZOH response, transducer noise)",
+            s.simulate,
+        ),
         ("Welch H1, transducer (1 per run)", s.welch_transducer),
-        ("BlurRenderer::for_path (column spectra, ramp blocks)", s.renderer),
+        (
+            "BlurRenderer::for_path (column spectra, ramp blocks)",
+            s.renderer,
+        ),
         ("FastDiskCamera::new", s.fast_setup),
-        ("imaging, reference (render + quantise + centroid)", s.imaging_ref),
+        (
+            "imaging, reference (render + quantise + centroid)",
+            s.imaging_ref,
+        ),
         ("imaging, fast path", s.imaging_fast),
         ("lost-frame fill + f32 copy", s.fill),
         ("Welch H1, vision (1 per exposure)", s.welch_vision),

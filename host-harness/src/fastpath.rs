@@ -31,7 +31,9 @@
 //! * rows outside `[dmin - c_out, dmax + c_out]` are below it in every translate: skipped, as
 //!   are whole columns whose peak never reaches `T + 0.5 - m`;
 //! * only the rows in between (one or two per edge for a slow target, the swept band for a
-//!   fast one) are evaluated: the inverse DFT at one row, `O(H)`.
+//!   fast one) are evaluated: the inverse DFT at one row, `O(H)`; a column with more than
+//!   [`ROWS_PER_FFT`] of them is inverted whole by the renderer's own `f32` inverse FFT
+//!   (same plan, same input: bit for bit the renderer's values).
 //!
 //! The mirror columns `rest_x +/- j` are equal in the renderer, so `sum_x = rest_x * pixels`.
 //! A frame outside the fast path's domain (the possibly selected rows reaching the frame's
@@ -44,12 +46,19 @@
 use crate::study::render::{BlurRenderer, DiskTarget};
 use firmware_core::centroid::{centroid_u8, Centroid, CentroidConfig, Flags, FrameError, Moments};
 use num_complex::Complex32;
+use realfft::{ComplexToReal, RealFftPlanner};
+use std::sync::Arc;
 
 /// Margin (grey levels) between the analytic profile's level crossings and the decision
 /// level: covers the band-limited interpolant's aliasing error (at most `MARGIN / 4`, checked
 /// at construction; about 0.003 for the study's disk) and the renderer's `f32` rounding
 /// (about 1e-3).
 const MARGIN: f64 = 0.5;
+
+/// Above this many uncertain rows in a column (a fast target sweeping many rows during the
+/// exposure), the column is inverted whole by the same `f32` inverse FFT as the renderer's
+/// (same length, same plan: the same values) instead of row by row.
+pub const ROWS_PER_FFT: i64 = 8;
 
 /// Counters of a [`FastDiskCamera`]'s work, for benchmarks and tests.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -60,6 +69,8 @@ pub struct FastStats {
     pub rendered: u64,
     /// Rows evaluated by an inverse DFT (summed over columns and frames).
     pub evaluated: u64,
+    /// Columns inverted whole by an inverse FFT (summed over frames).
+    pub columns_fft: u64,
 }
 
 /// Binary centroid of [`BlurRenderer`] frames of a [`DiskTarget`] without rendering them (see
@@ -81,12 +92,23 @@ pub struct FastDiskCamera {
     /// Twiddles `cos`, `sin` of `2 pi k y / H`, row `y` at `y * bins`.
     cos: Vec<f64>,
     sin: Vec<f64>,
-    /// The frame's averaged ramp (a copy of the renderer's).
-    ramp: Vec<Complex32>,
-    /// One column's spectrum (`f32`, as the renderer computes it).
+    /// Reference column spectra of columns `0 ..= last_col`, real and imaginary parts, `bins`
+    /// per column (copies of the renderer's, laid out for SIMD).
+    ref_re: Vec<f32>,
+    ref_im: Vec<f32>,
+    /// The frame's averaged ramp (a copy of the renderer's), real and imaginary parts.
+    ramp_re: Vec<f32>,
+    ramp_im: Vec<f32>,
+    /// One column's spectrum (`f32`, as the renderer computes it), and its parts as `f64`.
     spec: Vec<Complex32>,
+    spec_re: Vec<f64>,
+    spec_im: Vec<f64>,
     /// Frame buffer for frames outside the domain.
     frame: Vec<u8>,
+    /// The renderer's inverse FFT (planned alike) and its buffers, for swept columns.
+    ifft: Arc<dyn ComplexToReal<f32>>,
+    column: Vec<f32>,
+    scratch: Vec<Complex32>,
     stats: FastStats,
 }
 
@@ -136,6 +158,7 @@ impl FastDiskCamera {
                 sin[y * bins + k] = ph.sin();
             }
         }
+        let ifft = RealFftPlanner::<f32>::new().plan_fft_inverse(height);
         let decision = threshold as f64 + 0.5;
         let r_in = radius_at(target, decision + MARGIN);
         let r_out = radius_at(target, decision - MARGIN);
@@ -168,11 +191,25 @@ impl FastDiskCamera {
             c_out,
             cos,
             sin,
-            ramp: Vec::with_capacity(bins),
+            ref_re: Vec::new(),
+            ref_im: Vec::new(),
+            ramp_re: vec![0.0; bins],
+            ramp_im: vec![0.0; bins],
             spec: vec![Complex32::new(0.0, 0.0); bins],
+            spec_re: vec![0.0; bins],
+            spec_im: vec![0.0; bins],
             frame: Vec::new(),
+            scratch: vec![Complex32::new(0.0, 0.0); ifft.get_scratch_len()],
+            ifft,
+            column: vec![0.0; height],
             stats: FastStats::default(),
         };
+        for j in 0..cam.c_out.len() {
+            for c in renderer.column_spectrum(j) {
+                cam.ref_re.push(c.re);
+                cam.ref_im.push(c.im);
+            }
+        }
         if cam.enabled {
             cam.enabled = cam.interpolation_error(target, renderer) < MARGIN / 4.0;
         }
@@ -292,8 +329,17 @@ impl FastDiskCamera {
         if !(self.enabled && inside) {
             return false;
         }
-        self.ramp.clear();
-        self.ramp.extend_from_slice(renderer.exposure_ramp(a, b));
+        for ((r, re), im) in renderer
+            .exposure_ramp(a, b)
+            .iter()
+            .zip(&mut self.ramp_re)
+            .zip(&mut self.ramp_im)
+        {
+            *re = r.re;
+            *im = r.im;
+        }
+        let bins = self.ramp_re.len();
+        let scale = 1.0 / self.height as f32;
         let rest_y = self.rest_y as i64;
         for j in 0..self.c_out.len() {
             let (c_in, c_out) = (self.c_in[j], self.c_out[j]);
@@ -317,16 +363,49 @@ impl FastDiskCamera {
             } else {
                 [(lo, hi), (1, 0)]
             };
-            let mut have_spec = false;
+            let uncertain: i64 = ranges.iter().map(|(f, t)| (t - f + 1).max(0)).sum();
+            if uncertain == 0 {
+                continue;
+            }
+            // the renderer's column spectrum, reference x ramp x 1/H with the same f32
+            // operations in the same order as its Complex32 products (hence the same values)
+            let (fr, fi) = (
+                &self.ref_re[j * bins..(j + 1) * bins],
+                &self.ref_im[j * bins..(j + 1) * bins],
+            );
+            for k in 0..bins {
+                let (rr, ri) = (self.ramp_re[k], self.ramp_im[k]);
+                self.spec_re[k] = ((fr[k] * rr - fi[k] * ri) * scale) as f64;
+                self.spec_im[k] = ((fr[k] * ri + fi[k] * rr) * scale) as f64;
+            }
+            let whole = uncertain > ROWS_PER_FFT;
+            if whole {
+                // exactly the renderer's column: same spectrum (f32 values are exact in f64),
+                // same inverse FFT
+                for ((s, re), im) in self.spec.iter_mut().zip(&self.spec_re).zip(&self.spec_im) {
+                    *s = Complex32::new(*re as f32, *im as f32);
+                }
+                let last = bins - 1;
+                self.spec[0].im = 0.0;
+                self.spec[last].im = 0.0;
+                // sizes come from the same plan, so this cannot fail
+                let _ = self.ifft.process_with_scratch(
+                    &mut self.spec,
+                    &mut self.column,
+                    &mut self.scratch,
+                );
+                self.stats.columns_fft += 1;
+            }
             for (from, to) in ranges {
                 for u in from..=to {
-                    if !have_spec {
-                        column_spectrum(renderer.column_spectrum(j), &self.ramp, &mut self.spec);
-                        have_spec = true;
-                    }
                     let y = (rest_y + u) as usize;
-                    self.stats.evaluated += 1;
-                    if self.selected(y) {
+                    let above = if whole {
+                        above(self.column[y], self.config.threshold())
+                    } else {
+                        self.stats.evaluated += 1;
+                        self.selected(y)
+                    };
+                    if above {
                         sink(j, y as u64, y as u64);
                     }
                 }
@@ -339,32 +418,29 @@ impl FastDiskCamera {
     /// threshold: the inverse real DFT at one row (as the renderer's inverse FFT, which ignores
     /// the imaginary parts of the DC and Nyquist bins), rounded to 8 bits as the renderer does.
     fn selected(&self, y: usize) -> bool {
-        let bins = self.spec.len();
-        let (cos, sin) = (
-            &self.cos[y * bins..(y + 1) * bins],
-            &self.sin[y * bins..(y + 1) * bins],
-        );
+        let bins = self.spec_re.len();
         let last = bins - 1;
-        // four partial sums for instruction-level parallelism
+        let row = y * bins;
+        let (cos, sin) = (
+            &self.cos[row + 1..row + last],
+            &self.sin[row + 1..row + last],
+        );
+        let (re, im) = (&self.spec_re[1..last], &self.spec_im[1..last]);
+        // four partial sums (instruction-level parallelism, two SIMD lanes each)
         let mut acc = [0.0f64; 4];
-        let inner = &self.spec[1..last];
-        let (ci, si) = (&cos[1..last], &sin[1..last]);
-        let mut chunks = inner.chunks_exact(4);
-        let mut k = 0;
-        for c in &mut chunks {
+        let n4 = re.len() / 4 * 4;
+        for k in (0..n4).step_by(4) {
             for l in 0..4 {
-                acc[l] += c[l].re as f64 * ci[k + l] - c[l].im as f64 * si[k + l];
+                acc[l] += re[k + l] * cos[k + l] - im[k + l] * sin[k + l];
             }
-            k += 4;
         }
-        for (l, c) in chunks.remainder().iter().enumerate() {
-            acc[l] += c.re as f64 * ci[k + l] - c.im as f64 * si[k + l];
+        for k in n4..re.len() {
+            acc[k - n4] += re[k] * cos[k] - im[k] * sin[k];
         }
-        let v = self.spec[0].re as f64
+        let v = self.spec_re[0]
             + 2.0 * ((acc[0] + acc[1]) + (acc[2] + acc[3]))
-            + self.spec[last].re as f64 * cos[last];
-        let code = (v as f32 + 0.5).clamp(0.0, 255.0) as u8;
-        u16::from(code) > self.config.threshold()
+            + self.spec_re[last] * self.cos[row + last];
+        above(v as f32, self.config.threshold())
     }
 
     fn rendered(
@@ -381,14 +457,9 @@ impl FastDiskCamera {
     }
 }
 
-/// The column spectrum the renderer inverts: `reference * ramp / H`, DC and Nyquist real (the
-/// same `f32` operations as the renderer, so the same values).
-fn column_spectrum(reference: &[Complex32], ramp: &[Complex32], out: &mut [Complex32]) {
-    let h = 2 * (out.len() - 1);
-    let scale = 1.0 / h as f32;
-    for ((s, r), f) in out.iter_mut().zip(ramp).zip(reference) {
-        *s = f * r * scale;
-    }
+/// Whether the renderer's 8-bit quantisation of `v` (round to nearest, clamp) is above `t`.
+fn above(v: f32, t: u16) -> bool {
+    u16::from((v + 0.5).clamp(0.0, 255.0) as u8) > t
 }
 
 #[cfg(test)]
@@ -440,7 +511,7 @@ mod tests {
         target: &DiskTarget,
         renderer: &mut BlurRenderer,
         windows: &[(f64, f64)],
-    ) -> (u64, u64, u64) {
+    ) -> (u64, u64, u64, FastStats) {
         const TIE: f32 = 2e-3;
         let mut fast = FastDiskCamera::new(target, renderer, T);
         assert!(fast.enabled());
@@ -488,14 +559,14 @@ mod tests {
                 mismatches += 1;
             }
         }
-        (windows.len() as u64, on_fast_path, mismatches)
+        (windows.len() as u64, on_fast_path, mismatches, fast.stats())
     }
 
     #[test]
     fn same_pixels_as_the_renderer_over_random_paths_and_exposures() {
         let target = study_target();
         let mut rng = ChaCha8Rng::seed_from_u64(16);
-        let (mut frames, mut fast_frames, mut ties) = (0, 0, 0);
+        let (mut frames, mut fast_frames, mut ties, mut rows, mut columns) = (0, 0, 0, 0, 0);
         for case in 0..12 {
             // slow to fast targets: up to 2 ... 40 px amplitude at up to 6 Hz
             let amp = [2.0, 10.0, 40.0][case % 3];
@@ -514,11 +585,18 @@ mod tests {
                     (c - e / 2.0, c + e / 2.0)
                 })
                 .collect();
-            let (n, f, m) = compare(&target, &mut renderer, &windows);
+            let (n, f, m, st) = compare(&target, &mut renderer, &windows);
             frames += n;
             fast_frames += f;
             ties += m;
+            rows += st.evaluated;
+            columns += st.columns_fft;
         }
+        eprintln!(
+            "{frames} frames, {ties} tie pixels, {rows} rows evaluated, {columns} columns by FFT"
+        );
+        // both kinds of uncertain rows occurred: evaluated one by one, and whole columns
+        assert!(rows > 0 && columns > 0, "{rows} rows, {columns} columns");
         // for_path sizes the frame to the path, so every frame takes the fast path
         assert_eq!(fast_frames, frames);
         // ties (float value within 2e-3 of the level) are rare: at most one in 200 frames
@@ -536,7 +614,7 @@ mod tests {
         let windows: Vec<(f64, f64)> = (0..60)
             .map(|i| (30.0 * i as f64, 30.0 * i as f64 + 120.0))
             .collect();
-        let (n, f, _) = compare(&target, &mut renderer, &windows);
+        let (n, f, _, _) = compare(&target, &mut renderer, &windows);
         assert!(f < n, "some frames must leave the fast path's domain");
         assert!(f > 0, "and some stay in it");
     }
@@ -567,7 +645,10 @@ mod tests {
                 if got == want {
                     same += 1;
                 } else {
-                    assert!((got.cy - want.cy).abs() < 0.05 && got.pixels().abs_diff(want.pixels()) <= 2);
+                    assert!(
+                        (got.cy - want.cy).abs() < 0.05
+                            && got.pixels().abs_diff(want.pixels()) <= 2
+                    );
                 }
             }
             assert!(same >= 99, "{same} of 100 frames identical");

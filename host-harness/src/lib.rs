@@ -10,6 +10,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`study`] | Monte Carlo runner: seeds, parallelism, checkpoints, shards; its scenarios ([`study::grandstand`]: structure, excitation, transducers; [`study::cantilever`]) and the EPSA camera ([`study::render`]) |
+//! | [`fastpath`] | the binary centroid of EPSA frames without rendering them (identity effects) |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`report`] | CSV rows and the printed table (pure writers) |
 //! | [`plots`] | PNG and SVG figures of study results |
