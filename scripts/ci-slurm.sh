@@ -16,13 +16,14 @@
 #    (kept, with its path printed, when a check failed).
 #
 # Settings (environment): HOST_HARNESS (binary; default target/debug/host-harness, the one the
-# CI test step builds, else target/release/host-harness), CI_SLURM_RUNS (12),
+# CI test step builds, else target/release/host-harness), CI_SLURM_RUNS (24: 8 runs per task,
+# a window of several seconds for the requeue),
 # CI_SLURM_EXPOSURES (40,180), CI_SLURM_SEED (3), CI_SLURM_TIMEOUT (seconds per wait, 300),
 # CI_SLURM_KEEP=1 keeps the temporary directory (logs, outputs, slurm.conf).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-RUNS=${CI_SLURM_RUNS:-12}
+RUNS=${CI_SLURM_RUNS:-24}
 EXPOSURES=${CI_SLURM_EXPOSURES:-40,180}
 SEED=${CI_SLURM_SEED:-3}
 TIMEOUT=${CI_SLURM_TIMEOUT:-300}
@@ -270,13 +271,15 @@ RUNS2=$T/out/requeue/shard-2/runs.jsonl
 # shard 2 of 3 holds the runs r with r mod 3 = 1
 PER_SHARD=$(((RUNS + TASKS - 2) / TASKS))
 lines() { if [ -f "$1" ]; then grep -c '^{.*}$' "$1" || true; else echo 0; fi; }
-mid_run() {
-  local n
-  n=$(lines "$RUNS2")
-  [ "$n" -ge 1 ] && [ "$n" -lt "$PER_SHARD" ] && task_states "$JOB" | grep -qx '2 RUNNING'
-}
-wait_for "$TIMEOUT" "task 2 of job $JOB to checkpoint its first run" mid_run
-before=$(lines "$RUNS2")
+end=$(($(date +%s) + TIMEOUT))
+while :; do
+  before=$(lines "$RUNS2")
+  [ "$before" -lt "$PER_SHARD" ] ||
+    fail "task 2 finished all $PER_SHARD runs before it could be requeued; raise CI_SLURM_RUNS"
+  if [ "$before" -ge 1 ] && task_states "$JOB" | grep -qx '2 RUNNING'; then break; fi
+  [ "$(date +%s)" -lt "$end" ] || fail "timed out after ${TIMEOUT}s waiting for task 2 of job $JOB to checkpoint its first run"
+  sleep 0.1
+done
 scontrol requeue "${JOB}_2" || fail "scontrol requeue ${JOB}_2 failed"
 say "requeued task ${JOB}_2 after $before of its $PER_SHARD runs"
 # a requeued job waits for its begin time; release it at once so CI does not sit idle
