@@ -11,7 +11,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`model`] | the rigs: modal parameters and their PDFs, excitation, exact response, transducer noise, closed-form FRFs (one module per rig) |
-//! | [`imaging`] | the camera: targets, the EPSA renderer, image-formation effects, the `Camera` that ends in firmware-core's centroid, the exposure transfer of the centroid (compensation tables) |
+//! | [`imaging`] | the camera: targets, the EPSA renderer (and its fast binary-centroid path), image-formation effects, the `Camera` that ends in firmware-core's centroid, the exposure transfer of the centroid (compensation tables) |
 //! | [`chain`] | the host side of firmware-core: frames -> displacement (lost frames), two channels -> H1 -> peaks, upsampling to acceleration |
 //! | [`study`] | Monte Carlo studies: configuration, scenarios, runner (seeds, threads, shards), checkpoint, aggregation, merge |
 //! | [`recording`] | synthetic recordings (frames + transducer CSV) written from a model through the camera |

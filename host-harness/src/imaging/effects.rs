@@ -32,6 +32,8 @@ pub struct Camera {
     /// Seed of the noise streams (one per exposure); 0 and unused for identity effects.
     noise_seed: u64,
     noise: rand_chacha::ChaCha8Rng,
+    /// The fast binary-centroid path (identity effects only), when enabled.
+    fast: Option<super::fastpath::FastDiskCamera>,
 }
 
 impl Camera {
@@ -69,6 +71,20 @@ impl Camera {
             scratch: Vec::new(),
             noise_seed,
             noise: rand_chacha::ChaCha8Rng::seed_from_u64(noise_seed),
+            fast: None,
+        }
+    }
+
+    /// Uses the fast path ([`super::fastpath::FastDiskCamera`]: the binary centroid of the EPSA
+    /// frame computed from the rows that matter, the same pixels as rendering the frame) for
+    /// `target` seen by `renderer`, when the effects are the identity; otherwise nothing changes.
+    pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
+        if self.plain {
+            self.fast = Some(super::fastpath::FastDiskCamera::new(
+                target,
+                renderer,
+                self.config.threshold,
+            ));
         }
     }
 
@@ -88,6 +104,9 @@ impl Camera {
         b: f64,
     ) -> Result<Centroid, FrameError> {
         let (w, h) = (self.w, self.h);
+        if let Some(fast) = &mut self.fast {
+            return fast.frame(renderer, a, b);
+        }
         if self.plain {
             renderer.render(a, b, &mut self.frame);
             Frame::new(&self.frame, w, h, w).and_then(|f| centroid(&self.config, &f))

@@ -11,6 +11,7 @@
 
 pub mod compensation;
 pub mod effects;
+pub mod fastpath;
 pub mod render;
 
 pub use effects::{Camera, Effects};

@@ -268,6 +268,40 @@ impl BlurRenderer {
         });
     }
 
+    /// Columns `rest_x - half_cols ..= rest_x + half_cols` hold the target.
+    pub fn half_cols(&self) -> usize {
+        self.half_cols
+    }
+
+    /// Reference spectrum (bins `0 ..= H/2`, forward real FFT of the sharp column at rest) of
+    /// column `rest_x + j` and `rest_x - j`, `j = 0 ..= half_cols`.
+    pub fn column_spectrum(&self, j: usize) -> &[Complex32] {
+        &self.spectra[j]
+    }
+
+    /// The ramp averaged over the exposure from `a` to `b` (what [`render`](Self::render)
+    /// multiplies every column spectrum by, bins `0 ..= H/2`).
+    pub fn exposure_ramp(&mut self, a: f64, b: f64) -> &[Complex32] {
+        self.averaged_ramp(a, b);
+        &self.ramp
+    }
+
+    /// Smallest and largest displacement (px) of the path between fractional indices `a` and
+    /// `b` (linear between samples, clamped like the exposure).
+    pub fn path_range(&self, a: f64, b: f64) -> (f64, f64) {
+        let (pa, pb) = (at(&self.path, a), at(&self.path, b.max(a)));
+        let (mut lo, mut hi) = (pa.min(pb), pa.max(pb));
+        let last = self.path.len().saturating_sub(1) as f64;
+        let (i0, i1) = (a.max(0.0).ceil(), b.min(last).floor());
+        if i0 <= i1 {
+            for v in &self.path[i0 as usize..=i1 as usize] {
+                lo = lo.min(*v);
+                hi = hi.max(*v);
+            }
+        }
+        (lo, hi)
+    }
+
     /// Inverse-transforms every target column (spectrum x ramp) and hands it to `put` for both
     /// mirror columns.
     fn columns(&mut self, mut put: impl FnMut(usize, &[f32])) {

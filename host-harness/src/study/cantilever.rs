@@ -113,6 +113,7 @@ impl Scenario for Cantilever {
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
+        camera.use_fast_path(&TARGET, &renderer);
         let mut disp = vec![0.0f64; FRAMES];
         let mut valid = vec![false; FRAMES];
         let mut up =

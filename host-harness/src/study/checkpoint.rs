@@ -15,8 +15,11 @@ use std::path::Path;
 /// History: 1 = everything before the file existed; 2 = `f32` twiddles and window in
 /// firmware-core's `dft`/`spectrum` (results move in the 6th significant digit); 3 = synthetic
 /// recordings rendered by the studies' EPSA camera with the rig's target (level 255, threshold
-/// 127, 0.5 px edge) instead of their own renderer (study outputs unchanged).
-pub const MODEL_REVISION: u32 = 3;
+/// 127, 0.5 px edge) instead of their own renderer (study outputs unchanged); 4 = the fast
+/// binary-centroid path for identity effects (the same pixels as the rendered frame; the
+/// centroid's f32 sums in another order: grandstand vision amplitudes move in the 6th-7th
+/// significant digit, e.g. mode 1 at 40 ms 4.39004754 -> 4.39004554 mm/kN; cantilever unchanged).
+pub const MODEL_REVISION: u32 = 4;
 
 /// The revision recorded in study directory `dir` (1 when the file is absent: directories
 /// written before revisions were recorded).

@@ -133,6 +133,7 @@ impl Scenario for Grandstand {
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
+        camera.use_fast_path(&TARGET, &renderer);
         let mut vis = vec![0.0f64; N];
         let mut valid = vec![false; N];
         let mut vision = Vec::with_capacity(self.exposures_ms.len());
