@@ -256,6 +256,58 @@ fn first_crossing(points: &[(f64, f64)], floor: f64) -> f64 {
 /// Computes the plan. Errors name the input at fault; the binary transfer is rendered
 /// ([`crate::imaging::compensation`]), so this takes a fraction of a second per mode.
 pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
+    validate(input)?;
+    let threshold = input.threshold();
+    let floor = 1.0 - input.tolerance;
+    let grid: Vec<f64> = (0..=(1.0 / GRID_STEP).round() as usize)
+        .map(|i| i as f64 * GRID_STEP)
+        .collect();
+    let mut rows = Vec::with_capacity(input.modes.len());
+    let mut warnings = Vec::new();
+    for m in &input.modes {
+        if !(m.f_hz.is_finite() && m.f_hz > 0.0) {
+            return Err(CompensationError::Setup(format!(
+                "mode {}: f_hz {} must be positive",
+                m.mode, m.f_hz
+            )));
+        }
+        let mut setup = TransferSetup::new(input.target, threshold, input.centroid, m.amplitude_px);
+        setup.frames_per_period = 32;
+        setup.path_steps_per_period = 512;
+        // the measured transfer of this centroid at the actual threshold, on the grid
+        let curve = transfer_curve(&setup, &grid)?;
+        let measured: Vec<(f64, f64)> = curve.iter().map(|p| (p.e2pr, p.ratio)).collect();
+        let max_exposure_ms = 1000.0 * max_e2pr(input.centroid, &measured, floor) / m.f_hz;
+        let exposure_ms = input.exposure_ms.unwrap_or(max_exposure_ms);
+        let e2pr = m.f_hz * exposure_ms / 1000.0;
+        // beyond the grid (E2PR > 1) render the point itself
+        let measured_at = match interp(&measured, e2pr) {
+            Some(r) => r,
+            None => transfer_curve(&setup, &[e2pr])?[0].ratio,
+        };
+        let predicted_ratio = match input.centroid {
+            Mode::Weighted => sinc(e2pr),
+            _ => measured_at,
+        };
+        let compensated_residual = compensated_residual(input.centroid, &setup, e2pr, measured_at);
+        let risk = lost_frame_risk(&input.target, threshold as f64, m.amplitude_px, e2pr);
+        push_warnings(&mut warnings, input, m, exposure_ms, risk);
+        rows.push(PlanRow {
+            mode: m.mode,
+            f_hz: m.f_hz,
+            centroid: input.centroid,
+            max_exposure_ms,
+            e2pr,
+            predicted_ratio,
+            compensated_residual,
+            lost_frame_risk: risk,
+        });
+    }
+    Ok(Plan { rows, warnings })
+}
+
+/// Refuses a frame rate, tolerance, threshold fraction or fixed exposure out of range.
+fn validate(input: &PlanInput) -> Result<(), CompensationError> {
     let bad = |m: String| Err(CompensationError::Setup(m));
     if !(input.fps.is_finite() && input.fps > 0.0) {
         return bad(format!("fps {} must be positive", input.fps));
@@ -274,102 +326,83 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
             return bad(format!("exposure_ms {e} must be >= 0"));
         }
     }
-    let threshold = input.threshold();
-    let floor = 1.0 - input.tolerance;
+    Ok(())
+}
+
+/// The largest E2PR whose transfer ratio stays at or above `floor`: the sinc inverted by
+/// bisection for the weighted centroid, else the first crossing of the `measured` curve.
+fn max_e2pr(centroid: Mode, measured: &[(f64, f64)], floor: f64) -> f64 {
+    match centroid {
+        // the sinc falls monotonically on [0, 1]: invert it by bisection
+        Mode::Weighted => {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if sinc(mid) >= floor {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        }
+        _ => first_crossing(measured, floor),
+    }
+}
+
+/// Linear interpolation of the `(e2pr, ratio)` points at `e`; `None` outside them.
+fn interp(pts: &[(f64, f64)], e: f64) -> Option<f64> {
+    let i = pts.windows(2).position(|w| e >= w[0].0 && e <= w[1].0)?;
+    let ((e0, r0), (e1, r1)) = (pts[i], pts[i + 1]);
+    Some(r0 + (r1 - r0) * (e - e0) / (e1 - e0))
+}
+
+/// The relative error left at `e2pr` after the firmware's compensation of the `measured_at`
+/// ratio (the box transfer for the weighted centroid, else the correction table).
+fn compensated_residual(centroid: Mode, setup: &TransferSetup, e2pr: f64, measured_at: f64) -> f64 {
+    let compensation = match centroid {
+        Mode::Weighted => BoxTransfer.ratio(e2pr as f32),
+        _ => {
+            let table = correction_table::<TABLE_NODES>(setup, TABLE_STEP);
+            match table {
+                Ok(t) => t.ratio(e2pr as f32),
+                // a table that cannot be built (lost frames) corrects nothing
+                Err(_) => None,
+            }
+        }
+    };
+    match compensation {
+        Some(r) => (measured_at / r as f64 - 1.0).abs(),
+        None => (1.0 - measured_at).abs(),
+    }
+}
+
+/// The warnings of one mode: aliasing, an exposure longer than the frame, lost frames.
+fn push_warnings(
+    warnings: &mut Vec<PlanWarning>,
+    input: &PlanInput,
+    m: &PlanMode,
+    exposure_ms: f64,
+    risk: f64,
+) {
     let frame_ms = 1000.0 / input.fps;
-    let grid: Vec<f64> = (0..=(1.0 / GRID_STEP).round() as usize)
-        .map(|i| i as f64 * GRID_STEP)
-        .collect();
-    let mut rows = Vec::with_capacity(input.modes.len());
-    let mut warnings = Vec::new();
-    for m in &input.modes {
-        if !(m.f_hz.is_finite() && m.f_hz > 0.0) {
-            return bad(format!("mode {}: f_hz {} must be positive", m.mode, m.f_hz));
-        }
-        let mut setup = TransferSetup::new(input.target, threshold, input.centroid, m.amplitude_px);
-        setup.frames_per_period = 32;
-        setup.path_steps_per_period = 512;
-        // the measured transfer of this centroid at the actual threshold, on the grid
-        let curve = transfer_curve(&setup, &grid)?;
-        let measured: Vec<(f64, f64)> = curve.iter().map(|p| (p.e2pr, p.ratio)).collect();
-        let max_e2pr = match input.centroid {
-            // the sinc falls monotonically on [0, 1]: invert it by bisection
-            Mode::Weighted => {
-                let (mut lo, mut hi) = (0.0f64, 1.0f64);
-                for _ in 0..60 {
-                    let mid = 0.5 * (lo + hi);
-                    if sinc(mid) >= floor {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                lo
-            }
-            _ => first_crossing(&measured, floor),
-        };
-        let max_exposure_ms = 1000.0 * max_e2pr / m.f_hz;
-        let exposure_ms = input.exposure_ms.unwrap_or(max_exposure_ms);
-        let e2pr = m.f_hz * exposure_ms / 1000.0;
-        let interp = |pts: &[(f64, f64)], e: f64| -> Option<f64> {
-            let i = pts.windows(2).position(|w| e >= w[0].0 && e <= w[1].0)?;
-            let ((e0, r0), (e1, r1)) = (pts[i], pts[i + 1]);
-            Some(r0 + (r1 - r0) * (e - e0) / (e1 - e0))
-        };
-        // beyond the grid (E2PR > 1) render the point itself
-        let measured_at = match interp(&measured, e2pr) {
-            Some(r) => r,
-            None => transfer_curve(&setup, &[e2pr])?[0].ratio,
-        };
-        let predicted_ratio = match input.centroid {
-            Mode::Weighted => sinc(e2pr),
-            _ => measured_at,
-        };
-        let compensation = match input.centroid {
-            Mode::Weighted => BoxTransfer.ratio(e2pr as f32),
-            _ => {
-                let table = correction_table::<TABLE_NODES>(&setup, TABLE_STEP);
-                match table {
-                    Ok(t) => t.ratio(e2pr as f32),
-                    // a table that cannot be built (lost frames) corrects nothing
-                    Err(_) => None,
-                }
-            }
-        };
-        let compensated_residual = match compensation {
-            Some(r) => (measured_at / r as f64 - 1.0).abs(),
-            None => (1.0 - measured_at).abs(),
-        };
-        let risk = lost_frame_risk(&input.target, threshold as f64, m.amplitude_px, e2pr);
-        if m.f_hz > input.fps / 2.0 {
-            warnings.push(PlanWarning::Aliasing {
-                mode: m.mode,
-                f_hz: m.f_hz,
-                nyquist_hz: input.fps / 2.0,
-            });
-        }
-        if exposure_ms > frame_ms {
-            warnings.push(PlanWarning::ExposureLongerThanFrame {
-                mode: m.mode,
-                exposure_ms,
-                frame_period_ms: frame_ms,
-            });
-        }
-        if risk > 1.0 {
-            warnings.push(PlanWarning::LostFrames { mode: m.mode, risk });
-        }
-        rows.push(PlanRow {
+    if m.f_hz > input.fps / 2.0 {
+        warnings.push(PlanWarning::Aliasing {
             mode: m.mode,
             f_hz: m.f_hz,
-            centroid: input.centroid,
-            max_exposure_ms,
-            e2pr,
-            predicted_ratio,
-            compensated_residual,
-            lost_frame_risk: risk,
+            nyquist_hz: input.fps / 2.0,
         });
     }
-    Ok(Plan { rows, warnings })
+    if exposure_ms > frame_ms {
+        warnings.push(PlanWarning::ExposureLongerThanFrame {
+            mode: m.mode,
+            exposure_ms,
+            frame_period_ms: frame_ms,
+        });
+    }
+    if risk > 1.0 {
+        warnings.push(PlanWarning::LostFrames { mode: m.mode, risk });
+    }
 }
 
 #[cfg(test)]

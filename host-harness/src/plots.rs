@@ -275,42 +275,59 @@ where
             (System::Transducer, TRANSDUCER),
             (System::Vision, RGBColor(210, 40, 40)),
         ] {
-            let rows: Vec<&FrfBandRow> = p
-                .frf_band
-                .iter()
-                .filter(|r| r.system == system && r.exposure_ms == e)
-                .filter(|r| r.mean_abs.is_finite() && r.p05_abs.is_finite())
-                .collect();
-            if rows.is_empty() {
-                continue;
-            }
-            if width_only {
-                draw_line(
-                    &mut chart,
-                    rows.iter().map(|r| (r.freq_hz, r.p95_abs - r.p05_abs)),
-                    colour,
-                    2,
-                    system.name(),
-                )?;
-            } else {
-                let band: Vec<(f64, f64)> = rows
-                    .iter()
-                    .map(|r| (r.freq_hz, r.p95_abs))
-                    .chain(rows.iter().rev().map(|r| (r.freq_hz, r.p05_abs)))
-                    .collect();
-                chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
-                draw_line(
-                    &mut chart,
-                    rows.iter().map(|r| (r.freq_hz, r.mean_abs)),
-                    colour,
-                    2,
-                    format!("{} mean, 90 % band shaded", system.name()),
-                )?;
-            }
+            draw_frf_system(&mut chart, p, e, system, colour, width_only)?;
         }
         draw_legend(&mut chart, PANEL)?;
     }
     root.present()?;
+    Ok(())
+}
+
+/// One system's curve in a panel of [`draw_frf_band`] (exposure `e` ms): the band's width, or
+/// the mean |FRF| over its shaded 90 % band.
+fn draw_frf_system<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
+    p: &StudyPlots,
+    e: f64,
+    system: System,
+    colour: RGBColor,
+    width_only: bool,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let rows: Vec<&FrfBandRow> = p
+        .frf_band
+        .iter()
+        .filter(|r| r.system == system && r.exposure_ms == e)
+        .filter(|r| r.mean_abs.is_finite() && r.p05_abs.is_finite())
+        .collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    if width_only {
+        draw_line(
+            chart,
+            rows.iter().map(|r| (r.freq_hz, r.p95_abs - r.p05_abs)),
+            colour,
+            2,
+            system.name(),
+        )?;
+    } else {
+        let band: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (r.freq_hz, r.p95_abs))
+            .chain(rows.iter().rev().map(|r| (r.freq_hz, r.p05_abs)))
+            .collect();
+        chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.2))))?;
+        draw_line(
+            chart,
+            rows.iter().map(|r| (r.freq_hz, r.mean_abs)),
+            colour,
+            2,
+            format!("{} mean, 90 % band shaded", system.name()),
+        )?;
+    }
     Ok(())
 }
 

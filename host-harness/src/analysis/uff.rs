@@ -242,6 +242,19 @@ pub fn write_file(datasets: &[Dataset58<'_>]) -> Result<Vec<u8>, UffError> {
 /// One dataset 58 (see the module documentation for the records), from its `-1` delimiter line
 /// to the closing one.
 pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
+    validate(d)?;
+    let mut o = String::with_capacity(1200 + 42 * d.values.len());
+    o.push_str("    -1\n    58\n");
+    push_header_records(&mut o, d)?;
+    push_characteristic_records(&mut o, d)?;
+    push_data_records(&mut o, d);
+    o.push_str("    -1\n");
+    Ok(o.into_bytes())
+}
+
+/// Refuses a dataset that cannot be written: no values, a non-finite value, a bad abscissa or a
+/// direction outside -6..=6.
+fn validate(d: &Dataset58<'_>) -> Result<(), UffError> {
     let id = d.function_id;
     if d.values.is_empty() {
         return Err(UffError::Empty { function_id: id });
@@ -271,21 +284,34 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
             });
         }
     }
-    let text = |field: &'static str, s: &str, max: usize| -> Result<String, UffError> {
-        if s.chars().count() > max || s.contains(['\n', '\r']) {
-            return Err(UffError::Text {
-                function_id: id,
-                field,
-                text: s.to_string(),
-                max,
-            });
-        }
-        Ok(if s.trim().is_empty() {
-            "NONE".to_string()
-        } else {
-            s.to_string()
-        })
-    };
+    Ok(())
+}
+
+/// A text field of dataset `function_id` as written: at most `max` characters on one line,
+/// `NONE` when blank.
+fn record_text(
+    function_id: u32,
+    field: &'static str,
+    s: &str,
+    max: usize,
+) -> Result<String, UffError> {
+    if s.chars().count() > max || s.contains(['\n', '\r']) {
+        return Err(UffError::Text {
+            function_id,
+            field,
+            text: s.to_string(),
+            max,
+        });
+    }
+    Ok(if s.trim().is_empty() {
+        "NONE".to_string()
+    } else {
+        s.to_string()
+    })
+}
+
+/// Records 1-7: the five ID lines, the DOF identification and the data form.
+fn push_header_records(o: &mut String, d: &Dataset58<'_>) -> Result<(), UffError> {
     const ID_FIELDS: [&str; 5] = [
         "ID line 1",
         "ID line 2",
@@ -293,12 +319,11 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
         "ID line 4",
         "ID line 5",
     ];
-    let mut o = String::with_capacity(1200 + 42 * d.values.len());
-    o.push_str("    -1\n    58\n");
+    let id = d.function_id;
     for (line, field) in d.id_lines.iter().zip(ID_FIELDS) {
-        o += &format!("{:<80}\n", text(field, line, 80)?);
+        *o += &format!("{:<80}\n", record_text(id, field, line, 80)?);
     }
-    o += &format!(
+    *o += &format!(
         "{:>5}{:>10}{:>5}{:>10} {:<10}{:>10}{:>4} {:<10}{:>10}{:>4}\n",
         FUNCTION_TYPE_FRF,
         id,
@@ -311,7 +336,7 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
         d.reference.node,
         d.reference.direction
     );
-    o += &format!(
+    *o += &format!(
         "{:>10}{:>10}{:>10}{}{}{}\n",
         6,
         d.values.len(),
@@ -320,6 +345,12 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
         fortran_e(d.df_hz, 13, 5),
         fortran_e(0.0, 13, 5)
     );
+    Ok(())
+}
+
+/// Records 8-11: the characteristics of the abscissa, the ordinate numerator and denominator,
+/// and the (unused) z axis.
+fn push_characteristic_records(o: &mut String, d: &Dataset58<'_>) -> Result<(), UffError> {
     for (axis, what) in [
         (&AxisCharacteristics::frequency(), "abscissa"),
         (&d.numerator, "ordinate numerator"),
@@ -327,16 +358,21 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
         (&AxisCharacteristics::unused(), "z axis"),
     ] {
         let (l, f, t) = axis.quantity.exponents();
-        o += &format!(
+        *o += &format!(
             "{:>10}{:>5}{:>5}{:>5} {:<20} {:<20}\n",
             axis.quantity.code(),
             l,
             f,
             t,
-            text(label_field(what, false), &axis.label, 20)?,
-            text(label_field(what, true), &axis.units, 20)?
+            record_text(d.function_id, label_field(what, false), &axis.label, 20)?,
+            record_text(d.function_id, label_field(what, true), &axis.units, 20)?
         );
     }
+    Ok(())
+}
+
+/// Record 12: the values, two complex values (four numbers) a line.
+fn push_data_records(o: &mut String, d: &Dataset58<'_>) {
     let mut on_line = 0;
     for v in d.values {
         o.push_str(&fortran_e(v.re, 20, 12));
@@ -350,8 +386,6 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
     if on_line != 0 {
         o.push('\n');
     }
-    o.push_str("    -1\n");
-    Ok(o.into_bytes())
 }
 
 fn label_field(axis: &'static str, units: bool) -> &'static str {
