@@ -10,7 +10,7 @@
 //!   the firmware chain put together;
 //! - [`runner`]: random streams, shards, the parallel runner and resume;
 //! - [`checkpoint`]: `runs.jsonl`, the model revision, the file names;
-//! - [`aggregate`]: run records -> summary, realizations, FRF band and lost frames;
+//! - [`mod@aggregate`]: run records -> summary, realizations, FRF band and lost frames;
 //! - [`merge`]: the shards of one study -> its outputs.
 
 pub mod aggregate;
