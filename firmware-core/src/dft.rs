@@ -33,7 +33,6 @@
 //! ```
 
 use crate::{BufferError, Complex32};
-use core::fmt;
 
 /// Largest power-of-two transform `microfft` provides with the features this crate enables.
 pub const MAX_POW2: usize = 32768;
@@ -71,19 +70,13 @@ pub enum DftError {
     },
 }
 
-impl fmt::Display for DftError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DftError::Empty => write!(f, "DFT length must be at least 1"),
-            DftError::Unsupported { len } => write!(
-                f,
-                "DFT length {len} is not supported: its odd part needs a convolution longer than {MAX_POW2}"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for DftError {}
+error_display!(DftError, f, {
+    DftError::Empty => write!(f, "DFT length must be at least 1"),
+    DftError::Unsupported { len } => write!(
+        f,
+        "DFT length {len} is not supported: its odd part needs a convolution longer than {MAX_POW2}"
+    ),
+});
 
 /// How the length-`m` factor is transformed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -46,7 +46,6 @@
 
 use crate::Complex32;
 use core::f32::consts::PI;
-use core::fmt;
 
 /// Largest E2PR whose bins are divided by the transfer. At `E2PR = 0.8` the box transfer is
 /// `sinc(0.8 pi) = 0.234` (a noise gain of 4.3); towards its first zero at `E2PR = 1` the
@@ -154,20 +153,14 @@ pub enum TableError {
     },
 }
 
-impl fmt::Display for TableError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            TableError::TooFewNodes => write!(f, "a correction table needs at least two nodes"),
-            TableError::Step(s) => write!(f, "table step {s} must be a positive finite E2PR"),
-            TableError::Ratio { index, value } => write!(
-                f,
-                "table ratio {value} at node {index} must be a positive finite number"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for TableError {}
+error_display!(TableError, f, {
+    TableError::TooFewNodes => write!(f, "a correction table needs at least two nodes"),
+    TableError::Step(s) => write!(f, "table step {s} must be a positive finite E2PR"),
+    TableError::Ratio { index, value } => write!(
+        f,
+        "table ratio {value} at node {index} must be a positive finite number"
+    ),
+});
 
 /// Amplitude ratio (measured / true) against E2PR on the uniform grid `0, step, 2 step, ...,
 /// (N - 1) step`, linearly interpolated: a binary centroid's exposure transfer for one target,

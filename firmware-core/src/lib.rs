@@ -129,6 +129,22 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+/// Implements `Display` (one `match self` over the variants, writing to the formatter named by
+/// the second argument) and the empty `core::error::Error` for an error enum of this crate.
+macro_rules! error_display {
+    ($ty:ident, $f:ident, { $($arms:tt)* }) => {
+        impl core::fmt::Display for $ty {
+            fn fmt(&self, $f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                match self {
+                    $($arms)*
+                }
+            }
+        }
+
+        impl core::error::Error for $ty {}
+    };
+}
+
 pub mod centroid;
 pub mod convert;
 pub mod dft;

@@ -245,30 +245,24 @@ pub enum ConfigError {
     },
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ConfigError::Upsample(e) => write!(f, "upsampling block: {e}"),
-            ConfigError::Welch(e) => write!(f, "welch: {e}"),
-            ConfigError::BlockShape { frames, samples } => write!(
-                f,
-                "blocks of {frames} frames -> {samples} samples: the frames must be an even \
-                 number and the samples a multiple of 4 (blocks overlap by half and keep their \
-                 central half)"
-            ),
-            ConfigError::Capacity {
-                what,
-                needed,
-                capacity,
-            } => write!(
-                f,
-                "capacity {what} = {capacity} is too small: {needed} needed"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
+error_display!(ConfigError, f, {
+    ConfigError::Upsample(e) => write!(f, "upsampling block: {e}"),
+    ConfigError::Welch(e) => write!(f, "welch: {e}"),
+    ConfigError::BlockShape { frames, samples } => write!(
+        f,
+        "blocks of {frames} frames -> {samples} samples: the frames must be an even \
+         number and the samples a multiple of 4 (blocks overlap by half and keep their \
+         central half)"
+    ),
+    ConfigError::Capacity {
+        what,
+        needed,
+        capacity,
+    } => write!(
+        f,
+        "capacity {what} = {capacity} is too small: {needed} needed"
+    ),
+});
 
 impl From<upsample::ConfigError> for ConfigError {
     fn from(e: upsample::ConfigError) -> Self {
@@ -304,24 +298,18 @@ pub enum PushError {
     NotConfigured,
 }
 
-impl fmt::Display for PushError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            PushError::AdcOverflow { offered, room } => write!(
-                f,
-                "ADC history full: {offered} samples offered, room for {room}; the ADC is too \
-                 far ahead of the camera (nothing consumed)"
-            ),
-            PushError::BlockPending => write!(
-                f,
-                "a block of frames waits for ADC samples; the frame was not consumed"
-            ),
-            PushError::NotConfigured => write!(f, "the pipeline is not configured yet"),
-        }
-    }
-}
-
-impl core::error::Error for PushError {}
+error_display!(PushError, f, {
+    PushError::AdcOverflow { offered, room } => write!(
+        f,
+        "ADC history full: {offered} samples offered, room for {room}; the ADC is too \
+         far ahead of the camera (nothing consumed)"
+    ),
+    PushError::BlockPending => write!(
+        f,
+        "a block of frames waits for ADC samples; the frame was not consumed"
+    ),
+    PushError::NotConfigured => write!(f, "the pipeline is not configured yet"),
+});
 
 /// Camera + ADC -> upsampling (+ acceleration) -> streaming H1, in `4 CAM + 8 HIST + 16 WORK +
 /// 8 SCRATCH` bytes (see the [module documentation](self)).

@@ -311,36 +311,30 @@ pub enum ConfigError {
     },
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ConfigError::SampleRate => write!(f, "sampling rate must be finite and positive"),
-            ConfigError::SegmentLength { nperseg, capacity } => write!(
-                f,
-                "nperseg = {nperseg} is outside 1..={capacity} (the segment capacity)"
-            ),
-            ConfigError::Overlap { noverlap, nperseg } => write!(
-                f,
-                "noverlap = {noverlap} must be smaller than nperseg = {nperseg}"
-            ),
-            ConfigError::FftLength {
-                nfft,
-                nperseg,
-                capacity,
-            } => write!(
-                f,
-                "nfft = {nfft} is outside {nperseg}..={capacity} (nperseg ..= transform capacity)"
-            ),
-            ConfigError::Dft(e) => write!(f, "nfft: {e}"),
-            ConfigError::Scratch { needed, capacity } => write!(
-                f,
-                "the transform needs {needed} scratch values, the capacity is {capacity}"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
+error_display!(ConfigError, f, {
+    ConfigError::SampleRate => write!(f, "sampling rate must be finite and positive"),
+    ConfigError::SegmentLength { nperseg, capacity } => write!(
+        f,
+        "nperseg = {nperseg} is outside 1..={capacity} (the segment capacity)"
+    ),
+    ConfigError::Overlap { noverlap, nperseg } => write!(
+        f,
+        "noverlap = {noverlap} must be smaller than nperseg = {nperseg}"
+    ),
+    ConfigError::FftLength {
+        nfft,
+        nperseg,
+        capacity,
+    } => write!(
+        f,
+        "nfft = {nfft} is outside {nperseg}..={capacity} (nperseg ..= transform capacity)"
+    ),
+    ConfigError::Dft(e) => write!(f, "nfft: {e}"),
+    ConfigError::Scratch { needed, capacity } => write!(
+        f,
+        "the transform needs {needed} scratch values, the capacity is {capacity}"
+    ),
+});
 
 impl From<DftError> for ConfigError {
     fn from(e: DftError) -> Self {
@@ -371,21 +365,15 @@ pub enum WelchError {
     Buffer(BufferError),
 }
 
-impl fmt::Display for WelchError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            WelchError::ChunkLengths { x, y } => write!(
-                f,
-                "x and y chunks differ in length ({x} and {y} samples); nothing was consumed"
-            ),
-            WelchError::NoSegments => write!(f, "no complete segment has been accumulated yet"),
-            WelchError::NotConfigured => write!(f, "the estimator is not configured yet"),
-            WelchError::Buffer(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl core::error::Error for WelchError {}
+error_display!(WelchError, f, {
+    WelchError::ChunkLengths { x, y } => write!(
+        f,
+        "x and y chunks differ in length ({x} and {y} samples); nothing was consumed"
+    ),
+    WelchError::NoSegments => write!(f, "no complete segment has been accumulated yet"),
+    WelchError::NotConfigured => write!(f, "the estimator is not configured yet"),
+    WelchError::Buffer(e) => write!(f, "{e}"),
+});
 
 impl From<BufferError> for WelchError {
     fn from(e: BufferError) -> Self {

@@ -22,7 +22,6 @@
 //! assert_eq!(plan.exposure_ticks(), 61);
 //! ```
 
-use core::fmt;
 use embedded_hal::digital::OutputPin;
 
 /// Why a synchronisation plan is impossible (a [`SyncConfig`] rejected once, by
@@ -49,26 +48,20 @@ pub enum ConfigError {
     },
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ConfigError::ZeroRate => write!(f, "ADC and camera rates must be non-zero"),
-            ConfigError::NoCommonTick { needed_hz, max_hz } => write!(
-                f,
-                "the rates need a common tick of {needed_hz} Hz, above the timer's {max_hz} Hz"
-            ),
-            ConfigError::Exposure {
-                exposure_ticks,
-                frame_ticks,
-            } => write!(
-                f,
-                "exposure of {exposure_ticks} ticks must be at least 1 and shorter than the frame period of {frame_ticks} ticks"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
+error_display!(ConfigError, f, {
+    ConfigError::ZeroRate => write!(f, "ADC and camera rates must be non-zero"),
+    ConfigError::NoCommonTick { needed_hz, max_hz } => write!(
+        f,
+        "the rates need a common tick of {needed_hz} Hz, above the timer's {max_hz} Hz"
+    ),
+    ConfigError::Exposure {
+        exposure_ticks,
+        frame_ticks,
+    } => write!(
+        f,
+        "exposure of {exposure_ticks} ticks must be at least 1 and shorter than the frame period of {frame_ticks} ticks"
+    ),
+});
 
 /// Settings of a [`SyncPlan`]: rates in integer Hz and the exposure in ticks of the common
 /// time base. Plain data; checked once by [`SyncPlan::try_new`].

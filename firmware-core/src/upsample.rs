@@ -28,7 +28,6 @@
 use crate::dft::{scratch_len, Dft, DftError, Direction};
 use crate::{BufferError, Complex32};
 use core::f32::consts::PI;
-use core::fmt;
 
 /// Why an upsampling plan or an [`Upsampler`] cannot be built (checked once; running a plan
 /// can only fail on a caller buffer of the wrong length, [`BufferError`]).
@@ -64,29 +63,23 @@ pub enum ConfigError {
     RateRatio,
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ConfigError::Lengths { n, m } => {
-                write!(f, "cannot upsample {n} samples to {m}: need 1 <= n <= m")
-            }
-            ConfigError::Capacity { m, capacity } => {
-                write!(f, "output length {m} exceeds the capacity {capacity}")
-            }
-            ConfigError::Scratch { needed, capacity } => write!(
-                f,
-                "DFT scratch needs {needed} values, the capacity is {capacity}"
-            ),
-            ConfigError::Dft(e) => write!(f, "{e}"),
-            ConfigError::RateRatio => write!(
-                f,
-                "the record length times the rate ratio is not an integer number of samples"
-            ),
-        }
+error_display!(ConfigError, f, {
+    ConfigError::Lengths { n, m } => {
+        write!(f, "cannot upsample {n} samples to {m}: need 1 <= n <= m")
     }
-}
-
-impl core::error::Error for ConfigError {}
+    ConfigError::Capacity { m, capacity } => {
+        write!(f, "output length {m} exceeds the capacity {capacity}")
+    }
+    ConfigError::Scratch { needed, capacity } => write!(
+        f,
+        "DFT scratch needs {needed} values, the capacity is {capacity}"
+    ),
+    ConfigError::Dft(e) => write!(f, "{e}"),
+    ConfigError::RateRatio => write!(
+        f,
+        "the record length times the rate ratio is not an integer number of samples"
+    ),
+});
 
 impl From<DftError> for ConfigError {
     fn from(e: DftError) -> Self {

@@ -149,29 +149,23 @@ pub enum ConfigError {
     },
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ConfigError::EmptyRoi => write!(f, "region of interest has zero width or height"),
-            ConfigError::RoiTooLarge => {
-                write!(f, "region of interest reaches past {MAX_DIM} pixels")
-            }
-            ConfigError::RoiTooWide { width, max } => write!(
-                f,
-                "region of interest is {width} pixels wide, the label buffer holds {max}"
-            ),
-            ConfigError::SaturationNotAboveThreshold {
-                threshold,
-                saturation,
-            } => write!(
-                f,
-                "saturation level {saturation} must be above the threshold {threshold}"
-            ),
-        }
+error_display!(ConfigError, f, {
+    ConfigError::EmptyRoi => write!(f, "region of interest has zero width or height"),
+    ConfigError::RoiTooLarge => {
+        write!(f, "region of interest reaches past {MAX_DIM} pixels")
     }
-}
-
-impl core::error::Error for ConfigError {}
+    ConfigError::RoiTooWide { width, max } => write!(
+        f,
+        "region of interest is {width} pixels wide, the label buffer holds {max}"
+    ),
+    ConfigError::SaturationNotAboveThreshold {
+        threshold,
+        saturation,
+    } => write!(
+        f,
+        "saturation level {saturation} must be above the threshold {threshold}"
+    ),
+});
 
 /// Why a whole frame cannot be processed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -208,28 +202,22 @@ pub enum FrameError {
     Config(ConfigError),
 }
 
-impl fmt::Display for FrameError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            FrameError::Empty => write!(f, "frame has zero width or height"),
-            FrameError::TooLarge { width, height } => {
-                write!(f, "frame of {width} x {height} pixels is too large")
-            }
-            FrameError::Stride { stride, width } => {
-                write!(f, "row stride {stride} is smaller than the width {width}")
-            }
-            FrameError::BufferTooShort { needed, got } => {
-                write!(f, "frame buffer has {got} pixels, the frame needs {needed}")
-            }
-            FrameError::RoiOutsideFrame => {
-                write!(f, "region of interest does not lie inside the frame")
-            }
-            FrameError::Config(e) => write!(f, "invalid settings: {e}"),
-        }
+error_display!(FrameError, f, {
+    FrameError::Empty => write!(f, "frame has zero width or height"),
+    FrameError::TooLarge { width, height } => {
+        write!(f, "frame of {width} x {height} pixels is too large")
     }
-}
-
-impl core::error::Error for FrameError {}
+    FrameError::Stride { stride, width } => {
+        write!(f, "row stride {stride} is smaller than the width {width}")
+    }
+    FrameError::BufferTooShort { needed, got } => {
+        write!(f, "frame buffer has {got} pixels, the frame needs {needed}")
+    }
+    FrameError::RoiOutsideFrame => {
+        write!(f, "region of interest does not lie inside the frame")
+    }
+    FrameError::Config(e) => write!(f, "invalid settings: {e}"),
+});
 
 /// Result flags, a small bit set. `as u8` / [`Flags::bits`] give the bit mask printed by the
 /// command line; [`fmt::Display`] prints the names joined by `|` (`none` for no flag).
