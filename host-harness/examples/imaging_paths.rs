@@ -15,29 +15,6 @@ use host_harness::imaging::{BlurRenderer, DiskTarget};
 use host_harness::model::grandstand::{simulate, FINE, FS_HZ, N, PX_PER_MM, THRESHOLD};
 use host_harness::study::run_rng;
 
-/// CPU seconds of the calling thread (`/proc/thread-self/stat`, 10 ms ticks), so that a busy
-/// machine does not inflate the figures; wall-clock seconds where that file is missing.
-fn cpu_seconds() -> f64 {
-    let ticks = std::fs::read_to_string("/proc/thread-self/stat")
-        .ok()
-        .and_then(|s| {
-            // fields after the command name's closing parenthesis; utime and stime are 14 and 15
-            let rest = s.rsplit_once(')')?.1;
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
-        });
-    match ticks {
-        Some(t) => t / 100.0,
-        None => {
-            static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
-            START
-                .get_or_init(std::time::Instant::now)
-                .elapsed()
-                .as_secs_f64()
-        }
-    }
-}
-
 fn main() {
     let runs: u64 = std::env::args()
         .nth(1)
@@ -87,7 +64,7 @@ fn main() {
                 let c = (r.pad + i * FINE) as f64;
                 (c - half, c + half)
             };
-            let started = cpu_seconds();
+            let started = host_harness::testing::thread_cpu_seconds();
             for (i, out) in want.iter_mut().enumerate() {
                 let (a, b) = window(i);
                 renderer.render(a, b, &mut img);
@@ -95,21 +72,21 @@ fn main() {
                     .and_then(|f| centroid(&config, &f))
                     .expect("frame shape");
             }
-            t_ref += cpu_seconds() - started;
-            let started = cpu_seconds();
+            t_ref += host_harness::testing::thread_cpu_seconds() - started;
+            let started = host_harness::testing::thread_cpu_seconds();
             for (i, out) in got.iter_mut().enumerate() {
                 let (a, b) = window(i);
                 *out = fast.frame(&mut renderer, a, b).expect("frame shape");
             }
-            t_fast += cpu_seconds() - started;
+            t_fast += host_harness::testing::thread_cpu_seconds() - started;
             // the part of the fast path spent in the renderer's averaged ramp and path range
-            let started = cpu_seconds();
+            let started = host_harness::testing::thread_cpu_seconds();
             for i in 0..N {
                 let (a, b) = window(i);
                 std::hint::black_box(renderer.path_range(a, b));
                 std::hint::black_box(renderer.exposure_ramp(a, b));
             }
-            t_ramp += cpu_seconds() - started;
+            t_ramp += host_harness::testing::thread_cpu_seconds() - started;
             for (g, w) in got.iter().zip(&want) {
                 frames += 1;
                 if g == w {

@@ -18,29 +18,6 @@ use host_harness::model::grandstand::{
 use host_harness::study::Grandstand;
 use host_harness::study::{run_rng, Scenario, StudyConfig};
 
-/// CPU seconds of the calling thread (`/proc/thread-self/stat`, 10 ms ticks), so that a busy
-/// machine does not inflate the figures; wall-clock seconds where that file is missing.
-fn cpu_seconds() -> f64 {
-    let ticks = std::fs::read_to_string("/proc/thread-self/stat")
-        .ok()
-        .and_then(|s| {
-            // fields after the command name's closing parenthesis; utime and stime are 14 and 15
-            let rest = s.rsplit_once(')')?.1;
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
-        });
-    match ticks {
-        Some(t) => t / 100.0,
-        None => {
-            static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
-            START
-                .get_or_init(std::time::Instant::now)
-                .elapsed()
-                .as_secs_f64()
-        }
-    }
-}
-
 type Welch = WelchH1<NPERSEG, NFFT, { scratch_capacity(NFFT) }>;
 
 #[derive(Default)]
@@ -87,9 +64,9 @@ fn main() {
     let config = CentroidConfig::binary(THRESHOLD);
     let mut s = Split::default();
     let t = |f: &mut dyn FnMut(), acc: &mut f64| {
-        let started = cpu_seconds();
+        let started = host_harness::testing::thread_cpu_seconds();
         f();
-        *acc += cpu_seconds() - started;
+        *acc += host_harness::testing::thread_cpu_seconds() - started;
     };
     for run in 0..runs {
         let mut rng = run_rng(1, run);

@@ -19,16 +19,6 @@ use num_complex::Complex64;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-/// Euler-Bernoulli cantilever mode shape `mode` (0-based) at `x / L`.
-fn cantilever_shape(mode: usize, xi: f64) -> f64 {
-    let (bl, sigma) = [
-        (1.875_104_068_7, 0.734_095_514_1),
-        (4.694_091_132_9, 1.018_467_318_5),
-    ][mode];
-    let b = bl * xi;
-    b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
-}
-
 fn main() -> anyhow::Result<()> {
     let path = PathBuf::from(
         std::env::args()
@@ -51,7 +41,8 @@ fn main() -> anyhow::Result<()> {
                     let mut h = Complex64::new(1.0, 0.0);
                     for (m, mode) in modes.iter().enumerate() {
                         let wn = 2.0 * PI * mode.f_hz;
-                        let gphi = mode.g_phi * cantilever_shape(m, xi) / cantilever_shape(m, 1.0);
+                        let gphi = mode.g_phi * host_harness::model::cantilever::mode_shape(m, xi)
+                            / host_harness::model::cantilever::mode_shape(m, 1.0);
                         h += gphi * w * w
                             / Complex64::new(wn * wn - w * w, 2.0 * mode.zeta * wn * w);
                     }
@@ -106,7 +97,12 @@ fn main() -> anyhow::Result<()> {
         let fit = modal::fit_mode(&freq, &tip, band, FrfForm::Accelerance)?;
         let shape = modal::fit_shape(&freq, &refs, band, FrfForm::Accelerance, Some(fit.pole))?;
         let truth: Vec<Complex64> = (1..=5)
-            .map(|j| Complex64::new(cantilever_shape(m, j as f64 / 5.0), 0.0))
+            .map(|j| {
+                Complex64::new(
+                    host_harness::model::cantilever::mode_shape(m, j as f64 / 5.0),
+                    0.0,
+                )
+            })
             .collect();
         println!(
             "mode {}: model {:.4} Hz damping {:.5}; ours {:.4} Hz damping {:.5}; shape MAC {:.6}",

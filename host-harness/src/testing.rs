@@ -1,5 +1,6 @@
-//! Seeded noise for tests, examples and benchmarks: one portable generator (ChaCha8, never
-//! `StdRng`) so that every test's "random" record is reproducible on every platform.
+//! Helpers for tests, examples and benchmarks: seeded noise from one portable generator (ChaCha8,
+//! never `StdRng`), so that every test's "random" record is reproducible on every platform, and
+//! the calling thread's CPU time for benchmark figures.
 
 use rand::{Rng as _, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
@@ -15,6 +16,30 @@ pub fn uniform_noise(seed: u64, n: usize) -> Vec<f64> {
 pub fn gaussian_noise(seed: u64, n: usize) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n).map(|_| StandardNormal.sample(&mut rng)).collect()
+}
+
+/// CPU seconds of the calling thread (`/proc/thread-self/stat`, 10 ms ticks), so that a busy
+/// machine does not inflate a benchmark's figures; wall-clock seconds since the first call where
+/// that file is missing.
+pub fn thread_cpu_seconds() -> f64 {
+    let ticks = std::fs::read_to_string("/proc/thread-self/stat")
+        .ok()
+        .and_then(|s| {
+            // fields after the command name's closing parenthesis; utime and stime are 14 and 15
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
+        });
+    match ticks {
+        Some(t) => t / 100.0,
+        None => {
+            static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+            START
+                .get_or_init(std::time::Instant::now)
+                .elapsed()
+                .as_secs_f64()
+        }
+    }
 }
 
 #[cfg(test)]

@@ -133,6 +133,19 @@ impl Rig {
     }
 }
 
+/// Euler-Bernoulli cantilever mode shape of mode `mode` (0 or 1) at `xi = x / L` along the beam,
+/// clamped at `xi = 0`: `cosh(b) - cos(b) - sigma (sinh(b) - sin(b))` with `b = beta_i L xi`
+/// (`beta_1 L = 1.8751`, `beta_2 L = 4.6941`); the free tip takes the value +-2. The shape of the
+/// targets along the beam for multi-target recordings and the modal tests.
+pub fn mode_shape(mode: usize, xi: f64) -> f64 {
+    let (bl, sigma) = [
+        (1.875_104_068_7, 0.734_095_514_1),
+        (4.694_091_132_9, 1.018_467_318_5),
+    ][mode];
+    let b = bl * xi;
+    b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,5 +175,24 @@ mod tests {
         // the paper's peaks: about 68 and 39
         assert!((rig.transmissibility(7.1).norm() - 68.0).abs() < 1.0);
         assert!((rig.transmissibility(32.4).norm() - 39.4).abs() < 1.0);
+    }
+
+    #[test]
+    fn mode_shapes_are_clamped_and_end_at_plus_minus_two() {
+        for m in 0..2 {
+            assert!(mode_shape(m, 0.0).abs() < 1e-12);
+            // the free-end value of the Euler-Bernoulli shape with this normalisation is 2 (-1)^m
+            let tip = mode_shape(m, 1.0);
+            assert!((tip.abs() - 2.0).abs() < 1e-6, "mode {m}: {tip}");
+        }
+        // mode 2 has one node inside the beam (near x / L = 0.783), mode 1 none
+        let sign_changes = |m: usize| {
+            (1..100)
+                .filter(|k| {
+                    mode_shape(m, *k as f64 / 100.0) * mode_shape(m, (*k + 1) as f64 / 100.0) < 0.0
+                })
+                .count()
+        };
+        assert_eq!((sign_changes(0), sign_changes(1)), (0, 1));
     }
 }

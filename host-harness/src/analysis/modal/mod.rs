@@ -410,16 +410,6 @@ mod tests {
         RIG.iter().map(|m| m.2).collect()
     }
 
-    /// Euler-Bernoulli cantilever mode shapes at x / L (normalised so the tip is +-2).
-    fn cantilever_shape(mode: usize, xi: f64) -> f64 {
-        let (bl, sigma) = [
-            (1.875_104_068_7, 0.734_095_514_1),
-            (4.694_091_132_9, 1.018_467_318_5),
-        ][mode];
-        let b = bl * xi;
-        b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
-    }
-
     #[test]
     fn exact_two_mode_frf_gives_the_model_poles() {
         let f = bins();
@@ -546,7 +536,10 @@ mod tests {
             .map(|j| {
                 let xi = j as f64 / 5.0;
                 let gphi: Vec<f64> = (0..2)
-                    .map(|m| RIG[m].2 * cantilever_shape(m, xi) / cantilever_shape(m, 1.0))
+                    .map(|m| {
+                        RIG[m].2 * crate::model::cantilever::mode_shape(m, xi)
+                            / crate::model::cantilever::mode_shape(m, 1.0)
+                    })
                     .collect();
                 f.iter().map(|&x| base_excited(x, &gphi)).collect()
             })
@@ -555,7 +548,12 @@ mod tests {
 
     fn model_shape(mode: usize) -> Vec<Complex64> {
         (1..=5)
-            .map(|j| Complex64::new(cantilever_shape(mode, j as f64 / 5.0), 0.0))
+            .map(|j| {
+                Complex64::new(
+                    crate::model::cantilever::mode_shape(mode, j as f64 / 5.0),
+                    0.0,
+                )
+            })
             .collect()
     }
 
