@@ -73,9 +73,11 @@ fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
     let mut lines = summary.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,exposure_ms,mode,runs,mu_f_hz,sigma_f_hz,mu_a,sigma_a,e2pr"
+        "system,exposure_ms,mode,runs,mu_f_hz,sigma_f_hz,mu_a,sigma_a,e2pr,\
+         u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95"
     );
-    assert_eq!(lines.count(), 2 * 2 * 2);
+    // transducer, vision, vision_compensated x 2 modes x 2 exposures
+    assert_eq!(lines.count(), 3 * 2 * 2);
     // the table is printed
     let out = String::from_utf8_lossy(&study(&dir.path().join("three"), &[]).stdout).to_string();
     assert!(out.contains("mu_a") && out.contains("vision"), "{out}");
@@ -84,7 +86,12 @@ fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
     let (s1, s2) = two_shards(dir.path());
     let merged = dir.path().join("merged");
     ok(&merge(&s1, &s2, &merged));
-    for f in ["summary.csv", "realizations.csv", "frf_band.csv"] {
+    for f in [
+        "summary.csv",
+        "realizations.csv",
+        "frf_band.csv",
+        "coverage.csv",
+    ] {
         assert_eq!(
             read(&one.join(f)),
             read(&merged.join(f)),

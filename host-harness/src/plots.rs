@@ -274,6 +274,7 @@ where
         for (system, colour) in [
             (System::Transducer, TRANSDUCER),
             (System::Vision, RGBColor(210, 40, 40)),
+            (System::VisionCompensated, RGBColor(40, 150, 60)),
         ] {
             draw_frf_system(&mut chart, p, e, system, colour, width_only)?;
         }
@@ -575,6 +576,8 @@ mod tests {
                         e2pr: e / 1000.0 * 2.0,
                         chi_mu: None,
                         chi_sigma: None,
+                        a_coverage: None,
+                        f_coverage: None,
                     });
                     for run in 0..5 {
                         r.push(RealizationRow {

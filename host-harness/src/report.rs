@@ -2,6 +2,7 @@
 //! bytes out); putting the bytes on disk is the caller's separate step, so they are testable
 //! without the disk. Plots live in [`crate::plots`].
 
+use crate::uncertainty::CoverageSummary;
 use std::fmt::Write as _;
 
 /// Which measurement system a row describes.
@@ -11,6 +12,10 @@ pub enum System {
     Transducer,
     /// The camera path (image formation, centroid, H1).
     Vision,
+    /// The camera path with its exposure transfer divided out (method.md §2.8): each picked
+    /// amplitude divided by the centroid's transfer at `E2PR = Te f` of its peak, left as it
+    /// was beyond `E2PR` 0.8.
+    VisionCompensated,
 }
 
 impl System {
@@ -19,6 +24,7 @@ impl System {
         match self {
             System::Transducer => "transducer",
             System::Vision => "vision",
+            System::VisionCompensated => "vision_compensated",
         }
     }
 
@@ -27,6 +33,7 @@ impl System {
         match s {
             "transducer" => Some(System::Transducer),
             "vision" => Some(System::Vision),
+            "vision_compensated" => Some(System::VisionCompensated),
             _ => None,
         }
     }
@@ -57,6 +64,11 @@ pub struct SummaryRow {
     pub chi_mu: Option<f64>,
     /// Cantilever only, vision rows: std vision amplitude / std transducer amplitude.
     pub chi_sigma: Option<f64>,
+    /// The amplitudes' JCGM 101 statement (standard uncertainty of the mean, coverage
+    /// intervals); `None` when the runs are too few for the coverage probability.
+    pub a_coverage: Option<CoverageSummary>,
+    /// The frequencies' JCGM 101 statement, as for the amplitudes.
+    pub f_coverage: Option<CoverageSummary>,
 }
 
 /// One row of `realizations.csv`: one picked mode of one system in one run.
@@ -104,12 +116,20 @@ fn num(v: f64) -> String {
     }
 }
 
-/// `summary.csv` bytes. `with_chi` adds the `chi_mu,chi_sigma` columns (cantilever).
+/// The coverage columns appended to `summary.csv`: the standard uncertainty of the mean and
+/// the shortest coverage interval (JCGM 101 7.6, 7.7.2) of the amplitude, then of the
+/// frequency. The names say 95 whatever the coverage probability (recorded in `config.toml`).
+pub const COVERAGE_COLUMNS: &str = "u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95";
+
+/// `summary.csv` bytes. `with_chi` adds the `chi_mu,chi_sigma` columns (cantilever); the
+/// [`COVERAGE_COLUMNS`] come last.
 pub fn summary_csv(rows: &[SummaryRow], with_chi: bool) -> Vec<u8> {
     let mut s = String::from("system,exposure_ms,mode,runs,mu_f_hz,sigma_f_hz,mu_a,sigma_a,e2pr");
     if with_chi {
         s.push_str(",chi_mu,chi_sigma");
     }
+    s.push(',');
+    s.push_str(COVERAGE_COLUMNS);
     s.push('\n');
     for r in rows {
         let _ = write!(
@@ -125,11 +145,64 @@ pub fn summary_csv(rows: &[SummaryRow], with_chi: bool) -> Vec<u8> {
             num(r.sigma_a),
             num(r.e2pr)
         );
+        let opt = |v: Option<f64>| v.map(num).unwrap_or_default();
         if with_chi {
-            let opt = |v: Option<f64>| v.map(num).unwrap_or_default();
             let _ = write!(s, ",{},{}", opt(r.chi_mu), opt(r.chi_sigma));
         }
+        for c in [&r.a_coverage, &r.f_coverage] {
+            let _ = write!(
+                s,
+                ",{},{},{}",
+                opt(c.as_ref().map(|c| c.u_mean)),
+                opt(c.as_ref().map(|c| c.short_lo)),
+                opt(c.as_ref().map(|c| c.short_hi))
+            );
+        }
         s.push('\n');
+    }
+    s.into_bytes()
+}
+
+/// One row of `coverage.csv`: the whole JCGM 101 statement of one reported quantity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoverageRow {
+    /// Measurement system.
+    pub system: System,
+    /// Exposure time, ms.
+    pub exposure_ms: f64,
+    /// Mode number, 1-based.
+    pub mode: usize,
+    /// `f_hz`, `a`, or `ratio` (per run: this system's amplitude over the transducer's).
+    pub quantity: &'static str,
+    /// The statement.
+    pub coverage: CoverageSummary,
+}
+
+/// `coverage.csv` bytes.
+pub fn coverage_csv(rows: &[CoverageRow]) -> Vec<u8> {
+    let mut s = String::from(
+        "system,exposure_ms,mode,quantity,runs,coverage,estimate,std_uncertainty,u_mean,\
+         shortest_lo,shortest_hi,symmetric_lo,symmetric_hi\n",
+    );
+    for r in rows {
+        let c = &r.coverage;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.system.name(),
+            num(r.exposure_ms),
+            r.mode,
+            r.quantity,
+            c.n,
+            num(c.p),
+            num(c.mean),
+            num(c.std),
+            num(c.u_mean),
+            num(c.short_lo),
+            num(c.short_hi),
+            num(c.sym_lo),
+            num(c.sym_hi)
+        );
     }
     s.into_bytes()
 }
@@ -171,14 +244,27 @@ pub fn frf_band_csv(rows: &[FrfBandRow]) -> Vec<u8> {
 }
 
 /// The human table printed at the end of a study:
-/// `system | exposure_ms | mode | runs | mu_a | sigma_a | mu_f | sigma_f | e2pr [| chi_mu | chi_sigma]`.
-pub fn table(rows: &[SummaryRow], unit: &str) -> String {
+/// `system | exposure_ms | mode | runs | mu_a | sigma_a | u_mu_a | a interval | mu_f | sigma_f |
+/// e2pr [| chi_mu | chi_sigma]`, the interval being the shortest `coverage` one (JCGM 101
+/// 7.7.2; empty when the runs are too few).
+pub fn table(rows: &[SummaryRow], unit: &str, coverage: f64) -> String {
     let with_chi = rows.iter().any(|r| r.chi_mu.is_some());
+    let pct = format!("{}", coverage * 100.0);
     let mut s = String::new();
     let _ = write!(
         s,
-        "{:<10} | {:>11} | {:>4} | {:>5} | {:>10} | {:>9} | {:>8} | {:>8} | {:>6}",
-        "system", "exposure_ms", "mode", "runs", "mu_a", "sigma_a", "mu_f", "sigma_f", "e2pr"
+        "{:<18} | {:>11} | {:>4} | {:>5} | {:>10} | {:>9} | {:>8} | {:>19} | {:>8} | {:>8} | {:>6}",
+        "system",
+        "exposure_ms",
+        "mode",
+        "runs",
+        "mu_a",
+        "sigma_a",
+        "u_mu_a",
+        format!("a {pct} % interval"),
+        "mu_f",
+        "sigma_f",
+        "e2pr"
     );
     if with_chi {
         let _ = write!(s, " | {:>7} | {:>9}", "chi_mu", "chi_sigma");
@@ -188,15 +274,24 @@ pub fn table(rows: &[SummaryRow], unit: &str) -> String {
     s.push_str(&"-".repeat(width));
     s.push('\n');
     for r in rows {
+        let (u, interval) = match &r.a_coverage {
+            Some(c) => (
+                format!("{:.4}", c.u_mean),
+                format!("{:.4} .. {:.4}", c.short_lo, c.short_hi),
+            ),
+            None => (String::new(), String::new()),
+        };
         let _ = write!(
             s,
-            "{:<10} | {:>11} | {:>4} | {:>5} | {:>10.4} | {:>9.4} | {:>8.4} | {:>8.4} | {:>6.3}",
+            "{:<18} | {:>11} | {:>4} | {:>5} | {:>10.4} | {:>9.4} | {:>8} | {:>19} | {:>8.4} | {:>8.4} | {:>6.3}",
             r.system.name(),
             r.exposure_ms,
             r.mode,
             r.runs,
             r.mu_a,
             r.sigma_a,
+            u,
+            interval,
             r.mu_f_hz,
             r.sigma_f_hz,
             r.e2pr
@@ -207,7 +302,12 @@ pub fn table(rows: &[SummaryRow], unit: &str) -> String {
         }
         s.push('\n');
     }
-    let _ = writeln!(s, "(amplitudes in {unit}; frequencies in Hz)");
+    let _ = writeln!(
+        s,
+        "(amplitudes in {unit}; frequencies in Hz; u_mu_a: standard uncertainty of mu_a from \
+         the runs, JCGM 101 7.6; interval: shortest {pct} % coverage interval of one run's \
+         amplitude, JCGM 101 7.7.2; coverage.csv has both intervals of every quantity)"
+    );
     s
 }
 
@@ -228,6 +328,8 @@ mod tests {
             e2pr: 0.08,
             chi_mu: chi,
             chi_sigma: chi,
+            a_coverage: None,
+            f_coverage: None,
         }
     }
 
@@ -241,13 +343,31 @@ mod tests {
         let mut lines = text.lines();
         assert_eq!(
             lines.next(),
-            Some("system,exposure_ms,mode,runs,mu_f_hz,sigma_f_hz,mu_a,sigma_a,e2pr")
+            Some(
+                "system,exposure_ms,mode,runs,mu_f_hz,sigma_f_hz,mu_a,sigma_a,e2pr,\
+                 u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95"
+            )
         );
-        assert_eq!(lines.next(), Some("transducer,40,1,10,2,0.1,0.5,0.05,0.08"));
-        let text = String::from_utf8(summary_csv(&rows, true)).unwrap();
-        assert!(text.lines().next().unwrap().ends_with(",chi_mu,chi_sigma"));
-        assert!(text.lines().nth(1).unwrap().ends_with(",,"));
-        assert!(text.lines().nth(2).unwrap().ends_with(",0.9,0.9"));
+        assert_eq!(
+            lines.next(),
+            Some("transducer,40,1,10,2,0.1,0.5,0.05,0.08,,,,,,")
+        );
+        let mut with_cov = rows.clone();
+        with_cov[1].a_coverage =
+            Some(crate::uncertainty::coverage_summary(&[1.0, 2.0, 3.0, 4.0], 0.5).unwrap());
+        let text = String::from_utf8(summary_csv(&with_cov, true)).unwrap();
+        assert!(text
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",chi_mu,chi_sigma,u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95"));
+        assert!(text.lines().nth(1).unwrap().ends_with(",,,,,,,,"));
+        // 4 values, p = 0.5: q = 2, shortest [y1, y3] (first on ties), u_mean = s / 2
+        let u = (5.0f64 / 3.0).sqrt() / 2.0;
+        assert!(
+            text.lines().nth(2).unwrap().ends_with(&format!(",0.9,0.9,{u},1,3,,,")),
+            "{text}"
+        );
     }
 
     #[test]
@@ -263,8 +383,10 @@ mod tests {
         let t = table(
             &[row(System::Transducer, None), row(System::Vision, None)],
             "mm/kN",
+            0.95,
         );
         assert_eq!(t.lines().count(), 5);
+        assert!(t.contains("a 95 % interval"), "{t}");
         assert!(t.contains("vision") && t.contains("mm/kN"));
     }
 }

@@ -15,11 +15,20 @@ pub struct Args {
     /// Do not write the PNG/SVG figures.
     #[arg(long)]
     pub no_plots: bool,
+    /// Coverage probability of the intervals (default: the shards' one).
+    #[arg(long, value_name = "P")]
+    pub coverage: Option<f64>,
 }
 
 /// Runs `host-harness merge`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let merged = study::merge::read_shards(&args.dirs)?;
+    let mut merged = study::merge::read_shards(&args.dirs)?;
+    if let Some(p) = args.coverage {
+        merged.config.coverage = p;
+        merged.config.validate().map_err(|e| {
+            crate::bad_input(format!("--coverage: {}", e.to_string().trim_start_matches("coverage: ")))
+        })?;
+    }
     study::merge::write_merged(&args.out, &merged)?;
     let scenario = study::scenario_for(&merged.config)?;
     eprintln!(

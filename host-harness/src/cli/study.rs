@@ -43,6 +43,23 @@ pub struct Args {
     /// Do not write the PNG/SVG figures.
     #[arg(long)]
     pub no_plots: bool,
+    /// Coverage probability of the intervals (JCGM 101 7.7) in summary.csv and coverage.csv;
+    /// the column names keep "95" (default 0.95).
+    #[arg(long, value_name = "P")]
+    pub coverage: Option<f64>,
+    /// Adaptive Monte Carlo (JCGM 101 7.9): batches of runs until every reported quantity
+    /// (or the --adaptive-on one) is stable to --digits; --runs is then the cap.
+    #[arg(long, requires = "digits")]
+    pub adaptive: bool,
+    /// Significant digits wanted in the standard uncertainties (with --adaptive).
+    #[arg(long, value_name = "ND", requires = "adaptive")]
+    pub digits: Option<u32>,
+    /// Runs per batch (with --adaptive; default max(100/(1-p), 10^4) as JCGM 101 7.9.4 b).
+    #[arg(long, value_name = "M", requires = "adaptive")]
+    pub batch: Option<u64>,
+    /// The one quantity that decides, SYSTEM:MODE:a|f (e.g. vision:2:a; every exposure).
+    #[arg(long, value_name = "SYSTEM:MODE:Q", requires = "adaptive")]
+    pub adaptive_on: Option<String>,
 }
 
 /// Resolves the configuration from preset, study file and flags.
@@ -63,8 +80,45 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
     if args.fixed_structure {
         cfg.fixed_structure = true;
     }
+    if let Some(p) = args.coverage {
+        if !(p > 0.0 && p < 1.0) {
+            return Err(crate::bad_input(format!(
+                "--coverage: {p} must lie strictly between 0 and 1 (0.95 for 95 %)"
+            )));
+        }
+        cfg.coverage = p;
+    }
+    if args.adaptive {
+        set_adaptive(args, &mut cfg)?;
+    }
     cfg.validate()?;
     Ok(cfg)
+}
+
+
+/// The adaptive settings from the flags: the standard's batch size unless `--batch` (a smaller
+/// one is said), the run cap `--runs` or a thousand batches (at most `MAX_RUNS`).
+fn set_adaptive(args: &Args, cfg: &mut StudyConfig) -> anyhow::Result<()> {
+    let standard = crate::uncertainty::default_batch_size(cfg.coverage).unwrap_or(10_000) as u64;
+    let batch = args.batch.unwrap_or(standard);
+    if batch < standard {
+        eprintln!(
+            "note: --batch {batch} is smaller than JCGM 101 7.9.4 b's {standard} runs per batch \
+             (allowed; the batch values scatter more, so the criterion is checked more often)"
+        );
+    }
+    if batch == 0 {
+        return Err(crate::bad_input("--batch: must be at least 1"));
+    }
+    if args.runs.is_none() {
+        cfg.runs = (study::config::MAX_RUNS / batch).min(1000) * batch;
+    }
+    cfg.adaptive = Some(study::adaptive::AdaptiveConfig {
+        digits: args.digits.unwrap_or(1),
+        batch,
+        on: args.adaptive_on.clone(),
+    });
+    Ok(())
 }
 
 /// `out/<preset>-<hash of the resolved configuration and the model revision>[-shard-K-of-N]`.
@@ -74,7 +128,7 @@ pub fn default_out(cfg: &StudyConfig, shard: Shard) -> PathBuf {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let text = format!(
         "{}model_revision = {}\n",
-        cfg.to_toml(),
+        cfg.runs_key().to_toml(),
         study::MODEL_REVISION
     );
     for b in text.bytes() {
@@ -108,8 +162,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let scenario = study::scenario_for(&cfg)?;
     eprintln!(
-        "{} study: {} runs x {} exposures ({} ms), seed {}{}{} -> {}",
+        "{} study: {}{} runs x {} exposures ({} ms), seed {}{}{} -> {}",
         scenario.name(),
+        match &cfg.adaptive {
+            Some(a) => format!("adaptive in batches of {}, at most ", a.batch),
+            None => String::new(),
+        },
         cfg.runs,
         cfg.exposures_ms.len(),
         cfg.exposures_ms

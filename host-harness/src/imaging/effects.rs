@@ -49,11 +49,14 @@ impl Camera {
     ) -> Camera {
         let plain = effects.is_identity();
         let noise_seed: u64 = if plain { 0 } else { rng.random() };
-        let config = CentroidConfig::binary(if plain {
-            threshold
-        } else {
-            effects.threshold(threshold)
-        });
+        let config = CentroidConfig {
+            mode: effects.centroid.mode(),
+            ..CentroidConfig::binary(if plain {
+                threshold
+            } else {
+                effects.threshold(threshold)
+            })
+        };
         let (fimg, frame16) = if plain {
             (Vec::new(), Vec::new())
         } else {
@@ -79,7 +82,7 @@ impl Camera {
     /// frame computed from the rows that matter, the same pixels as rendering the frame) for
     /// `target` seen by `renderer`, when the effects are the identity; otherwise nothing changes.
     pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
-        if self.plain {
+        if self.plain && self.config.mode == firmware_core::centroid::Mode::Binary {
             self.fast = Some(super::fastpath::FastDiskCamera::new(
                 target,
                 renderer,
@@ -138,6 +141,8 @@ pub struct Effects {
     pub shot_e_per_level: f64,
     /// Quantisation bits (8, 12 or 16).
     pub bits: u32,
+    /// The firmware's centroid (not an image effect: [`Effects::is_identity`] ignores it).
+    pub centroid: super::CentroidKind,
 }
 
 impl Effects {
@@ -151,6 +156,7 @@ impl Effects {
             read_noise: o.read_noise.unwrap_or(0.0),
             shot_e_per_level: o.shot_noise_e_per_level.unwrap_or(0.0),
             bits: o.bits.unwrap_or(8),
+            centroid: o.centroid.unwrap_or_default(),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {

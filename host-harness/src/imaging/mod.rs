@@ -19,6 +19,35 @@ pub use render::{BlurRenderer, DiskTarget};
 
 use serde::{Deserialize, Serialize};
 
+/// The centroid the camera's firmware computes (`[imaging] centroid` of a study file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum CentroidKind {
+    /// Weight 1 for every pixel above the threshold (the paper's method; the default).
+    #[default]
+    Binary,
+    /// Weight `value - threshold` for every pixel above it.
+    Weighted,
+}
+
+impl CentroidKind {
+    /// firmware-core's centroid mode.
+    pub fn mode(self) -> firmware_core::centroid::Mode {
+        match self {
+            CentroidKind::Binary => firmware_core::centroid::Mode::Binary,
+            CentroidKind::Weighted => firmware_core::centroid::Mode::Weighted,
+        }
+    }
+
+    /// `binary` or `weighted`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CentroidKind::Binary => "binary",
+            CentroidKind::Weighted => "weighted",
+        }
+    }
+}
+
 /// Optional image-formation effects (method.md §3.1), all off by default. The `[imaging]` table
 /// of a study file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -38,6 +67,8 @@ pub struct ImagingOptions {
     pub shot_noise_e_per_level: Option<f64>,
     /// Quantisation bit depth (8, 12 or 16); 8 when absent.
     pub bits: Option<u32>,
+    /// The firmware's centroid; binary when absent.
+    pub centroid: Option<CentroidKind>,
 }
 
 /// A target's image-plane motion: `path_px[i]` is its displacement (px, positive **down**, image

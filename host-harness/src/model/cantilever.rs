@@ -146,6 +146,21 @@ pub fn mode_shape(mode: usize, xi: f64) -> f64 {
     b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
 }
 
+/// The tip's motion as the H1 estimator of the study weighs it: the nominal rig's test of seed 0
+/// with acquisition `acq` is stationary, so one segment with the equivalent sinusoidal
+/// amplitude (`sqrt(2)` RMS, px) of the whole record
+/// ([`crate::chain::exposure::ExposureCorrection::for_segments`]).
+pub fn nominal_motion_segments(
+    acq: &crate::model::Acquisition,
+) -> anyhow::Result<Vec<crate::chain::exposure::MotionSegment>> {
+    let sim = crate::model::simulate(&crate::model::Rig::Cantilever(Rig::nominal()), acq, 0)?;
+    let px: Vec<f64> = sim.tip_mm.iter().map(|mm| mm / MM_PER_PX).collect();
+    Ok(vec![crate::chain::exposure::MotionSegment {
+        weight: 1.0,
+        amplitude_px: crate::chain::exposure::equivalent_amplitude_px(&px),
+    }])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -59,6 +59,43 @@ pub const RESPONSE_SNR: f64 = 10.0;
 /// Mean decay rate of the smoothed impulse, 1/s.
 pub const ALPHA: f64 = 5.6;
 
+/// The target's motion in the Welch segments of one nominal record (fixed structure, the
+/// excitation of seed 0), as the H1 estimator weighs it
+/// ([`crate::chain::exposure::ExposureCorrection::for_segments`]): per segment of the study's
+/// estimator, the energy of the Hamming-windowed, mean-removed force and the equivalent
+/// sinusoidal amplitude (`sqrt(2)` windowed RMS) of the motion in px. The decay test makes it
+/// two populations: a few px of response to the process noise, and the impulse's segments
+/// with tens of px that carry most of the input energy.
+pub fn nominal_motion_segments() -> Vec<crate::chain::exposure::MotionSegment> {
+    use rand::SeedableRng as _;
+    let r = simulate(&mut ChaCha8Rng::seed_from_u64(0), true, 0);
+    let step = NPERSEG - NOVERLAP;
+    let w: Vec<f64> = (0..NPERSEG)
+        .map(|n| Window::Hamming.value(n, NPERSEG) as f64)
+        .collect();
+    let w2: f64 = w.iter().map(|v| v * v).sum();
+    let centred_energy = |x: &[f64]| {
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        x.iter()
+            .zip(&w)
+            .map(|(v, w)| (w * (v - mean)).powi(2))
+            .sum::<f64>()
+    };
+    (0..=(N - NPERSEG) / step)
+        .map(|s| {
+            let seg = s * step..s * step + NPERSEG;
+            let px: Vec<f64> = seg
+                .clone()
+                .map(|i| r.fine_disp_m[i * FINE] * 1000.0 * PX_PER_MM)
+                .collect();
+            crate::chain::exposure::MotionSegment {
+                weight: centred_energy(&r.force_n[seg]),
+                amplitude_px: (2.0 * centred_energy(&px) / w2).sqrt(),
+            }
+        })
+        .collect()
+}
+
 /// One mode of the platform's vertical receptance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mode {

@@ -3,9 +3,10 @@
 //! writing them. Everything here is deterministic: the records come sorted by run.
 
 use super::{checkpoint::files, PeakRecord, RunRecord, Scenario, StudyConfig, SystemRecord};
-use crate::report::{FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::chain::exposure::ExposureCorrection;
+use crate::report::{CoverageRow, FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::uncertainty::coverage_summary;
 use crate::{bad_input, stats};
-use anyhow::Context as _;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -48,6 +49,10 @@ pub struct Outputs {
     pub frf_band: Vec<FrfBandRow>,
     /// `lost_frames.csv` rows.
     pub lost: Vec<LostFrames>,
+    /// `coverage.csv` rows.
+    pub coverage: Vec<CoverageRow>,
+    /// What the `vision_compensated` rows divide by.
+    pub correction: String,
 }
 
 fn peak_of(sys: &SystemRecord, mode: usize) -> Option<PeakRecord> {
@@ -67,13 +72,15 @@ fn mean_natural_frequencies(records: &[RunRecord], modes: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The summary row of one system, exposure and mode from its picked peaks.
+/// The summary row of one system, exposure and mode from its picked peaks, with the JCGM 101
+/// statements at coverage probability `p` (none when the runs are too few).
 fn summary_row(
     system: System,
     exposure_ms: f64,
     mode: usize,
     nat_hz: f64,
     p: &[PeakRecord],
+    coverage: f64,
 ) -> SummaryRow {
     let f: Vec<f64> = p.iter().map(|p| p.f_hz).collect();
     let a: Vec<f64> = p.iter().map(|p| p.a).collect();
@@ -89,64 +96,137 @@ fn summary_row(
         e2pr: exposure_ms / 1000.0 * nat_hz,
         chi_mu: None,
         chi_sigma: None,
+        a_coverage: coverage_summary(&a, coverage).ok(),
+        f_coverage: coverage_summary(&f, coverage).ok(),
     }
 }
 
-/// Transducer and vision summary rows of every mode at exposure `ei`.
+/// The picks of one system at exposure `ei` and mode `m`, by run (failed vision runs left
+/// out); `vision_compensated` divides each vision amplitude by `correction` at its peak.
+pub(crate) fn picks(
+    records: &[RunRecord],
+    system: System,
+    ei: usize,
+    exposure_ms: f64,
+    m: usize,
+    correction: &ExposureCorrection,
+) -> Vec<(u64, PeakRecord)> {
+    records
+        .iter()
+        .filter_map(|r| {
+            let p = match system {
+                System::Transducer => peak_of(&r.transducer, m),
+                _ if r.vision[ei].failed => None,
+                _ => peak_of(&r.vision[ei].system, m),
+            }?;
+            let p = match system {
+                System::VisionCompensated => PeakRecord {
+                    a: correction.compensate(p.a, p.f_hz, exposure_ms),
+                    ..p
+                },
+                _ => p,
+            };
+            Some((r.run, p))
+        })
+        .collect()
+}
+
+/// The three systems in the order of the outputs.
+pub(crate) const SYSTEMS: [System; 3] = [
+    System::Transducer,
+    System::Vision,
+    System::VisionCompensated,
+];
+
+/// The summary and coverage rows of every system and mode at exposure `ei`.
+#[allow(clippy::too_many_arguments)]
 fn summary_at(
     records: &[RunRecord],
     ei: usize,
     exposure_ms: f64,
     nat: &[f64],
     with_chi: bool,
-    out: &mut Vec<SummaryRow>,
+    cfg: &StudyConfig,
+    correction: &ExposureCorrection,
+    out: &mut Outputs,
 ) {
     for (m, nat_m) in nat.iter().enumerate() {
-        let tr: Vec<PeakRecord> = records
-            .iter()
-            .filter_map(|r| peak_of(&r.transducer, m))
-            .collect();
-        let vi: Vec<PeakRecord> = records
-            .iter()
-            .filter(|r| !r.vision[ei].failed)
-            .filter_map(|r| peak_of(&r.vision[ei].system, m))
-            .collect();
-        let t = summary_row(System::Transducer, exposure_ms, m, *nat_m, &tr);
-        let mut v = summary_row(System::Vision, exposure_ms, m, *nat_m, &vi);
-        if with_chi {
-            v.chi_mu = Some(v.mu_a / t.mu_a);
-            v.chi_sigma = Some(v.sigma_a / t.sigma_a);
+        let tr = picks(records, System::Transducer, ei, exposure_ms, m, correction);
+        let mut t_row = None;
+        for system in SYSTEMS {
+            let p = picks(records, system, ei, exposure_ms, m, correction);
+            let peaks: Vec<PeakRecord> = p.iter().map(|(_, p)| *p).collect();
+            let mut row = summary_row(system, exposure_ms, m, *nat_m, &peaks, cfg.coverage);
+            let t: &SummaryRow = t_row.get_or_insert_with(|| row.clone());
+            if with_chi && system != System::Transducer {
+                row.chi_mu = Some(row.mu_a / t.mu_a);
+                row.chi_sigma = Some(row.sigma_a / t.sigma_a);
+            }
+            let mut quantities: Vec<(&'static str, Vec<f64>)> = vec![
+                ("f_hz", peaks.iter().map(|p| p.f_hz).collect()),
+                ("a", peaks.iter().map(|p| p.a).collect()),
+            ];
+            if system != System::Transducer {
+                // paired by run: what one test would show as vision / transducer
+                let by_run: BTreeMap<u64, f64> = tr.iter().map(|(r, p)| (*r, p.a)).collect();
+                let ratio = p
+                    .iter()
+                    .filter_map(|(r, p)| by_run.get(r).map(|t| p.a / t))
+                    .collect();
+                quantities.push(("ratio", ratio));
+            }
+            for (quantity, values) in quantities {
+                if let Ok(coverage) = coverage_summary(&values, cfg.coverage) {
+                    out.coverage.push(CoverageRow {
+                        system,
+                        exposure_ms,
+                        mode: m + 1,
+                        quantity,
+                        coverage,
+                    });
+                }
+            }
+            out.summary.push(row);
         }
-        out.push(t);
-        out.push(v);
     }
 }
 
-/// Transducer and vision picks of every run at exposure `ei` (failed vision runs left out).
+/// Picks of every run at exposure `ei` per system (failed vision runs left out).
 fn realizations_at(
     records: &[RunRecord],
     ei: usize,
     exposure_ms: f64,
     modes: usize,
+    correction: &ExposureCorrection,
     out: &mut Vec<RealizationRow>,
 ) {
     for r in records {
         for (system, sys, ok) in [
             (System::Transducer, &r.transducer, true),
             (System::Vision, &r.vision[ei].system, !r.vision[ei].failed),
+            (
+                System::VisionCompensated,
+                &r.vision[ei].system,
+                !r.vision[ei].failed,
+            ),
         ] {
             if !ok {
                 continue;
             }
             for m in 0..modes {
                 if let Some(p) = peak_of(sys, m) {
+                    let a = if system == System::VisionCompensated {
+                        correction.compensate(p.a, p.f_hz, exposure_ms)
+                    } else {
+                        p.a
+                    };
                     out.push(RealizationRow {
                         run: r.run,
                         exposure_ms,
                         system,
                         mode: m + 1,
                         f_hz: p.f_hz,
-                        a: p.a,
+                        a,
                     });
                 }
             }
@@ -154,13 +234,15 @@ fn realizations_at(
     }
 }
 
-/// Mean |FRF| and its 5th/95th percentiles per bin up to `max_hz`, per system, at exposure `ei`.
+/// Mean |FRF| and its 5th/95th percentiles per bin up to `max_hz`, per system, at exposure `ei`
+/// (`vision_compensated`: each bin divided by `correction` at its frequency).
 fn frf_band_at(
     records: &[RunRecord],
     ei: usize,
     exposure_ms: f64,
     freqs: &[f64],
     max_hz: f64,
+    correction: &ExposureCorrection,
     out: &mut Vec<FrfBandRow>,
 ) {
     let transducer: Vec<&Vec<f32>> = records.iter().map(|r| &r.transducer.frf_abs).collect();
@@ -169,7 +251,11 @@ fn frf_band_at(
         .filter(|r| !r.vision[ei].failed)
         .map(|r| &r.vision[ei].system.frf_abs)
         .collect();
-    for (system, curves) in [(System::Transducer, transducer), (System::Vision, vision)] {
+    for (system, curves) in [
+        (System::Transducer, transducer),
+        (System::Vision, vision.clone()),
+        (System::VisionCompensated, vision),
+    ] {
         if curves.is_empty() {
             continue;
         }
@@ -178,8 +264,16 @@ fn frf_band_at(
             if f > max_hz {
                 break;
             }
+            let gain = match system {
+                System::VisionCompensated => correction.compensate(1.0, f, exposure_ms),
+                _ => 1.0,
+            };
             col.clear();
-            col.extend(curves.iter().filter_map(|c| c.get(k).map(|v| *v as f64)));
+            col.extend(
+                curves
+                    .iter()
+                    .filter_map(|c| c.get(k).map(|v| *v as f64 * gain)),
+            );
             col.sort_by(f64::total_cmp);
             out.push(FrfBandRow {
                 system,
@@ -213,11 +307,14 @@ pub fn aggregate(
     let modes = scenario.bands().len();
     let freqs = scenario.frf_freqs();
     let nat = mean_natural_frequencies(records, modes);
+    let correction = scenario.exposure_correction()?;
     let mut out = Outputs {
         summary: Vec::new(),
         realizations: Vec::new(),
         frf_band: Vec::new(),
         lost: Vec::new(),
+        coverage: Vec::new(),
+        correction: correction.describe(),
     };
     for (ei, &exp) in cfg.exposures_ms.iter().enumerate() {
         out.lost.extend(records.iter().map(|r| LostFrames {
@@ -233,10 +330,20 @@ pub fn aggregate(
             exp,
             &nat,
             scenario.with_chi(),
-            &mut out.summary,
+            cfg,
+            &correction,
+            &mut out,
         );
-        realizations_at(records, ei, exp, modes, &mut out.realizations);
-        frf_band_at(records, ei, exp, &freqs, cfg.frf_max_hz, &mut out.frf_band);
+        realizations_at(records, ei, exp, modes, &correction, &mut out.realizations);
+        frf_band_at(
+            records,
+            ei,
+            exp,
+            &freqs,
+            cfg.frf_max_hz,
+            &correction,
+            &mut out.frf_band,
+        );
     }
     Ok(out)
 }
@@ -259,7 +366,7 @@ pub fn write_outputs(
     scenario: &dyn Scenario,
     out: &Outputs,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    let items: [(&str, Vec<u8>); 4] = [
+    let items: [(&str, Vec<u8>); 5] = [
         (
             files::SUMMARY,
             crate::report::summary_csv(&out.summary, scenario.with_chi()),
@@ -270,11 +377,12 @@ pub fn write_outputs(
         ),
         (files::FRF_BAND, crate::report::frf_band_csv(&out.frf_band)),
         (files::LOST_FRAMES, lost_frames_csv(&out.lost)),
+        (files::COVERAGE, crate::report::coverage_csv(&out.coverage)),
     ];
     let mut paths = Vec::new();
     for (name, bytes) in items {
         let p = dir.join(name);
-        std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
+        super::checkpoint::write_atomic(&p, &bytes)?;
         paths.push(p);
     }
     Ok(paths)

@@ -7,6 +7,7 @@
 //! in the grandstand ([`crate::imaging::Camera`]).
 
 use super::{measure_vision, RunRecord, Scenario, StudyConfig};
+use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
 use crate::imaging::{BlurRenderer, Camera, Effects, TargetPath};
 use crate::model::cantilever::{
@@ -86,6 +87,15 @@ impl Scenario for Cantilever {
     }
     fn with_chi(&self) -> bool {
         true
+    }
+
+    fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
+        Ok(ExposureCorrection::for_segments(
+            self.effects.centroid,
+            TARGET,
+            THRESHOLD,
+            &crate::model::cantilever::nominal_motion_segments(&ACQUISITION)?,
+        )?)
     }
 
     fn run(&self, run: u64, rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord> {

@@ -56,6 +56,10 @@ pub mod files {
     pub const FRF_BAND: &str = "frf_band.csv";
     /// Lost frames per run and exposure.
     pub const LOST_FRAMES: &str = "lost_frames.csv";
+    /// JCGM 101 statement (both coverage intervals) of every reported quantity.
+    pub const COVERAGE: &str = "coverage.csv";
+    /// State of the adaptive procedure per quantity (adaptive studies only).
+    pub const ADAPTIVE: &str = "adaptive.csv";
     /// Lock file of a running study (holds the pid).
     pub const LOCK: &str = ".lock";
 }

@@ -49,6 +49,18 @@ pub struct StudyConfig {
     /// Optional image-formation effects.
     #[serde(default)]
     pub imaging: ImagingOptions,
+    /// Coverage probability of the intervals in `summary.csv` and `coverage.csv` (JCGM 101
+    /// 7.7). Only the reporting depends on it: a study resumed or merged with another value
+    /// reports with that one.
+    #[serde(default = "default_coverage")]
+    pub coverage: f64,
+    /// The adaptive procedure (JCGM 101 7.9): `runs` is then the most runs it may take.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<super::adaptive::AdaptiveConfig>,
+}
+
+fn default_coverage() -> f64 {
+    crate::uncertainty::DEFAULT_COVERAGE
 }
 
 /// A study file: every field optional except the preset, whose defaults fill the rest.
@@ -63,6 +75,8 @@ struct StudyFile {
     frf_max_hz: Option<f64>,
     #[serde(default)]
     imaging: ImagingOptions,
+    coverage: Option<f64>,
+    adaptive: Option<super::adaptive::AdaptiveConfig>,
 }
 
 /// Most runs one study directory takes (see [`StudyConfig::validate`]).
@@ -81,6 +95,8 @@ impl StudyConfig {
                 fixed_structure: false,
                 frf_max_hz: 5.0,
                 imaging: ImagingOptions::default(),
+                coverage: default_coverage(),
+                adaptive: None,
             },
             Preset::Cantilever => StudyConfig {
                 preset,
@@ -90,6 +106,8 @@ impl StudyConfig {
                 fixed_structure: false,
                 frf_max_hz: 60.0,
                 imaging: ImagingOptions::default(),
+                coverage: default_coverage(),
+                adaptive: None,
             },
         }
     }
@@ -113,6 +131,8 @@ impl StudyConfig {
             fixed_structure: f.fixed_structure.unwrap_or(d.fixed_structure),
             frf_max_hz: f.frf_max_hz.unwrap_or(d.frf_max_hz),
             imaging: f.imaging,
+            coverage: f.coverage.unwrap_or(d.coverage),
+            adaptive: f.adaptive,
         })
     }
 
@@ -162,10 +182,28 @@ impl StudyConfig {
         if sorted.len() != self.exposures_ms.len() {
             return Err(bad_input("exposures_ms: exposures must be distinct"));
         }
+        if !(self.coverage > 0.0 && self.coverage < 1.0) {
+            return Err(bad_input(format!(
+                "coverage: {} must lie strictly between 0 and 1 (0.95 for 95 %)",
+                self.coverage
+            )));
+        }
+        if let Some(a) = &self.adaptive {
+            a.validate(self.runs, self.coverage)?;
+        }
         if !(self.frf_max_hz.is_finite() && self.frf_max_hz > 0.0) {
             return Err(bad_input("frf_max_hz: must be a positive number of Hz"));
         }
         Ok(())
+    }
+
+    /// The configuration with the reporting-only fields (the coverage probability) at their
+    /// defaults: two studies with the same key hold the same runs.
+    pub fn runs_key(&self) -> StudyConfig {
+        StudyConfig {
+            coverage: default_coverage(),
+            ..self.clone()
+        }
     }
 
     /// The resolved configuration as TOML text (written to `config.toml`).

@@ -5,6 +5,7 @@
 //! ([`crate::chain::frf::measure`]).
 
 use super::{measure_vision, RunRecord, Scenario, StudyConfig};
+use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
 use crate::imaging::{BlurRenderer, Camera, Effects, TargetPath};
 use crate::model::grandstand::{
@@ -100,6 +101,15 @@ impl Scenario for Grandstand {
                 long.join(", ")
             )]
         }
+    }
+
+    fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
+        Ok(ExposureCorrection::for_segments(
+            self.effects.centroid,
+            TARGET,
+            THRESHOLD,
+            &crate::model::grandstand::nominal_motion_segments(),
+        )?)
     }
 
     fn run(&self, run: u64, rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord> {

@@ -10,9 +10,11 @@
 //!   the firmware chain put together;
 //! - [`runner`]: random streams, shards, the parallel runner and resume;
 //! - [`checkpoint`]: `runs.jsonl`, the model revision, the file names;
+//! - [`adaptive`]: the adaptive Monte Carlo procedure (JCGM 101 7.9): where a study stops;
 //! - [`mod@aggregate`]: run records -> summary, realizations, FRF band and lost frames;
 //! - [`merge`]: the shards of one study -> its outputs.
 
+pub mod adaptive;
 pub mod aggregate;
 pub mod cantilever;
 pub mod checkpoint;
@@ -83,6 +85,8 @@ pub trait Scenario: Sync {
     fn notes(&self) -> Vec<String> {
         Vec::new()
     }
+    /// What the `vision_compensated` rows divide the vision amplitudes by (method.md §2.8).
+    fn exposure_correction(&self) -> anyhow::Result<crate::chain::exposure::ExposureCorrection>;
 }
 
 /// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
@@ -148,6 +152,15 @@ pub fn finish(
     out: &std::path::Path,
     plots: bool,
 ) -> anyhow::Result<()> {
+    let mut records = records;
+    let mut adaptive_report = None;
+    if let Some(a) = &cfg.adaptive {
+        let correction = scenario.exposure_correction()?;
+        let o = adaptive::outcome(cfg, a, scenario.bands().len(), &correction, records)?;
+        checkpoint::write_atomic(&out.join(files::ADAPTIVE), &adaptive::adaptive_csv(&o))?;
+        records = &records[..o.runs];
+        adaptive_report = Some(adaptive::report(&o, a));
+    }
     let outputs = aggregate(cfg, scenario, records)?;
     let mut written = write_outputs(out, scenario, &outputs)?;
     if plots {
@@ -165,8 +178,9 @@ pub fn finish(
     }
     println!(
         "{}",
-        crate::report::table(&outputs.summary, scenario.amplitude_unit())
+        crate::report::table(&outputs.summary, scenario.amplitude_unit(), cfg.coverage)
     );
+    println!("vision_compensated: {}", outputs.correction);
     for l in aggregate::lost_by_exposure(&outputs) {
         println!(
             "exposure {} ms: {} of {} frames lost (filled by interpolation), {} failed runs (> 5 % lost, left out)",
@@ -175,6 +189,10 @@ pub fn finish(
     }
     for n in scenario.notes() {
         println!("note: {n}");
+    }
+    if let Some(r) = adaptive_report {
+        print!("{r}");
+        written.push(out.join(files::ADAPTIVE));
     }
     println!("wrote {} files in {}", written.len() + 2, out.display());
     Ok(())

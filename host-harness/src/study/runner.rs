@@ -49,6 +49,15 @@ impl Shard {
     pub fn contains(&self, r: u64) -> bool {
         r % self.count == self.index - 1
     }
+
+    /// Whether run `r` belongs to this shard when whole batches of `batch` runs are dealt
+    /// round-robin (adaptive studies); [`Shard::contains`] without a batch.
+    pub fn owns(&self, r: u64, batch: Option<u64>) -> bool {
+        match batch {
+            Some(m) => self.contains(r / m),
+            None => self.contains(r),
+        }
+    }
 }
 
 /// Options of one study execution (not part of the results).
@@ -102,7 +111,7 @@ fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
         .with_context(|| format!("cannot read {}", cfg_path.display()))?;
     let old: StudyConfig =
         toml::from_str(&old_text).map_err(|e| bad_input(format!("{}: {e}", cfg_path.display())))?;
-    if &old != cfg {
+    if old.runs_key() != cfg.runs_key() {
         return Err(bad_input(format!(
             "--resume: the configuration differs from the one in {} (resume with the same \
              preset, runs, exposures, seed and options)",
@@ -163,6 +172,11 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
         )));
     }
     check_resumable(cfg, exec)?;
+    // only the reporting changed (the coverage probability): record the new value
+    let old_text = std::fs::read_to_string(&cfg_path).unwrap_or_default();
+    if old_text != cfg.to_toml() {
+        checkpoint::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
+    }
     let ck = checkpoint::read_checkpoint(&runs_path)?;
     if ck.torn_tail {
         eprintln!(
@@ -246,26 +260,70 @@ pub fn execute(
 ) -> anyhow::Result<Executed> {
     cfg.validate()?;
     let (_lock, mut done) = open_study(cfg, exec)?;
-    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
-    let pending: Vec<u64> = (0..cfg.runs)
-        .filter(|r| exec.shard.contains(*r) && !have.contains(r))
-        .collect();
-    if !have.is_empty() {
+    let batch = cfg.adaptive.as_ref().map(|a| a.batch);
+    if !done.is_empty() {
         eprintln!(
-            "resuming {}: {} runs already done, {} to go",
+            "resuming {}: {} runs already done",
             exec.out.display(),
-            have.len(),
-            pending.len()
+            done.len()
         );
     }
-    let new = run_pending(cfg, scenario, exec, &pending)?;
-    let computed = new.len();
-    done.extend(new);
-    done.sort_by_key(|r| r.run);
+    let mut computed = 0;
+    match (&cfg.adaptive, exec.shard == Shard::ALL) {
+        // one process: batch after batch until the criterion holds (or the cap)
+        (Some(a), true) => {
+            let correction = scenario.exposure_correction()?;
+            let modes = scenario.bands().len();
+            let mut h = 2u64;
+            loop {
+                let upto = (h * a.batch).min(cfg.runs);
+                computed += run_up_to(cfg, scenario, exec, &mut done, upto, batch)?;
+                let prefix: Vec<RunRecord> =
+                    done.iter().take_while(|r| r.run < upto).cloned().collect();
+                let o = super::adaptive::outcome(cfg, a, modes, &correction, &prefix)?;
+                eprintln!(
+                    "adaptive: {} batches ({} runs): {}",
+                    h,
+                    upto,
+                    if o.stable {
+                        "stable".to_string()
+                    } else {
+                        format!("not stable, about {} more batches", o.more_batches)
+                    }
+                );
+                if o.stable || upto >= cfg.runs {
+                    break;
+                }
+                h += 1;
+            }
+        }
+        _ => computed += run_up_to(cfg, scenario, exec, &mut done, cfg.runs, batch)?,
+    }
     Ok(Executed {
         records: done,
         computed,
     })
+}
+
+/// Runs this shard's runs below `upto` that `done` does not hold yet, appends them to `done`
+/// (kept sorted by run) and returns how many were computed.
+fn run_up_to(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    exec: &Execution,
+    done: &mut Vec<RunRecord>,
+    upto: u64,
+    batch: Option<u64>,
+) -> anyhow::Result<usize> {
+    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
+    let pending: Vec<u64> = (0..upto)
+        .filter(|r| exec.shard.owns(*r, batch) && !have.contains(r))
+        .collect();
+    let new = run_pending(cfg, scenario, exec, &pending)?;
+    let computed = new.len();
+    done.extend(new);
+    done.sort_by_key(|r| r.run);
+    Ok(computed)
 }
 
 fn progress_bar(len: u64, show: bool) -> indicatif::ProgressBar {
