@@ -29,10 +29,7 @@ fn write_u16(dir: &Path, name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> u16
 }
 
 /// `value` at the pixels where `on` holds, 0 elsewhere.
-fn spot<T: Default>(on: impl Fn(u32, u32) -> bool, value: T) -> impl Fn(u32, u32) -> T
-where
-    T: Copy,
-{
+fn spot<T: Default + Copy>(on: impl Fn(u32, u32) -> bool, value: T) -> impl Fn(u32, u32) -> T {
     move |x, y| if on(x, y) { value } else { T::default() }
 }
 
