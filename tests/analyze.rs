@@ -76,18 +76,14 @@ fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDir, Recordin
         img.save(fdir.join(format!("frame_{k}.png"))).unwrap();
     }
     let mut csv = String::from("t_s,base_acc,tip_acc\n");
-    let mut state = 7u64;
-    for j in 0..samples {
+    let noise = host_harness::testing::uniform_noise(7, samples);
+    for (j, noise) in noise.iter().enumerate() {
         let t = j as f64 / FS;
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let noise = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.2;
         let base: f64 = MODES
             .iter()
             .map(|&(f, _, b)| b * (2.0 * PI * f * t).sin())
             .sum::<f64>()
-            + noise;
+            + noise * 0.2;
         csv.push_str(&format!("{t},{base},{}\n", tip_acc(t)));
     }
     let accel = dir.join("accel.csv");

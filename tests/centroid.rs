@@ -1,26 +1,36 @@
 //! End-to-end tests of `host-harness centroid`: grey PNG/TIFF frames written to a temporary
 //! directory, centroids checked against naive sums computed here, bad files reported by name.
 
-use crate::util::harness;
+use crate::util::{assert_exit_2, harness};
 use image::{ImageBuffer, Luma, Rgb};
 use std::path::{Path, PathBuf};
 
-/// Writes an 8-bit grey frame (format from the extension).
-fn write_u8(dir: &Path, name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> PathBuf {
+/// Writes a grey frame of `T` (`u8` or `u16`; format from the extension).
+fn write_grey<T>(dir: &Path, name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> T) -> PathBuf
+where
+    Luma<T>: image::Pixel<Subpixel = T> + image::PixelWithColorType,
+    [T]: image::EncodableLayout,
+{
     let path = dir.join(name);
-    ImageBuffer::<Luma<u8>, Vec<u8>>::from_fn(w, h, |x, y| Luma([f(x, y)]))
+    ImageBuffer::<Luma<T>, Vec<T>>::from_fn(w, h, |x, y| Luma([f(x, y)]))
         .save(&path)
         .unwrap();
     path
 }
 
+/// Writes an 8-bit grey frame (format from the extension).
+fn write_u8(dir: &Path, name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> PathBuf {
+    write_grey(dir, name, w, h, f)
+}
+
 /// Writes a 16-bit grey frame (format from the extension).
 fn write_u16(dir: &Path, name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> u16) -> PathBuf {
-    let path = dir.join(name);
-    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(w, h, |x, y| Luma([f(x, y)]))
-        .save(&path)
-        .unwrap();
-    path
+    write_grey(dir, name, w, h, f)
+}
+
+/// `value` at the pixels where `on` holds, 0 elsewhere.
+fn spot<T: Default + Copy>(on: impl Fn(u32, u32) -> bool, value: T) -> impl Fn(u32, u32) -> T {
+    move |x, y| if on(x, y) { value } else { T::default() }
 }
 
 /// Naive centroid over the whole frame (or ROI): (cx, cy, pixels).
@@ -56,8 +66,12 @@ struct Run {
     stderr: String,
 }
 
-fn run(args: &[&str]) -> Run {
-    let out = harness(args);
+/// `host-harness centroid --threshold threshold flags.. files..`.
+fn run(threshold: &str, flags: &[&str], files: &[&Path]) -> Run {
+    let mut args = vec!["centroid", "--threshold", threshold];
+    args.extend_from_slice(flags);
+    args.extend(files.iter().map(|f| f.to_str().unwrap()));
+    let out = harness(&args);
     let stdout = String::from_utf8(out.stdout).unwrap();
     let mut lines = stdout.lines();
     assert_eq!(
@@ -99,15 +113,7 @@ fn png_and_tiff_8_and_16_bit_match_naive_sums() {
         // and (weighted) scales every weight by 250: the same centroid.
         for (files, t) in [([&png8, &tif8], 50u32), ([&png16, &tif16], 50 * 250)] {
             let ts = t.to_string();
-            let r = run(&[
-                "centroid",
-                "--threshold",
-                &ts,
-                "--mode",
-                mode,
-                files[0].to_str().unwrap(),
-                files[1].to_str().unwrap(),
-            ]);
+            let r = run(&ts, &["--mode", mode], &[files[0], files[1]]);
             assert_eq!(r.code, Some(0), "{}", r.stderr);
             assert_eq!(r.rows.len(), 2);
             let scale = if t > 255 { 250 } else { 1 };
@@ -130,89 +136,49 @@ fn roi_selects_one_of_two_targets_in_full_frame_coordinates() {
     let f = |x: u32, y: u32| {
         let a = (5..=7).contains(&x) && (4..=5).contains(&y);
         let b = (30..=32).contains(&x) && (12..=13).contains(&y);
-        if a || b {
-            1000u16
-        } else {
-            0
-        }
+        a || b
     };
-    let p = write_u16(dir.path(), "two.tif", 40, 20, f);
-    let r = run(&["centroid", "--threshold", "10", p.to_str().unwrap()]);
-    assert_eq!(r.rows[0][1..], ["18.5", "8.5", "12", "0"]);
-    let r = run(&[
-        "centroid",
-        "--threshold",
-        "10",
-        "--roi",
-        "20,0,20,20",
-        p.to_str().unwrap(),
-    ]);
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
-    assert_eq!(r.rows[0][1..], ["31", "12.5", "6", "0"]);
-    // A ROI whose edge cuts the target: border flag (2).
-    let r = run(&[
-        "centroid",
-        "--threshold",
-        "10",
-        "--roi",
-        "0,0,6,20",
-        p.to_str().unwrap(),
-    ]);
-    assert_eq!(r.rows[0][1..], ["5", "4.5", "2", "2"]);
+    let p = write_u16(dir.path(), "two.tif", 40, 20, spot(f, 1000));
+    for (flags, want) in [
+        (&[][..], ["18.5", "8.5", "12", "0"]),
+        (&["--roi", "20,0,20,20"][..], ["31", "12.5", "6", "0"]),
+        // A ROI whose edge cuts the target: border flag (2).
+        (&["--roi", "0,0,6,20"][..], ["5", "4.5", "2", "2"]),
+    ] {
+        let r = run("10", flags, &[&p]);
+        assert_eq!(r.code, Some(0), "{flags:?}: {}", r.stderr);
+        assert_eq!(r.rows[0][1..], want, "{flags:?}");
+    }
 }
 
 #[test]
 fn flags_empty_border_and_saturated() {
     let dir = tempfile::tempdir().unwrap();
     let dark = write_u8(dir.path(), "dark.png", 10, 10, |_, _| 20);
-    let edge = write_u8(dir.path(), "edge.png", 10, 10, |x, y| {
-        if x == 0 && y == 4 {
-            255
-        } else {
-            0
-        }
-    });
-    let sat16 = write_u16(dir.path(), "sat.png", 10, 10, |x, y| {
-        if (4..=5).contains(&x) && y == 5 {
-            4095
-        } else {
-            0
-        }
-    });
-    let r = run(&[
-        "centroid",
-        "--threshold",
-        "100",
-        dark.to_str().unwrap(),
-        edge.to_str().unwrap(),
-        sat16.to_str().unwrap(),
-    ]);
+    let edge = spot(|x, y| x == 0 && y == 4, 255);
+    let edge = write_u8(dir.path(), "edge.png", 10, 10, edge);
+    let sat16 = spot(|x, y| (4..=5).contains(&x) && y == 5, 4095);
+    let sat16 = write_u16(dir.path(), "sat.png", 10, 10, sat16);
+    let r = run("100", &[], &[&dark, &edge, &sat16]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     assert_eq!(r.rows[0][1..], ["", "", "0", "1"]);
     assert_eq!(r.rows[1][1..], ["0", "4", "1", "6"]);
     assert_eq!(r.rows[2][1..], ["4.5", "5", "2", "0"]);
     // A 12-bit camera: saturation level 4095.
-    let r = run(&[
-        "centroid",
-        "--threshold",
-        "100",
-        "--saturation",
-        "4095",
-        sat16.to_str().unwrap(),
-    ]);
+    let r = run("100", &["--saturation", "4095"], &[&sat16]);
     assert_eq!(r.rows[0][1..], ["4.5", "5", "2", "4"]);
 }
 
 #[test]
 fn bad_files_are_named_and_the_others_still_processed() {
     let dir = tempfile::tempdir().unwrap();
-    let good1 = write_u8(dir.path(), "good1.png", 8, 8, |x, y| {
-        if (x, y) == (3, 2) {
-            200
-        } else {
-            0
-        }
-    });
+    let good1 = write_u8(
+        dir.path(),
+        "good1.png",
+        8,
+        8,
+        spot(|x, y| (x, y) == (3, 2), 200),
+    );
     let rgb = dir.path().join("colour.png");
     ImageBuffer::<Rgb<u8>, Vec<u8>>::from_fn(8, 8, |_, _| Rgb([1, 2, 3]))
         .save(&rgb)
@@ -221,26 +187,10 @@ fn bad_files_are_named_and_the_others_still_processed() {
     std::fs::write(&junk, b"not an image at all").unwrap();
     let missing = dir.path().join("missing.tif");
     let small = write_u8(dir.path(), "small.png", 4, 4, |_, _| 0);
-    let good2 = write_u16(dir.path(), "good2.tif", 8, 8, |x, y| {
-        if (x, y) == (6, 5) {
-            60000
-        } else {
-            0
-        }
-    });
-    let r = run(&[
-        "centroid",
-        "--threshold",
-        "100",
-        "--roi",
-        "1,1,6,6",
-        good1.to_str().unwrap(),
-        rgb.to_str().unwrap(),
-        junk.to_str().unwrap(),
-        missing.to_str().unwrap(),
-        small.to_str().unwrap(),
-        good2.to_str().unwrap(),
-    ]);
+    let good2 = spot(|x, y| (x, y) == (6, 5), 60000);
+    let good2 = write_u16(dir.path(), "good2.tif", 8, 8, good2);
+    let files: [&Path; 6] = [&good1, &rgb, &junk, &missing, &small, &good2];
+    let r = run("100", &["--roi", "1,1,6,6"], &files);
     assert_eq!(r.code, Some(2), "{}", r.stderr);
     assert_eq!(r.rows.len(), 2);
     assert_eq!(r.rows[0], [good1.to_str().unwrap(), "3", "2", "1", "0"]);
@@ -262,24 +212,10 @@ fn bad_files_are_named_and_the_others_still_processed() {
 fn invalid_settings_exit_with_code_2() {
     let dir = tempfile::tempdir().unwrap();
     let p = write_u8(dir.path(), "a.png", 4, 4, |_, _| 0);
-    let out = harness(&[
-        "centroid",
-        "--threshold",
-        "100",
-        "--saturation",
-        "90",
-        p.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("saturation"));
-    let out = harness(&[
-        "centroid",
-        "--threshold",
-        "1",
-        "--roi",
-        "0,0,0,3",
-        p.to_str().unwrap(),
-    ]);
+    let p = p.to_str().unwrap();
+    let out = harness(&["centroid", "--threshold", "100", "--saturation", "90", p]);
+    assert_exit_2(&out, "saturation");
+    let out = harness(&["centroid", "--threshold", "1", "--roi", "0,0,0,3", p]);
     assert_eq!(out.status.code(), Some(2));
     let out = harness(&["centroid", "--threshold", "1"]);
     assert_eq!(out.status.code(), Some(2), "files are required");

@@ -2,39 +2,33 @@
 //! locked, its checkpoint is never emptied or double counted, sizes are bounded, undefined
 //! statistics are empty cells.
 
-use crate::util::harness;
+use crate::util::{assert_exit_2, assert_ok, harness, stderr};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-fn study(out: &Path, extra: &[&str]) -> std::process::Output {
+/// `host-harness study --runs runs --exposures-ms 40 --no-plots --out out` and `extra`.
+fn study_of(runs: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "study",
         "--runs",
-        "3",
+        runs,
         "--exposures-ms",
         "40",
-        "--seed",
-        "5",
         "--no-plots",
-        "--out",
-        out.to_str().unwrap(),
     ];
+    args.extend(["--out", out.to_str().unwrap()]);
     args.extend(extra);
     harness(&args)
 }
 
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+/// Three runs of seed 5.
+fn study(out: &Path, extra: &[&str]) -> std::process::Output {
+    study_of("3", out, &[&["--seed", "5"], extra].concat())
 }
 
-fn assert_ok(o: &std::process::Output) {
-    assert!(
-        o.status.success(),
-        "exit {:?}: {}",
-        o.status.code(),
-        stderr(o)
-    );
-}
+/// A study of 40 runs on one thread: many seconds, long enough to still be running when a
+/// second process starts on the same directory.
+const LONG: &[&str] = &["study", "--runs", "40", "--threads", "1", "--no-plots"];
 
 #[test]
 fn a_second_process_on_a_running_study_is_refused_with_the_holders_pid() {
@@ -42,15 +36,8 @@ fn a_second_process_on_a_running_study_is_refused_with_the_holders_pid() {
     let out = dir.path().join("s");
     // a study long enough to still be running when the second one starts
     let mut first = Command::new(env!("CARGO_BIN_EXE_host-harness"))
-        .args([
-            "study",
-            "--runs",
-            "40",
-            "--threads",
-            "1",
-            "--no-plots",
-            "--out",
-        ])
+        .args(LONG)
+        .arg("--out")
         .arg(&out)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -65,17 +52,7 @@ fn a_second_process_on_a_running_study_is_refused_with_the_holders_pid() {
         );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let second = harness(&[
-        "study",
-        "--runs",
-        "40",
-        "--threads",
-        "1",
-        "--no-plots",
-        "--resume",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let second = harness(&[LONG, &["--resume", "--out", out.to_str().unwrap()]].concat());
     let still_running = first.try_wait().unwrap().is_none();
     first.kill().ok();
     first.wait().ok();
@@ -84,12 +61,8 @@ fn a_second_process_on_a_running_study_is_refused_with_the_holders_pid() {
         still_running,
         "the first study ended before the second started"
     );
-    assert_eq!(second.status.code(), Some(2), "{}", stderr(&second));
-    let e = stderr(&second);
-    assert!(
-        e.contains("in use by another host-harness process") && e.contains(&first.id().to_string()),
-        "{e}"
-    );
+    assert_exit_2(&second, "in use by another host-harness process");
+    assert_exit_2(&second, &first.id().to_string());
 }
 
 #[test]
@@ -120,9 +93,10 @@ fn duplicated_and_torn_checkpoint_lines_are_neither_counted_twice_nor_fatal() {
     let changed = first.replace("\"natural_f_hz\":[", "\"natural_f_hz\":[9.5,");
     assert_ne!(changed, first);
     std::fs::write(b.join("runs.jsonl"), format!("{after}{changed}\n")).unwrap();
-    let o = study(&b, &["--resume"]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("recorded twice with different results"));
+    assert_exit_2(
+        &study(&b, &["--resume"]),
+        "recorded twice with different results",
+    );
 }
 
 #[test]
@@ -138,9 +112,7 @@ fn sizes_from_one_flag_are_bounded_and_the_bound_is_named() {
     ] {
         let mut a = vec!["study", "--no-plots", "--out", out.to_str().unwrap()];
         a.extend(args);
-        let o = harness(&a);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+        assert_exit_2(&harness(&a), needle);
     }
     let o = harness(&[
         "render",
@@ -149,8 +121,7 @@ fn sizes_from_one_flag_are_bounded_and_the_bound_is_named() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("longer than the simulated record"));
+    assert_exit_2(&o, "longer than the simulated record");
     // an absurd thread count is capped with a warning, and the study runs
     let o = study(&dir.path().join("t"), &["--threads", "100000"]);
     assert_ok(&o);
@@ -161,17 +132,7 @@ fn sizes_from_one_flag_are_bounded_and_the_bound_is_named() {
 fn one_run_gives_empty_cells_not_nan() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("one");
-    let o = harness(&[
-        "study",
-        "--runs",
-        "1",
-        "--exposures-ms",
-        "40",
-        "--no-plots",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_ok(&o);
+    assert_ok(&study_of("1", &out, &[]));
     let s = std::fs::read_to_string(out.join("summary.csv")).unwrap();
     assert!(!s.contains("NaN"), "{s}");
     // sigma of one run is undefined: an empty cell

@@ -6,21 +6,9 @@ mod frf {
     //! bad-input cases (exit code 2, message naming row and column).
 
     use crate::util::harness;
+    use host_harness::testing::uniform_noise as noise;
     use std::f64::consts::PI;
     use std::path::{Path, PathBuf};
-
-    /// Deterministic white-ish noise in [-0.5, 0.5) (LCG).
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect()
-    }
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
         let p = dir.join(name);
@@ -51,8 +39,26 @@ mod frf {
             .collect()
     }
 
-    fn run(args: &[&str]) -> (i32, String, String) {
-        let out = harness(args);
+    /// `host-harness frf --input input --x x --y y --out out` and `extra`: (exit code, stdout,
+    /// stderr).
+    fn run(
+        input: &Path,
+        (x, y): (&str, &str),
+        out: &Path,
+        extra: &[&str],
+    ) -> (i32, String, String) {
+        let mut args = vec![
+            "frf",
+            "--input",
+            input.to_str().unwrap(),
+            "--x",
+            x,
+            "--y",
+            y,
+        ];
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let out = harness(&args);
         (
             out.status.code().unwrap_or(-1),
             String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -63,7 +69,7 @@ mod frf {
     #[test]
     fn known_gain_with_explicit_settings() {
         let dir = tempfile::tempdir().unwrap();
-        let x = noise(3000, 1);
+        let x = noise(1, 3000);
         // an offset (removed by the detrend) and a gain of -1.75 in other units
         let y: Vec<f64> = x.iter().map(|v| -1.75e-3 * v + 4.0).collect();
         let input = write(
@@ -72,16 +78,9 @@ mod frf {
             &csv_of(&[("force", &x), ("disp", &y)]),
         );
         let out = dir.path().join("frf.csv");
-        let (code, stdout, stderr) = run(&[
-            "frf",
-            "--input",
-            input.to_str().unwrap(),
+        let settings = [
             "--fs",
             "50",
-            "--x",
-            "force",
-            "--y",
-            "disp",
             "--window",
             "hamming",
             "--nperseg",
@@ -90,9 +89,8 @@ mod frf {
             "100",
             "--nfft",
             "1000",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        ];
+        let (code, stdout, stderr) = run(&input, ("force", "disp"), &out, &settings);
         assert_eq!(code, 0, "{stderr}");
         assert!(stdout.is_empty(), "no --bands, nothing on stdout: {stdout}");
         // scipy's segment count: (3000 - 400) / 300 + 1 = 9
@@ -118,23 +116,11 @@ mod frf {
     #[test]
     fn scipy_defaults() {
         let dir = tempfile::tempdir().unwrap();
-        let x = noise(1000, 2);
+        let x = noise(2, 1000);
         let y: Vec<f64> = x.iter().map(|v| 2.0 * v).collect();
         let input = write(dir.path(), "in.csv", &csv_of(&[("a", &x), ("b", &y)]));
         let out = dir.path().join("frf.csv");
-        let (code, _, stderr) = run(&[
-            "frf",
-            "--input",
-            input.to_str().unwrap(),
-            "--fs",
-            "256",
-            "--x",
-            "a",
-            "--y",
-            "b",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let (code, _, stderr) = run(&input, ("a", "b"), &out, &["--fs", "256"]);
         assert_eq!(code, 0, "{stderr}");
         // nperseg 256, noverlap 128, nfft 256: (1000 - 256) / 128 + 1 = 6 segments, 129 bins
         assert!(stderr.contains("6 segment"), "{stderr}");
@@ -176,7 +162,7 @@ mod frf {
     fn bands_print_the_resonance_peaks() {
         let dir = tempfile::tempdir().unwrap();
         let fs = 100.0;
-        let x = noise(40_000, 3);
+        let x = noise(3, 40_000);
         let (y1, h1) = resonator(&x, 8.0, 0.96, fs);
         let (y2, h2) = resonator(&x, 31.0, 0.95, fs);
         let y: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b).collect();
@@ -186,23 +172,8 @@ mod frf {
         };
         let input = write(dir.path(), "in.csv", &csv_of(&[("x", &x), ("y", &y)]));
         let out = dir.path().join("frf.csv");
-        let (code, stdout, stderr) = run(&[
-            "frf",
-            "--input",
-            input.to_str().unwrap(),
-            "--fs",
-            "100",
-            "--x",
-            "x",
-            "--y",
-            "y",
-            "--nperseg",
-            "1000",
-            "--bands",
-            "5-15,25-40",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let settings = ["--fs", "100", "--nperseg", "1000", "--bands", "5-15,25-40"];
+        let (code, stdout, stderr) = run(&input, ("x", "y"), &out, &settings);
         assert_eq!(code, 0, "{stderr}");
         let lines: Vec<&str> = stdout.lines().collect();
         assert_eq!(lines.len(), 3, "{stdout}");
@@ -246,17 +217,7 @@ mod frf {
         let dir = tempfile::tempdir().unwrap();
         let input = write(dir.path(), "bad.csv", text);
         let out = dir.path().join("o.csv");
-        let mut args = vec![
-            "frf",
-            "--input",
-            input.to_str().unwrap(),
-            "--x",
-            "x",
-            "--y",
-            "y",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut args = Vec::new();
         // defaults unless the case sets them itself
         for (flag, value) in [("--fs", "10"), ("--nperseg", "2")] {
             if !extra.contains(&flag) {
@@ -264,7 +225,7 @@ mod frf {
             }
         }
         args.extend_from_slice(extra);
-        let (code, _, stderr) = run(&args);
+        let (code, _, stderr) = run(&input, ("x", "y"), &out, &args);
         assert!(!out.exists() || code == 0, "no output file on error");
         (code, stderr)
     }
@@ -273,33 +234,21 @@ mod frf {
     fn bad_csv_names_row_and_column() {
         let ok = "x,y\n1,2\n3,4\n5,6\n7,8\n";
         assert_eq!(run_bad(ok, &[]).0, 0);
-        let (code, err) = run_bad("x,z\n1,2\n3,4\n", &[]);
-        assert_eq!(code, 2, "{err}");
-        assert!(
-            err.contains("no column named `y`") && err.contains("x, z"),
-            "{err}"
-        );
-        let (code, err) = run_bad("x,y\n1,2\n3,abc\n5,6\n", &[]);
-        assert_eq!(code, 2, "{err}");
-        assert!(
-            err.contains("row 3") && err.contains("`y`") && err.contains("abc"),
-            "{err}"
-        );
-        let (code, err) = run_bad("x,y\n1,2\nNaN,4\n5,6\n", &[]);
-        assert_eq!(code, 2, "{err}");
-        assert!(
-            err.contains("row 3") && err.contains("`x`") && err.contains("finite"),
-            "{err}"
-        );
-        let (code, err) = run_bad("x,y\n1,2\n3,4\n5\n7,8\n", &[]);
-        assert_eq!(code, 2, "{err}");
-        assert!(
-            err.contains("row 4") && err.contains("`y`") && err.contains("missing"),
-            "{err}"
-        );
-        let (code, err) = run_bad("x,y\n1,2\n3,\n", &[]);
-        assert_eq!(code, 2, "{err}");
-        assert!(err.contains("row 3") && err.contains("`y`"), "{err}");
+        let cases: [(&str, &[&str]); 5] = [
+            ("x,z\n1,2\n3,4\n", &["no column named `y`", "x, z"]),
+            ("x,y\n1,2\n3,abc\n5,6\n", &["row 3", "`y`", "abc"]),
+            ("x,y\n1,2\nNaN,4\n5,6\n", &["row 3", "`x`", "finite"]),
+            ("x,y\n1,2\n3,4\n5\n7,8\n", &["row 4", "`y`", "missing"]),
+            ("x,y\n1,2\n3,\n", &["row 3", "`y`"]),
+        ];
+        for (csv, needles) in cases {
+            let (code, err) = run_bad(csv, &[]);
+            assert_eq!(code, 2, "{err}");
+            assert!(
+                needles.iter().all(|n| err.contains(n)),
+                "{needles:?}: {err}"
+            );
+        }
     }
 
     #[test]
@@ -330,6 +279,25 @@ mod upsample {
     //! exits with code 2 naming the row, column or rates.
 
     use crate::util::harness;
+    use std::path::Path;
+    use std::process::Output;
+
+    /// `host-harness upsample --input input --col col --from 120 --to 2048 --out out`.
+    fn upsample(input: &Path, col: &str, out: &Path) -> Output {
+        harness(&[
+            "upsample",
+            "--input",
+            input.to_str().unwrap(),
+            "--col",
+            col,
+            "--from",
+            "120",
+            "--to",
+            "2048",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    }
 
     #[test]
     fn sinusoid_120_to_2048_matches_the_analytic_values() {
@@ -343,19 +311,7 @@ mod upsample {
             text.push_str(&format!("{t},{}\n", (std::f64::consts::TAU * f * t).sin()));
         }
         std::fs::write(&input, text).unwrap();
-        let o = harness(&[
-            "upsample",
-            "--input",
-            input.to_str().unwrap(),
-            "--col",
-            "x",
-            "--from",
-            "120",
-            "--to",
-            "2048",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = upsample(&input, "x", &out);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let text = std::fs::read_to_string(&out).unwrap();
         let mut lines = text.lines();
@@ -386,19 +342,7 @@ mod upsample {
         for (i, (csv, col, needles)) in cases.iter().enumerate() {
             let input = dir.path().join(format!("in{i}.csv"));
             std::fs::write(&input, csv).unwrap();
-            let o = harness(&[
-                "upsample",
-                "--input",
-                input.to_str().unwrap(),
-                "--col",
-                col,
-                "--from",
-                "120",
-                "--to",
-                "2048",
-                "--out",
-                out.to_str().unwrap(),
-            ]);
+            let o = upsample(&input, col, &out);
             assert_eq!(o.status.code(), Some(2), "case {i}");
             let err = String::from_utf8_lossy(&o.stderr);
             for n in *needles {

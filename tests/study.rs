@@ -2,7 +2,7 @@
 //! shards merged byte-identically, resume after an interruption, refusal to overwrite or to mix
 //! runs of two model revisions.
 
-use crate::util::harness;
+use crate::util::{assert_exit_2, assert_ok as ok, harness};
 use std::path::Path;
 
 const SMALL: &[&str] = &[
@@ -28,14 +28,26 @@ fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-fn ok(out: &std::process::Output) {
-    assert!(
-        out.status.success(),
-        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+/// `host-harness study --config cfg --out out --no-plots`.
+fn study_config(cfg: &Path, out: &Path) -> std::process::Output {
+    harness(&[
+        "study",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plots",
+    ])
+}
+
+/// `mu_a` (column 6) of the first summary row starting with `prefix`.
+fn mu_a(summary: &str, prefix: &str) -> f64 {
+    summary
+        .lines()
+        .find(|l| l.starts_with(prefix))
+        .and_then(|l| l.split(',').nth(6))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{prefix} in {summary}"))
 }
 
 /// Runs the study as shards 1/2 and 2/2 into `dir/s1` and `dir/s2`.
@@ -99,14 +111,14 @@ fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
         );
     }
     // merging an incomplete set is refused
+    let bad = dir.path().join("bad");
     let out = harness(&[
         "merge",
         s1.to_str().unwrap(),
         "--out",
-        dir.path().join("bad").to_str().unwrap(),
+        bad.to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("missing"));
+    assert_exit_2(&out, "missing");
 }
 
 #[test]
@@ -125,9 +137,7 @@ fn resume_after_interruption_gives_the_uninterrupted_numbers() {
     std::fs::remove_file(part.join("summary.csv")).unwrap();
 
     // without --resume the directory is not overwritten
-    let out = study(&part, &[]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--resume"));
+    assert_exit_2(&study(&part, &[]), "--resume");
     // resuming with another configuration is refused
     let out = study(&part, &["--resume", "--fixed-structure"]);
     assert_eq!(out.status.code(), Some(2));
@@ -163,32 +173,24 @@ fn runs_of_another_model_revision_are_never_mixed() {
     // nor merged with shards of this revision
     let (s1, s2) = two_shards(dir.path());
     std::fs::write(s2.join("model_revision.txt"), format!("{}\n", rev + 1)).unwrap();
-    let out = merge(&s1, &s2, &dir.path().join("merged"));
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("same code"));
+    assert_exit_2(&merge(&s1, &s2, &dir.path().join("merged")), "same code");
 }
 
 #[test]
 fn bad_arguments_exit_2_and_name_the_field() {
     let dir = tempfile::tempdir().unwrap();
-    let out = study(&dir.path().join("x"), &["--shard", "3/2"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
-    let out = harness(&[
-        "study",
-        "--runs",
-        "0",
-        "--out",
-        dir.path().join("y").to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("runs"));
+    assert_exit_2(
+        &study(&dir.path().join("x"), &["--shard", "3/2"]),
+        "--shard",
+    );
+    let y = dir.path().join("y");
+    let out = harness(&["study", "--runs", "0", "--out", y.to_str().unwrap()]);
+    assert_exit_2(&out, "runs");
     let cfg = dir.path().join("s.toml");
     std::fs::write(&cfg, "preset = \"grandstand\"\nrunz = 3\n").unwrap();
     let out = harness(&["study", "--config", cfg.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("s.toml") && err.contains("runz"), "{err}");
+    assert_exit_2(&out, "s.toml");
+    assert_exit_2(&out, "runz");
 }
 
 #[test]
@@ -220,8 +222,7 @@ fn render_writes_sharp_and_blurred_frames() {
     let sum = |im: &image::GrayImage| im.pixels().map(|p| p.0[0] as f64).sum::<f64>();
     assert!((sum(&sharp) / sum(&blurred) - 1.0).abs() < 0.01);
     let o = harness(&["render", "--times", "1e6", "--out", out.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--times"));
+    assert_exit_2(&o, "--times");
 }
 
 #[test]
@@ -234,41 +235,16 @@ fn imaging_effects_from_a_study_file() {
     )
     .unwrap();
     let out = dir.path().join("o");
-    let o = harness(&[
-        "study",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ]);
-    ok(&o);
+    ok(&study_config(&cfg, &out));
     let written = read(&out.join("config.toml"));
     assert!(written.contains("bits = 12"), "{written}");
     // vision rows are present and the amplitude stays near the transducer's at 40 ms
     let s = read(&out.join("summary.csv"));
-    let vis: Vec<f64> = s
-        .lines()
-        .filter(|l| l.starts_with("vision,40,1,"))
-        .map(|l| l.split(',').nth(6).unwrap().parse().unwrap())
-        .collect();
-    let tr: Vec<f64> = s
-        .lines()
-        .filter(|l| l.starts_with("transducer,40,1,"))
-        .map(|l| l.split(',').nth(6).unwrap().parse().unwrap())
-        .collect();
-    assert!((vis[0] / tr[0] - 1.0).abs() < 0.1, "{s}");
+    let (vis, tr) = (mu_a(&s, "vision,40,1,"), mu_a(&s, "transducer,40,1,"));
+    assert!((vis / tr - 1.0).abs() < 0.1, "{s}");
     // an invalid option is refused with the field named
     std::fs::write(&cfg, "preset = \"grandstand\"\n[imaging]\nbits = 10\n").unwrap();
-    let o = harness(&[
-        "study",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        dir.path().join("p").to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("imaging.bits"));
+    assert_exit_2(&study_config(&cfg, &dir.path().join("p")), "imaging.bits");
 }
 
 #[test]
@@ -283,14 +259,7 @@ fn imaging_effects_in_the_cantilever_study() {
     .unwrap();
     let run = |name: &str, file: &Path| {
         let out = dir.path().join(name);
-        ok(&harness(&[
-            "study",
-            "--config",
-            file.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--no-plots",
-        ]));
+        ok(&study_config(file, &out));
         out
     };
     let noisy = run("noisy", &cfg);
@@ -311,13 +280,6 @@ fn imaging_effects_in_the_cantilever_study() {
     assert_ne!(rows(&noisy, "vision"), rows(&plain, "vision"));
     // and mode 1 still follows the accelerometer at 2 ms (sinc = 0.9997)
     let s = read(&noisy.join("summary.csv"));
-    let mu_a = |prefix: &str| -> f64 {
-        s.lines()
-            .find(|l| l.starts_with(prefix))
-            .and_then(|l| l.split(',').nth(6))
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("{prefix} in {s}"))
-    };
-    let chi = mu_a("vision,2,1,") / mu_a("transducer,2,1,");
+    let chi = mu_a(&s, "vision,2,1,") / mu_a(&s, "transducer,2,1,");
     assert!((chi - 1.0).abs() < 0.02, "chi {chi}\n{s}");
 }

@@ -7,13 +7,13 @@
 //! cargo run --release -p host-harness --example run_profile [RUNS]
 //! ```
 use firmware_core::centroid::{centroid, CentroidConfig, Frame};
-use firmware_core::spectrum::{scratch_capacity, Detrend, WelchConfig, WelchH1, Window};
+use firmware_core::spectrum::{scratch_capacity, WelchH1};
 use host_harness::chain::displacement::fill_lost_frames;
 use host_harness::chain::frf::measure as measure_system;
 use host_harness::imaging::fastpath::FastDiskCamera;
-use host_harness::imaging::{BlurRenderer, DiskTarget};
+use host_harness::imaging::BlurRenderer;
 use host_harness::model::grandstand::{
-    simulate, BANDS, FINE, FS_HZ, N, NFFT, NOVERLAP, NPERSEG, PX_PER_MM, THRESHOLD,
+    simulate, BANDS, FINE, FS_HZ, N, NFFT, NPERSEG, PX_PER_MM, TARGET, THRESHOLD, WELCH,
 };
 use host_harness::study::Grandstand;
 use host_harness::study::{run_rng, Scenario, StudyConfig};
@@ -41,26 +41,14 @@ fn main() {
         .unwrap_or(3);
     let cfg = StudyConfig::preset(host_harness::study::Preset::Grandstand);
     let scenario = Grandstand::new(&cfg).expect("preset is valid");
-    let target = DiskTarget {
-        radius_px: 12.0,
-        level: 200.0,
-        edge_sigma_px: 1.5,
-    };
+    let target = TARGET;
     let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
     let max_exp = cfg.exposures_ms.iter().cloned().fold(0.0, f64::max);
     let pad = (max_exp / 2.0 / dt_ms).ceil() as usize + 1;
     let block = 10;
     let bands = BANDS;
     let keep = (5.0 * NFFT as f64 / FS_HZ) as usize + 1;
-    let welch_cfg = WelchConfig {
-        fs_hz: FS_HZ as f32,
-        nperseg: NPERSEG,
-        noverlap: NOVERLAP,
-        nfft: NFFT,
-        window: Window::Hamming,
-        detrend: Detrend::Constant,
-    };
-    let mut welch = Box::new(Welch::try_new(welch_cfg).expect("valid Welch settings"));
+    let mut welch = Box::new(Welch::try_new(WELCH).expect("valid Welch settings"));
     let config = CentroidConfig::binary(THRESHOLD);
     let mut s = Split::default();
     let t = |f: &mut dyn FnMut(), acc: &mut f64| {

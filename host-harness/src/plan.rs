@@ -459,10 +459,10 @@ mod tests {
             );
         }
         // 125 ms at 50 fps is longer than the 20 ms frame: warned
-        assert!(p
-            .warnings
-            .iter()
-            .any(|w| matches!(w, PlanWarning::ExposureLongerThanFrame { mode: 1, .. })));
+        assert!(warned(&p, |w| matches!(
+            w,
+            PlanWarning::ExposureLongerThanFrame { mode: 1, .. }
+        )));
     }
 
     #[test]
@@ -486,6 +486,11 @@ mod tests {
         assert!((p.rows[1].e2pr - 0.25).abs() < 1e-12);
         let direct = centroid_transfer(&setup, 0.25).unwrap().ratio;
         assert!((p.rows[1].predicted_ratio - direct).abs() < 2e-3);
+    }
+
+    /// Whether `p` holds a warning that `want` accepts.
+    fn warned(p: &Plan, want: impl Fn(&PlanWarning) -> bool) -> bool {
+        p.warnings.iter().any(want)
     }
 
     #[test]
@@ -516,10 +521,10 @@ mod tests {
         let mut m = modes();
         m[1].f_hz = 30.0;
         let p = plan(&PlanInput::new(m, 12.0, 0.5, 50.0, 0.1, Mode::Weighted)).unwrap();
-        assert!(p
-            .warnings
-            .iter()
-            .any(|w| matches!(w, PlanWarning::Aliasing { mode: 2, .. })));
+        assert!(warned(&p, |w| matches!(
+            w,
+            PlanWarning::Aliasing { mode: 2, .. }
+        )));
     }
 
     /// The lost-frame risk against the renderer: a small target with a high threshold and a

@@ -89,19 +89,17 @@ impl GreyFrame {
     /// Centroid with the firmware-core single-target centroider. `label` names the frame (file,
     /// page) in the error when its shape is inconsistent.
     pub fn centroid(&self, config: &CentroidConfig, label: &str) -> anyhow::Result<Centroid> {
+        fn of<P: centroid::Pixel>(
+            config: &CentroidConfig,
+            data: &[P],
+            (width, height): (usize, usize),
+        ) -> Result<Centroid, centroid::FrameError> {
+            centroid::Frame::new(data, width, height, width)
+                .and_then(|f| centroid::centroid(config, &f))
+        }
         let r = match self {
-            GreyFrame::U8 {
-                width,
-                height,
-                data,
-            } => centroid::Frame::new(data, *width, *height, *width)
-                .and_then(|f| centroid::centroid(config, &f)),
-            GreyFrame::U16 {
-                width,
-                height,
-                data,
-            } => centroid::Frame::new(data, *width, *height, *width)
-                .and_then(|f| centroid::centroid(config, &f)),
+            GreyFrame::U8 { data, .. } => of(config, data, self.dimensions()),
+            GreyFrame::U16 { data, .. } => of(config, data, self.dimensions()),
         };
         r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
     }

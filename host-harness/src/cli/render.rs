@@ -5,7 +5,7 @@
 use crate::bad_input;
 use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
 use crate::model::{self, grandstand};
-use crate::recording::{camera_path, RecordingSpec};
+use crate::recording::{camera_path, save_grey_png, RecordingSpec};
 use crate::study::{run_rng, Preset};
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
@@ -123,10 +123,7 @@ fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<V
         ] {
             r.render(a, b, &mut frame);
             let p = out.join(format!("frame_t{t}_{label}.png"));
-            image::GrayImage::from_raw(w as u32, h as u32, frame.clone())
-                .context("frame buffer size")?
-                .save(&p)
-                .with_context(|| format!("cannot write {}", p.display()))?;
+            save_grey_png(&p, (w, h), &frame)?;
             written.push(p);
         }
     }

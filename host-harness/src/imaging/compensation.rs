@@ -269,14 +269,8 @@ mod tests {
     use super::*;
     use firmware_core::exposure::{sinc_pi, ExposureTransfer};
 
-    /// The grandstand target (method.md §3.1).
-    fn target() -> DiskTarget {
-        DiskTarget {
-            radius_px: 12.0,
-            level: 200.0,
-            edge_sigma_px: 1.5,
-        }
-    }
+    // the grandstand target (method.md §3.1)
+    use crate::model::grandstand::TARGET;
 
     #[test]
     fn sinusoid_fit_recovers_known_coefficients_with_missing_frames() {
@@ -307,7 +301,7 @@ mod tests {
     /// (0) follows the sinc.
     #[test]
     fn weighted_centroid_at_background_threshold_follows_the_sinc() {
-        let setup = TransferSetup::new(target(), 0, Mode::Weighted, 5.0);
+        let setup = TransferSetup::new(TARGET, 0, Mode::Weighted, 5.0);
         let e2prs = [0.0, 0.2, 0.4, 0.6, 0.8, 1.2];
         let curve = transfer_curve(&setup, &e2prs).unwrap();
         for pt in &curve {
@@ -362,7 +356,7 @@ mod tests {
     #[test]
     fn binary_transfer_matches_a_brute_force_rendering_and_departs_from_the_sinc() {
         // large motion against the target: amplitude 12 px = the radius
-        let mut setup = TransferSetup::new(target(), 100, Mode::Binary, 12.0);
+        let mut setup = TransferSetup::new(TARGET, 100, Mode::Binary, 12.0);
         setup.frames_per_period = 32;
         for e in [0.3, 0.7] {
             let got = centroid_transfer(&setup, e).unwrap();
@@ -388,7 +382,7 @@ mod tests {
 
     #[test]
     fn table_nodes_are_the_transfer_and_interpolate_between() {
-        let setup = TransferSetup::new(target(), 100, Mode::Binary, 5.0);
+        let setup = TransferSetup::new(TARGET, 100, Mode::Binary, 5.0);
         let table = correction_table::<9>(&setup, 0.1).unwrap();
         assert_eq!(table.ratios().len(), 9);
         let direct = centroid_transfer(&setup, 0.35).unwrap().ratio;
@@ -413,7 +407,7 @@ mod tests {
     #[test]
     fn a_binary_table_compensates_a_filmed_sinusoid() {
         let (amp, f, fps, te) = (5.0f64, 2.5f64, 50.0f64, 0.18f64);
-        let setup = TransferSetup::new(target(), 100, Mode::Binary, amp);
+        let setup = TransferSetup::new(TARGET, 100, Mode::Binary, amp);
         let table = correction_table::<17>(&setup, 0.05).unwrap();
         // the camera: a 1 kHz path, frames every 20 path steps, exposure 180 steps
         let fine = 1000.0;
@@ -468,7 +462,7 @@ mod tests {
 
     #[test]
     fn bad_setups_name_the_field() {
-        let mut s = TransferSetup::new(target(), 100, Mode::Binary, 0.0);
+        let mut s = TransferSetup::new(TARGET, 100, Mode::Binary, 0.0);
         let e = transfer_curve(&s, &[0.1]).unwrap_err();
         assert!(e.to_string().contains("amplitude_px"), "{e}");
         s.amplitude_px = 3.0;

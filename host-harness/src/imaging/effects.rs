@@ -285,28 +285,28 @@ fn gaussian_blur(img: &mut [f32], w: usize, h: usize, sigma: f64, scratch: &mut 
     scratch.clear();
     scratch.resize(img.len(), 0.0);
     // rows into scratch, columns back into img
+    convolve_1d(img, scratch, w, h, &kernel, true);
+    convolve_1d(scratch, img, w, h, &kernel, false);
+}
+
+/// One pass of a separable filter: `dst` = `src` convolved with `kernel` (odd length, centred)
+/// along the rows (`along_rows`) or the columns of the `w` x `h` image, zero outside.
+fn convolve_1d(src: &[f32], dst: &mut [f32], w: usize, h: usize, kernel: &[f32], along_rows: bool) {
+    let r = (kernel.len() / 2) as isize;
+    // length of the filtered line and the step between its pixels
+    let (n, step) = if along_rows { (w, 1) } else { (h, w) };
     for y in 0..h {
         for x in 0..w {
+            let i = if along_rows { x } else { y };
+            let line_start = y * w + x - i * step;
             let mut acc = 0.0;
             for (j, k) in kernel.iter().enumerate() {
-                let xx = x as isize + j as isize - r;
-                if xx >= 0 && (xx as usize) < w {
-                    acc += k * img[y * w + xx as usize];
+                let ii = i as isize + j as isize - r;
+                if ii >= 0 && (ii as usize) < n {
+                    acc += k * src[line_start + ii as usize * step];
                 }
             }
-            scratch[y * w + x] = acc;
-        }
-    }
-    for y in 0..h {
-        for x in 0..w {
-            let mut acc = 0.0;
-            for (j, k) in kernel.iter().enumerate() {
-                let yy = y as isize + j as isize - r;
-                if yy >= 0 && (yy as usize) < h {
-                    acc += k * scratch[yy as usize * w + x];
-                }
-            }
-            img[y * w + x] = acc;
+            dst[y * w + x] = acc;
         }
     }
 }
@@ -321,6 +321,16 @@ mod tests {
         let mut o = ImagingOptions::default();
         f(&mut o);
         Effects::from_options(&o).unwrap()
+    }
+
+    /// Applies the effects that `f` sets to the `w` x `h` image `img`.
+    fn apply(
+        f: impl FnOnce(&mut ImagingOptions),
+        img: &mut [f32],
+        (w, h): (usize, usize),
+        rng: &mut ChaCha8Rng,
+    ) {
+        effects(f).apply(img, w, h, rng, &mut Vec::new());
     }
 
     /// A 3x3 bright square at (cx, cy) in a w x h frame.
@@ -359,7 +369,7 @@ mod tests {
     fn gain_scales_the_light() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let mut img = square(20, 20, 10, 10);
-        effects(|o| o.gain = Some(1.5)).apply(&mut img, 20, 20, &mut rng, &mut Vec::new());
+        apply(|o| o.gain = Some(1.5), &mut img, (20, 20), &mut rng);
         assert_eq!(img[10 * 20 + 10], 300.0);
     }
 
@@ -368,12 +378,11 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let mut img = square(30, 30, 15, 14);
         let before = moments(&img, 30);
-        effects(|o| o.optical_blur_sigma_px = Some(1.2)).apply(
+        apply(
+            |o| o.optical_blur_sigma_px = Some(1.2),
             &mut img,
-            30,
-            30,
+            (30, 30),
             &mut rng,
-            &mut Vec::new(),
         );
         let after = moments(&img, 30);
         assert!((after.0 / before.0 - 1.0).abs() < 1e-5);
@@ -388,7 +397,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let k1 = 1e-3;
         let mut img = square(41, 41, 30, 20);
-        effects(|o| o.distortion_k1 = Some(k1)).apply(&mut img, 41, 41, &mut rng, &mut Vec::new());
+        apply(|o| o.distortion_k1 = Some(k1), &mut img, (41, 41), &mut rng);
         let (_, cx, cy) = moments(&img, 41);
         // solve r' + k1 r'^3 = 10 by Newton
         let mut r = 10.0f64;
@@ -409,7 +418,7 @@ mod tests {
         let n = 40_000;
         // read noise on black
         let mut img = vec![0.0f32; n];
-        effects(|o| o.read_noise = Some(2.0)).apply(&mut img, 200, 200, &mut rng, &mut Vec::new());
+        apply(|o| o.read_noise = Some(2.0), &mut img, (200, 200), &mut rng);
         let var = img.iter().map(|v| (*v as f64).powi(2)).sum::<f64>() / n as f64;
         assert!(
             (var.sqrt() / 2.0 - 1.0).abs() < 0.02,
@@ -418,12 +427,11 @@ mod tests {
         );
         // shot noise on a flat 100-level field with 10 e-/level: std = sqrt(1000)/10 levels
         let mut img = vec![100.0f32; n];
-        effects(|o| o.shot_noise_e_per_level = Some(10.0)).apply(
+        apply(
+            |o| o.shot_noise_e_per_level = Some(10.0),
             &mut img,
-            200,
-            200,
+            (200, 200),
             &mut rng,
-            &mut Vec::new(),
         );
         let mean = img.iter().map(|v| *v as f64).sum::<f64>() / n as f64;
         let sd = (img.iter().map(|v| (*v as f64 - mean).powi(2)).sum::<f64>() / n as f64).sqrt();

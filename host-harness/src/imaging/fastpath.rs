@@ -473,13 +473,8 @@ mod tests {
 
     const T: u16 = 100;
 
-    fn study_target() -> DiskTarget {
-        DiskTarget {
-            radius_px: 12.0,
-            level: 200.0,
-            edge_sigma_px: 1.5,
-        }
-    }
+    // the grandstand target (method.md §3.1)
+    use crate::model::grandstand::TARGET;
 
     /// A 1 kHz path of `n` samples: a few random sinusoids (up to `amp` px, 0.5 - 6 Hz) on a
     /// random offset, plus a smoothed impulse-like step, so that slow and fast frames occur.
@@ -569,7 +564,7 @@ mod tests {
 
     #[test]
     fn same_pixels_as_the_renderer_over_random_paths_and_exposures() {
-        let target = study_target();
+        let target = TARGET;
         let mut rng = ChaCha8Rng::seed_from_u64(16);
         let (mut frames, mut fast_frames, mut ties, mut rows, mut columns) = (0, 0, 0, 0, 0);
         for case in 0..12 {
@@ -610,7 +605,7 @@ mod tests {
 
     #[test]
     fn frames_near_the_border_are_rendered() {
-        let target = study_target();
+        let target = TARGET;
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let path = random_path(&mut rng, 2000, 10.0);
         // a frame sized for a smaller range than the path covers: the disk nears the border
@@ -666,7 +661,7 @@ mod tests {
     fn interpolant_stays_within_a_quarter_margin_of_the_analytic_disk() {
         // the premise of the certain rows: the band-limited interpolant of the sharp columns
         // is within MARGIN / 4 of the analytic profile everywhere, here on a 1/16 px grid
-        let target = study_target();
+        let target = TARGET;
         let renderer = BlurRenderer::new(&target, -20.0, 20.0);
         let h = renderer.height();
         let rest = renderer.rest_y();

@@ -437,12 +437,23 @@ fn ramp_sum(s: &mut Segments, out: &mut [Complex32]) {
 mod tests {
     use super::*;
 
-    fn target() -> DiskTarget {
-        DiskTarget {
-            radius_px: 12.0,
-            level: 200.0,
-            edge_sigma_px: 1.5,
-        }
+    // the grandstand target (method.md §3.1)
+    use crate::model::grandstand::TARGET;
+
+    /// `r`'s float frame of the exposure from `a` to `b` along `path` (blocks of `block`).
+    fn frame(r: &mut BlurRenderer, path: &[f64], block: usize, a: f64, b: f64) -> Vec<f32> {
+        let mut img = vec![0.0f32; r.width() * r.height()];
+        r.set_path(path, block);
+        r.render_float(a, b, &mut img);
+        img
+    }
+
+    /// Largest pixel difference of two frames.
+    fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
     }
 
     /// Weighted centroid (threshold 0) of a float image, naive double loop.
@@ -457,7 +468,7 @@ mod tests {
 
     #[test]
     fn sharp_frame_matches_the_analytic_disk() {
-        let t = target();
+        let t = TARGET;
         let mut r = BlurRenderer::new(&t, -10.0, 10.0);
         let (w, h) = (r.width(), r.height());
         let mut img = vec![0.0f32; w * h];
@@ -480,53 +491,31 @@ mod tests {
         let path: Vec<f64> = (0..300)
             .map(|i| 8.0 * (i as f64 * 0.05).sin() + 0.01 * i as f64)
             .collect();
-        let mut r = BlurRenderer::new(&target(), -9.0, 12.0);
-        let (w, h) = (r.width(), r.height());
-        let (mut a, mut b) = (vec![0.0f32; w * h], vec![0.0f32; w * h]);
+        let mut r = BlurRenderer::new(&TARGET, -9.0, 12.0);
         for (lo, hi) in [(12.3, 95.8), (40.0, 160.0), (0.0, 299.0), (5.5, 6.25)] {
-            r.set_path(&path, 1);
-            r.render_float(lo, hi, &mut a);
-            r.set_path(&path, 7);
-            r.render_float(lo, hi, &mut b);
-            let worst = a
-                .iter()
-                .zip(&b)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0f32, f32::max);
+            let a = frame(&mut r, &path, 1, lo, hi);
+            let worst = max_abs_diff(&a, &frame(&mut r, &path, 7, lo, hi));
             assert!(worst < 2e-3, "window {lo}..{hi}: {worst}");
         }
     }
 
     #[test]
     fn integer_shift_equals_rotating_rows() {
-        let mut r = BlurRenderer::new(&target(), -10.0, 10.0);
-        let (w, h) = (r.width(), r.height());
-        let mut a = vec![0.0f32; w * h];
-        let mut b = vec![0.0f32; w * h];
-        r.set_path(&[0.0, 3.0], 1);
-        r.render_float(0.0, 0.0, &mut a);
-        r.render_float(1.0, 1.0, &mut b);
-        a.rotate_right(3 * w);
-        let worst = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0f32, f32::max);
+        let mut r = BlurRenderer::new(&TARGET, -10.0, 10.0);
+        let mut a = frame(&mut r, &[0.0, 3.0], 1, 0.0, 0.0);
+        let b = frame(&mut r, &[0.0, 3.0], 1, 1.0, 1.0);
+        a.rotate_right(3 * r.width());
+        let worst = max_abs_diff(&a, &b);
         assert!(worst < 1e-3, "{worst}");
     }
 
     #[test]
     fn subpixel_shift_moves_the_weighted_centroid_exactly() {
-        let mut r = BlurRenderer::new(&target(), -10.0, 10.0);
-        let (w, h) = (r.width(), r.height());
-        let mut img = vec![0.0f32; w * h];
-        r.set_path(&[0.0], 1);
-        r.render_float(0.0, 0.0, &mut img);
-        let c0 = weighted_cy(&img, w);
+        let mut r = BlurRenderer::new(&TARGET, -10.0, 10.0);
+        let w = r.width();
+        let c0 = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), w);
         for d in [0.1, 0.37, -0.73, 4.5] {
-            r.set_path(&[d], 1);
-            r.render_float(0.0, 0.0, &mut img);
-            let c = weighted_cy(&img, w);
+            let c = weighted_cy(&frame(&mut r, &[d], 1, 0.0, 0.0), w);
             assert!((c - c0 - d).abs() < 1e-3, "shift {d}: moved {}", c - c0);
         }
     }
@@ -539,13 +528,10 @@ mod tests {
         let path: Vec<f64> = (0..4000)
             .map(|i| amp * (std::f64::consts::TAU * f * i as f64 / fine).sin())
             .collect();
-        let mut r = BlurRenderer::new(&target(), -6.0, 6.0);
+        let mut r = BlurRenderer::new(&TARGET, -6.0, 6.0);
         let (w, h) = (r.width(), r.height());
         let mut img = vec![0.0f32; w * h];
-        let mut c0 = vec![0.0f32; w * h];
-        r.set_path(&[0.0], 1);
-        r.render_float(0.0, 0.0, &mut c0);
-        let rest = weighted_cy(&c0, w);
+        let rest = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), w);
         r.set_path(&path, 10);
         // least-squares amplitude of the centroid sinusoid over whole periods
         let (mut ss, mut sc) = (0.0, 0.0);

@@ -267,6 +267,14 @@ pub fn write_synthetic_recording(
     write_recording(&spec, dir)
 }
 
+/// Writes the 8-bit grey frame `px` (`width * height` pixels, row 0 first) as a PNG at `path`.
+pub fn save_grey_png(path: &Path, (w, h): (usize, usize), px: &[u8]) -> anyhow::Result<()> {
+    image::GrayImage::from_raw(w as u32, h as u32, px.to_vec())
+        .context("frame buffer size")?
+        .save(path)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
 /// Writes the recording of `spec` to `dir` (see [`write_synthetic_recording`]).
 pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<RecordingFiles> {
     use std::fmt::Write as _;
@@ -281,11 +289,7 @@ pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<Recor
     for k in 0..spec.acquisition.frames {
         let (a, b) = path.frame_window(k, spec.exposure_ms);
         renderer.render(a, b, &mut px);
-        let p = frames_dir.join(format!("frame_{k:05}.png"));
-        image::GrayImage::from_raw(w as u32, h as u32, px.clone())
-            .context("frame buffer size")?
-            .save(&p)
-            .with_context(|| format!("cannot write {}", p.display()))?;
+        save_grey_png(&frames_dir.join(format!("frame_{k:05}.png")), (w, h), &px)?;
     }
     let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
     for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {

@@ -401,6 +401,25 @@ mod tests {
         h
     }
 
+    /// One mode of pole `(f_hz, damping)` with `[residue, lower, upper]` residual terms (re, im),
+    /// exactly of the model's `form` at the frequencies `f`: the terms and the FRF.
+    fn exact_frf(
+        f: &[f64],
+        (f_hz, damping): (f64, f64),
+        [r, l, u]: [(f64, f64); 3],
+        form: FrfForm,
+    ) -> (ResidueFit, Vec<Complex64>) {
+        let p = Pole { f_hz, damping };
+        let truth = ResidueFit {
+            residue: Complex64::new(r.0, r.1),
+            lower_residual: Complex64::new(l.0, l.1),
+            upper_residual: Complex64::new(u.0, u.1),
+            misfit: 0.0,
+        };
+        let h = f.iter().map(|&x| truth.evaluate(&p, form, x)).collect();
+        (truth, h)
+    }
+
     /// 0.1 Hz bins to 60 Hz, as the rig's H1 (2048 Hz, nfft 20480).
     fn bins() -> Vec<f64> {
         (0..=600).map(|k| k as f64 * 0.1).collect()
@@ -438,20 +457,8 @@ mod tests {
     fn single_mode_is_recovered_to_rounding() {
         // One mode, FRF exactly of the model's form: nothing but rounding separates fit and truth.
         let f = bins();
-        let p = Pole {
-            f_hz: 7.1,
-            damping: 0.0115,
-        };
-        let truth = ResidueFit {
-            residue: Complex64::new(0.3, -40.0),
-            lower_residual: Complex64::new(1.0, 0.0),
-            upper_residual: Complex64::new(-2e-5, 1e-6),
-            misfit: 0.0,
-        };
-        let h: Vec<Complex64> = f
-            .iter()
-            .map(|&x| truth.evaluate(&p, FrfForm::Accelerance, x))
-            .collect();
+        let residues = [(0.3, -40.0), (1.0, 0.0), (-2e-5, 1e-6)];
+        let (truth, h) = exact_frf(&f, (7.1, 0.0115), residues, FrfForm::Accelerance);
         let fit = fit_mode(&f, &h, (5.0, 15.0), FrfForm::Accelerance).unwrap();
         assert!((fit.f_hz() - 7.1).abs() < 1e-9 * 7.1, "{}", fit.f_hz());
         assert!(
@@ -468,18 +475,9 @@ mod tests {
     fn receptance_and_mobility_forms_recover_their_pole() {
         // One mode of each form with its own residual terms: the fit must pick the exponents.
         let f = bins();
-        let p = Pole {
-            f_hz: 32.4,
-            damping: 0.011,
-        };
         for form in [FrfForm::Receptance, FrfForm::Mobility] {
-            let truth = ResidueFit {
-                residue: Complex64::new(-1e-4, -2e-2),
-                lower_residual: Complex64::new(-3.0, 0.0),
-                upper_residual: Complex64::new(2e-7, 0.0),
-                misfit: 0.0,
-            };
-            let h: Vec<Complex64> = f.iter().map(|&x| truth.evaluate(&p, form, x)).collect();
+            let residues = [(-1e-4, -2e-2), (-3.0, 0.0), (2e-7, 0.0)];
+            let (_, h) = exact_frf(&f, (32.4, 0.011), residues, form);
             let fit = fit_mode(&f, &h, (25.0, 45.0), form).unwrap();
             assert!(
                 (fit.f_hz() - 32.4).abs() < 1e-8 * 32.4,

@@ -253,6 +253,27 @@ impl VideoError {
     }
 }
 
+/// Starts `cmd`, which runs `program` on `path`: a program that cannot be started is a
+/// [`VideoError::ProgramMissing`] naming both.
+fn spawn(cmd: &mut Command, program: &str, path: &Path) -> Result<Child, VideoError> {
+    cmd.spawn()
+        .map_err(|source| program_missing(program, path, source))
+}
+
+/// Starts `cmd` as a reader of `path`: no input, its output and its messages piped.
+fn spawn_reader(cmd: &mut Command, program: &str, path: &Path) -> Result<Child, VideoError> {
+    let cmd = cmd.stdin(Stdio::null()).stdout(Stdio::piped());
+    spawn(cmd.stderr(Stdio::piped()), program, path)
+}
+
+fn program_missing(program: &str, path: &Path, source: std::io::Error) -> VideoError {
+    VideoError::ProgramMissing {
+        program: program.into(),
+        path: path.into(),
+        source,
+    }
+}
+
 /// Keeps the last few kB of a child's stderr, read on a thread so the child never blocks on it.
 fn collect_stderr(mut pipe: impl Read + Send + 'static) -> JoinHandle<String> {
     std::thread::spawn(move || {
@@ -296,6 +317,11 @@ mod tests {
         have
     }
 
+    /// A temporary directory for a test that needs ffmpeg, `None` (the test is skipped) without.
+    fn ffmpeg_tempdir() -> Option<tempfile::TempDir> {
+        have_ffmpeg().then(|| tempfile::tempdir().unwrap())
+    }
+
     const W: usize = 33;
     const H: usize = 17;
     const N: usize = 24;
@@ -312,25 +338,65 @@ mod tests {
         p
     }
 
-    /// Runs the ffmpeg CLI to make a test video from the raw frames at 120 fps.
-    fn encode(raw: &Path, out: &Path, extra: &[&str]) {
+    /// Runs the ffmpeg CLI to make the test video `dir/name` from the raw frames at 120 fps.
+    fn encode(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+        let raw = raw_file(dir);
+        let out = dir.join(name);
         let status = Command::new("ffmpeg")
             .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "gray"])
             .args(["-s", &format!("{W}x{H}"), "-framerate", "120", "-i"])
             .arg(raw)
             .args(extra)
-            .arg(out)
+            .arg(&out)
             .status()
             .unwrap();
         assert!(status.success(), "ffmpeg {extra:?} {}", out.display());
+        out
     }
 
-    fn write_ffv1(path: &Path) {
-        let mut w = Ffv1Writer::create(path, W, H, 120.0).unwrap();
+    /// An FFV1 test video whose frames or timestamps the filter `vf` changed (timestamps passed
+    /// through as they are), with the encoder options `extra`.
+    fn retimed(dir: &Path, name: &str, vf: &str, extra: &[&str]) -> PathBuf {
+        let passthrough = ["-vf", vf, "-vsync", "passthrough"];
+        encode(
+            dir,
+            name,
+            &[&passthrough[..], extra, &["-c:v", "ffv1"]].concat(),
+        )
+    }
+
+    /// Opening `path` at `fps` fails on irregular timestamps from `frame` on.
+    fn irregular_at(path: &Path, fps: f64, frame: usize) -> VideoError {
+        let e = VideoFrames::open(path, fps).unwrap_err();
+        assert!(
+            matches!(e, VideoError::IrregularTimestamps { frame: f, .. } if f == frame),
+            "{e}"
+        );
+        e
+    }
+
+    /// Reading the `what` file `path` to its end fails, naming the file and a frame.
+    fn assert_read_fails(path: &Path, what: &str) {
+        match read_all(path, 120.0) {
+            Ok(frames) => panic!("{what} file read as {} frames", frames.len()),
+            Err(e) => {
+                println!("{what}: {e}");
+                let name = path.file_name().unwrap().to_string_lossy();
+                assert!(e.to_string().contains(&*name), "{e}");
+                assert!(e.to_string().contains("frame"), "{e}");
+            }
+        }
+    }
+
+    /// Writes the test frames with [`Ffv1Writer`] to `dir/name` at 120 fps.
+    fn write_ffv1(dir: &Path, name: &str) -> PathBuf {
+        let path = dir.join(name);
+        let mut w = Ffv1Writer::create(&path, W, H, 120.0).unwrap();
         for k in 0..N {
             w.write_frame(&frame(k)).unwrap();
         }
         assert_eq!(w.finish().unwrap(), N);
+        path
     }
 
     fn read_all(path: &Path, fps: f64) -> Result<Vec<Vec<u8>>, VideoError> {
@@ -346,12 +412,10 @@ mod tests {
 
     #[test]
     fn ffv1_round_trip_is_bit_identical() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.mkv");
-        write_ffv1(&path);
+        };
+        let path = write_ffv1(dir.path(), "a.mkv");
         let mut v = VideoFrames::open(&path, 120.0).unwrap();
         let info = v.info().clone();
         assert_eq!(
@@ -399,10 +463,9 @@ mod tests {
 
     #[test]
     fn sixteen_bit_round_trip_is_bit_identical() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
+        };
         let path = dir.path().join("b.mkv");
         let f16 = |k: usize| -> Vec<u16> {
             (0..W * H)
@@ -430,27 +493,22 @@ mod tests {
 
     #[test]
     fn avi_mov_and_mp4_containers() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let raw = raw_file(dir.path());
+        };
         let want: Vec<Vec<u8>> = (0..N).map(frame).collect();
         // Lossless codecs: bit-identical.
-        let avi = dir.path().join("c.avi");
-        encode(&raw, &avi, &["-c:v", "ffv1", "-pix_fmt", "gray"]);
-        assert_eq!(read_all(&avi, 120.0).unwrap(), want);
-        let mov = dir.path().join("c.mov");
-        encode(&raw, &mov, &["-c:v", "png", "-pix_fmt", "gray"]);
-        assert_eq!(read_all(&mov, 120.0).unwrap(), want);
+        for (name, codec) in [("c.avi", "ffv1"), ("c.mov", "png")] {
+            let path = encode(dir.path(), name, &["-c:v", codec, "-pix_fmt", "gray"]);
+            assert_eq!(read_all(&path, 120.0).unwrap(), want, "{name}");
+        }
         // H.264 in MP4 as cameras write it: limited-range YUV 4:2:0 (here losslessly coded,
         // qp 0). Its Y plane is expanded back to full range, so the grey values come back to
         // within the rounding of the two range conversions: one level.
         // (x264 needs even sizes: the top-left 32x16 pixels.)
-        let mp4 = dir.path().join("c.mp4");
-        encode(
-            &raw,
-            &mp4,
+        let mp4 = encode(
+            dir.path(),
+            "c.mp4",
             &[
                 "-vf",
                 "crop=32:16:0:0,scale=in_range=full:out_range=limited,format=yuv420p",
@@ -481,31 +539,13 @@ mod tests {
 
     #[test]
     fn dropped_frame_is_named() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let raw = raw_file(dir.path());
-        let path = dir.path().join("drop.mkv");
+        };
         // Frame 5 removed, the others keep their timestamps: a gap of two periods.
-        encode(
-            &raw,
-            &path,
-            &[
-                "-vf",
-                "select='not(eq(n\\,5))'",
-                "-vsync",
-                "passthrough",
-                "-c:v",
-                "ffv1",
-            ],
-        );
-        let e = VideoFrames::open(&path, 120.0).unwrap_err();
+        let path = retimed(dir.path(), "drop.mkv", "select='not(eq(n\\,5))'", &[]);
+        let e = irregular_at(&path, 120.0, 5);
         let msg = e.to_string();
-        assert!(
-            matches!(e, VideoError::IrregularTimestamps { frame: 5, .. }),
-            "{msg}"
-        );
         assert!(
             msg.contains("drop.mkv: frame 5") && msg.contains("dropped frame"),
             "{msg}"
@@ -515,41 +555,17 @@ mod tests {
 
     #[test]
     fn variable_frame_rate_and_wrong_rate_are_named() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let raw = raw_file(dir.path());
-        let path = dir.path().join("vfr.mkv");
+        };
         // From frame 7 on, every frame 0.4 period late (a 3.3 ms jitter at 120 fps).
-        encode(
-            &raw,
-            &path,
-            &[
-                "-vf",
-                "settb=1/1200,setpts='10*N+4*gte(N\\,7)'",
-                "-vsync",
-                "passthrough",
-                "-enc_time_base",
-                "1/1200",
-                "-c:v",
-                "ffv1",
-            ],
-        );
-        let e = VideoFrames::open(&path, 120.0).unwrap_err();
-        assert!(
-            matches!(e, VideoError::IrregularTimestamps { frame: 7, .. }),
-            "{e}"
-        );
+        let setpts = "settb=1/1200,setpts='10*N+4*gte(N\\,7)'";
+        let path = retimed(dir.path(), "vfr.mkv", setpts, &["-enc_time_base", "1/1200"]);
+        let e = irregular_at(&path, 120.0, 7);
         assert!(e.to_string().contains("variable frame rate"), "{e}");
         // A regular 120 fps file read as 100 fps: the first interval is already wrong.
-        let good = dir.path().join("good.mkv");
-        write_ffv1(&good);
-        let e = VideoFrames::open(&good, 100.0).unwrap_err();
-        assert!(
-            matches!(e, VideoError::IrregularTimestamps { frame: 1, .. }),
-            "{e}"
-        );
+        let good = write_ffv1(dir.path(), "good.mkv");
+        irregular_at(&good, 100.0, 1);
         // 119.88 fps (NTSC-style) read as 120: intervals pass one by one, the drift does not.
         let ntsc = dir.path().join("ntsc.mkv");
         let mut w = Ffv1Writer::create(&ntsc, W, H, 120_000.0 / 1001.0).unwrap();
@@ -564,28 +580,21 @@ mod tests {
 
     #[test]
     fn truncated_and_damaged_files_name_the_frame() {
-        if !have_ffmpeg() {
+        let Some(dir) = ffmpeg_tempdir() else {
             return;
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("full.mkv");
-        write_ffv1(&path);
+        };
+        let path = write_ffv1(dir.path(), "full.mkv");
         let bytes = std::fs::read(&path).unwrap();
         // Cut in the middle of the frames.
         let cut = dir.path().join("cut.mkv");
         std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
-        match read_all(&cut, 120.0) {
-            Ok(frames) => panic!("truncated file read as {} frames", frames.len()),
-            Err(e) => {
-                println!("truncated: {e}");
-                assert!(e.to_string().contains("cut.mkv"), "{e}");
-                assert!(e.to_string().contains("frame"), "{e}");
-            }
-        }
+        assert_read_fails(&cut, "truncated");
         // AVI keeps its frame count in the header.
-        let raw = raw_file(dir.path());
-        let avi = dir.path().join("full.avi");
-        encode(&raw, &avi, &["-c:v", "ffv1", "-pix_fmt", "gray"]);
+        let avi = encode(
+            dir.path(),
+            "full.avi",
+            &["-c:v", "ffv1", "-pix_fmt", "gray"],
+        );
         let avi_bytes = std::fs::read(&avi).unwrap();
         let cut_avi = dir.path().join("cut.avi");
         std::fs::write(&cut_avi, &avi_bytes[..avi_bytes.len() / 2]).unwrap();
@@ -607,14 +616,7 @@ mod tests {
         }
         let damaged = dir.path().join("damaged.mkv");
         std::fs::write(&damaged, &bad).unwrap();
-        match read_all(&damaged, 120.0) {
-            Ok(frames) => panic!("damaged file read as {} frames", frames.len()),
-            Err(e) => {
-                println!("damaged: {e}");
-                assert!(e.to_string().contains("damaged.mkv"), "{e}");
-                assert!(e.to_string().contains("frame"), "{e}");
-            }
-        }
+        assert_read_fails(&damaged, "damaged");
         // Not a video, and no file at all.
         let text = dir.path().join("notes.mkv");
         std::fs::write(&text, "not a video").unwrap();

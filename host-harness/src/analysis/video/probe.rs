@@ -34,11 +34,7 @@ fn run_probe(
         .arg(path)
         .stdin(Stdio::null())
         .output()
-        .map_err(|source| VideoError::ProgramMissing {
-            program: ffprobe.into(),
-            path: path.into(),
-            source,
-        })?;
+        .map_err(|source| program_missing(ffprobe, path, source))?;
     if !out.status.success() {
         return Err(VideoError::Unreadable {
             path: path.into(),
@@ -142,19 +138,14 @@ pub(super) fn component_bits(pix_fmt: &str) -> u32 {
 
 /// Packet presentation times of the video stream, sorted, relative to the first.
 pub(super) fn probe_times(path: &Path, ffprobe: &str) -> Result<Vec<f64>, VideoError> {
-    let mut child = Command::new(ffprobe)
-        .args(["-v", "error", "-select_streams", "v:0"])
-        .args(["-show_entries", "packet=pts_time,flags", "-of", "csv=p=0"])
-        .arg(path)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|source| VideoError::ProgramMissing {
-            program: ffprobe.into(),
-            path: path.into(),
-            source,
-        })?;
+    let mut child = spawn_reader(
+        Command::new(ffprobe)
+            .args(["-v", "error", "-select_streams", "v:0"])
+            .args(["-show_entries", "packet=pts_time,flags", "-of", "csv=p=0"])
+            .arg(path),
+        ffprobe,
+        path,
+    )?;
     let stderr = child.stderr.take().map(collect_stderr);
     let stdout = child.stdout.take().expect("stdout is piped");
     let mut times = Vec::new();

@@ -50,21 +50,16 @@ impl VideoFrames {
             b @ (9 | 10 | 12 | 14 | 16) => b,
             _ => 16,
         };
-        let mut child = Command::new(ffmpeg)
-            .args(["-nostdin", "-v", "warning", "-xerror", "-noautorotate"])
-            .args(["-err_detect", "explode", "-i"])
-            .arg(path)
-            .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo"])
-            .args(["-pix_fmt", &out_fmt, "-"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|source| VideoError::ProgramMissing {
-                program: ffmpeg.into(),
-                path: path.into(),
-                source,
-            })?;
+        let mut child = spawn_reader(
+            Command::new(ffmpeg)
+                .args(["-nostdin", "-v", "warning", "-xerror", "-noautorotate"])
+                .args(["-err_detect", "explode", "-i"])
+                .arg(path)
+                .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo"])
+                .args(["-pix_fmt", &out_fmt, "-"]),
+            ffmpeg,
+            path,
+        )?;
         let stdout = child.stdout.take().expect("stdout is piped");
         let said = Arc::new(Mutex::new(String::new()));
         let stderr = child
@@ -103,42 +98,40 @@ impl VideoFrames {
     /// 8-bit videos, `U16` otherwise). `Ok(None)` after the last frame.
     pub fn next_frame(&mut self, frame: &mut GreyFrame) -> Result<Option<FrameInfo>, VideoError> {
         let (w, h) = (self.info.width, self.info.height);
-        if self.info.bits == 8 {
-            if !matches!(frame, GreyFrame::U8 { .. }) {
-                *frame = GreyFrame::U8 {
-                    width: w,
-                    height: h,
+        let eight = self.info.bits == 8;
+        if eight != matches!(frame, GreyFrame::U8 { .. }) {
+            let (width, height) = (w, h);
+            *frame = if eight {
+                GreyFrame::U8 {
+                    width,
+                    height,
                     data: Vec::new(),
-                };
-            }
-            let GreyFrame::U8 {
+                }
+            } else {
+                GreyFrame::U16 {
+                    width,
+                    height,
+                    data: Vec::new(),
+                }
+            };
+        }
+        match frame {
+            GreyFrame::U8 {
                 width,
                 height,
                 data,
-            } = frame
-            else {
-                unreachable!("set to U8 above")
-            };
-            (*width, *height) = (w, h);
-            self.next_frame_u8(data)
-        } else {
-            if !matches!(frame, GreyFrame::U16 { .. }) {
-                *frame = GreyFrame::U16 {
-                    width: w,
-                    height: h,
-                    data: Vec::new(),
-                };
+            } => {
+                (*width, *height) = (w, h);
+                self.next_frame_u8(data)
             }
-            let GreyFrame::U16 {
+            GreyFrame::U16 {
                 width,
                 height,
                 data,
-            } = frame
-            else {
-                unreachable!("set to U16 above")
-            };
-            (*width, *height) = (w, h);
-            self.next_frame_u16(data)
+            } => {
+                (*width, *height) = (w, h);
+                self.next_frame_u16(data)
+            }
         }
     }
 

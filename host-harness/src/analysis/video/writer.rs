@@ -48,32 +48,30 @@ impl Ffv1Writer {
             });
         }
         let fmt = if sixteen { "gray16le" } else { "gray" };
-        let mut child = Command::new("ffmpeg")
-            .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", fmt])
-            .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
-            .args([
-                "-i",
-                "-",
-                "-c:v",
-                "ffv1",
-                "-level",
-                "3",
-                "-g",
-                "1",
-                "-slicecrc",
-                "1",
-            ])
-            .args(["-pix_fmt", fmt, "-f", "matroska"])
-            .arg(path)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|source| VideoError::ProgramMissing {
-                program: "ffmpeg".into(),
-                path: path.into(),
-                source,
-            })?;
+        let mut child = spawn(
+            Command::new("ffmpeg")
+                .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", fmt])
+                .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
+                .args([
+                    "-i",
+                    "-",
+                    "-c:v",
+                    "ffv1",
+                    "-level",
+                    "3",
+                    "-g",
+                    "1",
+                    "-slicecrc",
+                    "1",
+                ])
+                .args(["-pix_fmt", fmt, "-f", "matroska"])
+                .arg(path)
+                .stdin(Stdio::piped())
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped()),
+            "ffmpeg",
+            path,
+        )?;
         let stdin = child.stdin.take();
         let stderr = child.stderr.take().map(collect_stderr);
         Ok(Ffv1Writer {
