@@ -155,6 +155,9 @@ pub mod spectrum;
 pub mod sync;
 pub mod upsample;
 
+#[cfg(test)]
+mod test_support;
+
 /// Single-precision complex number used throughout the crate (the one `microfft` uses).
 pub use num_complex::Complex32;
 

@@ -1394,39 +1394,28 @@ mod tests {
             let e = W::try_new(WelchConfig { fs_hz: fs, ..ok }).unwrap_err();
             assert_eq!(e, ConfigError::SampleRate);
         }
-        let e = W::try_new(WelchConfig { nperseg: 0, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::SegmentLength {
-                nperseg: 0,
-                capacity: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { nperseg: 65, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::SegmentLength {
-                nperseg: 65,
-                capacity: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { noverlap: 64, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::Overlap {
-                noverlap: 64,
-                nperseg: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { nfft: 63, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::FftLength {
-                nfft: 63,
-                nperseg: 64,
-                capacity: 128
-            }
-        );
+        // the capacities of `W`: 64-sample segments, 128-point transforms
+        let segment = |nperseg| ConfigError::SegmentLength {
+            nperseg,
+            capacity: 64,
+        };
+        let overlap = ConfigError::Overlap {
+            noverlap: 64,
+            nperseg: 64,
+        };
+        let fft = ConfigError::FftLength {
+            nfft: 63,
+            nperseg: 64,
+            capacity: 128,
+        };
+        for (bad, want) in [
+            (WelchConfig { nperseg: 0, ..ok }, segment(0)),
+            (WelchConfig { nperseg: 65, ..ok }, segment(65)),
+            (WelchConfig { noverlap: 64, ..ok }, overlap),
+            (WelchConfig { nfft: 63, ..ok }, fft),
+        ] {
+            assert_eq!(W::try_new(bad).unwrap_err(), want, "{bad:?}");
+        }
         let e = W::try_new(WelchConfig { nfft: 129, ..ok }).unwrap_err();
         assert!(matches!(e, ConfigError::FftLength { nfft: 129, .. }));
         // 120 = 8 * 15 needs more scratch than scratch_capacity(96) = 96 + 2 * 3 = 102

@@ -543,12 +543,7 @@ mod tests {
         let mut up = Upsampler::<M, S>::try_new(n, m).unwrap();
         let mut y = vec![0.0f32; m];
         up.process(&x, &mut y).unwrap();
-        let rms = (want.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-        let err = y
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| (*a as f64 - b).abs())
-            .fold(0.0, f64::max);
+        let (err, rms) = crate::test_support::max_error_and_rms(&y, &want);
         assert!(err / rms < 1e-5, "{n} -> {m}: max error {err} vs rms {rms}");
     }
 

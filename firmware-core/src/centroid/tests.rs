@@ -369,15 +369,7 @@ fn lattice_disk_centroid(cx: f64, cy: f64, r: f64) -> (f64, f64) {
 
 /// Hard-edged 8-bit disk: 200 where the pixel centre is within `r` of the centre, else 0.
 fn hard_disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
-    let mut f = vec![0u8; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            if (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r {
-                f[y * w + x] = 200;
-            }
-        }
-    }
-    f
+    crate::test_support::disk(w, h, (cx, cy), r, 0, 200)
 }
 
 /// Binary mode on a disk: a hard threshold keeps the pixel centres inside a circle, whose

@@ -410,21 +410,11 @@ mod tests {
     use super::super::{centroid, CentroidConfig, Frame, Mode};
     use super::*;
     use proptest::prelude::*;
-    use std::vec;
     use std::vec::Vec;
 
     /// A hard disk of radius `r` centred at `(cx, cy)` on a background of 10, level 200.
     fn disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
-        let mut f = vec![10u8; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
-                if dx * dx + dy * dy <= r * r {
-                    f[y * w + x] = 200;
-                }
-            }
-        }
-        f
+        crate::test_support::disk(w, h, (cx, cy), r, 10, 200)
     }
 
     fn full(cfg: &CentroidConfig, px: &[u8], w: usize, h: usize) -> Centroid {
