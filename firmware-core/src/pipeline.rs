@@ -389,21 +389,11 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// assert_eq!(p.push_frame(0.0), Ok(()));
     /// ```
     pub const fn new() -> Self {
-        VisionH1 {
-            config: PipelineConfig::NONE,
-            plan: UpsamplePlan::NONE,
-            welch: WelchAccumulator::new(),
-            camera: [0.0; CAM],
-            cam_fill: 0,
-            vision: [0.0; HIST],
-            vis_fill: 0,
-            adc: [0.0; HIST],
-            adc_fill: 0,
-            adc_skip: 0,
-            work: [Complex32::new(0.0, 0.0); WORK],
-            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
-            blocks: 0,
-        }
+        Self::empty(
+            PipelineConfig::NONE,
+            UpsamplePlan::NONE,
+            WelchAccumulator::new(),
+        )
     }
 
     /// Whether the settings were set (by [`try_new`](Self::try_new) or
@@ -419,12 +409,19 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// Errors: [`ConfigError::Upsample`], [`ConfigError::Welch`],
     /// [`ConfigError::BlockShape`], [`ConfigError::Capacity`].
     pub const fn try_new(config: PipelineConfig) -> Result<Self, ConfigError> {
-        let (plan, welch) = match Self::check(&config) {
-            Ok(v) => v,
-            Err(e) => return Err(e),
-        };
-        let samples = config.samples_per_block;
-        Ok(VisionH1 {
+        let (plan, welch) = const_try!(Self::check(&config));
+        Ok(Self::empty(config, plan, welch))
+    }
+
+    /// A pipeline with checked settings and no samples (the first quarter block of ADC samples
+    /// is skipped, as after [`reset`](Self::reset)).
+    const fn empty(
+        config: PipelineConfig,
+        plan: UpsamplePlan,
+        welch: WelchAccumulator<WORK>,
+    ) -> Self {
+        let adc_skip = config.samples_per_block / 4;
+        VisionH1 {
             config,
             plan,
             welch,
@@ -434,11 +431,11 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             vis_fill: 0,
             adc: [0.0; HIST],
             adc_fill: 0,
-            adc_skip: samples / 4,
+            adc_skip,
             work: [Complex32::new(0.0, 0.0); WORK],
             scratch: [Complex32::new(0.0, 0.0); SCRATCH],
             blocks: 0,
-        })
+        }
     }
 
     /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets

@@ -498,10 +498,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// [`ConfigError::Overlap`], [`ConfigError::FftLength`], [`ConfigError::Dft`].
     /// `const`: a `static` initialiser builds it in place, checked at compile time.
     pub const fn try_new(config: WelchConfig) -> Result<Self, ConfigError> {
-        let dft = match Self::check(&config) {
-            Ok(d) => d,
-            Err(e) => return Err(e),
-        };
+        let dft = const_try!(Self::check(&config));
         Ok(WelchAccumulator {
             config,
             dft,
@@ -851,10 +848,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
         if let Err(e) = Self::check(&config) {
             return Err(e);
         }
-        let acc = match WelchAccumulator::try_new(config) {
-            Ok(a) => a,
-            Err(e) => return Err(e),
-        };
+        let acc = const_try!(WelchAccumulator::try_new(config));
         Ok(WelchH1 {
             acc,
             xseg: [0.0; SEG],
@@ -892,10 +886,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 capacity: SEG,
             });
         }
-        let dft = match WelchAccumulator::<NFFT>::check(c) {
-            Ok(d) => d,
-            Err(e) => return Err(e),
-        };
+        let dft = const_try!(WelchAccumulator::<NFFT>::check(c));
         if dft.scratch_len() > SCRATCH {
             return Err(ConfigError::Scratch {
                 needed: dft.scratch_len(),
