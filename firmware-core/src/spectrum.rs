@@ -169,27 +169,12 @@ pub struct WelchConfig {
 
 impl WelchConfig {
     /// All zero: the settings of an unconfigured estimator (not valid).
-    pub(crate) const NONE: WelchConfig = WelchConfig {
-        fs_hz: 0.0,
-        nperseg: 0,
-        noverlap: 0,
-        nfft: 0,
-        window: Window::Hann,
-        detrend: Detrend::Constant,
-    };
+    pub(crate) const NONE: WelchConfig = WelchConfig::hann(0.0, 0);
 
     /// scipy's defaults for a record of `len` samples: Hann window, `nperseg = min(256, len)`,
     /// `noverlap = nperseg / 2`, `nfft = nperseg`, constant detrend.
     pub const fn scipy_default(fs_hz: f32, len: usize) -> Self {
-        let nperseg = if len < 256 { len } else { 256 };
-        WelchConfig {
-            fs_hz,
-            nperseg,
-            noverlap: nperseg / 2,
-            nfft: nperseg,
-            window: Window::Hann,
-            detrend: Detrend::Constant,
-        }
+        WelchConfig::hann(fs_hz, if len < 256 { len } else { 256 })
     }
 
     /// `nperseg`-sample segments transformed without zero padding (`nfft = nperseg`), 50 %
@@ -473,9 +458,14 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// An unconfigured estimate (accumulates nothing) to build in place in a `static` (all
     /// zero bytes: `.bss`), then [`configure`](Self::configure).
     pub const fn new() -> Self {
+        Self::empty(WelchConfig::NONE, Dft::NONE)
+    }
+
+    /// An estimate with checked settings and no segment.
+    const fn empty(config: WelchConfig, dft: Dft) -> Self {
         WelchAccumulator {
-            config: WelchConfig::NONE,
-            dft: Dft::NONE,
+            config,
+            dft,
             auto: [0.0; NFFT],
             cross: [0.0; NFFT],
             pyy_dc: 0.0,
@@ -499,16 +489,7 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// `const`: a `static` initialiser builds it in place, checked at compile time.
     pub const fn try_new(config: WelchConfig) -> Result<Self, ConfigError> {
         let dft = const_try!(Self::check(&config));
-        Ok(WelchAccumulator {
-            config,
-            dft,
-            auto: [0.0; NFFT],
-            cross: [0.0; NFFT],
-            pyy_dc: 0.0,
-            pyy_nyquist: 0.0,
-            segments: 0,
-            skipped: 0,
-        })
+        Ok(Self::empty(config, dft))
     }
 
     /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
