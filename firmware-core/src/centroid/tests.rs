@@ -38,6 +38,16 @@ fn config(
     .validate()
 }
 
+/// A ROI from its corner and size.
+fn roi(x: u32, y: u32, width: u32, height: u32) -> Roi {
+    Roi {
+        x,
+        y,
+        width,
+        height,
+    }
+}
+
 /// A centroider for valid settings.
 fn centroider(cfg: CentroidConfig) -> Centroider {
     Centroider::try_new(cfg).unwrap()
@@ -148,23 +158,25 @@ fn frame_strategy(max: u32) -> impl Strategy<Value = (usize, usize, usize, Vec<u
 
 fn roi_strategy(w: usize, h: usize) -> impl Strategy<Value = Option<Roi>> {
     let some = (0..w, 0..h).prop_flat_map(move |(x, y)| {
-        (1..=w - x, 1..=h - y).prop_map(move |(rw, rh)| {
-            Some(Roi {
-                x: x as u32,
-                y: y as u32,
-                width: rw as u32,
-                height: rh as u32,
-            })
-        })
+        (1..=w - x, 1..=h - y)
+            .prop_map(move |(rw, rh)| Some(roi(x as u32, y as u32, rw as u32, rh as u32)))
     });
     prop_oneof![Just(None), some]
+}
+
+/// A frame from [`frame_strategy`] with a ROI inside it from [`roi_strategy`].
+#[allow(clippy::type_complexity)]
+fn frame_roi_strategy(
+    max: u32,
+) -> impl Strategy<Value = (usize, usize, usize, Vec<u32>, Option<Roi>)> {
+    frame_strategy(max)
+        .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h)))
 }
 
 proptest! {
     #[test]
     fn whole_frame_u8_matches_naive_double_loop(
-        (w, h, stride, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(255),
         t in 0u16..300,
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (150u16..400).prop_map(Some)],
@@ -182,8 +194,7 @@ proptest! {
 
     #[test]
     fn whole_frame_u16_matches_naive_double_loop(
-        (w, h, stride, px, roi) in frame_strategy(65535)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(65535),
         t in 0u16..=65535,
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (30000u16..=65535).prop_map(Some)],
@@ -231,8 +242,7 @@ proptest! {
     /// equals the whole-frame call to the last bit.
     #[test]
     fn streaming_equals_whole_frame(
-        (w, h, stride, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(255),
         t in 0u16..255,
         mode in mode_strategy(),
     ) {
@@ -539,13 +549,7 @@ fn flag_border_on_each_frame_and_roi_edge() {
         assert_eq!(at(x, y).flags, Flags::BORDER, "pixel at ({x}, {y})");
     }
     // ROI columns 2..=8, rows 1..=6: its edges count, pixels outside it do not.
-    let roi = Roi {
-        x: 2,
-        y: 1,
-        width: 7,
-        height: 6,
-    };
-    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi(2, 1, 7, 6)), None).unwrap();
     let at = |x, y| centroid_strided(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
     assert_eq!(at(5, 4).flags, Flags::NONE);
     for (x, y) in [(2, 4), (8, 4), (5, 1), (5, 6)] {
@@ -561,13 +565,7 @@ fn flag_border_on_each_frame_and_roi_edge() {
         );
     }
     // Streaming: a frame that ends before the ROI does makes its last row the border.
-    let roi = Roi {
-        x: 0,
-        y: 0,
-        width: 12,
-        height: 100,
-    };
-    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi(0, 0, 12, 100)), None).unwrap();
     let mut c = centroider(cfg);
     let f = frame_with(w, h, &[(5, 8, 200)]);
     for row in f.chunks(w) {
@@ -591,13 +589,7 @@ fn flag_saturated_at_full_scale_or_configured_level() {
     // Configured 8-bit level.
     let level_200 = config(50, Mode::Binary, None, Some(200)).unwrap();
     // A saturated pixel outside the ROI does not count.
-    let roi = Roi {
-        x: 0,
-        y: 0,
-        width: 3,
-        height: 8,
-    };
-    let in_roi = config(50, Mode::Binary, Some(roi), None).unwrap();
+    let in_roi = config(50, Mode::Binary, Some(roi(0, 0, 3, 8)), None).unwrap();
     for (cfg, pixels, want) in [
         (full_scale, &[(3, 3, 254), (4, 3, 200)][..], Flags::NONE),
         (full_scale, &[(3, 3, 255), (4, 3, 200)], Flags::SATURATED),
@@ -794,8 +786,7 @@ fn naive_components(
 proptest! {
     #[test]
     fn multi_target_matches_flood_fill(
-        (w, h, _s, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, _s, px)| (Just(w), Just(h), Just(w), Just(px), roi_strategy(w, h))),
+        (w, h, _s, px, roi) in frame_roi_strategy(255),
         t in 100u8..255,
         mode in mode_strategy(),
     ) {
@@ -938,13 +929,7 @@ fn multi_target_16_bit_streaming_equals_whole_frame() {
             }
         })
         .collect();
-    let roi = Roi {
-        x: 3,
-        y: 2,
-        width: 40,
-        height: 25,
-    };
-    let cfg = config(999, Mode::Weighted, Some(roi), Some(60000)).unwrap();
+    let cfg = config(999, Mode::Weighted, Some(roi(3, 2, 40, 25)), Some(60000)).unwrap();
     let mut whole = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
     whole.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
     let mut streamed = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
