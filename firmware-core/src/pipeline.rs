@@ -34,8 +34,8 @@
 //! transform in turn, the window is computed rather than stored, and segments are not copied:
 //! the state is `4 CAM + 8 HIST + 16 WORK + 8 SCRATCH` bytes plus a few words. For 120 fps ->
 //! 2048 Hz blocks of one second, 2048-point segments with 50 % overlap and 238 samples
-//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 256 B (under
-//! 64 KiB; 57 140 B on the Cortex-M4, where the mcu-demo prints it). The two separate owning
+//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 264 B (under
+//! 64 KiB; 57 148 B on the Cortex-M4, where the mcu-demo prints it). The two separate owning
 //! types, `WelchH1<2048, 2048, 0>` and `Upsampler<2048, 150>`, would need 66 KiB before any
 //! sample buffer.
 //!
