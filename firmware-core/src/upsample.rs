@@ -119,7 +119,7 @@ pub const fn output_len(n: usize, from_hz: u32, to_hz: u32) -> Option<usize> {
 }
 
 /// What a run of an [`UpsamplePlan`] does besides upsampling: the options of
-/// [`UpsamplePlan::process_options`] and [`UpsamplePlan::process_part_options`]. The default
+/// [`UpsamplePlan::process_part_options`] and [`Upsampler::process_options`]. The default
 /// is plain upsampling.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -246,33 +246,24 @@ impl UpsamplePlan {
         work: &mut [Complex32],
         scratch: &mut [Complex32],
     ) -> Result<(), BufferError> {
+        self.check_whole(output)?;
         let options = UpsampleOptions {
             accel,
             ..UpsampleOptions::default()
         };
-        self.process_options(input, output, options, work, scratch)
+        self.process_part_options(input, output, 0, options, work, scratch)
             .map(|_| ())
     }
 
-    /// As [`process_with`](Self::process_with), with all the [`UpsampleOptions`]; returns
-    /// what the exposure compensation did ([`Compensation::default`] without one).
-    ///
-    /// Errors: as [`process_with`](Self::process_with).
-    pub fn process_options(
-        &self,
-        input: &[f32],
-        output: &mut [f32],
-        options: UpsampleOptions,
-        work: &mut [Complex32],
-        scratch: &mut [Complex32],
-    ) -> Result<Compensation, BufferError> {
+    /// `Ok` when `output` holds the whole record (`m` values).
+    fn check_whole(&self, output: &[f32]) -> Result<(), BufferError> {
         if output.len() != self.m {
             return Err(BufferError {
                 expected: self.m,
                 got: output.len(),
             });
         }
-        self.process_part_options(input, output, 0, options, work, scratch)
+        Ok(())
     }
 
     /// As [`process_with`](Self::process_with), with two options for block-wise streaming
@@ -308,8 +299,9 @@ impl UpsamplePlan {
             .map(|_| ())
     }
 
-    /// As [`process_part`](Self::process_part), with all the [`UpsampleOptions`]; returns
-    /// what the exposure compensation did ([`Compensation::default`] without one).
+    /// As [`process_part`](Self::process_part), with all the [`UpsampleOptions`] (`first = 0`
+    /// and `m` output values for a whole record); returns what the exposure compensation did
+    /// ([`Compensation::default`] without one).
     ///
     /// Errors: as [`process_part`](Self::process_part).
     pub fn process_part_options(
@@ -580,9 +572,9 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
         )
     }
 
-    /// Upsamples with the [`UpsampleOptions`] (acceleration, end matching, exposure
-    /// compensation: see [`UpsamplePlan::process_options`]); returns what the exposure
-    /// compensation did.
+    /// Upsamples `input` (`n` values) into `output` (`m` values) with the [`UpsampleOptions`]
+    /// (acceleration, end matching, exposure compensation: see
+    /// [`UpsamplePlan::process_part_options`]); returns what the exposure compensation did.
     ///
     /// ```
     /// use firmware_core::upsample::{scratch_capacity, ExposureCompensation, UpsampleOptions, Upsampler};
@@ -609,8 +601,10 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
         output: &mut [f32],
         options: UpsampleOptions,
     ) -> Result<Compensation, BufferError> {
+        self.plan.check_whole(output)?;
+        let (work, scratch) = (&mut self.work, &mut self.scratch);
         self.plan
-            .process_options(input, output, options, &mut self.work, &mut self.scratch)
+            .process_part_options(input, output, 0, options, work, scratch)
     }
 }
 
