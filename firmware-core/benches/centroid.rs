@@ -14,16 +14,12 @@ use firmware_core::centroid::{
     centroid, row_binary_u8, CentroidConfig, Frame, Mode, MultiCentroider,
 };
 
+#[path = "../src/test_support.rs"]
+mod test_support;
+
+/// The benchmark disk: level 200 on a background of 10.
 fn disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
-    let mut f = vec![10u8; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            if (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r {
-                f[y * w + x] = 200;
-            }
-        }
-    }
-    f
+    test_support::disk(w, h, (cx, cy), r, 10, 200)
 }
 
 fn bench(c: &mut Criterion) {

@@ -262,11 +262,28 @@ pub fn compensate_with(
     exposure_s: f32,
     freq_hz: impl Fn(usize) -> f32,
 ) -> Compensation {
+    each_ratio(transfer, bins.len(), exposure_s, freq_hz, |k, r| {
+        if let Some(bin) = bins.get_mut(k) {
+            *bin /= r;
+        }
+    })
+}
+
+/// Calls `divide(k, ratio)` for every bin `k < len` that has a ratio at its E2PR and counts
+/// the bins that have none: the one loop behind [`compensate_with`] and
+/// [`dft_compensation`].
+fn each_ratio(
+    transfer: &impl ExposureTransfer,
+    len: usize,
+    exposure_s: f32,
+    freq_hz: impl Fn(usize) -> f32,
+    mut divide: impl FnMut(usize, f32),
+) -> Compensation {
     let mut out = Compensation::default();
-    for (k, bin) in bins.iter_mut().enumerate() {
+    for k in 0..len {
         match transfer.ratio(libm::fabsf(e2pr(freq_hz(k), exposure_s))) {
             Some(r) => {
-                *bin /= r;
+                divide(k, r);
                 out.corrected += 1;
             }
             None => {
@@ -291,6 +308,23 @@ pub fn compensate_one_sided(
     compensate_with(transfer, bins, exposure_s, |k| k as f32 * bin_hz)
 }
 
+/// The signed frequency (Hz) of bin `k` of an `n`-point DFT at `sample_rate_hz`: `k fs / n`
+/// for `k <= n/2`, `(k - n) fs / n` above.
+fn dft_bin_hz(n: usize, sample_rate_hz: f32) -> impl Fn(usize) -> f32 {
+    let df = if n == 0 {
+        0.0
+    } else {
+        sample_rate_hz / n as f32
+    };
+    move |k| {
+        if 2 * k <= n {
+            k as f32 * df
+        } else {
+            (k as f32 - n as f32) * df
+        }
+    }
+}
+
 /// [`compensate_with`] for a whole `n`-point DFT (`n = bins.len()`) of a signal sampled at
 /// `sample_rate_hz`: bin `k` is at `k fs / n` for `k <= n/2` and at `(k - n) fs / n` above
 /// (the layout [`upsample`](crate::upsample) works on). The transfer is even in `f`, so the
@@ -302,18 +336,25 @@ pub fn compensate_dft(
     exposure_s: f32,
 ) -> Compensation {
     let n = bins.len();
-    let df = if n == 0 {
-        0.0
-    } else {
-        sample_rate_hz / n as f32
-    };
-    compensate_with(transfer, bins, exposure_s, |k| {
-        if 2 * k <= n {
-            k as f32 * df
-        } else {
-            (k as f32 - n as f32) * df
-        }
-    })
+    compensate_with(transfer, bins, exposure_s, dft_bin_hz(n, sample_rate_hz))
+}
+
+/// What [`compensate_dft`] does to an `n`-point spectrum, without one: the bins it divides
+/// and the bins it leaves (for a report of a compensation whose spectrum is gone, e.g. the
+/// blocks of [`VisionH1`](crate::pipeline::VisionH1), which all have the same bins).
+pub fn dft_compensation(
+    transfer: &impl ExposureTransfer,
+    n: usize,
+    sample_rate_hz: f32,
+    exposure_s: f32,
+) -> Compensation {
+    each_ratio(
+        transfer,
+        n,
+        exposure_s,
+        dft_bin_hz(n, sample_rate_hz),
+        |_, _| {},
+    )
 }
 
 #[cfg(test)]

@@ -145,6 +145,17 @@ macro_rules! error_display {
     };
 }
 
+/// `?` for a `const fn`, where the operator is not allowed: the `Ok` value, or an early return
+/// of the error unchanged.
+macro_rules! const_try {
+    ($result:expr) => {
+        match $result {
+            Ok(v) => v,
+            Err(e) => return Err(e),
+        }
+    };
+}
+
 pub mod centroid;
 pub mod convert;
 pub mod dft;
@@ -154,6 +165,9 @@ pub mod pipeline;
 pub mod spectrum;
 pub mod sync;
 pub mod upsample;
+
+#[cfg(test)]
+mod test_support;
 
 /// Single-precision complex number used throughout the crate (the one `microfft` uses).
 pub use num_complex::Complex32;

@@ -34,8 +34,8 @@
 //! transform in turn, the window is computed rather than stored, and segments are not copied:
 //! the state is `4 CAM + 8 HIST + 16 WORK + 8 SCRATCH` bytes plus a few words. For 120 fps ->
 //! 2048 Hz blocks of one second, 2048-point segments with 50 % overlap and 238 samples
-//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 256 B (under
-//! 64 KiB; 57 140 B on the Cortex-M4, where the mcu-demo prints it). The two separate owning
+//! (116 ms) of extra ADC lead that is `VisionH1<121, 2816, 2048, 150>`: 57 264 B (under
+//! 64 KiB; 57 148 B on the Cortex-M4, where the mcu-demo prints it). The two separate owning
 //! types, `WelchH1<2048, 2048, 0>` and `Upsampler<2048, 150>`, would need 66 KiB before any
 //! sample buffer.
 //!
@@ -82,8 +82,9 @@
 //! ```
 
 use crate::dft;
+use crate::exposure::Compensation;
 use crate::spectrum::{self, WelchAccumulator, WelchConfig};
-use crate::upsample::{self, UpsamplePlan};
+use crate::upsample::{self, ExposureCompensation, UpsampleOptions, UpsamplePlan};
 use crate::Complex32;
 use core::fmt;
 
@@ -123,6 +124,13 @@ pub struct PipelineConfig {
     /// (spectrum times `-(2 pi f)^2 * scale`, e.g. `1e-3` for mm in, m/s^2 out). `None`: keep
     /// the camera unit.
     pub acceleration_scale: Option<f32>,
+    /// `Some(te)`: exposure compensation (issue #12): each block's spectrum is divided by the
+    /// box transfer `sinc(pi f te)` of a centred exposure of `te` seconds (finite, `>= 0`)
+    /// before the inverse transform, except its bins with `E2PR = |f| te > 0.8`, left
+    /// uncorrected ([`upsample::ExposureCompensation`]; which bins, see
+    /// [`VisionH1::exposure_compensation`]). `None` (the default of the constructors): the
+    /// vision spectrum as measured.
+    pub exposure_compensation: Option<f32>,
 }
 
 impl PipelineConfig {
@@ -132,6 +140,7 @@ impl PipelineConfig {
         samples_per_block: 0,
         welch: WelchConfig::NONE,
         acceleration_scale: None,
+        exposure_compensation: None,
     };
 
     /// Blocks of one second (`fps` frames -> `fs` samples) and one-second Welch segments:
@@ -143,6 +152,16 @@ impl PipelineConfig {
             samples_per_block: fs,
             welch: WelchConfig::hann(fs as f32, fs),
             acceleration_scale,
+            exposure_compensation: None,
+        }
+    }
+
+    /// These settings with exposure compensation for an exposure of `exposure_s` seconds
+    /// (see [`exposure_compensation`](Self::exposure_compensation)).
+    pub const fn with_exposure_compensation(self, exposure_s: f32) -> Self {
+        PipelineConfig {
+            exposure_compensation: Some(exposure_s),
+            ..self
         }
     }
 
@@ -234,6 +253,9 @@ pub enum ConfigError {
         /// `samples_per_block`.
         samples: usize,
     },
+    /// The exposure time of [`PipelineConfig::exposure_compensation`] is not a finite,
+    /// non-negative number of seconds.
+    Exposure,
     /// A capacity (const generic) is too small for the settings.
     Capacity {
         /// Which capacity: `"CAM"`, `"WORK"`, `"SCRATCH"` or `"HIST"`.
@@ -253,6 +275,10 @@ error_display!(ConfigError, f, {
         "blocks of {frames} frames -> {samples} samples: the frames must be an even \
          number and the samples a multiple of 4 (blocks overlap by half and keep their \
          central half)"
+    ),
+    ConfigError::Exposure => write!(
+        f,
+        "the exposure time to compensate must be finite and non-negative"
     ),
     ConfigError::Capacity {
         what,
@@ -389,21 +415,11 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// assert_eq!(p.push_frame(0.0), Ok(()));
     /// ```
     pub const fn new() -> Self {
-        VisionH1 {
-            config: PipelineConfig::NONE,
-            plan: UpsamplePlan::NONE,
-            welch: WelchAccumulator::new(),
-            camera: [0.0; CAM],
-            cam_fill: 0,
-            vision: [0.0; HIST],
-            vis_fill: 0,
-            adc: [0.0; HIST],
-            adc_fill: 0,
-            adc_skip: 0,
-            work: [Complex32::new(0.0, 0.0); WORK],
-            scratch: [Complex32::new(0.0, 0.0); SCRATCH],
-            blocks: 0,
-        }
+        Self::empty(
+            PipelineConfig::NONE,
+            UpsamplePlan::NONE,
+            WelchAccumulator::new(),
+        )
     }
 
     /// Whether the settings were set (by [`try_new`](Self::try_new) or
@@ -419,12 +435,19 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// Errors: [`ConfigError::Upsample`], [`ConfigError::Welch`],
     /// [`ConfigError::BlockShape`], [`ConfigError::Capacity`].
     pub const fn try_new(config: PipelineConfig) -> Result<Self, ConfigError> {
-        let (plan, welch) = match Self::check(&config) {
-            Ok(v) => v,
-            Err(e) => return Err(e),
-        };
-        let samples = config.samples_per_block;
-        Ok(VisionH1 {
+        let (plan, welch) = const_try!(Self::check(&config));
+        Ok(Self::empty(config, plan, welch))
+    }
+
+    /// A pipeline with checked settings and no samples (the first quarter block of ADC samples
+    /// is skipped, as after [`reset`](Self::reset)).
+    const fn empty(
+        config: PipelineConfig,
+        plan: UpsamplePlan,
+        welch: WelchAccumulator<WORK>,
+    ) -> Self {
+        let adc_skip = config.samples_per_block / 4;
+        VisionH1 {
             config,
             plan,
             welch,
@@ -434,11 +457,11 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             vis_fill: 0,
             adc: [0.0; HIST],
             adc_fill: 0,
-            adc_skip: samples / 4,
+            adc_skip,
             work: [Complex32::new(0.0, 0.0); WORK],
             scratch: [Complex32::new(0.0, 0.0); SCRATCH],
             blocks: 0,
-        })
+        }
     }
 
     /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
@@ -464,6 +487,11 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         };
         if frames < 2 || frames % 2 != 0 || samples % 4 != 0 {
             return Err(ConfigError::BlockShape { frames, samples });
+        }
+        if let Some(te) = config.exposure_compensation {
+            if !(te.is_finite() && te >= 0.0) {
+                return Err(ConfigError::Exposure);
+            }
         }
         let welch = match WelchAccumulator::<WORK>::try_new(config.welch) {
             Ok(w) => w,
@@ -500,6 +528,29 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// The settings.
     pub const fn config(&self) -> &PipelineConfig {
         &self.config
+    }
+
+    /// The exposure compensation of every block (the camera rate and
+    /// [`PipelineConfig::exposure_compensation`]), if it is on.
+    fn exposure(&self) -> Option<ExposureCompensation> {
+        self.config
+            .exposure_compensation
+            .map(|exposure_s| ExposureCompensation {
+                fs_in_hz: self.config.frame_rate_hz(),
+                exposure_s,
+            })
+    }
+
+    /// What the exposure compensation does to each block (the same for all): the block's
+    /// `n` bins divided by the transfer and those left uncorrected (`E2PR > 0.8`), the first
+    /// of which is `first_uncorrected` (bins above `n / 2` are the negative frequencies).
+    /// `None` when it is off or the pipeline is not configured.
+    pub fn exposure_compensation(&self) -> Option<Compensation> {
+        let n = self.plan.input_len();
+        match self.exposure() {
+            Some(e) if n > 0 => Some(e.bins(n)),
+            _ => None,
+        }
     }
 
     /// The estimate: H1 (vision over ADC), coherence, bin frequencies, segment counts.
@@ -617,18 +668,25 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
                     .config
                     .acceleration_scale
                     .map(|s| (self.config.frame_rate_hz(), s));
+                let exposure = self.exposure();
                 if let (Some(input), Some(&next), Some(out)) = (
                     self.camera.get(..n),
                     self.camera.get(n),
                     self.vision.get_mut(self.vis_fill..self.vis_fill + keep),
                 ) {
                     // lengths and capacities were checked by try_new: no error case is left
+                    let options = UpsampleOptions {
+                        accel,
+                        end_match: Some(next),
+                        exposure,
+                    };
+                    // what the compensation did is the same for every block: see
+                    // `exposure_compensation`
                     self.plan.run_part(
                         input,
                         out,
                         m / 4,
-                        accel,
-                        Some(next),
+                        options,
                         &mut self.work,
                         &mut self.scratch,
                     );
@@ -725,6 +783,7 @@ mod tests {
                 detrend: Detrend::Constant,
             },
             acceleration_scale: accel,
+            exposure_compensation: None,
         }
     }
 
@@ -846,6 +905,7 @@ mod tests {
                     samples_per_block: M2,
                     welch,
                     acceleration_scale: Some(1e-3),
+                    exposure_compensation: None,
                 })
                 .unwrap(),
             );
@@ -887,6 +947,55 @@ mod tests {
             whole_blocks > 10.0 * streamed,
             "whole blocks: {whole_blocks}"
         );
+    }
+
+    /// H1 at 3 Hz of a camera that sees `sin(2 pi 3 t + 0.4)` through a centred 0.1 s box
+    /// exposure (frames: the exact box average, `sinc(0.3 pi) = 0.858` times the motion)
+    /// against an ADC that sees the motion itself, with `config`.
+    fn blurred_h1(config: PipelineConfig) -> Complex32 {
+        let (f, te) = (3.0f64, 0.1f64);
+        let z = core::f64::consts::PI * f * te;
+        let motion = |t: f64| (core::f64::consts::TAU * f * t + 0.4).sin();
+        let frames: Vec<f32> = (0..8 * N)
+            .map(|j| (z.sin() / z * motion(j as f64 / 12.0)) as f32)
+            .collect();
+        let adc: Vec<f32> = (0..8 * M).map(|i| motion(i as f64 / 64.0) as f32).collect();
+        let mut p = P::try_new(config).unwrap();
+        feed(&mut p, &frames, &adc);
+        p.welch().h1(3).unwrap()
+    }
+
+    #[test]
+    fn exposure_compensation_undoes_the_box_exposure() {
+        let sinc = crate::exposure::box_transfer(3.0, 0.1);
+        // off (the default): H1 is the transfer, the blur's amplitude loss
+        let h = blurred_h1(config(None));
+        assert!((h.re - sinc).abs() < 1e-3 && h.im.abs() < 1e-3, "{h}");
+        // on: the motion recovered (f32 rounding and the block streaming, as in the other
+        // closed-form tests)
+        let h = blurred_h1(config(None).with_exposure_compensation(0.1));
+        assert!((h.re - 1.0).abs() < 1e-3 && h.im.abs() < 1e-3, "{h}");
+    }
+
+    #[test]
+    fn exposure_compensation_reports_its_bins_and_rejects_bad_times() {
+        let p = P::try_new(config(None)).unwrap();
+        assert_eq!(p.exposure_compensation(), None);
+        assert_eq!(P::new().exposure_compensation(), None);
+        // 12 fps blocks of 12 frames (1 Hz bins), 0.3 s: E2PR 0.3 |f|, over 0.8 from 3 Hz on
+        let p = P::try_new(config(None).with_exposure_compensation(0.3)).unwrap();
+        assert_eq!(
+            p.exposure_compensation(),
+            Some(Compensation {
+                corrected: 5, // 0, +-1, +-2 Hz
+                uncorrected: 7,
+                first_uncorrected: Some(3),
+            })
+        );
+        for te in [-0.1, f32::NAN, f32::INFINITY] {
+            let bad = config(None).with_exposure_compensation(te);
+            assert_eq!(P::try_new(bad).unwrap_err(), ConfigError::Exposure);
+        }
     }
 
     #[test]

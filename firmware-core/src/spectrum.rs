@@ -169,27 +169,12 @@ pub struct WelchConfig {
 
 impl WelchConfig {
     /// All zero: the settings of an unconfigured estimator (not valid).
-    pub(crate) const NONE: WelchConfig = WelchConfig {
-        fs_hz: 0.0,
-        nperseg: 0,
-        noverlap: 0,
-        nfft: 0,
-        window: Window::Hann,
-        detrend: Detrend::Constant,
-    };
+    pub(crate) const NONE: WelchConfig = WelchConfig::hann(0.0, 0);
 
     /// scipy's defaults for a record of `len` samples: Hann window, `nperseg = min(256, len)`,
     /// `noverlap = nperseg / 2`, `nfft = nperseg`, constant detrend.
     pub const fn scipy_default(fs_hz: f32, len: usize) -> Self {
-        let nperseg = if len < 256 { len } else { 256 };
-        WelchConfig {
-            fs_hz,
-            nperseg,
-            noverlap: nperseg / 2,
-            nfft: nperseg,
-            window: Window::Hann,
-            detrend: Detrend::Constant,
-        }
+        WelchConfig::hann(fs_hz, if len < 256 { len } else { 256 })
     }
 
     /// `nperseg`-sample segments transformed without zero padding (`nfft = nperseg`), 50 %
@@ -473,9 +458,14 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// An unconfigured estimate (accumulates nothing) to build in place in a `static` (all
     /// zero bytes: `.bss`), then [`configure`](Self::configure).
     pub const fn new() -> Self {
+        Self::empty(WelchConfig::NONE, Dft::NONE)
+    }
+
+    /// An estimate with checked settings and no segment.
+    const fn empty(config: WelchConfig, dft: Dft) -> Self {
         WelchAccumulator {
-            config: WelchConfig::NONE,
-            dft: Dft::NONE,
+            config,
+            dft,
             auto: [0.0; NFFT],
             cross: [0.0; NFFT],
             pyy_dc: 0.0,
@@ -498,20 +488,8 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
     /// [`ConfigError::Overlap`], [`ConfigError::FftLength`], [`ConfigError::Dft`].
     /// `const`: a `static` initialiser builds it in place, checked at compile time.
     pub const fn try_new(config: WelchConfig) -> Result<Self, ConfigError> {
-        let dft = match Self::check(&config) {
-            Ok(d) => d,
-            Err(e) => return Err(e),
-        };
-        Ok(WelchAccumulator {
-            config,
-            dft,
-            auto: [0.0; NFFT],
-            cross: [0.0; NFFT],
-            pyy_dc: 0.0,
-            pyy_nyquist: 0.0,
-            segments: 0,
-            skipped: 0,
-        })
+        let dft = const_try!(Self::check(&config));
+        Ok(Self::empty(config, dft))
     }
 
     /// Replaces the settings (checked as in [`try_new`](Self::try_new)) and clears the
@@ -851,10 +829,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
         if let Err(e) = Self::check(&config) {
             return Err(e);
         }
-        let acc = match WelchAccumulator::try_new(config) {
-            Ok(a) => a,
-            Err(e) => return Err(e),
-        };
+        let acc = const_try!(WelchAccumulator::try_new(config));
         Ok(WelchH1 {
             acc,
             xseg: [0.0; SEG],
@@ -892,10 +867,7 @@ impl<const SEG: usize, const NFFT: usize, const SCRATCH: usize> WelchH1<SEG, NFF
                 capacity: SEG,
             });
         }
-        let dft = match WelchAccumulator::<NFFT>::check(c) {
-            Ok(d) => d,
-            Err(e) => return Err(e),
-        };
+        let dft = const_try!(WelchAccumulator::<NFFT>::check(c));
         if dft.scratch_len() > SCRATCH {
             return Err(ConfigError::Scratch {
                 needed: dft.scratch_len(),
@@ -1394,39 +1366,28 @@ mod tests {
             let e = W::try_new(WelchConfig { fs_hz: fs, ..ok }).unwrap_err();
             assert_eq!(e, ConfigError::SampleRate);
         }
-        let e = W::try_new(WelchConfig { nperseg: 0, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::SegmentLength {
-                nperseg: 0,
-                capacity: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { nperseg: 65, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::SegmentLength {
-                nperseg: 65,
-                capacity: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { noverlap: 64, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::Overlap {
-                noverlap: 64,
-                nperseg: 64
-            }
-        );
-        let e = W::try_new(WelchConfig { nfft: 63, ..ok }).unwrap_err();
-        assert_eq!(
-            e,
-            ConfigError::FftLength {
-                nfft: 63,
-                nperseg: 64,
-                capacity: 128
-            }
-        );
+        // the capacities of `W`: 64-sample segments, 128-point transforms
+        let segment = |nperseg| ConfigError::SegmentLength {
+            nperseg,
+            capacity: 64,
+        };
+        let overlap = ConfigError::Overlap {
+            noverlap: 64,
+            nperseg: 64,
+        };
+        let fft = ConfigError::FftLength {
+            nfft: 63,
+            nperseg: 64,
+            capacity: 128,
+        };
+        for (bad, want) in [
+            (WelchConfig { nperseg: 0, ..ok }, segment(0)),
+            (WelchConfig { nperseg: 65, ..ok }, segment(65)),
+            (WelchConfig { noverlap: 64, ..ok }, overlap),
+            (WelchConfig { nfft: 63, ..ok }, fft),
+        ] {
+            assert_eq!(W::try_new(bad).unwrap_err(), want, "{bad:?}");
+        }
         let e = W::try_new(WelchConfig { nfft: 129, ..ok }).unwrap_err();
         assert!(matches!(e, ConfigError::FftLength { nfft: 129, .. }));
         // 120 = 8 * 15 needs more scratch than scratch_capacity(96) = 96 + 2 * 3 = 102

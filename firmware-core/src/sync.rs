@@ -380,20 +380,19 @@ mod tests {
         for _ in 0..512 {
             d.poll(|e| events.push(e)).unwrap();
         }
-        let frames: Vec<u64> = events
+        let (frames, samples): (Vec<Event>, Vec<Event>) = events
             .iter()
-            .filter_map(|e| match e {
-                Event::Frame { tick, .. } => Some(*tick),
-                _ => None,
-            })
-            .collect();
-        let samples: Vec<u64> = events
-            .iter()
-            .filter_map(|e| match e {
-                Event::Sample { tick, .. } => Some(*tick),
-                _ => None,
-            })
-            .collect();
+            .copied()
+            .partition(|e| matches!(e, Event::Frame { .. }));
+        let ticks = |events: Vec<Event>| -> Vec<u64> {
+            events
+                .into_iter()
+                .map(|e| match e {
+                    Event::Frame { tick, .. } | Event::Sample { tick, .. } => tick,
+                })
+                .collect()
+        };
+        let (frames, samples) = (ticks(frames), ticks(samples));
         assert_eq!(frames, [0, 256]);
         assert_eq!(samples.len(), 511 / 15 + 1);
         assert!(samples.iter().enumerate().all(|(i, t)| *t == 15 * i as u64));

@@ -26,6 +26,7 @@
 //! ```
 
 use crate::dft::{scratch_len, Dft, DftError, Direction};
+use crate::exposure::{self, BoxTransfer, Compensation};
 use crate::{BufferError, Complex32};
 use core::f32::consts::PI;
 
@@ -117,6 +118,50 @@ pub const fn output_len(n: usize, from_hz: u32, to_hz: u32) -> Option<usize> {
     Some((num / from_hz as u64) as usize)
 }
 
+/// What a run of an [`UpsamplePlan`] does besides upsampling: the options of
+/// [`UpsamplePlan::process_part_options`] and [`Upsampler::process_options`]. The default
+/// is plain upsampling.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct UpsampleOptions {
+    /// `Some((fs_in_hz, scale))`: convert displacement to acceleration, the spectrum times
+    /// `-(2 pi f)^2 * scale` (DC zeroed), as [`Upsampler::process_acceleration`]; `fs_in_hz`
+    /// is the input rate (Hz), `scale` the unit conversion.
+    pub accel: Option<(f32, f32)>,
+    /// `Some(next)`: end matching of a streamed block (see
+    /// [`process_part`](UpsamplePlan::process_part)).
+    pub end_match: Option<f32>,
+    /// `Some(_)`: divide the input spectrum by the exposure transfer (see
+    /// [`ExposureCompensation`]).
+    pub exposure: Option<ExposureCompensation>,
+}
+
+/// Exposure compensation in the upsampling (issue #12, SPEC 2.6): every bin of the input's
+/// `n`-point spectrum is divided by the box transfer `sinc(pi f Te)` of a centred exposure
+/// ([`exposure::BoxTransfer`], exact for the weighted centroid), except the bins with
+/// `E2PR = |f| Te >` [`exposure::E2PR_LIMIT`] (0.8, a noise gain of 4.3 and growing without
+/// bound towards the first zero at 1): those are left unchanged and counted in the
+/// [`Compensation`] the run returns. It is done on the `n` input bins before the zero padding
+/// (the padded bins are zero, and only the input's bins are reported), in the same spectral
+/// pass as the acceleration conversion; the end-matching line is not divided (a box average
+/// leaves a straight line unchanged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ExposureCompensation {
+    /// Input (camera) sampling rate, Hz: bin `k` of the input spectrum is at `k fs_in / n`.
+    pub fs_in_hz: f32,
+    /// Exposure time `Te`, s (`>= 0`; 0 is no blur and changes nothing).
+    pub exposure_s: f32,
+}
+
+impl ExposureCompensation {
+    /// What the compensation does to the spectrum of `n` input samples (without running it):
+    /// [`exposure::dft_compensation`] with the box transfer.
+    pub fn bins(&self, n: usize) -> Compensation {
+        exposure::dft_compensation(&BoxTransfer, n, self.fs_in_hz, self.exposure_s)
+    }
+}
+
 /// The plan of an `n -> m` Fourier upsampling (lengths and the two DFT plans), with no
 /// buffers: [`process_with`](Self::process_with) runs it in caller buffers, so a firmware can
 /// lend it the work buffer of another stage (the Welch estimate's, see [`crate::pipeline`]).
@@ -201,13 +246,24 @@ impl UpsamplePlan {
         work: &mut [Complex32],
         scratch: &mut [Complex32],
     ) -> Result<(), BufferError> {
+        self.check_whole(output)?;
+        let options = UpsampleOptions {
+            accel,
+            ..UpsampleOptions::default()
+        };
+        self.process_part_options(input, output, 0, options, work, scratch)
+            .map(|_| ())
+    }
+
+    /// `Ok` when `output` holds the whole record (`m` values).
+    fn check_whole(&self, output: &[f32]) -> Result<(), BufferError> {
         if output.len() != self.m {
             return Err(BufferError {
                 expected: self.m,
                 got: output.len(),
             });
         }
-        self.process_part(input, output, 0, accel, None, work, scratch)
+        Ok(())
     }
 
     /// As [`process_with`](Self::process_with), with two options for block-wise streaming
@@ -234,6 +290,29 @@ impl UpsamplePlan {
         work: &mut [Complex32],
         scratch: &mut [Complex32],
     ) -> Result<(), BufferError> {
+        let options = UpsampleOptions {
+            accel,
+            end_match,
+            exposure: None,
+        };
+        self.process_part_options(input, output, first, options, work, scratch)
+            .map(|_| ())
+    }
+
+    /// As [`process_part`](Self::process_part), with all the [`UpsampleOptions`] (`first = 0`
+    /// and `m` output values for a whole record); returns what the exposure compensation did
+    /// ([`Compensation::default`] without one).
+    ///
+    /// Errors: as [`process_part`](Self::process_part).
+    pub fn process_part_options(
+        &self,
+        input: &[f32],
+        output: &mut [f32],
+        first: usize,
+        options: UpsampleOptions,
+        work: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) -> Result<Compensation, BufferError> {
         let (n, m) = (self.n, self.m);
         if input.len() != n {
             return Err(BufferError {
@@ -259,27 +338,30 @@ impl UpsamplePlan {
                 got: scratch.len(),
             });
         }
-        self.run_part(input, output, first, accel, end_match, work, scratch);
-        Ok(())
+        Ok(self.run_part(input, output, first, options, work, scratch))
     }
 
     /// [`process_part`](Self::process_part) for the crate's own callers, whose buffers follow
     /// from a validated configuration: infallible (a buffer of the wrong length, impossible
-    /// there, leaves `output` untouched).
-    #[allow(clippy::too_many_arguments)]
+    /// there, leaves `output` untouched and reports no compensation).
     pub(crate) fn run_part(
         &self,
         input: &[f32],
         output: &mut [f32],
         first: usize,
-        accel: Option<(f32, f32)>,
-        end_match: Option<f32>,
+        options: UpsampleOptions,
         work: &mut [Complex32],
         scratch: &mut [Complex32],
-    ) {
+    ) -> Compensation {
+        let none = Compensation::default();
+        let UpsampleOptions {
+            accel,
+            end_match,
+            exposure,
+        } = options;
         let (n, m) = (self.n, self.m);
         if n == 0 || input.len() != n || first > m || output.len() > m - first {
-            return;
+            return none;
         }
         // the line a + slope * i through the first sample and the next block's (i in input
         // samples)
@@ -288,18 +370,22 @@ impl UpsamplePlan {
             _ => (0.0, 0.0),
         };
         let Some(work) = work.get_mut(..m) else {
-            return;
+            return none;
         };
         if scratch.len() < self.scratch_len() {
-            return;
+            return none;
         }
         for (i, (w, x)) in work.iter_mut().zip(input).enumerate() {
             *w = Complex32::new(*x - (a + slope * i as f32), 0.0);
         }
         let Some(head) = work.get_mut(..n) else {
-            return;
+            return none;
         };
         self.fwd.run(head, scratch, Direction::Forward);
+        let compensation = match exposure {
+            Some(e) => exposure::compensate_dft(&BoxTransfer, head, e.fs_in_hz, e.exposure_s),
+            None => none,
+        };
         // bins kept on each side: positive 0 ..= pos - 1, negative 1 ..= neg
         let even = n % 2 == 0;
         let pos = if even { n / 2 } else { n.div_ceil(2) };
@@ -360,6 +446,7 @@ impl UpsamplePlan {
         for (j, (o, w)) in output.iter_mut().zip(kept).enumerate() {
             *o = w.re * s + (a + slope * (first + j) as f32);
         }
+        compensation
     }
 }
 
@@ -484,6 +571,41 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
             &mut self.scratch,
         )
     }
+
+    /// Upsamples `input` (`n` values) into `output` (`m` values) with the [`UpsampleOptions`]
+    /// (acceleration, end matching, exposure compensation: see
+    /// [`UpsamplePlan::process_part_options`]); returns what the exposure compensation did.
+    ///
+    /// ```
+    /// use firmware_core::upsample::{scratch_capacity, ExposureCompensation, UpsampleOptions, Upsampler};
+    /// // 12 fps, 40 ms exposure: a 3 Hz tone is seen at sinc(pi 3 0.04) = 0.94 of its amplitude
+    /// type Up = Upsampler<64, { scratch_capacity(12, 64) }>;
+    /// let mut up = Up::try_new(12, 64).unwrap();
+    /// let (f, te) = (3.0, 0.04);
+    /// let seen = firmware_core::exposure::box_transfer(f, te);
+    /// let x: [f32; 12] = core::array::from_fn(|j| {
+    ///     seen * libm::sinf(2.0 * core::f32::consts::PI * f * j as f32 / 12.0)
+    /// });
+    /// let exposure = Some(ExposureCompensation { fs_in_hz: 12.0, exposure_s: te });
+    /// let options = UpsampleOptions { exposure, ..UpsampleOptions::default() };
+    /// let mut y = [0.0f32; 64];
+    /// let c = up.process_options(&x, &mut y, options).unwrap();
+    /// // 64 / 12 output samples per frame: y[16] is at t = 0.25 s, sin(2 pi 3 0.25) = -1
+    /// assert!((y[16] + 1.0).abs() < 1e-4);
+    /// // E2PR = |f| 0.04 <= 0.8 for every bin up to the 6 Hz Nyquist: all 12 corrected
+    /// assert_eq!((c.corrected, c.uncorrected), (12, 0));
+    /// ```
+    pub fn process_options(
+        &mut self,
+        input: &[f32],
+        output: &mut [f32],
+        options: UpsampleOptions,
+    ) -> Result<Compensation, BufferError> {
+        self.plan.check_whole(output)?;
+        let (work, scratch) = (&mut self.work, &mut self.scratch);
+        self.plan
+            .process_part_options(input, output, 0, options, work, scratch)
+    }
 }
 
 #[cfg(test)]
@@ -543,12 +665,7 @@ mod tests {
         let mut up = Upsampler::<M, S>::try_new(n, m).unwrap();
         let mut y = vec![0.0f32; m];
         up.process(&x, &mut y).unwrap();
-        let rms = (want.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-        let err = y
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| (*a as f64 - b).abs())
-            .fold(0.0, f64::max);
+        let (err, rms) = crate::test_support::max_error_and_rms(&y, &want);
         assert!(err / rms < 1e-5, "{n} -> {m}: max error {err} vs rms {rms}");
     }
 
@@ -691,6 +808,140 @@ mod tests {
             u.process(&[0.0; 15], &mut out),
             Err(BufferError { .. })
         ));
+    }
+
+    /// One second at 120 fps of `sin(2 pi f t + 0.4)` seen through a centred box exposure of
+    /// `te` s: the exact box average, `sinc(pi f te) sin(2 pi f t + 0.4)` (closed form, f64).
+    fn box_averaged(f: f64, te: f64) -> Vec<f32> {
+        let z = std::f64::consts::PI * f * te;
+        let sinc = if z == 0.0 { 1.0 } else { z.sin() / z };
+        (0..120)
+            .map(|j| (sinc * (std::f64::consts::TAU * f * j as f64 / 120.0 + 0.4).sin()) as f32)
+            .collect()
+    }
+
+    /// Largest `|y[j] - want(t_j)|` over an output at 480 Hz.
+    fn max_error(y: &[f32], want: impl Fn(f64) -> f64) -> f64 {
+        y.iter()
+            .enumerate()
+            .map(|(j, v)| (*v as f64 - want(j as f64 / 480.0)).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn exposure_compensation_recovers_a_box_averaged_sinusoid() {
+        type Up = Upsampler<480, { scratch_capacity(120, 480) }>;
+        let mut up = Up::try_new(120, 480).unwrap();
+        let (f, te) = (17.0, 0.03); // E2PR 0.51: seen at sinc(0.51 pi) = 0.614
+        let sinc = crate::exposure::box_transfer(f as f32, te as f32) as f64;
+        let x = box_averaged(f, te);
+        let true_x = |t: f64| (std::f64::consts::TAU * f * t + 0.4).sin();
+        let compensation = ExposureCompensation {
+            fs_in_hz: 120.0,
+            exposure_s: te as f32,
+        };
+        let exposure = Some(compensation);
+        let mut y = vec![0.0f32; 480];
+        // uncompensated: the motion times the sinc factor (f32 DFT rounding, amplitude 1)
+        up.process(&x, &mut y).unwrap();
+        assert!(max_error(&y, |t| sinc * true_x(t)) < 1e-4);
+        // 1 - sinc = 0.386 at the peaks; the 480 Hz grid comes within 1 % of them
+        assert!(max_error(&y, true_x) > 0.99 * (1.0 - sinc));
+        // compensated: the motion itself (f32 rounding of the frames and transforms)
+        let options = UpsampleOptions {
+            exposure,
+            ..UpsampleOptions::default()
+        };
+        let c = up.process_options(&x, &mut y, options).unwrap();
+        let err = max_error(&y, true_x);
+        assert!(err < 1e-3, "max error {err}");
+        // E2PR = |k| 0.03 <= 0.8 for |k| <= 26 Hz: 53 of the 120 bins corrected
+        assert_eq!(
+            c,
+            Compensation {
+                corrected: 53,
+                uncorrected: 67,
+                first_uncorrected: Some(27),
+            }
+        );
+        assert_eq!(compensation.bins(120), c);
+        // fused with -omega^2 in the same pass: -(2 pi f)^2 sin, scaled to amplitude 1
+        let w2 = (std::f64::consts::TAU * f).powi(2);
+        let options = UpsampleOptions {
+            accel: Some((120.0, (1.0 / w2) as f32)),
+            exposure,
+            end_match: None,
+        };
+        up.process_options(&x, &mut y, options).unwrap();
+        let err = max_error(&y, |t| -true_x(t));
+        assert!(err < 1e-3, "acceleration: max error {err}");
+    }
+
+    #[test]
+    fn bins_beyond_the_e2pr_limit_are_left_and_counted() {
+        type Up = Upsampler<48, { scratch_capacity(12, 48) }>;
+        let mut up = Up::try_new(12, 48).unwrap();
+        // 12 fps, 0.45 s exposure: E2PR 0 and 0.45 for 0 and 1 Hz (corrected), 0.9 for 2 Hz
+        // (beyond the limit, where the transfer is only 0.109), more above
+        let exposure = ExposureCompensation {
+            fs_in_hz: 12.0,
+            exposure_s: 0.45,
+        };
+        let options = UpsampleOptions {
+            exposure: Some(exposure),
+            ..UpsampleOptions::default()
+        };
+        let want = Compensation {
+            corrected: 3, // bins 0, 1 and 11 (-1 Hz)
+            uncorrected: 9,
+            first_uncorrected: Some(2),
+        };
+        assert_eq!(exposure.bins(12), want);
+        // DC plus 2 Hz: the 2 Hz bins are left (divided, they would be 9.2 times larger), DC
+        // is divided by exactly 1; what changes is the f32 rounding noise of the +-1 Hz bins,
+        // amplified by 1 / sinc(0.45 pi) = 1.4
+        let x: Vec<f32> = (0..12)
+            .map(|j| 0.25 + libm::cosf(2.0 * PI * 2.0 * j as f32 / 12.0 + 0.3))
+            .collect();
+        let (mut plain, mut comp) = (vec![0.0f32; 48], vec![0.0f32; 48]);
+        up.process(&x, &mut plain).unwrap();
+        assert_eq!(up.process_options(&x, &mut comp, options), Ok(want));
+        for (j, (c, p)) in comp.iter().zip(&plain).enumerate() {
+            assert!((c - p).abs() < 1e-6, "sample {j}: {c} vs {p}");
+        }
+        // a 1 Hz tone (E2PR 0.45) is divided by its transfer, the 2 Hz one is not
+        let gain = 1.0 / crate::exposure::box_transfer(1.0, 0.45);
+        let tone = |j: usize| libm::sinf(2.0 * PI * j as f32 / 12.0);
+        let x2: Vec<f32> = x.iter().enumerate().map(|(j, v)| v + tone(j)).collect();
+        up.process_options(&x2, &mut comp, options).unwrap();
+        for (j, (c, p)) in comp.iter().zip(&plain).enumerate() {
+            let added = libm::sinf(2.0 * PI * j as f32 / 48.0) * gain;
+            assert!(
+                (c - p - added).abs() < 1e-5,
+                "sample {j}: {c} - {p} vs {added}"
+            );
+        }
+    }
+
+    #[test]
+    fn without_exposure_compensation_the_output_is_bit_identical() {
+        type Up = Upsampler<363, { scratch_capacity(121, 363) }>;
+        let mut up = Up::try_new(121, 363).unwrap();
+        let x = signal(121);
+        for accel in [None, Some((120.0, 1e-3))] {
+            let mut want = vec![0.0f32; 363];
+            match accel {
+                None => up.process(&x, &mut want).unwrap(),
+                Some((fs, s)) => up.process_acceleration(&x, &mut want, fs, s).unwrap(),
+            }
+            let mut y = vec![0.0f32; 363];
+            let options = UpsampleOptions {
+                accel,
+                ..UpsampleOptions::default()
+            };
+            let c = up.process_options(&x, &mut y, options).unwrap();
+            assert_eq!((c, y), (Compensation::default(), want));
+        }
     }
 
     #[test]

@@ -5,6 +5,10 @@
 use firmware_core::upsample::{scratch_capacity, Upsampler};
 use std::path::Path;
 
+#[path = "../src/test_support.rs"]
+mod test_support;
+use test_support::max_error_and_rms;
+
 fn column(path: &Path) -> Vec<f64> {
     std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -37,12 +41,7 @@ fn upsampling_matches_scipy_resample() {
                 let mut up = Box::new(U::try_new(n, m).unwrap());
                 let mut y = vec![0.0f32; m];
                 up.process(&x, &mut y).unwrap();
-                let rms = (want.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-                let err = y
-                    .iter()
-                    .zip(&want)
-                    .map(|(a, b)| (*a as f64 - b).abs())
-                    .fold(0.0, f64::max);
+                let (err, rms) = max_error_and_rms(&y, &want);
                 assert!(err / rms < 1e-4, "{name}: max error {err:e}, rms {rms:e}");
                 eprintln!("{name}: max error / rms = {:.2e}", err / rms);
                 // fused -omega^2 against numpy's FFT derivative of scipy's output (camera 120 Hz)
@@ -50,12 +49,7 @@ fn upsampling_matches_scipy_resample() {
                 assert_eq!(want_a.len(), m, "{name}");
                 let mut a = vec![0.0f32; m];
                 up.process_acceleration(&x, &mut a, 120.0, 1.0).unwrap();
-                let rms_a = (want_a.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-                let err_a = a
-                    .iter()
-                    .zip(&want_a)
-                    .map(|(a, b)| (*a as f64 - b).abs())
-                    .fold(0.0, f64::max);
+                let (err_a, rms_a) = max_error_and_rms(&a, &want_a);
                 assert!(
                     err_a / rms_a < 1e-4,
                     "{name} acceleration: max error {err_a:e}, rms {rms_a:e}"

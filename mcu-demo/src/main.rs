@@ -30,7 +30,7 @@ use core::panic::PanicInfo;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use firmware_core::centroid::track::{TrackConfig, Tracker};
-use firmware_core::centroid::{self, Centroid, CentroidConfig, Frame, Mode};
+use firmware_core::centroid::{self, Centroid, CentroidConfig, Frame, FrameError, Mode, Pixel};
 use firmware_core::heapless::spsc::{Consumer, Producer, Queue};
 use firmware_core::pipeline::{PipelineConfig, VisionH1};
 use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
@@ -251,6 +251,14 @@ fn camera_signal_acc(t: f32) -> f32 {
     -3.0 * w1 * w1 * libm::sinf(w1 * t + 0.3) - 1.5 * w2 * w2 * libm::cosf(w2 * t)
 }
 
+/// Largest `|v[j] - signal(j / FS)|`: a record at the ADC rate against its closed form.
+fn max_error_at_fs(v: &[f32], signal: fn(f32) -> f32) -> f32 {
+    v.iter()
+        .enumerate()
+        .map(|(j, v)| libm::fabsf(v - signal(j as f32 / FS)))
+        .fold(0.0f32, f32::max)
+}
+
 // ---------------------------------------------------------------------------------------------
 // The complete 2048-point pipeline, in static RAM
 
@@ -310,54 +318,47 @@ impl Report {
     }
 }
 
+/// The whole-frame centroid of a `W x H` frame (8- or 16-bit).
+fn whole<P: Pixel>(cfg: &CentroidConfig, px: &[P]) -> Result<Centroid, FrameError> {
+    Frame::new(px, W, H, W).and_then(|f| centroid::centroid(cfg, &f))
+}
+
+/// Whether the centroid of the disk frame `px` (`bits`: its pixel type, for the log) in `mode`
+/// equals the naive loop's, and the disk centre, exactly.
+fn disk_centroid_ok<P: Pixel>(px: &[P], threshold: u16, mode: Mode, bits: &str) -> bool {
+    let cfg = CentroidConfig {
+        mode,
+        ..CentroidConfig::binary(threshold)
+    };
+    let Ok(c) = whole(&cfg, px) else {
+        return false;
+    };
+    let weighted = mode == Mode::Weighted;
+    let (w, sx, sy) = naive_moments(px.iter().map(|&p| p.into()), threshold, weighted);
+    let pos = c.position();
+    hprintln!(
+        "centroid {} {:?}: {} (naive weight {})",
+        bits,
+        mode,
+        Pos(pos),
+        w
+    );
+    let want = (sx as f64 / w as f64, sy as f64 / w as f64);
+    pos.is_some_and(|(x, y)| x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0)
+}
+
 fn check_centroids(rep: &mut Report) {
     let f8 = black_box(moved(0, 0));
     let f16 = black_box(&FRAME_U16);
-    for (mode, weighted) in [(Mode::Binary, false), (Mode::Weighted, true)] {
-        // 8-bit
-        let cfg = CentroidConfig {
-            mode,
-            ..CentroidConfig::binary(THRESHOLD)
-        };
-        let ok = match Frame::new(f8, W, H, W) {
-            Ok(frame) => match centroid::centroid(&cfg, &frame) {
-                Ok(c) => {
-                    let (w, sx, sy) =
-                        naive_moments(f8.iter().map(|&p| u16::from(p)), THRESHOLD, weighted);
-                    let pos = c.position();
-                    hprintln!("centroid u8  {:?}: {} (naive weight {})", mode, Pos(pos), w);
-                    let want = (sx as f64 / w as f64, sy as f64 / w as f64);
-                    pos.is_some_and(|(x, y)| {
-                        x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
-                    })
-                }
-                Err(_) => false,
-            },
-            Err(_) => false,
-        };
-        rep.check("centroid 8-bit vs naive loop and disk centre", ok);
-        // 16-bit
-        let t16 = THRESHOLD * 64;
-        let cfg = CentroidConfig {
-            mode,
-            ..CentroidConfig::binary(t16)
-        };
-        let ok = match Frame::new(f16, W, H, W) {
-            Ok(frame) => match centroid::centroid(&cfg, &frame) {
-                Ok(c) => {
-                    let (w, sx, sy) = naive_moments(f16.iter().copied(), t16, weighted);
-                    let pos = c.position();
-                    hprintln!("centroid u16 {:?}: {} (naive weight {})", mode, Pos(pos), w);
-                    let want = (sx as f64 / w as f64, sy as f64 / w as f64);
-                    pos.is_some_and(|(x, y)| {
-                        x as f64 == want.0 && y as f64 == want.1 && x == 171.5 && y == 97.0
-                    })
-                }
-                Err(_) => false,
-            },
-            Err(_) => false,
-        };
-        rep.check("centroid 16-bit vs naive loop and disk centre", ok);
+    for mode in [Mode::Binary, Mode::Weighted] {
+        rep.check(
+            "centroid 8-bit vs naive loop and disk centre",
+            disk_centroid_ok(f8, THRESHOLD, mode, "u8 "),
+        );
+        rep.check(
+            "centroid 16-bit vs naive loop and disk centre",
+            disk_centroid_ok(f16, THRESHOLD * 64, mode, "u16"),
+        );
     }
 }
 
@@ -370,9 +371,7 @@ fn check_dense(rep: &mut Report) {
         };
         let (w, sx, sy) = naive_moments(f.iter().map(|&p| u16::from(p)), THRESHOLD, weighted);
         let want = ((sx as f64 / w as f64) as f32, (sy as f64 / w as f64) as f32);
-        let got = Frame::new(f, W, H, W)
-            .and_then(|frame| centroid::centroid(&cfg, &frame))
-            .ok();
+        let got = whole(&cfg, f).ok();
         let pos = got.and_then(|c| c.position());
         hprintln!(
             "centroid u8 dense {:?}: {} (naive {}, weight {})",
@@ -449,11 +448,7 @@ fn check_upsampling(rep: &mut Report) {
     }
     // displacement
     let ok = up.process(&camera, &mut vision).is_ok();
-    let err = vision
-        .iter()
-        .enumerate()
-        .map(|(j, v)| libm::fabsf(v - camera_signal(j as f32 / FS)))
-        .fold(0.0f32, f32::max);
+    let err = max_error_at_fs(&vision, camera_signal);
     hprintln!(
         "upsample 120 -> 2048: max error {} mm (amplitude 4.5)",
         Fx(err)
@@ -467,11 +462,7 @@ fn check_upsampling(rep: &mut Report) {
         .process_acceleration(&camera, &mut vision, 120.0, 1.0)
         .is_ok();
     let peak = 1.5 * (2.0 * PI * 32.0) * (2.0 * PI * 32.0);
-    let err = vision
-        .iter()
-        .enumerate()
-        .map(|(j, v)| libm::fabsf(v - camera_signal_acc(j as f32 / FS)))
-        .fold(0.0f32, f32::max);
+    let err = max_error_at_fs(&vision, camera_signal_acc);
     hprintln!(
         "upsample acceleration: max error {} mm/s^2 (peak {})",
         Fx(err),
@@ -556,12 +547,6 @@ fn bench_centroids() {
     let b16 = CentroidConfig::binary(THRESHOLD * 64);
     let w = CentroidConfig::weighted(THRESHOLD);
     let w16 = CentroidConfig::weighted(THRESHOLD * 64);
-    let whole = |cfg: &CentroidConfig, px: &[u8]| {
-        Frame::new(px, W, H, W).and_then(|f| centroid::centroid(cfg, &f))
-    };
-    let whole16 = |cfg: &CentroidConfig, px: &[u16]| {
-        Frame::new(px, W, H, W).and_then(|f| centroid::centroid(cfg, &f))
-    };
     measured("centroid binary u8 76800", || whole(&b, f8)).ok();
     measured("centroid binary u8 row-kernel 76800", || {
         let mut s = 0u32;
@@ -574,8 +559,8 @@ fn bench_centroids() {
     measured("centroid binary u8 dense 76800", || whole(&b, d8)).ok();
     measured("centroid weighted u8 76800", || whole(&w, f8)).ok();
     measured("centroid weighted u8 dense 76800", || whole(&w, d8)).ok();
-    measured("centroid binary u16 76800", || whole16(&b16, f16)).ok();
-    measured("centroid weighted u16 76800", || whole16(&w16, f16)).ok();
+    measured("centroid binary u16 76800", || whole(&b16, f16)).ok();
+    measured("centroid weighted u16 76800", || whole(&w16, f16)).ok();
 }
 
 /// One segment pair through a fresh estimator (noverlap 0: `N` samples = one segment).
@@ -684,9 +669,7 @@ const PATH: [(usize, usize); 8] = [
 
 /// Full-frame centroid of a frame (the reference of the tracking window).
 fn full_frame(px: &[u8]) -> Option<Centroid> {
-    Frame::new(px, W, H, W)
-        .and_then(|f| centroid::centroid(&TRACK.centroid, &f))
-        .ok()
+    whole(&TRACK.centroid, px).ok()
 }
 
 /// One frame in memory through the tracker: only the window's rows are read.

@@ -88,13 +88,30 @@ pub trait Pixel: sealed::Sealed + Copy + Ord + Default + Into<u16> + 'static {
     }
 }
 
+/// The methods of [`Pixel`] the two types share: the weight above the threshold and the
+/// dispatch to the type's own binary and weighted row kernels (the kernels stay separate).
+macro_rules! pixel_kernels {
+    ($binary:ident, $weighted:ident) => {
+        #[inline(always)]
+        fn excess(self, t: Self) -> u32 {
+            u32::from(self.saturating_sub(t))
+        }
+
+        #[inline(always)]
+        fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
+            if binary {
+                $binary(row, t)
+            } else {
+                $weighted(row, t)
+            }
+        }
+    };
+}
+
 impl Pixel for u8 {
     const FULL: u16 = 255;
 
-    #[inline(always)]
-    fn excess(self, t: Self) -> u32 {
-        u32::from(self.saturating_sub(t))
-    }
+    pixel_kernels!(row_binary_u8, row_weighted_u8);
 
     #[inline(always)]
     fn threshold(t: u16) -> Self {
@@ -102,15 +119,6 @@ impl Pixel for u8 {
             255
         } else {
             t as u8
-        }
-    }
-
-    #[inline(always)]
-    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
-        if binary {
-            row_binary_u8(row, t)
-        } else {
-            row_weighted_u8(row, t)
         }
     }
 
@@ -136,23 +144,11 @@ impl Pixel for u8 {
 impl Pixel for u16 {
     const FULL: u16 = u16::MAX;
 
-    #[inline(always)]
-    fn excess(self, t: Self) -> u32 {
-        u32::from(self.saturating_sub(t))
-    }
+    pixel_kernels!(row_binary_u16, row_weighted_u16);
 
     #[inline(always)]
     fn threshold(t: u16) -> Self {
         t
-    }
-
-    #[inline(always)]
-    fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums {
-        if binary {
-            row_binary_u16(row, t)
-        } else {
-            row_weighted_u16(row, t)
-        }
     }
 }
 

@@ -444,6 +444,21 @@ impl CentroidConfig {
         }
     }
 
+    /// Counts the row `*next_y` of a frame and returns it with the region's first row `y0` when
+    /// it lies in the region; a row outside is skipped, and flagged [`Flags::CLIPPED`] when it
+    /// lies past [`MAX_DIM`] with no ROI (beyond the proven accumulator range).
+    #[inline(always)]
+    fn enter_row(&self, next_y: &mut u32, flags: &mut Flags) -> Option<(u32, u32)> {
+        let y = *next_y;
+        *next_y = y.saturating_add(1);
+        let (y0, y1) = self.rows();
+        if y < y0 || y >= y1 {
+            flags.set_if(Flags::CLIPPED, self.roi.is_none() && y >= y1);
+            return None;
+        }
+        Some((y, y0))
+    }
+
     /// Region columns `x0 .. x1` (frame coordinates).
     const fn cols(&self) -> (usize, usize) {
         match self.roi {
@@ -790,15 +805,9 @@ impl Centroider {
 
     #[inline(always)]
     fn push<P: Pixel>(&mut self, row: &[P], t: P, sat: u16, kernel: impl FnOnce(&[P]) -> RowSums) {
-        let y = self.next_y;
-        self.next_y = y.saturating_add(1);
-        let (y0, y1) = self.config.rows();
-        if y < y0 || y >= y1 {
-            // Rows past MAX_DIM (no ROI) are beyond the proven accumulator range.
-            self.flags
-                .set_if(Flags::CLIPPED, self.config.roi.is_none() && y >= y1);
+        let Some((y, y0)) = self.config.enter_row(&mut self.next_y, &mut self.flags) else {
             return;
-        }
+        };
         let (x0, x1) = self.config.cols();
         let end = x1.min(row.len());
         self.flags.set_if(Flags::CLIPPED, row.len() > MAX_DIM);

@@ -101,17 +101,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
     /// rarely what a firmware wants): a `static` built in place, then
     /// [`configure`](Self::configure)d.
     pub const fn new() -> Self {
-        #[allow(clippy::let_unit_value)]
-        let () = Self::CHECK;
-        MultiCentroider {
-            config: CentroidConfig::binary(0),
-            labels: [0; W],
-            slots: [Slot::FREE; N],
-            next_y: 0,
-            last_y: None,
-            flags: Flags::NONE,
-            dropped: 0,
-        }
+        Self::empty(CentroidConfig::binary(0))
     }
 
     /// A multi-target centroider; fails on invalid settings
@@ -119,13 +109,15 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
     /// (1..65 535) are checked at compile time. `const`: a `static` initialiser builds it in
     /// place (the label buffer is `2 W` bytes), checked at compile time.
     pub const fn try_new(config: CentroidConfig) -> Result<Self, ConfigError> {
+        Ok(Self::empty(const_try!(Self::check(config))))
+    }
+
+    /// The centroider with checked settings `config` and no frame seen (the capacities are
+    /// checked at compile time here).
+    const fn empty(config: CentroidConfig) -> Self {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
-        let config = match Self::check(config) {
-            Ok(c) => c,
-            Err(e) => return Err(e),
-        };
-        Ok(MultiCentroider {
+        MultiCentroider {
             config,
             labels: [0; W],
             slots: [Slot::FREE; N],
@@ -133,7 +125,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
             last_y: None,
             flags: Flags::NONE,
             dropped: 0,
-        })
+        }
     }
 
     /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
@@ -145,10 +137,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
     }
 
     const fn check(config: CentroidConfig) -> Result<CentroidConfig, ConfigError> {
-        let config = match config.validate() {
-            Ok(c) => c,
-            Err(e) => return Err(e),
-        };
+        let config = const_try!(config.validate());
         if let Some(r) = config.roi {
             if r.width as usize > W {
                 return Err(ConfigError::RoiTooWide {
@@ -264,14 +253,9 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
     }
 
     fn push<P: Pixel>(&mut self, row: &[P], t: P, sat: u16) {
-        let y = self.next_y;
-        self.next_y = y.saturating_add(1);
-        let (y0, y1) = self.config.rows();
-        if y < y0 || y >= y1 {
-            self.flags
-                .set_if(Flags::CLIPPED, self.config.roi.is_none() && y >= y1);
+        let Some((y, y0)) = self.config.enter_row(&mut self.next_y, &mut self.flags) else {
             return;
-        }
+        };
         let (x0, x1) = self.config.cols();
         let end = x1.min(x0 + W).min(row.len());
         self.flags

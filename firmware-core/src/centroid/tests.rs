@@ -10,21 +10,11 @@ use rand_chacha::ChaCha8Rng;
 use std::vec;
 use std::vec::Vec;
 
-/// The one-shot centroid of a strided 8-bit frame (the former `centroid_u8`).
-fn centroid_u8(
+/// The one-shot centroid of a strided 8- or 16-bit frame (the former `centroid_u8` and
+/// `centroid_u16`).
+fn centroid_strided<P: Pixel>(
     cfg: &CentroidConfig,
-    px: &[u8],
-    w: usize,
-    h: usize,
-    stride: usize,
-) -> Result<Centroid, FrameError> {
-    Frame::new(px, w, h, stride).and_then(|f| centroid(cfg, &f))
-}
-
-/// The one-shot centroid of a strided 16-bit frame (the former `centroid_u16`).
-fn centroid_u16(
-    cfg: &CentroidConfig,
-    px: &[u16],
+    px: &[P],
     w: usize,
     h: usize,
     stride: usize,
@@ -48,9 +38,33 @@ fn config(
     .validate()
 }
 
+/// A ROI from its corner and size.
+fn roi(x: u32, y: u32, width: u32, height: u32) -> Roi {
+    Roi {
+        x,
+        y,
+        width,
+        height,
+    }
+}
+
 /// A centroider for valid settings.
 fn centroider(cfg: CentroidConfig) -> Centroider {
     Centroider::try_new(cfg).unwrap()
+}
+
+/// The references' region `(x0, y0, x1, y1)` (end exclusive): the ROI, or the whole
+/// `width x height` frame.
+fn region(roi: Option<Roi>, width: usize, height: usize) -> (usize, usize, usize, usize) {
+    match roi {
+        Some(r) => (
+            r.x as usize,
+            r.y as usize,
+            (r.x + r.width) as usize,
+            (r.y + r.height) as usize,
+        ),
+        None => (0, 0, width, height),
+    }
 }
 
 /// Naive reference: one double loop over the region, u128 sums, flags from their definitions.
@@ -65,15 +79,7 @@ fn naive(
     mode: Mode,
     roi: Option<Roi>,
 ) -> (u128, u128, u128, u128, Flags) {
-    let (rx0, ry0, rx1, ry1) = match roi {
-        Some(r) => (
-            r.x as usize,
-            r.y as usize,
-            (r.x + r.width) as usize,
-            (r.y + r.height) as usize,
-        ),
-        None => (0, 0, width, height),
-    };
+    let (rx0, ry0, rx1, ry1) = region(roi, width, height);
     let (mut n, mut w, mut sx, mut sy) = (0u128, 0u128, 0u128, 0u128);
     let mut flags = Flags::NONE;
     for y in ry0..ry1 {
@@ -152,23 +158,25 @@ fn frame_strategy(max: u32) -> impl Strategy<Value = (usize, usize, usize, Vec<u
 
 fn roi_strategy(w: usize, h: usize) -> impl Strategy<Value = Option<Roi>> {
     let some = (0..w, 0..h).prop_flat_map(move |(x, y)| {
-        (1..=w - x, 1..=h - y).prop_map(move |(rw, rh)| {
-            Some(Roi {
-                x: x as u32,
-                y: y as u32,
-                width: rw as u32,
-                height: rh as u32,
-            })
-        })
+        (1..=w - x, 1..=h - y)
+            .prop_map(move |(rw, rh)| Some(roi(x as u32, y as u32, rw as u32, rh as u32)))
     });
     prop_oneof![Just(None), some]
+}
+
+/// A frame from [`frame_strategy`] with a ROI inside it from [`roi_strategy`].
+#[allow(clippy::type_complexity)]
+fn frame_roi_strategy(
+    max: u32,
+) -> impl Strategy<Value = (usize, usize, usize, Vec<u32>, Option<Roi>)> {
+    frame_strategy(max)
+        .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h)))
 }
 
 proptest! {
     #[test]
     fn whole_frame_u8_matches_naive_double_loop(
-        (w, h, stride, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(255),
         t in 0u16..300,
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (150u16..400).prop_map(Some)],
@@ -178,7 +186,7 @@ proptest! {
             unreachable!()
         };
         let frame: Vec<u8> = px.iter().map(|&v| v as u8).collect();
-        let c = centroid_u8(&cfg, &frame, w, h, stride).unwrap();
+        let c = centroid_strided(&cfg, &frame, w, h, stride).unwrap();
         let sat_level = u32::from(sat.unwrap_or(255).min(255));
         let r = naive(&px, w, h, stride, u32::from(t), sat_level, mode, roi);
         check_against_naive(&c, r);
@@ -186,8 +194,7 @@ proptest! {
 
     #[test]
     fn whole_frame_u16_matches_naive_double_loop(
-        (w, h, stride, px, roi) in frame_strategy(65535)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(65535),
         t in 0u16..=65535,
         mode in mode_strategy(),
         sat in prop_oneof![Just(None), (30000u16..=65535).prop_map(Some)],
@@ -197,7 +204,7 @@ proptest! {
             unreachable!()
         };
         let frame: Vec<u16> = px.iter().map(|&v| v as u16).collect();
-        let c = centroid_u16(&cfg, &frame, w, h, stride).unwrap();
+        let c = centroid_strided(&cfg, &frame, w, h, stride).unwrap();
         let r = naive(&px, w, h, stride, u32::from(t), u32::from(sat.unwrap_or(65535)), mode, roi);
         check_against_naive(&c, r);
     }
@@ -235,14 +242,13 @@ proptest! {
     /// equals the whole-frame call to the last bit.
     #[test]
     fn streaming_equals_whole_frame(
-        (w, h, stride, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, s, px)| (Just(w), Just(h), Just(s), Just(px), roi_strategy(w, h))),
+        (w, h, stride, px, roi) in frame_roi_strategy(255),
         t in 0u16..255,
         mode in mode_strategy(),
     ) {
         let cfg = config(t, mode, roi, None).unwrap();
         let frame: Vec<u8> = px.iter().map(|&v| v as u8).collect();
-        let whole = centroid_u8(&cfg, &frame, w, h, stride).unwrap();
+        let whole = centroid_strided(&cfg, &frame, w, h, stride).unwrap();
         let mut c = centroider(cfg);
         for y in 0..h {
             let row: Vec<u8> = frame[y * stride..y * stride + w].to_vec();
@@ -283,8 +289,8 @@ proptest! {
             f
         };
         let cfg = config(t, mode, None, None).unwrap();
-        let a = centroid_u16(&cfg, &place(0, 0), fw, fh, fw).unwrap();
-        let b = centroid_u16(&cfg, &place(dx, dy), fw, fh, fw).unwrap();
+        let a = centroid_strided(&cfg, &place(0, 0), fw, fh, fw).unwrap();
+        let b = centroid_strided(&cfg, &place(dx, dy), fw, fh, fw).unwrap();
         prop_assert_eq!(a.flags, b.flags);
         prop_assert_eq!(a.moments.pixels, b.moments.pixels);
         prop_assert_eq!(a.moments.weight, b.moments.weight);
@@ -305,7 +311,7 @@ fn single_pixel_centroid_is_its_index() {
         f[j * w + i] = 200;
         for mode in [Mode::Binary, Mode::Weighted] {
             let cfg = config(100, mode, None, None).unwrap();
-            let c = centroid_u8(&cfg, &f, w, h, w).unwrap();
+            let c = centroid_strided(&cfg, &f, w, h, w).unwrap();
             assert_eq!(c.position(), Some((i as f32, j as f32)));
             assert_eq!(c.pixels(), 1);
         }
@@ -336,7 +342,7 @@ fn weighted_smooth_disk_found_within_a_thousandth_of_a_pixel() {
         let cx = 31.0 + rng.random::<f64>();
         let cy = 30.0 + rng.random::<f64>();
         let f = smooth_disk(w, h, cx, cy, 12.0, 1.5, 60000.0);
-        let c = centroid_u16(&cfg, &f, w, h, w).unwrap();
+        let c = centroid_strided(&cfg, &f, w, h, w).unwrap();
         assert_eq!(c.flags, Flags::NONE);
         worst = worst
             .max((f64::from(c.cx) - cx).abs())
@@ -369,15 +375,7 @@ fn lattice_disk_centroid(cx: f64, cy: f64, r: f64) -> (f64, f64) {
 
 /// Hard-edged 8-bit disk: 200 where the pixel centre is within `r` of the centre, else 0.
 fn hard_disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
-    let mut f = vec![0u8; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            if (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= r * r {
-                f[y * w + x] = 200;
-            }
-        }
-    }
-    f
+    crate::test_support::disk(w, h, (cx, cy), r, 0, 200)
 }
 
 /// Binary mode on a disk: a hard threshold keeps the pixel centres inside a circle, whose
@@ -398,7 +396,7 @@ fn binary_disk_matches_lattice_reference_and_true_centre() {
         let cx = 31.0 + rng.random::<f64>();
         let cy = 30.0 + rng.random::<f64>();
         let f = hard_disk(w, h, cx, cy, r);
-        let c = centroid_u8(&cfg, &f, w, h, w).unwrap();
+        let c = centroid_strided(&cfg, &f, w, h, w).unwrap();
         let (lx, ly) = lattice_disk_centroid(cx, cy, r);
         assert!((f64::from(c.cx) - lx).abs() < 1e-5, "{} vs {lx}", c.cx);
         assert!((f64::from(c.cy) - ly).abs() < 1e-5, "{} vs {ly}", c.cy);
@@ -417,7 +415,7 @@ fn binary_disk_matches_lattice_reference_and_true_centre() {
     );
     for (cx, cy) in [(31.0, 30.0), (31.5, 30.0), (31.5, 30.5), (31.0, 30.5)] {
         let f = hard_disk(w, h, cx, cy, r + 0.3);
-        let c = centroid_u8(&cfg, &f, w, h, w).unwrap();
+        let c = centroid_strided(&cfg, &f, w, h, w).unwrap();
         assert!((f64::from(c.cx) - cx).abs() < 0.01 && (f64::from(c.cy) - cy).abs() < 0.01);
     }
 }
@@ -432,7 +430,7 @@ fn full_scale_4096_square_16_bit_frame_gives_exact_centre() {
         (Mode::Weighted, 1000),
     ] {
         let cfg = config(t, mode, None, None).unwrap();
-        let c = centroid_u16(&cfg, &f, n, n, n).unwrap();
+        let c = centroid_strided(&cfg, &f, n, n, n).unwrap();
         let w = match mode {
             Mode::Binary => 1u128,
             Mode::Weighted => u128::from(u16::MAX - t),
@@ -515,26 +513,26 @@ fn frame_with(w: usize, h: usize, pixels: &[(usize, usize, u8)]) -> Vec<u8> {
 fn flag_empty_when_nothing_above_threshold() {
     let f = frame_with(10, 8, &[(3, 3, 100)]);
     let cfg = config(100, Mode::Binary, None, None).unwrap();
-    let c = centroid_u8(&cfg, &f, 10, 8, 10).unwrap();
+    let c = centroid_strided(&cfg, &f, 10, 8, 10).unwrap();
     assert_eq!(c.flags, Flags::EMPTY);
     assert_eq!((c.cx, c.cy, c.position()), (0.0, 0.0, None));
     // 8-bit frame with a threshold at or above 255 selects nothing, even full-scale pixels.
     let f = vec![255u8; 80];
     let cfg = config(255, Mode::Weighted, None, None).unwrap();
     assert_eq!(
-        centroid_u8(&cfg, &f, 10, 8, 10).unwrap().flags,
+        centroid_strided(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
     let cfg = config(300, Mode::Binary, None, None).unwrap();
     assert_eq!(
-        centroid_u8(&cfg, &f, 10, 8, 10).unwrap().flags,
+        centroid_strided(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
     // 16-bit.
     let f = vec![65535u16; 80];
     let cfg = config(65535, Mode::Binary, None, None).unwrap();
     assert_eq!(
-        centroid_u16(&cfg, &f, 10, 8, 10).unwrap().flags,
+        centroid_strided(&cfg, &f, 10, 8, 10).unwrap().flags,
         Flags::EMPTY
     );
     // A fresh streaming centroider has no centroid either.
@@ -545,20 +543,14 @@ fn flag_empty_when_nothing_above_threshold() {
 fn flag_border_on_each_frame_and_roi_edge() {
     let (w, h) = (12, 9);
     let cfg = CentroidConfig::binary(50);
-    let at = |x, y| centroid_u8(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
+    let at = |x, y| centroid_strided(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
     assert_eq!(at(5, 4).flags, Flags::NONE);
     for (x, y) in [(0, 4), (11, 4), (5, 0), (5, 8), (0, 0), (11, 8)] {
         assert_eq!(at(x, y).flags, Flags::BORDER, "pixel at ({x}, {y})");
     }
     // ROI columns 2..=8, rows 1..=6: its edges count, pixels outside it do not.
-    let roi = Roi {
-        x: 2,
-        y: 1,
-        width: 7,
-        height: 6,
-    };
-    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
-    let at = |x, y| centroid_u8(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi(2, 1, 7, 6)), None).unwrap();
+    let at = |x, y| centroid_strided(&cfg, &frame_with(w, h, &[(x, y, 200)]), w, h, w).unwrap();
     assert_eq!(at(5, 4).flags, Flags::NONE);
     for (x, y) in [(2, 4), (8, 4), (5, 1), (5, 6)] {
         let c = at(x, y);
@@ -573,13 +565,7 @@ fn flag_border_on_each_frame_and_roi_edge() {
         );
     }
     // Streaming: a frame that ends before the ROI does makes its last row the border.
-    let roi = Roi {
-        x: 0,
-        y: 0,
-        width: 12,
-        height: 100,
-    };
-    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
+    let cfg = config(50, Mode::Binary, Some(roi(0, 0, 12, 100)), None).unwrap();
     let mut c = centroider(cfg);
     let f = frame_with(w, h, &[(5, 8, 200)]);
     for row in f.chunks(w) {
@@ -597,56 +583,35 @@ fn flag_border_on_each_frame_and_roi_edge() {
 #[test]
 fn flag_saturated_at_full_scale_or_configured_level() {
     let (w, h) = (8, 8);
-    let cfg = CentroidConfig::binary(50);
-    let f = frame_with(w, h, &[(3, 3, 254), (4, 3, 200)]);
-    assert_eq!(centroid_u8(&cfg, &f, w, h, w).unwrap().flags, Flags::NONE);
-    let f = frame_with(w, h, &[(3, 3, 255), (4, 3, 200)]);
-    assert_eq!(
-        centroid_u8(&cfg, &f, w, h, w).unwrap().flags,
-        Flags::SATURATED
-    );
-    let mut f16 = vec![0u16; 64];
-    f16[27] = 65534;
-    assert_eq!(
-        centroid_u16(&cfg, &f16, w, h, w).unwrap().flags,
-        Flags::NONE
-    );
-    f16[27] = 65535;
-    assert_eq!(
-        centroid_u16(&cfg, &f16, w, h, w).unwrap().flags,
-        Flags::SATURATED
-    );
+    let full_scale = CentroidConfig::binary(50);
     // A 12-bit camera in a 16-bit container saturates at 4095.
-    let cfg = config(50, Mode::Weighted, None, Some(4095)).unwrap();
-    f16[27] = 4094;
-    assert_eq!(
-        centroid_u16(&cfg, &f16, w, h, w).unwrap().flags,
-        Flags::NONE
-    );
-    f16[27] = 4095;
-    assert_eq!(
-        centroid_u16(&cfg, &f16, w, h, w).unwrap().flags,
-        Flags::SATURATED
-    );
+    let twelve_bit = config(50, Mode::Weighted, None, Some(4095)).unwrap();
     // Configured 8-bit level.
-    let cfg = config(50, Mode::Binary, None, Some(200)).unwrap();
-    let f = frame_with(w, h, &[(3, 3, 199)]);
-    assert_eq!(centroid_u8(&cfg, &f, w, h, w).unwrap().flags, Flags::NONE);
-    let f = frame_with(w, h, &[(3, 3, 200)]);
-    assert_eq!(
-        centroid_u8(&cfg, &f, w, h, w).unwrap().flags,
-        Flags::SATURATED
-    );
+    let level_200 = config(50, Mode::Binary, None, Some(200)).unwrap();
     // A saturated pixel outside the ROI does not count.
-    let roi = Roi {
-        x: 0,
-        y: 0,
-        width: 3,
-        height: 8,
-    };
-    let cfg = config(50, Mode::Binary, Some(roi), None).unwrap();
-    let f = frame_with(w, h, &[(1, 3, 100), (5, 3, 255)]);
-    assert_eq!(centroid_u8(&cfg, &f, w, h, w).unwrap().flags, Flags::NONE);
+    let in_roi = config(50, Mode::Binary, Some(roi(0, 0, 3, 8)), None).unwrap();
+    for (cfg, pixels, want) in [
+        (full_scale, &[(3, 3, 254), (4, 3, 200)][..], Flags::NONE),
+        (full_scale, &[(3, 3, 255), (4, 3, 200)], Flags::SATURATED),
+        (level_200, &[(3, 3, 199)], Flags::NONE),
+        (level_200, &[(3, 3, 200)], Flags::SATURATED),
+        (in_roi, &[(1, 3, 100), (5, 3, 255)], Flags::NONE),
+    ] {
+        let f = frame_with(w, h, pixels);
+        let got = centroid_strided(&cfg, &f, w, h, w).unwrap().flags;
+        assert_eq!(got, want, "{cfg:?}, 8-bit pixels {pixels:?}");
+    }
+    for (cfg, level, want) in [
+        (full_scale, 65534, Flags::NONE),
+        (full_scale, 65535, Flags::SATURATED),
+        (twelve_bit, 4094, Flags::NONE),
+        (twelve_bit, 4095, Flags::SATURATED),
+    ] {
+        let mut f16 = vec![0u16; 64];
+        f16[27] = level;
+        let got = centroid_strided(&cfg, &f16, w, h, w).unwrap().flags;
+        assert_eq!(got, want, "{cfg:?}, 16-bit pixel {level}");
+    }
 }
 
 #[test]
@@ -717,28 +682,28 @@ fn invalid_settings_and_frames_are_rejected() {
     ));
     let f = [0u8; 100];
     let c = CentroidConfig::binary(10);
-    assert_eq!(centroid_u8(&c, &f, 0, 5, 10), Err(FrameError::Empty));
+    assert_eq!(centroid_strided(&c, &f, 0, 5, 10), Err(FrameError::Empty));
     assert_eq!(
-        centroid_u8(&c, &f, 10, 5, 9),
+        centroid_strided(&c, &f, 10, 5, 9),
         Err(FrameError::Stride {
             stride: 9,
             width: 10
         })
     );
     assert_eq!(
-        centroid_u8(&c, &f, 10, 11, 10),
+        centroid_strided(&c, &f, 10, 11, 10),
         Err(FrameError::BufferTooShort {
             needed: 110,
             got: 100
         })
     );
-    assert!(centroid_u8(&c, &f, 10, 10, 10).is_ok());
+    assert!(centroid_strided(&c, &f, 10, 10, 10).is_ok());
     assert!(matches!(
-        centroid_u8(&c, &f, MAX_DIM + 1, 1, MAX_DIM + 1),
+        centroid_strided(&c, &f, MAX_DIM + 1, 1, MAX_DIM + 1),
         Err(FrameError::TooLarge { .. })
     ));
     assert_eq!(
-        centroid_u8(&c, &f, 10, usize::MAX, usize::MAX),
+        centroid_strided(&c, &f, 10, usize::MAX, usize::MAX),
         Err(FrameError::TooLarge {
             width: 10,
             height: usize::MAX
@@ -746,7 +711,7 @@ fn invalid_settings_and_frames_are_rejected() {
     );
     let c = config(10, Mode::Binary, roi(5, 0, 6, 5), None).unwrap();
     assert_eq!(
-        centroid_u8(&c, &f, 10, 10, 10),
+        centroid_strided(&c, &f, 10, 10, 10),
         Err(FrameError::RoiOutsideFrame)
     );
 }
@@ -763,15 +728,7 @@ fn naive_components(
     mode: Mode,
     roi: Option<Roi>,
 ) -> Vec<(Moments, BoundingBox, Flags)> {
-    let (rx0, ry0, rx1, ry1) = match roi {
-        Some(r) => (
-            r.x as usize,
-            r.y as usize,
-            (r.x + r.width) as usize,
-            (r.y + r.height) as usize,
-        ),
-        None => (0, 0, w, h),
-    };
+    let (rx0, ry0, rx1, ry1) = region(roi, w, h);
     let mut seen = vec![false; w * h];
     let mut out = Vec::new();
     for y0 in ry0..ry1 {
@@ -829,8 +786,7 @@ fn naive_components(
 proptest! {
     #[test]
     fn multi_target_matches_flood_fill(
-        (w, h, _s, px, roi) in frame_strategy(255)
-            .prop_flat_map(|(w, h, _s, px)| (Just(w), Just(h), Just(w), Just(px), roi_strategy(w, h))),
+        (w, h, _s, px, roi) in frame_roi_strategy(255),
         t in 100u8..255,
         mode in mode_strategy(),
     ) {
@@ -973,13 +929,7 @@ fn multi_target_16_bit_streaming_equals_whole_frame() {
             }
         })
         .collect();
-    let roi = Roi {
-        x: 3,
-        y: 2,
-        width: 40,
-        height: 25,
-    };
-    let cfg = config(999, Mode::Weighted, Some(roi), Some(60000)).unwrap();
+    let cfg = config(999, Mode::Weighted, Some(roi(3, 2, 40, 25)), Some(60000)).unwrap();
     let mut whole = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
     whole.process(&Frame::new(&px, w, h, w).unwrap()).unwrap();
     let mut streamed = MultiCentroider::<40, 512>::try_new(cfg).unwrap();
@@ -992,7 +942,7 @@ fn multi_target_16_bit_streaming_equals_whole_frame() {
     assert_eq!(a, b);
     // The components partition the pixels above the threshold: their moments add up to the
     // single-target moments of the same region.
-    let single = centroid_u16(&cfg, &px, w, h, w).unwrap();
+    let single = centroid_strided(&cfg, &px, w, h, w).unwrap();
     let mut total = Moments::default();
     for t in &a {
         total.merge(&t.centroid.moments);

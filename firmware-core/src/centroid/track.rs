@@ -38,6 +38,7 @@
 //! assert_eq!(tracker.rows(), (16, 27));
 //! ```
 
+use super::kernel::WindowSums;
 use super::{Centroid, Centroider, ConfigError, Flags, Mode, Pixel, Roi, MAX_DIM};
 
 /// Settings of a [`Tracker`]: plain data, checked once by [`Tracker::try_new`].
@@ -123,6 +124,32 @@ impl Extent {
         y_min: u32::MAX,
         y_max: 0,
     };
+
+    /// The columns `left .. right` of the extent in a row segment starting at column `x0`
+    /// (`0 .. 0` while the extent is empty): where the window kernel need not look for it.
+    #[inline(always)]
+    fn columns_in(&self, x0: usize) -> (usize, usize) {
+        let left = (self.x_min as usize).saturating_sub(x0);
+        let right = if self.x_min > self.x_max {
+            0
+        } else {
+            (self.x_max as usize + 1).saturating_sub(x0)
+        };
+        (left, right)
+    }
+
+    /// Widens the extent by row `y`'s hits (window sums of a segment starting at column `x0`).
+    #[inline(always)]
+    fn grow(&mut self, w: &WindowSums, x0: usize, y: u32) {
+        if w.first != u32::MAX {
+            self.x_min = self.x_min.min(x0 as u32 + w.first);
+        }
+        if w.last != u32::MAX {
+            self.x_max = self.x_max.max(x0 as u32 + w.last);
+        }
+        self.y_min = self.y_min.min(y);
+        self.y_max = y;
+    }
 }
 
 /// Single-target centroider with a tracking window (see the [module documentation](self)).
@@ -159,10 +186,7 @@ impl Tracker {
     /// A tracker that searches its first frame whole. `const`: a `static` initialiser builds
     /// it in place, checked at compile time.
     pub const fn try_new(config: TrackConfig) -> Result<Self, ConfigError> {
-        let config = match config.validate() {
-            Ok(c) => c,
-            Err(e) => return Err(e),
-        };
+        let config = const_try!(config.validate());
         let area = config.area();
         Ok(Tracker {
             config,
@@ -212,23 +236,13 @@ impl Tracker {
         let sat = c.saturation_for(P::FULL);
         // only hits left of the extent so far, or right of it, can widen it
         let e = self.extent;
-        let left = (e.x_min as usize).saturating_sub(x0);
-        let right = (e.x_max as usize + 1).saturating_sub(x0);
-        let right = if e.x_min > e.x_max { 0 } else { right };
+        let (left, right) = e.columns_in(x0);
         if let Some(w) = P::window_sums(seg, t, sat, c.mode == Mode::Binary, left, right) {
             // one pass for the sums, then the extent (binary 8-bit on ARM)
             let ends = seg.first().is_some_and(|&p| p > t) || seg.last().is_some_and(|&p| p > t);
             self.inner.push_window(&w, y, x0, ends, row.len());
             if w.pixels > 0 {
-                let e = &mut self.extent;
-                if w.first != u32::MAX {
-                    e.x_min = e.x_min.min(x0 as u32 + w.first);
-                }
-                if w.last != u32::MAX {
-                    e.x_max = e.x_max.max(x0 as u32 + w.last);
-                }
-                e.y_min = e.y_min.min(y);
-                e.y_max = y;
+                self.extent.grow(&w, x0, y);
             }
             return;
         }
@@ -285,12 +299,7 @@ impl Tracker {
                 break;
             };
             let seg = row.get(x0..x1).unwrap_or(&[]);
-            let left = (e.x_min as usize).saturating_sub(x0);
-            let right = if e.x_min > e.x_max {
-                0
-            } else {
-                (e.x_max as usize + 1).saturating_sub(x0)
-            };
+            let (left, right) = e.columns_in(x0);
             let Some(w) = P::window_sums(seg, t, sat, binary, left, right) else {
                 break;
             };
@@ -304,14 +313,7 @@ impl Tracker {
                     || seg.first().is_some_and(|&p| p > t)
                     || seg.last().is_some_and(|&p| p > t);
                 saturated |= w.saturated;
-                if w.first != u32::MAX {
-                    e.x_min = e.x_min.min(x0 as u32 + w.first);
-                }
-                if w.last != u32::MAX {
-                    e.x_max = e.x_max.max(x0 as u32 + w.last);
-                }
-                e.y_min = e.y_min.min(y);
-                e.y_max = y;
+                e.grow(&w, x0, y);
             }
         }
         let inner = &mut self.inner;
@@ -410,21 +412,11 @@ mod tests {
     use super::super::{centroid, CentroidConfig, Frame, Mode};
     use super::*;
     use proptest::prelude::*;
-    use std::vec;
     use std::vec::Vec;
 
     /// A hard disk of radius `r` centred at `(cx, cy)` on a background of 10, level 200.
     fn disk(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<u8> {
-        let mut f = vec![10u8; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
-                if dx * dx + dy * dy <= r * r {
-                    f[y * w + x] = 200;
-                }
-            }
-        }
-        f
+        crate::test_support::disk(w, h, (cx, cy), r, 10, 200)
     }
 
     fn full(cfg: &CentroidConfig, px: &[u8], w: usize, h: usize) -> Centroid {
