@@ -283,3 +283,130 @@ fn imaging_effects_in_the_cantilever_study() {
     let chi = mu_a(&s, "vision,2,1,") / mu_a(&s, "transducer,2,1,");
     assert!((chi - 1.0).abs() < 0.02, "chi {chi}\n{s}");
 }
+
+/// The adaptive procedure (JCGM 101 7.9): one process stops at a whole number of batches and
+/// says so; the same batches computed as three shards and merged give identical outputs.
+#[test]
+fn adaptive_batches_stop_and_three_shards_merge_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = [
+        "study",
+        "--adaptive",
+        "--digits",
+        "1",
+        "--batch",
+        "20",
+        "--runs",
+        "60",
+        "--exposures-ms",
+        "40",
+        "--seed",
+        "5",
+        "--adaptive-on",
+        "transducer:1:f",
+        "--no-plots",
+    ];
+    let run = |out: &Path, extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend(["--out", out.to_str().unwrap()]);
+        a.extend(extra);
+        harness(&a)
+    };
+    let one = dir.path().join("one");
+    let o = run(&one, &[]);
+    ok(&o);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("adaptive (JCGM 101 7.9, 1 significant digit(s), batches of 20)"));
+    assert!(crate::util::stderr(&o).contains("smaller than JCGM 101"));
+    // whole batches only, at least two
+    let runs = read(&one.join("runs.jsonl")).lines().count();
+    assert!(runs == 40 || runs == 60, "{runs} runs");
+    let adaptive = read(&one.join("adaptive.csv"));
+    let row = adaptive.lines().nth(1).unwrap();
+    assert!(row.starts_with("transducer,40,1,f_hz,"), "{adaptive}");
+    assert_eq!(row.split(',').nth(5), Some(runs.to_string().as_str()));
+    assert!(text.contains(&format!("{} runs", runs)), "{text}");
+
+    let shards: Vec<_> = (1..=3)
+        .map(|k| {
+            let d = dir.path().join(format!("s{k}"));
+            ok(&run(&d, &["--shard", &format!("{k}/3")]));
+            // a shard holds whole batches: batch k - 1 of the three
+            assert_eq!(read(&d.join("runs.jsonl")).lines().count(), 20);
+            d
+        })
+        .collect();
+    let merged = dir.path().join("merged");
+    let mut args = vec!["merge"];
+    args.extend(shards.iter().map(|d| d.to_str().unwrap()));
+    args.extend(["--out", merged.to_str().unwrap(), "--no-plots"]);
+    ok(&harness(&args));
+    for f in [
+        "summary.csv",
+        "realizations.csv",
+        "frf_band.csv",
+        "coverage.csv",
+        "adaptive.csv",
+    ] {
+        assert_eq!(
+            read(&one.join(f)),
+            read(&merged.join(f)),
+            "merged {f} differs"
+        );
+    }
+    // a bad selection names the flag
+    assert_exit_2(
+        &run(&dir.path().join("bad"), &["--adaptive-on", "vision:9:a"]),
+        "--adaptive-on",
+    );
+}
+
+/// `vision_compensated`: with the weighted centroid at 180 ms, mode 2 (E2PR 0.45) loses about
+/// 30 % of its amplitude; divided by the centroid's transfer it is back within 3 % of the
+/// transducer (mean of the paired per-run ratios over 12 runs: enough for a 95 % interval).
+#[test]
+fn weighted_centroid_amplitudes_compensated_for_the_exposure() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("w.toml");
+    std::fs::write(
+        &cfg,
+        "preset = \"grandstand\"\nruns = 12\nexposures_ms = [180.0]\n[imaging]\ncentroid = \"weighted\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("w");
+    ok(&study_config(&cfg, &out));
+    let cov = read(&out.join("coverage.csv"));
+    let rows: Vec<(String, Vec<f64>)> = read(&out.join("realizations.csv"))
+        .lines()
+        .skip(1)
+        .filter(|l| l.contains(",2,"))
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (
+                c[2].to_string(),
+                vec![c[0].parse().unwrap(), c[5].parse().unwrap()],
+            )
+        })
+        .collect();
+    let amp = |system: &str, run: f64| {
+        rows.iter()
+            .find(|(s, v)| s == system && v[0] == run)
+            .map(|(_, v)| v[1])
+            .unwrap()
+    };
+    let mean_ratio = |system: &str| {
+        (0..12)
+            .map(|run| amp(system, run as f64) / amp("transducer", run as f64))
+            .sum::<f64>()
+            / 12.0
+    };
+    let (v, c) = (mean_ratio("vision"), mean_ratio("vision_compensated"));
+    assert!(v < 0.8, "vision/transducer {v}");
+    // one run's ratio scatters by about 3 % (std), the mean of 12 by about 1 %
+    assert!((c - 1.0).abs() < 0.03, "compensated/transducer {c}");
+    // the coverage file states the ratio of every vision system
+    assert!(
+        cov.contains("vision_compensated,180,2,ratio,12,0.95,"),
+        "{cov}"
+    );
+}

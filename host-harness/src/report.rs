@@ -121,6 +121,21 @@ fn num(v: f64) -> String {
 /// frequency. The names say 95 whatever the coverage probability (recorded in `config.toml`).
 pub const COVERAGE_COLUMNS: &str = "u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95";
 
+/// CSV bytes: the `header` line, then the `cells` of each row joined by commas.
+fn csv_bytes<T, const N: usize>(
+    header: &str,
+    rows: &[T],
+    cells: impl Fn(&T) -> [String; N],
+) -> Vec<u8> {
+    let mut s = String::from(header);
+    s.push('\n');
+    for r in rows {
+        s.push_str(&cells(r).join(","));
+        s.push('\n');
+    }
+    s.into_bytes()
+}
+
 /// `summary.csv` bytes. `with_chi` adds the `chi_mu,chi_sigma` columns (cantilever); the
 /// [`COVERAGE_COLUMNS`] come last.
 pub fn summary_csv(rows: &[SummaryRow], with_chi: bool) -> Vec<u8> {
@@ -180,20 +195,16 @@ pub struct CoverageRow {
 
 /// `coverage.csv` bytes.
 pub fn coverage_csv(rows: &[CoverageRow]) -> Vec<u8> {
-    let mut s = String::from(
-        "system,exposure_ms,mode,quantity,runs,coverage,estimate,std_uncertainty,u_mean,\
-         shortest_lo,shortest_hi,symmetric_lo,symmetric_hi\n",
-    );
-    for r in rows {
+    const HEADER: &str = "system,exposure_ms,mode,quantity,runs,coverage,estimate,\
+                          std_uncertainty,u_mean,shortest_lo,shortest_hi,symmetric_lo,symmetric_hi";
+    csv_bytes(HEADER, rows, |r| {
         let c = &r.coverage;
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.system.name(),
+        [
+            r.system.name().to_string(),
             num(r.exposure_ms),
-            r.mode,
-            r.quantity,
-            c.n,
+            r.mode.to_string(),
+            r.quantity.to_string(),
+            c.n.to_string(),
             num(c.p),
             num(c.mean),
             num(c.std),
@@ -201,46 +212,41 @@ pub fn coverage_csv(rows: &[CoverageRow]) -> Vec<u8> {
             num(c.short_lo),
             num(c.short_hi),
             num(c.sym_lo),
-            num(c.sym_hi)
-        );
-    }
-    s.into_bytes()
+            num(c.sym_hi),
+        ]
+    })
 }
 
 /// `realizations.csv` bytes.
 pub fn realizations_csv(rows: &[RealizationRow]) -> Vec<u8> {
-    let mut s = String::from("run,exposure_ms,system,mode,f_hz,a\n");
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{}",
-            r.run,
+    csv_bytes("run,exposure_ms,system,mode,f_hz,a", rows, |r| {
+        [
+            r.run.to_string(),
             num(r.exposure_ms),
-            r.system.name(),
-            r.mode,
+            r.system.name().to_string(),
+            r.mode.to_string(),
             num(r.f_hz),
-            num(r.a)
-        );
-    }
-    s.into_bytes()
+            num(r.a),
+        ]
+    })
 }
 
 /// `frf_band.csv` bytes.
 pub fn frf_band_csv(rows: &[FrfBandRow]) -> Vec<u8> {
-    let mut s = String::from("system,exposure_ms,freq_hz,mean_abs,p05_abs,p95_abs\n");
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{}",
-            r.system.name(),
-            num(r.exposure_ms),
-            num(r.freq_hz),
-            num(r.mean_abs),
-            num(r.p05_abs),
-            num(r.p95_abs)
-        );
-    }
-    s.into_bytes()
+    csv_bytes(
+        "system,exposure_ms,freq_hz,mean_abs,p05_abs,p95_abs",
+        rows,
+        |r| {
+            [
+                r.system.name().to_string(),
+                num(r.exposure_ms),
+                num(r.freq_hz),
+                num(r.mean_abs),
+                num(r.p05_abs),
+                num(r.p95_abs),
+            ]
+        },
+    )
 }
 
 /// The human table printed at the end of a study:
@@ -365,7 +371,10 @@ mod tests {
         // 4 values, p = 0.5: q = 2, shortest [y1, y3] (first on ties), u_mean = s / 2
         let u = (5.0f64 / 3.0).sqrt() / 2.0;
         assert!(
-            text.lines().nth(2).unwrap().ends_with(&format!(",0.9,0.9,{u},1,3,,,")),
+            text.lines()
+                .nth(2)
+                .unwrap()
+                .ends_with(&format!(",0.9,0.9,{u},1,3,,,")),
             "{text}"
         );
     }

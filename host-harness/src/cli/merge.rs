@@ -26,7 +26,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.coverage {
         merged.config.coverage = p;
         merged.config.validate().map_err(|e| {
-            crate::bad_input(format!("--coverage: {}", e.to_string().trim_start_matches("coverage: ")))
+            crate::bad_input(format!(
+                "--coverage: {}",
+                e.to_string().trim_start_matches("coverage: ")
+            ))
         })?;
     }
     study::merge::write_merged(&args.out, &merged)?;

@@ -95,7 +95,6 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
     Ok(cfg)
 }
 
-
 /// The adaptive settings from the flags: the standard's batch size unless `--batch` (a smaller
 /// one is said), the run cap `--runs` or a thousand batches (at most `MAX_RUNS`).
 fn set_adaptive(args: &Args, cfg: &mut StudyConfig) -> anyhow::Result<()> {

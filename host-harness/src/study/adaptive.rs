@@ -249,7 +249,10 @@ pub fn outcome(
     let mut last = None;
     for h in 2..=whole {
         let quantities = state_at(records, h, m, &keys, a, cfg.coverage, correction);
-        let assessed: Vec<&Stability> = quantities.iter().filter_map(|q| q.status.as_ref()).collect();
+        let assessed: Vec<&Stability> = quantities
+            .iter()
+            .filter_map(|q| q.status.as_ref())
+            .collect();
         let stable = !assessed.is_empty() && assessed.iter().all(|s| s.is_stable());
         let more = assessed
             .iter()
@@ -370,7 +373,13 @@ mod tests {
             parse_on("vision_compensated:1:f").unwrap(),
             (System::VisionCompensated, 0, false)
         );
-        for bad in ["vision:0:a", "vision:2", "camera:1:a", "vision:1:x", "vision:1:a:b"] {
+        for bad in [
+            "vision:0:a",
+            "vision:2",
+            "camera:1:a",
+            "vision:1:x",
+            "vision:1:a:b",
+        ] {
             let e = parse_on(bad).unwrap_err().to_string();
             assert!(e.contains("--adaptive-on"), "{bad}: {e}");
         }

@@ -6,10 +6,10 @@
 //! H1 against the base acceleration -> peaks. The `[imaging]` options of a study file apply as
 //! in the grandstand ([`crate::imaging::Camera`]).
 
-use super::{measure_vision, RunRecord, Scenario, StudyConfig};
+use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
 use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
-use crate::imaging::{BlurRenderer, Camera, Effects, TargetPath};
+use crate::imaging::{Effects, TargetPath};
 use crate::model::cantilever::{
     Rig, BANDS, FINE_PER_SAMPLE, FPS, FRAMES, FS_HZ, MM_PER_PX, SAMPLES, TARGET, THRESHOLD, WELCH,
 };
@@ -60,33 +60,26 @@ impl Cantilever {
     }
 
     fn welch() -> anyhow::Result<Box<Welch>> {
-        Ok(Box::new(
-            Welch::try_new(WELCH).map_err(|e| anyhow::anyhow!("Welch settings: {e}"))?,
-        ))
+        super::boxed_welch(WELCH)
     }
 
+    const REPORTING: Reporting = Reporting::new(
+        "cantilever",
+        "(m/s^2)/(m/s^2)",
+        &BANDS,
+        (FS_HZ, SAMPLES),
+        Self::FRF_MAX_HZ,
+        true,
+    );
+
     fn keep_bins() -> usize {
-        (Self::FRF_MAX_HZ * SAMPLES as f64 / FS_HZ) as usize + 1
+        Self::REPORTING.keep_bins()
     }
 }
 
 impl Scenario for Cantilever {
-    fn name(&self) -> &'static str {
-        "cantilever"
-    }
-    fn amplitude_unit(&self) -> &'static str {
-        "(m/s^2)/(m/s^2)"
-    }
-    fn bands(&self) -> Vec<(f64, f64)> {
-        BANDS.to_vec()
-    }
-    fn frf_freqs(&self) -> Vec<f64> {
-        (0..Self::keep_bins())
-            .map(|k| k as f64 * FS_HZ / SAMPLES as f64)
-            .collect()
-    }
-    fn with_chi(&self) -> bool {
-        true
+    fn reporting(&self) -> Reporting {
+        Self::REPORTING
     }
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
@@ -119,37 +112,28 @@ impl Scenario for Cantilever {
         let pad = (max_exp / 2000.0 * fine_hz).ceil() as usize + 2;
         let period_px: Vec<f64> = sim.tip_mm.iter().map(|mm| -mm / MM_PER_PX).collect();
         let path = TargetPath::periodic(&period_px, pad, sim.fine_per_frame, fine_hz);
-        let mut renderer = BlurRenderer::for_path(&TARGET, &path.path_px, 16);
-        let (w, h) = (renderer.width(), renderer.height());
-        let rest_y = renderer.rest_y();
-        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
-        camera.use_fast_path(&TARGET, &renderer);
-        let mut disp = vec![0.0f64; FRAMES];
-        let mut valid = vec![false; FRAMES];
         let mut up =
             Box::new(Up::try_new(FRAMES, SAMPLES).map_err(|e| anyhow::anyhow!("upsampler: {e}"))?);
         let mut acc = vec![0.0f32; SAMPLES];
-        let mut vision = Vec::with_capacity(self.exposures_ms.len());
-        for (ei, &exp) in self.exposures_ms.iter().enumerate() {
-            camera.start_exposure(ei);
-            vision.push(measure_vision(
-                exp,
-                &mut disp,
-                &mut valid,
-                bands.len(),
-                |k| {
-                    let (a, b) = path.frame_window(k, exp);
-                    camera.frame(&mut renderer, a, b)
-                },
-                |cy| -(cy as f64 - rest_y) * MM_PER_PX,
-                |d32| {
-                    // mm -> m/s^2 in the same pass as the upsampling
-                    up.process_acceleration(d32, &mut acc, FPS as f32, 1e-3)
-                        .map_err(|e| anyhow::anyhow!("upsampling: {e}"))?;
-                    measure(&mut welch, &base, &acc, &bands, Self::keep_bins(), 1.0)
-                },
-            )?);
-        }
+        let camera = Filming {
+            effects: &self.effects,
+            target: &TARGET,
+            threshold: THRESHOLD,
+            block: 16,
+        };
+        let vision = camera.vision_records(
+            &path,
+            &self.exposures_ms,
+            (FRAMES, bands.len()),
+            |dy| -dy * MM_PER_PX,
+            |d32| {
+                // mm -> m/s^2 in the same pass as the upsampling
+                up.process_acceleration(d32, &mut acc, FPS as f32, 1e-3)
+                    .map_err(|e| anyhow::anyhow!("upsampling: {e}"))?;
+                measure(&mut welch, &base, &acc, &bands, Self::keep_bins(), 1.0)
+            },
+            rng,
+        )?;
         Ok(RunRecord {
             run,
             natural_f_hz,

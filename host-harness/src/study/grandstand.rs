@@ -4,10 +4,10 @@
 //! and pushes both systems through firmware-core's Welch H1 and peak picking
 //! ([`crate::chain::frf::measure`]).
 
-use super::{measure_vision, RunRecord, Scenario, StudyConfig};
+use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
 use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
-use crate::imaging::{BlurRenderer, Camera, Effects, TargetPath};
+use crate::imaging::{Effects, TargetPath};
 use crate::model::grandstand::{
     simulate, BANDS, FINE, FS_HZ, N, NFFT, NPERSEG, PX_PER_MM, TARGET, THRESHOLD, WELCH,
 };
@@ -59,31 +59,21 @@ impl Grandstand {
     }
 
     fn welch() -> anyhow::Result<Box<Welch>> {
-        Ok(Box::new(
-            Welch::try_new(WELCH).map_err(|e| anyhow::anyhow!("Welch settings: {e}"))?,
-        ))
+        super::boxed_welch(WELCH)
     }
 
+    /// |FRF| kept up to 5 Hz (0.01 Hz bins).
+    const REPORTING: Reporting =
+        Reporting::new("grandstand", "mm/kN", &BANDS, (FS_HZ, NFFT), 5.0, false);
+
     fn keep_bins() -> usize {
-        // |FRF| kept up to 5 Hz (0.01 Hz bins)
-        (5.0 * NFFT as f64 / FS_HZ) as usize + 1
+        Self::REPORTING.keep_bins()
     }
 }
 
 impl Scenario for Grandstand {
-    fn name(&self) -> &'static str {
-        "grandstand"
-    }
-    fn amplitude_unit(&self) -> &'static str {
-        "mm/kN"
-    }
-    fn bands(&self) -> Vec<(f64, f64)> {
-        BANDS.to_vec()
-    }
-    fn frf_freqs(&self) -> Vec<f64> {
-        (0..Self::keep_bins())
-            .map(|k| k as f64 * FS_HZ / NFFT as f64)
-            .collect()
+    fn reporting(&self) -> Reporting {
+        Self::REPORTING
     }
     fn notes(&self) -> Vec<String> {
         let period_ms = 1000.0 / FS_HZ;
@@ -139,38 +129,29 @@ impl Scenario for Grandstand {
             fine_per_frame: FINE,
             fine_hz: FS_HZ * FINE as f64,
         };
-        let mut renderer = BlurRenderer::for_path(&TARGET, &path.path_px, self.block);
-        let (w, h) = (renderer.width(), renderer.height());
-        let rest_y = renderer.rest_y();
-        let mut camera = Camera::new(&self.effects, THRESHOLD, w, h, rng);
-        camera.use_fast_path(&TARGET, &renderer);
-        let mut vis = vec![0.0f64; N];
-        let mut valid = vec![false; N];
-        let mut vision = Vec::with_capacity(self.exposures_ms.len());
-        for (ei, &exp) in self.exposures_ms.iter().enumerate() {
-            camera.start_exposure(ei);
-            vision.push(measure_vision(
-                exp,
-                &mut vis,
-                &mut valid,
-                bands.len(),
-                |i| {
-                    let (a, b) = path.frame_window(i, exp);
-                    camera.frame(&mut renderer, a, b)
-                },
-                |cy| -(cy as f64 - rest_y) / PX_PER_MM,
-                |y| {
-                    measure(
-                        &mut welch,
-                        &r.force_meas_kn,
-                        y,
-                        &bands,
-                        Self::keep_bins(),
-                        1.0,
-                    )
-                },
-            )?);
-        }
+        let camera = Filming {
+            effects: &self.effects,
+            target: &TARGET,
+            threshold: THRESHOLD,
+            block: self.block,
+        };
+        let vision = camera.vision_records(
+            &path,
+            &self.exposures_ms,
+            (N, bands.len()),
+            |dy| -dy / PX_PER_MM,
+            |y| {
+                measure(
+                    &mut welch,
+                    &r.force_meas_kn,
+                    y,
+                    &bands,
+                    Self::keep_bins(),
+                    1.0,
+                )
+            },
+            rng,
+        )?;
         Ok(RunRecord {
             run,
             natural_f_hz: r.modes[..2].iter().map(|m| m.f_hz).collect(),

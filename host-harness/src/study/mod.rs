@@ -65,19 +65,79 @@ pub struct RunRecord {
     pub vision: Vec<VisionRecord>,
 }
 
+/// What a scenario reports, fixed by its rig: names, units, mode bands and the FRF bins kept.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reporting {
+    /// Short name printed in titles.
+    pub name: &'static str,
+    /// Unit of the resonant amplitudes.
+    pub amplitude_unit: &'static str,
+    /// Mode bands `(lo, hi)` in Hz, one per reported mode.
+    pub bands: &'static [(f64, f64)],
+    /// Sample rate of the FRF, Hz.
+    pub fs_hz: f64,
+    /// Transform length of the FRF.
+    pub nfft: usize,
+    /// |FRF| kept up to this frequency, Hz.
+    pub frf_max_hz: f64,
+    /// Whether the summary carries `chi_mu`/`chi_sigma` (cantilever).
+    pub with_chi: bool,
+}
+
+impl Reporting {
+    /// What a rig reports: its `name`, amplitude `unit`, mode `bands`, the FRF's sample rate
+    /// and transform length, the highest frequency kept and whether `chi_*` are reported.
+    pub const fn new(
+        name: &'static str,
+        unit: &'static str,
+        bands: &'static [(f64, f64)],
+        (fs_hz, nfft): (f64, usize),
+        frf_max_hz: f64,
+        with_chi: bool,
+    ) -> Reporting {
+        Reporting {
+            name,
+            amplitude_unit: unit,
+            bands,
+            fs_hz,
+            nfft,
+            frf_max_hz,
+            with_chi,
+        }
+    }
+
+    /// Bins of |FRF| kept in a run record.
+    pub fn keep_bins(&self) -> usize {
+        (self.frf_max_hz * self.nfft as f64 / self.fs_hz) as usize + 1
+    }
+}
+
 /// A simulated measurement: how to run one realization.
 pub trait Scenario: Sync {
+    /// What the scenario reports.
+    fn reporting(&self) -> Reporting;
     /// Short name printed in titles.
-    fn name(&self) -> &'static str;
+    fn name(&self) -> &'static str {
+        self.reporting().name
+    }
     /// Unit of the resonant amplitudes.
-    fn amplitude_unit(&self) -> &'static str;
+    fn amplitude_unit(&self) -> &'static str {
+        self.reporting().amplitude_unit
+    }
     /// Mode bands `(lo, hi)` in Hz, one per reported mode.
-    fn bands(&self) -> Vec<(f64, f64)>;
+    fn bands(&self) -> Vec<(f64, f64)> {
+        self.reporting().bands.to_vec()
+    }
     /// Frequencies of the bins in [`SystemRecord::frf_abs`], Hz.
-    fn frf_freqs(&self) -> Vec<f64>;
+    fn frf_freqs(&self) -> Vec<f64> {
+        let r = self.reporting();
+        (0..r.keep_bins())
+            .map(|k| k as f64 * r.fs_hz / r.nfft as f64)
+            .collect()
+    }
     /// Whether the summary carries `chi_mu`/`chi_sigma` (cantilever).
     fn with_chi(&self) -> bool {
-        false
+        self.reporting().with_chi
     }
     /// Runs realization `run`; `rng` is its private stream.
     fn run(&self, run: u64, rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord>;
@@ -87,6 +147,17 @@ pub trait Scenario: Sync {
     }
     /// What the `vision_compensated` rows divide the vision amplitudes by (method.md §2.8).
     fn exposure_correction(&self) -> anyhow::Result<crate::chain::exposure::ExposureCorrection>;
+}
+
+/// A Welch H1 estimator of firmware-core on the heap (its buffers are large), or the error
+/// naming the settings.
+pub fn boxed_welch<const NPERSEG: usize, const NFFT: usize, const SCRATCH: usize>(
+    config: firmware_core::spectrum::WelchConfig,
+) -> anyhow::Result<Box<firmware_core::spectrum::WelchH1<NPERSEG, NFFT, SCRATCH>>> {
+    Ok(Box::new(
+        firmware_core::spectrum::WelchH1::try_new(config)
+            .map_err(|e| anyhow::anyhow!("Welch settings: {e}"))?,
+    ))
 }
 
 /// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
@@ -135,6 +206,61 @@ pub fn measure_vision<E: std::fmt::Display>(
     })
 }
 
+/// The camera of a scenario: effects, target and threshold, and the renderer's ramp block.
+#[derive(Debug, Clone, Copy)]
+pub struct Filming<'a> {
+    /// Image-formation effects (and the centroid).
+    pub effects: &'a crate::imaging::Effects,
+    /// The target.
+    pub target: &'a crate::imaging::DiskTarget,
+    /// Centroid threshold on the 8-bit scale.
+    pub threshold: u16,
+    /// Path segments per precomputed ramp block of the renderer.
+    pub block: usize,
+}
+
+impl Filming<'_> {
+    /// Films `path` at every exposure of `exposures_ms` and measures each with
+    /// [`measure_vision`]: one renderer and one camera for the run (the camera draws its noise
+    /// seed from `rng`), frames `0..frames`, `to_disp` turning the centroid's offset from the
+    /// rest position (px, image `y`) into the displacement, `measure` the filled record.
+    pub fn vision_records(
+        &self,
+        path: &crate::imaging::TargetPath,
+        exposures_ms: &[f64],
+        (frames, bands): (usize, usize),
+        to_disp: impl Fn(f64) -> f64,
+        mut measure: impl FnMut(&[f32]) -> anyhow::Result<SystemRecord>,
+        rng: &mut ChaCha8Rng,
+    ) -> anyhow::Result<Vec<VisionRecord>> {
+        let mut renderer =
+            crate::imaging::BlurRenderer::for_path(self.target, &path.path_px, self.block);
+        let (w, h) = (renderer.width(), renderer.height());
+        let rest_y = renderer.rest_y();
+        let mut camera = crate::imaging::Camera::new(self.effects, self.threshold, w, h, rng);
+        camera.use_fast_path(self.target, &renderer);
+        let mut disp = vec![0.0f64; frames];
+        let mut valid = vec![false; frames];
+        let mut vision = Vec::with_capacity(exposures_ms.len());
+        for (ei, &exp) in exposures_ms.iter().enumerate() {
+            camera.start_exposure(ei);
+            vision.push(measure_vision(
+                exp,
+                &mut disp,
+                &mut valid,
+                bands,
+                |k| {
+                    let (a, b) = path.frame_window(k, exp);
+                    camera.frame(&mut renderer, a, b)
+                },
+                |cy| to_disp(cy as f64 - rest_y),
+                &mut measure,
+            )?);
+        }
+        Ok(vision)
+    }
+}
+
 /// The scenario a configuration describes.
 pub fn scenario_for(cfg: &StudyConfig) -> anyhow::Result<Box<dyn Scenario>> {
     Ok(match cfg.preset {
@@ -154,7 +280,13 @@ pub fn finish(
 ) -> anyhow::Result<()> {
     let mut records = records;
     let mut adaptive_report = None;
-    if let Some(a) = &cfg.adaptive {
+    // a shard's directory holds some batches only (never two from the start, which are batches
+    // 0 and 1 of two shards): its outputs are its own runs'
+    let from_start = |batch: u64| {
+        records.len() as u64 >= 2 * batch
+            && records.iter().enumerate().all(|(i, r)| r.run == i as u64)
+    };
+    if let Some(a) = cfg.adaptive.as_ref().filter(|a| from_start(a.batch)) {
         let correction = scenario.exposure_correction()?;
         let o = adaptive::outcome(cfg, a, scenario.bands().len(), &correction, records)?;
         checkpoint::write_atomic(&out.join(files::ADAPTIVE), &adaptive::adaptive_csv(&o))?;
