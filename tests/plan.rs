@@ -236,3 +236,87 @@ fn bad_flags_exit_2_naming_the_flag() {
         "missing --fps",
     );
 }
+
+/// `analyze --compensate-exposure` on a synthetic cantilever recording filmed with an 8 ms
+/// exposure (E2PR 0.26 for mode 2 at 32.4 Hz: the blur costs about 11 %), weighted centroid
+/// with the threshold at the black background (the case where the sinc is exact).
+#[test]
+fn compensation_brings_the_weighted_vision_amplitude_back_to_the_accelerometer() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    let rec_s = rec.to_str().unwrap();
+    let o = harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec_s,
+        "--exposure-ms",
+        "8",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let analyze = |out: &str, extra: &[&str]| {
+        let frames = rec.join("frames");
+        let accel = rec.join("accel.csv");
+        let out = dir.path().join(out);
+        // the recording's README.txt command, with the weighted centroid at threshold 0
+        let mut args: Vec<&str> = "analyze --fps 120 --fs 2048 --time-col t_s --threshold 0 \
+                                   --mode weighted --mm-per-px 0.1266 --exposure-ms 8"
+            .split_whitespace()
+            .collect();
+        let paths = [("--frames", &frames), ("--accel", &accel), ("--out", &out)];
+        for (flag, p) in &paths {
+            args.extend([*flag, p.to_str().unwrap()]);
+        }
+        args.extend(extra);
+        let o = harness(&args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let modes = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+        // (system, mode) -> (f_hz, amplitude)
+        let rows: HashMap<(String, String), (f64, f64)> = modes
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                (
+                    (c[0].to_string(), c[1].to_string()),
+                    (c[4].parse().unwrap(), c[5].parse().unwrap()),
+                )
+            })
+            .collect();
+        (rows, text(&o.stdout), out)
+    };
+    let (raw, _, raw_dir) = analyze("raw", &[]);
+    let (comp, report, comp_dir) = analyze("comp", &["--compensate-exposure"]);
+    assert!(!raw_dir.join("compensation.csv").exists());
+    assert!(comp_dir.join("compensation.csv").exists());
+    for mode in ["1", "2"] {
+        let key = |s: &str| (s.to_string(), mode.to_string());
+        let acc = raw[&key("accelerometer")].1;
+        assert_eq!(
+            acc,
+            comp[&key("accelerometer")].1,
+            "the accelerometer is not touched"
+        );
+        let ((f_raw, a_raw), (f_comp, a_comp)) = (raw[&key("vision")], comp[&key("vision")]);
+        eprintln!(
+            "mode {mode}: vision / accelerometer {:.4} raw, {:.4} compensated",
+            a_raw / acc,
+            a_comp / acc
+        );
+        // the same bin is picked, divided by the closed-form sinc there (the firmware's f32
+        // sinc: 1e-6 relative)
+        assert_eq!(f_raw, f_comp);
+        let want = a_raw / sinc(f_raw * 0.008);
+        assert!(
+            (a_comp / want - 1.0).abs() < 1e-5,
+            "mode {mode}: {a_comp} vs {want}"
+        );
+        assert!(
+            (a_comp / acc - 1.0).abs() < (a_raw / acc - 1.0).abs(),
+            "mode {mode}: compensated {a_comp}, raw {a_raw}, accelerometer {acc}"
+        );
+        assert!(report.contains(&format!("mode {mode}: ")), "{report}");
+    }
+    assert!(report.contains("exposure compensation (8 ms"), "{report}");
+}
