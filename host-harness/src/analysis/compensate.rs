@@ -1,8 +1,8 @@
 //! Exposure compensation of an analysis (`analyze --compensate-exposure`, method.md §2.8): the
 //! vision H1 (its numerator, the vision acceleration's spectrum) is divided bin by bin by the
-//! exposure's amplitude transfer at `|f| Te`, through firmware-core's
-//! [`ExposureTransfer`](firmware_core::exposure::ExposureTransfer) (no ratio beyond
-//! [`E2PR_LIMIT`]: those bins are left as they were), and the vision modes are picked again.
+//! exposure's amplitude transfer at `|f| Te`, through firmware-core's [`ExposureTransfer`] (no
+//! ratio beyond [`E2PR_LIMIT`]: those bins are left as they were), and the vision modes are
+//! picked again.
 //!
 //! The transfer is the box exposure's `sinc(pi f Te)` ([`BoxTransfer`]): exact for the weighted
 //! centroid with the threshold at the background level. The binary centroid's transfer depends

@@ -107,23 +107,20 @@ fn preset_input(args: &Args) -> anyhow::Result<Option<PlanInput>> {
     }
 }
 
-/// The planner's input from the preset and the flags; errors name the flag at fault.
-pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
-    check(
-        "--tolerance",
-        args.tolerance,
-        |v| v > 0.0 && v < 1.0,
-        "in (0, 1)",
-    )?;
-    let base = preset_input(args)?;
-    let missing = |flag: &str| bad_input(format!("missing {flag} (or give --preset)"));
-    let freqs = match (&args.freqs_hz, &base) {
+fn missing(flag: &str) -> anyhow::Error {
+    bad_input(format!("missing {flag} (or give --preset)"))
+}
+
+/// The modes from `--freqs-hz` and `--amplitude-px`, else the preset's; errors name the flag.
+fn resolve_modes(args: &Args, base: Option<&PlanInput>) -> anyhow::Result<Vec<PlanMode>> {
+    let freqs = match (&args.freqs_hz, base) {
         (Some(f), _) => f.clone(),
         (None, Some(b)) => b.modes.iter().map(|m| m.f_hz).collect(),
         (None, None) => return Err(missing("--freqs-hz")),
     };
-    let amps = match (&args.amplitude_px, &base) {
+    let amps = match (&args.amplitude_px, base) {
         (Some(a), _) => a.clone(),
+        // the preset's amplitudes belong to its own modes only
         (None, Some(b)) if args.freqs_hz.is_none() => {
             b.modes.iter().map(|m| m.amplitude_px).collect()
         }
@@ -142,7 +139,7 @@ pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
             freqs.len()
         )));
     }
-    let modes = freqs
+    Ok(freqs
         .iter()
         .enumerate()
         .map(|(i, &f_hz)| PlanMode {
@@ -150,8 +147,12 @@ pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
             f_hz,
             amplitude_px: amps[i.min(amps.len() - 1)],
         })
-        .collect();
-    let bt = base.as_ref().map(|b| b.target);
+        .collect())
+}
+
+/// The target from the flags, else the preset's, else the grandstand's defaults.
+fn resolve_target(args: &Args, base: Option<&PlanInput>) -> anyhow::Result<DiskTarget> {
+    let bt = base.map(|b| b.target);
     let target = DiskTarget {
         radius_px: args
             .target_radius_px
@@ -164,21 +165,23 @@ pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
             .unwrap_or(1.5),
     };
     check("--target-radius-px", target.radius_px, |v| v > 0.0, "> 0")?;
-    check(
-        "--target-level",
-        target.level,
-        |v| v > 0.0 && v <= 255.0,
-        "in (0, 255]",
-    )?;
+    let level_ok = |v: f64| v > 0.0 && v <= 255.0;
+    check("--target-level", target.level, level_ok, "in (0, 255]")?;
     check("--edge-sigma-px", target.edge_sigma_px, |v| v > 0.0, "> 0")?;
+    Ok(target)
+}
+
+/// The planner's input from the preset and the flags; errors name the flag at fault.
+pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
+    let tolerance_ok = |v: f64| v > 0.0 && v < 1.0;
+    check("--tolerance", args.tolerance, tolerance_ok, "in (0, 1)")?;
+    let base = preset_input(args)?;
+    let modes = resolve_modes(args, base.as_ref())?;
+    let target = resolve_target(args, base.as_ref())?;
     let base_frac = base.as_ref().map(|b| b.threshold_frac);
     let threshold_frac = args.threshold_frac.or(base_frac).unwrap_or(0.5);
-    check(
-        "--threshold-frac",
-        threshold_frac,
-        |v| (0.0..1.0).contains(&v),
-        "in [0, 1)",
-    )?;
+    let frac_ok = |v: f64| (0.0..1.0).contains(&v);
+    check("--threshold-frac", threshold_frac, frac_ok, "in [0, 1)")?;
     let fps = match args.fps.or(base.as_ref().map(|b| b.fps)) {
         Some(f) => f,
         None => return Err(missing("--fps")),
@@ -186,12 +189,13 @@ pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
     check("--fps", fps, |v| v > 0.0, "a positive frame rate")?;
     if let Some(e) = args.exposure_ms {
         check("--exposure-ms", e, |v| v >= 0.0, ">= 0")?;
-        let f_max = freqs.iter().copied().fold(0.0, f64::max);
+        let f_max = modes.iter().map(|m| m.f_hz).fold(0.0, f64::max);
         // the rendered transfer covers E2PR up to 4 (compensation::TransferSetup)
+        let within = |v: f64| v * f_max / 1000.0 <= 4.0;
         check(
             "--exposure-ms",
             e,
-            |v| v * f_max / 1000.0 <= 4.0,
+            within,
             "at most 4 periods of the highest mode",
         )?;
     }

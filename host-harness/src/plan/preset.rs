@@ -9,11 +9,13 @@
 //! *peak displacement of the mode's response to the mean decay pulse* (`F0` = 1000 N, the mean
 //! of U(950, 1050); `alpha` = 5.6 1/s; the mode at its mean frequency and damping), integrated
 //! exactly as the study integrates it ([`Zoh`] at 1 kHz) and scaled to pixels as the study's
-//! camera sees it ([`PX_PER_MM`]). The decay is where the target moves far within one exposure
-//! and where the binary centroid departs from the sinc. The process-noise response of one mode
-//! is small (mode 2: about 0.5 px RMS, a third of the 1.5 px edge sigma), and its transfer is
-//! then set by the other modes' larger motion in the same frames, not by its own amplitude
-//! (rendered alone, a sub-pixel sinusoid shows the sharp image's pixel locking instead).
+//! camera sees it ([`grandstand::PX_PER_MM`]). The decay is where the target moves far within
+//! one exposure and where the binary centroid departs from the sinc. The process-noise
+//! response of one mode is small against the 1.5 px edge (mode 2: about 0.5 px RMS); rendered
+//! alone, such a sub-pixel sinusoid shows the sharp image's pixel locking, which the other
+//! modes' larger motion dithers away in the study. Over the whole record that response carries
+//! more of the mode's energy than the decay, and it is blurred nearly as by the sinc, so the
+//! study's binary ratio falls between this curve and the sinc (method.md §3.4, README).
 
 use super::{PlanInput, PlanMode};
 use crate::model::grandstand::{self, impulse, Mode, Zoh, ALPHA, FINE, FS_HZ, T0_S};
