@@ -100,8 +100,13 @@ fn preset_input(args: &Args) -> anyhow::Result<Option<PlanInput>> {
             Ok(Some(preset::grandstand_input(args.tolerance, Mode::Binary)))
         }
         Some(p) => Err(bad_input(format!(
-            "--preset {}: the planner supports only the grandstand preset; give --freqs-hz, \
+            "{} {}: the planner supports only the grandstand preset; give --freqs-hz, \
              --amplitude-px and --fps instead",
+            if args.config.is_some() {
+                "--config: preset"
+            } else {
+                "--preset"
+            },
             p.name()
         ))),
     }
