@@ -6,6 +6,7 @@ mod util;
 
 mod analyze;
 mod centroid;
+mod plan;
 mod robustness;
 mod signal;
 mod study;
@@ -25,7 +26,7 @@ fn help_lists_every_subcommand() {
         .filter_map(|l| l.split_whitespace().next())
         .collect();
     for cmd in [
-        "study", "merge", "centroid", "frf", "upsample", "analyze", "render",
+        "study", "merge", "centroid", "frf", "upsample", "analyze", "render", "plan",
     ] {
         assert!(
             listed.contains(&cmd),

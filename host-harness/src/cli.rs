@@ -8,6 +8,7 @@ pub mod args;
 pub mod centroid;
 pub mod frf;
 pub mod merge;
+pub mod plan;
 pub mod render;
 pub mod study;
 pub mod upsample;
@@ -38,6 +39,9 @@ enum Command {
     Analyze(analyze::Args),
     /// Write PNG frames of the simulated target, sharp and blurred.
     Render(render::Args),
+    /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
+    /// within a tolerance, the residual after compensation, the lost-frame risk.
+    Plan(plan::Args),
 }
 
 /// Runs the command line; the error is returned to `main` for the exit code.
@@ -50,6 +54,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Upsample(a) => upsample::run(a),
         Command::Analyze(a) => analyze::run(a),
         Command::Render(a) => render::run(a),
+        Command::Plan(a) => plan::run(a),
     }
 }
 

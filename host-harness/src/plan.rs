@@ -23,7 +23,10 @@
 //!   passes the threshold `T` once `l > 2 R L / T`. The risk is `l T / (2 R L)`: frames are
 //!   expected to be lost above 1 (the edge blur makes it approximate).
 //!
-//! When no exposure is given the row is evaluated at `max_exposure_ms`.
+//! When no exposure is given the row is evaluated at `max_exposure_ms`. [`preset`] builds
+//! the input of a study preset from its model.
+
+pub mod preset;
 
 use crate::imaging::compensation::{
     correction_table, transfer_curve, CompensationError, TransferSetup,

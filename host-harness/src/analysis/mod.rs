@@ -31,6 +31,7 @@
 //! * **Units.** Accelerations are in m/s^2 (the accelerometer CSV must be in m/s^2); the FRFs are
 //!   dimensionless (acceleration over acceleration).
 
+pub mod compensate;
 pub mod frames;
 pub mod modal;
 pub mod report;

@@ -77,6 +77,16 @@ pub enum ModeArg {
     Weighted,
 }
 
+impl ModeArg {
+    /// The firmware's centroid mode.
+    pub fn mode(self) -> Mode {
+        match self {
+            ModeArg::Binary => Mode::Binary,
+            ModeArg::Weighted => Mode::Weighted,
+        }
+    }
+}
+
 /// The centroid's flags (`centroid`, `analyze`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct CentroidArgs {
@@ -97,13 +107,9 @@ pub struct CentroidArgs {
 impl CentroidArgs {
     /// The firmware configuration, with an optional saturation level; errors name the setting.
     pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
-        let mode = match self.mode {
-            ModeArg::Binary => Mode::Binary,
-            ModeArg::Weighted => Mode::Weighted,
-        };
         CentroidConfig {
             threshold: self.threshold,
-            mode,
+            mode: self.mode.mode(),
             roi: self.roi,
             saturation,
         }
