@@ -63,6 +63,12 @@ pub struct PlanInput {
     pub centroid: Mode,
     /// The exposure the rows are evaluated at, ms; `None`: each mode's longest exposure.
     pub exposure_ms: Option<f64>,
+    /// The target's motion as the H1 estimator weighs it (a study preset's nominal record):
+    /// when given, the measured transfer is the input-energy weighted average of the transfers
+    /// at the segments' amplitudes, as the study's `vision_compensated` rows use
+    /// ([`crate::chain::exposure::ExposureCorrection::for_segments`]); otherwise the transfer
+    /// at each mode's own amplitude.
+    pub motion: Option<Vec<crate::chain::exposure::MotionSegment>>,
 }
 
 impl PlanInput {
@@ -87,6 +93,7 @@ impl PlanInput {
             tolerance,
             centroid,
             exposure_ms: None,
+            motion: None,
         }
     }
 
@@ -278,8 +285,7 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
         setup.frames_per_period = 32;
         setup.path_steps_per_period = 512;
         // the measured transfer of this centroid at the actual threshold, on the grid
-        let curve = transfer_curve(&setup, &grid)?;
-        let measured: Vec<(f64, f64)> = curve.iter().map(|p| (p.e2pr, p.ratio)).collect();
+        let measured = measured_transfer(&setup, input.motion.as_deref(), &grid)?;
         let max_exposure_ms = 1000.0 * max_e2pr(input.centroid, &measured, floor) / m.f_hz;
         let exposure_ms = input.exposure_ms.unwrap_or(max_exposure_ms);
         let e2pr = m.f_hz * exposure_ms / 1000.0;
@@ -310,6 +316,34 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
 }
 
 /// Refuses a frame rate, tolerance, threshold fraction or fixed exposure out of range.
+/// The transfer on `grid` at the setup's amplitude, or averaged over `motion`'s segments with
+/// their input-energy weights (amplitudes grouped on a 5 % grid, one curve per group).
+fn measured_transfer(
+    setup: &TransferSetup,
+    motion: Option<&[crate::chain::exposure::MotionSegment]>,
+    grid: &[f64],
+) -> Result<Vec<(f64, f64)>, CompensationError> {
+    let Some(segments) = motion else {
+        let curve = transfer_curve(setup, grid)?;
+        return Ok(curve.iter().map(|p| (p.e2pr, p.ratio)).collect());
+    };
+    let total: f64 = segments.iter().map(|s| s.weight).sum();
+    let mut out: Vec<(f64, f64)> = grid.iter().map(|e| (*e, 0.0)).collect();
+    for (a, w) in crate::chain::exposure::amplitude_groups(segments) {
+        let curve = transfer_curve(
+            &TransferSetup {
+                amplitude_px: a,
+                ..*setup
+            },
+            grid,
+        )?;
+        for (o, p) in out.iter_mut().zip(&curve) {
+            o.1 += w / total * p.ratio;
+        }
+    }
+    Ok(out)
+}
+
 fn validate(input: &PlanInput) -> Result<(), CompensationError> {
     let bad = |m: String| Err(CompensationError::Setup(m));
     if !(input.fps.is_finite() && input.fps > 0.0) {

@@ -73,16 +73,7 @@ impl ExposureCorrection {
                 "the motion segments carry no input energy".into(),
             ));
         }
-        // group amplitudes on a 5 % logarithmic grid: one curve per group
-        let mut groups: Vec<(f64, f64)> = Vec::new(); // (amplitude, weight)
-        for s in segments {
-            let key = (s.amplitude_px.ln() / 1.05f64.ln()).round();
-            let a = 1.05f64.powf(key);
-            match groups.iter_mut().find(|g| (g.0 / a - 1.0).abs() < 1e-9) {
-                Some(g) => g.1 += s.weight,
-                None => groups.push((a, s.weight)),
-            }
-        }
+        let groups = amplitude_groups(segments);
         let mut ratios = [0.0f32; TABLE_NODES];
         let mut eff = 0.0;
         for (a, w) in groups {
@@ -129,6 +120,21 @@ impl ExposureCorrection {
             ),
         }
     }
+}
+
+/// The segments' amplitudes grouped on a 5 % logarithmic grid, with the summed weight of each
+/// group: `(amplitude_px, weight)`, one transfer curve per group.
+pub fn amplitude_groups(segments: &[MotionSegment]) -> Vec<(f64, f64)> {
+    let mut groups: Vec<(f64, f64)> = Vec::new();
+    for s in segments {
+        let key = (s.amplitude_px.ln() / 1.05f64.ln()).round();
+        let a = 1.05f64.powf(key);
+        match groups.iter_mut().find(|g| (g.0 / a - 1.0).abs() < 1e-9) {
+            Some(g) => g.1 += s.weight,
+            None => groups.push((a, s.weight)),
+        }
+    }
+    groups
 }
 
 /// The amplitude of the sinusoid with the RMS of a motion `path_px` (px): `sqrt(2) RMS` about

@@ -212,6 +212,15 @@ pub fn resolve(args: &Args) -> anyhow::Result<PlanInput> {
         tolerance: args.tolerance,
         centroid: Mode::Binary,
         exposure_ms: args.exposure_ms,
+        // the preset's record-wide motion, unless the flags describe another motion or camera
+        motion: match (
+            &args.amplitude_px,
+            args.target_radius_px,
+            args.threshold_frac,
+        ) {
+            (None, None, None) => base.and_then(|b| b.motion),
+            _ => None,
+        },
     })
 }
 
@@ -306,7 +315,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     print!("{}", table(&input, &plans));
     if args.preset.is_some() || args.config.is_some() {
         println!(
-            "amplitudes: peak of each mode's response to the mean decay pulse (method.md §3.4)"
+            "transfer: averaged over the Welch segments of a nominal record, weighted by their \
+             input energy, as the study's vision_compensated rows; lost-frame risk: peak of each \
+             mode's response to the mean decay pulse (method.md §3.4)"
         );
     }
     if let Some(path) = &args.out {

@@ -16,6 +16,13 @@
 //! modes' larger motion dithers away in the study. Over the whole record that response carries
 //! more of the mode's energy than the decay, and it is blurred nearly as by the sinc, so the
 //! study's binary ratio falls between this curve and the sinc (method.md §3.4, README).
+//!
+//! So the transfer itself comes from the whole record, as H1 weighs it: the preset also
+//! gives the target's motion in the Welch segments of a nominal record
+//! ([`grandstand::nominal_motion_segments`]), and the planner averages the transfers at the
+//! segments' amplitudes with their input-energy weights, the same table the study's
+//! `vision_compensated` rows divide by. The per-mode decay peak is kept for the lost-frame
+//! risk.
 
 use super::{PlanInput, PlanMode};
 use crate::model::grandstand::{self, impulse, Mode, Zoh, ALPHA, FINE, FS_HZ, T0_S};
@@ -66,6 +73,7 @@ pub fn grandstand_input(tolerance: f64, centroid: CentroidMode) -> PlanInput {
         tolerance,
         centroid,
         exposure_ms: None,
+        motion: Some(grandstand::nominal_motion_segments()),
     }
 }
 
