@@ -40,6 +40,29 @@ fn study_config(cfg: &Path, out: &Path) -> std::process::Output {
     ])
 }
 
+/// Writes the study file `text` into a new temporary directory and runs it into its `out`;
+/// returns the directory (removed when dropped) and the output directory.
+fn run_study_file(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("study.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("out");
+    ok(&study_config(&cfg, &out));
+    (dir, out)
+}
+
+/// Asserts that `files` are byte-identical in directories `a` and `b`.
+fn assert_same_files(a: &Path, b: &Path, files: &[&str]) {
+    for f in files {
+        assert_eq!(
+            read(&a.join(f)),
+            read(&b.join(f)),
+            "{f} differs in {}",
+            b.display()
+        );
+    }
+}
+
 /// `mu_a` (column 6) of the first summary row starting with `prefix`.
 fn mu_a(summary: &str, prefix: &str) -> f64 {
     summary
@@ -98,18 +121,16 @@ fn same_seed_same_numbers_for_any_thread_count_and_sharding() {
     let (s1, s2) = two_shards(dir.path());
     let merged = dir.path().join("merged");
     ok(&merge(&s1, &s2, &merged));
-    for f in [
-        "summary.csv",
-        "realizations.csv",
-        "frf_band.csv",
-        "coverage.csv",
-    ] {
-        assert_eq!(
-            read(&one.join(f)),
-            read(&merged.join(f)),
-            "merged {f} differs"
-        );
-    }
+    assert_same_files(
+        &one,
+        &merged,
+        &[
+            "summary.csv",
+            "realizations.csv",
+            "frf_band.csv",
+            "coverage.csv",
+        ],
+    );
     // merging an incomplete set is refused
     let bad = dir.path().join("bad");
     let out = harness(&[
@@ -227,15 +248,9 @@ fn render_writes_sharp_and_blurred_frames() {
 
 #[test]
 fn imaging_effects_from_a_study_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = dir.path().join("s.toml");
-    std::fs::write(
-        &cfg,
+    let (dir, out) = run_study_file(
         "preset = \"grandstand\"\nruns = 2\nexposures_ms = [40.0]\n\n[imaging]\nbits = 12\nread_noise = 1.0\nshot_noise_e_per_level = 20.0\noptical_blur_sigma_px = 0.7\ngain = 1.1\n",
-    )
-    .unwrap();
-    let out = dir.path().join("o");
-    ok(&study_config(&cfg, &out));
+    );
     let written = read(&out.join("config.toml"));
     assert!(written.contains("bits = 12"), "{written}");
     // vision rows are present and the amplitude stays near the transducer's at 40 ms
@@ -243,6 +258,7 @@ fn imaging_effects_from_a_study_file() {
     let (vis, tr) = (mu_a(&s, "vision,40,1,"), mu_a(&s, "transducer,40,1,"));
     assert!((vis / tr - 1.0).abs() < 0.1, "{s}");
     // an invalid option is refused with the field named
+    let cfg = dir.path().join("bad.toml");
     std::fs::write(&cfg, "preset = \"grandstand\"\n[imaging]\nbits = 10\n").unwrap();
     assert_exit_2(&study_config(&cfg, &dir.path().join("p")), "imaging.bits");
 }
@@ -289,25 +305,12 @@ fn imaging_effects_in_the_cantilever_study() {
 #[test]
 fn adaptive_batches_stop_and_three_shards_merge_identically() {
     let dir = tempfile::tempdir().unwrap();
-    let base = [
-        "study",
-        "--adaptive",
-        "--digits",
-        "1",
-        "--batch",
-        "20",
-        "--runs",
-        "60",
-        "--exposures-ms",
-        "40",
-        "--seed",
-        "5",
-        "--adaptive-on",
-        "transducer:1:f",
-        "--no-plots",
-    ];
+    let base: Vec<&str> = "study --adaptive --digits 1 --batch 20 --runs 60 --exposures-ms 40 \
+                           --seed 5 --adaptive-on transducer:1:f --no-plots"
+        .split_whitespace()
+        .collect();
     let run = |out: &Path, extra: &[&str]| {
-        let mut a = base.to_vec();
+        let mut a = base.clone();
         a.extend(["--out", out.to_str().unwrap()]);
         a.extend(extra);
         harness(&a)
@@ -341,19 +344,14 @@ fn adaptive_batches_stop_and_three_shards_merge_identically() {
     args.extend(shards.iter().map(|d| d.to_str().unwrap()));
     args.extend(["--out", merged.to_str().unwrap(), "--no-plots"]);
     ok(&harness(&args));
-    for f in [
+    let all = [
         "summary.csv",
         "realizations.csv",
         "frf_band.csv",
         "coverage.csv",
-        "adaptive.csv",
-    ] {
-        assert_eq!(
-            read(&one.join(f)),
-            read(&merged.join(f)),
-            "merged {f} differs"
-        );
-    }
+    ];
+    assert_same_files(&one, &merged, &all);
+    assert_same_files(&one, &merged, &["adaptive.csv"]);
     // a bad selection names the flag
     assert_exit_2(
         &run(&dir.path().join("bad"), &["--adaptive-on", "vision:9:a"]),
@@ -366,15 +364,9 @@ fn adaptive_batches_stop_and_three_shards_merge_identically() {
 /// transducer (mean of the paired per-run ratios over 12 runs: enough for a 95 % interval).
 #[test]
 fn weighted_centroid_amplitudes_compensated_for_the_exposure() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = dir.path().join("w.toml");
-    std::fs::write(
-        &cfg,
+    let (_dir, out) = run_study_file(
         "preset = \"grandstand\"\nruns = 12\nexposures_ms = [180.0]\n[imaging]\ncentroid = \"weighted\"\n",
-    )
-    .unwrap();
-    let out = dir.path().join("w");
-    ok(&study_config(&cfg, &out));
+    );
     let cov = read(&out.join("coverage.csv"));
     let rows: Vec<(String, Vec<f64>)> = read(&out.join("realizations.csv"))
         .lines()
