@@ -68,7 +68,7 @@ pub struct PlanInput {
     /// at the segments' amplitudes, as the study's `vision_compensated` rows use
     /// ([`crate::chain::exposure::ExposureCorrection::for_segments`]); otherwise the transfer
     /// at each mode's own amplitude.
-    pub motion: Option<Vec<crate::chain::exposure::MotionSegment>>,
+    pub motion: Option<Vec<crate::model::MotionSegment>>,
 }
 
 impl PlanInput {
@@ -320,7 +320,7 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
 /// their input-energy weights (amplitudes grouped on a 5 % grid, one curve per group).
 fn measured_transfer(
     setup: &TransferSetup,
-    motion: Option<&[crate::chain::exposure::MotionSegment]>,
+    motion: Option<&[crate::model::MotionSegment]>,
     grid: &[f64],
 ) -> Result<Vec<(f64, f64)>, CompensationError> {
     let Some(segments) = motion else {

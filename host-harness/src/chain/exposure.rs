@@ -8,6 +8,7 @@
 
 use crate::imaging::compensation::{correction_table, CompensationError, TransferSetup};
 use crate::imaging::{CentroidKind, DiskTarget};
+pub use crate::model::{equivalent_amplitude_px, MotionSegment};
 use firmware_core::exposure::{BoxTransfer, CorrectionTable, ExposureTransfer};
 
 /// Nodes of the binary correction table (step 0.05: E2PR 0 ..= 0.8).
@@ -22,16 +23,6 @@ pub enum ExposureCorrection {
     Sinc,
     /// A measured table and the (effective) motion amplitude it was measured at, px.
     Table(CorrectionTable<TABLE_NODES>, f64),
-}
-
-/// One Welch segment of a motion as the H1 estimator sees it: the weight of the segment in the
-/// estimate (the energy of the windowed input) and the amplitude of the target's motion in it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MotionSegment {
-    /// Energy of the windowed input in the segment (any unit; only ratios matter).
-    pub weight: f64,
-    /// Equivalent sinusoidal amplitude of the target's motion in the segment, px.
-    pub amplitude_px: f64,
 }
 
 impl ExposureCorrection {
@@ -135,15 +126,6 @@ pub fn amplitude_groups(segments: &[MotionSegment]) -> Vec<(f64, f64)> {
         }
     }
     groups
-}
-
-/// The amplitude of the sinusoid with the RMS of a motion `path_px` (px): `sqrt(2) RMS` about
-/// its mean. The one number a binary correction table is measured at.
-pub fn equivalent_amplitude_px(path_px: &[f64]) -> f64 {
-    let n = path_px.len().max(1) as f64;
-    let mean = path_px.iter().sum::<f64>() / n;
-    let ms = path_px.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
-    (2.0 * ms).sqrt()
 }
 
 #[cfg(test)]

@@ -152,12 +152,12 @@ pub fn mode_shape(mode: usize, xi: f64) -> f64 {
 /// ([`crate::chain::exposure::ExposureCorrection::for_segments`]).
 pub fn nominal_motion_segments(
     acq: &crate::model::Acquisition,
-) -> anyhow::Result<Vec<crate::chain::exposure::MotionSegment>> {
+) -> anyhow::Result<Vec<crate::model::MotionSegment>> {
     let sim = crate::model::simulate(&crate::model::Rig::Cantilever(Rig::nominal()), acq, 0)?;
     let px: Vec<f64> = sim.tip_mm.iter().map(|mm| mm / MM_PER_PX).collect();
-    Ok(vec![crate::chain::exposure::MotionSegment {
+    Ok(vec![crate::model::MotionSegment {
         weight: 1.0,
-        amplitude_px: crate::chain::exposure::equivalent_amplitude_px(&px),
+        amplitude_px: crate::model::equivalent_amplitude_px(&px),
     }])
 }
 

@@ -66,7 +66,7 @@ pub const ALPHA: f64 = 5.6;
 /// sinusoidal amplitude (`sqrt(2)` windowed RMS) of the motion in px. The decay test makes it
 /// two populations: a few px of response to the process noise, and the impulse's segments
 /// with tens of px that carry most of the input energy.
-pub fn nominal_motion_segments() -> Vec<crate::chain::exposure::MotionSegment> {
+pub fn nominal_motion_segments() -> Vec<crate::model::MotionSegment> {
     use rand::SeedableRng as _;
     let r = simulate(&mut ChaCha8Rng::seed_from_u64(0), true, 0);
     let step = NPERSEG - NOVERLAP;
@@ -88,7 +88,7 @@ pub fn nominal_motion_segments() -> Vec<crate::chain::exposure::MotionSegment> {
                 .clone()
                 .map(|i| r.fine_disp_m[i * FINE] * 1000.0 * PX_PER_MM)
                 .collect();
-            crate::chain::exposure::MotionSegment {
+            crate::model::MotionSegment {
                 weight: centred_energy(&r.force_n[seg]),
                 amplitude_px: (2.0 * centred_energy(&px) / w2).sqrt(),
             }

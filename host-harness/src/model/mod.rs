@@ -262,6 +262,25 @@ fn add_transducer_noise(
     (input, noisy(clean_tip, tip_noise))
 }
 
+/// One Welch segment of a motion as the H1 estimator sees it: the weight of the segment in the
+/// estimate (the energy of the windowed input) and the amplitude of the target's motion in it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionSegment {
+    /// Energy of the windowed input in the segment (any unit; only ratios matter).
+    pub weight: f64,
+    /// Equivalent sinusoidal amplitude of the target's motion in the segment, px.
+    pub amplitude_px: f64,
+}
+
+/// The amplitude of the sinusoid with the RMS of a motion `path_px` (px): `sqrt(2) RMS` about
+/// its mean. The one number a binary correction table is measured at.
+pub fn equivalent_amplitude_px(path_px: &[f64]) -> f64 {
+    let n = path_px.len().max(1) as f64;
+    let mean = path_px.iter().sum::<f64>() / n;
+    let ms = path_px.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+    (2.0 * ms).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
