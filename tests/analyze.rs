@@ -359,6 +359,17 @@ fn non_numeric_or_non_monotonic_csv_rows_are_errors_naming_the_row() {
     let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
 
+    // a time column 2.4 % off --fs (a 2000 Hz file read as 2048 Hz): every step is within the
+    // 5 % step check, the drift passes half a sample at sample 21 (row 23)
+    let mut lines = good.clone();
+    for (k, l) in lines.iter_mut().enumerate().skip(1) {
+        let rest = l.split_once(',').unwrap().1.to_string();
+        *l = format!("{},{rest}", (k - 1) as f64 / 2000.0);
+    }
+    std::fs::write(&rec.accel, lines.join("\n")).unwrap();
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &["--time-col", "t_s"]);
+    assert_bad_input(&o, &["accel.csv", "row 23", "half a sample", "2000.0"]);
+
     let o = analyze(&rec, rec.frames.to_str().unwrap(), &["--input-col", "base"]);
     assert_bad_input(&o, &["no column named `base`", "t_s, base_acc, tip_acc"]);
 }

@@ -143,8 +143,10 @@ pub fn tick_offset_to_seconds(ticks: i64, tick_hz: f64) -> anyhow::Result<f64> {
     Ok(ticks as f64 / tick_hz)
 }
 
-/// Checks an accelerometer time column: strictly increasing, steps of `1 / fs` (within 5 %).
-/// `first_row` is the spreadsheet row of `t[0]` (2 after a header), so errors name the row.
+/// Checks an accelerometer time column: strictly increasing, steps of `1 / fs` (within 5 %),
+/// and no drift from `t[0] + i / fs` of more than half a sample over the whole record (a wrong
+/// `--fs` by a few percent passes the step check but not this one). `first_row` is the
+/// spreadsheet row of `t[0]` (2 after a header), so errors name the row.
 pub fn check_time_column(t: &[f64], fs: f64, source: &str, first_row: usize) -> anyhow::Result<()> {
     let dt = 1.0 / fs;
     for (i, w) in t.windows(2).enumerate() {
@@ -161,6 +163,16 @@ pub fn check_time_column(t: &[f64], fs: f64, source: &str, first_row: usize) -> 
             return Err(bad_input(format!(
                 "{source}: row {row}: time step {step} s does not match --fs {fs} Hz \
                  (expected {dt} s)"
+            )));
+        }
+        let drift = w[1] - t[0] - (i + 1) as f64 * dt;
+        if drift.abs() > 0.5 * dt {
+            let rate = (i + 1) as f64 / (w[1] - t[0]);
+            return Err(bad_input(format!(
+                "{source}: row {row}: time {} s is {drift:+.6} s from the {} s that --fs {fs} \
+                 Hz gives (more than half a sample): the file's own rate is about {rate:.6} Hz",
+                w[1],
+                t[0] + (i + 1) as f64 * dt
             )));
         }
     }
@@ -403,6 +415,18 @@ mod tests {
             check_time_column(&[0.0, 0.5, 1.2], 2.0, "a.csv", 2).unwrap_err()
         );
         assert!(e.contains("row 4") && e.contains("--fs"), "{e}");
+        // a rate 2.4 % off passes every step (within 5 %) but drifts by half a sample after
+        // 22 samples (2048 Hz data read as 2000 Hz, t[22] on row 24): the row is named
+        let t: Vec<f64> = (0..100).map(|i| i as f64 / 2048.0).collect();
+        check_time_column(&t, 2048.0, "a.csv", 2).unwrap();
+        let e = format!(
+            "{:#}",
+            check_time_column(&t, 2000.0, "a.csv", 2).unwrap_err()
+        );
+        assert!(
+            e.contains("row 24") && e.contains("half a sample") && e.contains("2048.0"),
+            "{e}"
+        );
     }
 
     /// A sinusoidal displacement that is periodic in the record upsamples to the closed-form
