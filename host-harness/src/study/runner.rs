@@ -262,10 +262,15 @@ pub fn execute(
     let (_lock, mut done) = open_study(cfg, exec)?;
     let batch = cfg.adaptive.as_ref().map(|a| a.batch);
     if !done.is_empty() {
+        let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.run).collect();
+        let to_go = (0..cfg.runs)
+            .filter(|r| exec.shard.owns(*r, batch) && !have.contains(r))
+            .count();
         eprintln!(
-            "resuming {}: {} runs already done",
+            "resuming {}: {} runs already done, {to_go} to go{}",
             exec.out.display(),
-            done.len()
+            done.len(),
+            if batch.is_some() { " at most" } else { "" }
         );
     }
     let mut computed = 0;
