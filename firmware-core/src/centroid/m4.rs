@@ -396,6 +396,35 @@ fn window_binary<const HIGH: bool>(
     }
 }
 
+/// Bit `i` (`0..4`): column `start + i` has a pixel above `t` in `rows` rows of `pixels`
+/// `stride` apart from `start` (a word and one SWAR compare per row; rows that do not fit
+/// count as no hit).
+#[inline(always)]
+pub(crate) fn column_group_u8(
+    pixels: &[u8],
+    start: usize,
+    stride: usize,
+    rows: usize,
+    t: u8,
+) -> u32 {
+    let (k, high) = constant(t);
+    let mut acc = 0u32;
+    let mut i = start;
+    for _ in 0..rows {
+        let w = pixels
+            .get(i..i + 4)
+            .and_then(|b| <[u8; 4]>::try_from(b).ok())
+            .map_or(0, u32::from_le_bytes);
+        acc |= if high {
+            mask::<true>(w, k)
+        } else {
+            mask::<false>(w, k)
+        };
+        i += stride;
+    }
+    (acc | acc >> 7 | acc >> 14 | acc >> 21) & 0xf
+}
+
 /// Index of the first pixel above `t` (a word at a time from the left), `u32::MAX` if none.
 #[inline(always)]
 fn first_hit<const HIGH: bool>(seg: &[u8], t: u8, k: u32) -> u32 {
