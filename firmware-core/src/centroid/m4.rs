@@ -659,4 +659,28 @@ mod tests {
             assert_eq!(got.max, 255);
         }
     }
+
+    proptest! {
+        /// The four-column group of the tracking window's extent equals a per-pixel check of
+        /// the same columns and rows (rows past the end of the pixels count as no hit).
+        #[test]
+        fn column_group_is_the_per_pixel_check(
+            px in proptest::collection::vec(any::<u8>(), 1..400),
+            start in 0usize..40,
+            stride in 4usize..24,
+            rows in 0usize..20,
+            t in any::<u8>(),
+        ) {
+            let mut want = 0u32;
+            for r in 0..rows {
+                let i = start + r * stride;
+                if let Some(g) = px.get(i..i + 4) {
+                    for (k, &p) in g.iter().enumerate() {
+                        want |= u32::from(p > t) << k;
+                    }
+                }
+            }
+            prop_assert_eq!(column_group_u8(&px, start, stride, rows, t), want);
+        }
+    }
 }
