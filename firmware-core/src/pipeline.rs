@@ -341,7 +341,12 @@ error_display!(PushError, f, {
 /// 8 SCRATCH` bytes (see the [module documentation](self)).
 #[derive(Clone)]
 pub struct VisionH1<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usize> {
-    config: PipelineConfig,
+    // The settings are not kept whole: the block lengths live in `plan`, the Welch settings
+    // in `welch`; only the two options are stored here (see `config`).
+    /// [`PipelineConfig::acceleration_scale`].
+    acceleration_scale: Option<f32>,
+    /// [`PipelineConfig::exposure_compensation`].
+    exposure_s: Option<f32>,
     plan: UpsamplePlan,
     welch: WelchAccumulator<WORK>,
     camera: [f32; CAM],
@@ -364,7 +369,7 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("VisionH1")
             .field("capacities", &(CAM, HIST, WORK, SCRATCH))
-            .field("config", &self.config)
+            .field("config", &self.config())
             .field("blocks", &self.blocks)
             .field("segments", &self.welch.segments())
             .field("pending", &(self.cam_fill, self.vis_fill, self.adc_fill))
@@ -382,7 +387,7 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             f,
             "VisionH1 {{ config: {}, blocks: {}, segments: {}, skipped: {}, \
              pending: ({}, {}, {}) }}",
-            self.config,
+            self.config(),
             self.blocks,
             self.welch.segments(),
             self.welch.skipped_segments(),
@@ -448,7 +453,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     ) -> Self {
         let adc_skip = config.samples_per_block / 4;
         VisionH1 {
-            config,
+            acceleration_scale: config.acceleration_scale,
+            exposure_s: config.exposure_compensation,
             plan,
             welch,
             camera: [0.0; CAM],
@@ -468,7 +474,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// all samples and the estimate. On error nothing changes.
     pub fn configure(&mut self, config: PipelineConfig) -> Result<(), ConfigError> {
         let (plan, welch) = Self::check(&config)?;
-        self.config = config;
+        self.acceleration_scale = config.acceleration_scale;
+        self.exposure_s = config.exposure_compensation;
         self.plan = plan;
         self.welch = welch;
         self.reset();
@@ -525,20 +532,26 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         Ok((plan, welch))
     }
 
-    /// The settings.
-    pub const fn config(&self) -> &PipelineConfig {
-        &self.config
+    /// The settings (those of [`new`](Self::new)'s unconfigured pipeline are all zero).
+    /// Rebuilt from the plan, the Welch accumulator and the two options, so that the
+    /// pipeline does not hold a second copy of the block lengths and Welch settings.
+    pub const fn config(&self) -> PipelineConfig {
+        PipelineConfig {
+            frames_per_block: self.plan.input_len(),
+            samples_per_block: self.plan.output_len(),
+            welch: *self.welch.config(),
+            acceleration_scale: self.acceleration_scale,
+            exposure_compensation: self.exposure_s,
+        }
     }
 
     /// The exposure compensation of every block (the camera rate and
     /// [`PipelineConfig::exposure_compensation`]), if it is on.
     fn exposure(&self) -> Option<ExposureCompensation> {
-        self.config
-            .exposure_compensation
-            .map(|exposure_s| ExposureCompensation {
-                fs_in_hz: self.config.frame_rate_hz(),
-                exposure_s,
-            })
+        self.exposure_s.map(|exposure_s| ExposureCompensation {
+            fs_in_hz: self.config().frame_rate_hz(),
+            exposure_s,
+        })
     }
 
     /// What the exposure compensation does to each block (the same for all): the block's
@@ -654,8 +667,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// both histories cover, until neither is possible.
     fn advance(&mut self) {
         let (n, m) = (self.plan.input_len(), self.plan.output_len());
-        let nperseg = self.config.welch.nperseg;
-        let hop = nperseg - self.config.welch.noverlap;
+        let welch = self.welch.config();
+        let (nperseg, hop) = (welch.nperseg, welch.nperseg - welch.noverlap);
         let keep = m / 2;
         if n == 0 || hop == 0 {
             // unconfigured: nothing to do (and no loop without progress)
@@ -665,9 +678,8 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             // a block is complete with the frame after it (the end-matching line's end point)
             if self.cam_fill > n && self.vis_fill + keep <= HIST {
                 let accel = self
-                    .config
                     .acceleration_scale
-                    .map(|s| (self.config.frame_rate_hz(), s));
+                    .map(|s| (self.config().frame_rate_hz(), s));
                 let exposure = self.exposure();
                 if let (Some(input), Some(&next), Some(out)) = (
                     self.camera.get(..n),

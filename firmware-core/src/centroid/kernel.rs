@@ -86,6 +86,25 @@ pub trait Pixel: sealed::Sealed + Copy + Ord + Default + Into<u16> + 'static {
     ) -> Option<WindowSums> {
         None
     }
+
+    /// Bit `i` (`0..4`): column `start + i` has a pixel above `t` in `rows` rows of `pixels`
+    /// `stride` apart from `start` (the tracking window's x extent; rows that do not fit count
+    /// as no hit).
+    #[doc(hidden)]
+    #[inline(always)]
+    fn column_group(pixels: &[Self], start: usize, stride: usize, rows: usize, t: Self) -> u32 {
+        let mut bits = 0u32;
+        let mut i = start;
+        for _ in 0..rows {
+            if let Some(g) = pixels.get(i..i + 4) {
+                for (k, &p) in (0u32..).zip(g) {
+                    bits |= u32::from(p > t) << k;
+                }
+            }
+            i += stride;
+        }
+        bits
+    }
 }
 
 /// The methods of [`Pixel`] the two types share: the weight above the threshold and the
@@ -138,6 +157,12 @@ impl Pixel for u8 {
         } else {
             None
         }
+    }
+
+    #[cfg(any(test, target_arch = "arm"))]
+    #[inline(always)]
+    fn column_group(pixels: &[Self], start: usize, stride: usize, rows: usize, t: Self) -> u32 {
+        super::m4::column_group_u8(pixels, start, stride, rows, t)
     }
 }
 

@@ -396,6 +396,35 @@ fn window_binary<const HIGH: bool>(
     }
 }
 
+/// Bit `i` (`0..4`): column `start + i` has a pixel above `t` in `rows` rows of `pixels`
+/// `stride` apart from `start` (a word and one SWAR compare per row; rows that do not fit
+/// count as no hit).
+#[inline(always)]
+pub(crate) fn column_group_u8(
+    pixels: &[u8],
+    start: usize,
+    stride: usize,
+    rows: usize,
+    t: u8,
+) -> u32 {
+    let (k, high) = constant(t);
+    let mut acc = 0u32;
+    let mut i = start;
+    for _ in 0..rows {
+        let w = pixels
+            .get(i..i + 4)
+            .and_then(|b| <[u8; 4]>::try_from(b).ok())
+            .map_or(0, u32::from_le_bytes);
+        acc |= if high {
+            mask::<true>(w, k)
+        } else {
+            mask::<false>(w, k)
+        };
+        i += stride;
+    }
+    (acc | acc >> 7 | acc >> 14 | acc >> 21) & 0xf
+}
+
 /// Index of the first pixel above `t` (a word at a time from the left), `u32::MAX` if none.
 #[inline(always)]
 fn first_hit<const HIGH: bool>(seg: &[u8], t: u8, k: u32) -> u32 {
@@ -628,6 +657,30 @@ mod tests {
             assert_eq!(got.pixels as u64, n);
             assert_eq!(got.sum_x, n * (n - 1) / 2);
             assert_eq!(got.max, 255);
+        }
+    }
+
+    proptest! {
+        /// The four-column group of the tracking window's extent equals a per-pixel check of
+        /// the same columns and rows (rows past the end of the pixels count as no hit).
+        #[test]
+        fn column_group_is_the_per_pixel_check(
+            px in proptest::collection::vec(any::<u8>(), 1..400),
+            start in 0usize..40,
+            stride in 4usize..24,
+            rows in 0usize..20,
+            t in any::<u8>(),
+        ) {
+            let mut want = 0u32;
+            for r in 0..rows {
+                let i = start + r * stride;
+                if let Some(g) = px.get(i..i + 4) {
+                    for (k, &p) in g.iter().enumerate() {
+                        want |= u32::from(p > t) << k;
+                    }
+                }
+            }
+            prop_assert_eq!(column_group_u8(&px, start, stride, rows, t), want);
         }
     }
 }

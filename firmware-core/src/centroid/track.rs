@@ -152,6 +152,115 @@ impl Extent {
     }
 }
 
+/// The rows `y0 .. y1`, columns `x0 .. x1` of a frame through the one-pass window kernel
+/// ([`Tracker::process`]).
+struct RowPass<P> {
+    y0: u32,
+    y1: u32,
+    x0: usize,
+    x1: usize,
+    region_y0: u32,
+    t: P,
+    sat: u16,
+    binary: bool,
+}
+
+/// What [`RowPass::run`] found: the frame's sums, flags and hit extent.
+struct Pass {
+    pixels: u64,
+    sum_x: u64,
+    sum_y: u64,
+    border: bool,
+    saturated: bool,
+    last_hit: bool,
+    extent: Extent,
+}
+
+impl<P: Pixel> RowPass<P> {
+    /// The sums kept in locals (what `push_row` does row by row, without the per-row loads
+    /// and stores of the state). `WINDOWED`: the target fills most of the window's columns,
+    /// so the x extent is not looked for row by row but once after the rows, four columns
+    /// at a time from each edge inwards over the rows with hits (the same extent: the first
+    /// and last column with a pixel above the threshold); the window's margin leaves only a
+    /// few empty columns to check on each side (`x1 >= x0 + 4`). A whole-area search keeps the
+    /// row-wise one.
+    #[inline(always)]
+    fn run<const WINDOWED: bool>(&self, frame: &super::Frame<'_, P>) -> Pass {
+        let RowPass {
+            y0,
+            y1,
+            x0,
+            x1,
+            region_y0,
+            t,
+            sat,
+            binary,
+        } = *self;
+        let (mut pixels, mut sum_x, mut sum_y) = (0u64, 0u64, 0u64);
+        let (mut border, mut saturated, mut last_hit) = (false, false, false);
+        let mut e = Extent::NONE;
+        for y in y0..y1 {
+            let Some(row) = frame.row(y as usize) else {
+                break;
+            };
+            let seg = row.get(x0..x1).unwrap_or(&[]);
+            let (left, right) = if WINDOWED {
+                (0, usize::MAX)
+            } else {
+                e.columns_in(x0)
+            };
+            let Some(w) = P::window_sums(seg, t, sat, binary, left, right) else {
+                break;
+            };
+            last_hit = w.pixels > 0;
+            if last_hit {
+                let n = u64::from(w.pixels);
+                pixels += n;
+                sum_x += w.sum_x + x0 as u64 * n;
+                sum_y += u64::from(y) * n;
+                if !WINDOWED {
+                    border |= y == region_y0
+                        || seg.first().is_some_and(|&p| p > t)
+                        || seg.last().is_some_and(|&p| p > t);
+                }
+                saturated |= w.saturated;
+                e.grow(&w, x0, y);
+            }
+        }
+        if WINDOWED && pixels > 0 {
+            let (stride, rows) = (frame.stride.max(1), (e.y_max - e.y_min) as usize + 1);
+            let top = e.y_min as usize * stride;
+            let group = |x: usize| P::column_group(frame.pixels, top + x, stride, rows, t);
+            // groups from each edge inwards (the last one may overlap its neighbour)
+            let groups = (x1 - x0).div_ceil(4);
+            let first = (0..groups)
+                .map(|g| (x0 + 4 * g).min(x1 - 4))
+                .map(|x| (x, group(x)))
+                .find(|&(_, b)| b != 0);
+            let last = (0..groups)
+                .map(|g| (x1 - 4 * g).max(x0 + 4) - 4)
+                .map(|x| (x, group(x)))
+                .find(|&(_, b)| b != 0);
+            if let (Some((a, ba)), Some((b, bb))) = (first, last) {
+                e.x_min = a as u32 + ba.trailing_zeros();
+                e.x_max = b as u32 + 31 - bb.leading_zeros();
+            }
+            // a hit in the search area's first row or the segment's first or last column: the
+            // row-wise test's border, from the extent
+            border = e.y_min == region_y0 || e.x_min as usize == x0 || e.x_max as usize + 1 == x1;
+        }
+        Pass {
+            pixels,
+            sum_x,
+            sum_y,
+            border,
+            saturated,
+            last_hit,
+            extent: e,
+        }
+    }
+}
+
 /// Single-target centroider with a tracking window (see the [module documentation](self)).
 /// O(1) memory, like [`Centroider`]; `const` constructible in a `static`.
 #[derive(Debug, Clone)]
@@ -291,31 +400,30 @@ impl Tracker {
         let (x0, x1) = c.cols();
         let x1 = x1.min(frame.width());
         let (region_y0, _) = c.rows();
-        let (mut pixels, mut sum_x, mut sum_y) = (0u64, 0u64, 0u64);
-        let (mut border, mut saturated, mut last_hit) = (false, false, false);
-        let mut e = Extent::NONE;
-        for y in y0..y1 {
-            let Some(row) = frame.row(y as usize) else {
-                break;
-            };
-            let seg = row.get(x0..x1).unwrap_or(&[]);
-            let (left, right) = e.columns_in(x0);
-            let Some(w) = P::window_sums(seg, t, sat, binary, left, right) else {
-                break;
-            };
-            last_hit = w.pixels > 0;
-            if last_hit {
-                let n = u64::from(w.pixels);
-                pixels += n;
-                sum_x += w.sum_x + x0 as u64 * n;
-                sum_y += u64::from(y) * n;
-                border |= y == region_y0
-                    || seg.first().is_some_and(|&p| p > t)
-                    || seg.last().is_some_and(|&p| p > t);
-                saturated |= w.saturated;
-                e.grow(&w, x0, y);
-            }
-        }
+        let rows = RowPass {
+            y0,
+            y1,
+            x0,
+            x1,
+            region_y0,
+            t,
+            sat,
+            binary,
+        };
+        // in a window the extent is found after the rows (see `RowPass::run`)
+        let Pass {
+            pixels,
+            sum_x,
+            sum_y,
+            border,
+            saturated,
+            last_hit,
+            extent: e,
+        } = if self.window.is_some() && x1 >= x0 + 4 {
+            rows.run::<true>(frame)
+        } else {
+            rows.run::<false>(frame)
+        };
         let inner = &mut self.inner;
         inner.moments = super::Moments {
             pixels,
