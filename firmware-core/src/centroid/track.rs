@@ -186,16 +186,9 @@ impl<P: Pixel> RowPass<P> {
     /// row-wise one.
     #[inline(always)]
     fn run<const WINDOWED: bool>(&self, frame: &super::Frame<'_, P>) -> Pass {
-        let RowPass {
-            y0,
-            y1,
-            x0,
-            x1,
-            region_y0,
-            t,
-            sat,
-            binary,
-        } = *self;
+        // the settings copied into locals (registers) once for the whole pass
+        let (y0, y1, x0, x1) = (self.y0, self.y1, self.x0, self.x1);
+        let (region_y0, t, sat, binary) = (self.region_y0, self.t, self.sat, self.binary);
         let (mut pixels, mut sum_x, mut sum_y) = (0u64, 0u64, 0u64);
         let (mut border, mut saturated, mut last_hit) = (false, false, false);
         let mut e = Extent::NONE;
@@ -411,31 +404,23 @@ impl Tracker {
             binary,
         };
         // in a window the extent is found after the rows (see `RowPass::run`)
-        let Pass {
-            pixels,
-            sum_x,
-            sum_y,
-            border,
-            saturated,
-            last_hit,
-            extent: e,
-        } = if self.window.is_some() && x1 >= x0 + 4 {
+        let pass = if self.window.is_some() && x1 >= x0 + 4 {
             rows.run::<true>(frame)
         } else {
             rows.run::<false>(frame)
         };
         let inner = &mut self.inner;
         inner.moments = super::Moments {
-            pixels,
-            weight: pixels,
-            sum_x,
-            sum_y,
+            pixels: pass.pixels,
+            weight: pass.pixels,
+            sum_x: pass.sum_x,
+            sum_y: pass.sum_y,
         };
-        inner.flags.set_if(Flags::BORDER, border);
-        inner.flags.set_if(Flags::SATURATED, saturated);
-        inner.last_row_hit = last_hit;
+        inner.flags.set_if(Flags::BORDER, pass.border);
+        inner.flags.set_if(Flags::SATURATED, pass.saturated);
+        inner.last_row_hit = pass.last_hit;
         inner.next_y = y1;
-        self.extent = e;
+        self.extent = pass.extent;
         self.finish_frame()
     }
 
