@@ -138,3 +138,19 @@ fn one_run_gives_empty_cells_not_nan() {
     // sigma of one run is undefined: an empty cell
     assert!(s.lines().nth(1).unwrap().contains(",,"), "{s}");
 }
+
+/// `study --help` states the defaults of --runs and --seed and the units of the outputs
+/// (#11: it stated neither).
+#[test]
+fn study_help_states_defaults_and_units() {
+    let o = harness(&["study", "--help"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    for needle in [
+        "[default: 100",
+        "[default: 1]",
+        "mm/kN",
+        "frequencies in Hz",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in\n{text}");
+    }
+}

@@ -25,7 +25,11 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a Monte Carlo study (grandstand or cantilever) and write summary, realizations,
-    /// FRF bands and plots.
+    /// FRF bands, coverage intervals and plots.
+    ///
+    /// Outputs (docs/cli.md): amplitudes in mm/kN (grandstand) or (m/s^2)/(m/s^2)
+    /// (cantilever), frequencies in Hz, exposures in ms; systems transducer, vision and
+    /// vision_compensated.
     Study(study::Args),
     /// Combine the outputs of `study --shard K/N` runs into one study output.
     Merge(merge::Args),

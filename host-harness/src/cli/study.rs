@@ -13,13 +13,16 @@ pub struct Args {
     /// Study file (TOML) with the fields of the resolved `config.toml`; flags override it.
     #[arg(long, value_name = "FILE.toml")]
     pub config: Option<PathBuf>,
-    /// Number of Monte Carlo runs (the paper used 1000).
+    /// Number of Monte Carlo runs [default: 100, both presets; the paper used 1000]. With
+    /// --adaptive: the most runs the procedure may take.
     #[arg(long)]
     pub runs: Option<u64>,
-    /// Exposure times in ms, comma separated (grandstand default 40,60,...,180).
+    /// Exposure times in ms, comma separated [default: grandstand 40,60,...,180; cantilever
+    /// 2,4,6].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub exposures_ms: Option<Vec<f64>>,
-    /// Master seed; the same seed gives identical numbers whatever the thread count.
+    /// Master seed [default: 1]; the same seed gives identical numbers whatever the thread
+    /// count or sharding.
     #[arg(long)]
     pub seed: Option<u64>,
     /// Method-uncertainty variant: modal parameters fixed at their means, only excitation and
