@@ -145,12 +145,13 @@ fn one_run_gives_empty_cells_not_nan() {
 fn study_help_states_defaults_and_units() {
     let o = harness(&["study", "--help"]);
     let text = String::from_utf8_lossy(&o.stdout);
-    for needle in [
+    let needles = [
         "[default: 100",
         "[default: 1]",
         "mm/kN",
         "frequencies in Hz",
-    ] {
+    ];
+    for needle in needles {
         assert!(text.contains(needle), "`{needle}` not in\n{text}");
     }
 }
