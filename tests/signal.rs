@@ -299,16 +299,20 @@ mod upsample {
         ])
     }
 
-    #[test]
-    fn sinusoid_120_to_2048_matches_the_analytic_values() {
+    /// A 7 Hz sinusoid of amplitude `amp` (whole cycles in 1 s at 120 fps) upsampled to
+    /// 2048 Hz matches `amp sin(2 pi 7 t)` within `1e-4 amp` at every output sample.
+    fn sinusoid_matches_the_analytic_values(amp: f64) {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("x.csv");
         let out = dir.path().join("y.csv");
         let mut text = String::from("t,x\n");
-        let f = 7.0; // 7 Hz: whole cycles in 1 s at 120 fps
+        let f = 7.0;
         for i in 0..120 {
             let t = i as f64 / 120.0;
-            text.push_str(&format!("{t},{}\n", (std::f64::consts::TAU * f * t).sin()));
+            text.push_str(&format!(
+                "{t},{}\n",
+                amp * (std::f64::consts::TAU * f * t).sin()
+            ));
         }
         std::fs::write(&input, text).unwrap();
         let o = upsample(&input, "x", &out);
@@ -324,9 +328,21 @@ mod upsample {
             .collect();
         assert_eq!(rows.len(), 2048);
         for (t, v) in rows {
-            let want = (std::f64::consts::TAU * f * t).sin();
-            assert!((v - want).abs() < 1e-4, "t = {t}: {v} vs {want}");
+            let want = amp * (std::f64::consts::TAU * f * t).sin();
+            assert!((v - want).abs() < 1e-4 * amp, "t = {t}: {v} vs {want}");
         }
+    }
+
+    #[test]
+    fn sinusoid_120_to_2048_matches_the_analytic_values() {
+        sinusoid_matches_the_analytic_values(1.0);
+    }
+
+    /// Values whose f32 transform would overflow (1e37: the sums reach 1e39 > f32::MAX) are
+    /// scaled into range, not written as NaN (#11 defect 7).
+    #[test]
+    fn values_beyond_the_f32_range_are_scaled_not_nan() {
+        sinusoid_matches_the_analytic_values(1e37);
     }
 
     #[test]
@@ -339,6 +355,16 @@ mod upsample {
             ("x\n1\n2\n", "y", &["no column named `y`"]),
             ("x\n1\n2\n3\n", "x", &["integer number of samples"]),
         ];
+        let o = harness(&[
+            "upsample", "--input", "x.csv", "--col", "x", "--from", "0", "--to", "2048", "--out",
+            "y.csv",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("--from: must be a positive sample rate in Hz, got 0"),
+            "{err}"
+        );
         for (i, (csv, col, needles)) in cases.iter().enumerate() {
             let input = dir.path().join(format!("in{i}.csv"));
             std::fs::write(&input, csv).unwrap();

@@ -9,6 +9,10 @@ use std::path::PathBuf;
 /// Largest output length this command handles (the host instantiation's capacity).
 pub const MAX_OUTPUT: usize = 1 << 16;
 
+/// Largest input magnitude taken into the f32 core as it is: its transform (sums over up to
+/// 65 536 values, times the window of the output) stays far from `f32::MAX` (3.4e38).
+const F32_SAFE: f64 = 1e30;
+
 type HostUpsampler = Upsampler<MAX_OUTPUT, { 2 * MAX_OUTPUT + 256 }>;
 
 /// Arguments of `host-harness upsample`.
@@ -43,8 +47,32 @@ fn output_len(n: usize, from: f64, to: f64) -> Option<usize> {
 
 /// Runs `host-harness upsample`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    for (flag, hz) in [("--from", args.from_hz), ("--to", args.to_hz)] {
+        if !(hz.is_finite() && hz > 0.0) {
+            return Err(bad_input(format!(
+                "{flag}: must be a positive sample rate in Hz, got {hz}"
+            )));
+        }
+    }
     let cols = crate::csvio::read_columns(&args.input, &[args.col.as_str()])?;
-    let x: Vec<f32> = cols.values[0].iter().map(|v| *v as f32).collect();
+    let raw = &cols.values[0];
+    if let Some((i, v)) = raw.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(bad_input(format!(
+            "{}: row {}: `{}` is {v}, not a finite number",
+            args.input.display(),
+            i + 2,
+            args.col
+        )));
+    }
+    // firmware-core computes in f32: values whose transform could overflow it are scaled by
+    // a power of two (exact) into range and scaled back in f64 for the output
+    let peak = raw.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let scale = if peak > F32_SAFE {
+        2f64.powi(peak.log2().ceil() as i32)
+    } else {
+        1.0
+    };
+    let x: Vec<f32> = raw.iter().map(|v| (*v / scale) as f32).collect();
     let n = x.len();
     let m = output_len(n, args.from_hz, args.to_hz).ok_or_else(|| {
         bad_input(format!(
@@ -79,7 +107,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|_| anyhow::anyhow!("the upsampling thread panicked"))??;
     let mut text = String::from("t_s,value\n");
     for (k, v) in y.iter().enumerate() {
-        text.push_str(&format!("{},{}\n", k as f64 / args.to_hz, v));
+        let t = k as f64 / args.to_hz;
+        if scale == 1.0 {
+            text.push_str(&format!("{t},{v}\n"));
+        } else {
+            text.push_str(&format!("{t},{}\n", *v as f64 * scale));
+        }
     }
     std::fs::write(&args.out, text)
         .with_context(|| format!("cannot write {}", args.out.display()))?;
