@@ -155,3 +155,23 @@ fn study_help_states_defaults_and_units() {
         assert!(text.contains(needle), "`{needle}` not in\n{text}");
     }
 }
+
+/// Shards of two layouts (1/2 and 1/3) overlap; `merge` says so instead of "run 0 appears in
+/// more than one directory" (#11 defect 8).
+#[test]
+fn merging_shards_of_two_layouts_names_the_layouts() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    assert_ok(&study(&a, &["--shard", "1/2"]));
+    assert_ok(&study(&b, &["--shard", "1/3"]));
+    let merged = dir.path().join("m");
+    let o = harness(&[
+        "merge",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert_exit_2(&o, "is shard 1/3, but");
+    assert!(stderr(&o).contains("same N"), "{}", stderr(&o));
+}

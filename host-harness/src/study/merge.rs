@@ -26,7 +26,25 @@ pub fn read_shards(dirs: &[PathBuf]) -> anyhow::Result<Merged> {
         .first()
         .ok_or_else(|| bad_input("no directories to merge"))?;
     let mut merged: Option<Merged> = None;
+    let mut layout: Option<(String, &PathBuf)> = None;
     for dir in dirs {
+        // shards of two layouts (K/N with different N) overlap: say so, not "run r twice"
+        let shard = std::fs::read_to_string(dir.join(files::SHARD))
+            .map(|t| t.trim().to_string())
+            .unwrap_or_else(|_| "1/1".into());
+        let count = shard.split_once('/').map(|(_, n)| n.to_string());
+        match &layout {
+            Some((n, d)) if Some(n) != count.as_ref() => {
+                return Err(bad_input(format!(
+                    "{} is shard {shard}, but {} is a shard of {n}: merge the shards of one \
+                     layout (--shard K/N with the same N)",
+                    dir.display(),
+                    d.display()
+                )));
+            }
+            Some(_) => {}
+            None => layout = count.map(|n| (n, dir)),
+        }
         // runs of two code revisions must not be mixed (see MODEL_REVISION)
         let rev = recorded_revision(dir)?;
         let p = dir.join(files::CONFIG);
