@@ -1,4 +1,4 @@
-//! Tracking window (SPEC 2.9): a single target moves little between frames, so a frame only
+//! Tracking window (method.md §2.9): a single target moves little between frames, so a frame only
 //! needs the rows and columns around where it was.
 //!
 //! After each frame the [`Tracker`] predicts the next frame's window: the target's bounding box
