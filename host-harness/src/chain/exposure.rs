@@ -26,26 +26,6 @@ pub enum ExposureCorrection {
 }
 
 impl ExposureCorrection {
-    /// The correction of a camera with centroid `kind` looking at `target` with `threshold`
-    /// (8-bit grey levels) while it moves with amplitude `amplitude_px` (binary only).
-    pub fn for_camera(
-        kind: CentroidKind,
-        target: DiskTarget,
-        threshold: u16,
-        amplitude_px: f64,
-    ) -> Result<ExposureCorrection, CompensationError> {
-        Ok(match kind {
-            CentroidKind::Weighted => ExposureCorrection::Sinc,
-            CentroidKind::Binary => {
-                let setup = TransferSetup::new(target, threshold, kind.mode(), amplitude_px);
-                ExposureCorrection::Table(
-                    correction_table::<TABLE_NODES>(&setup, TABLE_STEP)?,
-                    amplitude_px,
-                )
-            }
-        })
-    }
-
     /// The transfer an H1 estimate sees when the target moves with different amplitudes in
     /// its segments: `H1 = sum_s |X_s|^2 T_s H / sum_s |X_s|^2`, so the table is the average of
     /// the tables at the segments' amplitudes weighted by the input energy of each segment

@@ -118,6 +118,21 @@ impl CentroidArgs {
     }
 }
 
+/// Parses `--coverage P`: a probability strictly between 0 and 1 (study and merge).
+pub fn parse_coverage(s: &str) -> Result<f64, String> {
+    let p: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if p > 0.0 && p < 1.0 {
+        Ok(p)
+    } else {
+        Err(format!(
+            "{p} must lie strictly between 0 and 1 (0.95 for 95 %)"
+        ))
+    }
+}
+
 /// Parses `--roi X,Y,W,H`.
 pub fn parse_roi(s: &str) -> Result<Roi, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();

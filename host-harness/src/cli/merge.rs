@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long)]
     pub no_plots: bool,
     /// Coverage probability of the intervals (default: the shards' one).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = super::args::parse_coverage)]
     pub coverage: Option<f64>,
 }
 
@@ -25,12 +25,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut merged = study::merge::read_shards(&args.dirs)?;
     if let Some(p) = args.coverage {
         merged.config.coverage = p;
-        merged.config.validate().map_err(|e| {
-            crate::bad_input(format!(
-                "--coverage: {}",
-                e.to_string().trim_start_matches("coverage: ")
-            ))
-        })?;
     }
     study::merge::write_merged(&args.out, &merged)?;
     let scenario = study::scenario_for(&merged.config)?;

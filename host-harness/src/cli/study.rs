@@ -48,7 +48,7 @@ pub struct Args {
     pub no_plots: bool,
     /// Coverage probability of the intervals (JCGM 101 7.7) in summary.csv and coverage.csv;
     /// the column names keep "95" (default 0.95).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = super::args::parse_coverage)]
     pub coverage: Option<f64>,
     /// Adaptive Monte Carlo (JCGM 101 7.9): batches of runs until every reported quantity
     /// (or the --adaptive-on one) is stable to --digits; --runs is then the cap.
@@ -84,11 +84,6 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
         cfg.fixed_structure = true;
     }
     if let Some(p) = args.coverage {
-        if !(p > 0.0 && p < 1.0) {
-            return Err(crate::bad_input(format!(
-                "--coverage: {p} must lie strictly between 0 and 1 (0.95 for 95 %)"
-            )));
-        }
         cfg.coverage = p;
     }
     if args.adaptive {

@@ -198,35 +198,6 @@ fn batch_result(
     Some(BatchResult::from_summary(&s, IntervalKind::Shortest))
 }
 
-/// The state of every watched quantity after the first `h` batches of `records` (sorted by
-/// run, holding at least `h M` runs).
-fn state_at(
-    records: &[RunRecord],
-    h: usize,
-    m: usize,
-    keys: &[QuantityKey],
-    a: &AdaptiveConfig,
-    coverage: f64,
-    correction: &ExposureCorrection,
-) -> Vec<QuantityState> {
-    keys.iter()
-        .map(|key| {
-            let mut q = AdaptiveQuantity::new(a.digits).ok();
-            for b in 0..h {
-                let r = batch_result(&records[b * m..(b + 1) * m], key, correction, coverage);
-                match (r, q.as_mut()) {
-                    (Some(r), Some(q)) => q.push(r),
-                    _ => q = None,
-                }
-            }
-            QuantityState {
-                key: *key,
-                status: q.and_then(|q| q.status()),
-            }
-        })
-        .collect()
-}
-
 /// Where the procedure stops on `records` (sorted by run, runs `0 .. n` without gaps): the
 /// first `h >= 2` whole batches at which every assessable watched quantity is stable, or all
 /// whole batches when none is.
@@ -246,9 +217,35 @@ pub fn outcome(
             records.len()
         )));
     }
+    // each batch's values of each quantity computed once, the histories grown batch by batch
+    // (a quantity a batch cannot give an interval for is dropped: not assessable)
+    let mut histories: Vec<Option<AdaptiveQuantity>> = keys
+        .iter()
+        .map(|_| AdaptiveQuantity::new(a.digits).ok())
+        .collect();
     let mut last = None;
-    for h in 2..=whole {
-        let quantities = state_at(records, h, m, &keys, a, cfg.coverage, correction);
+    for h in 1..=whole {
+        let batch = &records[(h - 1) * m..h * m];
+        for (key, q) in keys.iter().zip(histories.iter_mut()) {
+            match (
+                batch_result(batch, key, correction, cfg.coverage),
+                q.as_mut(),
+            ) {
+                (Some(r), Some(hist)) => hist.push(r),
+                _ => *q = None,
+            }
+        }
+        if h < 2 {
+            continue;
+        }
+        let quantities: Vec<QuantityState> = keys
+            .iter()
+            .zip(&histories)
+            .map(|(key, q)| QuantityState {
+                key: *key,
+                status: q.as_ref().and_then(|q| q.status()),
+            })
+            .collect();
         let assessed: Vec<&Stability> = quantities
             .iter()
             .filter_map(|q| q.status.as_ref())

@@ -293,6 +293,16 @@ pub fn aggregate(
     scenario: &dyn Scenario,
     records: &[RunRecord],
 ) -> anyhow::Result<Outputs> {
+    aggregate_with(cfg, scenario, records, &scenario.exposure_correction()?)
+}
+
+/// [`aggregate`] with the scenario's exposure correction already measured.
+pub fn aggregate_with(
+    cfg: &StudyConfig,
+    scenario: &dyn Scenario,
+    records: &[RunRecord],
+    correction: &ExposureCorrection,
+) -> anyhow::Result<Outputs> {
     if let Some(rec) = records
         .iter()
         .find(|r| r.vision.len() != cfg.exposures_ms.len())
@@ -307,7 +317,6 @@ pub fn aggregate(
     let modes = scenario.bands().len();
     let freqs = scenario.frf_freqs();
     let nat = mean_natural_frequencies(records, modes);
-    let correction = scenario.exposure_correction()?;
     let mut out = Outputs {
         summary: Vec::new(),
         realizations: Vec::new(),
@@ -331,17 +340,17 @@ pub fn aggregate(
             &nat,
             scenario.with_chi(),
             cfg,
-            &correction,
+            correction,
             &mut out,
         );
-        realizations_at(records, ei, exp, modes, &correction, &mut out.realizations);
+        realizations_at(records, ei, exp, modes, correction, &mut out.realizations);
         frf_band_at(
             records,
             ei,
             exp,
             &freqs,
             cfg.frf_max_hz,
-            &correction,
+            correction,
             &mut out.frf_band,
         );
     }

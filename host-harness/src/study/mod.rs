@@ -278,6 +278,7 @@ pub fn finish(
     out: &std::path::Path,
     plots: bool,
 ) -> anyhow::Result<()> {
+    let correction = scenario.exposure_correction()?;
     let mut records = records;
     let mut adaptive_report = None;
     // a shard's directory holds some batches only (never two from the start, which are batches
@@ -287,13 +288,12 @@ pub fn finish(
             && records.iter().enumerate().all(|(i, r)| r.run == i as u64)
     };
     if let Some(a) = cfg.adaptive.as_ref().filter(|a| from_start(a.batch)) {
-        let correction = scenario.exposure_correction()?;
         let o = adaptive::outcome(cfg, a, scenario.bands().len(), &correction, records)?;
         checkpoint::write_atomic(&out.join(files::ADAPTIVE), &adaptive::adaptive_csv(&o))?;
         records = &records[..o.runs];
         adaptive_report = Some(adaptive::report(&o, a));
     }
-    let outputs = aggregate(cfg, scenario, records)?;
+    let outputs = aggregate::aggregate_with(cfg, scenario, records, &correction)?;
     let mut written = write_outputs(out, scenario, &outputs)?;
     if plots {
         let p = crate::plots::StudyPlots {

@@ -283,9 +283,9 @@ pub fn execute(
             loop {
                 let upto = (h * a.batch).min(cfg.runs);
                 computed += run_up_to(cfg, scenario, exec, &mut done, upto, batch)?;
-                let prefix: Vec<RunRecord> =
-                    done.iter().take_while(|r| r.run < upto).cloned().collect();
-                let o = super::adaptive::outcome(cfg, a, modes, &correction, &prefix)?;
+                // `done` is sorted by run: the runs below `upto` are its start
+                let prefix = &done[..done.partition_point(|r| r.run < upto)];
+                let o = super::adaptive::outcome(cfg, a, modes, &correction, prefix)?;
                 eprintln!(
                     "adaptive: {} batches ({} runs): {}",
                     h,
