@@ -148,8 +148,8 @@ pub const fn scratch_len(n: usize) -> Option<usize> {
         Some(Inner::None) => Some(0),
         // reorder buffer + column in + column out
         Some(Inner::Naive) => Some(n + 2 * m),
-        // reorder buffer + chirp filter spectrum + convolution buffer
-        Some(Inner::Bluestein { l }) => Some(n + 2 * l),
+        // reorder buffer + chirp filter spectrum + convolution buffer + chirp table
+        Some(Inner::Bluestein { l }) => Some(n + 2 * l + m),
     }
 }
 
@@ -190,7 +190,7 @@ impl Dft {
         match self.inner {
             Inner::None => 0,
             Inner::Naive => self.n + 2 * self.m,
-            Inner::Bluestein { l } => self.n + 2 * l,
+            Inner::Bluestein { l } => self.n + 2 * l + self.m,
         }
     }
 
@@ -246,11 +246,19 @@ impl Dft {
         let Some((reorder, work)) = scratch.split_at_mut_checked(n) else {
             return;
         };
-        // Bluestein: the spectrum of the chirp filter is the same for every column.
+        // Bluestein: the chirp (a table of m values, used twice per column) and the spectrum of
+        // the chirp filter are the same for every column.
         if let Inner::Bluestein { l } = self.inner {
-            if let Some(filt) = work.get_mut(..l) {
-                chirp_filter(m, filt);
+            let Some((filt, rest)) = work.split_at_mut_checked(l) else {
+                return;
+            };
+            let Some(chirps) = rest.get_mut(l..l + m) else {
+                return;
+            };
+            for (k, c) in chirps.iter_mut().enumerate() {
+                *c = chirp(k, m);
             }
+            chirp_filter(chirps, filt);
         }
         // Step 1+2: for each n2, DFT of the strided column x[p*n1 + n2] (n1 < m), then twiddle,
         // written back to the same strided positions (so data[p*k1 + n2] = A_n2[k1] W^(n2 k1)).
@@ -275,12 +283,12 @@ impl Dft {
                     let Some((filt, rest)) = work.split_at_mut_checked(l) else {
                         return;
                     };
-                    let Some(conv) = rest.get_mut(..l) else {
+                    let Some((conv, chirps)) = rest.split_at_mut_checked(l) else {
                         return;
                     };
                     for (n1, c) in conv.iter_mut().enumerate() {
                         *c = if n1 < m {
-                            at(data, p * n1 + n2) * chirp(n1, m)
+                            at(data, p * n1 + n2) * at(chirps, n1)
                         } else {
                             Complex32::new(0.0, 0.0)
                         };
@@ -294,7 +302,7 @@ impl Dft {
                     fft_pow2(conv);
                     let scale = 1.0 / l as f32;
                     for (k1, c) in conv.iter().take(m).enumerate() {
-                        let y = c.conj() * scale * chirp(k1, m);
+                        let y = c.conj() * scale * at(chirps, k1);
                         put(data, p * k1 + n2, y * twiddle(n2 * k1, n));
                     }
                 }
@@ -476,15 +484,15 @@ fn poly_sin(x: f32) -> f32 {
         + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))))
 }
 
-/// Spectrum of the Bluestein filter `b[k] = conj(chirp(|k|))` for `|k| < m`, circularly placed
-/// in `filt` (length `l >= 2m - 1`).
-fn chirp_filter(m: usize, filt: &mut [Complex32]) {
+/// Spectrum of the Bluestein filter `b[k] = conj(chirp(|k|))` for `|k| < m` (`chirps[k]` =
+/// `chirp(k, m)`), circularly placed in `filt` (length `l >= 2m - 1`).
+fn chirp_filter(chirps: &[Complex32], filt: &mut [Complex32]) {
     let l = filt.len();
     for v in filt.iter_mut() {
         *v = Complex32::new(0.0, 0.0);
     }
-    for k in 0..m {
-        let c = chirp(k, m).conj();
+    for (k, c) in chirps.iter().enumerate() {
+        let c = c.conj();
         put(filt, k, c);
         if k != 0 {
             put(filt, l.wrapping_sub(k), c);

@@ -7,13 +7,13 @@
 //! and 5000 frames each, and every centroid is compared.
 //!
 //! ```sh
-//! cargo run --release -p host-harness --example imaging_paths [RUNS] [aligned]
+//! cargo run --release -p host-harness --example imaging_paths [RUNS] [misaligned]
 //! ```
 use firmware_core::centroid::{centroid, CentroidConfig, Frame};
 use host_harness::imaging::fastpath::FastDiskCamera;
 use host_harness::imaging::{BlurRenderer, DiskTarget};
 use host_harness::model::grandstand::{simulate, FINE, FS_HZ, N, PX_PER_MM, THRESHOLD};
-use host_harness::study::run_rng;
+use host_harness::study::{run_rng, Grandstand, Preset, StudyConfig};
 
 fn main() {
     let runs: u64 = std::env::args()
@@ -27,14 +27,14 @@ fn main() {
         edge_sigma_px: 1.5,
     };
     let exposures_ms: Vec<f64> = (0..8).map(|i| 40.0 + 20.0 * i as f64).collect();
+    // the study's ramp block and rest padding before t = 0 (a whole number of blocks, so every
+    // exposure window covers whole blocks); with `misaligned`, the padding before model
+    // revision 5 (half the longest exposure and one step: windows start and end mid-block)
+    let scenario = Grandstand::new(&StudyConfig::preset(Preset::Grandstand)).expect("preset");
+    let (mut pad, block) = (scenario.padding(), scenario.block());
     let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
-    let block = 10; // what Grandstand::new picks for these exposures
-                    // the study's rest padding before t = 0 (Grandstand::run), or with `aligned` rounded up to
-                    // a whole number of ramp blocks so that every exposure window covers whole blocks
-    let aligned = std::env::args().nth(2).as_deref() == Some("aligned");
-    let mut pad = (180.0 / 2.0 / dt_ms) as usize + 1;
-    if aligned {
-        pad = pad.div_ceil(block) * block;
+    if std::env::args().nth(2).as_deref() == Some("misaligned") {
+        pad = (180.0 / 2.0 / dt_ms) as usize + 1;
     }
     let config = CentroidConfig::binary(THRESHOLD);
 

@@ -43,9 +43,7 @@ fn main() {
     let scenario = Grandstand::new(&cfg).expect("preset is valid");
     let target = TARGET;
     let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
-    let max_exp = cfg.exposures_ms.iter().cloned().fold(0.0, f64::max);
-    let pad = (max_exp / 2.0 / dt_ms).ceil() as usize + 1;
-    let block = 10;
+    let (pad, block) = (scenario.padding(), scenario.block());
     let bands = BANDS;
     let keep = (5.0 * NFFT as f64 / FS_HZ) as usize + 1;
     let mut welch = Box::new(Welch::try_new(WELCH).expect("valid Welch settings"));

@@ -20,8 +20,10 @@ use serde::{Deserialize, Serialize};
 /// Largest segment and transform length on the host: 65 536 samples (32 s at 2048 Hz in one
 /// segment).
 pub const MAX_NFFT: usize = 65_536;
-/// DFT scratch for any supported length up to [`MAX_NFFT`] (Bluestein: `n + 2 l`, `l <= 32768`).
-pub const SCRATCH: usize = MAX_NFFT + 2 * firmware_core::dft::MAX_POW2;
+/// DFT scratch for any supported length up to [`MAX_NFFT`] (Bluestein: `n + 2 l + m`,
+/// `l <= 32768`, `m <= l / 2`).
+pub const SCRATCH: usize =
+    MAX_NFFT + 2 * firmware_core::dft::MAX_POW2 + firmware_core::dft::MAX_POW2 / 2;
 
 /// The estimator the host entry instantiates (a few MiB: boxed, on a large-stack thread).
 type HostWelch = WelchH1<MAX_NFFT, MAX_NFFT, SCRATCH>;

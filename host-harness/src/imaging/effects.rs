@@ -82,7 +82,10 @@ impl Camera {
     /// frame computed from the rows that matter, the same pixels as rendering the frame) for
     /// `target` seen by `renderer`, when the effects are the identity; otherwise nothing changes.
     pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
-        if self.plain && self.config.mode == firmware_core::centroid::Mode::Binary {
+        if self.plain
+            && self.effects.fast_path
+            && self.config.mode == firmware_core::centroid::Mode::Binary
+        {
             self.fast = Some(super::fastpath::FastDiskCamera::new(
                 target,
                 renderer,
@@ -143,6 +146,9 @@ pub struct Effects {
     pub bits: u32,
     /// The firmware's centroid (not an image effect: [`Effects::is_identity`] ignores it).
     pub centroid: super::CentroidKind,
+    /// Whether identity effects with the binary centroid take the fast path (not an effect:
+    /// the same pixels either way).
+    pub fast_path: bool,
 }
 
 impl Effects {
@@ -157,6 +163,7 @@ impl Effects {
             shot_e_per_level: o.shot_noise_e_per_level.unwrap_or(0.0),
             bits: o.bits.unwrap_or(8),
             centroid: o.centroid.unwrap_or_default(),
+            fast_path: o.fast_path.unwrap_or(true),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {

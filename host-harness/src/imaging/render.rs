@@ -73,6 +73,8 @@ pub struct BlurRenderer {
     block: usize,
     /// Ramp sums of consecutive blocks of path segments, `bins` values per block.
     blocks: Vec<Complex32>,
+    /// Smallest and largest displacement of each block's samples (its `block + 1` samples).
+    block_range: Vec<(f64, f64)>,
 }
 
 impl std::fmt::Debug for BlurRenderer {
@@ -182,6 +184,7 @@ impl BlurRenderer {
             path: Vec::new(),
             block: 1,
             blocks: Vec::new(),
+            block_range: Vec::new(),
         }
     }
 
@@ -230,6 +233,12 @@ impl BlurRenderer {
         self.blocks.reserve(nblocks * bins);
         let h = self.height as f64;
         let mut acc = vec![Complex32::new(0.0, 0.0); bins];
+        self.block_range.clear();
+        self.block_range.extend((0..nblocks).map(|j| {
+            path[j * block..=(j + 1) * block]
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)))
+        }));
         for j in 0..nblocks {
             self.seg.clear();
             for i in j * block..(j + 1) * block {
@@ -294,9 +303,20 @@ impl BlurRenderer {
         let last = self.path.len().saturating_sub(1) as f64;
         let (i0, i1) = (a.max(0.0).ceil(), b.min(last).floor());
         if i0 <= i1 {
-            for v in &self.path[i0 as usize..=i1 as usize] {
-                lo = lo.min(*v);
-                hi = hi.max(*v);
+            // the samples i0 ..= i1: whole blocks from their precomputed extremes, the rest one
+            // by one (the same minimum and maximum as a plain scan)
+            let (mut i, end, bl) = (i0 as usize, i1 as usize, self.block);
+            while i <= end {
+                let j = i / bl;
+                if i % bl == 0 && i + bl <= end && j < self.block_range.len() {
+                    let (l, h) = self.block_range[j];
+                    (lo, hi) = (lo.min(l), hi.max(h));
+                    i += bl;
+                } else {
+                    let v = self.path[i];
+                    (lo, hi) = (lo.min(v), hi.max(v));
+                    i += 1;
+                }
             }
         }
         (lo, hi)
@@ -496,6 +516,41 @@ mod tests {
             let a = frame(&mut r, &path, 1, lo, hi);
             let worst = max_abs_diff(&a, &frame(&mut r, &path, 7, lo, hi));
             assert!(worst < 2e-3, "window {lo}..{hi}: {worst}");
+        }
+    }
+
+    #[test]
+    fn path_range_from_block_extremes_equals_a_plain_scan() {
+        let path: Vec<f64> = (0..403)
+            .map(|i| 8.0 * (i as f64 * 0.37).sin() + 3.0 * (i as f64 * 0.051).cos())
+            .collect();
+        let mut r = BlurRenderer::new(&TARGET, -12.0, 12.0);
+        let plain = |a: f64, b: f64| {
+            let (pa, pb) = (at(&path, a), at(&path, b.max(a)));
+            let (i0, i1) = (a.max(0.0).ceil() as usize, b.min(402.0).floor() as usize);
+            path.get(i0..=i1.max(i0).min(402))
+                .unwrap_or(&[])
+                .iter()
+                .filter(|_| i0 <= i1)
+                .fold((pa.min(pb), pa.max(pb)), |(l, h), v| (l.min(*v), h.max(*v)))
+        };
+        for block in [1, 3, 10, 16] {
+            r.set_path(&path, block);
+            for (a, b) in [
+                (0.0, 402.0),
+                (12.3, 95.8),
+                (40.0, 160.0),
+                (5.5, 6.25),
+                (-3.0, 33.0),
+                (390.5, 410.0),
+                (7.0, 7.0),
+            ] {
+                assert_eq!(
+                    r.path_range(a, b),
+                    plain(a, b),
+                    "block {block}, window {a}..{b}"
+                );
+            }
         }
     }
 

@@ -37,6 +37,22 @@ pub struct Grandstand {
 }
 
 impl Grandstand {
+    /// Fine steps simulated before t = 0 (and after the record) for the exposure windows: half
+    /// the longest exposure and one step, rounded up to a whole number of ramp blocks, so that
+    /// every exposure window (centred on a frame; half-exposures a multiple of the block)
+    /// starts and ends on block boundaries and the renderer sums precomputed blocks only. The
+    /// padding is the structure at rest: the samples from t = 0 on do not depend on it.
+    pub fn padding(&self) -> usize {
+        let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
+        let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
+        ((max_exp / 2.0 / dt_ms).ceil() as usize + 1).div_ceil(self.block) * self.block
+    }
+
+    /// Path segments per precomputed ramp block of the renderer.
+    pub fn block(&self) -> usize {
+        self.block
+    }
+
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
         let effects = Effects::from_options(&cfg.imaging)?;
@@ -103,10 +119,7 @@ impl Scenario for Grandstand {
     }
 
     fn run(&self, run: u64, rng: &mut ChaCha8Rng) -> anyhow::Result<RunRecord> {
-        let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
-        let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
-        let pad = (max_exp / 2.0 / dt_ms).ceil() as usize + 1;
-        let r = simulate(rng, self.fixed, pad);
+        let r = simulate(rng, self.fixed, self.padding());
         let bands = self.bands();
         let mut welch = Self::welch()?;
         let transducer = measure(
@@ -166,6 +179,25 @@ mod tests {
     use super::*;
     use crate::model::grandstand::simulate;
     use rand::SeedableRng;
+
+    #[test]
+    fn fast_imaging_path_gives_the_rendered_frames_records() {
+        // The fast path selects the renderer's pixels, so a run's records (every centroid, the
+        // vision H1 peaks and |H1|, lost frames) are the same as with every frame rendered:
+        // two runs at the shortest and longest exposures, compared exactly.
+        let mut cfg = StudyConfig::preset(crate::study::Preset::Grandstand);
+        cfg.exposures_ms = vec![40.0, 180.0];
+        let fast = Grandstand::new(&cfg).unwrap();
+        cfg.imaging.fast_path = Some(false);
+        let reference = Grandstand::new(&cfg).unwrap();
+        for run in 0..2 {
+            let got = fast.run(run, &mut crate::study::run_rng(7, run)).unwrap();
+            let want = reference
+                .run(run, &mut crate::study::run_rng(7, run))
+                .unwrap();
+            assert_eq!(got, want, "run {run}");
+        }
+    }
 
     #[test]
     fn transducer_path_without_noise_recovers_the_closed_form_peak() {
