@@ -149,6 +149,8 @@ pub struct Effects {
     /// Whether identity effects with the binary centroid take the fast path (not an effect:
     /// the same pixels either way).
     pub fast_path: bool,
+    /// When the exposure happens relative to the frame's timestamp.
+    pub alignment: super::ExposureAlignment,
 }
 
 impl Effects {
@@ -164,6 +166,7 @@ impl Effects {
             bits: o.bits.unwrap_or(8),
             centroid: o.centroid.unwrap_or_default(),
             fast_path: o.fast_path.unwrap_or(true),
+            alignment: o.exposure_alignment.unwrap_or_default(),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {

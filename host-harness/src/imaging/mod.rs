@@ -19,6 +19,19 @@ pub use render::{BlurRenderer, DiskTarget};
 
 use serde::{Deserialize, Serialize};
 
+/// When a frame's exposure happens relative to its timestamp (`[imaging] exposure_alignment`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExposureAlignment {
+    /// Centred on the frame's instant (the default; also what a camera that starts at the
+    /// trigger gives once its timestamps are corrected to mid-exposure).
+    #[default]
+    Centred,
+    /// Starting at the frame's instant (the trigger) and the timestamps left there: the
+    /// displacement is late by half the exposure, a phase lag of `pi f Te` in the vision H1.
+    Trigger,
+}
+
 /// The centroid the camera's firmware computes (`[imaging] centroid` of a study file).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -74,6 +87,60 @@ pub struct ImagingOptions {
     /// absent. `false` renders every frame (the reference, about 4 times slower), e.g. to check
     /// the fast path on a study.
     pub fast_path: Option<bool>,
+    /// Target disk radius, px; the rig's when absent.
+    pub target_radius_px: Option<f64>,
+    /// Gaussian sigma of the target's edge, px; the rig's when absent.
+    pub target_edge_sigma_px: Option<f64>,
+    /// Binary threshold as a fraction of the target's grey level (rounded to a grey level);
+    /// the rig's when absent.
+    pub threshold_frac: Option<f64>,
+    /// When the exposure happens relative to the frame's timestamp; centred when absent.
+    pub exposure_alignment: Option<ExposureAlignment>,
+}
+
+impl ImagingOptions {
+    /// The scenario's target and threshold (8-bit grey levels) with this table's overrides:
+    /// the rig's `target` and `threshold` where a field is absent; the message names the field.
+    pub fn target_and_threshold(
+        &self,
+        target: DiskTarget,
+        threshold: u16,
+    ) -> anyhow::Result<(DiskTarget, u16)> {
+        let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
+        let mut t = target;
+        if let Some(r) = self.target_radius_px {
+            if !(r.is_finite() && (1.0..=100.0).contains(&r)) {
+                return Err(bad("target_radius_px", "must be between 1 and 100 px"));
+            }
+            t.radius_px = r;
+        }
+        if let Some(s) = self.target_edge_sigma_px {
+            // below about 0.5 px the sampled disk is not band-limited and the phase-shift
+            // translation rings
+            if !(s.is_finite() && (0.5..=10.0).contains(&s)) {
+                return Err(bad("target_edge_sigma_px", "must be between 0.5 and 10 px"));
+            }
+            t.edge_sigma_px = s;
+        }
+        let threshold = match self.threshold_frac {
+            None => threshold,
+            Some(f) => {
+                let level = (f * t.level).round();
+                if !(f.is_finite() && f > 0.0 && f < 1.0 && level >= 1.0 && level < t.level) {
+                    return Err(bad(
+                        "threshold_frac",
+                        &format!(
+                            "must be a fraction in (0, 1) of the target level {} that rounds to \
+                             a grey level between 1 and the level",
+                            t.level
+                        ),
+                    ));
+                }
+                level as u16
+            }
+        };
+        Ok((t, threshold))
+    }
 }
 
 /// A target's image-plane motion: `path_px[i]` is its displacement (px, positive **down**, image
@@ -123,5 +190,90 @@ impl TargetPath {
     /// The window of frame `k` (see [`window`](Self::window)).
     pub fn frame_window(&self, k: usize, exposure_ms: f64) -> (f64, f64) {
         self.window((self.pad + k * self.fine_per_frame) as f64, exposure_ms)
+    }
+
+    /// The window of frame `k` for an exposure aligned as `alignment` says: centred on the
+    /// frame's instant, or starting there (then `pad` must cover a whole exposure after the
+    /// last frame).
+    pub fn aligned_window(
+        &self,
+        k: usize,
+        exposure_ms: f64,
+        alignment: ExposureAlignment,
+    ) -> (f64, f64) {
+        match alignment {
+            ExposureAlignment::Centred => self.frame_window(k, exposure_ms),
+            ExposureAlignment::Trigger => {
+                let start = (self.pad + k * self.fine_per_frame) as f64;
+                (start, start + exposure_ms / 1000.0 * self.fine_hz)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn target_and_threshold_overrides_name_the_field() {
+        let rig = DiskTarget {
+            radius_px: 12.0,
+            level: 200.0,
+            edge_sigma_px: 1.5,
+        };
+        let o = ImagingOptions::default();
+        assert_eq!(o.target_and_threshold(rig, 100).unwrap(), (rig, 100));
+        let o = ImagingOptions {
+            target_radius_px: Some(4.5),
+            target_edge_sigma_px: Some(0.75),
+            threshold_frac: Some(0.123),
+            ..Default::default()
+        };
+        let (t, th) = o.target_and_threshold(rig, 100).unwrap();
+        assert_eq!(
+            (t.radius_px, t.edge_sigma_px, t.level, th),
+            (4.5, 0.75, 200.0, 25)
+        );
+        for (o, field) in [
+            (
+                ImagingOptions {
+                    target_radius_px: Some(0.5),
+                    ..Default::default()
+                },
+                "target_radius_px",
+            ),
+            (
+                ImagingOptions {
+                    target_edge_sigma_px: Some(0.1),
+                    ..Default::default()
+                },
+                "target_edge_sigma_px",
+            ),
+            (
+                ImagingOptions {
+                    threshold_frac: Some(1.0),
+                    ..Default::default()
+                },
+                "threshold_frac",
+            ),
+            (
+                ImagingOptions {
+                    threshold_frac: Some(0.001),
+                    ..Default::default()
+                },
+                "threshold_frac",
+            ),
+            (
+                ImagingOptions {
+                    threshold_frac: Some(f64::NAN),
+                    ..Default::default()
+                },
+                "threshold_frac",
+            ),
+        ] {
+            let e = o.target_and_threshold(rig, 100).unwrap_err().to_string();
+            assert!(e.contains(&format!("imaging.{field}")), "{e}");
+        }
     }
 }

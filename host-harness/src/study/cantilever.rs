@@ -35,6 +35,9 @@ pub const ACQUISITION: Acquisition = Acquisition {
 pub struct Cantilever {
     /// Optional image-formation effects (identity by default: the fast 8-bit path).
     effects: Effects,
+    /// The target and the binary threshold (the rig's, or the study file's `[imaging]`).
+    target: crate::imaging::DiskTarget,
+    threshold: u16,
     exposures_ms: Vec<f64>,
     fixed: bool,
 }
@@ -46,6 +49,7 @@ impl Cantilever {
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
         let effects = Effects::from_options(&cfg.imaging)?;
+        let (target, threshold) = cfg.imaging.target_and_threshold(TARGET, THRESHOLD)?;
         let period_ms = 1000.0 / FPS;
         if let Some(e) = cfg.exposures_ms.iter().find(|e| **e >= period_ms) {
             return Err(crate::bad_input(format!(
@@ -54,6 +58,8 @@ impl Cantilever {
         }
         Ok(Cantilever {
             effects,
+            target,
+            threshold,
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
         })
@@ -85,8 +91,8 @@ impl Scenario for Cantilever {
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
             self.effects.centroid,
-            TARGET,
-            THRESHOLD,
+            self.target,
+            self.threshold,
             &crate::model::cantilever::nominal_motion_segments(&ACQUISITION)?,
         )?)
     }
@@ -109,7 +115,12 @@ impl Scenario for Cantilever {
         // y grows down, the tip displacement up
         let fine_hz = FPS * sim.fine_per_frame as f64;
         let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
-        let pad = (max_exp / 2000.0 * fine_hz).ceil() as usize + 2;
+        // an exposure starting at the trigger reaches a whole exposure past a frame
+        let reach_ms = match self.effects.alignment {
+            crate::imaging::ExposureAlignment::Centred => max_exp,
+            crate::imaging::ExposureAlignment::Trigger => 2.0 * max_exp,
+        };
+        let pad = (reach_ms / 2000.0 * fine_hz).ceil() as usize + 2;
         let period_px: Vec<f64> = sim.tip_mm.iter().map(|mm| -mm / MM_PER_PX).collect();
         let path = TargetPath::periodic(&period_px, pad, sim.fine_per_frame, fine_hz);
         let mut up =
@@ -117,8 +128,8 @@ impl Scenario for Cantilever {
         let mut acc = vec![0.0f32; SAMPLES];
         let camera = Filming {
             effects: &self.effects,
-            target: &TARGET,
-            threshold: THRESHOLD,
+            target: &self.target,
+            threshold: self.threshold,
             block: 16,
         };
         let vision = camera.vision_records(

@@ -34,6 +34,9 @@ pub struct Grandstand {
     /// period and every half exposure (in fine steps), so windows cover whole blocks.
     block: usize,
     fixed: bool,
+    /// The target and the binary threshold (the rig's, or the study file's `[imaging]`).
+    target: crate::imaging::DiskTarget,
+    threshold: u16,
 }
 
 impl Grandstand {
@@ -45,7 +48,12 @@ impl Grandstand {
     pub fn padding(&self) -> usize {
         let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
         let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
-        ((max_exp / 2.0 / dt_ms).ceil() as usize + 1).div_ceil(self.block) * self.block
+        // an exposure starting at the trigger reaches a whole exposure past the last frame
+        let reach = match self.effects.alignment {
+            crate::imaging::ExposureAlignment::Centred => max_exp / 2.0,
+            crate::imaging::ExposureAlignment::Trigger => max_exp,
+        };
+        ((reach / dt_ms).ceil() as usize + 1).div_ceil(self.block) * self.block
     }
 
     /// Path segments per precomputed ramp block of the renderer.
@@ -56,6 +64,7 @@ impl Grandstand {
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
         let effects = Effects::from_options(&cfg.imaging)?;
+        let (target, threshold) = cfg.imaging.target_and_threshold(TARGET, THRESHOLD)?;
         let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
         let mut block = FINE;
         for e in &cfg.exposures_ms {
@@ -71,6 +80,8 @@ impl Grandstand {
             block: block.max(1),
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
+            target,
+            threshold,
         })
     }
 
@@ -112,8 +123,8 @@ impl Scenario for Grandstand {
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
             self.effects.centroid,
-            TARGET,
-            THRESHOLD,
+            self.target,
+            self.threshold,
             &crate::model::grandstand::nominal_motion_segments(),
         )?)
     }
@@ -144,8 +155,8 @@ impl Scenario for Grandstand {
         };
         let camera = Filming {
             effects: &self.effects,
-            target: &TARGET,
-            threshold: THRESHOLD,
+            target: &self.target,
+            threshold: self.threshold,
             block: self.block,
         };
         let vision = camera.vision_records(
@@ -197,6 +208,38 @@ mod tests {
                 .unwrap();
             assert_eq!(got, want, "run {run}");
         }
+    }
+
+    #[test]
+    fn exposure_at_the_trigger_delays_the_vision_record() {
+        // Starting at the trigger with the timestamps left there, the centroid is late by half
+        // the exposure: H1 turns by pi f Te, so the |Im H1| peak moves off resonance (to a higher
+        // frequency for a receptance seen late) and |H1| there drops, by about cos(pi f Te / 2)
+        // for a single mode. Fixed structure, the same runs (common random numbers), 180 ms.
+        let mut cfg = StudyConfig::preset(crate::study::Preset::Grandstand);
+        cfg.exposures_ms = vec![180.0];
+        cfg.fixed_structure = true;
+        let centred = Grandstand::new(&cfg).unwrap();
+        cfg.imaging.exposure_alignment = Some(crate::imaging::ExposureAlignment::Trigger);
+        let trigger = Grandstand::new(&cfg).unwrap();
+        assert!(trigger.padding() > centred.padding());
+        let (mut df, mut ratio) = (0.0, 0.0);
+        let runs = 4;
+        for run in 0..runs {
+            let pick = |s: &Grandstand| {
+                let r = s.run(run, &mut crate::study::run_rng(3, run)).unwrap();
+                r.vision[0].system.peaks[0].unwrap()
+            };
+            let (c, t) = (pick(&centred), pick(&trigger));
+            df += (t.f_hz - c.f_hz) / runs as f64;
+            ratio += t.a / c.a / runs as f64;
+        }
+        let predicted = (std::f64::consts::PI * 2.0 * 0.18 / 2.0).cos(); // 0.844 at 2 Hz
+        assert!(df > 0.02, "mode 1 moved by {df} Hz");
+        assert!(
+            (ratio - predicted).abs() < 0.08,
+            "ratio {ratio}, single-mode {predicted}"
+        );
     }
 
     #[test]

@@ -250,7 +250,7 @@ impl Filming<'_> {
                 &mut valid,
                 bands,
                 |k| {
-                    let (a, b) = path.frame_window(k, exp);
+                    let (a, b) = path.aligned_window(k, exp, self.effects.alignment);
                     camera.frame(&mut renderer, a, b)
                 },
                 |cy| to_disp(cy as f64 - rest_y),
