@@ -259,6 +259,63 @@ pub fn summary_of_sorted(sorted: &[f64], p: f64) -> Result<CoverageSummary, Cove
     })
 }
 
+/// Resamples drawn by [`bootstrap_chi`].
+pub const BOOTSTRAP_RESAMPLES: usize = 2000;
+
+/// Bootstrap statements of the two rig indices `chi_mu = mean(v) / mean(t)` and
+/// `chi_sigma = std(v) / std(t)` over paired runs `(t, v)` (`v` `None` where the run's vision
+/// pick failed: such runs count in the transducer's statistics only, as in the point
+/// estimates). [`BOOTSTRAP_RESAMPLES`] resamples of the runs with replacement, drawn from a
+/// stream seeded by `seed` (deterministic). Each summary's `mean` is the estimate from the
+/// runs themselves, `std` and `u_mean` the bootstrap standard deviation of the statistic (its
+/// standard uncertainty), and the intervals the bootstrap distribution's (percentile)
+/// intervals. Errors when fewer runs than [`min_values`] or a statistic is undefined.
+pub fn bootstrap_chi(
+    pairs: &[(f64, Option<f64>)],
+    p: f64,
+    seed: u64,
+) -> Result<(CoverageSummary, CoverageSummary), CoverageError> {
+    use rand::{Rng, SeedableRng};
+    let stats = |idx: &mut dyn Iterator<Item = usize>| -> Option<(f64, f64)> {
+        let (mut t, mut v) = (Vec::new(), Vec::new());
+        for i in idx {
+            let (ti, vi) = pairs[i];
+            t.push(ti);
+            v.extend(vi);
+        }
+        let (mt, st) = (crate::stats::mean(&t)?, crate::stats::std_dev(&t)?);
+        let (mv, sv) = (crate::stats::mean(&v)?, crate::stats::std_dev(&v)?);
+        let (mu, sigma) = (mv / mt, sv / st);
+        (mu.is_finite() && sigma.is_finite()).then_some((mu, sigma))
+    };
+    let n = pairs.len();
+    let needed = min_values(p).ok_or(CoverageError::Probability(p))?;
+    let undefined = CoverageError::TooFewValues { n, p, needed };
+    if n < needed {
+        return Err(undefined);
+    }
+    let (mu, sigma) = stats(&mut (0..n)).ok_or(undefined)?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let (mut mus, mut sigmas) = (Vec::new(), Vec::new());
+    for _ in 0..BOOTSTRAP_RESAMPLES {
+        let mut draw = (0..n).map(|_| rng.random_range(0..n));
+        if let Some((m, s)) = stats(&mut draw) {
+            mus.push(m);
+            sigmas.push(s);
+        }
+    }
+    let state = |estimate: f64, draws: Vec<f64>| {
+        let s = coverage_summary(&draws, p)?;
+        Ok(CoverageSummary {
+            n,
+            mean: estimate,
+            u_mean: s.std,
+            ..s
+        })
+    };
+    Ok((state(mu, mus)?, state(sigma, sigmas)?))
+}
+
 /// The final results of the adaptive procedure (JCGM 101 7.9.4 l): the summary of all the
 /// `h M` values of the batches.
 pub fn final_results(batches: &[&[f64]], p: f64) -> Result<CoverageSummary, CoverageError> {
@@ -543,6 +600,48 @@ impl fmt::Display for Stability {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn bootstrap_chi_agrees_with_the_delta_method() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        // independent t ~ N(10, 1), v ~ N(9, 1), 400 runs: first-order (delta method)
+        // u(chi_mu) = chi sqrt(u(mean v)^2 / mean v^2 + u(mean t)^2 / mean t^2) and, for normal
+        // samples, u(chi_sigma) = chi_sigma sqrt(1 / (2 (n - 1)) * 2)
+        let n = 400;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (nt, nv) = (
+            Normal::new(10.0, 1.0).unwrap(),
+            Normal::new(9.0, 1.0).unwrap(),
+        );
+        let pairs: Vec<(f64, Option<f64>)> = (0..n)
+            .map(|_| (nt.sample(&mut rng), Some(nv.sample(&mut rng))))
+            .collect();
+        let (mu, sigma) = bootstrap_chi(&pairs, 0.95, 1).unwrap();
+        let (t, v): (Vec<f64>, Vec<f64>) = pairs.iter().map(|(t, v)| (*t, v.unwrap())).unzip();
+        let (mt, st) = mean_std(&t);
+        let (mv, sv) = mean_std(&v);
+        assert!((mu.mean - mv / mt).abs() < 1e-12 && (sigma.mean - sv / st).abs() < 1e-12);
+        let nn = n as f64;
+        let u_mu = mv / mt * ((sv / mv).powi(2) / nn + (st / mt).powi(2) / nn).sqrt();
+        let u_sigma = sv / st * (1.0 / (nn - 1.0)).sqrt();
+        assert!((mu.std / u_mu - 1.0).abs() < 0.15, "{} vs {u_mu}", mu.std);
+        assert!(
+            (sigma.std / u_sigma - 1.0).abs() < 0.2,
+            "{} vs {u_sigma}",
+            sigma.std
+        );
+        assert!(mu.short_lo < mu.mean && mu.mean < mu.short_hi);
+        assert!((mu.sym_hi - mu.sym_lo) / (2.0 * 1.96 * u_mu) - 1.0 < 0.2);
+        // a vision exactly proportional to the transducer: chi_mu is 0.9 in every resample
+        let exact: Vec<(f64, Option<f64>)> = t.iter().map(|t| (*t, Some(0.9 * t))).collect();
+        let (mu, sigma) = bootstrap_chi(&exact, 0.95, 1).unwrap();
+        assert!(
+            mu.std < 1e-12 && (mu.short_lo - 0.9).abs() < 1e-12 && (sigma.mean - 0.9).abs() < 1e-12
+        );
+        // too few runs: an error, not NaN
+        assert!(bootstrap_chi(&exact[..5], 0.95, 1).is_err());
+    }
+
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

@@ -174,6 +174,10 @@ fn summary_at(
                     .filter_map(|(r, p)| by_run.get(r).map(|t| p.a / t))
                     .collect();
                 quantities.push(("ratio", ratio));
+                if with_chi {
+                    let seed = chi_seed(cfg.seed, ei, m, system);
+                    chi_coverage(&tr, &p, (system, exposure_ms, m), cfg.coverage, seed, out);
+                }
             }
             for (quantity, values) in quantities {
                 if let Ok(coverage) = coverage_summary(&values, cfg.coverage) {
@@ -187,6 +191,70 @@ fn summary_at(
                 }
             }
             out.summary.push(row);
+        }
+    }
+}
+
+/// One line per vision `chi_mu` and `chi_sigma` coverage row: the index, its bootstrap
+/// interval and standard uncertainty, and about how many runs would make the interval's
+/// half-width one point (0.01), the uncertainty falling as one over the root of the runs.
+pub fn chi_statements(out: &Outputs) -> Vec<String> {
+    out.coverage
+        .iter()
+        .filter(|r| r.system == System::Vision && r.quantity.starts_with("chi_"))
+        .map(|r| {
+            let c = &r.coverage;
+            let half = (c.short_hi - c.short_lo) / 2.0;
+            let runs = (c.n as f64 * (half / 0.01).powi(2)).ceil();
+            format!(
+                "{} vision {} ms mode {}: {:.4} ({:.0} % bootstrap interval {:.4} .. {:.4}, u {:.4}, \
+                 {} runs); +/- 0.01 at {:.0} % needs about {runs} runs",
+                r.quantity,
+                r.exposure_ms,
+                r.mode,
+                c.mean,
+                100.0 * c.p,
+                c.short_lo,
+                c.short_hi,
+                c.u_mean,
+                c.n,
+                100.0 * c.p
+            )
+        })
+        .collect()
+}
+
+/// The bootstrap stream of the chi statements of one system, exposure and mode (deterministic,
+/// distinct per row).
+fn chi_seed(seed: u64, ei: usize, mode: usize, system: System) -> u64 {
+    let row = ((ei as u64) << 16) | ((mode as u64) << 8) | system as u64;
+    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ row
+}
+
+/// `chi_mu` and `chi_sigma` coverage rows of `system` against the transducer (bootstrap over
+/// the runs, [`crate::uncertainty::bootstrap_chi`]); nothing when they are undefined.
+fn chi_coverage(
+    transducer: &[(u64, PeakRecord)],
+    vision: &[(u64, PeakRecord)],
+    (system, exposure_ms, m): (System, f64, usize),
+    p: f64,
+    seed: u64,
+    out: &mut Outputs,
+) {
+    let by_run: BTreeMap<u64, f64> = vision.iter().map(|(r, p)| (*r, p.a)).collect();
+    let pairs: Vec<(f64, Option<f64>)> = transducer
+        .iter()
+        .map(|(r, t)| (t.a, by_run.get(r).copied()))
+        .collect();
+    if let Ok((mu, sigma)) = crate::uncertainty::bootstrap_chi(&pairs, p, seed) {
+        for (quantity, coverage) in [("chi_mu", mu), ("chi_sigma", sigma)] {
+            out.coverage.push(CoverageRow {
+                system,
+                exposure_ms,
+                mode: m + 1,
+                quantity,
+                coverage,
+            });
         }
     }
 }

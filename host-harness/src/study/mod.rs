@@ -322,6 +322,9 @@ pub fn finish(
     for n in scenario.notes() {
         println!("note: {n}");
     }
+    for line in aggregate::chi_statements(&outputs) {
+        println!("{line}");
+    }
     if let Some(r) = adaptive_report {
         print!("{r}");
         written.push(out.join(files::ADAPTIVE));
