@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 pub mod analyze;
 pub mod args;
+pub mod calibrate;
 pub mod centroid;
 pub mod frf;
 pub mod merge;
@@ -46,6 +47,9 @@ enum Command {
     /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
     /// within a tolerance, the residual after compensation, the lost-frame risk.
     Plan(plan::Args),
+    /// Fit a study's unreported imaging knobs (target, threshold, noise, blur) to observed
+    /// figures: coarse grid then local search, every evaluation the same small study.
+    Calibrate(calibrate::Args),
 }
 
 /// Runs the command line; the error is returned to `main` for the exit code.
@@ -59,6 +63,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
     }
 }
 

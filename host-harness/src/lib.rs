@@ -26,6 +26,7 @@
 //! | [`testing`] | seeded noise for tests, examples and benchmarks |
 
 pub mod analysis;
+pub mod calibrate;
 pub mod chain;
 pub mod cli;
 pub mod csvio;
