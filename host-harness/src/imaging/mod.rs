@@ -83,7 +83,7 @@ pub struct ImagingOptions {
     /// The firmware's centroid; binary when absent.
     pub centroid: Option<CentroidKind>,
     /// Whether identity-effect binary-centroid frames take the fast path
-    /// ([`fastpath`](crate::imaging::fastpath), the same pixels as rendering them); true when
+    /// ([`fastpath`], the same pixels as rendering them); true when
     /// absent. `false` renders every frame (the reference, about 4 times slower), e.g. to check
     /// the fast path on a study.
     pub fast_path: Option<bool>,
