@@ -84,6 +84,7 @@ impl Camera {
     pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
         if self.plain
             && self.effects.fast_path
+            && self.effects.frame_range_frac.is_none()
             && self.config.mode == firmware_core::centroid::Mode::Binary
         {
             self.fast = Some(super::fastpath::FastDiskCamera::new(
@@ -115,13 +116,34 @@ impl Camera {
         }
         if self.plain {
             renderer.render(a, b, &mut self.frame);
-            Frame::new(&self.frame, w, h, w).and_then(|f| centroid(&self.config, &f))
+            let config = self.config_for(&self.frame);
+            Frame::new(&self.frame, w, h, w).and_then(|f| centroid(&config, &f))
         } else {
             renderer.render_float(a, b, &mut self.fimg);
             self.effects
                 .apply(&mut self.fimg, w, h, &mut self.noise, &mut self.scratch);
             self.effects.quantise(&self.fimg, &mut self.frame16);
-            Frame::new(&self.frame16, w, h, w).and_then(|f| centroid(&self.config, &f))
+            let config = self.config_for(&self.frame16);
+            Frame::new(&self.frame16, w, h, w).and_then(|f| centroid(&config, &f))
+        }
+    }
+
+    /// The centroid settings for this frame: the fixed threshold, or with a frame-range rule
+    /// `min + frac (max - min)` of the frame's grey levels (rounded down; a flat frame gets its
+    /// one level, so nothing is above it and the frame is lost).
+    fn config_for<P: Copy + Into<u32>>(&self, frame: &[P]) -> CentroidConfig {
+        let Some(frac) = self.effects.frame_range_frac else {
+            return self.config;
+        };
+        let (lo, hi) = frame.iter().fold((u32::MAX, 0u32), |(lo, hi), &v| {
+            let v = v.into();
+            (lo.min(v), hi.max(v))
+        });
+        let lo = lo.min(hi);
+        let threshold = lo + (frac * (hi - lo) as f64).floor() as u32;
+        CentroidConfig {
+            threshold: threshold.min(u16::MAX as u32) as u16,
+            ..self.config
         }
     }
 }
@@ -151,6 +173,9 @@ pub struct Effects {
     pub fast_path: bool,
     /// When the exposure happens relative to the frame's timestamp.
     pub alignment: super::ExposureAlignment,
+    /// With [`super::ThresholdRule::FrameRange`], the fraction of each frame's grey-level range
+    /// the threshold sits at (not an effect on the image: [`Effects::is_identity`] ignores it).
+    pub frame_range_frac: Option<f64>,
 }
 
 impl Effects {
@@ -167,6 +192,10 @@ impl Effects {
             centroid: o.centroid.unwrap_or_default(),
             fast_path: o.fast_path.unwrap_or(true),
             alignment: o.exposure_alignment.unwrap_or_default(),
+            frame_range_frac: match o.threshold_rule.unwrap_or_default() {
+                super::ThresholdRule::Fixed => None,
+                super::ThresholdRule::FrameRange => Some(o.threshold_frac.unwrap_or(0.5)),
+            },
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {
@@ -183,6 +212,11 @@ impl Effects {
         }
         if !(e.shot_e_per_level.is_finite() && e.shot_e_per_level >= 0.0) {
             return Err(bad("shot_noise_e_per_level", "must be >= 0"));
+        }
+        if let Some(f) = e.frame_range_frac {
+            if !(f.is_finite() && f > 0.0 && f < 1.0) {
+                return Err(bad("threshold_frac", "must be a fraction in (0, 1)"));
+            }
         }
         if ![8, 12, 16].contains(&e.bits) {
             return Err(bad("bits", "must be 8, 12 or 16"));
@@ -462,5 +496,55 @@ mod tests {
         let e8 = effects(|_| {});
         e8.quantise(&[99.4, 99.6, 255.0], &mut out);
         assert_eq!(out, [99, 100, 255]);
+    }
+
+    /// A small target smeared over a path much longer than itself: its peak falls to about
+    /// 200 * 6 / 40 = 30 grey levels, below a fixed threshold at half the level (the frame is
+    /// lost), while a threshold at half of each frame's range keeps it and centres it on the
+    /// path. Both with and without sensor effects (8- and 16-bit frames).
+    #[test]
+    fn a_frame_range_threshold_keeps_a_smeared_target_a_fixed_one_loses() {
+        use super::super::{DiskTarget, ThresholdRule};
+        use firmware_core::centroid::Flags;
+        let target = DiskTarget {
+            radius_px: 3.0,
+            level: 200.0,
+            edge_sigma_px: 0.7,
+        };
+        let path: Vec<f64> = (0..=400).map(|i| i as f64 * 0.1).collect();
+        let mut renderer = BlurRenderer::for_path(&target, &path, 1);
+        let (w, h, rest_y) = (renderer.width(), renderer.height(), renderer.rest_y());
+        for bits in [8, 12] {
+            let mut rng = ChaCha8Rng::seed_from_u64(1);
+            let fixed = effects(|o| o.bits = Some(bits));
+            let mut camera = Camera::new(&fixed, 100, w, h, &mut rng);
+            let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
+            assert!(c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
+            let range = effects(|o| {
+                o.bits = Some(bits);
+                o.threshold_rule = Some(ThresholdRule::FrameRange);
+            });
+            assert_eq!(range.is_identity(), bits == 8);
+            let mut camera = Camera::new(&range, 100, w, h, &mut rng);
+            camera.use_fast_path(&target, &renderer);
+            let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
+            assert!(!c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
+            let y = c.cy as f64 - rest_y;
+            assert!(
+                (y - 20.0).abs() < 0.5,
+                "{bits} bits: centroid {y} px, path middle 20"
+            );
+            // a short exposure sees the whole target: range 0..200, the same threshold of 100
+            // as the fixed rule and the same centroid
+            let short = camera.frame(&mut renderer, 0.0, 1.0).unwrap();
+            let mut camera = Camera::new(&fixed, 100, w, h, &mut rng);
+            assert_eq!(short, camera.frame(&mut renderer, 0.0, 1.0).unwrap());
+        }
+        let bad = Effects::from_options(&ImagingOptions {
+            threshold_rule: Some(ThresholdRule::FrameRange),
+            threshold_frac: Some(1.5),
+            ..ImagingOptions::default()
+        });
+        assert!(bad.unwrap_err().to_string().contains("threshold_frac"));
     }
 }

@@ -32,6 +32,21 @@ pub enum ExposureAlignment {
     Trigger,
 }
 
+/// How the binary threshold is set in each frame (`[imaging] threshold_rule`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThresholdRule {
+    /// One grey level for every frame (`threshold_frac` of the target level; the default).
+    #[default]
+    Fixed,
+    /// Per frame, `min + threshold_frac (max - min)` of that frame's grey levels: a camera that
+    /// stretches each frame's contrast to its full range (auto levels) before a fixed
+    /// threshold, or a firmware that thresholds at a fraction of the frame's peak above its
+    /// background. A blurred target whose peak falls (a long exposure spreads its light) keeps
+    /// its pixels instead of fading below a fixed level.
+    FrameRange,
+}
+
 /// The centroid the camera's firmware computes (`[imaging] centroid` of a study file).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -96,6 +111,8 @@ pub struct ImagingOptions {
     pub threshold_frac: Option<f64>,
     /// When the exposure happens relative to the frame's timestamp; centred when absent.
     pub exposure_alignment: Option<ExposureAlignment>,
+    /// How the threshold is set in each frame; fixed when absent.
+    pub threshold_rule: Option<ThresholdRule>,
 }
 
 impl ImagingOptions {
