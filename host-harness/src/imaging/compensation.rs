@@ -38,6 +38,9 @@ pub struct TransferSetup {
     /// Path samples per period given to the renderer (linear in between; at least 64).
     /// The chord error of the linearised sinusoid is `A (1 - cos(pi / P))`.
     pub path_steps_per_period: usize,
+    /// With a frame-range threshold rule ([`crate::imaging::ThresholdRule::FrameRange`]), the
+    /// fraction of each frame's grey-level range the threshold sits at (`threshold` unused).
+    pub frame_range_frac: Option<f64>,
 }
 
 impl TransferSetup {
@@ -50,6 +53,7 @@ impl TransferSetup {
             amplitude_px,
             frames_per_period: 64,
             path_steps_per_period: 1024,
+            frame_range_frac: None,
         }
     }
 }
@@ -206,6 +210,13 @@ pub fn transfer_curve(
             let t = j as f64 / k as f64;
             let centre = lead as f64 + t * p as f64;
             renderer.render(centre - half, centre + half, &mut frame);
+            let config = match setup.frame_range_frac {
+                None => config,
+                Some(frac) => CentroidConfig {
+                    threshold: super::effects::frame_range_threshold(&frame, frac),
+                    ..config
+                },
+            };
             let c = Frame::new(&frame, w, h, w)
                 .and_then(|f| centroid(&config, &f))
                 .map_err(|e| CompensationError::Setup(format!("frame: {e}")))?;

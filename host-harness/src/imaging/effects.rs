@@ -132,20 +132,26 @@ impl Camera {
     /// `min + frac (max - min)` of the frame's grey levels (rounded down; a flat frame gets its
     /// one level, so nothing is above it and the frame is lost).
     fn config_for<P: Copy + Into<u32>>(&self, frame: &[P]) -> CentroidConfig {
-        let Some(frac) = self.effects.frame_range_frac else {
-            return self.config;
-        };
-        let (lo, hi) = frame.iter().fold((u32::MAX, 0u32), |(lo, hi), &v| {
-            let v = v.into();
-            (lo.min(v), hi.max(v))
-        });
-        let lo = lo.min(hi);
-        let threshold = lo + (frac * (hi - lo) as f64).floor() as u32;
-        CentroidConfig {
-            threshold: threshold.min(u16::MAX as u32) as u16,
-            ..self.config
+        match self.effects.frame_range_frac {
+            None => self.config,
+            Some(frac) => CentroidConfig {
+                threshold: frame_range_threshold(frame, frac),
+                ..self.config
+            },
         }
     }
+}
+
+/// The threshold of a frame-range rule: `min + frac (max - min)` of the frame's grey levels,
+/// rounded down (a flat frame gets its one level, so nothing is above it and it is lost).
+pub fn frame_range_threshold<P: Copy + Into<u32>>(frame: &[P], frac: f64) -> u16 {
+    let (lo, hi) = frame.iter().fold((u32::MAX, 0u32), |(lo, hi), &v| {
+        let v = v.into();
+        (lo.min(v), hi.max(v))
+    });
+    let lo = lo.min(hi);
+    let threshold = lo + (frac * (hi - lo) as f64).floor() as u32;
+    threshold.min(u16::MAX as u32) as u16
 }
 
 /// The resolved effects (identity when built from default options).

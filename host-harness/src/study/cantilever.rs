@@ -90,7 +90,7 @@ impl Scenario for Cantilever {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            self.effects.centroid,
+            &self.effects,
             self.target,
             self.threshold,
             &crate::model::cantilever::nominal_motion_segments(&ACQUISITION)?,

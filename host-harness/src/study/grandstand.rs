@@ -122,7 +122,7 @@ impl Scenario for Grandstand {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            self.effects.centroid,
+            &self.effects,
             self.target,
             self.threshold,
             &crate::model::grandstand::nominal_motion_segments(),
