@@ -175,3 +175,132 @@ fn merging_shards_of_two_layouts_names_the_layouts() {
     assert_exit_2(&o, "is shard 1/3, but");
     assert!(stderr(&o).contains("same N"), "{}", stderr(&o));
 }
+
+/// A 16 x 16 8-bit grey frame with a bright 4 x 4 square at (`x`, 6).
+fn square(x: u32) -> Vec<u8> {
+    (0..16 * 16)
+        .map(|i| {
+            if (x..x + 4).contains(&(i % 16)) && (6..10).contains(&(i / 16)) {
+                200
+            } else {
+                0
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (good, bad) = (dir.path().join("three.tif"), dir.path().join("bad.tif"));
+    {
+        let mut enc = TiffEncoder::new(std::fs::File::create(&good).unwrap()).unwrap();
+        for x in [2, 5, 9] {
+            enc.write_image::<colortype::Gray8>(16, 16, &square(x))
+                .unwrap();
+        }
+        let mut enc = TiffEncoder::new(std::fs::File::create(&bad).unwrap()).unwrap();
+        enc.write_image::<colortype::Gray8>(16, 16, &square(2))
+            .unwrap();
+        enc.write_image::<colortype::Gray8>(8, 8, &[0u8; 64])
+            .unwrap();
+        enc.write_image::<colortype::RGB8>(16, 16, &[0u8; 768])
+            .unwrap();
+    }
+    let o = harness(&["centroid", "--threshold", "100", good.to_str().unwrap()]);
+    assert_ok(&o);
+    let rows: Vec<String> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(2).collect::<Vec<_>>().join(","))
+        .collect();
+    let g = good.to_str().unwrap();
+    assert_eq!(
+        rows,
+        [
+            format!("{g}#1,3.5"),
+            format!("{g}#2,6.5"),
+            format!("{g}#3,10.5")
+        ]
+    );
+    // page 2 (another size, no target) is measured on its own; page 3 is colour: named
+    let o = harness(&["centroid", "--threshold", "100", bad.to_str().unwrap()]);
+    assert_exit_2(&o, "bad.tif page 3: not a grey frame");
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        out.contains("bad.tif#1,3.5") && out.contains("bad.tif#2,,"),
+        "{out}"
+    );
+    // a truncated TIFF: the page that cannot be read is named
+    let bytes = std::fs::read(&good).unwrap();
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let o = harness(&["centroid", "--threshold", "100", bad.to_str().unwrap()]);
+    assert_exit_2(&o, "bad.tif page");
+}
+
+#[test]
+fn an_8_bit_saturation_above_255_and_a_1_bit_png_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let frame = dir.path().join("f.png");
+    image::GrayImage::from_raw(16, 16, square(4))
+        .unwrap()
+        .save(&frame)
+        .unwrap();
+    let f = frame.to_str().unwrap();
+    let o = harness(&["centroid", "--threshold", "100", "--saturation", "1000", f]);
+    assert_exit_2(&o, "--saturation 1000 is above 255");
+    assert_ok(&harness(&[
+        "centroid",
+        "--threshold",
+        "100",
+        "--saturation",
+        "250",
+        f,
+    ]));
+    // a 1-bit grey PNG (one byte holds 8 pixels)
+    let one_bit = dir.path().join("bits.png");
+    {
+        let file = std::fs::File::create(&one_bit).unwrap();
+        let mut enc = png::Encoder::new(file, 16, 16);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::One);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[0x0f; 32]).unwrap();
+    }
+    let o = harness(&["centroid", "--threshold", "0", one_bit.to_str().unwrap()]);
+    assert_exit_2(&o, "a 1-bit grey PNG; 8- or 16-bit grey images are needed");
+}
+
+#[test]
+fn a_full_standard_output_is_an_error_naming_it_not_a_crash() {
+    let dir = tempfile::tempdir().unwrap();
+    let frame = dir.path().join("f.png");
+    image::GrayImage::from_raw(16, 16, square(4))
+        .unwrap()
+        .save(&frame)
+        .unwrap();
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    for args in [
+        vec!["plan", "--preset", "grandstand", "--tolerance", "0.1"],
+        vec!["centroid", "--threshold", "100", frame.to_str().unwrap()],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_host-harness"))
+            .args(&args)
+            .stdout(full())
+            .output()
+            .unwrap();
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert!(
+            e.contains("cannot write to standard output"),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("panicked"), "{args:?}: {e}");
+    }
+}

@@ -70,7 +70,25 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 /// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli) {
+    // `println!` panics when standard output cannot be written (a full disk, a closed pipe):
+    // that is an error of the command, named as such, not a crash with a backtrace
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if stdout_failure(info.payload()).is_none() {
+            default_hook(info)
+        }
+    }));
+    let result = match std::panic::catch_unwind(|| run(cli)) {
+        Ok(result) => result.and_then(|()| {
+            std::io::Write::flush(&mut std::io::stdout())
+                .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
+        }),
+        Err(payload) => match stdout_failure(payload.as_ref()) {
+            Some(why) => Err(anyhow::anyhow!("cannot write to standard output: {why}")),
+            None => std::panic::resume_unwind(payload),
+        },
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -81,4 +99,14 @@ pub fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// The reason in a `println!` panic on standard output ("failed printing to stdout: REASON").
+fn stdout_failure(payload: &(dyn std::any::Any + Send)) -> Option<String> {
+    let text = payload
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| payload.downcast_ref::<&str>().copied())?;
+    text.strip_prefix("failed printing to stdout: ")
+        .map(str::to_owned)
 }

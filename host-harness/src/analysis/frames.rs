@@ -198,8 +198,29 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
     )))
 }
 
+/// Refuses a grey PNG of 1, 2 or 4 bits per pixel: the decoder widens it to 8 bits with levels
+/// the threshold was not chosen for (and reports it as 8-bit, so the header is read here).
+fn refuse_low_bit_png(path: &Path) -> anyhow::Result<()> {
+    use std::io::Read as _;
+    let mut head = [0u8; 26];
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+    // signature, IHDR length and type, width, height, then bit depth and colour type
+    if read.is_ok() && head[..8] == *b"\x89PNG\r\n\x1a\n" && head[12..16] == *b"IHDR" {
+        let (depth, colour) = (head[24], head[25]);
+        if colour == 0 && depth < 8 {
+            return Err(bad_input(format!(
+                "{}: a {depth}-bit grey PNG; 8- or 16-bit grey images are needed (convert it, \
+                 e.g. `magick IN -depth 8 OUT`)",
+                path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Loads one 8- or 16-bit grey PNG/TIFF frame; errors name the file.
 pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
+    refuse_low_bit_png(path)?;
     let img = image::ImageReader::open(path)
         .and_then(|r| r.with_guessed_format())
         .map_err(|e| bad_input(format!("{}: cannot open the frame: {e}", path.display())))?

@@ -97,6 +97,14 @@ impl GreyFrame {
             centroid::Frame::new(data, width, height, width)
                 .and_then(|f| centroid::centroid(config, &f))
         }
+        if let (GreyFrame::U8 { .. }, Some(s)) = (self, config.saturation) {
+            if s > 255 {
+                return Err(bad_input(format!(
+                    "{label}: --saturation {s} is above 255, the largest level of an 8-bit \
+                     frame: no pixel could ever be flagged saturated"
+                )));
+            }
+        }
         let r = match self {
             GreyFrame::U8 { data, .. } => of(config, data, self.dimensions()),
             GreyFrame::U16 { data, .. } => of(config, data, self.dimensions()),

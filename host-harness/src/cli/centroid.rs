@@ -1,13 +1,14 @@
 //! `host-harness centroid`: thresholded centroid of the target in PNG/TIFF frames, through
 //! `firmware_core::centroid` (the single-target whole-frame path the firmware runs).
 //!
-//! Output: CSV on stdout, `file,cx,cy,pixels,flags`, one row per frame that could be read.
-//! A file that cannot be read, is not 8- or 16-bit grey, or does not hold the ROI gets an error
-//! naming it on stderr; the other files are still processed, and the command exits with code 2
-//! at the end.
+//! Output: CSV on stdout, `file,cx,cy,pixels,flags`, one row per frame that could be read;
+//! every page of a multi-page TIFF is measured, each page a row named `file#N` (1-based).
+//! A file (or page) that cannot be read, is not 8- or 16-bit grey, or does not hold the ROI gets
+//! an error naming it on stderr; the other files are still processed, and the command exits with
+//! code 2 at the end.
 
 use super::args::CentroidArgs;
-use crate::analysis::frames::load_frame;
+use crate::analysis::frames::{for_each_tiff_page, load_frame};
 use crate::bad_input;
 use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::io::Write;
@@ -49,6 +50,41 @@ pub fn centroid_file(config: &CentroidConfig, path: &Path) -> anyhow::Result<Cen
     load_frame(path)?.centroid(config, &path.display().to_string())
 }
 
+/// The centroids of every frame in `path`, each with its row label: the file name, or
+/// `file#N` for page `N` of a TIFF of several pages. The pages measured before a page that
+/// fails are returned with the error.
+fn centroid_pages(
+    config: &CentroidConfig,
+    path: &Path,
+) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
+    let name = path.to_string_lossy().into_owned();
+    let is_tiff = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
+    if !is_tiff {
+        return match centroid_file(config, path) {
+            Ok(c) => (vec![(name, c)], None),
+            Err(e) => (Vec::new(), Some(e)),
+        };
+    }
+    let mut pages = Vec::new();
+    let result = for_each_tiff_page(path, |label, frame| {
+        pages.push(frame.centroid(config, &label)?);
+        Ok(())
+    });
+    let several = pages.len() > 1 || result.is_err();
+    let rows = pages
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| match several {
+            true => (format!("{name}#{}", i + 1), c),
+            false => (name.clone(), c),
+        })
+        .collect();
+    (rows, result.err())
+}
+
 /// One CSV row: `file,cx,cy,pixels,flags` (cx, cy empty when there is no centroid).
 fn row(file: &str, c: &Centroid) -> [String; 5] {
     let (cx, cy) = match c.position() {
@@ -69,30 +105,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let config = args.centroid.config(args.saturation)?;
     let stdout = std::io::stdout();
     let mut out = csv::Writer::from_writer(stdout.lock());
-    out.write_record(["file", "cx", "cy", "pixels", "flags"])?;
-    out.flush()?;
+    out.write_record(["file", "cx", "cy", "pixels", "flags"])
+        .map_err(stdout_error)?;
+    out.flush().map_err(|e| stdout_error(e.into()))?;
     let mut failed = 0usize;
     let (mut empty, mut flagged) = (0usize, 0usize);
+    let mut frames = 0usize;
     for path in &args.files {
-        match centroid_file(&config, path) {
-            Ok(c) => {
-                out.write_record(row(&path.to_string_lossy(), &c))?;
-                out.flush()?;
-                empty += usize::from(c.position().is_none());
-                flagged += usize::from(!c.flags.is_clear());
-            }
-            Err(e) => {
-                failed += 1;
-                out.flush()?;
-                eprintln!("error: {e:#}");
-            }
+        let (rows, error) = centroid_pages(&config, path);
+        for (label, c) in &rows {
+            out.write_record(row(label, c)).map_err(stdout_error)?;
+            out.flush().map_err(|e| stdout_error(e.into()))?;
+            empty += usize::from(c.position().is_none());
+            flagged += usize::from(!c.flags.is_clear());
+        }
+        frames += rows.len();
+        if let Some(e) = error {
+            failed += 1;
+            eprintln!("error: {e:#}");
         }
     }
     drop(out);
     let total = args.files.len();
     eprintln!(
-        "centroid: {} of {total} file(s) measured ({empty} without centroid, {flagged} flagged), \
-         {failed} failed",
+        "centroid: {frames} frame(s) of {} of {total} file(s) measured ({empty} without centroid, \
+         {flagged} flagged), {failed} file(s) failed",
         total - failed
     );
     std::io::stderr().flush().ok();
@@ -102,4 +139,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )));
     }
     Ok(())
+}
+
+/// A failed write of the CSV to standard output, named as such.
+fn stdout_error(e: csv::Error) -> anyhow::Error {
+    anyhow::anyhow!("cannot write to standard output: {e}")
 }
