@@ -114,6 +114,8 @@ fn analyze(rec: &Recording, frames: &str, extra: &[&str]) -> std::process::Outpu
         "0.1",
         "--out",
         out.to_str().unwrap(),
+        // the tests analyse one recording several times into the same directory
+        "--force",
     ];
     if !extra.contains(&"--threshold") {
         args.extend_from_slice(&["--threshold", "100"]);
@@ -452,8 +454,13 @@ fn synthetic_cantilever_recording_round_trip() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("rec");
     let t0 = std::time::Instant::now();
-    let files = write_synthetic_recording(host_harness::study::Preset::Cantilever, 2016, 0.5, &dir)
-        .unwrap();
+    let files = write_synthetic_recording(
+        host_harness::study::Preset::Cantilever,
+        2016,
+        0.5,
+        (&dir, &dir),
+    )
+    .unwrap();
     let spec = RecordingSpec::cantilever(2016, 0.5);
 
     // 1. rectangular window: closed form, binary centroid

@@ -137,6 +137,15 @@ fn one_run_gives_empty_cells_not_nan() {
     assert!(!s.contains("NaN"), "{s}");
     // sigma of one run is undefined: an empty cell
     assert!(s.lines().nth(1).unwrap().contains(",,"), "{s}");
+    // a shard that gets no run: every statistic empty, in every file
+    let empty = dir.path().join("empty");
+    assert_ok(&study_of("1", &empty, &["--shard", "2/2"]));
+    for f in ["summary.csv", "coverage.csv", "frf_band.csv", "realizations.csv"] {
+        let s = std::fs::read_to_string(empty.join(f)).unwrap();
+        assert!(!s.to_lowercase().contains("nan"), "{f}: {s}");
+    }
+    let s = std::fs::read_to_string(empty.join("summary.csv")).unwrap();
+    assert!(s.lines().nth(1).unwrap().starts_with("transducer,40,1,0,,"), "{s}");
 }
 
 /// `study --help` states the defaults of --runs and --seed and the units of the outputs
@@ -303,4 +312,199 @@ fn a_full_standard_output_is_an_error_naming_it_not_a_crash() {
         );
         assert!(!e.contains("panicked"), "{args:?}: {e}");
     }
+}
+
+/// `study` of 4 runs (seed 5, one thread) into `out` with `extra`, with `VIBCAM_FAILPOINT`
+/// set to `failpoint` when given.
+fn study_killed_at(out: &Path, extra: &[&str], failpoint: Option<&str>) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_host-harness"));
+    cmd.args(["study", "--runs", "4", "--exposures-ms", "40", "--no-plots"])
+        .args([
+            "--seed",
+            "5",
+            "--threads",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(extra);
+    match failpoint {
+        Some(f) => cmd.env("VIBCAM_FAILPOINT", f),
+        None => cmd.env_remove("VIBCAM_FAILPOINT"),
+    };
+    cmd.output().unwrap()
+}
+
+/// Complete lines of a checkpoint.
+fn complete_runs(dir: &Path) -> usize {
+    let text = std::fs::read_to_string(dir.join("runs.jsonl")).unwrap_or_default();
+    text.matches('\n').count()
+}
+
+#[test]
+fn a_kill_at_any_write_of_a_resume_loses_no_finished_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let clean = tmp.path().join("clean");
+    assert_ok(&study_killed_at(&clean, &[], None));
+    let outputs = [
+        "summary.csv",
+        "realizations.csv",
+        "frf_band.csv",
+        "coverage.csv",
+    ];
+    let mut killed = 0;
+    for point in [
+        "checkpoint-cut",
+        "checkpoint-torn",
+        "checkpoint-appended",
+        "atomic-synced",
+        "atomic-renamed",
+    ] {
+        for n in 1..=3 {
+            // an interrupted study: two runs done, the third cut mid-line, no outputs yet
+            let dir = tmp.path().join(format!("{point}-{n}"));
+            std::fs::create_dir(&dir).unwrap();
+            for f in ["runs.jsonl", "config.toml", "model_revision.txt"] {
+                std::fs::copy(clean.join(f), dir.join(f)).unwrap();
+            }
+            let runs = std::fs::read_to_string(clean.join("runs.jsonl")).unwrap();
+            let lines: Vec<&str> = runs.lines().collect();
+            let cut = format!("{}\n{}\n{}", lines[0], lines[1], &lines[2][..40]);
+            std::fs::write(dir.join("runs.jsonl"), cut).unwrap();
+            // the resume, killed at the n-th time it reaches the point (if it does)
+            let o = study_killed_at(&dir, &["--resume"], Some(&format!("{point}:{n}")));
+            if !o.status.success() {
+                killed += 1;
+                assert!(
+                    stderr(&o).contains("failpoint"),
+                    "{point}:{n}: {}",
+                    stderr(&o)
+                );
+            }
+            assert!(complete_runs(&dir) >= 2, "{point}:{n}: finished runs lost");
+            // the next resume finishes the study with the clean run's outputs
+            assert_ok(&study_killed_at(&dir, &["--resume"], None));
+            for f in outputs {
+                assert_eq!(
+                    std::fs::read(clean.join(f)).unwrap(),
+                    std::fs::read(dir.join(f)).unwrap(),
+                    "{point}:{n}: {f} differs"
+                );
+            }
+            assert_eq!(complete_runs(&dir), 4, "{point}:{n}");
+        }
+    }
+    // every point was reached at least once (else the test would prove nothing)
+    assert!(killed >= 5 + 4, "only {killed} kills");
+}
+
+/// The names in a directory, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    let r = rec.to_str().unwrap();
+    let render = |extra: &[&str]| {
+        harness(
+            &[
+                &[
+                    "render",
+                    "--preset",
+                    "cantilever",
+                    "--exposure-ms",
+                    "2",
+                    "--recording",
+                    r,
+                ],
+                extra,
+            ]
+            .concat(),
+        )
+    };
+    assert_ok(&render(&[]));
+    // into an existing recording: refused without --force, the recording untouched
+    std::fs::write(
+        rec.join("frames/frame_99999.png"),
+        "an extra frame of an older recording",
+    )
+    .unwrap();
+    assert_exit_2(&render(&[]), "--force");
+    assert!(rec.join("frames/frame_99999.png").exists());
+    // with --force the recording is replaced as a whole: no frame of the old one is left
+    assert_ok(&render(&["--force"]));
+    assert!(!rec.join("frames/frame_99999.png").exists());
+    assert_eq!(names(&rec.join("frames")).len(), 1200);
+    // a directory that is not a recording is never replaced
+    let other = tmp.path().join("thesis");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("chapter1.tex"), "").unwrap();
+    let o = harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        other.to_str().unwrap(),
+        "--force",
+    ]);
+    assert_exit_2(&o, "not an earlier output");
+    assert_eq!(names(&other), ["chapter1.tex"]);
+
+    let out = rec.join("analysis");
+    let analyze = |threshold: &str, extra: &[&str]| {
+        let args = [
+            "analyze",
+            "--frames",
+            &format!("{r}/frames"),
+            "--fps",
+            "120",
+            "--accel",
+            &format!("{r}/accel.csv"),
+            "--fs",
+            "2048",
+            "--time-col",
+            "t_s",
+            "--mm-per-px",
+            "0.1266",
+            "--threshold",
+            threshold,
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .map(str::to_string);
+        let mut v: Vec<&str> = args.iter().map(String::as_str).collect();
+        v.extend(extra);
+        harness(&v)
+    };
+    assert_ok(&analyze("127", &[]));
+    let first = names(&out);
+    assert!(first.contains(&"modes.csv".to_string()), "{first:?}");
+    let report = std::fs::read(out.join("report.txt")).unwrap();
+    assert_exit_2(&analyze("127", &[]), "--force");
+    // a failing analysis (no pixel is above 255: every frame lost) leaves the earlier one as it was
+    let o = analyze("255", &["--force"]);
+    assert!(!o.status.success(), "{}", stderr(&o));
+    assert_eq!(names(&out), first);
+    assert_eq!(std::fs::read(out.join("report.txt")).unwrap(), report);
+    // and nothing of the failed run is left beside it
+    assert_eq!(
+        names(&rec),
+        [
+            "README.txt",
+            "accel.csv",
+            "analysis",
+            "frames",
+            "recording.toml"
+        ]
+    );
+    assert_ok(&analyze("127", &["--force"]));
+    assert_eq!(names(&out), first);
 }

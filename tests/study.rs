@@ -242,7 +242,17 @@ fn render_writes_sharp_and_blurred_frames() {
     // the same total light: the blur redistributes it (sums within 1 %)
     let sum = |im: &image::GrayImage| im.pixels().map(|p| p.0[0] as f64).sum::<f64>();
     assert!((sum(&sharp) / sum(&blurred) - 1.0).abs() < 0.01);
-    let o = harness(&["render", "--times", "1e6", "--out", out.to_str().unwrap()]);
+    // a second render into the same directory is refused without --force
+    let again = harness(&["render", "--times", "33.4", "--out", out.to_str().unwrap()]);
+    assert_exit_2(&again, "--force");
+    let o = harness(&[
+        "render",
+        "--times",
+        "1e6",
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+    ]);
     assert_exit_2(&o, "--times");
 }
 

@@ -22,6 +22,9 @@
 //! | [`report`] | study rows (summary, realizations, FRF band) as CSV and the printed table |
 //! | [`plots`] | PNG and SVG figures |
 //! | [`csvio`] | numeric CSV columns with errors naming row and column |
+//! | [`outdir`] | output directories that are complete or absent (staged, synced, moved into place) |
+//! | [`failpoint`] | `VIBCAM_FAILPOINT`: abort at a named point, for crash tests |
+//! | [`calibrate`] | fitting unreported imaging knobs to observed figures (common random numbers) |
 //! | [`cli`] | argument parsing and one module per subcommand |
 //! | [`testing`] | seeded noise for tests, examples and benchmarks |
 
@@ -30,8 +33,10 @@ pub mod calibrate;
 pub mod chain;
 pub mod cli;
 pub mod csvio;
+pub mod failpoint;
 pub mod imaging;
 pub mod model;
+pub mod outdir;
 pub mod plan;
 pub mod plots;
 pub mod recording;

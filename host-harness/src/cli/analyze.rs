@@ -7,7 +7,7 @@ use crate::analysis::compensate::{compensate, Compensated};
 use crate::analysis::frames::{centroid_source, discover_frames, FrameSource};
 use crate::analysis::{self, Axis, DisplacementSettings, Settings};
 use crate::bad_input;
-use anyhow::Context as _;
+use crate::outdir::{Owner, Staged};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `host-harness analyze`.
@@ -91,6 +91,9 @@ pub struct Args {
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
+    /// Replace --out if it holds an earlier analysis (its report.txt), as a whole.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `--axis`.
@@ -100,12 +103,6 @@ pub enum AxisArg {
     X,
     /// Vertical, positive upwards in the image.
     Y,
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> anyhow::Result<PathBuf> {
-    let p = dir.join(name);
-    std::fs::write(&p, text).with_context(|| format!("cannot write {}", p.display()))?;
-    Ok(p)
 }
 
 /// Runs `host-harness analyze`.
@@ -159,13 +156,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let centroids = centroid_source(&source, &config)?;
     let disp = analysis::displacement_mm(&centroids, &dsettings)?;
 
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    // every output is staged and the directory moved into place at the end (complete or absent)
+    let out = Staged::new(&args.out, args.force, Owner::Holds("report.txt"))?;
     let inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
-    write(
-        &args.out,
+    out.write(
         "displacement.csv",
-        &analysis::displacement_csv(&centroids, &disp, args.fps, time_offset_s),
+        analysis::displacement_csv(&centroids, &disp, args.fps, time_offset_s),
     )?;
     let (result, compensation) = analyze_and_compensate(&args, &disp, (&base, &tip), &settings)?;
     let (a, failure) = match &result {
@@ -173,19 +169,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(e) => (None, Some(format!("{e:#}"))),
     };
     let mut report = analysis::report_text(&inputs, &disp, a, failure.as_deref());
-    append_compensation(&args.out, compensation.as_ref(), &mut report)?;
+    append_compensation(&out, compensation.as_ref(), &mut report)?;
     if let Some(a) = a {
-        write(&args.out, "frf.csv", &analysis::frf_csv(a))?;
-        write(&args.out, "modes.csv", &analysis::modes_csv(a))?;
-        let plots = write_plot(&args.out, a, args.fps)?;
-        let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"]
-            .into_iter()
+        out.write("frf.csv", analysis::frf_csv(a))?;
+        out.write("modes.csv", analysis::modes_csv(a))?;
+        let plots = write_plot(out.dir(), a, args.fps)?;
+        let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
+        let names: Vec<String> = plots
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        files.extend(names.iter().map(String::as_str));
+        let files: Vec<String> = files
+            .iter()
             .map(|f| args.out.join(f).display().to_string())
-            .collect::<Vec<_>>();
-        files.extend(plots.iter().map(|p| p.display().to_string()));
+            .collect();
         report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
     }
-    write(&args.out, "report.txt", &report)?;
+    out.write("report.txt", &report)?;
+    out.commit()?;
     print!("{report}");
     result.map(|_| ())
 }
@@ -211,12 +213,12 @@ fn analyze_and_compensate(
 
 /// Appends the compensation's section to the report and writes `compensation.csv`.
 fn append_compensation(
-    out: &Path,
+    out: &Staged,
     c: Option<&Compensated>,
     report: &mut String,
 ) -> anyhow::Result<()> {
     if let Some(c) = c {
-        let p = write(out, "compensation.csv", &c.csv())?;
+        let p = out.write("compensation.csv", c.csv())?;
         report.push_str(&c.report());
         report.push_str(&format!("  written: {}\n", p.display()));
     }

@@ -10,7 +10,6 @@
 use super::args::{parse_bands, Bands, WelchArgs};
 use crate::chain::frf::{self, Defaults, Frf, PickedMode};
 use crate::csvio::read_columns;
-use anyhow::Context as _;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -104,8 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .transpose()?;
     let mut buf = Vec::new();
     write_frf(&mut buf, &frf)?;
-    std::fs::write(&args.out, buf)
-        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    crate::study::checkpoint::write_atomic(&args.out, &buf)?;
     if let (Some(b), Some(p)) = (&args.bands, &picked) {
         write_peaks(std::io::stdout().lock(), b, p)?;
     }

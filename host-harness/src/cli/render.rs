@@ -5,9 +5,9 @@
 use crate::bad_input;
 use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
 use crate::model::{self, grandstand};
+use crate::outdir::{Owner, Staged};
 use crate::recording::{camera_path, save_grey_png, RecordingSpec};
 use crate::study::{run_rng, Preset};
-use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `host-harness render`.
@@ -32,6 +32,10 @@ pub struct Args {
     /// recording.toml, README.txt with the `analyze` command) into this directory.
     #[arg(long, value_name = "DIR")]
     pub recording: Option<PathBuf>,
+    /// Replace the output directory if it holds an earlier output of `render` (only its
+    /// frames, or a recording's recording.toml), as a whole.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `host-harness render`.
@@ -50,12 +54,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )));
     }
     if let Some(dir) = &args.recording {
+        let out = Staged::new(dir, args.force, Owner::Holds("recording.toml"))?;
         let files = crate::recording::write_synthetic_recording(
             args.preset,
             args.seed,
             args.exposure_ms,
-            dir,
+            (out.dir(), dir),
         )?;
+        out.commit()?;
         println!(
             "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}",
             args.preset.name(),
@@ -70,15 +76,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let scene = match args.preset {
         Preset::Grandstand => grandstand_scene(&args),
         Preset::Cantilever => cantilever_scene(&args)?,
     };
-    let written = write_frames(&args.out, &scene, args.exposure_ms)?;
+    let out = Staged::new(&args.out, args.force, Owner::OnlyFiles("frame_t", ".png"))?;
+    let written = write_frames(out.dir(), &scene, args.exposure_ms)?;
+    out.commit()?;
     for p in &written {
-        println!("{}", p.display());
+        let name = p.file_name().unwrap_or_default();
+        println!("{}", args.out.join(name).display());
     }
     eprintln!("wrote {} frames in {}", written.len(), args.out.display());
     Ok(())

@@ -114,8 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             text.push_str(&format!("{t},{}\n", *v as f64 * scale));
         }
     }
-    std::fs::write(&args.out, text)
-        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    crate::study::checkpoint::write_atomic(&args.out, text.as_bytes())?;
     eprintln!(
         "upsampled {n} samples at {} Hz to {m} samples at {} Hz -> {}",
         args.from_hz,

@@ -258,13 +258,13 @@ pub fn write_synthetic_recording(
     preset: Preset,
     seed: u64,
     exposure_ms: f64,
-    dir: &Path,
+    (write_to, dir): (&Path, &Path),
 ) -> anyhow::Result<RecordingFiles> {
     let spec = match preset {
         Preset::Cantilever => RecordingSpec::cantilever(seed, exposure_ms),
         Preset::Grandstand => RecordingSpec::grandstand(seed, exposure_ms),
     };
-    write_recording(&spec, dir)
+    write_recording_into(&spec, write_to, dir)
 }
 
 /// Writes the 8-bit grey frame `px` (`width * height` pixels, row 0 first) as a PNG at `path`.
@@ -277,11 +277,23 @@ pub fn save_grey_png(path: &Path, (w, h): (usize, usize), px: &[u8]) -> anyhow::
 
 /// Writes the recording of `spec` to `dir` (see [`write_synthetic_recording`]).
 pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<RecordingFiles> {
+    write_recording_into(spec, dir, dir)
+}
+
+/// Writes the recording of `spec` into `write_to` (a staging directory) for the directory
+/// `dir` it will be moved to: the paths returned, in `README.txt` and in the analyze command
+/// are `dir`'s.
+pub fn write_recording_into(
+    spec: &RecordingSpec,
+    write_to: &Path,
+    dir: &Path,
+) -> anyhow::Result<RecordingFiles> {
     use std::fmt::Write as _;
     spec.validate()?;
     let run = model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
     let frames_dir = dir.join("frames");
-    std::fs::create_dir_all(&frames_dir)
+    let frames_to = write_to.join("frames");
+    std::fs::create_dir_all(&frames_to)
         .with_context(|| format!("cannot create {}", frames_dir.display()))?;
     let (path, mut renderer) = camera_path(spec, &run);
     let (w, h) = (renderer.width(), renderer.height());
@@ -289,18 +301,21 @@ pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<Recor
     for k in 0..spec.acquisition.frames {
         let (a, b) = path.frame_window(k, spec.exposure_ms);
         renderer.render(a, b, &mut px);
-        save_grey_png(&frames_dir.join(format!("frame_{k:05}.png")), (w, h), &px)?;
+        save_grey_png(&frames_to.join(format!("frame_{k:05}.png")), (w, h), &px)?;
     }
     let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
     for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
         let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
     }
     let accel_csv = dir.join("accel.csv");
-    std::fs::write(&accel_csv, csv)
+    std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", accel_csv.display()))?;
     let toml = dir.join("recording.toml");
-    std::fs::write(&toml, recording_toml(spec, (w, h)))
-        .with_context(|| format!("cannot write {}", toml.display()))?;
+    std::fs::write(
+        write_to.join("recording.toml"),
+        recording_toml(spec, (w, h)),
+    )
+    .with_context(|| format!("cannot write {}", toml.display()))?;
     let args = analyze_args(spec, dir);
     let (what, unit) = match spec.rig {
         Rig::Cantilever(_) => ("cantilever", "|tip/base|"),
@@ -332,7 +347,7 @@ pub fn write_recording(spec: &RecordingSpec, dir: &Path) -> anyhow::Result<Recor
          parameters.\n",
     );
     let readme_path = dir.join("README.txt");
-    std::fs::write(&readme_path, readme)
+    std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", readme_path.display()))?;
     Ok(RecordingFiles {
         frames_dir,

@@ -111,13 +111,18 @@ pub fn write_merged(out: &Path, m: &Merged) -> anyhow::Result<()> {
             out.display()
         )));
     }
-    std::fs::write(out.join(files::CONFIG), m.config.to_toml())?;
-    std::fs::write(out.join(files::REVISION), format!("{}\n", m.revision))?;
+    // each file whole or absent; runs.jsonl last, so that a directory holding it is complete
+    let write = super::checkpoint::write_atomic;
+    write(&out.join(files::CONFIG), m.config.to_toml().as_bytes())?;
+    write(
+        &out.join(files::REVISION),
+        format!("{}\n", m.revision).as_bytes(),
+    )?;
     let mut lines = String::new();
     for r in &m.records {
         lines.push_str(&serde_json::to_string(r)?);
         lines.push('\n');
     }
-    std::fs::write(out.join(files::RUNS), lines)?;
+    write(&out.join(files::RUNS), lines.as_bytes())?;
     Ok(())
 }

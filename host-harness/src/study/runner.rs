@@ -189,6 +189,7 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
             .with_context(|| format!("cannot open {}", runs_path.display()))?;
         f.set_len(ck.valid_len)?;
         f.sync_all()?;
+        crate::failpoint::hit("checkpoint-cut");
     }
     if !ck.duplicates.is_empty() {
         eprintln!(
@@ -235,9 +236,16 @@ fn run_pending(
                 let mut f = sink
                     .lock()
                     .map_err(|_| anyhow::anyhow!("checkpoint lock"))?;
-                f.write_all(line.as_bytes())
+                // two writes, so that a crash test can stop between them (a torn line)
+                let (head, tail) = line.as_bytes().split_at(line.len() / 2);
+                f.write_all(head)
+                    .and_then(|_| {
+                        crate::failpoint::hit("checkpoint-torn");
+                        f.write_all(tail)
+                    })
                     .and_then(|_| f.sync_data())
                     .with_context(|| format!("cannot append to {}", runs_path.display()))?;
+                crate::failpoint::hit("checkpoint-appended");
             }
             new.lock()
                 .map_err(|_| anyhow::anyhow!("result lock"))?
