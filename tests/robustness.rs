@@ -140,12 +140,20 @@ fn one_run_gives_empty_cells_not_nan() {
     // a shard that gets no run: every statistic empty, in every file
     let empty = dir.path().join("empty");
     assert_ok(&study_of("1", &empty, &["--shard", "2/2"]));
-    for f in ["summary.csv", "coverage.csv", "frf_band.csv", "realizations.csv"] {
+    for f in [
+        "summary.csv",
+        "coverage.csv",
+        "frf_band.csv",
+        "realizations.csv",
+    ] {
         let s = std::fs::read_to_string(empty.join(f)).unwrap();
         assert!(!s.to_lowercase().contains("nan"), "{f}: {s}");
     }
     let s = std::fs::read_to_string(empty.join("summary.csv")).unwrap();
-    assert!(s.lines().nth(1).unwrap().starts_with("transducer,40,1,0,,"), "{s}");
+    assert!(
+        s.lines().nth(1).unwrap().starts_with("transducer,40,1,0,,"),
+        "{s}"
+    );
 }
 
 /// `study --help` states the defaults of --runs and --seed and the units of the outputs
