@@ -10,6 +10,7 @@ mod plan;
 mod robustness;
 mod signal;
 mod study;
+mod targets;
 
 #[test]
 fn help_lists_every_subcommand() {

@@ -35,6 +35,7 @@ pub mod compensate;
 pub mod frames;
 pub mod modal;
 pub mod report;
+pub mod targets;
 pub mod uff;
 pub mod video;
 

@@ -94,6 +94,14 @@ pub struct Args {
     /// Replace --out if it holds an earlier analysis (its report.txt), as a whole.
     #[arg(long)]
     pub force: bool,
+    /// Several targets (2-32): numbered left to right (then top to bottom) in the first frame
+    /// and followed frame to frame; writes modes.csv with a target column and the fitted
+    /// damping, shapes.csv and frf.uff (docs/cli.md).
+    #[arg(long, value_name = "K")]
+    pub targets: Option<usize>,
+    /// With --targets: how far a target may move between frames and still be the same, px.
+    #[arg(long, value_name = "PX", default_value_t = 10.0)]
+    pub gate_px: f64,
 }
 
 /// `--axis`.
@@ -152,6 +160,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let FrameSource::Files(f) = &source {
         // The frame count is known before decoding: check the record lengths now.
         analysis::align(f.len(), args.fps, base.len(), args.fs, time_offset_s)?;
+    }
+    if let Some(k) = args.targets {
+        return super::analyze_targets::run(
+            &args,
+            &source,
+            (&base, &tip),
+            (&settings, &dsettings),
+            k,
+        );
     }
     let centroids = centroid_source(&source, &config)?;
     let disp = analysis::displacement_mm(&centroids, &dsettings)?;

@@ -36,6 +36,11 @@ pub struct Args {
     /// frames, or a recording's recording.toml), as a whole.
     #[arg(long)]
     pub force: bool,
+    /// With --recording and the cantilever: K targets (2-16) along the beam, target k at
+    /// k/K of its length (the last at the tip), each moving with the mode shapes there; the true
+    /// shapes go into recording.toml.
+    #[arg(long, value_name = "K", requires = "recording")]
+    pub targets: Option<usize>,
 }
 
 /// Runs `host-harness render`.
@@ -55,12 +60,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.recording {
         let out = Staged::new(dir, args.force, Owner::Holds("recording.toml"))?;
-        let files = crate::recording::write_synthetic_recording(
-            args.preset,
-            args.seed,
-            args.exposure_ms,
-            (out.dir(), dir),
-        )?;
+        let files = match args.targets {
+            None => crate::recording::write_synthetic_recording(
+                args.preset,
+                args.seed,
+                args.exposure_ms,
+                (out.dir(), dir),
+            )?,
+            Some(k) => {
+                if args.preset != Preset::Cantilever {
+                    return Err(bad_input("--targets: only with --preset cantilever"));
+                }
+                let spec = crate::recording::RecordingSpec::cantilever(args.seed, args.exposure_ms);
+                crate::recording::targets::write_targets_recording(&spec, k, (out.dir(), dir))
+                    .map_err(|e| bad_input(format!("{e:#}")))?
+            }
+        };
         out.commit()?;
         println!(
             "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}",

@@ -123,11 +123,23 @@ impl Rig {
     /// Transmissibility from base to tip acceleration at `f_hz` (closed form, see the module
     /// documentation).
     pub fn transmissibility(&self, f_hz: f64) -> Complex64 {
+        self.transmissibility_at(f_hz, 1.0)
+    }
+
+    /// Transmissibility from base to the absolute acceleration at `xi = x / L` along the beam:
+    /// each mode's term scaled by its shape there relative to the tip,
+    /// `mode_shape(i, xi) / mode_shape(i, 1)` (exactly 1 at the tip).
+    pub fn transmissibility_at(&self, f_hz: f64, xi: f64) -> Complex64 {
         let w = 2.0 * std::f64::consts::PI * f_hz;
         let mut h = Complex64::new(1.0, 0.0);
-        for m in &self.modes {
+        for (i, m) in self.modes.iter().enumerate() {
             let wn = 2.0 * std::f64::consts::PI * m.f_hz;
-            h += m.g_phi * w * w / Complex64::new(wn * wn - w * w, 2.0 * m.zeta * wn * w);
+            let at = if xi == 1.0 {
+                1.0
+            } else {
+                mode_shape(i, xi) / mode_shape(i, 1.0)
+            };
+            h += at * m.g_phi * w * w / Complex64::new(wn * wn - w * w, 2.0 * m.zeta * wn * w);
         }
         h
     }

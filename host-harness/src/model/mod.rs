@@ -140,6 +140,23 @@ fn rms(v: &[f64]) -> f64 {
 /// transient), the cantilever scaled to its tip peak-to-peak, and the transducer noise (the
 /// cantilever's accelerometer noise in g; the grandstand's SNRs).
 pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<SyntheticRun> {
+    Ok(simulate_at(rig, acq, seed, &[])?.0)
+}
+
+/// [`simulate`], and the displacement (mm, on the fine time base, as `tip_mm`) at each position
+/// `xi = x / L` of `positions` along the cantilever (the same run: the same input and scale;
+/// the grandstand has no positions and refuses any).
+pub fn simulate_at(
+    rig: &Rig,
+    acq: &Acquisition,
+    seed: u64,
+    positions: &[f64],
+) -> anyhow::Result<(SyntheticRun, Vec<Vec<f64>>)> {
+    let beam = match rig {
+        Rig::Cantilever(beam) => Some(beam),
+        Rig::Grandstand(_) if positions.is_empty() => None,
+        Rig::Grandstand(_) => anyhow::bail!("targets along the structure need the cantilever"),
+    };
     let (fine_per_frame, n) = acq.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut planner = rustfft::FftPlanner::<f64>::new();
@@ -147,6 +164,7 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
     let df = acq.fine_hz() / n as f64;
     let mut tip_acc = vec![Complex64::new(0.0, 0.0); n];
     let mut tip_mm = vec![Complex64::new(0.0, 0.0); n];
+    let mut at_mm = vec![vec![Complex64::new(0.0, 0.0); n]; positions.len()];
     for k in 1..n {
         let signed = if k <= n / 2 {
             k as f64
@@ -162,9 +180,23 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
         let w = 2.0 * std::f64::consts::PI * f;
         tip_acc[k] = input[k] * h;
         tip_mm[k] = -tip_acc[k] / (w * w) * 1000.0;
+        for (buf, &xi) in at_mm.iter_mut().zip(positions) {
+            let h = beam.map_or(h, |b| {
+                let h = b.transmissibility_at(f.abs(), xi);
+                if signed >= 0.0 {
+                    h
+                } else {
+                    h.conj()
+                }
+            });
+            buf[k] = -input[k] * h / (w * w) * 1000.0;
+        }
     }
     let ifft = planner.plan_fft_inverse(n);
-    for buf in [&mut input, &mut tip_acc, &mut tip_mm] {
+    for buf in [&mut input, &mut tip_acc, &mut tip_mm]
+        .into_iter()
+        .chain(at_mm.iter_mut())
+    {
         ifft.process(buf);
     }
     // the inverse is unnormalised: one common factor, removed by the scaling below
@@ -183,12 +215,17 @@ pub fn simulate(rig: &Rig, acq: &Acquisition, seed: u64) -> anyhow::Result<Synth
     let clean_in: Vec<f64> = input.iter().step_by(step).map(|v| v.re * scale).collect();
     let clean_tip: Vec<f64> = tip_acc.iter().step_by(step).map(|v| v.re * scale).collect();
     let (input, tip_acc) = add_transducer_noise(rig, clean_in, clean_tip, &mut rng);
-    Ok(SyntheticRun {
+    let at_mm = at_mm
+        .iter()
+        .map(|b| b.iter().map(|v| v.re * scale).collect())
+        .collect();
+    let run = SyntheticRun {
         input,
         tip_acc,
         tip_mm: tip_mm.iter().map(|v| v.re * scale).collect(),
         fine_per_frame,
-    })
+    };
+    Ok((run, at_mm))
 }
 
 /// The input's spectrum on the fine grid of `n` steps: the cantilever's complex Gaussian on its

@@ -12,6 +12,8 @@
 //! Frame `k` is at `t = k / fps`, its exposure centred on it. A positive tip displacement moves the
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
+pub mod targets;
+
 use crate::bad_input;
 use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
 use crate::model::{self, cantilever, grandstand, Acquisition, Rig};

@@ -1,0 +1,144 @@
+//! Synthetic recordings with several targets along the cantilever (issue 14,
+//! `render --recording --targets K`): target `k` of `K` sits at `xi = k / K` of the beam (the
+//! last at the tip), moves with the model's mode shapes there (`model::simulate_at`), and is
+//! drawn in its own column strip of the frame, left to right; `recording.toml` gets the true
+//! shapes.
+
+use super::{save_grey_png, RecordingFiles, RecordingSpec};
+use crate::imaging::{BlurRenderer, TargetPath};
+use crate::model::{self, cantilever, Rig};
+use anyhow::Context as _;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Positions `xi = k / K`, `k = 1..=K`, along the beam.
+pub fn positions(k: usize) -> Vec<f64> {
+    (1..=k).map(|i| i as f64 / k as f64).collect()
+}
+
+/// The true mode shapes at `positions` (per mode, the shape relative to the tip, normalised to
+/// unit largest modulus: the modal residues of the absolute-acceleration FRFs are proportional
+/// to it).
+pub fn true_shapes(modes: usize, positions: &[f64]) -> Vec<Vec<f64>> {
+    (0..modes)
+        .map(|i| {
+            let v: Vec<f64> = positions
+                .iter()
+                .map(|&xi| cantilever::mode_shape(i, xi) / cantilever::mode_shape(i, 1.0))
+                .collect();
+            let big = v
+                .iter()
+                .copied()
+                .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+            v.iter().map(|x| x / big).collect()
+        })
+        .collect()
+}
+
+/// Writes a `targets`-target recording of `spec` (the cantilever) into `write_to` for the
+/// directory `dir` it will be moved to (see [`super::write_recording_into`]).
+pub fn write_targets_recording(
+    spec: &RecordingSpec,
+    targets: usize,
+    (write_to, dir): (&Path, &Path),
+) -> anyhow::Result<RecordingFiles> {
+    spec.validate()?;
+    if !(2..=16).contains(&targets) {
+        anyhow::bail!("--targets {targets}: between 2 and 16 targets");
+    }
+    let Rig::Cantilever(beam) = &spec.rig else {
+        anyhow::bail!("--targets: only the cantilever has targets along it");
+    };
+    let xis = positions(targets);
+    let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
+    let fine_hz = spec.acquisition.fps * run.fine_per_frame as f64;
+    let pad = TargetPath::pad_for(spec.exposure_ms, fine_hz);
+    let paths: Vec<TargetPath> = at_mm
+        .iter()
+        .map(|mm| {
+            let px: Vec<f64> = mm.iter().map(|v| -v / spec.mm_per_px).collect();
+            TargetPath::periodic(&px, pad, run.fine_per_frame, fine_hz)
+        })
+        .collect();
+    let (lo, hi) = paths
+        .iter()
+        .flat_map(|p| p.path_px.iter())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let mut renderers: Vec<BlurRenderer> = paths
+        .iter()
+        .map(|p| {
+            let mut r = BlurRenderer::new(&spec.target, lo, hi);
+            r.set_path(&p.path_px, 1);
+            r
+        })
+        .collect();
+    let (sw, h) = (renderers[0].width(), renderers[0].height());
+    let w = sw * targets;
+    let frames_to = write_to.join("frames");
+    std::fs::create_dir_all(&frames_to)
+        .with_context(|| format!("cannot create {}", dir.join("frames").display()))?;
+    let (mut strip, mut frame) = (vec![0u8; sw * h], vec![0u8; w * h]);
+    for k in 0..spec.acquisition.frames {
+        for (t, (r, p)) in renderers.iter_mut().zip(&paths).enumerate() {
+            let (a, b) = p.frame_window(k, spec.exposure_ms);
+            r.render(a, b, &mut strip);
+            for y in 0..h {
+                frame[y * w + t * sw..y * w + (t + 1) * sw]
+                    .copy_from_slice(&strip[y * sw..(y + 1) * sw]);
+            }
+        }
+        save_grey_png(&frames_to.join(format!("frame_{k:05}.png")), (w, h), &frame)?;
+    }
+    let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
+    for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
+        let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
+    }
+    std::fs::write(write_to.join("accel.csv"), csv)
+        .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
+    let mut toml = super::recording_toml(spec, (w, h));
+    let _ = write!(
+        toml,
+        "\n# targets left to right at xi = x / L along the beam, centred in strips of {sw} px;\n\
+         # shapes: per mode, relative to the tip, unit largest modulus\ntargets = {targets}\n\
+         target_xi = {xis:?}\ntarget_x_px = {:?}\n",
+        (0..targets)
+            .map(|t| (t * sw) as f64 + renderers[t].rest_x())
+            .collect::<Vec<_>>()
+    );
+    for (i, s) in true_shapes(beam.modes.len(), &xis).iter().enumerate() {
+        let _ = write!(
+            toml,
+            "\n[[target_shapes]]\nmode = {}\nshape = {s:?}\n",
+            i + 1
+        );
+    }
+    std::fs::write(write_to.join("recording.toml"), toml)
+        .with_context(|| format!("cannot write {}", dir.join("recording.toml").display()))?;
+    let mut args = super::analyze_args(spec, dir);
+    let at = args.iter().position(|a| a == "--out").unwrap_or(args.len());
+    args.insert(at, targets.to_string());
+    args.insert(at, "--targets".into());
+    let readme = format!(
+        "Synthetic cantilever recording with {targets} targets along the beam ({} frames at {} \
+         fps, exposure {} ms, seed {}); true mode shapes in recording.toml.\n\nAnalyse it with:\n\n  \
+         host-harness {}\n",
+        spec.acquisition.frames,
+        spec.acquisition.fps,
+        spec.exposure_ms,
+        spec.seed,
+        args.join(" ")
+    );
+    std::fs::write(write_to.join("README.txt"), readme)
+        .with_context(|| format!("cannot write {}", dir.join("README.txt").display()))?;
+    Ok(RecordingFiles {
+        frames_dir: dir.join("frames"),
+        accel_csv: dir.join("accel.csv"),
+        toml: dir.join("recording.toml"),
+        readme: dir.join("README.txt"),
+        analyze_args: args,
+        frame_size: (w, h),
+        frame_count: spec.acquisition.frames,
+    })
+}
