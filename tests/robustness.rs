@@ -206,6 +206,16 @@ fn square(x: u32) -> Vec<u8> {
         .collect()
 }
 
+/// `DIR/f.png`: the 8-bit frame of [`square`] at x = 4.
+fn square_png(dir: &Path) -> std::path::PathBuf {
+    let frame = dir.join("f.png");
+    image::GrayImage::from_raw(16, 16, square(4))
+        .unwrap()
+        .save(&frame)
+        .unwrap();
+    frame
+}
+
 #[test]
 fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
     use tiff::encoder::{colortype, TiffEncoder};
@@ -259,11 +269,7 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
 #[test]
 fn an_8_bit_saturation_above_255_and_a_1_bit_png_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let frame = dir.path().join("f.png");
-    image::GrayImage::from_raw(16, 16, square(4))
-        .unwrap()
-        .save(&frame)
-        .unwrap();
+    let frame = square_png(dir.path());
     let f = frame.to_str().unwrap();
     let o = harness(&["centroid", "--threshold", "100", "--saturation", "1000", f]);
     assert_exit_2(&o, "--saturation 1000 is above 255");
@@ -292,11 +298,7 @@ fn an_8_bit_saturation_above_255_and_a_1_bit_png_are_refused() {
 #[test]
 fn a_full_standard_output_is_an_error_naming_it_not_a_crash() {
     let dir = tempfile::tempdir().unwrap();
-    let frame = dir.path().join("f.png");
-    image::GrayImage::from_raw(16, 16, square(4))
-        .unwrap()
-        .save(&frame)
-        .unwrap();
+    let frame = square_png(dir.path());
     let full = || {
         std::fs::OpenOptions::new()
             .write(true)
