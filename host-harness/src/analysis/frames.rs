@@ -16,6 +16,18 @@ pub enum FrameSource {
     Files(Vec<PathBuf>),
     /// One multi-page TIFF, one page per frame.
     MultiPageTiff(PathBuf),
+    /// One video file (AVI, MKV, MP4, MOV, ...), decoded frame by frame by FFmpeg
+    /// ([`super::video`]).
+    Video(PathBuf),
+}
+
+/// Extensions read as video files.
+const VIDEO_EXTENSIONS: [&str; 7] = ["avi", "mkv", "mp4", "mov", "m4v", "webm", "mxf"];
+
+fn is_video(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| VIDEO_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
 }
 
 fn has_frame_ext(p: &Path) -> bool {
@@ -187,10 +199,14 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
         if is_tiff(path) {
             return Ok(FrameSource::MultiPageTiff(path.to_path_buf()));
         }
+        if is_video(path) {
+            return Ok(FrameSource::Video(path.to_path_buf()));
+        }
         return Err(bad_input(format!(
             "--frames {spec}: a single {} file is one frame; give a directory of frames, a \
-             pattern like dir/frame_*.png, or a multi-page TIFF",
-            path.extension().and_then(|e| e.to_str()).unwrap_or("image")
+             pattern like dir/frame_*.png, a multi-page TIFF or a video file (.{})",
+            path.extension().and_then(|e| e.to_str()).unwrap_or("image"),
+            VIDEO_EXTENSIONS.join(", .")
         )));
     }
     Err(bad_input(format!(
@@ -302,10 +318,68 @@ pub fn for_each_tiff_page(
     }
 }
 
-/// Centroids every frame of `source` (one frame in memory at a time). Frames must all have the
-/// size of the first one.
+impl FrameSource {
+    /// The number of frames when it is known before decoding (files, and a video from its
+    /// container's timestamps, checked against `fps` by opening it); `None` for a multi-page
+    /// TIFF.
+    pub fn count(&self, fps: f64) -> anyhow::Result<Option<usize>> {
+        match self {
+            FrameSource::Files(f) => Ok(Some(f.len())),
+            FrameSource::MultiPageTiff(_) => Ok(None),
+            FrameSource::Video(p) => {
+                let v = super::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+                Ok(Some(v.info().frames))
+            }
+        }
+    }
+
+    /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time; a
+    /// video is opened with its timestamps checked against `fps`. Labels name the file (and
+    /// page, or 0-based video frame).
+    pub fn for_each(
+        &self,
+        fps: f64,
+        mut f: impl FnMut(String, GreyFrame) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        match self {
+            FrameSource::Files(files) => {
+                for p in files {
+                    f(p.display().to_string(), load_frame(p)?)?;
+                }
+                Ok(())
+            }
+            FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, f),
+            FrameSource::Video(p) => {
+                let mut v = super::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+                let mut frame = GreyFrame::U8 {
+                    width: 0,
+                    height: 0,
+                    data: Vec::new(),
+                };
+                while let Some(info) = v.next_frame(&mut frame).map_err(|e| e.into_anyhow())? {
+                    let label = format!("{} frame {} (0-based)", p.display(), info.index);
+                    // the callback takes the frame; the next one reuses a fresh buffer
+                    let taken = std::mem::replace(
+                        &mut frame,
+                        GreyFrame::U8 {
+                            width: 0,
+                            height: 0,
+                            data: Vec::new(),
+                        },
+                    );
+                    f(label, taken)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Centroids every frame of `source` (one frame in memory at a time; a video's timestamps are
+/// checked against `fps`). Frames must all have the size of the first one.
 pub fn centroid_source(
     source: &FrameSource,
+    fps: f64,
     config: &CentroidConfig,
 ) -> anyhow::Result<Vec<Centroid>> {
     let mut out = Vec::new();
@@ -325,15 +399,7 @@ pub fn centroid_source(
         out.push(frame.centroid(config, &label)?);
         Ok(())
     };
-    match source {
-        FrameSource::Files(files) => {
-            for p in files {
-                let frame = load_frame(p)?;
-                one(p.display().to_string(), frame)?;
-            }
-        }
-        FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, &mut one)?,
-    }
+    source.for_each(fps, &mut one)?;
     Ok(out)
 }
 

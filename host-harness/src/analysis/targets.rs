@@ -6,7 +6,7 @@
 //! ([`super::modal`]): the accelerometer's and each target's pole (frequency, damping) and the
 //! shape across targets from one pole fitted to all their FRFs.
 
-use super::frames::{for_each_tiff_page, load_frame, FrameSource};
+use super::frames::FrameSource;
 use super::modal::{self, FrfForm};
 use super::{Analysis, Displacement, DisplacementSettings, Settings};
 use crate::bad_input;
@@ -47,6 +47,7 @@ fn lost() -> Centroid {
 /// Follows `k` targets through the frames of `source` (see the module documentation).
 pub fn track(
     source: &FrameSource,
+    fps: f64,
     config: &CentroidConfig,
     k: usize,
     gate_px: f64,
@@ -113,14 +114,7 @@ pub fn track(
         }
         Ok(())
     };
-    match source {
-        FrameSource::Files(files) => {
-            for p in files {
-                one(p.display().to_string(), load_frame(p)?)?;
-            }
-        }
-        FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, &mut one)?,
-    }
+    source.for_each(fps, &mut one)?;
     Ok(tracks)
 }
 

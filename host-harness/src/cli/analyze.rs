@@ -157,9 +157,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.time_col.as_deref(),
     )?;
     let source = discover_frames(&args.frames)?;
-    if let FrameSource::Files(f) = &source {
+    if let Some(n) = source.count(args.fps)? {
         // The frame count is known before decoding: check the record lengths now.
-        analysis::align(f.len(), args.fps, base.len(), args.fs, time_offset_s)?;
+        analysis::align(n, args.fps, base.len(), args.fs, time_offset_s)?;
     }
     if let Some(k) = args.targets {
         return super::analyze_targets::run(
@@ -170,7 +170,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             k,
         );
     }
-    let centroids = centroid_source(&source, &config)?;
+    let centroids = centroid_source(&source, args.fps, &config)?;
     let disp = analysis::displacement_mm(&centroids, &dsettings)?;
 
     // every output is staged and the directory moved into place at the end (complete or absent)
@@ -289,6 +289,7 @@ fn describe_inputs(
                 .unwrap_or_default()
         ),
         FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
+        FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
     };
     let mut v = vec![
         ("frames".to_string(), src),

@@ -22,7 +22,7 @@ pub fn run(
         return Err(crate::bad_input(format!("--targets {k}: between 2 and 32")));
     }
     let config = args.centroid.config(None)?;
-    let tracks = targets::track(source, &config, k, args.gate_px)?;
+    let tracks = targets::track(source, args.fps, &config, k, args.gate_px)?;
     let a = targets::analyze_targets(&tracks, ds, (base, tip), settings)?;
     let out = Staged::new(&args.out, args.force, Owner::Holds("report.txt"))?;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;

@@ -41,6 +41,19 @@ pub struct Args {
     /// shapes go into recording.toml.
     #[arg(long, value_name = "K", requires = "recording")]
     pub targets: Option<usize>,
+    /// With --recording: also write the frames as a lossless video, `frames.mkv` (FFV1 in
+    /// Matroska, bit-identical to the PNGs; needs the `ffmpeg` program).
+    #[arg(long, requires = "recording")]
+    pub video: bool,
+    /// With --recording: sensor read noise added to every frame before rounding to 8 bits,
+    /// Gaussian, std in grey levels (0 = none).
+    #[arg(
+        long,
+        value_name = "SIGMA",
+        default_value_t = 0.0,
+        requires = "recording"
+    )]
+    pub read_noise: f64,
 }
 
 /// Runs `host-harness render`.
@@ -60,18 +73,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.recording {
         let out = Staged::new(dir, args.force, Owner::Holds("recording.toml"))?;
+        let mut spec = match args.preset {
+            Preset::Cantilever => RecordingSpec::cantilever(args.seed, args.exposure_ms),
+            Preset::Grandstand => RecordingSpec::grandstand(args.seed, args.exposure_ms),
+        };
+        spec.read_noise = args.read_noise;
+        spec.video = args.video;
         let files = match args.targets {
-            None => crate::recording::write_synthetic_recording(
-                args.preset,
-                args.seed,
-                args.exposure_ms,
-                (out.dir(), dir),
-            )?,
+            None => crate::recording::write_recording_into(&spec, out.dir(), dir)?,
             Some(k) => {
                 if args.preset != Preset::Cantilever {
                     return Err(bad_input("--targets: only with --preset cantilever"));
                 }
-                let spec = crate::recording::RecordingSpec::cantilever(args.seed, args.exposure_ms);
                 crate::recording::targets::write_targets_recording(&spec, k, (out.dir(), dir))
                     .map_err(|e| bad_input(format!("{e:#}")))?
             }
@@ -84,7 +97,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             files.frame_count,
             files.frame_size.0,
             files.frame_size.1,
-            files.frames_dir.display(),
+            match &files.video {
+                Some(v) => format!("{} and {}", files.frames_dir.display(), v.display()),
+                None => files.frames_dir.display().to_string(),
+            },
             files.accel_csv.display(),
             files.toml.display(),
             dir.join("README.txt").display()

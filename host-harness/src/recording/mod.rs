@@ -38,6 +38,11 @@ pub struct RecordingSpec {
     pub threshold: u16,
     /// Structure, excitation and transducers.
     pub rig: Rig,
+    /// Sensor read noise added to every frame before quantisation: Gaussian, std in grey
+    /// levels (0 = none), from its own seeded stream.
+    pub read_noise: f64,
+    /// Also write every frame into `frames.mkv`, a lossless FFV1/Matroska video.
+    pub video: bool,
 }
 
 impl RecordingSpec {
@@ -52,6 +57,8 @@ impl RecordingSpec {
             target: cantilever::TARGET,
             threshold: cantilever::THRESHOLD,
             rig: Rig::Cantilever(cantilever::Rig::nominal()),
+            read_noise: 0.0,
+            video: false,
         }
     }
 
@@ -71,6 +78,8 @@ impl RecordingSpec {
             target: grandstand::TARGET,
             threshold: grandstand::THRESHOLD,
             rig: Rig::Grandstand(grandstand::DecayTest::nominal(seed)),
+            read_noise: 0.0,
+            video: false,
         }
     }
 
@@ -98,7 +107,109 @@ impl RecordingSpec {
                 self.exposure_ms,
             )));
         }
+        if !(self.read_noise.is_finite() && (0.0..=64.0).contains(&self.read_noise)) {
+            return Err(bad_input(format!(
+                "read noise {} grey levels: must be between 0 and 64",
+                self.read_noise
+            )));
+        }
         Ok(())
+    }
+}
+
+/// Where a recording's frames go: `frames/frame_00000.png` ... and, with
+/// [`RecordingSpec::video`], the same frames into `frames.mkv` (FFV1, lossless: the video's
+/// frames are the PNGs' pixels bit for bit). Read noise is added here, to the float image,
+/// before rounding to 8 bits.
+pub(crate) struct FrameSink {
+    /// The frames directory being written (in the staging directory).
+    frames_to: PathBuf,
+    /// The frames directory as it will be named.
+    frames_dir: PathBuf,
+    video: Option<(crate::analysis::video::Ffv1Writer, PathBuf)>,
+    noise: Option<(f64, rand_chacha::ChaCha8Rng)>,
+    size: (usize, usize),
+    px: Vec<u8>,
+}
+
+impl FrameSink {
+    /// Opens the sink for frames of `size` (width, height) of `spec`'s recording written into
+    /// `write_to` for the directory `dir`.
+    pub fn create(
+        spec: &RecordingSpec,
+        (write_to, dir): (&Path, &Path),
+        size: (usize, usize),
+    ) -> anyhow::Result<FrameSink> {
+        use rand::SeedableRng as _;
+        let frames_dir = dir.join("frames");
+        let frames_to = write_to.join("frames");
+        std::fs::create_dir_all(&frames_to)
+            .with_context(|| format!("cannot create {}", frames_dir.display()))?;
+        let video = if spec.video {
+            let w = crate::analysis::video::Ffv1Writer::create(
+                &write_to.join("frames.mkv"),
+                size.0,
+                size.1,
+                spec.acquisition.fps,
+            )
+            .map_err(|e| e.into_anyhow())?;
+            Some((w, dir.join("frames.mkv")))
+        } else {
+            None
+        };
+        let noise = (spec.read_noise > 0.0).then(|| {
+            // a stream of its own: the same seed gives the same motion with or without noise
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(spec.seed);
+            rng.set_stream(0x6e6f_6973_65);
+            (spec.read_noise, rng)
+        });
+        Ok(FrameSink {
+            frames_to,
+            frames_dir,
+            video,
+            noise,
+            size,
+            px: vec![0; size.0 * size.1],
+        })
+    }
+
+    /// Writes frame `k` from its float image (8-bit scale, `width * height`): read noise,
+    /// rounding to nearest and clamping, then the PNG and the video frame.
+    pub fn put(&mut self, k: usize, img: &[f32]) -> anyhow::Result<()> {
+        use rand_distr::Distribution as _;
+        for (o, &v) in self.px.iter_mut().zip(img) {
+            let v = match &mut self.noise {
+                Some((sigma, rng)) => {
+                    let z: f64 = rand_distr::StandardNormal.sample(rng);
+                    (v as f64 + *sigma * z) as f32
+                }
+                None => v,
+            };
+            // as BlurRenderer::render rounds: without noise the pixels are the same
+            *o = (v + 0.5).clamp(0.0, 255.0) as u8;
+        }
+        save_grey_png(
+            &self.frames_to.join(format!("frame_{k:05}.png")),
+            self.size,
+            &self.px,
+        )?;
+        if let Some((w, _)) = &mut self.video {
+            w.write_frame(&self.px).map_err(|e| e.into_anyhow())?;
+        }
+        Ok(())
+    }
+
+    /// Closes the video; returns the frames directory and the video's path (as they will be
+    /// named).
+    pub fn finish(self) -> anyhow::Result<(PathBuf, Option<PathBuf>)> {
+        let video = match self.video {
+            Some((w, path)) => {
+                w.finish().map_err(|e| e.into_anyhow())?;
+                Some(path)
+            }
+            None => None,
+        };
+        Ok((self.frames_dir, video))
     }
 }
 
@@ -118,6 +229,8 @@ pub fn camera_path(spec: &RecordingSpec, run: &model::SyntheticRun) -> (TargetPa
 pub struct RecordingFiles {
     /// The frames directory (`frame_00000.png` ...).
     pub frames_dir: PathBuf,
+    /// The same frames as a lossless video (`frames.mkv`), when asked for.
+    pub video: Option<PathBuf>,
     /// `accel.csv` (`t_s,base_acc,tip_acc` or `t_s,force_n,tip_acc`).
     pub accel_csv: PathBuf,
     /// `recording.toml` (the parameters).
@@ -143,7 +256,7 @@ pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> Strin
         "# synthetic recording written by host-harness render --recording\n\
          preset = \"{preset}\"\nseed = {}\nexposure_ms = {}\nfps = {}\nfs = {}\nframes = {}\n\
          samples = {}\nmm_per_px = {}\nradius_px = {}\nlevel = {}\nedge_sigma_px = {}\n\
-         threshold = {}\nframe_size = [{}, {}]\n",
+         threshold = {}\nframe_size = [{}, {}]\nread_noise = {}\n",
         spec.seed,
         spec.exposure_ms,
         spec.acquisition.fps,
@@ -157,6 +270,7 @@ pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> Strin
         spec.threshold,
         frame_size.0,
         frame_size.1,
+        spec.read_noise,
     );
     match &spec.rig {
         Rig::Cantilever(cantilever::Rig {
@@ -293,18 +407,16 @@ pub fn write_recording_into(
     use std::fmt::Write as _;
     spec.validate()?;
     let run = model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
-    let frames_dir = dir.join("frames");
-    let frames_to = write_to.join("frames");
-    std::fs::create_dir_all(&frames_to)
-        .with_context(|| format!("cannot create {}", frames_dir.display()))?;
     let (path, mut renderer) = camera_path(spec, &run);
     let (w, h) = (renderer.width(), renderer.height());
-    let mut px = vec![0u8; w * h];
+    let mut sink = FrameSink::create(spec, (write_to, dir), (w, h))?;
+    let mut img = vec![0f32; w * h];
     for k in 0..spec.acquisition.frames {
         let (a, b) = path.frame_window(k, spec.exposure_ms);
-        renderer.render(a, b, &mut px);
-        save_grey_png(&frames_to.join(format!("frame_{k:05}.png")), (w, h), &px)?;
+        renderer.render_float(a, b, &mut img);
+        sink.put(k, &img)?;
     }
+    let (frames_dir, video) = sink.finish()?;
     let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
     for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
         let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
@@ -348,11 +460,21 @@ pub fn write_recording_into(
         " for both systems (one record is one noisy estimate); see recording.toml for all \
          parameters.\n",
     );
+    if let Some(v) = &video {
+        let _ = writeln!(
+            readme,
+            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} \
+             to analyse the video.",
+            v.display(),
+            v.display()
+        );
+    }
     let readme_path = dir.join("README.txt");
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", readme_path.display()))?;
     Ok(RecordingFiles {
         frames_dir,
+        video,
         accel_csv,
         toml,
         readme: readme_path,

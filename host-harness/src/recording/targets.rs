@@ -4,7 +4,7 @@
 //! drawn in its own column strip of the frame, left to right; `recording.toml` gets the true
 //! shapes.
 
-use super::{save_grey_png, RecordingFiles, RecordingSpec};
+use super::{RecordingFiles, RecordingSpec};
 use crate::imaging::{BlurRenderer, TargetPath};
 use crate::model::{self, cantilever, Rig};
 use anyhow::Context as _;
@@ -76,21 +76,20 @@ pub fn write_targets_recording(
         .collect();
     let (sw, h) = (renderers[0].width(), renderers[0].height());
     let w = sw * targets;
-    let frames_to = write_to.join("frames");
-    std::fs::create_dir_all(&frames_to)
-        .with_context(|| format!("cannot create {}", dir.join("frames").display()))?;
-    let (mut strip, mut frame) = (vec![0u8; sw * h], vec![0u8; w * h]);
+    let mut sink = super::FrameSink::create(spec, (write_to, dir), (w, h))?;
+    let (mut strip, mut frame) = (vec![0f32; sw * h], vec![0f32; w * h]);
     for k in 0..spec.acquisition.frames {
         for (t, (r, p)) in renderers.iter_mut().zip(&paths).enumerate() {
             let (a, b) = p.frame_window(k, spec.exposure_ms);
-            r.render(a, b, &mut strip);
+            r.render_float(a, b, &mut strip);
             for y in 0..h {
                 frame[y * w + t * sw..y * w + (t + 1) * sw]
                     .copy_from_slice(&strip[y * sw..(y + 1) * sw]);
             }
         }
-        save_grey_png(&frames_to.join(format!("frame_{k:05}.png")), (w, h), &frame)?;
+        sink.put(k, &frame)?;
     }
+    let (frames_dir, video) = sink.finish()?;
     let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
     for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
         let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
@@ -120,7 +119,7 @@ pub fn write_targets_recording(
     let at = args.iter().position(|a| a == "--out").unwrap_or(args.len());
     args.insert(at, targets.to_string());
     args.insert(at, "--targets".into());
-    let readme = format!(
+    let mut readme = format!(
         "Synthetic cantilever recording with {targets} targets along the beam ({} frames at {} \
          fps, exposure {} ms, seed {}); true mode shapes in recording.toml.\n\nAnalyse it with:\n\n  \
          host-harness {}\n",
@@ -130,10 +129,20 @@ pub fn write_targets_recording(
         spec.seed,
         args.join(" ")
     );
+    if let Some(v) = &video {
+        let _ = writeln!(
+            readme,
+            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} \
+             to analyse the video.",
+            v.display(),
+            v.display()
+        );
+    }
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", dir.join("README.txt").display()))?;
     Ok(RecordingFiles {
-        frames_dir: dir.join("frames"),
+        frames_dir,
+        video,
         accel_csv: dir.join("accel.csv"),
         toml: dir.join("recording.toml"),
         readme: dir.join("README.txt"),
