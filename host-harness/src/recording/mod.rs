@@ -160,7 +160,7 @@ impl FrameSink {
         let noise = (spec.read_noise > 0.0).then(|| {
             // a stream of its own: the same seed gives the same motion with or without noise
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(spec.seed);
-            rng.set_stream(0x6e6f_6973_65);
+            rng.set_stream(0x006e_6f69_7365);
             (spec.read_noise, rng)
         });
         Ok(FrameSink {
