@@ -134,7 +134,7 @@ fn read_modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,e2pr"
+        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr"
     );
     lines
         .map(|l| {
@@ -470,6 +470,20 @@ fn synthetic_cantilever_recording_round_trip() {
         &tmp.path().join("rect"),
     );
     assert!(report.contains("lost frames: 0 of 1200"), "{report}");
+    // the damping column: a single-mode fit to each system's complex FRF in the band (the
+    // periodic record and the rectangular window leave no leakage to widen the peak)
+    let text = std::fs::read_to_string(tmp.path().join("rect/modes.csv")).unwrap();
+    let host_harness::model::Rig::Cantilever(beam) = &spec.rig else {
+        unreachable!()
+    };
+    for (row, line) in text.lines().skip(1).enumerate() {
+        let damping: f64 = line.split(',').nth(6).unwrap().parse().unwrap();
+        let zeta = beam.modes[row % 2].zeta;
+        assert!(
+            (damping / zeta - 1.0).abs() < 0.10,
+            "{line}: damping {damping}, model {zeta}"
+        );
+    }
     for (i, f_hz) in spec.natural_frequencies().into_iter().enumerate() {
         let (acc, vis) = (&modes[i], &modes[i + 2]);
         assert_eq!(

@@ -659,3 +659,102 @@ mod tests {
         assert!(paths.iter().all(|p| p.exists()));
     }
 }
+
+/// One mode shape to plot: its label, the real part of each component (normalised), and
+/// whether it is a reference (drawn dashed, grey).
+#[derive(Debug)]
+pub struct ShapeCurve<'a> {
+    /// Legend label.
+    pub label: String,
+    /// Component values, one per target, in the order of the positions.
+    pub values: &'a [f64],
+    /// A reference shape (dashed) rather than a measured one.
+    pub reference: bool,
+}
+
+/// `shapes.png` / `shapes.svg`: each mode shape (real part, unit largest modulus) against the
+/// targets' positions along the structure, with its points marked, and reference shapes dashed.
+pub fn write_shape_plot(
+    path_stem: &Path,
+    title: &str,
+    x_label: &str,
+    positions: &[f64],
+    curves: &[ShapeCurve],
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let dir = path_stem.parent().unwrap_or(Path::new("."));
+    let name = path_stem
+        .file_name()
+        .and_then(|n| n.to_str())
+        .context("plot path has no file name")?;
+    figure!(dir, name, |r| draw_shapes(
+        r, title, x_label, positions, curves
+    ))
+}
+
+fn draw_shapes<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    x_label: &str,
+    positions: &[f64],
+    curves: &[ShapeCurve],
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (lo, hi) = finite_range(positions.iter().copied()).unwrap_or((0.0, 1.0));
+    let pad = ((hi - lo) * 0.05).max(1.0);
+    let mut chart = build_chart(
+        &root,
+        SINGLE,
+        title,
+        (lo - pad)..(hi + pad),
+        -1.15..1.15,
+        x_label,
+        "shape (real part, unit largest modulus)",
+    )?;
+    chart.draw_series(LineSeries::new(
+        [(lo - pad, 0.0), (hi + pad, 0.0)],
+        BLACK.mix(0.4).stroke_width(1),
+    ))?;
+    let measured = curves.iter().filter(|c| !c.reference).count();
+    let mut i = 0;
+    for c in curves {
+        let points: Vec<(f64, f64)> = positions
+            .iter()
+            .zip(c.values)
+            .map(|(x, y)| (*x, *y))
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .collect();
+        if c.reference {
+            let grey = RGBColor(120, 120, 120);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    points.clone(),
+                    8,
+                    6,
+                    grey.stroke_width(2),
+                ))?
+                .label(c.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
+                });
+            continue;
+        }
+        let colour = exposure_colour(i, measured.max(2));
+        i += 1;
+        draw_line(&mut chart, points.clone(), colour, 2, c.label.clone())?;
+        chart.draw_series(points.iter().map(|&p| Circle::new(p, 5, colour.filled())))?;
+    }
+    // upper left: shapes normalised to the largest component usually peak at the far end
+    chart
+        .configure_series_labels()
+        .label_font((FONT, SINGLE.labels))
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}

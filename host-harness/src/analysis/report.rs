@@ -29,17 +29,26 @@ pub fn frf_csv(a: &Analysis) -> String {
     s
 }
 
-/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,e2pr` (`system` is
-/// `accelerometer` or `vision`, `mode` is 1-based, `e2pr` is empty without an exposure).
+/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr` (`system` is
+/// `accelerometer` or `vision`, `mode` is 1-based, `f_hz` and `amplitude` the picked peak,
+/// `damping` the ratio of a single-mode fit to the complex FRF in the band
+/// ([`super::modal::fit_mode`]; empty when the fit fails), `e2pr` empty without an exposure).
 pub fn modes_csv(a: &Analysis) -> String {
+    use super::modal::{fit_mode, FrfForm};
     use std::fmt::Write as _;
-    let mut s = String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,e2pr\n");
-    for (system, modes) in [("accelerometer", &a.acc_modes), ("vision", &a.vis_modes)] {
+    let mut s = String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
+    for (system, modes, frf) in [
+        ("accelerometer", &a.acc_modes, &a.acc_frf),
+        ("vision", &a.vis_modes, &a.vis_frf),
+    ] {
         for (i, m) in modes.iter().enumerate() {
             let e2pr = m.e2pr.map(|e| e.to_string()).unwrap_or_default();
+            let damping = fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
+                .map(|f| f.pole.damping.to_string())
+                .unwrap_or_default();
             let _ = writeln!(
                 s,
-                "{system},{},{},{},{},{},{e2pr}",
+                "{system},{},{},{},{},{},{damping},{e2pr}",
                 i + 1,
                 m.band_hz.0,
                 m.band_hz.1,

@@ -1,8 +1,9 @@
 //! Several targets in one recording (issue 14, `analyze --targets K`): firmware-core's
 //! multi-target centroider on every frame, targets numbered left to right (then top to bottom)
 //! in the first frame, each followed by its nearest detection within a gate; a target with no
-//! detection in the gate, or whose detection is also the nearest of another target, is a lost
-//! frame of that target only. Per target the chain of [`super::analyze`]; per band the modal fit
+//! detection in the gate, whose detection is also the nearest of another target (two targets
+//! merging), or whose detection touches the frame border (leaving the frame: its centroid would
+//! be biased) is a lost frame of that target only. Per target the chain of [`super::analyze`]; per band the modal fit
 //! ([`super::modal`]): the accelerometer's and each target's pole (frequency, damping) and the
 //! shape across targets from one pole fitted to all their FRFs.
 
@@ -73,6 +74,14 @@ pub fn track(
                     found.len()
                 )));
             }
+            if let Some(c) = found.iter().find(|c| c.flags.contains(Flags::BORDER)) {
+                return Err(bad_input(format!(
+                    "{label}: the target at ({:.1}, {:.1}) px touches the frame border in the \
+                     first frame (its centroid would be biased): every target must be wholly \
+                     inside the frame (or --roi) in the first frame",
+                    c.cx, c.cy
+                )));
+            }
             let mut order: Vec<Centroid> = found.clone();
             order.sort_by(|a, b| a.cx.total_cmp(&b.cx).then(a.cy.total_cmp(&b.cy)));
             last = order.iter().map(|c| (c.cx as f64, c.cy as f64)).collect();
@@ -104,6 +113,10 @@ pub fn track(
             let claimed =
                 nearest[t].filter(|j| nearest.iter().filter(|n| **n == Some(*j)).count() == 1);
             match claimed {
+                // touching the frame (or ROI) border: partly outside, its centroid is biased
+                Some(j) if found[j].flags.contains(Flags::BORDER) => {
+                    tracks.centroids[t].push(lost())
+                }
                 Some(j) => {
                     let c = found[j];
                     last[t] = (c.cx as f64, c.cy as f64);
@@ -167,15 +180,52 @@ pub struct TargetMode {
 pub struct TargetAnalysis {
     /// Per target, its displacement.
     pub displacements: Vec<Displacement>,
-    /// Per target, the chain's result.
-    pub analyses: Vec<Analysis>,
-    /// Accelerometer and every target, every band.
+    /// Per target, the chain's result, or why it failed (too many lost frames, ...): a failed
+    /// target has no modes and no shape component; the others are analysed.
+    pub analyses: Vec<Result<Analysis, String>>,
+    /// The accelerometer's H1 (the same from every target's analysis).
+    pub acc_frf: crate::chain::frf::Frf,
+    /// The accelerometer's picked modes, one per band.
+    pub acc_modes: Vec<crate::chain::frf::PickedMode>,
+    /// Accelerometer and every target, every band (failed targets left out).
     pub modes: Vec<TargetMode>,
-    /// Per band, the shape across targets (normalised) and the shared pole.
-    pub shapes: Vec<Option<(modal::Pole, Vec<Complex64>)>>,
+    /// Per band, the shape across targets (normalised; `None` for a failed target) and the
+    /// shared pole; `None` when the fit failed.
+    pub shapes: Vec<Option<(modal::Pole, Vec<Option<Complex64>>)>>,
 }
 
-/// The chain on every target and the modal fits.
+impl TargetAnalysis {
+    /// The targets (1-based) whose analysis failed, with the reason.
+    pub fn failures(&self) -> Vec<(usize, &str)> {
+        self.analyses
+            .iter()
+            .enumerate()
+            .filter_map(|(t, a)| a.as_ref().err().map(|e| (t + 1, e.as_str())))
+            .collect()
+    }
+
+    /// Per-target fits that disagree with the shared pole of their band by more than three
+    /// half-power bandwidths (`2 zeta f`): typically a target near a node of that mode, whose
+    /// own FRF hardly shows it. `(target, mode, own f_hz, shared pole)`.
+    pub fn doubtful_fits(&self) -> Vec<(usize, usize, Option<f64>, modal::Pole)> {
+        let mut v = Vec::new();
+        for m in self.modes.iter().filter(|m| m.target > 0) {
+            let Some(Some((pole, _))) = self.shapes.get(m.mode - 1) else {
+                continue;
+            };
+            let width = 2.0 * pole.damping * pole.f_hz;
+            let off = m.f_hz.is_none_or(|f| (f - pole.f_hz).abs() > 3.0 * width);
+            if off {
+                v.push((m.target, m.mode, m.f_hz, *pole));
+            }
+        }
+        v
+    }
+}
+
+/// The chain on every target and the modal fits. A target whose chain fails (more than 5 %
+/// lost frames, ...) is reported in [`TargetAnalysis::analyses`] and left out of the modes and
+/// shapes; an error only when every target fails.
 pub fn analyze_targets(
     tracks: &Tracks,
     ds: &DisplacementSettings,
@@ -184,32 +234,50 @@ pub fn analyze_targets(
 ) -> anyhow::Result<TargetAnalysis> {
     let mut displacements = Vec::new();
     let mut analyses = Vec::new();
-    for (t, c) in tracks.centroids.iter().enumerate() {
-        let d = super::displacement_mm(c, ds)
-            .map_err(|e| bad_input(format!("target {}: {e:#}", t + 1)))?;
-        let a = super::analyze(&d, base, tip, s)
-            .map_err(|e| bad_input(format!("target {}: {e:#}", t + 1)))?;
-        displacements.push(d);
+    for c in &tracks.centroids {
+        let d = super::displacement_mm(c, ds);
+        let a = match &d {
+            Ok(d) => super::analyze(d, base, tip, s).map_err(|e| format!("{e:#}")),
+            Err(e) => Err(format!("{e:#}")),
+        };
+        displacements.push(d.unwrap_or_else(|_| Displacement {
+            mm: vec![0.0; c.len()],
+            lost: vec![true; c.len()],
+            lost_count: c.len(),
+            reference_px: 0.0,
+        }));
         analyses.push(a);
     }
+    let Some(first) = analyses.iter().find_map(|a| a.as_ref().ok()) else {
+        let why: Vec<String> = analyses
+            .iter()
+            .enumerate()
+            .filter_map(|(t, a)| a.as_ref().err().map(|e| format!("target {}: {e}", t + 1)))
+            .collect();
+        return Err(bad_input(format!(
+            "no target could be analysed: {}",
+            why.join("; ")
+        )));
+    };
+    let (acc_frf, acc_modes) = (first.acc_frf.clone(), first.acc_modes.clone());
     let mut modes = Vec::new();
     let mut shapes = Vec::new();
-    let acc = &analyses[0].acc_frf;
     for (b, &band) in s.bands.iter().enumerate() {
         let fit = |f: &crate::chain::frf::Frf| {
             modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance).ok()
         };
-        let a = fit(acc);
+        let a = fit(&acc_frf);
         modes.push(TargetMode {
             target: 0,
             mode: b + 1,
             band_hz: band,
             f_hz: a.as_ref().map(|m| m.pole.f_hz),
-            amplitude: analyses[0].acc_modes[b].amplitude,
+            amplitude: acc_modes[b].amplitude,
             damping: a.as_ref().map(|m| m.pole.damping),
             e2pr: None,
         });
         for (t, an) in analyses.iter().enumerate() {
+            let Ok(an) = an else { continue };
             let v = fit(&an.vis_frf);
             modes.push(TargetMode {
                 target: t + 1,
@@ -221,16 +289,192 @@ pub fn analyze_targets(
                 e2pr: an.vis_modes[b].e2pr,
             });
         }
-        let frfs: Vec<&[Complex64]> = analyses.iter().map(|a| a.vis_frf.h1.as_slice()).collect();
-        let shape = modal::fit_shape(&acc.freq_hz, &frfs, band, FrfForm::Accelerance, None).ok();
-        shapes.push(shape.map(|s| (s.pole, s.shape)));
+        let good: Vec<usize> = (0..analyses.len())
+            .filter(|&t| analyses[t].is_ok())
+            .collect();
+        let frfs: Vec<&[Complex64]> = good
+            .iter()
+            .filter_map(|&t| analyses[t].as_ref().ok())
+            .map(|a| a.vis_frf.h1.as_slice())
+            .collect();
+        let shape =
+            modal::fit_shape(&acc_frf.freq_hz, &frfs, band, FrfForm::Accelerance, None).ok();
+        shapes.push(shape.map(|sh| {
+            let mut full = vec![None; analyses.len()];
+            for (&t, c) in good.iter().zip(sh.shape) {
+                full[t] = Some(c);
+            }
+            (sh.pole, full)
+        }));
     }
     Ok(TargetAnalysis {
         displacements,
         analyses,
+        acc_frf,
+        acc_modes,
         modes,
         shapes,
     })
+}
+
+/// A reference mode shape per mode (`--shape-reference`): `mode -> components of targets
+/// 1..K` (complex; a missing `im` column is 0).
+pub type ShapeReference = std::collections::BTreeMap<usize, Vec<Complex64>>;
+
+/// Reads a reference shape CSV with a header naming at least `mode`, `target` and `re` (and
+/// optionally `im`): the layout of `shapes.csv`, or a hand-written table. Every mode present
+/// must give all `k` targets once. Errors name the file, the row and the column.
+pub fn read_shape_reference(path: &std::path::Path, k: usize) -> anyhow::Result<ShapeReference> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| bad_input(format!("--shape-reference {name}: cannot read it: {e}")))?;
+    let mut lines = text.lines().enumerate();
+    let header: Vec<&str> = lines
+        .next()
+        .map(|(_, l)| l.split(',').map(str::trim).collect())
+        .unwrap_or_default();
+    let col = |c: &str| header.iter().position(|h| *h == c);
+    let (Some(cm), Some(ct), Some(cr)) = (col("mode"), col("target"), col("re")) else {
+        return Err(bad_input(format!(
+            "{name}: the header must name the columns mode, target and re (and optionally \
+             im), as shapes.csv does; found {header:?}"
+        )));
+    };
+    let ci = col("im");
+    let mut raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>> = Default::default();
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let row = i + 1;
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cell = |c: usize, what: &str| -> anyhow::Result<&str> {
+            cells
+                .get(c)
+                .copied()
+                .ok_or_else(|| bad_input(format!("{name} row {row}: no {what} column ({line:?})")))
+        };
+        let int = |c: usize, what: &str| -> anyhow::Result<usize> {
+            let v = cell(c, what)?;
+            v.parse().map_err(|_| {
+                bad_input(format!(
+                    "{name} row {row}, column {what}: {v:?} is not a positive integer"
+                ))
+            })
+        };
+        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
+            let v = cell(c, what)?;
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    bad_input(format!(
+                        "{name} row {row}, column {what}: {v:?} is not a finite number"
+                    ))
+                })
+        };
+        let (mode, target) = (int(cm, "mode")?, int(ct, "target")?);
+        if mode == 0 || !(1..=k).contains(&target) {
+            return Err(bad_input(format!(
+                "{name} row {row}: mode {mode}, target {target}: modes count from 1 and \
+                 targets from 1 to {k} (--targets {k})"
+            )));
+        }
+        let im = match ci {
+            Some(c) => num(c, "im")?,
+            None => 0.0,
+        };
+        let v = raw.entry(mode).or_insert_with(|| vec![None; k]);
+        if v[target - 1].is_some() {
+            return Err(bad_input(format!(
+                "{name} row {row}: mode {mode}, target {target} is given twice"
+            )));
+        }
+        v[target - 1] = Some(Complex64::new(num(cr, "re")?, im));
+    }
+    if raw.is_empty() {
+        return Err(bad_input(format!("{name}: no shape rows")));
+    }
+    raw.into_iter()
+        .map(|(mode, v)| {
+            let missing: Vec<usize> = (0..k).filter(|&t| v[t].is_none()).map(|t| t + 1).collect();
+            if !missing.is_empty() {
+                return Err(bad_input(format!(
+                    "{name}: mode {mode} has no component for target(s) {missing:?}"
+                )));
+            }
+            Ok((mode, v.into_iter().flatten().collect()))
+        })
+        .collect()
+}
+
+/// MAC of each fitted shape against the reference of its mode, over the targets analysed:
+/// `(mode, MAC)` for every mode both have.
+pub fn macs(a: &TargetAnalysis, reference: &ShapeReference) -> Vec<(usize, f64)> {
+    let mut v = Vec::new();
+    for (b, shape) in a.shapes.iter().enumerate() {
+        let (Some((_, fitted)), Some(r)) = (shape, reference.get(&(b + 1))) else {
+            continue;
+        };
+        let (x, y): (Vec<Complex64>, Vec<Complex64>) = fitted
+            .iter()
+            .zip(r)
+            .filter_map(|(f, r)| f.map(|f| (f, *r)))
+            .unzip();
+        v.push((b + 1, modal::mac(&x, &y)));
+    }
+    v
+}
+
+/// `frf.csv` of several targets: `target,freq_hz,h1_re,h1_im,h1_abs,coherence`, target 0 the
+/// accelerometer, then each analysed target, one row per bin.
+pub fn frf_csv(a: &TargetAnalysis) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("target,freq_hz,h1_re,h1_im,h1_abs,coherence\n");
+    let frfs = std::iter::once((0, &a.acc_frf)).chain(
+        a.analyses
+            .iter()
+            .enumerate()
+            .filter_map(|(t, an)| an.as_ref().ok().map(|an| (t + 1, &an.vis_frf))),
+    );
+    for (t, frf) in frfs {
+        for ((f, h), c) in frf.freq_hz.iter().zip(&frf.h1).zip(&frf.coherence) {
+            let _ = writeln!(s, "{t},{f},{},{},{},{c}", h.re, h.im, h.norm());
+        }
+    }
+    s
+}
+
+/// `displacement.csv` of several targets: `frame,t_s,target,cx,cy,pixels,disp_mm,lost`, one row
+/// per frame and target (`cx`, `cy` empty where the target was lost).
+pub fn displacement_csv(
+    tracks: &Tracks,
+    a: &TargetAnalysis,
+    frame_rate_hz: f64,
+    time_offset_s: f64,
+) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,disp_mm,lost\n");
+    let frames = tracks.centroids.first().map_or(0, Vec::len);
+    for k in 0..frames {
+        let t_s = time_offset_s + k as f64 / frame_rate_hz;
+        for (t, (c, d)) in tracks.centroids.iter().zip(&a.displacements).enumerate() {
+            let c = &c[k];
+            let (cx, cy) = match c.position() {
+                Some((x, y)) => (x.to_string(), y.to_string()),
+                None => (String::new(), String::new()),
+            };
+            let _ = writeln!(
+                s,
+                "{k},{t_s},{},{cx},{cy},{},{},{}",
+                t + 1,
+                c.pixels(),
+                d.mm[k],
+                u8::from(d.lost[k])
+            );
+        }
+    }
+    s
 }
 
 /// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr` (f_hz and
@@ -260,12 +504,13 @@ pub fn modes_csv(modes: &[TargetMode]) -> String {
     s
 }
 
-/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs`.
+/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs` (failed targets left out).
 pub fn shapes_csv(a: &TargetAnalysis, first: &[(f64, f64)]) -> String {
     let mut s = String::from("mode,target,x_px,y_px,re,im,abs\n");
     for (b, shape) in a.shapes.iter().enumerate() {
         let Some((_, v)) = shape else { continue };
         for (t, (c, &(x, y))) in v.iter().zip(first).enumerate() {
+            let Some(c) = c else { continue };
             s.push_str(&format!(
                 "{},{},{x},{y},{},{},{}\n",
                 b + 1,

@@ -18,9 +18,10 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Frames: a directory (all *.png, *.tif, *.tiff in it, in natural name order, so
     /// frame_2 comes before frame_10), a pattern with `*`/`?` in the file name part
-    /// (`rec/frame_*.png`), or one multi-page TIFF. 8- or 16-bit grey. Numbered files must
-    /// be consecutive (a gap is an error).
-    #[arg(long, value_name = "DIR|GLOB|FILE.tif")]
+    /// (`rec/frame_*.png`), one multi-page TIFF, or a video file (.avi, .mkv, .mp4, .mov,
+    /// .m4v, .webm, .mxf; decoded by the `ffmpeg` program, luma, its timestamps checked against
+    /// --fps). 8- or 16-bit grey. Numbered files must be consecutive (a gap is an error).
+    #[arg(long, value_name = "DIR|GLOB|FILE.tif|VIDEO")]
     pub frames: String,
     /// Camera frame rate, frames per second.
     #[arg(long, value_name = "HZ")]
@@ -102,6 +103,22 @@ pub struct Args {
     /// With --targets: how far a target may move between frames and still be the same, px.
     #[arg(long, value_name = "PX", default_value_t = 10.0)]
     pub gate_px: f64,
+    /// With --targets: the target (1..K) co-located with the output accelerometer, compared
+    /// with it in the report (default: the last, K).
+    #[arg(long, value_name = "J", requires = "targets")]
+    pub accel_target: Option<usize>,
+    /// With --targets: a reference mode shape CSV (header `mode,target,re[,im]`, e.g. an
+    /// earlier shapes.csv or a model's): the MAC of each fitted shape against it goes into the
+    /// report and mac.csv, the reference into the shape plot.
+    #[arg(long, value_name = "FILE.csv", requires = "targets")]
+    pub shape_reference: Option<PathBuf>,
+}
+
+impl Args {
+    /// Whether the motion is measured along the image's x axis.
+    pub fn axis_is_x(&self) -> bool {
+        self.axis == AxisArg::X
+    }
 }
 
 /// `--axis`.

@@ -1,10 +1,11 @@
 //! `analyze --targets K`: the multi-target path of `host-harness analyze`
-//! ([`crate::analysis::targets`]); writes `modes.csv`, `shapes.csv`, `frf.uff` and `report.txt`
-//! into the staged output directory.
+//! ([`crate::analysis::targets`]); writes `modes.csv`, `shapes.csv`, `frf.csv`,
+//! `displacement.csv`, `frf.uff`, `shapes.png`/`.svg`, `mac.csv` (with `--shape-reference`)
+//! and `report.txt` into the staged output directory.
 
 use super::analyze::Args;
 use crate::analysis::frames::FrameSource;
-use crate::analysis::targets::{self, TargetAnalysis};
+use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::uff::{self, Dataset58, Dof};
 use crate::analysis::{DisplacementSettings, Settings};
 use crate::outdir::{Owner, Staged};
@@ -21,28 +22,66 @@ pub fn run(
     if !(2..=32).contains(&k) {
         return Err(crate::bad_input(format!("--targets {k}: between 2 and 32")));
     }
+    let accel_target = args.accel_target.unwrap_or(k);
+    if !(1..=k).contains(&accel_target) {
+        return Err(crate::bad_input(format!(
+            "--accel-target {accel_target}: targets are numbered 1 to {k}"
+        )));
+    }
+    // the reference is read before the frames: a bad file fails at once
+    let reference = match &args.shape_reference {
+        Some(p) => Some(targets::read_shape_reference(p, k)?),
+        None => None,
+    };
     let config = args.centroid.config(None)?;
     let tracks = targets::track(source, args.fps, &config, k, args.gate_px)?;
     let a = targets::analyze_targets(&tracks, ds, (base, tip), settings)?;
     let out = Staged::new(&args.out, args.force, Owner::Holds("report.txt"))?;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;
     out.write("shapes.csv", targets::shapes_csv(&a, &tracks.first))?;
+    out.write("frf.csv", targets::frf_csv(&a))?;
+    out.write(
+        "displacement.csv",
+        targets::displacement_csv(&tracks, &a, args.fps, settings.time_offset_s),
+    )?;
     out.write("frf.uff", uff_bytes(&a)?)?;
-    let report = report(&a, &tracks.first, k);
+    let macs = reference.as_ref().map(|r| targets::macs(&a, r));
+    if let Some(m) = &macs {
+        let mut csv = String::from("mode,mac\n");
+        for (mode, v) in m {
+            let _ = writeln!(csv, "{mode},{v}");
+        }
+        out.write("mac.csv", csv)?;
+    }
+    shape_plot(&out, &a, &tracks, reference.as_ref(), args.axis_is_x())?;
+    let report = report(&a, &tracks, (k, accel_target), macs.as_deref());
     out.write("report.txt", &report)?;
     out.commit()?;
     print!("{report}");
+    let failed = a.failures();
+    if !failed.is_empty() {
+        let list: Vec<String> = failed
+            .iter()
+            .map(|(t, why)| format!("target {t}: {why}"))
+            .collect();
+        return Err(crate::bad_input(format!(
+            "{} of {k} targets could not be analysed ({}); the others' results are in {}",
+            failed.len(),
+            list.join("; "),
+            args.out.display()
+        )));
+    }
     Ok(())
 }
 
-/// One dataset 58 per FRF: the accelerometer (node 100) and each target (node 1..K), all over
-/// the base acceleration (node 1000), direction +Z (image up).
+/// One dataset 58 per FRF: the accelerometer (node 100) and each analysed target (node
+/// 1..K), all over the base acceleration (node 1000), direction +Z (image up).
 fn uff_bytes(a: &TargetAnalysis) -> anyhow::Result<Vec<u8>> {
     let base = Dof {
         node: 1000,
         direction: 3,
     };
-    let acc = &a.analyses[0].acc_frf;
+    let acc = &a.acc_frf;
     let df = acc.freq_hz.get(1).copied().unwrap_or(0.0) - acc.freq_hz[0];
     let mut sets = vec![Dataset58::acceleration_frf(
         "accelerometer / base acceleration",
@@ -60,6 +99,7 @@ fn uff_bytes(a: &TargetAnalysis) -> anyhow::Result<Vec<u8>> {
         .map(|t| format!("vision target {t} / base acceleration"))
         .collect();
     for (t, an) in a.analyses.iter().enumerate() {
+        let Ok(an) = an else { continue };
         sets.push(Dataset58::acceleration_frf(
             &names[t],
             t as u32 + 2,
@@ -76,11 +116,84 @@ fn uff_bytes(a: &TargetAnalysis) -> anyhow::Result<Vec<u8>> {
     Ok(uff::write_file(&sets)?)
 }
 
-/// The printed report: lost frames per target, modes, shapes.
-fn report(a: &TargetAnalysis, first: &[(f64, f64)], k: usize) -> String {
+/// `shapes.png` / `shapes.svg`: every fitted shape's real part along the targets' first-frame
+/// positions (along the image axis across the motion), reference shapes dashed.
+fn shape_plot(
+    out: &Staged,
+    a: &TargetAnalysis,
+    tracks: &Tracks,
+    reference: Option<&targets::ShapeReference>,
+    motion_along_x: bool,
+) -> anyhow::Result<()> {
+    use crate::plots::ShapeCurve;
+    // targets lie across the motion: along x for vertical motion, along y for horizontal
+    let positions: Vec<f64> = tracks
+        .first
+        .iter()
+        .map(|&(x, y)| if motion_along_x { y } else { x })
+        .collect();
+    let fitted: Vec<(usize, Vec<f64>)> = a
+        .shapes
+        .iter()
+        .enumerate()
+        .filter_map(|(b, s)| {
+            s.as_ref().map(|(_, v)| {
+                (
+                    b + 1,
+                    v.iter().map(|c| c.map_or(f64::NAN, |c| c.re)).collect(),
+                )
+            })
+        })
+        .collect();
+    let refs: Vec<(usize, Vec<f64>)> = reference
+        .map(|r| {
+            r.iter()
+                .map(|(m, v)| (*m, crate::analysis::modal::normalise_shape(v)))
+                .map(|(m, v)| (m, v.iter().map(|c| c.re).collect()))
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut curves: Vec<ShapeCurve> = Vec::new();
+    for (m, v) in &fitted {
+        let pole = a.shapes[m - 1].as_ref().map(|(p, _)| p.f_hz).unwrap_or(0.0);
+        curves.push(ShapeCurve {
+            label: format!("mode {m} ({pole:.3} Hz)"),
+            values: v,
+            reference: false,
+        });
+    }
+    for (m, v) in &refs {
+        curves.push(ShapeCurve {
+            label: format!("mode {m}, reference"),
+            values: v,
+            reference: true,
+        });
+    }
+    let axis = if motion_along_x { "y" } else { "x" };
+    crate::plots::write_shape_plot(
+        &out.dir().join("shapes"),
+        "Mode shapes along the targets",
+        &format!("target position in the first frame, {axis} (px)"),
+        &positions,
+        &curves,
+    )?;
+    Ok(())
+}
+
+/// The printed report: lost frames per target, failed targets, modes, the co-located target
+/// against the accelerometer, shapes, MAC against the reference, doubtful per-target fits.
+fn report(
+    a: &TargetAnalysis,
+    tracks: &Tracks,
+    (k, accel_target): (usize, usize),
+    macs: Option<&[(usize, f64)]>,
+) -> String {
     let mut s = format!("analyze --targets {k}\n\nlost frames per target:");
     for (t, d) in a.displacements.iter().enumerate() {
         let _ = write!(s, " {}: {} of {}", t + 1, d.lost_count, d.mm.len());
+    }
+    for (t, why) in a.failures() {
+        let _ = write!(s, "\nTARGET {t} NOT ANALYSED: {why}");
     }
     s.push_str("\n\nsystem        | target | mode |    f_hz | damping  | amplitude\n");
     for m in &a.modes {
@@ -97,6 +210,7 @@ fn report(a: &TargetAnalysis, first: &[(f64, f64)], k: usize) -> String {
             m.target, m.mode, m.amplitude
         );
     }
+    colocated(&mut s, a, accel_target);
     for (b, shape) in a.shapes.iter().enumerate() {
         match shape {
             Some((pole, v)) => {
@@ -107,8 +221,15 @@ fn report(a: &TargetAnalysis, first: &[(f64, f64)], k: usize) -> String {
                     pole.f_hz,
                     pole.damping
                 );
-                for (c, (x, _)) in v.iter().zip(first) {
-                    let _ = write!(s, " x {x:.0} px: {:+.4}{:+.4}i", c.re, c.im);
+                for (c, (x, _)) in v.iter().zip(&tracks.first) {
+                    match c {
+                        Some(c) => {
+                            let _ = write!(s, " x {x:.0} px: {:+.4}{:+.4}i", c.re, c.im);
+                        }
+                        None => {
+                            let _ = write!(s, " x {x:.0} px: -");
+                        }
+                    }
                 }
             }
             None => {
@@ -117,5 +238,52 @@ fn report(a: &TargetAnalysis, first: &[(f64, f64)], k: usize) -> String {
         }
     }
     s.push('\n');
+    if let Some(m) = macs {
+        s.push_str("\nMAC against --shape-reference:");
+        for (mode, v) in m {
+            let _ = write!(s, " mode {mode}: {v:.6}");
+        }
+        s.push('\n');
+    }
+    for (t, mode, f, pole) in a.doubtful_fits() {
+        let f = f.map_or("no fit".into(), |f| format!("{f:.4} Hz"));
+        let _ = writeln!(
+            s,
+            "note: target {t}, mode {mode}: its own fit ({f}) is more than three half-power \
+             bandwidths from the shared pole ({:.4} Hz); the target is probably near a node of \
+             this mode and its own frequency and damping are not to be trusted (its shape \
+             component, from the shared pole, is)",
+            pole.f_hz
+        );
+    }
     s
+}
+
+/// The target co-located with the accelerometer against it, per mode: fitted frequency
+/// difference and amplitude ratio (the chi indices of a vision system against a transducer).
+fn colocated(s: &mut String, a: &TargetAnalysis, j: usize) {
+    let _ = write!(
+        s,
+        "\nvision target {j} (co-located with the accelerometer, --accel-target) / accelerometer:"
+    );
+    if a.analyses[j - 1].is_err() {
+        s.push_str(" not analysed\n");
+        return;
+    }
+    let find = |t: usize, mode: usize| a.modes.iter().find(|m| m.target == t && m.mode == mode);
+    for mode in 1..=a.shapes.len() {
+        let (Some(acc), Some(vis)) = (find(0, mode), find(j, mode)) else {
+            continue;
+        };
+        let df = match (vis.f_hz, acc.f_hz) {
+            (Some(v), Some(c)) => format!("{:+.4} Hz", v - c),
+            _ => "-".into(),
+        };
+        let _ = write!(
+            s,
+            "\n  mode {mode}: amplitude ratio {:.4}, frequency difference {df}",
+            vis.amplitude / acc.amplitude
+        );
+    }
+    s.push('\n');
 }

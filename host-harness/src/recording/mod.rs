@@ -256,7 +256,7 @@ pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> Strin
         "# synthetic recording written by host-harness render --recording\n\
          preset = \"{preset}\"\nseed = {}\nexposure_ms = {}\nfps = {}\nfs = {}\nframes = {}\n\
          samples = {}\nmm_per_px = {}\nradius_px = {}\nlevel = {}\nedge_sigma_px = {}\n\
-         threshold = {}\nframe_size = [{}, {}]\nread_noise = {}\n",
+         threshold = {}\nframe_size = [{}, {}]\nread_noise = {:?}\n",
         spec.seed,
         spec.exposure_ms,
         spec.acquisition.fps,

@@ -97,8 +97,11 @@ pub fn write_targets_recording(
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
     let mut toml = super::recording_toml(spec, (w, h));
+    // top-level keys go before the first table (after it they would belong to the last mode)
+    let tables = toml.find("\n[[").unwrap_or(toml.len());
+    let mut keys = String::new();
     let _ = write!(
-        toml,
+        keys,
         "\n# targets left to right at xi = x / L along the beam, centred in strips of {sw} px;\n\
          # shapes: per mode, relative to the tip, unit largest modulus\ntargets = {targets}\n\
          target_xi = {xis:?}\ntarget_x_px = {:?}\n",
@@ -106,6 +109,7 @@ pub fn write_targets_recording(
             .map(|t| (t * sw) as f64 + renderers[t].rest_x())
             .collect::<Vec<_>>()
     );
+    toml.insert_str(tables, &keys);
     for (i, s) in true_shapes(beam.modes.len(), &xis).iter().enumerate() {
         let _ = write!(
             toml,
