@@ -175,6 +175,11 @@ fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
             "0",
             "--window",
             "rect",
+            // the record is exactly periodic (whole periods of both lines): the end-matching
+            // line (through its first and last samples, which differ by one step of the
+            // motion) would leave a kink at the wrap, whose broadband ringing, divided by a base
+            // with power only at the two lines, dominates |Im H1| between them
+            "--no-end-match",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));

@@ -195,6 +195,10 @@ pub struct Settings {
     pub bands: Vec<(f64, f64)>,
     /// Camera exposure time, s (for the E2PR), when known.
     pub exposure_s: Option<f64>,
+    /// Subtract the line through the displacement record's first and last samples before
+    /// the Fourier upsampling ([`chain::vision_acceleration_end_matched`]): a real record is
+    /// not periodic. `false` takes the record as periodic (as before issue 14).
+    pub end_match: bool,
 }
 
 /// Result of [`analyze`].
@@ -257,7 +261,11 @@ pub fn analyze(
     )?;
     let span = alignment.start..alignment.start + alignment.len;
     let (base, tip) = (&base[span.clone()], &tip[span]);
-    let vision_acc = chain::vision_acceleration(&disp.mm, s.frame_rate_hz, alignment.len)?;
+    let vision_acc = if s.end_match {
+        chain::vision_acceleration_end_matched(&disp.mm, s.frame_rate_hz, alignment.len)?
+    } else {
+        chain::vision_acceleration(&disp.mm, s.frame_rate_hz, alignment.len)?
+    };
     let welch = s.welch.resolve(alignment.len, fa, Defaults::WholeRecord)?;
     let acc_frf = checked_h1(base, tip, welch)?;
     let mut vis_frf = checked_h1(base, &vision_acc, welch)?;
@@ -467,6 +475,7 @@ mod tests {
             },
             bands: vec![(5.0, 10.0)],
             exposure_s: None,
+            end_match: true,
         };
         let a = analyze(&disp, &base, &tip_acc, &s).unwrap();
         assert_eq!(a.alignment.start, 3);

@@ -92,6 +92,11 @@ pub struct Args {
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
+    /// Take the displacement record as periodic in the Fourier upsampling (no end matching):
+    /// by default the line through its first and last samples is subtracted first, since a
+    /// real record is not periodic (docs/method.md §3.2).
+    #[arg(long)]
+    pub no_end_match: bool,
     /// Replace --out if it holds an earlier analysis (its report.txt), as a whole.
     #[arg(long)]
     pub force: bool,
@@ -155,6 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         welch: args.welch.settings(),
         bands: args.bands.pairs(),
         exposure_s: args.exposure_ms.map(|e| e / 1000.0),
+        end_match: !args.no_end_match,
     };
     let dsettings = DisplacementSettings {
         mm_per_px: args.mm_per_px,
