@@ -154,6 +154,30 @@ fn one_run_gives_empty_cells_not_nan() {
         s.lines().nth(1).unwrap().starts_with("transducer,40,1,0,,"),
         "{s}"
     );
+    // merged with the shard that has the run: the one-process study's files, byte for byte
+    let first = dir.path().join("first");
+    assert_ok(&study_of("1", &first, &["--shard", "1/2"]));
+    let merged = dir.path().join("merged");
+    assert_ok(&harness(&[
+        "merge",
+        first.to_str().unwrap(),
+        empty.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+        "--no-plots",
+    ]));
+    for f in [
+        "summary.csv",
+        "coverage.csv",
+        "frf_band.csv",
+        "realizations.csv",
+    ] {
+        assert_eq!(
+            std::fs::read_to_string(merged.join(f)).unwrap(),
+            std::fs::read_to_string(out.join(f)).unwrap(),
+            "{f}: merge of a full and an empty shard differs from the one-process study"
+        );
+    }
 }
 
 /// `study --help` states the defaults of --runs and --seed and the units of the outputs
@@ -517,4 +541,43 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
     );
     assert_ok(&analyze("127", &["--force"]));
     assert_eq!(names(&out), first);
+}
+
+/// Every vision run failing (a target too dark for the threshold: all frames lost) leaves the
+/// vision rows with runs = 0 and empty statistics, in the files and in the printed table, never
+/// `NaN`; the transducer rows are computed (#11 defect 7).
+#[test]
+fn all_failed_vision_rows_are_empty_not_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("dark.toml");
+    std::fs::write(
+        &config,
+        "preset = \"grandstand\"\nruns = 2\nexposures_ms = [40]\n[imaging]\ngain = 0.3\n",
+    )
+    .unwrap();
+    let out = dir.path().join("dark");
+    let o = harness(&[
+        "study",
+        "--config",
+        config.to_str().unwrap(),
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(!printed.contains("NaN"), "{printed}");
+    assert!(printed.contains("runs 0:"), "{printed}");
+    for f in [
+        "summary.csv",
+        "coverage.csv",
+        "frf_band.csv",
+        "realizations.csv",
+    ] {
+        let s = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(!s.to_lowercase().contains("nan"), "{f}: {s}");
+    }
+    let s = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert!(s.contains("\nvision,40,1,0,,,,,"), "{s}");
+    assert!(s.contains("\ntransducer,40,1,2,"), "{s}");
 }

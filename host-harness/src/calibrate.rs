@@ -174,16 +174,19 @@ pub enum Knob {
     OpticalBlur,
     /// `gain`.
     Gain,
+    /// `tip_rotation_lever` (the cantilever's projected tip rotation).
+    TipRotationLever,
 }
 
 impl Knob {
-    const NAMES: [(&'static str, Knob); 6] = [
+    const NAMES: [(&'static str, Knob); 7] = [
         ("target_radius_px", Knob::TargetRadius),
         ("target_edge_sigma_px", Knob::EdgeSigma),
         ("threshold_frac", Knob::ThresholdFrac),
         ("read_noise", Knob::ReadNoise),
         ("optical_blur_sigma_px", Knob::OpticalBlur),
         ("gain", Knob::Gain),
+        ("tip_rotation_lever", Knob::TipRotationLever),
     ];
 
     /// The `[imaging]` field name.
@@ -202,6 +205,7 @@ impl Knob {
             Knob::ReadNoise => &mut o.read_noise,
             Knob::OpticalBlur => &mut o.optical_blur_sigma_px,
             Knob::Gain => &mut o.gain,
+            Knob::TipRotationLever => &mut o.tip_rotation_lever,
         };
         *field = Some(v);
     }

@@ -287,19 +287,27 @@ pub fn table(rows: &[SummaryRow], unit: &str, coverage: f64) -> String {
             ),
             None => (String::new(), String::new()),
         };
+        // a statistic without runs (or of one run: sigma) is an empty cell, as in the files
+        let num = |v: f64| {
+            if v.is_finite() {
+                format!("{v:.4}")
+            } else {
+                String::new()
+            }
+        };
         let _ = write!(
             s,
-            "{:<18} | {:>11} | {:>4} | {:>5} | {:>10.4} | {:>9.4} | {:>8} | {:>19} | {:>8.4} | {:>8.4} | {:>6.3}",
+            "{:<18} | {:>11} | {:>4} | {:>5} | {:>10} | {:>9} | {:>8} | {:>19} | {:>8} | {:>8} | {:>6.3}",
             r.system.name(),
             r.exposure_ms,
             r.mode,
             r.runs,
-            r.mu_a,
-            r.sigma_a,
+            num(r.mu_a),
+            num(r.sigma_a),
             u,
             interval,
-            r.mu_f_hz,
-            r.sigma_f_hz,
+            num(r.mu_f_hz),
+            num(r.sigma_f_hz),
             r.e2pr
         );
         if with_chi {
@@ -307,6 +315,12 @@ pub fn table(rows: &[SummaryRow], unit: &str, coverage: f64) -> String {
             let _ = write!(s, " | {:>7} | {:>9}", f(r.chi_mu), f(r.chi_sigma));
         }
         s.push('\n');
+    }
+    if rows.iter().any(|r| r.runs == 0) {
+        s.push_str(
+            "(runs 0: every run of that row failed or none was in this shard; its statistics \
+             are empty)\n",
+        );
     }
     let _ = writeln!(
         s,

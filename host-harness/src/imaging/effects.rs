@@ -182,6 +182,9 @@ pub struct Effects {
     /// With [`super::ThresholdRule::FrameRange`], the fraction of each frame's grey-level range
     /// the threshold sits at (not an effect on the image: [`Effects::is_identity`] ignores it).
     pub frame_range_frac: Option<f64>,
+    /// The cantilever's projected tip rotation, beam lengths (not an image effect: it changes
+    /// the motion the camera sees; 0 = none).
+    pub tip_rotation_lever: f64,
 }
 
 impl Effects {
@@ -202,6 +205,7 @@ impl Effects {
                 super::ThresholdRule::Fixed => None,
                 super::ThresholdRule::FrameRange => Some(o.threshold_frac.unwrap_or(0.5)),
             },
+            tip_rotation_lever: o.tip_rotation_lever.unwrap_or(0.0),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {
@@ -218,6 +222,12 @@ impl Effects {
         }
         if !(e.shot_e_per_level.is_finite() && e.shot_e_per_level >= 0.0) {
             return Err(bad("shot_noise_e_per_level", "must be >= 0"));
+        }
+        if !(e.tip_rotation_lever.is_finite() && e.tip_rotation_lever.abs() <= 0.5) {
+            return Err(bad(
+                "tip_rotation_lever",
+                "must be between -0.5 and 0.5 beam lengths",
+            ));
         }
         if let Some(f) = e.frame_range_frac {
             if !(f.is_finite() && f > 0.0 && f < 1.0) {

@@ -113,6 +113,10 @@ pub struct ImagingOptions {
     pub exposure_alignment: Option<ExposureAlignment>,
     /// How the threshold is set in each frame; fixed when absent.
     pub threshold_rule: Option<ThresholdRule>,
+    /// Cantilever only: the beam's rotation projected on the image plane, as a lever in beam
+    /// lengths (`model::cantilever::View`): the camera sees the tip's deflection plus this lever
+    /// times the tip's slope. 0 (none) when absent.
+    pub tip_rotation_lever: Option<f64>,
 }
 
 impl ImagingOptions {

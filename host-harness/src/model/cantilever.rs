@@ -130,30 +130,69 @@ impl Rig {
     /// each mode's term scaled by its shape there relative to the tip,
     /// `mode_shape(i, xi) / mode_shape(i, 1)` (exactly 1 at the tip).
     pub fn transmissibility_at(&self, f_hz: f64, xi: f64) -> Complex64 {
+        self.transmissibility_seen(f_hz, View { xi, lever: 0.0 })
+    }
+
+    /// Transmissibility from base to what `view` sees (its position plus the projected
+    /// rotation, [`View`]): each mode's term scaled by [`View::factor`].
+    pub fn transmissibility_seen(&self, f_hz: f64, view: View) -> Complex64 {
         let w = 2.0 * std::f64::consts::PI * f_hz;
         let mut h = Complex64::new(1.0, 0.0);
         for (i, m) in self.modes.iter().enumerate() {
             let wn = 2.0 * std::f64::consts::PI * m.f_hz;
-            let at = if xi == 1.0 {
-                1.0
-            } else {
-                mode_shape(i, xi) / mode_shape(i, 1.0)
-            };
+            let at = view.factor(i);
             h += at * m.g_phi * w * w / Complex64::new(wn * wn - w * w, 2.0 * m.zeta * wn * w);
         }
         h
     }
 }
 
+/// Where a camera sees the beam's motion: the displacement at `xi = x / L` along it, plus
+/// `lever` (in beam lengths) times the beam's slope there. The lever term is the beam's rotation
+/// projected on the image plane: a target standing off the beam, or seen in perspective off the
+/// optical axis, moves in the image by the rotation times a lever arm as well as by the
+/// deflection (the paper's explanation of its mode-1 chi_mu of 95 %: out-of-plane rotation of
+/// the tip). Linear in the beam's motion, so per mode a constant factor (`factor`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// Position along the beam, `x / L` (1 = the tip).
+    pub xi: f64,
+    /// Lever of the projected rotation, in beam lengths (0 = none; negative moves the image
+    /// against the deflection).
+    pub lever: f64,
+}
+
+impl View {
+    /// What this view sees of mode `i`, relative to the tip's deflection:
+    /// `(phi_i(xi) + lever phi_i'(xi)) / phi_i(1)` (exactly 1 at the tip without a lever).
+    pub fn factor(&self, i: usize) -> f64 {
+        if self.xi == 1.0 && self.lever == 0.0 {
+            return 1.0;
+        }
+        (mode_shape(i, self.xi) + self.lever * mode_slope(i, self.xi)) / mode_shape(i, 1.0)
+    }
+}
+
+/// `d mode_shape(mode, xi) / d xi`: the slope of the mode shape along the beam (per beam
+/// length). At the tip `slope / shape` is 1.3765 for mode 1 and 4.7808 for mode 2.
+pub fn mode_slope(mode: usize, xi: f64) -> f64 {
+    let (bl, sigma) = MODE_CONSTANTS[mode];
+    let b = bl * xi;
+    bl * (b.sinh() + b.sin() - sigma * (b.cosh() - b.cos()))
+}
+
+/// `(beta_i L, sigma_i)` of the first two cantilever modes.
+const MODE_CONSTANTS: [(f64, f64); 2] = [
+    (1.875_104_068_7, 0.734_095_514_1),
+    (4.694_091_132_9, 1.018_467_318_5),
+];
+
 /// Euler-Bernoulli cantilever mode shape of mode `mode` (0 or 1) at `xi = x / L` along the beam,
 /// clamped at `xi = 0`: `cosh(b) - cos(b) - sigma (sinh(b) - sin(b))` with `b = beta_i L xi`
 /// (`beta_1 L = 1.8751`, `beta_2 L = 4.6941`); the free tip takes the value +-2. The shape of the
 /// targets along the beam for multi-target recordings and the modal tests.
 pub fn mode_shape(mode: usize, xi: f64) -> f64 {
-    let (bl, sigma) = [
-        (1.875_104_068_7, 0.734_095_514_1),
-        (4.694_091_132_9, 1.018_467_318_5),
-    ][mode];
+    let (bl, sigma) = MODE_CONSTANTS[mode];
     let b = bl * xi;
     b.cosh() - b.cos() - sigma * (b.sinh() - b.sin())
 }
@@ -202,6 +241,30 @@ mod tests {
         // the paper's peaks: about 68 and 39
         assert!((rig.transmissibility(7.1).norm() - 68.0).abs() < 1.0);
         assert!((rig.transmissibility(32.4).norm() - 39.4).abs() < 1.0);
+    }
+
+    #[test]
+    fn mode_slopes_are_the_derivatives_of_the_shapes() {
+        for m in 0..2 {
+            for k in 1..20 {
+                let xi = k as f64 / 20.0;
+                let h = 1e-6;
+                let fd = (mode_shape(m, xi + h) - mode_shape(m, xi - h)) / (2.0 * h);
+                assert!((mode_slope(m, xi) - fd).abs() < 1e-6, "mode {m} at {xi}");
+            }
+            // clamped: no slope at the root
+            assert!(mode_slope(m, 0.0).abs() < 1e-12);
+        }
+        let ratio = |m: usize| mode_slope(m, 1.0) / mode_shape(m, 1.0);
+        assert!((ratio(0) - 1.376_505).abs() < 1e-5, "{}", ratio(0));
+        assert!((ratio(1) - 4.780_778).abs() < 1e-5, "{}", ratio(1));
+        // a view with a lever scales each mode by 1 + lever * slope / shape at the tip
+        let v = View {
+            xi: 1.0,
+            lever: -0.0324,
+        };
+        assert!((v.factor(0) - (1.0 - 0.0324 * ratio(0))).abs() < 1e-12);
+        assert!((v.factor(1) - (1.0 - 0.0324 * ratio(1))).abs() < 1e-12);
     }
 
     #[test]

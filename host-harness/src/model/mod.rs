@@ -152,6 +152,22 @@ pub fn simulate_at(
     seed: u64,
     positions: &[f64],
 ) -> anyhow::Result<(SyntheticRun, Vec<Vec<f64>>)> {
+    let views: Vec<cantilever::View> = positions
+        .iter()
+        .map(|&xi| cantilever::View { xi, lever: 0.0 })
+        .collect();
+    simulate_seen(rig, acq, seed, &views)
+}
+
+/// [`simulate`], and what each of `views` sees of the cantilever (mm on the fine time base, as
+/// `tip_mm`; [`cantilever::View`]: a position along the beam and a projected rotation).
+pub fn simulate_seen(
+    rig: &Rig,
+    acq: &Acquisition,
+    seed: u64,
+    views: &[cantilever::View],
+) -> anyhow::Result<(SyntheticRun, Vec<Vec<f64>>)> {
+    let positions = views;
     let beam = match rig {
         Rig::Cantilever(beam) => Some(beam),
         Rig::Grandstand(_) if positions.is_empty() => None,
@@ -180,9 +196,9 @@ pub fn simulate_at(
         let w = 2.0 * std::f64::consts::PI * f;
         tip_acc[k] = input[k] * h;
         tip_mm[k] = -tip_acc[k] / (w * w) * 1000.0;
-        for (buf, &xi) in at_mm.iter_mut().zip(positions) {
+        for (buf, &view) in at_mm.iter_mut().zip(positions) {
             let h = beam.map_or(h, |b| {
-                let h = b.transmissibility_at(f.abs(), xi);
+                let h = b.transmissibility_seen(f.abs(), view);
                 if signed >= 0.0 {
                     h
                 } else {

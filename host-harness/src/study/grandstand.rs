@@ -64,6 +64,11 @@ impl Grandstand {
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
         let effects = Effects::from_options(&cfg.imaging)?;
+        if effects.tip_rotation_lever != 0.0 {
+            return Err(crate::bad_input(
+                "imaging.tip_rotation_lever: only the cantilever has a tip that rotates",
+            ));
+        }
         let (target, threshold) = cfg.imaging.target_and_threshold(TARGET, THRESHOLD)?;
         let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
         let mut block = FINE;
