@@ -518,13 +518,19 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
-        /// Any path of a disk that moves less than the margin per frame: every frame's result
-        /// equals the full-frame centroid (moments, position, flags), and after the first
-        /// frame only the window's rows are processed.
+        /// Any path of a disk whose pixel extent moves less than the margin (4) per frame:
+        /// every frame's result equals the full-frame centroid (moments, position, flags), and
+        /// after the first frame only the window's rows are processed. The steps are below 2
+        /// px: on the pixel grid a small disk's extent can move one pixel more than its centre
+        /// (whether a row holds a pixel inside the disk also depends on the x shift), so a
+        /// step of 2.9 px once moved the extent by the whole margin; the target then touches
+        /// the window's edge and is flagged `border` as documented (it may reach past the
+        /// window), which the full frame does not flag (a CI run found it: start (61.36, 14.44),
+        /// first step (1.52, -2.90)).
         #[test]
         fn equals_the_full_frame_centroid_along_a_path(
             start in (10.0f64..70.0, 10.0f64..50.0),
-            steps in proptest::collection::vec((-3.0f64..3.0, -3.0f64..3.0), 1..12),
+            steps in proptest::collection::vec((-2.0f64..2.0, -2.0f64..2.0), 1..12),
             r in 1.0f64..8.0,
             weighted in any::<bool>(),
         ) {
