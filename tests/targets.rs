@@ -306,9 +306,14 @@ fn resting(t: usize, k: usize) -> (f64, f64) {
 /// `analyze --targets 3` of a hand-drawn recording in `dir` (frames: `frames`, a folder or a
 /// video) into `dir/out`.
 fn analyze_hand(dir: &Path, frames: &str) -> std::process::Output {
+    analyze_hand_with(dir, frames, &[])
+}
+
+/// [`analyze_hand`] with `extra` arguments.
+fn analyze_hand_with(dir: &Path, frames: &str, extra: &[&str]) -> std::process::Output {
     let accel = dir.join("accel.csv");
     let out = dir.join("out");
-    harness(&[
+    let mut args = vec![
         "analyze",
         "--frames",
         frames,
@@ -329,7 +334,9 @@ fn analyze_hand(dir: &Path, frames: &str) -> std::process::Output {
         "--out",
         out.to_str().unwrap(),
         "--force",
-    ])
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
 }
 
 /// `lost frames per target: ...` of the report, as counts.
@@ -384,6 +391,27 @@ fn targets_leaving_the_frame_or_merging_are_lost_frames_of_those_targets_only() 
     assert_ok(&analyze_hand(&dir, dir.join("frames").to_str().unwrap()));
     assert_eq!(lost_counts(&dir), vec![0, 0, touching]);
     assert_eq!(analysed_targets(&dir), vec![1, 2, 3]);
+    // --lost-frames hold: each lost frame of target 3 repeats the last valid displacement
+    assert_ok(&analyze_hand_with(
+        &dir,
+        dir.join("frames").to_str().unwrap(),
+        &["--lost-frames", "hold"],
+    ));
+    let disp = std::fs::read_to_string(dir.join("out/displacement.csv")).unwrap();
+    let rows: Vec<(f64, bool)> = disp
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(2) == Some("3"))
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[6].parse().unwrap(), c[7] == "1")
+        })
+        .collect();
+    let held = rows.windows(2).filter(|w| w[1].1).count();
+    assert_eq!(held, touching);
+    for w in rows.windows(2).filter(|w| w[1].1) {
+        assert_eq!(w[1].0, w[0].0, "a lost frame holds the last value");
+    }
 
     // 2. the same target leaving the frame for longer than 5 % of the frames: it is not
     // analysed (exit 2 naming it), the other targets are

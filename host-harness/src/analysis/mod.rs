@@ -366,6 +366,7 @@ mod tests {
             .map(|f| f.centroid(&cfg, "f").unwrap())
             .collect();
         let s = DisplacementSettings {
+            lost_frames: Default::default(),
             mm_per_px: 0.5,
             axis: Axis::Y,
             invert: false,

@@ -8,7 +8,10 @@
 //!   flips either.
 //! * **Lost frames.** A frame without any pixel above the threshold has no centroid. Its value
 //!   is interpolated linearly between the nearest valid frames before and after; lost frames at
-//!   the start or the end take the value of the nearest valid frame ([`fill_lost_frames`]). More
+//!   the start or the end take the value of the nearest valid frame ([`fill_lost_frames`]); or,
+//!   with [`LostFramePolicy::Hold`], it holds the last valid value (as firmware that repeats its
+//!   last output does). There is no "drop" policy: the chain is a uniform-rate Fourier
+//!   upsampling, and a dropped sample would shift every later frame by one period. More
 //!   than [`MAX_LOST_FRACTION`] of lost frames makes a measurement fail: a study reports the run
 //!   as failed and leaves it out, an analysis stops with an error.
 
@@ -17,6 +20,51 @@ use firmware_core::centroid::{self, Centroid, CentroidConfig};
 
 /// Largest fraction of lost frames (no centroid) a measurement accepts: 5 %.
 pub const MAX_LOST_FRACTION: f64 = 0.05;
+
+/// What a lost frame's value becomes (`[imaging] lost_frame_policy`, `analyze --lost-frames`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum LostFramePolicy {
+    /// Linear interpolation between the neighbouring valid frames ([`fill_lost_frames`]).
+    #[default]
+    Interpolate,
+    /// The last valid frame's value (the first valid one's before it): a zero-order hold.
+    Hold,
+}
+
+/// [`fill_lost_frames`] with a policy: interpolation, or a hold of the last valid value.
+/// Returns the number of lost frames.
+pub fn fill_lost_frames_with(values: &mut [f64], valid: &[bool], policy: LostFramePolicy) -> usize {
+    match policy {
+        LostFramePolicy::Interpolate => fill_lost_frames(values, valid),
+        LostFramePolicy::Hold => {
+            let n = values.len().min(valid.len());
+            let lost = valid[..n].iter().filter(|v| !**v).count();
+            let Some(first) = valid[..n].iter().position(|v| *v) else {
+                return lost;
+            };
+            let mut last = values[first];
+            for i in 0..n {
+                if valid[i] {
+                    last = values[i];
+                } else {
+                    values[i] = last;
+                }
+            }
+            lost
+        }
+    }
+}
 
 /// Fills the values of lost frames (`valid[i] == false`) by linear interpolation between the
 /// neighbouring valid frames; lost frames before the first or after the last valid one take its
@@ -142,6 +190,8 @@ pub struct DisplacementSettings {
     pub axis: Axis,
     /// Flip the sign.
     pub invert: bool,
+    /// What a lost frame's value becomes.
+    pub lost_frames: LostFramePolicy,
 }
 
 /// Displacement record of the camera, one value per frame.
@@ -211,7 +261,7 @@ pub fn displacement_mm(
         .map(|(c, _)| c)
         .sum::<f64>()
         / valid_count as f64;
-    let lost_count = fill_lost_frames(&mut coord, &valid);
+    let lost_count = fill_lost_frames_with(&mut coord, &valid, s.lost_frames);
     let sign = match (s.axis, s.invert) {
         (Axis::X, false) | (Axis::Y, true) => 1.0,
         (Axis::X, true) | (Axis::Y, false) => -1.0,
@@ -250,6 +300,20 @@ mod tests {
             assert_eq!(fill_lost_frames(&mut v, valid), lost, "{values:?}");
             assert_eq!(v, want, "{values:?}");
         }
+    }
+
+    #[test]
+    fn lost_frames_can_hold_the_last_value() {
+        let mut v = vec![9.0, 1.0, 9.0, 9.0, 4.0, 9.0];
+        let valid = [false, true, false, false, true, false];
+        assert_eq!(
+            fill_lost_frames_with(&mut v, &valid, LostFramePolicy::Hold),
+            4
+        );
+        assert_eq!(v, [1.0, 1.0, 1.0, 1.0, 4.0, 4.0]);
+        let mut v = vec![1.0, 9.0, 3.0];
+        fill_lost_frames_with(&mut v, &[true, false, true], LostFramePolicy::Interpolate);
+        assert_eq!(v, [1.0, 2.0, 3.0]);
     }
 
     #[test]

@@ -92,6 +92,10 @@ pub struct Args {
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
+    /// What a lost frame's value becomes: `interpolate` (linearly between its valid
+    /// neighbours) or `hold` (the last valid value, as firmware repeating its last output).
+    #[arg(long, value_enum, default_value_t = crate::chain::displacement::LostFramePolicy::Interpolate)]
+    pub lost_frames: crate::chain::displacement::LostFramePolicy,
     /// Take the displacement record as periodic in the Fourier upsampling (no end matching):
     /// by default the line through its first and last samples is subtracted first, since a
     /// real record is not periodic (docs/method.md §3.2).
@@ -163,6 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         end_match: !args.no_end_match,
     };
     let dsettings = DisplacementSettings {
+        lost_frames: args.lost_frames,
         mm_per_px: args.mm_per_px,
         axis: match args.axis {
             AxisArg::X => Axis::X,

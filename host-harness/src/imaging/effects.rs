@@ -185,6 +185,8 @@ pub struct Effects {
     /// The cantilever's projected tip rotation, beam lengths (not an image effect: it changes
     /// the motion the camera sees; 0 = none).
     pub tip_rotation_lever: f64,
+    /// What a lost frame's value becomes (not an image effect).
+    pub lost_frame_policy: crate::chain::displacement::LostFramePolicy,
 }
 
 impl Effects {
@@ -206,6 +208,7 @@ impl Effects {
                 super::ThresholdRule::FrameRange => Some(o.threshold_frac.unwrap_or(0.5)),
             },
             tip_rotation_lever: o.tip_rotation_lever.unwrap_or(0.0),
+            lost_frame_policy: o.lost_frame_policy.unwrap_or_default(),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {

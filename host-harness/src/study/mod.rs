@@ -30,7 +30,7 @@ pub use config::{ImagingOptions, Preset, StudyConfig};
 pub use grandstand::Grandstand;
 pub use runner::{execute, run_rng, Executed, Execution, Shard};
 
-use crate::chain::displacement::{fill_lost_frames, too_many_lost};
+use crate::chain::displacement::{fill_lost_frames_with, too_many_lost};
 pub use crate::chain::frf::{PeakRecord, SystemRecord};
 use anyhow::Context as _;
 use rand_chacha::ChaCha8Rng;
@@ -162,12 +162,14 @@ pub fn boxed_welch<const NPERSEG: usize, const NFFT: usize, const SCRATCH: usize
 
 /// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
 /// `0..disp.len()` with `centroid(k)`, turns the centroid row `cy` (px) into the displacement
-/// with `to_disp`, fills the lost frames ([`fill_lost_frames`]) and, unless too many of them were lost
+/// with `to_disp`, fills the lost frames (`policy`, [`fill_lost_frames_with`]) and, unless too many of them were lost
 /// ([`crate::chain::displacement::MAX_LOST_FRACTION`]), measures the filled record (as `f32`) with
 /// `measure`. `disp` and `valid` are the caller's buffers, reused across exposures; `bands` is
 /// the number of mode bands (the empty peaks of a failed run).
+#[allow(clippy::too_many_arguments)]
 pub fn measure_vision<E: std::fmt::Display>(
     exposure_ms: f64,
+    policy: crate::chain::displacement::LostFramePolicy,
     disp: &mut [f64],
     valid: &mut [bool],
     bands: usize,
@@ -186,7 +188,7 @@ pub fn measure_vision<E: std::fmt::Display>(
             None => valid[k] = false,
         }
     }
-    let lost = fill_lost_frames(disp, valid) as u64;
+    let lost = fill_lost_frames_with(disp, valid, policy) as u64;
     let failed = too_many_lost(lost as usize, frames);
     let system = if failed {
         SystemRecord {
@@ -246,6 +248,7 @@ impl Filming<'_> {
             camera.start_exposure(ei);
             vision.push(measure_vision(
                 exp,
+                self.effects.lost_frame_policy,
                 &mut disp,
                 &mut valid,
                 bands,
