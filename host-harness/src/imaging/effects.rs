@@ -185,6 +185,9 @@ pub struct Effects {
     /// The cantilever's projected tip rotation, beam lengths (not an image effect: it changes
     /// the motion the camera sees; 0 = none).
     pub tip_rotation_lever: f64,
+    /// The cantilever target's position along the beam, `x / L` (not an image effect; 1 = the
+    /// tip, with the accelerometer).
+    pub target_position_xi: f64,
     /// What a lost frame's value becomes (not an image effect).
     pub lost_frame_policy: crate::chain::displacement::LostFramePolicy,
 }
@@ -209,6 +212,7 @@ impl Effects {
             },
             tip_rotation_lever: o.tip_rotation_lever.unwrap_or(0.0),
             lost_frame_policy: o.lost_frame_policy.unwrap_or_default(),
+            target_position_xi: o.target_position_xi.unwrap_or(1.0),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {
@@ -230,6 +234,12 @@ impl Effects {
             return Err(bad(
                 "tip_rotation_lever",
                 "must be between -0.5 and 0.5 beam lengths",
+            ));
+        }
+        if !(e.target_position_xi > 0.0 && e.target_position_xi <= 1.0) {
+            return Err(bad(
+                "target_position_xi",
+                "must be a position along the beam in (0, 1] (1 = the tip)",
             ));
         }
         if let Some(f) = e.frame_range_frac {

@@ -117,6 +117,9 @@ pub struct ImagingOptions {
     /// lengths (`model::cantilever::View`): the camera sees the tip's deflection plus this lever
     /// times the tip's slope. 0 (none) when absent.
     pub tip_rotation_lever: Option<f64>,
+    /// Cantilever only: where the target sits along the beam, `x / L` (the accelerometer is at
+    /// the tip, 1); the tip when absent.
+    pub target_position_xi: Option<f64>,
     /// What a lost frame's value becomes (`interpolate` or `hold`); interpolate when absent.
     pub lost_frame_policy: Option<crate::chain::displacement::LostFramePolicy>,
 }

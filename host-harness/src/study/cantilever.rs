@@ -104,16 +104,20 @@ impl Scenario for Cantilever {
         let mut rig = Rig::nominal();
         rig.scatter(rng, self.fixed);
         let natural_f_hz = rig.modes.iter().map(|m| m.f_hz).collect();
-        // what the camera sees: the tip's deflection, plus the projected tip rotation when a
-        // lever is set (the same run: the transducer records are the same either way)
-        let lever = self.effects.tip_rotation_lever;
-        let (sim, seen) = if lever == 0.0 {
+        // what the camera sees: the tip's deflection, or the target's position along the beam,
+        // plus the projected rotation when a lever is set (the same run: the transducer records
+        // are the same either way)
+        let (lever, xi) = (
+            self.effects.tip_rotation_lever,
+            self.effects.target_position_xi,
+        );
+        let (sim, seen) = if lever == 0.0 && xi == 1.0 {
             (
                 model::simulate(&model::Rig::Cantilever(rig), &ACQUISITION, seed)?,
                 None,
             )
         } else {
-            let view = model::cantilever::View { xi: 1.0, lever };
+            let view = model::cantilever::View { xi, lever };
             let (sim, mut seen) =
                 model::simulate_seen(&model::Rig::Cantilever(rig), &ACQUISITION, seed, &[view])?;
             (sim, seen.pop())
@@ -296,7 +300,7 @@ mod tests {
     }
 
     #[test]
-    fn a_projected_tip_rotation_scales_each_mode_by_its_slope_over_deflection() {
+    fn a_target_position_or_projected_tip_rotation_scales_each_mode_by_its_view_factor() {
         // the same runs with and without the lever (the weighted centroid: no quantisation
         // noise to blur the comparison); the camera then sees each mode scaled by
         // 1 + lever * phi_i'(L) / phi_i(L): 1 - 0.0324 * 1.3765 = 0.9554 for mode 1 (the
@@ -308,7 +312,24 @@ mod tests {
         let plain = chi_mu_at_2ms(cfg.clone());
         let lever = -0.0324;
         cfg.imaging.tip_rotation_lever = Some(lever);
-        let turned = chi_mu_at_2ms(cfg);
+        let turned = chi_mu_at_2ms(cfg.clone());
+        let mut at = cfg.clone();
+        at.imaging.tip_rotation_lever = None;
+        at.imaging.target_position_xi = Some(0.9);
+        let placed = chi_mu_at_2ms(at);
+        for mode in 0..2 {
+            let want = model::cantilever::View {
+                xi: 0.9,
+                lever: 0.0,
+            }
+            .factor(mode);
+            let got = placed[mode] / plain[mode];
+            assert!(
+                (got / want - 1.0).abs() < 0.005,
+                "target at 0.9 L, mode {}: ratio {got}, shape ratio {want}",
+                mode + 1
+            );
+        }
         for mode in 0..2 {
             let want = model::cantilever::View { xi: 1.0, lever }.factor(mode);
             let got = turned[mode] / plain[mode];

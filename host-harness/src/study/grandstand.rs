@@ -64,9 +64,10 @@ impl Grandstand {
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
         let effects = Effects::from_options(&cfg.imaging)?;
-        if effects.tip_rotation_lever != 0.0 {
+        if effects.tip_rotation_lever != 0.0 || effects.target_position_xi != 1.0 {
             return Err(crate::bad_input(
-                "imaging.tip_rotation_lever: only the cantilever has a tip that rotates",
+                "imaging.tip_rotation_lever, imaging.target_position_xi: only the cantilever \
+                 has a beam to place the target along",
             ));
         }
         let (target, threshold) = cfg.imaging.target_and_threshold(TARGET, THRESHOLD)?;
