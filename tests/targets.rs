@@ -303,6 +303,18 @@ fn resting(t: usize, k: usize) -> (f64, f64) {
     (30.0 + 50.0 * t as f64, 24.0 + 3.0 * phase.sin())
 }
 
+/// The resting motion, with target 3 dipping `depth` px down over the frames `window`.
+fn dipping(depth: f64, window: (usize, usize)) -> impl Fn(usize, usize) -> (f64, f64) {
+    move |t, k| {
+        let (x, y) = resting(t, k);
+        if t == 2 {
+            (x, y + depth * bump(k, window))
+        } else {
+            (x, y)
+        }
+    }
+}
+
 /// `analyze --targets 3` of a hand-drawn recording in `dir` (frames: `frames`, a folder or a
 /// video) into `dir/out`.
 fn analyze_hand(dir: &Path, frames: &str) -> std::process::Output {
@@ -372,14 +384,7 @@ fn targets_leaving_the_frame_or_merging_are_lost_frames_of_those_targets_only() 
     // touches the last row (partly outside: a biased centroid) are its lost frames, and only
     // its; fewer than 5 %, so it is analysed (interpolated over them)
     let dir = tmp.path().join("edge");
-    let dip = |t: usize, k: usize| {
-        let (x, y) = resting(t, k);
-        if t == 2 {
-            (x, y + 22.0 * bump(k, (50, 70)))
-        } else {
-            (x, y)
-        }
-    };
+    let dip = dipping(22.0, (50, 70));
     hand_recording(&dir, &dip, 2048);
     let touching = (0..FRAMES)
         .filter(|&k| {
@@ -416,14 +421,7 @@ fn targets_leaving_the_frame_or_merging_are_lost_frames_of_those_targets_only() 
     // 2. the same target leaving the frame for longer than 5 % of the frames: it is not
     // analysed (exit 2 naming it), the other targets are
     let dir = tmp.path().join("leave");
-    let leave = |t: usize, k: usize| {
-        let (x, y) = resting(t, k);
-        if t == 2 {
-            (x, y + 40.0 * bump(k, (40, 80)))
-        } else {
-            (x, y)
-        }
-    };
+    let leave = dipping(40.0, (40, 80));
     hand_recording(&dir, &leave, 2048);
     let o = analyze_hand(&dir, dir.join("frames").to_str().unwrap());
     assert_exit_2(&o, "1 of 3 targets could not be analysed (target 3: ");

@@ -492,11 +492,7 @@ pub fn write_frf_plot(
     curves: &[(&str, &[f64], &[f64])],
 ) -> anyhow::Result<Vec<PathBuf>> {
     register_font();
-    let dir = path_stem.parent().unwrap_or(Path::new("."));
-    let name = path_stem
-        .file_name()
-        .and_then(|n| n.to_str())
-        .context("plot path has no file name")?;
+    let (dir, name) = split_stem(path_stem)?;
     figure!(dir, name, |r| draw_curves(r, title, y_label, curves))
 }
 
@@ -660,6 +656,17 @@ mod tests {
     }
 }
 
+/// The directory and file-name stem of a figure's `path_stem` (`dir/name` -> `name.png`,
+/// `name.svg` in `dir`).
+fn split_stem(path_stem: &Path) -> anyhow::Result<(&Path, &str)> {
+    let dir = path_stem.parent().unwrap_or(Path::new("."));
+    let name = path_stem
+        .file_name()
+        .and_then(|n| n.to_str())
+        .context("plot path has no file name")?;
+    Ok((dir, name))
+}
+
 /// One mode shape to plot: its label, the real part of each component (normalised), and
 /// whether it is a reference (drawn dashed, grey).
 #[derive(Debug)]
@@ -682,11 +689,7 @@ pub fn write_shape_plot(
     curves: &[ShapeCurve],
 ) -> anyhow::Result<Vec<PathBuf>> {
     register_font();
-    let dir = path_stem.parent().unwrap_or(Path::new("."));
-    let name = path_stem
-        .file_name()
-        .and_then(|n| n.to_str())
-        .context("plot path has no file name")?;
+    let (dir, name) = split_stem(path_stem)?;
     figure!(dir, name, |r| draw_shapes(
         r, title, x_label, positions, curves
     ))

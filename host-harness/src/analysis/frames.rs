@@ -333,22 +333,22 @@ impl FrameSource {
         }
     }
 
-    /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time; a
-    /// video is opened with its timestamps checked against `fps`. Labels name the file (and
-    /// page, or 0-based video frame).
+    /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time (a
+    /// video's frames decoded into one reused buffer); a video is opened with its timestamps
+    /// checked against `fps`. Labels name the file (and page, or 0-based video frame).
     pub fn for_each(
         &self,
         fps: f64,
-        mut f: impl FnMut(String, GreyFrame) -> anyhow::Result<()>,
+        mut f: impl FnMut(String, &GreyFrame) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
         match self {
             FrameSource::Files(files) => {
                 for p in files {
-                    f(p.display().to_string(), load_frame(p)?)?;
+                    f(p.display().to_string(), &load_frame(p)?)?;
                 }
                 Ok(())
             }
-            FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, f),
+            FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, |label, frame| f(label, &frame)),
             FrameSource::Video(p) => {
                 let mut v = super::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
                 let mut frame = GreyFrame::U8 {
@@ -357,17 +357,10 @@ impl FrameSource {
                     data: Vec::new(),
                 };
                 while let Some(info) = v.next_frame(&mut frame).map_err(|e| e.into_anyhow())? {
-                    let label = format!("{} frame {} (0-based)", p.display(), info.index);
-                    // the callback takes the frame; the next one reuses a fresh buffer
-                    let taken = std::mem::replace(
-                        &mut frame,
-                        GreyFrame::U8 {
-                            width: 0,
-                            height: 0,
-                            data: Vec::new(),
-                        },
-                    );
-                    f(label, taken)?;
+                    f(
+                        format!("{} frame {} (0-based)", p.display(), info.index),
+                        &frame,
+                    )?;
                 }
                 Ok(())
             }
@@ -384,7 +377,7 @@ pub fn centroid_source(
 ) -> anyhow::Result<Vec<Centroid>> {
     let mut out = Vec::new();
     let mut first: Option<(usize, usize, String)> = None;
-    let mut one = |label: String, frame: GreyFrame| -> anyhow::Result<()> {
+    let mut one = |label: String, frame: &GreyFrame| -> anyhow::Result<()> {
         let dims = frame.dimensions();
         match &first {
             None => first = Some((dims.0, dims.1, label.clone())),

@@ -63,9 +63,9 @@ pub fn track(
     };
     let mut last: Vec<(f64, f64)> = Vec::new();
     let mut frame_no = 0usize;
-    let mut one = |label: String, frame: GreyFrame| -> anyhow::Result<()> {
+    let mut one = |label: String, frame: &GreyFrame| -> anyhow::Result<()> {
         frame_no += 1;
-        let found = detect(&mut mc, &frame, &label)?;
+        let found = detect(&mut mc, frame, &label)?;
         if frame_no == 1 {
             if found.len() != k {
                 return Err(bad_input(format!(

@@ -383,6 +383,18 @@ pub fn write_synthetic_recording(
     write_recording_into(&spec, write_to, dir)
 }
 
+/// The README.txt paragraph on the recording's video, when it has one.
+fn video_readme(video: Option<&Path>) -> String {
+    video.map_or(String::new(), |v| {
+        format!(
+            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} to \
+             analyse the video.\n",
+            v.display(),
+            v.display()
+        )
+    })
+}
+
 /// Writes the 8-bit grey frame `px` (`width * height` pixels, row 0 first) as a PNG at `path`.
 pub fn save_grey_png(path: &Path, (w, h): (usize, usize), px: &[u8]) -> anyhow::Result<()> {
     image::GrayImage::from_raw(w as u32, h as u32, px.to_vec())
@@ -460,15 +472,7 @@ pub fn write_recording_into(
         " for both systems (one record is one noisy estimate); see recording.toml for all \
          parameters.\n",
     );
-    if let Some(v) = &video {
-        let _ = writeln!(
-            readme,
-            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} \
-             to analyse the video.",
-            v.display(),
-            v.display()
-        );
-    }
+    readme.push_str(&video_readme(video.as_deref()));
     let readme_path = dir.join("README.txt");
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", readme_path.display()))?;

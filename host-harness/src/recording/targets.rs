@@ -133,15 +133,7 @@ pub fn write_targets_recording(
         spec.seed,
         args.join(" ")
     );
-    if let Some(v) = &video {
-        let _ = writeln!(
-            readme,
-            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} \
-             to analyse the video.",
-            v.display(),
-            v.display()
-        );
-    }
+    readme.push_str(&super::video_readme(video.as_deref()));
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", dir.join("README.txt").display()))?;
     Ok(RecordingFiles {
