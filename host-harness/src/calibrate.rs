@@ -1,20 +1,24 @@
 //! Identifying what a rig leaves unreported from observed study figures (method.md §3.5,
 //! issue 13): the imaging knobs of a study file's `[imaging]` table (target radius and edge,
-//! threshold, read noise, optical blur, gain) fitted to observed values of `mu_a`, `sigma_a`,
+//! threshold, read noise, optical blur, gain, the cantilever's projected tip rotation) and the
+//! `[rig]` table's beam length (the tip accelerometer's tilt reading) fitted to observed values of `mu_a`, `sigma_a`,
 //! `mu_f`, `ratio_to_first`, `chi_mu` and `chi_sigma`.
 //!
 //! Every evaluation is a small study of the same runs (the same seed: common random numbers,
 //! so a parameter change is not drowned in Monte Carlo noise) computed in process through the
-//! study's scenario and aggregation. The objective is `chi2 = sum r^2` over the observations,
-//! `r = (model - observed) / sqrt(u_obs^2 + u_model^2)` (`u_model` the Monte Carlo standard
-//! uncertainty of the model's figure; `u_obs` the observation's, when given). The search: a
-//! coarse grid over the ranges, then a pattern search from the best point that halves its steps
-//! when no neighbour improves. A parameter's uncertainty is `sqrt(2 / c)`, `c` the curvature of
-//! `chi2` along its axis at the optimum (the `chi2 + 1` half-width, correlations ignored).
+//! study's scenario and aggregation. The misfit is `chi2 = sum r^2` over the observations,
+//! `r = (model - observed) / u`, `u = sqrt(u_obs^2 + u_model^2)` (`u_model` the Monte Carlo
+//! standard uncertainty of the model's figure; `u_obs` the observation's, when given). Because
+//! `u_model` depends on the parameters, chi2 alone rewards a noisier model (a smaller target,
+//! more read noise: larger `u`, smaller `r`), so the search minimises the Gaussian negative
+//! log-likelihood `objective = sum (r^2 + ln u^2)` instead, whose `ln u^2` term charges for the
+//! spread it buys. The search: a coarse grid over the ranges, then a pattern search from the
+//! best point that halves its steps when no neighbour improves. A parameter's uncertainty is
+//! `sqrt(2 / c)`, `c` the curvature of the objective along its axis at the optimum (the
+//! `+1` half-width of `-2 ln L`, correlations ignored).
 
 use crate::bad_input;
 use crate::chain::exposure::ExposureCorrection;
-use crate::imaging::ImagingOptions;
 use crate::report::{CoverageRow, SummaryRow, System};
 use crate::study::{aggregate, run_rng, scenario_for, Preset, RunRecord, StudyConfig};
 use std::collections::BTreeMap;
@@ -159,7 +163,7 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
     Ok((out, other))
 }
 
-/// An `[imaging]` knob a calibration may turn.
+/// An `[imaging]` (or `[rig]`) knob a calibration may turn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Knob {
     /// `target_radius_px`.
@@ -176,10 +180,13 @@ pub enum Knob {
     Gain,
     /// `tip_rotation_lever` (the cantilever's projected tip rotation).
     TipRotationLever,
+    /// `beam_length_m` (`[rig]`: the cantilever's length, with an upright or hanging beam the
+    /// tip accelerometer's tilt reading).
+    BeamLength,
 }
 
 impl Knob {
-    const NAMES: [(&'static str, Knob); 7] = [
+    const NAMES: [(&'static str, Knob); 8] = [
         ("target_radius_px", Knob::TargetRadius),
         ("target_edge_sigma_px", Knob::EdgeSigma),
         ("threshold_frac", Knob::ThresholdFrac),
@@ -187,9 +194,10 @@ impl Knob {
         ("optical_blur_sigma_px", Knob::OpticalBlur),
         ("gain", Knob::Gain),
         ("tip_rotation_lever", Knob::TipRotationLever),
+        ("beam_length_m", Knob::BeamLength),
     ];
 
-    /// The `[imaging]` field name.
+    /// The `[imaging]` (or `[rig]`) field name.
     pub fn name(self) -> &'static str {
         Self::NAMES
             .iter()
@@ -197,7 +205,8 @@ impl Knob {
             .map_or("", |(n, _)| n)
     }
 
-    fn set(self, o: &mut ImagingOptions, v: f64) {
+    fn set(self, cfg: &mut StudyConfig, v: f64) {
+        let o = &mut cfg.imaging;
         let field = match self {
             Knob::TargetRadius => &mut o.target_radius_px,
             Knob::EdgeSigma => &mut o.target_edge_sigma_px,
@@ -206,6 +215,7 @@ impl Knob {
             Knob::OpticalBlur => &mut o.optical_blur_sigma_px,
             Knob::Gain => &mut o.gain,
             Knob::TipRotationLever => &mut o.tip_rotation_lever,
+            Knob::BeamLength => &mut cfg.rig.beam_length_m,
         };
         *field = Some(v);
     }
@@ -263,6 +273,9 @@ pub struct Evaluation {
     pub x: Vec<f64>,
     /// Sum of squared residuals (a large penalty per figure the model cannot give).
     pub chi2: f64,
+    /// What the search minimises: `chi2 + sum ln u^2` (the Gaussian negative log-likelihood
+    /// up to a constant, see the module documentation).
+    pub objective: f64,
     /// Per observation.
     pub residuals: Vec<Residual>,
 }
@@ -275,7 +288,7 @@ const MISSING: f64 = 1e6;
 pub fn config_at(base: &StudyConfig, free: &[Free], x: &[f64], obs: &[Observation]) -> StudyConfig {
     let mut cfg = base.clone();
     for (f, v) in free.iter().zip(x) {
-        f.knob.set(&mut cfg.imaging, *v);
+        f.knob.set(&mut cfg, *v);
     }
     let mut exposures: Vec<f64> = obs.iter().map(|o| o.exposure_ms).collect();
     exposures.sort_by(f64::total_cmp);
@@ -313,8 +326,7 @@ pub fn evaluate(
         .iter()
         .map(|o| {
             let (model, u_model) = model_figure(&out.summary, &out.coverage, &cfg, o);
-            let u = (o.u.unwrap_or(0.0).powi(2) + u_model.powi(2)).sqrt();
-            let u = u.max(1e-6 * o.value.abs().max(1e-12));
+            let u = combined_u(o, u_model);
             Residual {
                 observed: o.clone(),
                 model,
@@ -330,8 +342,31 @@ pub fn evaluate(
     Ok(Evaluation {
         x: x.to_vec(),
         chi2,
+        objective: objective(&residuals),
         residuals,
     })
+}
+
+/// The standard uncertainty a residual is divided by: the observation's and the model's
+/// combined (floored at a millionth of the observed value).
+fn combined_u(o: &Observation, u_model: f64) -> f64 {
+    let u = (o.u.unwrap_or(0.0).powi(2) + u_model.powi(2)).sqrt();
+    u.max(1e-6 * o.value.abs().max(1e-12))
+}
+
+/// `sum (r^2 + ln u^2)` over the residuals; a figure the model cannot give costs a large penalty (1e6).
+pub fn objective(residuals: &[Residual]) -> f64 {
+    residuals
+        .iter()
+        .map(|r| {
+            let u = combined_u(&r.observed, r.u_model);
+            if r.r.is_finite() && u.is_finite() {
+                r.r * r.r + (u * u).ln()
+            } else {
+                MISSING
+            }
+        })
+        .sum()
 }
 
 /// The model's figure for an observation and its Monte Carlo standard uncertainty.
@@ -385,7 +420,7 @@ fn model_figure(
 pub struct Fit {
     /// The best point.
     pub best: Evaluation,
-    /// Standard uncertainty of each parameter (`None`: chi2 not convex along that axis).
+    /// Standard uncertainty of each parameter (`None`: the objective not convex along that axis).
     pub u: Vec<Option<f64>>,
     /// Every evaluation, in the order made.
     pub evaluations: Vec<Evaluation>,
@@ -421,7 +456,7 @@ pub fn search(
             .map(|j| at(&free[j], flat / grid.pow(j as u32) % grid))
             .collect();
         let e = eval(&x)?;
-        if best.as_ref().is_none_or(|b| e.chi2 < b.chi2) {
+        if best.as_ref().is_none_or(|b| e.objective < b.objective) {
             best = Some(e);
         }
     }
@@ -437,7 +472,7 @@ pub fn search(
                 let mut x = best.x.clone();
                 x[j] = (x[j] + sign * step[j]).clamp(free[j].lo, free[j].hi);
                 let e = eval(&x)?;
-                if e.chi2 < best.chi2 {
+                if e.objective < best.objective {
                     best = e;
                     improved = true;
                 }
@@ -456,10 +491,10 @@ pub fn search(
             if x[j] < free[j].lo || x[j] > free[j].hi {
                 return Ok(None);
             }
-            Ok(Some(eval(&x)?.chi2))
+            Ok(Some(eval(&x)?.objective))
         };
         let curvature = match (side(-1.0)?, side(1.0)?) {
-            (Some(a), Some(b)) => Some((a - 2.0 * best.chi2 + b) / (h * h)),
+            (Some(a), Some(b)) => Some((a - 2.0 * best.objective + b) / (h * h)),
             _ => None,
         };
         u.push(curvature.filter(|c| *c > 0.0).map(|c| (2.0 / c).sqrt()));
@@ -492,15 +527,16 @@ pub fn residuals_csv(e: &Evaluation) -> Vec<u8> {
     s.into_bytes()
 }
 
-/// `evaluations.csv` bytes: the free parameters' values and chi2 of every evaluation.
+/// `evaluations.csv` bytes: the free parameters' values, chi2 and the objective of every
+/// evaluation.
 pub fn evaluations_csv(free: &[Free], evals: &[Evaluation]) -> Vec<u8> {
     let mut s: String = free.iter().map(|f| format!("{},", f.knob.name())).collect();
-    s += "chi2\n";
+    s += "chi2,objective\n";
     for e in evals {
         for v in &e.x {
             s += &format!("{v},");
         }
-        s += &format!("{}\n", e.chi2);
+        s += &format!("{},{}\n", e.chi2, e.objective);
     }
     s.into_bytes()
 }
@@ -592,5 +628,32 @@ mod tests {
         assert!(fit.best.chi2 < 1.0, "chi2 {}", fit.best.chi2);
         let u = fit.u[0].expect("convex at the optimum");
         assert!(u > 0.0 && u < 0.2, "u {u}");
+    }
+
+    #[test]
+    fn the_objective_charges_for_the_spread_a_noisier_model_buys() {
+        // one observation 100 +/- 0 against two models: 101 with u 0.5 (r = 2) and a noisier
+        // 103 with u 3 (r = 1). chi2 prefers the noisy one; the likelihood does not
+        let obs = Observation {
+            mode: 2,
+            exposure_ms: 2.0,
+            quantity: Quantity::ChiMu,
+            value: 100.0,
+            u: None,
+        };
+        let at = |model: f64, u_model: f64| Residual {
+            observed: obs.clone(),
+            model,
+            u_model,
+            r: (model - obs.value) / u_model,
+        };
+        let (tight, noisy) = ([at(101.0, 0.5)], [at(103.0, 3.0)]);
+        assert!(noisy[0].r.powi(2) < tight[0].r.powi(2));
+        let (a, b) = (objective(&tight), objective(&noisy));
+        assert!((a - (4.0 + 0.25f64.ln())).abs() < 1e-12, "{a}");
+        assert!((b - (1.0 + 9.0f64.ln())).abs() < 1e-12, "{b}");
+        assert!(a < b);
+        // a figure the model cannot give costs the penalty
+        assert_eq!(objective(&[at(f64::NAN, 1.0)]), MISSING);
     }
 }

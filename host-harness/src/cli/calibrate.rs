@@ -16,7 +16,7 @@ pub struct Args {
     /// only the rows of the study's rig are used.
     #[arg(long, value_name = "FILE.csv")]
     pub observed: PathBuf,
-    /// The study to calibrate (TOML, as `study --config`); its `[imaging]` values not set free
+    /// The study to calibrate (TOML, as `study --config`); its `[imaging]` and `[rig]` values not set free
     /// stay as they are. Default: the preset's.
     #[arg(long, value_name = "FILE.toml", conflicts_with = "preset")]
     pub config: Option<PathBuf>,
@@ -25,7 +25,7 @@ pub struct Args {
     pub preset: Preset,
     /// A free parameter and its range, NAME=LO:HI (repeat): target_radius_px,
     /// target_edge_sigma_px, threshold_frac, read_noise, optical_blur_sigma_px, gain,
-    /// tip_rotation_lever.
+    /// tip_rotation_lever, beam_length_m (`[rig]`; the config must set beam_orientation).
     #[arg(long = "free", value_name = "NAME=LO:HI", required = true, value_parser = calibrate::parse_free)]
     pub free: Vec<Free>,
     /// Runs per evaluation (the same runs every time: common random numbers).
@@ -92,9 +92,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(|(f, v)| format!("{}={v:.4}", f.knob.name()))
             .collect();
         eprintln!(
-            "  evaluation {count}: {} -> chi2 {:.3} ({:.0} s)",
+            "  evaluation {count}: {} -> chi2 {:.3}, objective {:.3} ({:.0} s)",
             at.join(" "),
             e.chi2,
+            e.objective,
             started.elapsed().as_secs_f64()
         );
     })?;
@@ -103,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut fitted = base.clone();
     for (f, v) in args.free.iter().zip(&fit.best.x) {
         let one = calibrate::config_at(&fitted, std::slice::from_ref(f), &[*v], &obs);
-        fitted.imaging = one.imaging;
+        (fitted.imaging, fitted.rig) = (one.imaging, one.rig);
     }
     let header = format!(
         "# fitted by `host-harness calibrate` to {} ({} observations, {} runs per evaluation)\n",
@@ -128,12 +129,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &calibrate::evaluations_csv(&args.free, &fit.evaluations),
     )?;
     println!(
-        "fitted (chi2 {:.3} over {} observations):",
+        "fitted (chi2 {:.3}, objective {:.3}, over {} observations):",
         fit.best.chi2,
+        fit.best.objective,
         obs.len()
     );
     for ((f, v), u) in args.free.iter().zip(&fit.best.x).zip(&fit.u) {
-        let u = u.map_or("not determined (chi2 not convex there)".into(), |u| {
+        let u = u.map_or("not determined (objective not convex there)".into(), |u| {
             format!("+/- {u:.4}")
         });
         println!(

@@ -82,6 +82,13 @@ pub struct Rig {
     pub tip_pp_mm: f64,
     /// Accelerometer noise, g RMS.
     pub accel_noise_g: f64,
+    /// What the tip accelerometer reads of gravity as it tilts with the beam, per unit of the
+    /// tip's slope, m/s^2 ([`Tilt::gain`]: `+g` for an upright beam, `-g` hanging, 0 for a
+    /// horizontal beam moving vertically). 0 in the nominal rig.
+    pub accel_tilt_gain: f64,
+    /// Beam length, m (turns the mode shapes' slopes per beam length into radians per metre of
+    /// tip motion; only used with a tilt gain).
+    pub beam_length_m: f64,
 }
 
 impl Rig {
@@ -103,6 +110,8 @@ impl Rig {
             band_hz: EXCITATION_BAND_HZ,
             tip_pp_mm: TIP_PP_MM,
             accel_noise_g: ACCEL_NOISE_G,
+            accel_tilt_gain: 0.0,
+            beam_length_m: 1.0,
         }
     }
 
@@ -136,15 +145,73 @@ impl Rig {
     /// Transmissibility from base to what `view` sees (its position plus the projected
     /// rotation, [`View`]): each mode's term scaled by [`View::factor`].
     pub fn transmissibility_seen(&self, f_hz: f64, view: View) -> Complex64 {
+        self.sum_of_modes(f_hz, |i, _| view.factor(i))
+    }
+
+    /// Transmissibility from base to what the tip accelerometer reads: the tip's acceleration
+    /// plus gravity projected on its sensing axis as it tilts with the beam
+    /// (`accel_tilt_gain` times the tip slope, [`Tilt`]). The slope of mode `i` is
+    /// `phi_i'(L) / (phi_i(L) L)` times its tip displacement, and the displacement is the
+    /// acceleration over `-w^2`, so each mode's term is scaled by
+    /// `1 + gain phi_i'/(phi_i L w^2)` (the term carries `w^2`, so it stays finite as `w`
+    /// falls: a quasi-static tilt). Exactly [`Rig::transmissibility`] without a tilt gain.
+    pub fn accelerometer_transmissibility(&self, f_hz: f64) -> Complex64 {
+        let per_slope = self.accel_tilt_gain / self.beam_length_m;
+        self.sum_of_modes(f_hz, |i, w2| 1.0 + per_slope * tip_slope_ratio(i) / w2)
+    }
+
+    /// `1 + sum_i scale(i, w^2) G_i phi_i w^2 / (w_i^2 - w^2 + 2 i h_i w_i w)`.
+    fn sum_of_modes(&self, f_hz: f64, scale: impl Fn(usize, f64) -> f64) -> Complex64 {
         let w = 2.0 * std::f64::consts::PI * f_hz;
         let mut h = Complex64::new(1.0, 0.0);
         for (i, m) in self.modes.iter().enumerate() {
             let wn = 2.0 * std::f64::consts::PI * m.f_hz;
-            let at = view.factor(i);
+            let at = scale(i, w * w);
             h += at * m.g_phi * w * w / Complex64::new(wn * wn - w * w, 2.0 * m.zeta * wn * w);
         }
         h
     }
+}
+
+/// Standard gravity, m/s^2.
+pub const STANDARD_GRAVITY: f64 = 9.806_65;
+
+/// How the beam stands in gravity (`[rig] beam_orientation`), which decides what the tip
+/// accelerometer reads of its own tilt. The accelerometer turns with the tip; its sensing axis,
+/// perpendicular to the beam, tilts by the tip's slope `theta`. An accelerometer reads specific
+/// force (acceleration minus gravity), so on a beam standing **upright** (clamped below, moving
+/// horizontally) it reads `a - g theta`: gravity's projection adds to the motion (the tip tilts
+/// the way it moves, `theta` in phase with the displacement, and the acceleration is
+/// `-w^2` times it), and the accelerometer over-reads each mode by `1 + g phi'/(phi L w^2)`,
+/// far more for a low mode than for a high one (`1/w^2`). **Hanging** (clamped above) it
+/// under-reads by the same amount. A **horizontal** beam moving vertically tilts its axis about
+/// the vertical: the projection changes by `1 - cos theta`, second order, none here.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tilt {
+    /// Horizontal beam, vertical motion: no first-order tilt reading (the default).
+    #[default]
+    Horizontal,
+    /// Clamped below, free end up, horizontal motion: the accelerometer over-reads.
+    Upright,
+    /// Clamped above, free end down, horizontal motion: the accelerometer under-reads.
+    Hanging,
+}
+
+impl Tilt {
+    /// The tilt gain, m/s^2 per radian of tip slope: `+g`, `-g` or 0.
+    pub fn gain(self) -> f64 {
+        match self {
+            Tilt::Horizontal => 0.0,
+            Tilt::Upright => STANDARD_GRAVITY,
+            Tilt::Hanging => -STANDARD_GRAVITY,
+        }
+    }
+}
+
+/// `phi_i'(L) / phi_i(L)` at the tip, per beam length: 1.3765 for mode 1, 4.7808 for mode 2.
+pub fn tip_slope_ratio(mode: usize) -> f64 {
+    mode_slope(mode, 1.0) / mode_shape(mode, 1.0)
 }
 
 /// Where a camera sees the beam's motion: the displacement at `xi = x / L` along it, plus

@@ -53,6 +53,17 @@ impl Rig {
         }
     }
 
+    /// What the tip transducer reads per unit input at `f_hz`: [`Rig::frf`], except on a
+    /// cantilever whose tip accelerometer reads gravity as it tilts
+    /// ([`cantilever::Rig::accelerometer_transmissibility`]). The camera sees the motion
+    /// ([`Rig::frf`]); the accelerometer reads this.
+    pub fn transducer_frf(&self, f_hz: f64) -> Complex64 {
+        match self {
+            Rig::Cantilever(rig) => rig.accelerometer_transmissibility(f_hz),
+            Rig::Grandstand(test) => grandstand::accelerance(&test.modes, f_hz),
+        }
+    }
+
     /// Natural frequencies of the modes, Hz.
     pub fn natural_frequencies(&self) -> Vec<f64> {
         match self {
@@ -188,14 +199,13 @@ pub fn simulate_seen(
             k as f64 - n as f64
         };
         let f = signed * df;
-        let h = if signed >= 0.0 {
-            rig.frf(f)
-        } else {
-            rig.frf(-f).conj()
-        };
+        let side = |h: Complex64| if signed >= 0.0 { h } else { h.conj() };
+        let h = side(rig.frf(f.abs()));
         let w = 2.0 * std::f64::consts::PI * f;
-        tip_acc[k] = input[k] * h;
-        tip_mm[k] = -tip_acc[k] / (w * w) * 1000.0;
+        // the accelerometer reads its own tilt too (a cantilever standing in gravity); the
+        // camera sees the motion
+        tip_acc[k] = input[k] * side(rig.transducer_frf(f.abs()));
+        tip_mm[k] = -input[k] * h / (w * w) * 1000.0;
         for (buf, &view) in at_mm.iter_mut().zip(positions) {
             let h = beam.map_or(h, |b| {
                 let h = b.transmissibility_seen(f.abs(), view);
@@ -382,6 +392,48 @@ mod tests {
             let f = k as f64 * acq.fs / n as f64;
             let want = rig.frf(f);
             assert!(((y[k] / x[k]) - want).norm() < 1e-9 * want.norm(), "{f} Hz");
+        }
+    }
+
+    #[test]
+    fn a_tilting_tip_accelerometer_reads_gravity_times_the_tip_slope() {
+        // time domain, against the frequency-domain implementation: the tip slope comes from a
+        // view with a lever of one beam length ((seen - tip) = phi' q per beam length), and an
+        // accelerometer turning with an upright beam reads a - g theta (hanging: a + g theta)
+        let acq = short(120.0, 240);
+        let mut beam = cantilever::Rig::nominal();
+        beam.accel_noise_g = 0.0;
+        let view = cantilever::View {
+            xi: 1.0,
+            lever: 1.0,
+        };
+        let (plain, seen) =
+            simulate_seen(&Rig::Cantilever(beam.clone()), &acq, 7, &[view]).unwrap();
+        let length_m = 0.15;
+        for (tilt, sign) in [
+            (cantilever::Tilt::Upright, -1.0),
+            (cantilever::Tilt::Hanging, 1.0),
+        ] {
+            let mut tilted = beam.clone();
+            (tilted.accel_tilt_gain, tilted.beam_length_m) = (tilt.gain(), length_m);
+            let run = simulate(&Rig::Cantilever(tilted), &acq, 7).unwrap();
+            // the camera's record does not change
+            assert_eq!(run.tip_mm, plain.tip_mm);
+            assert_eq!(run.input, plain.input);
+            let peak = plain.tip_acc.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let mut largest = 0.0f64;
+            for (n, (&a, &read)) in plain.tip_acc.iter().zip(&run.tip_acc).enumerate() {
+                let k = n * acq.fine_per_sample;
+                let theta = (seen[0][k] - plain.tip_mm[k]) / 1000.0 / length_m;
+                let want = a + sign * cantilever::STANDARD_GRAVITY * theta;
+                assert!(
+                    (read - want).abs() < 1e-9 * peak,
+                    "{tilt:?}, sample {n}: {read} vs {want}"
+                );
+                largest = largest.max((read - a).abs());
+            }
+            // and the tilt reading is there to see (a few percent of the motion's acceleration)
+            assert!(largest > 0.01 * peak, "{tilt:?}: {largest} of {peak}");
         }
     }
 

@@ -278,12 +278,20 @@ pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> Strin
             band_hz,
             tip_pp_mm,
             accel_noise_g,
+            accel_tilt_gain,
+            beam_length_m,
         }) => {
             let _ = write!(
                 s,
                 "band_hz = [{}, {}]\ntip_pp_mm = {tip_pp_mm}\naccel_noise_g = {accel_noise_g}\n",
                 band_hz.0, band_hz.1
             );
+            if *accel_tilt_gain != 0.0 {
+                let _ = write!(
+                    s,
+                    "accel_tilt_gain = {accel_tilt_gain}\nbeam_length_m = {beam_length_m}\n"
+                );
+            }
             for m in modes {
                 let _ = write!(
                     s,

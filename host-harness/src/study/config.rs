@@ -57,6 +57,53 @@ pub struct StudyConfig {
     /// The adaptive procedure (JCGM 101 7.9): `runs` is then the most runs it may take.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adaptive: Option<super::adaptive::AdaptiveConfig>,
+    /// How the structure stands (the `[rig]` table); absent from `config.toml` when default.
+    #[serde(default, skip_serializing_if = "RigOptions::is_default")]
+    pub rig: RigOptions,
+}
+
+/// The `[rig]` table of a study file: how the structure stands, which the imaging cannot change.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct RigOptions {
+    /// Cantilever only: how the beam stands in gravity, which decides what the tip
+    /// accelerometer reads of its own tilt ([`crate::model::cantilever::Tilt`]); horizontal
+    /// (none) when absent.
+    pub beam_orientation: Option<crate::model::cantilever::Tilt>,
+    /// Cantilever only: the beam's length, m (with an upright or hanging beam).
+    pub beam_length_m: Option<f64>,
+}
+
+/// The shortest and longest beam `[rig] beam_length_m` takes, m.
+pub const BEAM_LENGTH_RANGE_M: (f64, f64) = (0.02, 10.0);
+
+impl RigOptions {
+    fn is_default(&self) -> bool {
+        *self == RigOptions::default()
+    }
+
+    /// The tip accelerometer's tilt gain (m/s^2 per radian) and the beam length (m) for the
+    /// cantilever ([`crate::model::cantilever::Rig::accel_tilt_gain`]); the message names the
+    /// field.
+    pub fn accel_tilt(&self) -> anyhow::Result<(f64, f64)> {
+        let tilt = self.beam_orientation.unwrap_or_default();
+        let (lo, hi) = BEAM_LENGTH_RANGE_M;
+        use crate::model::cantilever::Tilt;
+        match (tilt, self.beam_length_m) {
+            (Tilt::Horizontal, None) => Ok((0.0, 1.0)),
+            (Tilt::Horizontal, Some(_)) => Err(bad_input(
+                "rig.beam_length_m: only used with beam_orientation = \"upright\" or \"hanging\" \
+                 (a horizontal beam's accelerometer reads no first-order tilt)",
+            )),
+            (_, None) => Err(bad_input(
+                "rig.beam_length_m: an upright or hanging beam needs its length (m)",
+            )),
+            (_, Some(l)) if !(l.is_finite() && (lo..=hi).contains(&l)) => Err(bad_input(format!(
+                "rig.beam_length_m: {l} m is outside {lo} .. {hi} m"
+            ))),
+            (t, Some(l)) => Ok((t.gain(), l)),
+        }
+    }
 }
 
 fn default_coverage() -> f64 {
@@ -77,6 +124,8 @@ struct StudyFile {
     imaging: ImagingOptions,
     coverage: Option<f64>,
     adaptive: Option<super::adaptive::AdaptiveConfig>,
+    #[serde(default)]
+    rig: RigOptions,
 }
 
 /// Most runs one study directory takes (see [`StudyConfig::validate`]).
@@ -97,6 +146,7 @@ impl StudyConfig {
                 imaging: ImagingOptions::default(),
                 coverage: default_coverage(),
                 adaptive: None,
+                rig: RigOptions::default(),
             },
             Preset::Cantilever => StudyConfig {
                 preset,
@@ -108,6 +158,7 @@ impl StudyConfig {
                 imaging: ImagingOptions::default(),
                 coverage: default_coverage(),
                 adaptive: None,
+                rig: RigOptions::default(),
             },
         }
     }
@@ -133,6 +184,7 @@ impl StudyConfig {
             imaging: f.imaging,
             coverage: f.coverage.unwrap_or(d.coverage),
             adaptive: f.adaptive,
+            rig: f.rig,
         })
     }
 
@@ -194,6 +246,18 @@ impl StudyConfig {
         if !(self.frf_max_hz.is_finite() && self.frf_max_hz > 0.0) {
             return Err(bad_input("frf_max_hz: must be a positive number of Hz"));
         }
+        match self.preset {
+            Preset::Cantilever => {
+                self.rig.accel_tilt()?;
+            }
+            Preset::Grandstand if !self.rig.is_default() => {
+                return Err(bad_input(
+                    "rig: beam_orientation and beam_length_m describe the cantilever; the \
+                     grandstand has none",
+                ));
+            }
+            Preset::Grandstand => {}
+        }
         Ok(())
     }
 
@@ -238,5 +302,56 @@ mod tests {
         let mut c = StudyConfig::preset(Preset::Grandstand);
         c.exposures_ms = vec![40.0, 40.0];
         assert!(format!("{}", c.validate().unwrap_err()).starts_with("exposures_ms"));
+    }
+
+    #[test]
+    fn the_rig_table_names_what_is_wrong() {
+        let err = |text: &str| {
+            let c = StudyConfig::from_toml_str(text).unwrap();
+            format!("{:#}", c.validate().unwrap_err())
+        };
+        let e = err("preset = \"cantilever\"\n[rig]\nbeam_orientation = \"upright\"\n");
+        assert!(
+            e.contains("rig.beam_length_m") && e.contains("needs its length"),
+            "{e}"
+        );
+        let e = err("preset = \"cantilever\"\n[rig]\nbeam_length_m = 0.2\n");
+        assert!(e.contains("only used with beam_orientation"), "{e}");
+        let e = err("preset = \"cantilever\"\n[rig]\nbeam_orientation = \"hanging\"\nbeam_length_m = 0.001\n");
+        assert!(e.contains("outside 0.02 .. 10 m"), "{e}");
+        let e = err(
+            "preset = \"grandstand\"\n[rig]\nbeam_orientation = \"upright\"\nbeam_length_m = 0.2\n",
+        );
+        assert!(e.contains("the grandstand has none"), "{e}");
+        assert!(StudyConfig::from_toml_str(
+            "preset = \"cantilever\"\n[rig]\norientation = \"upright\"\n"
+        )
+        .is_err());
+        // a valid table round-trips through config.toml; a default one is not written
+        let c = StudyConfig::from_toml_str(
+            "preset = \"cantilever\"\n[rig]\nbeam_orientation = \"upright\"\nbeam_length_m = 0.145\n",
+        )
+        .unwrap();
+        c.validate().unwrap();
+        assert_eq!(StudyConfig::from_toml_str(&c.to_toml()).unwrap(), c);
+        assert!(!StudyConfig::preset(Preset::Cantilever)
+            .to_toml()
+            .contains("[rig]"));
+    }
+
+    #[test]
+    fn every_committed_study_file_reads_and_validates() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../studies");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let c = StudyConfig::from_toml_file(&path).unwrap();
+                c.validate()
+                    .unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
+                n += 1;
+            }
+        }
+        assert!(n >= 4, "{n} study files in {}", dir.display());
     }
 }
