@@ -148,6 +148,12 @@ impl Rig {
         self.sum_of_modes(f_hz, |i, _| view.factor(i))
     }
 
+    /// [`Rig::transmissibility_seen`] with each mode's factor given (`factors[i]`, e.g. a
+    /// view's [`View::factor`]s computed once for a whole spectrum).
+    pub fn transmissibility_scaled(&self, f_hz: f64, factors: &[f64]) -> Complex64 {
+        self.sum_of_modes(f_hz, |i, _| factors[i])
+    }
+
     /// Transmissibility from base to what the tip accelerometer reads: the tip's acceleration
     /// plus gravity projected on its sensing axis as it tilts with the beam
     /// (`accel_tilt_gain` times the tip slope, [`Tilt`]). The slope of mode `i` is
@@ -209,9 +215,11 @@ impl Tilt {
     }
 }
 
-/// `phi_i'(L) / phi_i(L)` at the tip, per beam length: 1.3765 for mode 1, 4.7808 for mode 2.
+/// `phi_i'(L) / phi_i(L)` at the tip, per beam length: 1.3765 for mode 1, 4.7808 for mode 2
+/// (computed once: a spectrum asks for it at every bin).
 pub fn tip_slope_ratio(mode: usize) -> f64 {
-    mode_slope(mode, 1.0) / mode_shape(mode, 1.0)
+    static RATIOS: std::sync::OnceLock<[f64; 2]> = std::sync::OnceLock::new();
+    RATIOS.get_or_init(|| [0, 1].map(|m| mode_slope(m, 1.0) / mode_shape(m, 1.0)))[mode]
 }
 
 /// Where a camera sees the beam's motion: the displacement at `xi = x / L` along it, plus

@@ -53,14 +53,17 @@ impl Rig {
         }
     }
 
-    /// What the tip transducer reads per unit input at `f_hz`: [`Rig::frf`], except on a
-    /// cantilever whose tip accelerometer reads gravity as it tilts
-    /// ([`cantilever::Rig::accelerometer_transmissibility`]). The camera sees the motion
-    /// ([`Rig::frf`]); the accelerometer reads this.
-    pub fn transducer_frf(&self, f_hz: f64) -> Complex64 {
+    /// The motion's FRF ([`Rig::frf`], what the camera sees) and what the tip transducer reads
+    /// per unit input at `f_hz`: the same, except on a cantilever whose tip accelerometer reads
+    /// gravity as it tilts ([`cantilever::Rig::accelerometer_transmissibility`]); computed once
+    /// where they coincide.
+    pub fn motion_and_transducer_frf(&self, f_hz: f64) -> (Complex64, Complex64) {
+        let h = self.frf(f_hz);
         match self {
-            Rig::Cantilever(rig) => rig.accelerometer_transmissibility(f_hz),
-            Rig::Grandstand(test) => grandstand::accelerance(&test.modes, f_hz),
+            Rig::Cantilever(rig) if rig.accel_tilt_gain != 0.0 => {
+                (h, rig.accelerometer_transmissibility(f_hz))
+            }
+            _ => (h, h),
         }
     }
 
@@ -192,6 +195,13 @@ pub fn simulate_seen(
     let mut tip_acc = vec![Complex64::new(0.0, 0.0); n];
     let mut tip_mm = vec![Complex64::new(0.0, 0.0); n];
     let mut at_mm = vec![vec![Complex64::new(0.0, 0.0); n]; positions.len()];
+    // each view's per-mode factors, once: they do not depend on the frequency
+    let view_factors: Vec<Vec<f64>> = beam.map_or(Vec::new(), |b| {
+        positions
+            .iter()
+            .map(|v| (0..b.modes.len()).map(|i| v.factor(i)).collect())
+            .collect()
+    });
     for k in 1..n {
         let signed = if k <= n / 2 {
             k as f64
@@ -200,22 +210,18 @@ pub fn simulate_seen(
         };
         let f = signed * df;
         let side = |h: Complex64| if signed >= 0.0 { h } else { h.conj() };
-        let h = side(rig.frf(f.abs()));
-        let w = 2.0 * std::f64::consts::PI * f;
         // the accelerometer reads its own tilt too (a cantilever standing in gravity); the
         // camera sees the motion
-        tip_acc[k] = input[k] * side(rig.transducer_frf(f.abs()));
+        let (motion, reading) = rig.motion_and_transducer_frf(f.abs());
+        let h = side(motion);
+        let w = 2.0 * std::f64::consts::PI * f;
+        tip_acc[k] = input[k] * side(reading);
         tip_mm[k] = -input[k] * h / (w * w) * 1000.0;
-        for (buf, &view) in at_mm.iter_mut().zip(positions) {
-            let h = beam.map_or(h, |b| {
-                let h = b.transmissibility_seen(f.abs(), view);
-                if signed >= 0.0 {
-                    h
-                } else {
-                    h.conj()
-                }
-            });
-            buf[k] = -input[k] * h / (w * w) * 1000.0;
+        if let Some(b) = beam {
+            for (buf, factors) in at_mm.iter_mut().zip(&view_factors) {
+                let h = side(b.transmissibility_scaled(f.abs(), factors));
+                buf[k] = -input[k] * h / (w * w) * 1000.0;
+            }
         }
     }
     let ifft = planner.plan_fft_inverse(n);

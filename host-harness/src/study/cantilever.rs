@@ -274,6 +274,16 @@ mod tests {
             );
         }
     }
+    /// The cantilever preset with `runs` runs at 2 ms and the weighted centroid (no
+    /// quantisation noise to blur a comparison of the same runs).
+    fn weighted_at_2ms(runs: u64) -> StudyConfig {
+        let mut cfg = StudyConfig::preset(Preset::Cantilever);
+        cfg.runs = runs;
+        cfg.exposures_ms = vec![2.0];
+        cfg.imaging.centroid = Some(crate::imaging::CentroidKind::Weighted);
+        cfg
+    }
+
     /// chi_mu of every mode at 2 ms, `runs` runs of `cfg`.
     fn chi_mu_at_2ms(cfg: StudyConfig) -> Vec<f64> {
         std::thread::Builder::new()
@@ -309,10 +319,7 @@ mod tests {
         // quantisation noise): the camera sees the same motion, the tip accelerometer over-reads
         // mode i by 1 + g phi_i'/(phi_i L w_i^2) (model::cantilever::Tilt), so chi_mu falls by
         // that factor: 4.7 % for mode 1 of a 0.145 m beam, 0.8 % for mode 2 (1/w^2)
-        let mut cfg = StudyConfig::preset(Preset::Cantilever);
-        cfg.runs = 8;
-        cfg.exposures_ms = vec![2.0];
-        cfg.imaging.centroid = Some(crate::imaging::CentroidKind::Weighted);
+        let mut cfg = weighted_at_2ms(8);
         let plain = chi_mu_at_2ms(cfg.clone());
         let length_m = 0.145;
         cfg.rig.beam_orientation = Some(model::cantilever::Tilt::Upright);
@@ -340,10 +347,7 @@ mod tests {
         // noise to blur the comparison); the camera then sees each mode scaled by
         // 1 + lever * phi_i'(L) / phi_i(L): 1 - 0.0324 * 1.3765 = 0.9554 for mode 1 (the
         // paper's 95.5 %) but 1 - 0.0324 * 4.7808 = 0.8451 for mode 2
-        let mut cfg = StudyConfig::preset(Preset::Cantilever);
-        cfg.runs = 8;
-        cfg.exposures_ms = vec![2.0];
-        cfg.imaging.centroid = Some(crate::imaging::CentroidKind::Weighted);
+        let mut cfg = weighted_at_2ms(8);
         let plain = chi_mu_at_2ms(cfg.clone());
         let lever = -0.0324;
         cfg.imaging.tip_rotation_lever = Some(lever);
