@@ -10,19 +10,19 @@ use std::path::{Path, PathBuf};
 /// the target (m/s^2, positive up, as `--axis y` reads the image), `base` a sine at each mode
 /// frequency plus a little broadband noise. Frequencies sit on FRF bins (1 Hz) so the record is
 /// periodic.
-struct Recording {
-    dir: PathBuf,
-    frames: PathBuf,
-    accel: PathBuf,
+pub(crate) struct Recording {
+    pub(crate) dir: PathBuf,
+    pub(crate) frames: PathBuf,
+    pub(crate) accel: PathBuf,
 }
 
-const FPS: f64 = 120.0;
+pub(crate) const FPS: f64 = 120.0;
 const FS: f64 = 2048.0;
 const MM_PER_PX: f64 = 0.1;
 /// (frequency Hz, displacement amplitude px, base amplitude m/s^2)
 const MODES: [(f64, f64, f64); 2] = [(8.0, 8.0, 0.5), (30.0, 1.5, 2.0)];
 
-fn position_px(t: f64) -> f64 {
+pub(crate) fn position_px(t: f64) -> f64 {
     MODES
         .iter()
         .map(|&(f, p, _)| p * (2.0 * PI * f * t).cos())
@@ -41,7 +41,7 @@ fn tip_acc(t: f64) -> f64 {
 }
 
 /// Disk of radius 6 px, level 200, anti-aliased by 4x4 supersampling, centre (12, 24 + p).
-fn disk(p: f64, w: u32, h: u32) -> Vec<u8> {
+pub(crate) fn disk(p: f64, w: u32, h: u32) -> Vec<u8> {
     let (cx, cy, r) = (12.0, 24.0 + p, 6.0);
     let mut v = vec![0u8; (w * h) as usize];
     for j in 0..h {
@@ -62,10 +62,10 @@ fn disk(p: f64, w: u32, h: u32) -> Vec<u8> {
     v
 }
 
-const W: u32 = 24;
-const H: u32 = 48;
+pub(crate) const W: u32 = 24;
+pub(crate) const H: u32 = 48;
 
-fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDir, Recording) {
+pub(crate) fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDir, Recording) {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().to_path_buf();
     let fdir = dir.join("frames");

@@ -473,9 +473,14 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
     .unwrap();
     assert_exit_2(&render(&[]), "--force");
     assert!(rec.join("frames/frame_99999.png").exists());
-    // with --force the recording is replaced as a whole: no frame of the old one is left
+    // nor with --force: a file the recording did not write is someone's, named in the error
+    assert_exit_2(&render(&["--force"]), "frames/frame_99999.png");
+    assert!(rec.join("frames/frame_99999.png").exists());
+    std::fs::remove_file(rec.join("frames/frame_99999.png")).unwrap();
+    std::fs::remove_file(rec.join("frames/frame_00007.png")).unwrap();
+    // with --force the recording is replaced as a whole (a frame deleted by hand comes back)
     assert_ok(&render(&["--force"]));
-    assert!(!rec.join("frames/frame_99999.png").exists());
+    assert!(rec.join("frames/frame_00007.png").exists());
     assert_eq!(names(&rec.join("frames")).len(), 1200);
     // a directory that is not a recording is never replaced
     let other = tmp.path().join("thesis");
@@ -489,7 +494,7 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
         other.to_str().unwrap(),
         "--force",
     ]);
-    assert_exit_2(&o, "not an earlier output");
+    assert_exit_2(&o, "not only an earlier output");
     assert_eq!(names(&other), ["chapter1.tex"]);
 
     let out = rec.join("analysis");
@@ -532,6 +537,7 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
     assert_eq!(
         names(&rec),
         [
+            ".vibcam-manifest.toml",
             "README.txt",
             "accel.csv",
             "analysis",
@@ -541,6 +547,9 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
     );
     assert_ok(&analyze("127", &["--force"]));
     assert_eq!(names(&out), first);
+    // the recording now holds an analysis it did not write: render --force refuses to wipe it
+    assert_exit_2(&render(&["--force"]), "analysis/");
+    assert!(out.join("modes.csv").exists());
 }
 
 /// Every vision run failing (a target too dark for the threshold: all frames lost) leaves the

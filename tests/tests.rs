@@ -4,6 +4,7 @@
 #[allow(dead_code)]
 mod util;
 
+mod adversarial;
 mod analyze;
 mod centroid;
 mod plan;

@@ -1,48 +1,36 @@
-//! Output directories that are complete or absent (issue 11): a command writes every output
-//! file into a hidden staging directory beside the target (`.NAME.partial-PID`, the same file
-//! system), syncs them, and only then moves the whole directory into place. A failure or a
-//! kill before that leaves the target as it was (the staging directory is removed on error;
-//! after a kill, the next run removes stale ones); a directory of a previous run is replaced
-//! as a whole, so no stale file of it survives beside the new ones.
+//! Output directories that are complete or absent: a command writes every output file into a
+//! hidden staging directory beside the target (`.NAME.partial-PID`, the same file system),
+//! syncs them, and only then moves the whole directory into place. A failure or a kill before
+//! that leaves the target as it was; a directory of a previous run is replaced as a whole, so no
+//! stale file of it survives beside the new ones.
 //!
-//! An existing non-empty target is refused without `--force`; with it, only a directory that
-//! looks like an earlier output of the same command ([`Owner`]: it holds `report.txt` of
-//! `analyze`, `recording.toml` of a recording, only rendered frames) is replaced, never one that
-//! holds something else.
+//! What may be replaced is decided by a **manifest**: every committed output directory holds
+//! [`MANIFEST`], naming the command that wrote it and every file and folder it wrote. An
+//! existing non-empty target is refused without `--force`; with it, it is replaced only when its
+//! manifest names this command and every entry in it is listed there (nothing was added by
+//! hand), and when none of the run's inputs lies inside it. A run that fails
+//! ([`Staged::commit_unless_replacing`]) never replaces anything.
+//!
+//! A staging directory is locked (`flock`) by the process writing it; the next run into the same
+//! target removes any staging or set-aside directory whose lock is free (its writer is gone,
+//! whoever it was), and ignores one it cannot remove.
 
 use crate::bad_input;
 use anyhow::Context as _;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// What an earlier output directory of a command looks like (so `--force` may replace it).
-#[derive(Debug, Clone, Copy)]
-pub enum Owner {
-    /// It holds this file.
-    Holds(&'static str),
-    /// Every entry is a file whose name starts with the first and ends with the second text.
-    OnlyFiles(&'static str, &'static str),
-}
+/// The manifest file of an output directory (hidden, TOML).
+pub const MANIFEST: &str = ".vibcam-manifest.toml";
 
-impl Owner {
-    fn owns(self, dir: &Path) -> bool {
-        match self {
-            Owner::Holds(f) => dir.join(f).is_file(),
-            Owner::OnlyFiles(pre, suf) => std::fs::read_dir(dir).is_ok_and(|d| {
-                d.flatten().all(|e| {
-                    let n = e.file_name();
-                    let n = n.to_string_lossy();
-                    e.path().is_file() && n.starts_with(pre) && n.ends_with(suf)
-                })
-            }),
-        }
-    }
-
-    fn describe(self) -> String {
-        match self {
-            Owner::Holds(f) => format!("holds no {f}"),
-            Owner::OnlyFiles(p, s) => format!("holds other files than {p}*{s}"),
-        }
-    }
+/// What a manifest records: the command and every entry it wrote, relative paths with `/`,
+/// folders with a trailing `/`.
+#[derive(Debug, Serialize, Deserialize, PartialEq)]
+struct Manifest {
+    /// The command that wrote the directory, e.g. `analyze`.
+    command: String,
+    /// Every file and folder written (not the manifest itself).
+    entries: Vec<String>,
 }
 
 /// A staged output directory; see the module documentation.
@@ -50,14 +38,23 @@ impl Owner {
 pub struct Staged {
     target: PathBuf,
     stage: PathBuf,
+    command: &'static str,
     replace: bool,
     committed: bool,
+    /// The lock on the staging directory, held while the value lives.
+    _lock: std::fs::File,
 }
 
 impl Staged {
-    /// Starts staging the outputs of a command into `target`; `force` allows replacing an
-    /// earlier output directory of the command (`owner` says what one looks like).
-    pub fn new(target: &Path, force: bool, owner: Owner) -> anyhow::Result<Staged> {
+    /// Starts staging the outputs of `command` into `target`; `force` allows replacing an
+    /// earlier output directory of the same command (see the module documentation). `inputs`
+    /// are the files and folders the run reads: a target that holds one is never replaced.
+    pub fn new(
+        target: &Path,
+        force: bool,
+        command: &'static str,
+        inputs: &[&Path],
+    ) -> anyhow::Result<Staged> {
         let name = target
             .file_name()
             .and_then(|n| n.to_str())
@@ -72,7 +69,7 @@ impl Staged {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let replace = check_target(target, force, owner)?;
+        let replace = check_target(target, force, command, inputs)?;
         std::fs::create_dir_all(&parent)
             .with_context(|| format!("cannot create {}", parent.display()))?;
         remove_stale_stages(&parent, name);
@@ -83,11 +80,18 @@ impl Staged {
         }
         std::fs::create_dir(&stage)
             .with_context(|| format!("cannot create {}", stage.display()))?;
+        let lock = std::fs::File::open(&stage)
+            .with_context(|| format!("cannot open {}", stage.display()))?;
+        // a fresh directory of this process: nobody else can hold its lock
+        lock.try_lock()
+            .with_context(|| format!("cannot lock {}", stage.display()))?;
         Ok(Staged {
             target: target.to_path_buf(),
             stage,
+            command,
             replace,
             committed: false,
+            _lock: lock,
         })
     }
 
@@ -101,6 +105,11 @@ impl Staged {
         &self.target
     }
 
+    /// Whether committing would replace an earlier output directory.
+    pub fn replaces(&self) -> bool {
+        self.replace && self.target.exists()
+    }
+
     /// Writes `bytes` to the staged file `name`; returns the path it will have in the target.
     pub fn write(&self, name: &str, bytes: impl AsRef<[u8]>) -> anyhow::Result<PathBuf> {
         let p = self.stage.join(name);
@@ -109,13 +118,32 @@ impl Staged {
         Ok(self.target.join(name))
     }
 
-    /// Syncs every staged file and moves the directory into place (replacing a previous output
-    /// directory as a whole when allowed), then syncs the parent directory.
+    /// The outputs of a run that failed: committed into an absent or empty target (so its
+    /// report can be read), but never in place of an earlier output directory, which is left as
+    /// it was. Returns whether they were committed.
+    pub fn commit_unless_replacing(self) -> anyhow::Result<bool> {
+        if self.replaces() {
+            return Ok(false);
+        }
+        self.commit().map(|()| true)
+    }
+
+    /// Writes the manifest, syncs every staged file and moves the directory into place
+    /// (replacing a previous output directory as a whole when allowed), then syncs the parent
+    /// directory.
     pub fn commit(mut self) -> anyhow::Result<()> {
+        let mut entries = Vec::new();
+        list_entries(&self.stage, "", &mut entries)?;
+        let manifest = Manifest {
+            command: self.command.to_string(),
+            entries,
+        };
+        let text = toml::to_string(&manifest).context("cannot write the manifest")?;
+        self.write(MANIFEST, text)?;
         sync_tree(&self.stage)?;
         crate::failpoint::hit("outdir-synced");
         let parent = self.stage.parent().unwrap_or(Path::new(".")).to_path_buf();
-        if self.replace && self.target.exists() {
+        if self.replaces() {
             let old = parent.join(format!(
                 ".{}.old-{}",
                 self.target
@@ -129,8 +157,16 @@ impl Staged {
             crate::failpoint::hit("outdir-old-moved");
             std::fs::rename(&self.stage, &self.target)
                 .with_context(|| format!("cannot move the outputs to {}", self.target.display()))?;
-            std::fs::remove_dir_all(&old)
-                .with_context(|| format!("cannot remove {}", old.display()))?;
+            self.committed = true;
+            // the new outputs are in place: a set-aside directory that cannot be removed (files
+            // of another user) is left for the next run to clean, with a warning, not an error
+            if let Err(e) = std::fs::remove_dir_all(&old) {
+                eprintln!(
+                    "warning: the earlier output was replaced, but its old copy {} could not be \
+                     removed ({e}); remove it by hand",
+                    old.display()
+                );
+            }
         } else {
             if self.target.exists() {
                 // an empty directory (checked in `new`): make room for the rename
@@ -139,8 +175,8 @@ impl Staged {
             }
             std::fs::rename(&self.stage, &self.target)
                 .with_context(|| format!("cannot move the outputs to {}", self.target.display()))?;
+            self.committed = true;
         }
-        self.committed = true;
         sync_dir(&parent)
     }
 }
@@ -148,14 +184,46 @@ impl Staged {
 impl Drop for Staged {
     fn drop(&mut self) {
         if !self.committed {
-            let _ = std::fs::remove_dir_all(&self.stage);
+            // best effort: a directory that cannot be removed is cleaned by the next run
+            std::fs::remove_dir_all(&self.stage).ok();
         }
     }
 }
 
+/// Every entry below `dir` (relative to it, prefixed by `prefix`), folders with a trailing `/`,
+/// sorted; the manifest itself is not listed.
+fn list_entries(dir: &Path, prefix: &str, out: &mut Vec<String>) -> anyhow::Result<()> {
+    let mut names: Vec<(String, bool)> = Vec::new();
+    for e in std::fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))? {
+        let e = e.with_context(|| format!("cannot read {}", dir.display()))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+        names.push((name, is_dir));
+    }
+    names.sort();
+    for (name, is_dir) in names {
+        if prefix.is_empty() && name == MANIFEST {
+            continue;
+        }
+        if is_dir {
+            let rel = format!("{prefix}{name}/");
+            out.push(rel.clone());
+            list_entries(&dir.join(&name), &rel, out)?;
+        } else {
+            out.push(format!("{prefix}{name}"));
+        }
+    }
+    Ok(())
+}
+
 /// Whether `target` may be written: absent or empty (returns false), or with `force` an
-/// earlier output directory of the command (returns true).
-fn check_target(target: &Path, force: bool, owner: Owner) -> anyhow::Result<bool> {
+/// earlier output directory of `command` holding nothing else and no input (returns true).
+fn check_target(
+    target: &Path,
+    force: bool,
+    command: &str,
+    inputs: &[&Path],
+) -> anyhow::Result<bool> {
     if !target.exists() {
         return Ok(false);
     }
@@ -177,18 +245,80 @@ fn check_target(target: &Path, force: bool, owner: Owner) -> anyhow::Result<bool
             target.display()
         )));
     }
-    if !owner.owns(target) {
+    if let Some(input) = input_inside(target, inputs) {
         return Err(bad_input(format!(
-            "{}: not empty and {}, so it is not an earlier output of this command: not \
-             replaced even with --force",
+            "{}: holds {}, an input of this run: not replaced even with --force; choose \
+             another --out",
             target.display(),
-            owner.describe()
+            input.display()
+        )));
+    }
+    let refuse = |why: String| {
+        bad_input(format!(
+            "{}: {why}, so it is not only an earlier output of `{command}`: not replaced even \
+             with --force; choose another --out",
+            target.display()
+        ))
+    };
+    let manifest_path = target.join(MANIFEST);
+    let text = match std::fs::read_to_string(&manifest_path) {
+        Ok(t) => t,
+        Err(_) => return Err(refuse(format!("has no {MANIFEST}"))),
+    };
+    let manifest: Manifest = toml::from_str(&text)
+        .map_err(|_| refuse(format!("its {MANIFEST} is not one this program wrote")))?;
+    if manifest.command != command {
+        return Err(refuse(format!("was written by `{}`", manifest.command)));
+    }
+    let mut found = Vec::new();
+    list_entries(target, "", &mut found)?;
+    let listed: std::collections::HashSet<&str> =
+        manifest.entries.iter().map(String::as_str).collect();
+    if let Some(extra) = found.iter().find(|e| !listed.contains(e.as_str())) {
+        return Err(refuse(format!(
+            "holds {extra}, which that command did not write"
         )));
     }
     Ok(true)
 }
 
-/// Removes staging and set-aside directories of `name` left by killed processes.
+/// The first of `inputs` that lies inside `dir` (or is `dir`), by their canonical paths.
+pub fn input_inside<'a>(dir: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
+    let dir = std::fs::canonicalize(dir).ok()?;
+    inputs.iter().copied().find(|p| {
+        // a pattern (`rec/frame_*.png`) is checked by its folder
+        let p = if p.exists() {
+            p.to_path_buf()
+        } else {
+            p.parent().map(Path::to_path_buf).unwrap_or_default()
+        };
+        std::fs::canonicalize(&p).is_ok_and(|c| c.starts_with(&dir))
+    })
+}
+
+/// Refuses an output file that is one of the run's inputs (the same file, by any name).
+pub fn refuse_overwriting_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    use std::os::unix::fs::MetadataExt as _;
+    let Ok(o) = std::fs::metadata(out) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if let Ok(i) = std::fs::metadata(input) {
+            if (i.dev(), i.ino()) == (o.dev(), o.ino()) {
+                return Err(bad_input(format!(
+                    "--out {}: is the input {}; the command never writes over one of its \
+                     inputs, choose another --out",
+                    out.display(),
+                    input.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Removes staging and set-aside directories of `name` whose writer is gone: their lock is
+/// free (a live writer holds it). One that cannot be removed is ignored.
 fn remove_stale_stages(parent: &Path, name: &str) {
     let Ok(entries) = std::fs::read_dir(parent) else {
         return;
@@ -197,14 +327,14 @@ fn remove_stale_stages(parent: &Path, name: &str) {
     for e in entries.flatten() {
         let file = e.file_name();
         let Some(f) = file.to_str() else { continue };
-        let Some(pid) = prefixes.iter().find_map(|p| f.strip_prefix(p.as_str())) else {
+        if !prefixes.iter().any(|p| f.starts_with(p.as_str())) {
+            continue;
+        }
+        let Ok(dir) = std::fs::File::open(e.path()) else {
             continue;
         };
-        let alive = pid
-            .parse::<u32>()
-            .is_ok_and(|p| Path::new(&format!("/proc/{p}")).exists());
-        if !alive {
-            let _ = std::fs::remove_dir_all(e.path());
+        if dir.try_lock().is_ok() {
+            std::fs::remove_dir_all(e.path()).ok();
         }
     }
 }
@@ -234,13 +364,13 @@ fn sync_dir(dir: &Path) -> anyhow::Result<()> {
 mod tests {
     use super::*;
 
-    const REPORT: Owner = Owner::Holds("report.txt");
+    const CMD: &str = "analyze";
 
     #[test]
     fn outputs_appear_only_on_commit_and_replace_an_earlier_directory_whole() {
         let tmp = tempfile::tempdir().unwrap();
         let out = tmp.path().join("out");
-        let s = Staged::new(&out, false, REPORT).unwrap();
+        let s = Staged::new(&out, false, CMD, &[]).unwrap();
         s.write("report.txt", "one").unwrap();
         s.write("stale.csv", "x").unwrap();
         assert!(!out.exists());
@@ -250,19 +380,27 @@ mod tests {
             "one"
         );
         // refused without --force
-        let e = Staged::new(&out, false, REPORT).unwrap_err().to_string();
+        let e = Staged::new(&out, false, CMD, &[]).unwrap_err().to_string();
         assert!(e.contains("not empty") && e.contains("--force"), "{e}");
         // a failed second run (dropped before commit) leaves the first as it was
         {
-            let s = Staged::new(&out, true, REPORT).unwrap();
+            let s = Staged::new(&out, true, CMD, &[]).unwrap();
             s.write("report.txt", "two").unwrap();
         }
         assert_eq!(
             std::fs::read_to_string(out.join("report.txt")).unwrap(),
             "one"
         );
+        // so does a failed run that got as far as its report
+        let s = Staged::new(&out, true, CMD, &[]).unwrap();
+        s.write("report.txt", "failed").unwrap();
+        assert!(!s.commit_unless_replacing().unwrap());
+        assert_eq!(
+            std::fs::read_to_string(out.join("report.txt")).unwrap(),
+            "one"
+        );
         // a forced second run replaces it whole: no stale file survives
-        let s = Staged::new(&out, true, REPORT).unwrap();
+        let s = Staged::new(&out, true, CMD, &[]).unwrap();
         s.write("report.txt", "two").unwrap();
         s.commit().unwrap();
         assert_eq!(
@@ -273,16 +411,77 @@ mod tests {
         // nothing is left beside it
         let names: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().flatten().collect();
         assert_eq!(names.len(), 1, "{names:?}");
-        // a directory of something else is never replaced
-        let other = tmp.path().join("other");
-        std::fs::create_dir(&other).unwrap();
-        std::fs::write(other.join("thesis.tex"), "").unwrap();
-        let e = Staged::new(&other, true, REPORT).unwrap_err().to_string();
-        assert!(e.contains("holds no report.txt"), "{e}");
-        let frames = Owner::OnlyFiles("frame_", ".png");
-        std::fs::write(other.join("frame_1.png"), "").unwrap();
-        assert!(!frames.owns(&other));
-        std::fs::remove_file(other.join("thesis.tex")).unwrap();
-        assert!(frames.owns(&other));
+    }
+
+    #[test]
+    fn force_replaces_only_what_the_manifest_of_the_same_command_lists() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        let s = Staged::new(&out, false, CMD, &[]).unwrap();
+        s.write("report.txt", "one").unwrap();
+        std::fs::create_dir(s.dir().join("frames")).unwrap();
+        s.write("frames/f1.png", "p").unwrap();
+        s.commit().unwrap();
+        // a file added by hand, in the folder or in a sub-folder: refused, named
+        for extra in ["notes.txt", "frames/mine.png"] {
+            std::fs::write(out.join(extra), "mine").unwrap();
+            let e = Staged::new(&out, true, CMD, &[]).unwrap_err().to_string();
+            assert!(e.contains(extra) && e.contains("not replaced"), "{e}");
+            std::fs::remove_file(out.join(extra)).unwrap();
+        }
+        // another command's output
+        let e = Staged::new(&out, true, "render", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("written by `analyze`"), "{e}");
+        // a directory holding an input of the run
+        let input = out.join("frames/f1.png");
+        let e = Staged::new(&out, true, CMD, &[&input])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("an input of this run"), "{e}");
+        // one marker file is not a manifest: a folder with a report.txt is someone's
+        let lab = tmp.path().join("lab");
+        std::fs::create_dir(&lab).unwrap();
+        std::fs::write(lab.join("report.txt"), "notes").unwrap();
+        let e = Staged::new(&lab, true, CMD, &[]).unwrap_err().to_string();
+        assert!(e.contains(MANIFEST), "{e}");
+        assert!(lab.join("report.txt").exists());
+        // the untouched output is still replaceable
+        Staged::new(&out, true, CMD, &[]).unwrap().commit().unwrap();
+        assert!(!out.join("report.txt").exists());
+    }
+
+    #[test]
+    fn leftovers_of_a_killed_writer_are_removed_but_a_live_ones_are_not() {
+        let tmp = tempfile::tempdir().unwrap();
+        // a pid that is alive (init's) but no lock: a killed writer whose pid was reused
+        let dead = tmp.path().join(".out.partial-1");
+        let old = tmp.path().join(".out.old-1");
+        let live = tmp.path().join(".out.partial-999999999");
+        for d in [&dead, &old, &live] {
+            std::fs::create_dir(d).unwrap();
+            std::fs::write(d.join("x"), "").unwrap();
+        }
+        let holder = std::fs::File::open(&live).unwrap();
+        holder.lock().unwrap();
+        let s = Staged::new(&tmp.path().join("out"), false, CMD, &[]).unwrap();
+        assert!(!old.exists() && !dead.exists());
+        assert!(live.exists(), "a live writer's stage was removed");
+        s.commit().unwrap();
+        assert!(live.exists());
+    }
+
+    #[test]
+    fn an_output_file_that_is_an_input_is_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let a = tmp.path().join("a.csv");
+        std::fs::write(&a, "x\n1\n").unwrap();
+        let same = tmp.path().join(".").join("a.csv");
+        let e = refuse_overwriting_input(&same, &[&a])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is the input"), "{e}");
+        refuse_overwriting_input(&tmp.path().join("b.csv"), &[&a]).unwrap();
     }
 }

@@ -7,7 +7,7 @@ use crate::analysis::compensate::{compensate, Compensated};
 use crate::analysis::frames::{centroid_source, discover_frames, FrameSource};
 use crate::analysis::{self, Axis, DisplacementSettings, Settings};
 use crate::bad_input;
-use crate::outdir::{Owner, Staged};
+use crate::outdir::Staged;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `host-harness analyze`.
@@ -101,7 +101,8 @@ pub struct Args {
     /// real record is not periodic (docs/method.md §3.2).
     #[arg(long)]
     pub no_end_match: bool,
-    /// Replace --out if it holds an earlier analysis (its report.txt), as a whole.
+    /// Replace --out if it is an earlier output of `analyze` (its manifest lists every file in
+    /// it, and it holds no input of this run), as a whole. A failed run replaces nothing.
     #[arg(long)]
     pub force: bool,
     /// Several targets (2-32): numbered left to right (then top to bottom) in the first frame
@@ -124,6 +125,14 @@ pub struct Args {
 }
 
 impl Args {
+    /// The files and folders the run reads (an output directory holding one is never
+    /// replaced).
+    pub fn inputs(&self) -> Vec<&Path> {
+        let mut v = vec![Path::new(self.frames.as_str()), self.accel.as_path()];
+        v.extend(self.shape_reference.as_deref());
+        v
+    }
+
     /// Whether the motion is measured along the image's x axis.
     pub fn axis_is_x(&self) -> bool {
         self.axis == AxisArg::X
@@ -202,7 +211,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let disp = analysis::displacement_mm(&centroids, &dsettings)?;
 
     // every output is staged and the directory moved into place at the end (complete or absent)
-    let out = Staged::new(&args.out, args.force, Owner::Holds("report.txt"))?;
+    let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
     let inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
     out.write(
         "displacement.csv",
@@ -232,7 +241,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
     }
     out.write("report.txt", &report)?;
-    out.commit()?;
+    if result.is_ok() {
+        out.commit()?;
+    } else if !out.commit_unless_replacing()? {
+        report.push_str(&format!(
+            "\nthe analysis failed: the earlier output in {} was left as it was\n",
+            args.out.display()
+        ));
+    }
     print!("{report}");
     result.map(|_| ())
 }

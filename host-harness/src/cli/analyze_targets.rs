@@ -8,7 +8,7 @@ use crate::analysis::frames::FrameSource;
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::uff::{self, Dataset58, Dof};
 use crate::analysis::{DisplacementSettings, Settings};
-use crate::outdir::{Owner, Staged};
+use crate::outdir::Staged;
 use std::fmt::Write as _;
 
 /// Runs the multi-target analysis of `k` targets.
@@ -36,7 +36,7 @@ pub fn run(
     let config = args.centroid.config(None)?;
     let tracks = targets::track(source, args.fps, &config, k, args.gate_px)?;
     let a = targets::analyze_targets(&tracks, ds, (base, tip), settings)?;
-    let out = Staged::new(&args.out, args.force, Owner::Holds("report.txt"))?;
+    let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;
     out.write("shapes.csv", targets::shapes_csv(&a, &tracks.first))?;
     out.write("frf.csv", targets::frf_csv(&a))?;
@@ -55,20 +55,32 @@ pub fn run(
     }
     shape_plot(&out, &a, &tracks, reference.as_ref(), args.axis_is_x())?;
     let report = report(&a, &tracks, (k, accel_target), macs.as_deref());
-    out.write("report.txt", &report)?;
-    out.commit()?;
-    print!("{report}");
     let failed = a.failures();
+    out.write("report.txt", &report)?;
+    // a run with failed targets exits 2: it never replaces an earlier output
+    let written = if failed.is_empty() {
+        out.commit().map(|()| true)?
+    } else {
+        out.commit_unless_replacing()?
+    };
+    print!("{report}");
     if !failed.is_empty() {
         let list: Vec<String> = failed
             .iter()
             .map(|(t, why)| format!("target {t}: {why}"))
             .collect();
+        let whereabouts = if written {
+            format!("the others' results are in {}", args.out.display())
+        } else {
+            format!(
+                "nothing was written: the earlier output in {} was left as it was",
+                args.out.display()
+            )
+        };
         return Err(crate::bad_input(format!(
-            "{} of {k} targets could not be analysed ({}); the others' results are in {}",
+            "{} of {k} targets could not be analysed ({}); {whereabouts}",
             failed.len(),
             list.join("; "),
-            args.out.display()
         )));
     }
     Ok(())

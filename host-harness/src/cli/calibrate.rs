@@ -61,6 +61,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.free.len()
         )));
     }
+    let mut inputs = vec![args.observed.as_path()];
+    inputs.extend(args.config.as_deref());
+    for f in [
+        "fitted.toml",
+        "parameters.csv",
+        "residuals.csv",
+        "evaluations.csv",
+    ] {
+        crate::outdir::refuse_overwriting_input(&args.out.join(f), &inputs)?;
+    }
     let (obs, other) = calibrate::read_observations(&args.observed, base.preset)?;
     if other > 0 {
         eprintln!(

@@ -86,6 +86,7 @@ pub fn write_peaks(w: impl Write, bands: &Bands, peaks: &[PickedMode]) -> anyhow
 
 /// Runs `host-harness frf`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    crate::outdir::refuse_overwriting_input(&args.out, &[&args.input])?;
     let cols = read_columns(&args.input, &[args.x.as_str(), args.y.as_str()])?;
     let (x, y) = match cols.values.as_slice() {
         [x, y] => (x, y),

@@ -321,6 +321,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     if let Some(path) = &args.out {
+        let config: Vec<&std::path::Path> = args.config.iter().map(|p| p.as_path()).collect();
+        crate::outdir::refuse_overwriting_input(path, &config)?;
         crate::study::checkpoint::write_atomic(path, &csv(&plans)?)?;
         eprintln!("wrote {}", path.display());
     }

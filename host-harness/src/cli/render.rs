@@ -5,7 +5,7 @@
 use crate::bad_input;
 use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
 use crate::model::{self, grandstand};
-use crate::outdir::{Owner, Staged};
+use crate::outdir::Staged;
 use crate::recording::{camera_path, save_grey_png, RecordingSpec};
 use crate::study::{run_rng, Preset};
 use std::path::{Path, PathBuf};
@@ -32,8 +32,9 @@ pub struct Args {
     /// recording.toml, README.txt with the `analyze` command) into this directory.
     #[arg(long, value_name = "DIR")]
     pub recording: Option<PathBuf>,
-    /// Replace the output directory if it holds an earlier output of `render` (only its
-    /// frames, or a recording's recording.toml), as a whole.
+    /// Replace the output directory if it is an earlier output of the same `render` command
+    /// (its manifest lists every file in it: nothing was added, not even an analysis), as a
+    /// whole.
     #[arg(long)]
     pub force: bool,
     /// With --recording and the cantilever: K targets (2-16) along the beam, target k at
@@ -72,7 +73,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )));
     }
     if let Some(dir) = &args.recording {
-        let out = Staged::new(dir, args.force, Owner::Holds("recording.toml"))?;
+        let out = Staged::new(dir, args.force, "render --recording", &[])?;
         let mut spec = match args.preset {
             Preset::Cantilever => RecordingSpec::cantilever(args.seed, args.exposure_ms),
             Preset::Grandstand => RecordingSpec::grandstand(args.seed, args.exposure_ms),
@@ -111,7 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Preset::Grandstand => grandstand_scene(&args),
         Preset::Cantilever => cantilever_scene(&args)?,
     };
-    let out = Staged::new(&args.out, args.force, Owner::OnlyFiles("frame_t", ".png"))?;
+    let out = Staged::new(&args.out, args.force, "render", &[])?;
     let written = write_frames(out.dir(), &scene, args.exposure_ms)?;
     out.commit()?;
     for p in &written {

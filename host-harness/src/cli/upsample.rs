@@ -54,6 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )));
         }
     }
+    crate::outdir::refuse_overwriting_input(&args.out, &[&args.input])?;
     let cols = crate::csvio::read_columns(&args.input, &[args.col.as_str()])?;
     let raw = &cols.values[0];
     if let Some((i, v)) = raw.iter().enumerate().find(|(_, v)| !v.is_finite()) {

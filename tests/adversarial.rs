@@ -1,0 +1,145 @@
+//! Adversarial end-to-end cases of the recording commands: each was once a lost file or a
+//! silently wrong number (exit 0); each now gives a clear error or a correct answer, and no
+//! file the user did not ask to replace is touched.
+
+use crate::analyze::{disk, make_recording, position_px, Recording, FPS, H, W};
+use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use std::path::Path;
+
+/// `analyze` of a hand-made recording (1 s, two modes at 8 and 30 Hz) into `out`, with `extra`.
+fn analyze_into(rec: &Recording, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "analyze",
+        "--frames",
+        rec.frames.to_str().unwrap(),
+        "--fps",
+        "120",
+        "--accel",
+        rec.accel.to_str().unwrap(),
+        "--fs",
+        "2048",
+        "--mm-per-px",
+        "0.1",
+        "--threshold",
+        "100",
+        "--bands",
+        "5-15,25-45",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+/// Every entry below `dir`, relative, sorted.
+fn tree(dir: &Path) -> Vec<String> {
+    fn walk(d: &Path, pre: &str, v: &mut Vec<String>) {
+        for e in std::fs::read_dir(d).unwrap().flatten() {
+            let n = format!("{pre}{}", e.file_name().to_string_lossy());
+            if e.path().is_dir() {
+                walk(&e.path(), &format!("{n}/"), v);
+            }
+            v.push(n);
+        }
+    }
+    let mut v = Vec::new();
+    walk(dir, "", &mut v);
+    v.sort();
+    v
+}
+
+#[test]
+fn force_never_deletes_a_folder_holding_the_inputs_or_files_of_someone_else() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    // the recording's own folder, with a report.txt of the user's beside the frames
+    std::fs::write(rec.dir.join("report.txt"), "my notes").unwrap();
+    let before = tree(&rec.dir);
+    let o = analyze_into(&rec, &rec.dir, &["--force"]);
+    assert_exit_2(&o, "not replaced even with --force");
+    assert!(
+        stderr(&o).contains("an input of this run"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(tree(&rec.dir), before);
+    // a folder with a report.txt, a thesis and raw data, holding no input: still refused
+    let lab = rec.dir.join("lab");
+    std::fs::create_dir_all(lab.join("data")).unwrap();
+    for f in ["report.txt", "thesis.docx", "data/raw.bin"] {
+        std::fs::write(lab.join(f), f).unwrap();
+    }
+    let before = tree(&lab);
+    let o = analyze_into(&rec, &lab, &["--force"]);
+    assert_exit_2(&o, "not replaced even with --force");
+    assert_eq!(tree(&lab), before);
+    // an analysis the user added a file to is someone's too
+    let out = rec.dir.join("out");
+    assert_ok(&analyze_into(&rec, &out, &[]));
+    std::fs::write(out.join("my-plot.py"), "").unwrap();
+    assert_exit_2(&analyze_into(&rec, &out, &["--force"]), "my-plot.py");
+    assert!(out.join("my-plot.py").exists() && out.join("modes.csv").exists());
+    // the same analysis, untouched, is replaced
+    std::fs::remove_file(out.join("my-plot.py")).unwrap();
+    assert_ok(&analyze_into(&rec, &out, &["--force"]));
+}
+
+#[test]
+fn a_failed_analysis_never_replaces_a_good_one() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let out = rec.dir.join("out");
+    assert_ok(&analyze_into(&rec, &out, &[]));
+    let good = tree(&out);
+    let modes = std::fs::read(out.join("modes.csv")).unwrap();
+    // 10 of 120 frames blank: 8.3 % lost, the analysis fails (exit 2)
+    let blank = image::GrayImage::new(W, H);
+    for k in (0..10).map(|i| 5 + 11 * i) {
+        blank
+            .save(rec.frames.join(format!("frame_{k}.png")))
+            .unwrap();
+    }
+    let o = analyze_into(&rec, &out, &["--force"]);
+    assert_exit_2(&o, "more than the 5 %");
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("left as it was"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert_eq!(tree(&out), good);
+    assert_eq!(std::fs::read(out.join("modes.csv")).unwrap(), modes);
+    // nothing of the failed run beside it
+    assert!(
+        !tree(&rec.dir).iter().any(|n| n.starts_with(".out.")),
+        "{:?}",
+        tree(&rec.dir)
+    );
+    // the frames restored, the next forced run replaces it again
+    for k in (0..10).map(|i| 5 + 11 * i) {
+        image::GrayImage::from_raw(W, H, disk(position_px(k as f64 / FPS), W, H))
+            .unwrap()
+            .save(rec.frames.join(format!("frame_{k}.png")))
+            .unwrap();
+    }
+    assert_ok(&analyze_into(&rec, &out, &["--force"]));
+}
+
+#[test]
+fn no_command_writes_over_its_own_input() {
+    let (_tmp, rec) = make_recording(4, 2048);
+    let accel = rec.accel.to_str().unwrap();
+    let before = std::fs::read(&rec.accel).unwrap();
+    // the same file by another name, too
+    let other_name = format!("{}/./accel.csv", rec.dir.display());
+    for out in [accel, other_name.as_str()] {
+        let o = harness(&[
+            "frf", "--input", accel, "--fs", "2048", "--x", "base_acc", "--y", "tip_acc", "--out",
+            out,
+        ]);
+        assert_exit_2(&o, "is the input");
+        let o = harness(&[
+            "upsample", "--input", accel, "--col", "tip_acc", "--from", "2048", "--to", "4096",
+            "--out", out,
+        ]);
+        assert_exit_2(&o, "is the input");
+    }
+    assert_eq!(std::fs::read(&rec.accel).unwrap(), before);
+}
