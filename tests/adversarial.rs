@@ -143,3 +143,160 @@ fn no_command_writes_over_its_own_input() {
     }
     assert_eq!(std::fs::read(&rec.accel).unwrap(), before);
 }
+
+#[test]
+fn a_stray_image_beside_the_frames_is_ignored_and_named() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let clean = rec.dir.join("clean");
+    assert_ok(&analyze_into(&rec, &clean, &[]));
+    // a white background.png sorts before frame_0.png
+    image::GrayImage::from_pixel(W, H, image::Luma([255]))
+        .save(rec.frames.join("background.png"))
+        .unwrap();
+    let out = rec.dir.join("out");
+    let o = analyze_into(&rec, &out, &[]);
+    assert_ok(&o);
+    assert!(stderr(&o).contains("background.png"), "{}", stderr(&o));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("background.png") && report.contains("ignored"),
+        "{report}"
+    );
+    assert!(report.contains("lost frames: 0 of 120"), "{report}");
+    assert_eq!(
+        std::fs::read(out.join("modes.csv")).unwrap(),
+        std::fs::read(clean.join("modes.csv")).unwrap()
+    );
+    // two numbered sequences of one length: which one is meant is asked, not guessed
+    for k in 0..120 {
+        std::fs::copy(
+            rec.frames.join(format!("frame_{k}.png")),
+            rec.frames.join(format!("other_{k}.png")),
+        )
+        .unwrap();
+    }
+    assert_exit_2(&analyze_into(&rec, &rec.dir.join("o2"), &[]), "pattern");
+}
+
+/// Rewrites the recording's accelerometer CSV with `f(row, base, tip) -> (base, tip)`.
+fn rewrite_accel(rec: &Recording, f: impl Fn(usize, &str, &str) -> (String, String)) {
+    let text = std::fs::read_to_string(&rec.accel).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if i == 0 {
+            out.push_str(line);
+        } else {
+            let c: Vec<&str> = line.split(',').collect();
+            let (b, t) = f(i, c[1], c[2]);
+            out.push_str(&format!("{},{b},{t}", c[0]));
+        }
+        out.push('\n');
+    }
+    std::fs::write(&rec.accel, out).unwrap();
+}
+
+#[test]
+fn dead_constant_or_vanishing_accelerometer_channels_are_refused() {
+    type Edit = fn(usize, &str, &str) -> (String, String);
+    let cases: [(Edit, &str); 4] = [
+        (|_, _, t| ("0".into(), t.into()), "`base_acc`"),
+        (|_, _, t| ("0.05".into(), t.into()), "no variation"),
+        (|_, b, _| (b.into(), "0".into()), "`tip_acc`"),
+        (
+            |_, b, t| {
+                let tiny = |v: &str| format!("{:e}", v.parse::<f64>().unwrap() * 1e-300);
+                (tiny(b), tiny(t))
+            },
+            "far below the range",
+        ),
+    ];
+    for (edit, needle) in cases {
+        let (_tmp, rec) = make_recording(120, 2048);
+        rewrite_accel(&rec, edit);
+        let o = analyze_into(&rec, &rec.dir.join("out"), &[]);
+        assert_exit_2(&o, needle);
+        assert!(!rec.dir.join("out").exists());
+        let o = harness(&[
+            "frf",
+            "--input",
+            rec.accel.to_str().unwrap(),
+            "--fs",
+            "2048",
+            "--x",
+            "base_acc",
+            "--y",
+            "tip_acc",
+            "--out",
+            rec.dir.join("frf.csv").to_str().unwrap(),
+        ]);
+        assert_exit_2(&o, needle);
+    }
+}
+
+#[test]
+fn an_exposure_longer_than_the_frame_period_is_named() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    // 20 ms at 120 fps (8.33 ms frames): a warning in analyze, never a compensation
+    let o = analyze_into(&rec, &rec.dir.join("a"), &["--exposure-ms", "20"]);
+    assert_ok(&o);
+    assert!(
+        stderr(&o).contains("longer than the frame period (8.333 ms"),
+        "{}",
+        stderr(&o)
+    );
+    let o = analyze_into(
+        &rec,
+        &rec.dir.join("b"),
+        &["--exposure-ms", "20", "--compensate-exposure"],
+    );
+    assert_exit_2(&o, "--compensate-exposure refused");
+    // a recording is never rendered with one unless asked, nor with a silent default
+    let r = rec.dir.join("r");
+    let render = |extra: &[&str]| {
+        let mut a = vec![
+            "render",
+            "--preset",
+            "cantilever",
+            "--recording",
+            r.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        harness(&a)
+    };
+    assert_exit_2(&render(&[]), "needs --exposure-ms");
+    assert_exit_2(
+        &render(&["--exposure-ms", "100"]),
+        "longer than the frame period",
+    );
+    assert!(!r.exists());
+}
+
+#[test]
+fn gate_and_lost_frame_flags_are_checked_and_reported_as_used() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let out = rec.dir.join("out");
+    for (gate, needle) in [
+        ("0", "--gate-px 0"),
+        ("NaN", "--gate-px NaN"),
+        ("-1", "--gate-px -1"),
+    ] {
+        let o = analyze_into(&rec, &out, &["--targets", "2", "--gate-px", gate]);
+        assert_exit_2(&o, needle);
+    }
+    // --gate-px means nothing without --targets: refused, not ignored
+    let o = analyze_into(&rec, &out, &["--gate-px", "5"]);
+    assert_exit_2(&o, "--targets");
+    // three blank frames held, and the report says so
+    let blank = image::GrayImage::new(W, H);
+    for k in [10, 50, 90] {
+        blank
+            .save(rec.frames.join(format!("frame_{k}.png")))
+            .unwrap();
+    }
+    assert_ok(&analyze_into(&rec, &out, &["--lost-frames", "hold"]));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("lost frames: 3 of 120") && report.contains("held at the last valid"),
+        "{report}"
+    );
+}

@@ -490,6 +490,8 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
         "render",
         "--preset",
         "cantilever",
+        "--exposure-ms",
+        "2",
         "--recording",
         other.to_str().unwrap(),
         "--force",

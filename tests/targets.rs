@@ -522,3 +522,55 @@ fn short_accelerometer_records_and_damaged_videos_are_errors_naming_them() {
         crate::util::stderr(&o)
     );
 }
+
+#[test]
+fn a_merged_or_jumping_blob_within_the_gate_is_refused_not_taken() {
+    let tmp = tempfile::tempdir().unwrap();
+    // 1. target 2 jumps onto target 3 for 6 frames (5 %): their disks overlap, one blob of nearly twice
+    // target 3's pixels whose centroid lies within target 3's gate. Target 3 must not take it:
+    // those frames are lost frames of both (interpolated), counted and reported
+    let dir = tmp.path().join("merge");
+    let window = 40..46;
+    let onto = |t: usize, k: usize| {
+        let (x, y) = resting(t, k);
+        if t == 1 && window.contains(&k) {
+            let (x3, y3) = resting(2, k);
+            (x3 - 5.0, y3)
+        } else {
+            (x, y)
+        }
+    };
+    hand_recording(&dir, &onto, 2048);
+    assert_ok(&analyze_hand(&dir, dir.join("frames").to_str().unwrap()));
+    assert_eq!(lost_counts(&dir), vec![0, 6, 6]);
+    let report = std::fs::read_to_string(dir.join("out/report.txt")).unwrap();
+    assert!(
+        report.contains("refused as implausible") && report.contains("3: 6"),
+        "{report}"
+    );
+    // the displacement of target 3 in those frames is interpolated, not the merged centroid
+    let disp = std::fs::read_to_string(dir.join("out/displacement.csv")).unwrap();
+    let lost3: Vec<usize> = disp
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[2] == "3" && c[7] == "1")
+        .map(|c| c[0].parse().unwrap())
+        .collect();
+    assert_eq!(lost3, window.clone().collect::<Vec<_>>());
+
+    // 2. target 3 alone jumps 8 px sideways (inside the 10 px gate) for 3 frames, where its
+    // motion moves it less than 2 px a frame: refused as a jump, the other frames kept
+    let dir = tmp.path().join("jump");
+    let jump = |t: usize, k: usize| {
+        let (x, y) = resting(t, k);
+        if t == 2 && (60..63).contains(&k) {
+            (x + 8.0, y)
+        } else {
+            (x, y)
+        }
+    };
+    hand_recording(&dir, &jump, 2048);
+    assert_ok(&analyze_hand(&dir, dir.join("frames").to_str().unwrap()));
+    assert_eq!(lost_counts(&dir), vec![0, 0, 3]);
+}

@@ -162,8 +162,64 @@ pub fn check_numbering(files: &[PathBuf]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The frames `--frames` names, and the image files beside them that are not frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Discovered {
+    /// The frames.
+    pub source: FrameSource,
+    /// Image files in the folder (or matching the pattern) whose names are not of the numbered
+    /// sequence (`background.png` beside `frame_00000.png ...`): ignored, named in the report.
+    pub ignored: Vec<PathBuf>,
+}
+
+/// The numbered sequence among `files`: the names `prefix<number>suffix` of the most common
+/// prefix and suffix are the frames, every other file is returned as ignored. Names without
+/// any number, when no name has one, are all frames (natural order). Two sequences of the
+/// same size are an error (say which with a pattern).
+fn numbered_sequence(
+    files: Vec<PathBuf>,
+    what: &str,
+) -> anyhow::Result<(Vec<PathBuf>, Vec<PathBuf>)> {
+    let key = |p: &PathBuf| {
+        p.file_name()
+            .and_then(|n| n.to_str())
+            .and_then(split_number)
+            .map(|(pre, _, suf)| (pre.to_string(), suf.to_string()))
+    };
+    let mut counts: Vec<((String, String), usize)> = Vec::new();
+    for k in files.iter().filter_map(key) {
+        match counts.iter_mut().find(|(c, _)| *c == k) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((k, 1)),
+        }
+    }
+    let Some(best) = counts.iter().map(|(_, n)| *n).max() else {
+        return Ok((files, Vec::new()));
+    };
+    let top: Vec<&(String, String)> = counts
+        .iter()
+        .filter(|(_, n)| *n == best)
+        .map(|(k, _)| k)
+        .collect();
+    if top.len() > 1 {
+        let seqs: Vec<String> = top.iter().map(|(p, s)| format!("{p}N{s}")).collect();
+        return Err(bad_input(format!(
+            "{what}: {} numbered sequences of {best} files each ({}); name the frames with a              pattern, e.g. --frames 'DIR/{}*{}'",
+            top.len(),
+            seqs.join(", "),
+            top[0].0,
+            top[0].1
+        )));
+    }
+    let chosen = top[0].clone();
+    let (frames, ignored) = files
+        .into_iter()
+        .partition(|p| key(p).as_ref() == Some(&chosen));
+    Ok((frames, ignored))
+}
+
 /// Resolves `--frames`: a directory, a file-name pattern, or a multi-page TIFF.
-pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
+pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
     let path = Path::new(spec);
     if path.is_dir() {
         let files = sorted_files(path, |n| has_frame_ext(Path::new(n)))?;
@@ -173,8 +229,12 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
                 path.display()
             )));
         }
+        let (files, ignored) = numbered_sequence(files, &path.display().to_string())?;
         check_numbering(&files)?;
-        return Ok(FrameSource::Files(files));
+        return Ok(Discovered {
+            source: FrameSource::Files(files),
+            ignored,
+        });
     }
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
     if name.contains(['*', '?']) {
@@ -192,15 +252,23 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<FrameSource> {
         if files.is_empty() {
             return Err(bad_input(format!("--frames {spec}: no file matches")));
         }
+        let (files, ignored) = numbered_sequence(files, &format!("--frames {spec}"))?;
         check_numbering(&files)?;
-        return Ok(FrameSource::Files(files));
+        return Ok(Discovered {
+            source: FrameSource::Files(files),
+            ignored,
+        });
     }
+    let whole = |source| Discovered {
+        source,
+        ignored: Vec::new(),
+    };
     if path.is_file() {
         if is_tiff(path) {
-            return Ok(FrameSource::MultiPageTiff(path.to_path_buf()));
+            return Ok(whole(FrameSource::MultiPageTiff(path.to_path_buf())));
         }
         if is_video(path) {
-            return Ok(FrameSource::Video(path.to_path_buf()));
+            return Ok(whole(FrameSource::Video(path.to_path_buf())));
         }
         return Err(bad_input(format!(
             "--frames {spec}: a single {} file is one frame; give a directory of frames, a \

@@ -239,7 +239,8 @@ pub fn analyze(
     if disp.failed() {
         return Err(bad_input(format!(
             "{} of {} frames ({:.1} %) have no centroid, more than the {} % \
-             allowed (check --threshold, --roi, the exposure and the lighting)",
+             allowed (check --threshold, --roi, with --targets --gate-px, the exposure and the \
+             lighting)",
             disp.lost_count,
             disp.mm.len(),
             100.0 * disp.lost_fraction(),
@@ -322,7 +323,65 @@ pub fn load_accel(
     }
     let output = cols.pop().unwrap_or_default();
     let input = cols.pop().unwrap_or_default();
+    let file = path.display();
+    check_channel(
+        &input,
+        &format!("{file}: column `{input_col}` (--input-col)"),
+    )?;
+    check_channel(
+        &output,
+        &format!("{file}: column `{output_col}` (--output-col)"),
+    )?;
     Ok((input, output))
+}
+
+/// The smallest standard deviation a channel may have: below it the squares summed by the
+/// Welch estimator (about std^2 x segment length) fall out of `f64`'s normal range and H1 is
+/// no longer computed to full precision (1e-300 underflows to no spectrum at all).
+pub const CHANNEL_STD_MIN: f64 = 1e-140;
+
+/// Refuses a channel that cannot carry a measurement: a value that is not finite (named by
+/// row), no variance at all (constant: a dead or disconnected sensor; an FRF against it would
+/// divide by nothing), or a variation far below the floating-point range. `what` names the file
+/// and column.
+pub fn check_channel(values: &[f64], what: &str) -> anyhow::Result<()> {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(bad_input(format!(
+            "{what}: row {} is {}, not a finite number",
+            i + 2,
+            values[i]
+        )));
+    }
+    let n = values.len() as f64;
+    if values.is_empty() {
+        return Err(bad_input(format!("{what}: no samples")));
+    }
+    // in units of the largest magnitude, so that tiny values do not underflow here
+    let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let unit = if scale > 0.0 { scale } else { 1.0 };
+    let mean = values.iter().map(|v| v / unit).sum::<f64>() / n;
+    let std = (values
+        .iter()
+        .map(|v| (v / unit - mean).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let (mean, std) = (mean * unit, std * unit);
+    // a constant column, up to the rounding of its mean
+    if std <= mean.abs() * 1e-12 || std == 0.0 {
+        return Err(bad_input(format!(
+            "{what}: every sample is {} (no variation): a dead, disconnected or clipped \
+             channel cannot be analysed",
+            values[0]
+        )));
+    }
+    if std < CHANNEL_STD_MIN {
+        return Err(bad_input(format!(
+            "{what}: its standard deviation {std:e} is far below the range the spectra can be \
+             computed in (>= {CHANNEL_STD_MIN:e}); scale the column (e.g. to m/s^2)"
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -464,6 +523,7 @@ mod tests {
             lost: vec![false; n],
             lost_count: 0,
             reference_px: 0.0,
+            policy: Default::default(),
             mm,
         };
         let s = Settings {

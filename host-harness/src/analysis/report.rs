@@ -125,9 +125,9 @@ pub fn report_text(
         100.0 * disp.lost_fraction(),
         100.0 * MAX_LOST_FRACTION,
         if disp.lost_count > 0 {
-            " - filled by linear interpolation"
+            format!(" - {}", disp.policy.describe())
         } else {
-            ""
+            String::new()
         }
     );
     if let Some(f) = failure {

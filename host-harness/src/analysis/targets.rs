@@ -2,8 +2,10 @@
 //! multi-target centroider on every frame, targets numbered left to right (then top to bottom)
 //! in the first frame, each followed by its nearest detection within a gate; a target with no
 //! detection in the gate, whose detection is also the nearest of another target (two targets
-//! merging), or whose detection touches the frame border (leaving the frame: its centroid would
-//! be biased) is a lost frame of that target only. Per target the chain of [`super::analyze`]; per band the modal fit
+//! merging), whose detection touches the frame border (leaving the frame: its centroid would
+//! be biased), or whose detection is implausible for its history ([`History`]: a pixel count
+//! far from its recent ones, as when two blobs merge or stray light joins it, or a jump far
+//! beyond what its motion so far predicts) is a lost frame of that target only. Per target the chain of [`super::analyze`]; per band the modal fit
 //! ([`super::modal`]): the accelerometer's and each target's pole (frequency, damping) and the
 //! shape across targets from one pole fitted to all their FRFs.
 
@@ -28,6 +30,90 @@ pub struct Tracks {
     pub centroids: Vec<Vec<Centroid>>,
     /// Position in the first frame, px.
     pub first: Vec<(f64, f64)>,
+    /// Per target, the detections refused as implausible ([`History::check`]), counted among
+    /// its lost frames.
+    pub refused: Vec<usize>,
+}
+
+/// Pixel counts of a target's accepted detections this many frames back are its reference.
+const PIXEL_HISTORY: usize = 15;
+/// A detection whose pixel count is more than this factor above or below the median of the
+/// target's recent ones is not the target alone (two blobs merged: 2x) or not all of it.
+const PIXEL_FACTOR: f64 = 1.5;
+/// A detection this far (px) from the constant-velocity prediction is always plausible: the
+/// floor of the jump check, above the quantisation and noise of a centroid.
+const JUMP_FLOOR_PX: f64 = 3.0;
+/// Beyond the floor, a detection may be this many RMS prediction residuals of the target's
+/// history from the prediction.
+const JUMP_SIGMAS: f64 = 6.0;
+/// Residuals needed before the history's RMS is trusted (until then: the gate only).
+const JUMP_WARMUP: usize = 10;
+
+/// What a target's accepted detections so far allow of the next one.
+#[derive(Debug, Clone, Default)]
+pub struct History {
+    /// Pixel counts of the last accepted detections (at most [`PIXEL_HISTORY`]).
+    pixels: std::collections::VecDeque<u64>,
+    /// The last accepted position and, if the frame before it was accepted too, the one before.
+    last: Option<(f64, f64)>,
+    before: Option<(f64, f64)>,
+    /// Sum of squared constant-velocity prediction residuals, and their count.
+    residual_sq: f64,
+    residuals: usize,
+}
+
+impl History {
+    /// Why detection `c` is not plausible for this target, if it is not.
+    pub fn check(&self, c: &Centroid) -> Option<String> {
+        let mut recent: Vec<u64> = self.pixels.iter().copied().collect();
+        recent.sort_unstable();
+        if let Some(&median) = recent.get(recent.len() / 2) {
+            let p = c.moments.pixels as f64;
+            let m = median as f64;
+            if p > m * PIXEL_FACTOR || p * PIXEL_FACTOR < m {
+                return Some(format!("{p} px against {m} px recently"));
+            }
+        }
+        if let (Some(last), Some(before)) = (self.last, self.before) {
+            if self.residuals >= JUMP_WARMUP {
+                let r = self.residual(last, before, c);
+                let rms = (self.residual_sq / self.residuals as f64).sqrt();
+                let allowed = JUMP_FLOOR_PX.max(JUMP_SIGMAS * rms);
+                if r > allowed {
+                    return Some(format!(
+                        "{r:.1} px from where its motion predicts it (allowed {allowed:.1})"
+                    ));
+                }
+            }
+        }
+        None
+    }
+
+    fn residual(&self, last: (f64, f64), before: (f64, f64), c: &Centroid) -> f64 {
+        let predicted = (2.0 * last.0 - before.0, 2.0 * last.1 - before.1);
+        (f64::from(c.cx) - predicted.0).hypot(f64::from(c.cy) - predicted.1)
+    }
+
+    /// Takes an accepted detection into the history.
+    pub fn accept(&mut self, c: &Centroid) {
+        if let (Some(last), Some(before)) = (self.last, self.before) {
+            let r = self.residual(last, before, c);
+            self.residual_sq += r * r;
+            self.residuals += 1;
+        }
+        self.before = self.last;
+        self.last = Some((f64::from(c.cx), f64::from(c.cy)));
+        if self.pixels.len() == PIXEL_HISTORY {
+            self.pixels.pop_front();
+        }
+        self.pixels.push_back(c.moments.pixels);
+    }
+
+    /// A frame without an accepted detection: the velocity is unknown until two consecutive
+    /// frames are accepted again.
+    pub fn miss(&mut self) {
+        self.before = None;
+    }
 }
 
 /// A centroid standing for a lost frame.
@@ -60,7 +146,9 @@ pub fn track(
     let mut tracks = Tracks {
         centroids: vec![Vec::new(); k],
         first: Vec::new(),
+        refused: vec![0; k],
     };
+    let mut history = vec![History::default(); k];
     let mut last: Vec<(f64, f64)> = Vec::new();
     let mut frame_no = 0usize;
     let mut one = |label: String, frame: &GreyFrame| -> anyhow::Result<()> {
@@ -87,6 +175,7 @@ pub fn track(
             last = order.iter().map(|c| (c.cx as f64, c.cy as f64)).collect();
             tracks.first = last.clone();
             for (t, c) in order.into_iter().enumerate() {
+                history[t].accept(&c);
                 tracks.centroids[t].push(c);
             }
             return Ok(());
@@ -115,14 +204,24 @@ pub fn track(
             match claimed {
                 // touching the frame (or ROI) border: partly outside, its centroid is biased
                 Some(j) if found[j].flags.contains(Flags::BORDER) => {
+                    history[t].miss();
+                    tracks.centroids[t].push(lost())
+                }
+                Some(j) if history[t].check(&found[j]).is_some() => {
+                    history[t].miss();
+                    tracks.refused[t] += 1;
                     tracks.centroids[t].push(lost())
                 }
                 Some(j) => {
                     let c = found[j];
+                    history[t].accept(&c);
                     last[t] = (c.cx as f64, c.cy as f64);
                     tracks.centroids[t].push(c);
                 }
-                None => tracks.centroids[t].push(lost()),
+                None => {
+                    history[t].miss();
+                    tracks.centroids[t].push(lost())
+                }
             }
         }
         Ok(())
@@ -245,6 +344,7 @@ pub fn analyze_targets(
             lost: vec![true; c.len()],
             lost_count: c.len(),
             reference_px: 0.0,
+            policy: ds.lost_frames,
         }));
         analyses.push(a);
     }

@@ -205,6 +205,18 @@ pub struct Displacement {
     pub lost_count: usize,
     /// Reference centroid coordinate along the axis (mean of the valid frames), pixels.
     pub reference_px: f64,
+    /// How the lost frames were filled.
+    pub policy: LostFramePolicy,
+}
+
+impl LostFramePolicy {
+    /// How a report says what the policy did to the lost frames.
+    pub fn describe(self) -> &'static str {
+        match self {
+            LostFramePolicy::Interpolate => "filled by linear interpolation",
+            LostFramePolicy::Hold => "held at the last valid value",
+        }
+    }
 }
 
 impl Displacement {
@@ -274,6 +286,7 @@ pub fn displacement_mm(
         lost: valid.iter().map(|v| !v).collect(),
         lost_count,
         reference_px,
+        policy: s.lost_frames,
     })
 }
 

@@ -110,9 +110,15 @@ pub struct Args {
     /// damping, shapes.csv and frf.uff (docs/cli.md).
     #[arg(long, value_name = "K")]
     pub targets: Option<usize>,
-    /// With --targets: how far a target may move between frames and still be the same, px.
-    #[arg(long, value_name = "PX", default_value_t = 10.0)]
-    pub gate_px: f64,
+    /// With --targets: how far a target may move between frames and still be the same, px
+    /// (> 0; default 10).
+    #[arg(
+        long,
+        value_name = "PX",
+        requires = "targets",
+        allow_negative_numbers = true
+    )]
+    pub gate_px: Option<f64>,
     /// With --targets: the target (1..K) co-located with the output accelerometer, compared
     /// with it in the report (default: the last, K).
     #[arg(long, value_name = "J", requires = "targets")]
@@ -159,6 +165,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if !(e.is_finite() && e >= 0.0) {
             return Err(bad_input(format!("--exposure-ms must be >= 0, got {e}")));
         }
+        let period_ms = 1000.0 / args.fps;
+        if e > period_ms {
+            let why = format!(
+                "--exposure-ms {e} is longer than the frame period ({period_ms:.3} ms at {} \
+                 fps): no camera exposes longer than it records; check --exposure-ms (in ms) \
+                 and --fps",
+                args.fps
+            );
+            // dividing by the transfer of an impossible exposure would be a wrong number
+            if args.compensate_exposure {
+                return Err(bad_input(format!("{why}; --compensate-exposure refused")));
+            }
+            eprintln!("warning: {why}");
+        }
     }
     let time_offset_s = match (args.time_offset_s, args.tick_offset, args.tick_hz) {
         (Some(t), _, _) => t,
@@ -193,7 +213,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &args.output_col,
         args.time_col.as_deref(),
     )?;
-    let source = discover_frames(&args.frames)?;
+    let found = discover_frames(&args.frames)?;
+    let source = found.source.clone();
+    let ignored = ignored_note(&found.ignored);
+    if let Some(n) = &ignored {
+        eprintln!("warning: {n}");
+    }
     if let Some(n) = source.count(args.fps)? {
         // The frame count is known before decoding: check the record lengths now.
         analysis::align(n, args.fps, base.len(), args.fs, time_offset_s)?;
@@ -205,6 +230,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             (&base, &tip),
             (&settings, &dsettings),
             k,
+            ignored.as_deref(),
         );
     }
     let centroids = centroid_source(&source, args.fps, &config)?;
@@ -212,7 +238,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     // every output is staged and the directory moved into place at the end (complete or absent)
     let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
-    let inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
+    let mut inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
+    if let Some(n) = ignored {
+        inputs.push(("ignored".into(), n));
+    }
     out.write(
         "displacement.csv",
         analysis::displacement_csv(&centroids, &disp, args.fps, time_offset_s),
@@ -284,6 +313,20 @@ fn append_compensation(
         report.push_str(&format!("  written: {}\n", p.display()));
     }
     Ok(())
+}
+
+/// The sentence naming image files beside the frames that are not of their numbered sequence.
+pub fn ignored_note(ignored: &[PathBuf]) -> Option<String> {
+    if ignored.is_empty() {
+        return None;
+    }
+    let names: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
+    Some(format!(
+        "{} image file(s) beside the frames are not of their numbered sequence and were \
+         ignored: {}",
+        names.len(),
+        names.join(", ")
+    ))
 }
 
 /// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the

@@ -18,9 +18,17 @@ pub fn run(
     (base, tip): (&[f64], &[f64]),
     (settings, ds): (&Settings, &DisplacementSettings),
     k: usize,
+    ignored: Option<&str>,
 ) -> anyhow::Result<()> {
     if !(2..=32).contains(&k) {
         return Err(crate::bad_input(format!("--targets {k}: between 2 and 32")));
+    }
+    let gate_px = args.gate_px.unwrap_or(10.0);
+    if !(gate_px.is_finite() && gate_px > 0.0) {
+        return Err(crate::bad_input(format!(
+            "--gate-px {gate_px}: must be a positive number of pixels (how far a target may \
+             move between two frames and still be the same)"
+        )));
     }
     let accel_target = args.accel_target.unwrap_or(k);
     if !(1..=k).contains(&accel_target) {
@@ -34,7 +42,7 @@ pub fn run(
         None => None,
     };
     let config = args.centroid.config(None)?;
-    let tracks = targets::track(source, args.fps, &config, k, args.gate_px)?;
+    let tracks = targets::track(source, args.fps, &config, k, gate_px)?;
     let a = targets::analyze_targets(&tracks, ds, (base, tip), settings)?;
     let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;
@@ -54,7 +62,10 @@ pub fn run(
         out.write("mac.csv", csv)?;
     }
     shape_plot(&out, &a, &tracks, reference.as_ref(), args.axis_is_x())?;
-    let report = report(&a, &tracks, (k, accel_target), macs.as_deref());
+    let mut report = report(&a, &tracks, (k, accel_target), macs.as_deref());
+    if let Some(n) = ignored {
+        report.push_str(&format!("\nnote: {n}\n"));
+    }
     let failed = a.failures();
     out.write("report.txt", &report)?;
     // a run with failed targets exits 2: it never replaces an earlier output
@@ -203,6 +214,14 @@ fn report(
     let mut s = format!("analyze --targets {k}\n\nlost frames per target:");
     for (t, d) in a.displacements.iter().enumerate() {
         let _ = write!(s, " {}: {} of {}", t + 1, d.lost_count, d.mm.len());
+    }
+    if tracks.refused.iter().any(|&n| n > 0) {
+        s.push_str(
+            "\nof them refused as implausible for the target's history (pixel count or jump):",
+        );
+        for (t, n) in tracks.refused.iter().enumerate() {
+            let _ = write!(s, " {}: {n}", t + 1);
+        }
     }
     for (t, why) in a.failures() {
         let _ = write!(s, "\nTARGET {t} NOT ANALYSED: {why}");

@@ -92,6 +92,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         [x, y] => (x, y),
         _ => anyhow::bail!("internal: expected two columns"),
     };
+    let file = args.input.display();
+    crate::analysis::check_channel(x, &format!("{file}: column `{}` (--x)", args.x))?;
+    crate::analysis::check_channel(y, &format!("{file}: column `{}` (--y)", args.y))?;
     let config = args
         .welch
         .settings()

@@ -19,9 +19,15 @@ pub struct Args {
     /// Seed of the simulated run (the study's run 0 of this seed).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Exposure time of the blurred frames, ms (centred on the frame time).
-    #[arg(long, default_value_t = 100.0)]
-    pub exposure_ms: f64,
+    /// Exposure time of the blurred frames, ms (centred on the frame time). Default 100 for
+    /// single frames; a recording (--recording) needs it given, at most the frame period
+    /// unless --allow-long-exposure.
+    #[arg(long, value_name = "MS")]
+    pub exposure_ms: Option<f64>,
+    /// With --recording: allow an exposure longer than the frame period (no real camera does
+    /// that; the paper's simulation does).
+    #[arg(long, requires = "recording")]
+    pub allow_long_exposure: bool,
     /// Frame times in seconds, comma separated (default: a few instants of the response).
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub times: Option<Vec<f64>>,
@@ -59,25 +65,25 @@ pub struct Args {
 
 /// Runs `host-harness render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if !(args.exposure_ms.is_finite() && args.exposure_ms >= 0.0) {
+    let exposure_ms = args.exposure_ms.unwrap_or(100.0);
+    if !(exposure_ms.is_finite() && exposure_ms >= 0.0) {
         return Err(bad_input(format!(
-            "--exposure-ms {}: must be a non-negative number",
-            args.exposure_ms
+            "--exposure-ms {exposure_ms}: must be a non-negative number"
         )));
     }
     let record_ms = crate::study::StudyConfig::preset(args.preset).record_ms();
-    if args.exposure_ms > record_ms {
+    if exposure_ms > record_ms {
         return Err(bad_input(format!(
-            "--exposure-ms {}: longer than the simulated record ({record_ms} ms)",
-            args.exposure_ms
+            "--exposure-ms {exposure_ms}: longer than the simulated record ({record_ms} ms)"
         )));
     }
     if let Some(dir) = &args.recording {
-        let out = Staged::new(dir, args.force, "render --recording", &[])?;
         let mut spec = match args.preset {
-            Preset::Cantilever => RecordingSpec::cantilever(args.seed, args.exposure_ms),
-            Preset::Grandstand => RecordingSpec::grandstand(args.seed, args.exposure_ms),
+            Preset::Cantilever => RecordingSpec::cantilever(args.seed, exposure_ms),
+            Preset::Grandstand => RecordingSpec::grandstand(args.seed, exposure_ms),
         };
+        check_recording_exposure(&args, spec.acquisition.fps)?;
+        let out = Staged::new(dir, args.force, "render --recording", &[])?;
         spec.read_noise = args.read_noise;
         spec.video = args.video;
         let files = match args.targets {
@@ -109,11 +115,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let scene = match args.preset {
-        Preset::Grandstand => grandstand_scene(&args),
-        Preset::Cantilever => cantilever_scene(&args)?,
+        Preset::Grandstand => grandstand_scene(&args, exposure_ms),
+        Preset::Cantilever => cantilever_scene(&args, exposure_ms)?,
     };
     let out = Staged::new(&args.out, args.force, "render", &[])?;
-    let written = write_frames(out.dir(), &scene, args.exposure_ms)?;
+    let written = write_frames(out.dir(), &scene, exposure_ms)?;
     out.commit()?;
     for p in &written {
         let name = p.file_name().unwrap_or_default();
@@ -121,6 +127,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     eprintln!("wrote {} frames in {}", written.len(), args.out.display());
     Ok(())
+}
+
+/// A recording's exposure: given, and at most the frame period unless asked.
+fn check_recording_exposure(args: &Args, fps: f64) -> anyhow::Result<()> {
+    let period_ms = 1000.0 / fps;
+    match args.exposure_ms {
+        None => Err(bad_input(format!(
+            "--recording needs --exposure-ms: the camera records at {fps} fps, a frame period \
+             of {period_ms:.3} ms, the longest exposure it can have"
+        ))),
+        Some(e) if e > period_ms && !args.allow_long_exposure => Err(bad_input(format!(
+            "--exposure-ms {e}: longer than the frame period ({period_ms:.3} ms at {fps} fps), \
+             which no camera does; --allow-long-exposure to simulate it anyway"
+        ))),
+        Some(_) => Ok(()),
+    }
 }
 
 /// What the camera of a preset looks at: the target and its path.
@@ -170,9 +192,9 @@ fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<V
 }
 
 /// The grandstand of run 0 of `--seed`, as the study simulates it.
-fn grandstand_scene(args: &Args) -> Scene {
+fn grandstand_scene(args: &Args, exposure_ms: f64) -> Scene {
     let fine_hz = grandstand::FS_HZ * grandstand::FINE as f64;
-    let pad = TargetPath::pad_for(args.exposure_ms, fine_hz);
+    let pad = TargetPath::pad_for(exposure_ms, fine_hz);
     let mut rng = run_rng(args.seed, 0);
     let sim = grandstand::simulate(&mut rng, false, pad);
     Scene {
@@ -195,9 +217,8 @@ fn grandstand_scene(args: &Args) -> Scene {
 }
 
 /// The nominal cantilever, as a synthetic recording simulates it.
-fn cantilever_scene(args: &Args) -> anyhow::Result<Scene> {
-    let mut spec = RecordingSpec::cantilever(args.seed, args.exposure_ms);
-    spec.exposure_ms = args.exposure_ms;
+fn cantilever_scene(args: &Args, exposure_ms: f64) -> anyhow::Result<Scene> {
+    let spec = RecordingSpec::cantilever(args.seed, exposure_ms);
     let sim = model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
     let (path, _) = camera_path(&spec, &sim);
     Ok(Scene {
