@@ -22,8 +22,6 @@ fn analyze_into(rec: &Recording, out: &Path, extra: &[&str]) -> std::process::Ou
         "0.1",
         "--threshold",
         "100",
-        "--bands",
-        "5-15,25-45",
         "--out",
         out.to_str().unwrap(),
     ];
@@ -299,4 +297,32 @@ fn gate_and_lost_frame_flags_are_checked_and_reported_as_used() {
         report.contains("lost frames: 3 of 120") && report.contains("held at the last valid"),
         "{report}"
     );
+}
+
+#[test]
+fn a_threshold_for_8_bit_frames_on_16_bit_ones_and_bands_above_nyquist_are_named() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let out = rec.dir.join("out");
+    assert_exit_2(
+        &analyze_into(&rec, &out, &["--bands", "5-15,55-70"]),
+        "Nyquist frequency (60 Hz",
+    );
+    // the same frames as 16-bit PNGs (x257), analysed with the 8-bit threshold
+    for k in 0..120 {
+        let p = rec.frames.join(format!("frame_{k}.png"));
+        let img = image::open(&p).unwrap().to_luma8();
+        let wide: image::ImageBuffer<image::Luma<u16>, Vec<u16>> =
+            image::ImageBuffer::from_fn(img.width(), img.height(), |x, y| {
+                image::Luma([u16::from(img.get_pixel(x, y).0[0]) * 257])
+            });
+        wide.save(&p).unwrap();
+    }
+    let o = analyze_into(&rec, &out, &[]);
+    assert!(
+        stderr(&o).contains("--threshold 100 on 16-bit frames whose values reach 51400"),
+        "{}",
+        stderr(&o)
+    );
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains("16-bit, largest value 51400"), "{report}");
 }

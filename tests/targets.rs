@@ -231,6 +231,72 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
         "row 2: mode 1, target 9",
     );
 
+    // an all-zero reference, or one for a mode --bands does not have, is refused
+    std::fs::write(
+        &reference,
+        "mode,target,re\n1,1,0\n1,2,0\n1,3,0\n1,4,0\n1,5,0\n",
+    )
+    .unwrap();
+    assert_exit_2(
+        &analyze_with(
+            &png_frames,
+            &with_ref,
+            "5",
+            &["--shape-reference", refarg, "--force"],
+        ),
+        "every component of mode 1 is zero",
+    );
+    std::fs::write(&reference, "mode,target,re\n3,1,1\n").unwrap();
+    assert_exit_2(
+        &analyze_with(
+            &png_frames,
+            &with_ref,
+            "5",
+            &["--shape-reference", refarg, "--force"],
+        ),
+        "modes count from 1 to 2",
+    );
+    // every vision fit is resolvable or empty (a one-bin "resonance" of a weakly excited
+    // target is not a mode): no damping below half a bin's bandwidth
+    for r in modes(&out).iter().filter(|r| r.0 == "vision") {
+        let (f, zeta) = (r.3, r.4);
+        assert!(
+            (f.is_nan() && zeta.is_nan()) || 2.0 * zeta * f >= 0.05,
+            "{r:?}"
+        );
+    }
+    // --compensate-exposure acts on every target: the amplitudes divided by the transfer that
+    // compensation.csv states, one row per target and mode
+    let comp = rec.join("analysis-compensated");
+    assert_ok(&analyze_with(
+        &png_frames,
+        &comp,
+        "5",
+        &["--compensate-exposure"],
+    ));
+    let table = std::fs::read_to_string(comp.join("compensation.csv")).unwrap();
+    assert_eq!(table.lines().count(), 1 + 5 * 2, "{table}");
+    let amplitude = |dir: &Path, t: usize, m: usize| {
+        let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
+        text.lines()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|c| c[0] == "vision" && c[1] == t.to_string() && c[2] == m.to_string())
+            .map(|c| c[6].parse::<f64>().unwrap())
+            .unwrap()
+    };
+    for row in table.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        let (t, m, factor): (usize, usize, f64) = (
+            c[0].parse().unwrap(),
+            c[1].parse().unwrap(),
+            c[5].parse().unwrap(),
+        );
+        assert!(factor > 1.0, "{row}");
+        let ratio = amplitude(&comp, t, m) / amplitude(&out, t, m);
+        // the same bin picked before and after: the ratio is the factor (f32 transfer)
+        assert!((ratio / factor - 1.0).abs() < 1e-6, "{row}: ratio {ratio}");
+    }
+
     // a wrong target count is named with the frame
     assert_exit_2(
         &analyze("4"),

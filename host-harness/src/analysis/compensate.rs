@@ -135,12 +135,19 @@ impl Compensated {
     /// `compensated` false for a flagged mode).
     pub fn csv(&self) -> String {
         let mut s = String::from("mode,f_hz,e2pr,transfer,factor,compensated\n");
+        s += &self.rows("");
+        s
+    }
+
+    /// The rows of [`csv`](Self::csv), each after `prefix` (e.g. `3,` for a target column).
+    pub fn rows(&self, prefix: &str) -> String {
+        let mut s = String::new();
         for m in &self.modes {
             s += &format!(
-                "{},{},{},{},{},{}\n",
+                "{prefix}{},{},{},{},{},{}\n",
                 m.mode,
                 m.f_hz,
-                m.e2pr,
+                round_e2pr(m.e2pr),
                 m.ratio.map(|r| r.to_string()).unwrap_or_default(),
                 m.factor(),
                 m.ratio.is_some()
@@ -148,4 +155,15 @@ impl Compensated {
         }
         s
     }
+}
+
+/// An E2PR as written in CSV files: rounded to 9 significant digits, so that the product of a
+/// frequency and an exposure is `0.0646`, not `0.06459999999999999`.
+pub fn round_e2pr(e: f64) -> f64 {
+    if e == 0.0 || !e.is_finite() {
+        return e;
+    }
+    let digits = 9 - 1 - e.abs().log10().floor() as i32;
+    let scale = 10f64.powi(digits);
+    (e * scale).round() / scale
 }

@@ -442,11 +442,13 @@ pub fn centroid_source(
     source: &FrameSource,
     fps: f64,
     config: &CentroidConfig,
-) -> anyhow::Result<Vec<Centroid>> {
+) -> anyhow::Result<(Vec<Centroid>, FrameDepth)> {
     let mut out = Vec::new();
     let mut first: Option<(usize, usize, String)> = None;
+    let mut depth = FrameDepth::default();
     let mut one = |label: String, frame: &GreyFrame| -> anyhow::Result<()> {
         let dims = frame.dimensions();
+        depth.add(frame);
         match &first {
             None => first = Some((dims.0, dims.1, label.clone())),
             Some((w, h, l)) if (*w, *h) != dims => {
@@ -461,7 +463,49 @@ pub fn centroid_source(
         Ok(())
     };
     source.for_each(fps, &mut one)?;
-    Ok(out)
+    Ok((out, depth))
+}
+
+/// The bit depth of a recording's frames and the largest value in them, for the report and
+/// for a threshold that does not fit them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameDepth {
+    /// 8 or 16 (0 before the first frame).
+    pub bits: u8,
+    /// The largest pixel value seen.
+    pub max: u16,
+}
+
+impl FrameDepth {
+    /// Takes one frame into account.
+    pub fn add(&mut self, frame: &GreyFrame) {
+        let (bits, max) = match frame {
+            GreyFrame::U8 { data, .. } => (8, data.iter().copied().max().map_or(0, u16::from)),
+            GreyFrame::U16 { data, .. } => (16, data.iter().copied().max().unwrap_or(0)),
+        };
+        self.bits = self.bits.max(bits);
+        self.max = self.max.max(max);
+    }
+
+    /// How the report names the frames' depth.
+    pub fn describe(&self) -> String {
+        format!("{}-bit, largest value {}", self.bits, self.max)
+    }
+
+    /// A warning when `threshold` looks meant for 8-bit frames but the frames are 16-bit with
+    /// values far above 255 (the threshold then selects nearly everything but the darkest
+    /// background).
+    pub fn threshold_warning(&self, threshold: u16) -> Option<String> {
+        (self.bits == 16 && threshold <= 255 && self.max > 1023).then(|| {
+            format!(
+                "--threshold {threshold} on 16-bit frames whose values reach {}: a threshold \
+                 for 8-bit frames? On 16-bit frames it is in their own units (x257 maps 8-bit \
+                 levels to 16-bit: {})",
+                self.max,
+                u32::from(threshold) * 257
+            )
+        })
+    }
 }
 
 #[cfg(test)]

@@ -42,7 +42,10 @@ pub fn modes_csv(a: &Analysis) -> String {
         ("vision", &a.vis_modes, &a.vis_frf),
     ] {
         for (i, m) in modes.iter().enumerate() {
-            let e2pr = m.e2pr.map(|e| e.to_string()).unwrap_or_default();
+            let e2pr = m
+                .e2pr
+                .map(|e| super::compensate::round_e2pr(e).to_string())
+                .unwrap_or_default();
             let damping = fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
                 .map(|f| f.pole.damping.to_string())
                 .unwrap_or_default();

@@ -33,6 +33,8 @@ pub struct Tracks {
     /// Per target, the detections refused as implausible ([`History::check`]), counted among
     /// its lost frames.
     pub refused: Vec<usize>,
+    /// The frames' bit depth and largest value.
+    pub depth: super::frames::FrameDepth,
 }
 
 /// Pixel counts of a target's accepted detections this many frames back are its reference.
@@ -147,12 +149,14 @@ pub fn track(
         centroids: vec![Vec::new(); k],
         first: Vec::new(),
         refused: vec![0; k],
+        depth: Default::default(),
     };
     let mut history = vec![History::default(); k];
     let mut last: Vec<(f64, f64)> = Vec::new();
     let mut frame_no = 0usize;
     let mut one = |label: String, frame: &GreyFrame| -> anyhow::Result<()> {
         frame_no += 1;
+        tracks.depth.add(frame);
         let found = detect(&mut mc, frame, &label)?;
         if frame_no == 1 {
             if found.len() != k {
@@ -291,6 +295,19 @@ pub struct TargetAnalysis {
     /// Per band, the shape across targets (normalised; `None` for a failed target) and the
     /// shared pole; `None` when the fit failed.
     pub shapes: Vec<Option<(modal::Pole, Vec<Option<Complex64>>)>>,
+    /// Per target, the exposure compensation applied to its vision H1 before the fits
+    /// (`analyze --compensate-exposure`); `None` without it or for a failed target.
+    pub compensation: Vec<Option<super::compensate::Compensated>>,
+}
+
+/// The exposure compensation asked of [`analyze_targets`]: every target's vision H1 divided
+/// by the exposure's transfer before the modal fits ([`super::compensate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CompensationRequest {
+    /// Exposure, s.
+    pub exposure_s: f64,
+    /// Binary centroid (the sinc is then an approximation, noted).
+    pub binary: bool,
 }
 
 impl TargetAnalysis {
@@ -322,6 +339,14 @@ impl TargetAnalysis {
     }
 }
 
+/// Whether a fitted pole is one the FRF can show: inside the band, not on its edges, and with
+/// a half-power bandwidth (`2 zeta f`) of at least half a bin. A narrower "resonance" is one
+/// spurious bin (noise where the input is weak), not a mode: its fit is left empty.
+fn resolvable(pole: &modal::Pole, band: (f64, f64), freq_hz: &[f64]) -> bool {
+    let df = freq_hz.get(1).copied().unwrap_or(0.0) - freq_hz.first().copied().unwrap_or(0.0);
+    pole.f_hz > band.0 + df && pole.f_hz < band.1 - df && 2.0 * pole.damping * pole.f_hz >= 0.5 * df
+}
+
 /// The chain on every target and the modal fits. A target whose chain fails (more than 5 %
 /// lost frames, ...) is reported in [`TargetAnalysis::analyses`] and left out of the modes and
 /// shapes; an error only when every target fails.
@@ -330,15 +355,26 @@ pub fn analyze_targets(
     ds: &DisplacementSettings,
     (base, tip): (&[f64], &[f64]),
     s: &Settings,
+    compensate: Option<CompensationRequest>,
 ) -> anyhow::Result<TargetAnalysis> {
     let mut displacements = Vec::new();
     let mut analyses = Vec::new();
+    let mut compensation = Vec::new();
     for c in &tracks.centroids {
         let d = super::displacement_mm(c, ds);
-        let a = match &d {
+        let mut a = match &d {
             Ok(d) => super::analyze(d, base, tip, s).map_err(|e| format!("{e:#}")),
             Err(e) => Err(format!("{e:#}")),
         };
+        compensation.push(match (&mut a, compensate) {
+            (Ok(an), Some(r)) => Some(super::compensate::compensate(
+                an,
+                r.exposure_s,
+                &s.bands,
+                r.binary,
+            )?),
+            _ => None,
+        });
         displacements.push(d.unwrap_or_else(|_| Displacement {
             mm: vec![0.0; c.len()],
             lost: vec![true; c.len()],
@@ -364,7 +400,9 @@ pub fn analyze_targets(
     let mut shapes = Vec::new();
     for (b, &band) in s.bands.iter().enumerate() {
         let fit = |f: &crate::chain::frf::Frf| {
-            modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance).ok()
+            modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
+                .ok()
+                .filter(|m| resolvable(&m.pole, band, &f.freq_hz))
         };
         let a = fit(&acc_frf);
         modes.push(TargetMode {
@@ -386,7 +424,14 @@ pub fn analyze_targets(
                 f_hz: v.as_ref().map(|m| m.pole.f_hz),
                 amplitude: an.vis_modes[b].amplitude,
                 damping: v.as_ref().map(|m| m.pole.damping),
-                e2pr: an.vis_modes[b].e2pr,
+                // at the fitted frequency (the picked bin's when the fit failed)
+                e2pr: an.vis_modes[b].e2pr.map(|e| {
+                    let picked = an.vis_modes[b].f_hz;
+                    match v.as_ref() {
+                        Some(m) if picked > 0.0 => e / picked * m.pole.f_hz,
+                        _ => e,
+                    }
+                }),
             });
         }
         let good: Vec<usize> = (0..analyses.len())
@@ -414,6 +459,7 @@ pub fn analyze_targets(
         acc_modes,
         modes,
         shapes,
+        compensation,
     })
 }
 
@@ -424,7 +470,11 @@ pub type ShapeReference = std::collections::BTreeMap<usize, Vec<Complex64>>;
 /// Reads a reference shape CSV with a header naming at least `mode`, `target` and `re` (and
 /// optionally `im`): the layout of `shapes.csv`, or a hand-written table. Every mode present
 /// must give all `k` targets once. Errors name the file, the row and the column.
-pub fn read_shape_reference(path: &std::path::Path, k: usize) -> anyhow::Result<ShapeReference> {
+pub fn read_shape_reference(
+    path: &std::path::Path,
+    k: usize,
+    bands: usize,
+) -> anyhow::Result<ShapeReference> {
     let name = path.display();
     let text = std::fs::read_to_string(path)
         .map_err(|e| bad_input(format!("--shape-reference {name}: cannot read it: {e}")))?;
@@ -474,10 +524,10 @@ pub fn read_shape_reference(path: &std::path::Path, k: usize) -> anyhow::Result<
                 })
         };
         let (mode, target) = (int(cm, "mode")?, int(ct, "target")?);
-        if mode == 0 || !(1..=k).contains(&target) {
+        if !(1..=bands).contains(&mode) || !(1..=k).contains(&target) {
             return Err(bad_input(format!(
-                "{name} row {row}: mode {mode}, target {target}: modes count from 1 and \
-                 targets from 1 to {k} (--targets {k})"
+                "{name} row {row}: mode {mode}, target {target}: modes count from 1 to {bands} \
+                 (one per --bands band) and targets from 1 to {k} (--targets {k})"
             )));
         }
         let im = match ci {
@@ -501,6 +551,11 @@ pub fn read_shape_reference(path: &std::path::Path, k: usize) -> anyhow::Result<
             if !missing.is_empty() {
                 return Err(bad_input(format!(
                     "{name}: mode {mode} has no component for target(s) {missing:?}"
+                )));
+            }
+            if v.iter().flatten().all(|c| c.norm() == 0.0) {
+                return Err(bad_input(format!(
+                    "{name}: every component of mode {mode} is zero: no shape to compare with"
                 )));
             }
             Ok((mode, v.into_iter().flatten().collect()))
@@ -598,7 +653,7 @@ pub fn modes_csv(modes: &[TargetMode]) -> String {
             opt(m.f_hz),
             m.amplitude,
             opt(m.damping),
-            opt(m.e2pr)
+            opt(m.e2pr.map(super::compensate::round_e2pr))
         ));
     }
     s

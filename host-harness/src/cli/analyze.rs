@@ -180,6 +180,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("warning: {why}");
         }
     }
+    for &(lo, hi) in &args.bands.pairs() {
+        if hi > args.fps / 2.0 {
+            return Err(bad_input(format!(
+                "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz at {} \
+                 fps), where the vision record has no content; keep every band below it",
+                args.fps / 2.0,
+                args.fps
+            )));
+        }
+    }
     let time_offset_s = match (args.time_offset_s, args.tick_offset, args.tick_hz) {
         (Some(t), _, _) => t,
         (None, Some(k), Some(hz)) => analysis::tick_offset_to_seconds(k, hz)?,
@@ -233,7 +243,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ignored.as_deref(),
         );
     }
-    let centroids = centroid_source(&source, args.fps, &config)?;
+    let (centroids, depth) = centroid_source(&source, args.fps, &config)?;
+    let depth_warning = depth.threshold_warning(args.centroid.threshold);
+    if let Some(w) = &depth_warning {
+        eprintln!("warning: {w}");
+    }
     let disp = analysis::displacement_mm(&centroids, &dsettings)?;
 
     // every output is staged and the directory moved into place at the end (complete or absent)
@@ -241,6 +255,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
     if let Some(n) = ignored {
         inputs.push(("ignored".into(), n));
+    }
+    inputs.push(("frame depth".into(), depth.describe()));
+    if let Some(w) = depth_warning {
+        inputs.push(("WARNING".into(), w));
     }
     out.write(
         "displacement.csv",

@@ -38,12 +38,19 @@ pub fn run(
     }
     // the reference is read before the frames: a bad file fails at once
     let reference = match &args.shape_reference {
-        Some(p) => Some(targets::read_shape_reference(p, k)?),
+        Some(p) => Some(targets::read_shape_reference(p, k, settings.bands.len())?),
         None => None,
     };
     let config = args.centroid.config(None)?;
     let tracks = targets::track(source, args.fps, &config, k, gate_px)?;
-    let a = targets::analyze_targets(&tracks, ds, (base, tip), settings)?;
+    let compensate = match (args.compensate_exposure, settings.exposure_s) {
+        (true, Some(exposure_s)) => Some(targets::CompensationRequest {
+            exposure_s,
+            binary: args.centroid.mode == super::args::ModeArg::Binary,
+        }),
+        _ => None,
+    };
+    let a = targets::analyze_targets(&tracks, ds, (base, tip), settings, compensate)?;
     let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;
     out.write("shapes.csv", targets::shapes_csv(&a, &tracks.first))?;
@@ -53,6 +60,15 @@ pub fn run(
         targets::displacement_csv(&tracks, &a, args.fps, settings.time_offset_s),
     )?;
     out.write("frf.uff", uff_bytes(&a)?)?;
+    if compensate.is_some() {
+        let mut csv = String::from("target,mode,f_hz,e2pr,transfer,factor,compensated\n");
+        for (t, c) in a.compensation.iter().enumerate() {
+            if let Some(c) = c {
+                csv += &c.rows(&format!("{},", t + 1));
+            }
+        }
+        out.write("compensation.csv", csv)?;
+    }
     let macs = reference.as_ref().map(|r| targets::macs(&a, r));
     if let Some(m) = &macs {
         let mut csv = String::from("mode,mac\n");
@@ -65,6 +81,17 @@ pub fn run(
     let mut report = report(&a, &tracks, (k, accel_target), macs.as_deref());
     if let Some(n) = ignored {
         report.push_str(&format!("\nnote: {n}\n"));
+    }
+    report.push_str(&format!("\nframes: {}\n", tracks.depth.describe()));
+    if let Some(w) = tracks.depth.threshold_warning(args.centroid.threshold) {
+        eprintln!("warning: {w}");
+        report.push_str(&format!("WARNING: {w}\n"));
+    }
+    for (t, c) in a.compensation.iter().enumerate() {
+        if let Some(c) = c {
+            report.push_str(&format!("\ntarget {}:", t + 1));
+            report.push_str(&c.report());
+        }
     }
     let failed = a.failures();
     out.write("report.txt", &report)?;
@@ -281,9 +308,10 @@ fn report(
         let _ = writeln!(
             s,
             "note: target {t}, mode {mode}: its own fit ({f}) is more than three half-power \
-             bandwidths from the shared pole ({:.4} Hz); the target is probably near a node of \
-             this mode and its own frequency and damping are not to be trusted (its shape \
-             component, from the shared pole, is)",
+             bandwidths from the shared pole ({:.4} Hz): its own FRF shows the mode weakly (a \
+             target near a node, or a spurious peak where the input is weak), so its own \
+             frequency and damping are not to be trusted (its shape component, from the shared \
+             pole, is)",
             pole.f_hz
         );
     }
