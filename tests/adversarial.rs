@@ -326,3 +326,50 @@ fn a_threshold_for_8_bit_frames_on_16_bit_ones_and_bands_above_nyquist_are_named
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
     assert!(report.contains("16-bit, largest value 51400"), "{report}");
 }
+
+#[test]
+fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
+    let tmp = tempfile::tempdir().unwrap();
+    let obs = tmp.path().join("observed.csv");
+    let out = tmp.path().join("fit");
+    let calibrate = |rows: &str, extra: &[&str]| {
+        std::fs::write(
+            &obs,
+            format!("rig,mode,exposure_ms,quantity,value,u\n{rows}"),
+        )
+        .unwrap();
+        let mut a = vec![
+            "calibrate",
+            "--preset",
+            "cantilever",
+            "--observed",
+            obs.to_str().unwrap(),
+            "--free",
+            "target_radius_px=5:20",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        harness(&a)
+    };
+    let chi = "cantilever,1,2,chi_mu,95.5,\n";
+    // too few runs for the model's uncertainty of a chi index: refused before any run
+    assert_exit_2(
+        &calibrate(chi, &["--runs", "5"]),
+        "--runs 5: the chi_mu/chi_sigma observations need",
+    );
+    // a mode the rig does not report, a negative uncertainty, a knob freed twice
+    assert_exit_2(
+        &calibrate("cantilever,3,2,chi_mu,95.5,\n", &[]),
+        "row 2: mode `3` must be 1 to 2",
+    );
+    assert_exit_2(
+        &calibrate("cantilever,1,2,chi_mu,95.5,-1\n", &[]),
+        "row 2: u `-1` is negative",
+    );
+    assert_exit_2(
+        &calibrate(chi, &["--free", "target_radius_px=6:9"]),
+        "--free target_radius_px: given twice",
+    );
+    assert!(!out.exists());
+}

@@ -83,6 +83,10 @@ pub struct Observation {
 /// counted in the second value). Chi indices above 2 are taken as percent. Errors name the file
 /// and row.
 pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observation>, usize)> {
+    let modes = crate::study::scenario_for(&StudyConfig::preset(rig))?
+        .reporting()
+        .bands
+        .len();
     let file = || path.display().to_string();
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -117,12 +121,13 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
         let mode = cell(ci_mode)
             .parse::<usize>()
             .ok()
-            .filter(|m| *m >= 1)
+            .filter(|m| (1..=modes).contains(m))
             .ok_or_else(|| {
                 bad_input(format!(
-                    "{}: mode `{}` must be 1, 2, ...",
+                    "{}: mode `{}` must be 1 to {modes}, the modes the {} rig reports",
                     at(),
-                    cell(ci_mode)
+                    cell(ci_mode),
+                    rig.name()
                 ))
             })?;
         let quantity = Quantity::parse(cell(ci_q)).ok_or_else(|| {
@@ -138,7 +143,17 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
         }
         let mut value = num(ci_v, "value")?;
         let mut u = match ci_u.filter(|c| !cell(*c).is_empty()) {
-            Some(c) => Some(num(c, "u")?.abs()),
+            Some(c) => {
+                let u = num(c, "u")?;
+                if u < 0.0 {
+                    return Err(bad_input(format!(
+                        "{}: u `{}` is negative; a standard uncertainty is >= 0",
+                        at(),
+                        cell(c)
+                    )));
+                }
+                Some(u)
+            }
             None => None,
         };
         if matches!(quantity, Quantity::ChiMu | Quantity::ChiSigma) && value > 2.0 {
@@ -326,15 +341,26 @@ pub fn evaluate(
         .iter()
         .map(|o| {
             let (model, u_model) = model_figure(&out.summary, &out.coverage, &cfg, o);
+            if model.is_finite() && !u_model.is_finite() {
+                // a residual over an unknown uncertainty would be a number without meaning
+                return Err(bad_input(format!(
+                    "the model's uncertainty of {} (mode {}, {} ms) is undefined with {} runs \
+                     per evaluation; raise --runs",
+                    o.quantity.name(),
+                    o.mode,
+                    o.exposure_ms,
+                    cfg.runs
+                )));
+            }
             let u = combined_u(o, u_model);
-            Residual {
+            Ok(Residual {
                 observed: o.clone(),
                 model,
                 u_model,
                 r: (model - o.value) / u,
-            }
+            })
         })
-        .collect();
+        .collect::<anyhow::Result<_>>()?;
     let chi2 = residuals
         .iter()
         .map(|r| if r.r.is_finite() { r.r * r.r } else { MISSING })

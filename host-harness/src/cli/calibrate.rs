@@ -3,7 +3,7 @@
 //! `evaluations.csv` and `fitted.toml` (a study file that uses the fitted values), each atomically.
 
 use crate::bad_input;
-use crate::calibrate::{self, Free};
+use crate::calibrate::{self, Free, Quantity};
 use crate::study::checkpoint::write_atomic;
 use crate::study::{Preset, StudyConfig};
 use std::path::PathBuf;
@@ -71,7 +71,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ] {
         crate::outdir::refuse_overwriting_input(&args.out.join(f), &inputs)?;
     }
+    for (i, f) in args.free.iter().enumerate() {
+        if args.free[..i].iter().any(|g| g.knob == f.knob) {
+            return Err(bad_input(format!(
+                "--free {}: given twice; each knob is fitted once",
+                f.knob.name()
+            )));
+        }
+    }
     let (obs, other) = calibrate::read_observations(&args.observed, base.preset)?;
+    let chi = obs
+        .iter()
+        .any(|o| matches!(o.quantity, Quantity::ChiMu | Quantity::ChiSigma));
+    let needed = crate::uncertainty::min_values(base.coverage).unwrap_or(2) as u64;
+    if chi && args.runs < needed {
+        return Err(bad_input(format!(
+            "--runs {}: the chi_mu/chi_sigma observations need the model's bootstrap \
+             uncertainty, which needs at least {needed} runs per evaluation (coverage {})",
+            args.runs, base.coverage
+        )));
+    }
     if other > 0 {
         eprintln!(
             "{}: {other} rows of another rig left out",
