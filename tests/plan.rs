@@ -71,8 +71,9 @@ fn weighted_rows_follow_the_sinc_and_the_csv_header_is_the_contract() {
         "2,2.5",
         "--amplitude-px",
         "4,3",
+        // 5 fps: a frame period (200 ms) longer than the tolerance's exposures
         "--fps",
-        "50",
+        "5",
         "--tolerance",
         "0.1",
         "--threshold-frac",
@@ -134,7 +135,7 @@ fn binary_rows_cross_the_tolerance_at_their_longest_exposure() {
             "--amplitude-px",
             "5",
             "--fps",
-            "50",
+            "5",
             "--centroid",
             "binary",
         ],
@@ -169,10 +170,34 @@ fn aliasing_and_long_exposures_are_warned() {
         "{out}"
     );
     assert!(!out.contains("mode 1 at 2 Hz is above"), "{out}");
-    // 125 ms for mode 1 is longer than the 20 ms frame
+    // the tolerance alone would allow 125 ms for mode 1, longer than the 20 ms frame: the
+    // maximum is the frame period, never an exposure no camera has
     assert!(
-        out.contains("warning: mode 1: exposure 125.2 ms is longer than the frame period"),
+        out.contains(
+            "warning: mode 1: the tolerance alone allows 125.2 ms, longer than the frame \
+             period; max_exposure_ms is the frame period, 20.000 ms"
+        ),
         "{out}"
+    );
+    assert!(!out.contains("exposure 125.2 ms is longer"), "{out}");
+    // an exposure given longer than the frame is warned as such
+    let o = harness(&[
+        "plan",
+        "--freqs-hz",
+        "2",
+        "--amplitude-px",
+        "3",
+        "--fps",
+        "50",
+        "--exposure-ms",
+        "60",
+        "--centroid",
+        "weighted",
+    ]);
+    assert!(
+        text(&o.stdout).contains("warning: mode 1: exposure 60.0 ms is longer than the frame"),
+        "{}",
+        text(&o.stdout)
     );
 }
 
@@ -319,4 +344,38 @@ fn compensation_brings_the_weighted_vision_amplitude_back_to_the_accelerometer()
         assert!(report.contains(&format!("mode {mode}: ")), "{report}");
     }
     assert!(report.contains("exposure compensation (8 ms"), "{report}");
+}
+
+#[test]
+fn a_study_files_imaging_table_reaches_the_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("big-target.toml");
+    std::fs::write(
+        &cfg,
+        "preset = \"grandstand\"\n[imaging]\ntarget_radius_px = 24.0\nread_noise = 1.0\n",
+    )
+    .unwrap();
+    let fixed = ["--centroid", "weighted", "--exposure-ms", "100"];
+    let (_, preset, _) = plan_csv(
+        dir.path(),
+        &[&["--preset", "grandstand"][..], &fixed].concat(),
+    );
+    let o = harness(&[&["plan", "--config", cfg.to_str().unwrap()][..], &fixed].concat());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // the effects it does not model are named, not dropped in silence
+    assert!(
+        text(&o.stderr).contains("not: read_noise"),
+        "{}",
+        text(&o.stderr)
+    );
+    let (_, with_cfg, _) = plan_csv(
+        dir.path(),
+        &[&["--config", cfg.to_str().unwrap()][..], &fixed].concat(),
+    );
+    // the lost-frame risk is the swept path over the target's diameter: twice the radius,
+    // half the risk
+    for (a, b) in preset.iter().zip(&with_cfg) {
+        let ratio = num(b, "lost_frame_risk") / num(a, "lost_frame_risk");
+        assert!((ratio - 0.5).abs() < 1e-9, "{ratio}: {a:?} {b:?}");
+    }
 }

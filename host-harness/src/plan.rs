@@ -8,7 +8,9 @@
 //! * `predicted_ratio` (vision / true amplitude) at the exposure `Te`: the sinc
 //!   `sinc(pi f Te)` for the weighted centroid (the transfer the firmware divides by), the
 //!   transfer measured through the renderer ([`crate::imaging::compensation`]) for the binary centroid;
-//! * `max_exposure_ms`: the longest exposure whose predicted ratio stays `>= 1 - tolerance`
+//! * `max_exposure_ms`: the longest exposure whose predicted ratio stays `>= 1 - tolerance`,
+//!   at most the frame period (a warning says when the tolerance alone allows more), empty
+//!   when even the shortest exposure misses the tolerance (a warning gives its ratio)
 //!   (the sinc inverted by bisection; for the binary centroid the first crossing, linearly
 //!   interpolated on a 0.0125 E2PR grid);
 //! * `compensated_residual`: the relative amplitude error left after dividing by the
@@ -113,8 +115,9 @@ pub struct PlanRow {
     pub f_hz: f64,
     /// Centroid mode.
     pub centroid: Mode,
-    /// Longest exposure keeping the predicted ratio `>= 1 - tolerance`, ms.
-    pub max_exposure_ms: f64,
+    /// Longest exposure keeping the predicted ratio `>= 1 - tolerance`, ms, at most the frame
+    /// period; `None` when even the shortest exposure misses the tolerance (an empty cell).
+    pub max_exposure_ms: Option<f64>,
     /// `f Te` at the evaluated exposure.
     pub e2pr: f64,
     /// Predicted vision / true amplitude at the evaluated exposure.
@@ -149,7 +152,9 @@ impl PlanRow {
                 _ => "binary",
             }
             .to_string(),
-            self.max_exposure_ms.to_string(),
+            self.max_exposure_ms
+                .map(|e| e.to_string())
+                .unwrap_or_default(),
             self.e2pr.to_string(),
             self.predicted_ratio.to_string(),
             self.compensated_residual.to_string(),
@@ -176,6 +181,26 @@ pub enum PlanWarning {
         mode: usize,
         /// Exposure, ms.
         exposure_ms: f64,
+        /// `1000 / fps`, ms.
+        frame_period_ms: f64,
+    },
+    /// No exposure keeps the predicted ratio within the tolerance: even the shortest gives
+    /// `ratio` (the binary centroid's quantisation, not the blur).
+    ToleranceUnreachable {
+        /// Mode number.
+        mode: usize,
+        /// The tolerance.
+        tolerance: f64,
+        /// The predicted ratio at the shortest exposure.
+        ratio: f64,
+    },
+    /// The tolerance alone would allow a longer exposure than the frame period: the maximum is
+    /// the frame period.
+    MaxLimitedByFrame {
+        /// Mode number.
+        mode: usize,
+        /// What the tolerance alone allows, ms.
+        tolerance_ms: f64,
         /// `1000 / fps`, ms.
         frame_period_ms: f64,
     },
@@ -207,6 +232,25 @@ impl std::fmt::Display for PlanWarning {
                 f,
                 "mode {mode}: exposure {exposure_ms:.1} ms is longer than the frame period \
                  {frame_period_ms:.1} ms"
+            ),
+            PlanWarning::ToleranceUnreachable {
+                mode,
+                tolerance,
+                ratio,
+            } => write!(
+                f,
+                "mode {mode}: no exposure meets the tolerance {tolerance}: even the shortest \
+                 gives a predicted ratio of {ratio:.4} (max_exposure_ms left empty; the row is \
+                 evaluated at 0 ms)"
+            ),
+            PlanWarning::MaxLimitedByFrame {
+                mode,
+                tolerance_ms,
+                frame_period_ms,
+            } => write!(
+                f,
+                "mode {mode}: the tolerance alone allows {tolerance_ms:.1} ms, longer than the \
+                 frame period; max_exposure_ms is the frame period, {frame_period_ms:.3} ms"
             ),
             PlanWarning::LostFrames { mode, risk } => write!(
                 f,
@@ -286,8 +330,26 @@ pub fn plan(input: &PlanInput) -> Result<Plan, CompensationError> {
         setup.path_steps_per_period = 512;
         // the measured transfer of this centroid at the actual threshold, on the grid
         let measured = measured_transfer(&setup, input.motion.as_deref(), &grid)?;
-        let max_exposure_ms = 1000.0 * max_e2pr(input.centroid, &measured, floor) / m.f_hz;
-        let exposure_ms = input.exposure_ms.unwrap_or(max_exposure_ms);
+        let frame_ms = 1000.0 / input.fps;
+        let max_exposure_ms = max_e2pr(input.centroid, &measured, floor).map(|e| {
+            let tolerance_ms = 1000.0 * e / m.f_hz;
+            if tolerance_ms > frame_ms {
+                warnings.push(PlanWarning::MaxLimitedByFrame {
+                    mode: m.mode,
+                    tolerance_ms,
+                    frame_period_ms: frame_ms,
+                });
+            }
+            tolerance_ms.min(frame_ms)
+        });
+        if max_exposure_ms.is_none() {
+            warnings.push(PlanWarning::ToleranceUnreachable {
+                mode: m.mode,
+                tolerance: input.tolerance,
+                ratio: measured.first().map_or(f64::NAN, |p| p.1),
+            });
+        }
+        let exposure_ms = input.exposure_ms.or(max_exposure_ms).unwrap_or(0.0);
         let e2pr = m.f_hz * exposure_ms / 1000.0;
         // beyond the grid (E2PR > 1) render the point itself
         let measured_at = match interp(&measured, e2pr) {
@@ -368,8 +430,11 @@ fn validate(input: &PlanInput) -> Result<(), CompensationError> {
 
 /// The largest E2PR whose transfer ratio stays at or above `floor`: the sinc inverted by
 /// bisection for the weighted centroid, else the first crossing of the `measured` curve.
-fn max_e2pr(centroid: Mode, measured: &[(f64, f64)], floor: f64) -> f64 {
-    match centroid {
+fn max_e2pr(centroid: Mode, measured: &[(f64, f64)], floor: f64) -> Option<f64> {
+    if centroid != Mode::Weighted && measured.first().is_none_or(|p| p.1 < floor) {
+        return None;
+    }
+    Some(match centroid {
         // the sinc falls monotonically on [0, 1]: invert it by bisection
         Mode::Weighted => {
             let (mut lo, mut hi) = (0.0f64, 1.0f64);
@@ -384,7 +449,7 @@ fn max_e2pr(centroid: Mode, measured: &[(f64, f64)], floor: f64) -> f64 {
             lo
         }
         _ => first_crossing(measured, floor),
-    }
+    })
 }
 
 /// Linear interpolation of the `(e2pr, ratio)` points at `e`; `None` outside them.
@@ -465,14 +530,15 @@ mod tests {
 
     #[test]
     fn weighted_plan_inverts_the_sinc() {
-        let input = PlanInput::new(modes(), 12.0, 0.0, 50.0, 0.1, Mode::Weighted);
+        // 5 fps: a frame period (200 ms) longer than the tolerance's exposures
+        let input = PlanInput::new(modes(), 12.0, 0.0, 5.0, 0.1, Mode::Weighted);
         let p = plan(&input).unwrap();
         for r in &p.rows {
             eprintln!("weighted plan: {}", r.csv_record().join(","));
         }
         for (row, m) in p.rows.iter().zip(modes()) {
             // at the longest exposure the sinc is exactly 1 - tolerance
-            let x = m.f_hz * row.max_exposure_ms / 1000.0;
+            let x = m.f_hz * row.max_exposure_ms.unwrap() / 1000.0;
             // (bisection to 1e-18, f32 sinc of the firmware: 1e-7)
             assert!((sinc_pi(x as f32) as f64 - 0.9).abs() < 1e-6, "{row:?}");
             assert!((row.predicted_ratio - 0.9).abs() < 1e-9, "{row:?}");
@@ -495,16 +561,59 @@ mod tests {
                 "{a:?} {b:?}"
             );
         }
-        // 125 ms at 50 fps is longer than the 20 ms frame: warned
+        // at 50 fps the tolerance's 125 ms is longer than the 20 ms frame: the maximum is the
+        // frame period, and the warning says what the tolerance alone allows
+        let p = plan(&PlanInput::new(
+            modes(),
+            12.0,
+            0.0,
+            50.0,
+            0.1,
+            Mode::Weighted,
+        ))
+        .unwrap();
+        assert_eq!(p.rows[0].max_exposure_ms, Some(20.0));
         assert!(warned(&p, |w| matches!(
+            w,
+            PlanWarning::MaxLimitedByFrame { mode: 1, tolerance_ms, .. }
+                if (tolerance_ms - 125.25).abs() < 0.1
+        )));
+        // a fixed exposure longer than the frame is evaluated, and warned
+        let mut fixed = PlanInput::new(modes(), 12.0, 0.0, 50.0, 0.1, Mode::Weighted);
+        fixed.exposure_ms = Some(60.0);
+        assert!(warned(&plan(&fixed).unwrap(), |w| matches!(
             w,
             PlanWarning::ExposureLongerThanFrame { mode: 1, .. }
         )));
     }
 
     #[test]
+    fn a_tolerance_no_exposure_meets_leaves_the_maximum_empty() {
+        // the binary centroid's ratio at the shortest exposure is below 1 - 0.002 here
+        let p = plan(&PlanInput::new(
+            modes(),
+            12.0,
+            0.5,
+            5.0,
+            0.002,
+            Mode::Binary,
+        ))
+        .unwrap();
+        let r = p.rows[0];
+        assert_eq!(r.max_exposure_ms, None, "{r:?}");
+        assert_eq!(r.e2pr, 0.0, "{r:?}");
+        assert!(r.predicted_ratio < 0.998, "{r:?}");
+        let csv = r.csv_record();
+        assert_eq!(csv[3], "");
+        assert!(warned(&p, |w| matches!(
+            w,
+            PlanWarning::ToleranceUnreachable { mode: 1, ratio, .. } if *ratio < 0.998
+        )));
+    }
+
+    #[test]
     fn binary_plan_uses_the_rendered_transfer_and_its_table() {
-        let mut input = PlanInput::new(modes(), 12.0, 0.5, 50.0, 0.1, Mode::Binary);
+        let mut input = PlanInput::new(modes(), 12.0, 0.5, 5.0, 0.1, Mode::Binary);
         let p = plan(&input).unwrap();
         for r in &p.rows {
             eprintln!("binary plan: {}", r.csv_record().join(","));
@@ -541,7 +650,7 @@ mod tests {
             mode: 2,
             f_hz: 2.5,
             centroid: Mode::Weighted,
-            max_exposure_ms: 102.5,
+            max_exposure_ms: Some(102.5),
             e2pr: 0.25625,
             predicted_ratio: 0.9,
             compensated_residual: 1e-4,

@@ -90,14 +90,23 @@ fn check(flag: &str, v: f64, ok: impl Fn(f64) -> bool, want: &str) -> anyhow::Re
 
 /// The preset's input (from `--preset` or the study file's preset), if any.
 fn preset_input(args: &Args) -> anyhow::Result<Option<PlanInput>> {
-    let preset = match (&args.config, args.preset) {
-        (Some(p), _) => Some(StudyConfig::from_toml_file(p)?.preset),
-        (None, p) => p,
+    let config = args
+        .config
+        .as_ref()
+        .map(|p| StudyConfig::from_toml_file(p))
+        .transpose()?;
+    let preset = match &config {
+        Some(c) => Some(c.preset),
+        None => args.preset,
     };
     match preset {
         None => Ok(None),
         Some(Preset::Grandstand) => {
-            Ok(Some(preset::grandstand_input(args.tolerance, Mode::Binary)))
+            let mut input = preset::grandstand_input(args.tolerance, Mode::Binary);
+            if let Some(c) = &config {
+                apply_imaging(&mut input, &c.imaging)?;
+            }
+            Ok(Some(input))
         }
         Some(p) => Err(bad_input(format!(
             "{} {}: the planner supports only the grandstand preset; give --freqs-hz, \
@@ -110,6 +119,44 @@ fn preset_input(args: &Args) -> anyhow::Result<Option<PlanInput>> {
             p.name()
         ))),
     }
+}
+
+/// A study file's `[imaging]` table in the plan: its target and threshold replace the rig's;
+/// the effects the planner does not model are named on stderr, never silently dropped.
+fn apply_imaging(
+    input: &mut PlanInput,
+    imaging: &crate::imaging::ImagingOptions,
+) -> anyhow::Result<()> {
+    let (target, threshold) = imaging.target_and_threshold(input.target, input.threshold())?;
+    input.target = target;
+    input.threshold_frac = f64::from(threshold) / target.level;
+    let ignored: Vec<&str> = [
+        ("gain", imaging.gain.is_some()),
+        ("distortion_k1", imaging.distortion_k1.is_some()),
+        ("distortion_k2", imaging.distortion_k2.is_some()),
+        (
+            "optical_blur_sigma_px",
+            imaging.optical_blur_sigma_px.is_some(),
+        ),
+        ("read_noise", imaging.read_noise.is_some()),
+        (
+            "shot_noise_e_per_level",
+            imaging.shot_noise_e_per_level.is_some(),
+        ),
+        ("bits", imaging.bits.is_some()),
+        ("exposure_alignment", imaging.exposure_alignment.is_some()),
+        ("threshold_rule", imaging.threshold_rule.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(name, set)| set.then_some(name))
+    .collect();
+    if !ignored.is_empty() {
+        eprintln!(
+            "note: the planner models the target, threshold and centroid of [imaging]; not: {}",
+            ignored.join(", ")
+        );
+    }
+    Ok(())
 }
 
 fn missing(flag: &str) -> anyhow::Error {
@@ -263,12 +310,13 @@ pub fn table(input: &PlanInput, plans: &[Plan]) -> String {
         for (r, m) in p.rows.iter().zip(&input.modes) {
             let c = r.csv_record();
             s += &format!(
-                "{:>4} {:>7.3} {:>8.3} {:>8} {:>15.1} {:>6.3} {:>15.4} {:>20.4} {:>15.3}\n",
+                "{:>4} {:>7.3} {:>8.3} {:>8} {:>15} {:>6.3} {:>15.4} {:>20.4} {:>15.3}\n",
                 r.mode,
                 r.f_hz,
                 m.amplitude_px,
                 c[2],
-                r.max_exposure_ms,
+                r.max_exposure_ms
+                    .map_or("-".to_string(), |e| format!("{e:.1}")),
                 r.e2pr,
                 r.predicted_ratio,
                 r.compensated_residual,
