@@ -373,3 +373,81 @@ fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
     );
     assert!(!out.exists());
 }
+
+/// Encodes `rec/frames/frame_%05d.png` at `rate` with `codec` into `rec/name`.
+fn encode(rec: &Path, rate: &str, codec: &[&str], name: &str) {
+    let status = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-framerate", rate, "-i"])
+        .arg(rec.join("frames/frame_%05d.png"))
+        .args(codec)
+        .arg(rec.join(name))
+        .status()
+        .expect("ffmpeg (Debian: apt-get install ffmpeg)");
+    assert!(status.success());
+}
+
+#[test]
+fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--exposure-ms",
+        "2",
+    ]));
+    let analyze = |frames: &str, fps: &str, out: &str| {
+        // one band below the Nyquist frequency of the slowest rate here (15 Hz at 30 fps)
+        let bands = if fps.starts_with('3') {
+            "5-14"
+        } else {
+            "5-15,25-45"
+        };
+        std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"))
+            .current_dir(&rec)
+            .args([
+                "analyze",
+                &format!("--frames={frames}"),
+                "--fps",
+                fps,
+                "--accel",
+                "accel.csv",
+                "--fs",
+                "2048",
+                "--time-col",
+                "t_s",
+                "--threshold",
+                "127",
+                "--mm-per-px",
+                "0.1266",
+                "--bands",
+                bands,
+                "--out",
+                out,
+            ])
+            .output()
+            .unwrap()
+    };
+    // an MJPEG AVI of 33 px wide frames: FFmpeg notes "EOI missing" on every frame, which is
+    // not damage
+    encode(&rec, "120", &["-c:v", "mjpeg", "-q:v", "2"], "mjpeg.avi");
+    assert_ok(&analyze("mjpeg.avi", "120", "a1"));
+    // a file whose name starts with '-' is a file, not an FFmpeg option
+    encode(&rec, "120", &["-c:v", "ffv1"], "-y.mkv");
+    assert_ok(&analyze("-y.mkv", "120", "a2"));
+    // a constant 60 fps video read as 120, and an NTSC 29.97 fps one read as 30: the video's
+    // own rate is named, never "a dropped frame" or "a variable frame rate"
+    encode(&rec, "60", &["-c:v", "ffv1"], "v60.mkv");
+    let o = analyze("v60.mkv", "120", "a3");
+    assert_exit_2(&o, "frame rate is 60.0000 fps (60/1), constant, not 120");
+    encode(&rec, "30000/1001", &["-c:v", "ffv1"], "ntsc.mkv");
+    let o = analyze("ntsc.mkv", "30", "a4");
+    assert_exit_2(&o, "29.9700 fps (30000/1001), constant");
+    // the rate written as the container writes it is accepted; 1200 frames at 30000/1001 fps
+    // span no whole number of 2048 Hz samples (that needs a multiple of 1875 frames): said so
+    let o = analyze("ntsc.mkv", "30000/1001", "a5");
+    assert_exit_2(&o, "no record of up to 1200 frames spans a whole number");
+}

@@ -218,6 +218,29 @@ pub struct Analysis {
     pub acc_modes: Vec<PickedMode>,
     /// Modes of the vision system, one per band.
     pub vis_modes: Vec<PickedMode>,
+    /// Frames analysed: all of them, or the longest leading part whose span is a whole number
+    /// of accelerometer samples ([`usable_frames`]); the rest were left out.
+    pub frames_used: usize,
+}
+
+/// The longest record of at most `frames` frames at `fc` Hz whose span is a whole number of
+/// samples at `fa` Hz (the Fourier upsampling needs `N fa / fc` to be an integer: with
+/// `fc = 30000/1001` and `fa = 2048`, N a multiple of 1875). `None` when no such length exists.
+pub fn usable_frames(frames: usize, fc: f64, fa: f64) -> Option<usize> {
+    (1..=frames)
+        .rev()
+        .find(|&n| integer_ratio(n as f64 * fa, fc).is_some())
+}
+
+/// [`usable_frames`], or an error saying what the rates need.
+pub fn usable_frames_or_error(frames: usize, fc: f64, fa: f64) -> anyhow::Result<usize> {
+    usable_frames(frames, fc, fa).ok_or_else(|| {
+        bad_input(format!(
+            "{frames} frames at {fc} fps: no record of up to {frames} frames spans a whole \
+             number of accelerometer samples at {fa} Hz (the Fourier upsampling needs N * fa / \
+             fc to be an integer); check --fps and --fs, or record longer"
+        ))
+    })
 }
 
 /// Runs the chain after the centroids: checks the lost fraction, upsamples the displacement to
@@ -253,8 +276,10 @@ pub fn analyze(
         }
     }
     let fa = s.accel_rate_hz;
+    let frames_used = usable_frames_or_error(disp.mm.len(), s.frame_rate_hz, fa)?;
+    let mm = &disp.mm[..frames_used];
     let alignment = align(
-        disp.mm.len(),
+        frames_used,
         s.frame_rate_hz,
         base.len(),
         fa,
@@ -263,9 +288,9 @@ pub fn analyze(
     let span = alignment.start..alignment.start + alignment.len;
     let (base, tip) = (&base[span.clone()], &tip[span]);
     let vision_acc = if s.end_match {
-        chain::vision_acceleration_end_matched(&disp.mm, s.frame_rate_hz, alignment.len)?
+        chain::vision_acceleration_end_matched(mm, s.frame_rate_hz, alignment.len)?
     } else {
-        chain::vision_acceleration(&disp.mm, s.frame_rate_hz, alignment.len)?
+        chain::vision_acceleration(mm, s.frame_rate_hz, alignment.len)?
     };
     let welch = s.welch.resolve(alignment.len, fa, Defaults::WholeRecord)?;
     let acc_frf = checked_h1(base, tip, welch)?;
@@ -286,6 +311,7 @@ pub fn analyze(
         vis_frf,
         acc_modes,
         vis_modes,
+        frames_used,
     })
 }
 
@@ -387,6 +413,19 @@ pub fn check_channel(values: &[f64], what: &str) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn records_are_trimmed_to_a_whole_number_of_samples() {
+        let ntsc = 30000.0 / 1001.0;
+        // 100.1 samples a frame at 3000 Hz: every tenth length is whole
+        assert_eq!(usable_frames(1203, ntsc, 3000.0), Some(1200));
+        assert_eq!(usable_frames(1200, 120.0, 2048.0), Some(1200));
+        // at 2048 Hz a whole number needs a multiple of 1875 frames
+        assert_eq!(usable_frames(1200, ntsc, 2048.0), None);
+        assert_eq!(usable_frames(3800, ntsc, 2048.0), Some(3750));
+        let e = usable_frames_or_error(1200, ntsc, 2048.0).unwrap_err();
+        assert!(e.to_string().contains("check --fps and --fs"), "{e}");
+    }
 
     use firmware_core::centroid::{Centroid, CentroidConfig};
 

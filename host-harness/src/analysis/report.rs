@@ -139,6 +139,16 @@ pub fn report_text(
     let Some(a) = analysis else {
         return s;
     };
+    if a.frames_used < disp.mm.len() {
+        let _ = writeln!(
+            s,
+            "note: the last {} of {} frames were left out: the first {} are the longest record \
+             that spans a whole number of accelerometer samples",
+            disp.mm.len() - a.frames_used,
+            disp.mm.len(),
+            a.frames_used
+        );
+    }
     let (nperseg, noverlap, nfft) = (a.welch.nperseg, a.welch.noverlap, a.welch.nfft);
     let df = a.acc_frf.freq_hz.get(1).copied().unwrap_or(0.0);
     let _ = writeln!(

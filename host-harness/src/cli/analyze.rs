@@ -23,8 +23,8 @@ pub struct Args {
     /// --fps). 8- or 16-bit grey. Numbered files must be consecutive (a gap is an error).
     #[arg(long, value_name = "DIR|GLOB|FILE.tif|VIDEO")]
     pub frames: String,
-    /// Camera frame rate, frames per second.
-    #[arg(long, value_name = "HZ")]
+    /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`).
+    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: f64,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
     /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
@@ -231,6 +231,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(n) = source.count(args.fps)? {
         // The frame count is known before decoding: check the record lengths now.
+        let n = analysis::usable_frames_or_error(n, args.fps, args.fs)?;
         analysis::align(n, args.fps, base.len(), args.fs, time_offset_s)?;
     }
     if let Some(k) = args.targets {

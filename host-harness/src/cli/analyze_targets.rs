@@ -83,6 +83,16 @@ pub fn run(
         report.push_str(&format!("\nnote: {n}\n"));
     }
     report.push_str(&format!("\nframes: {}\n", tracks.depth.describe()));
+    let total = tracks.centroids.first().map_or(0, Vec::len);
+    if let Some(used) = a.analyses.iter().flatten().map(|an| an.frames_used).next() {
+        if used < total {
+            report.push_str(&format!(
+                "note: the last {} of {total} frames were left out: the first {used} are the \
+                 longest record that spans a whole number of accelerometer samples\n",
+                total - used
+            ));
+        }
+    }
     if let Some(w) = tracks.depth.threshold_warning(args.centroid.threshold) {
         eprintln!("warning: {w}");
         report.push_str(&format!("WARNING: {w}\n"));

@@ -295,6 +295,16 @@ fn collect_stderr(mut pipe: impl Read + Send + 'static) -> JoinHandle<String> {
         String::from_utf8_lossy(&all[start..]).into_owned()
     })
 }
+/// A file path as an FFmpeg argument: a relative name that starts with `-` (`-y.mkv`) would be
+/// read as an option, so it is given as `./-y.mkv`.
+pub(crate) fn file_arg(path: &Path) -> PathBuf {
+    if path.is_relative() && path.as_os_str().to_string_lossy().starts_with('-') {
+        Path::new(".").join(path)
+    } else {
+        path.to_path_buf()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::probe::{check_times, component_bits};
@@ -574,7 +584,11 @@ mod tests {
         }
         w.finish().unwrap();
         let e = VideoFrames::open(&ntsc, 120.0).unwrap_err();
-        assert!(e.to_string().contains("frame rate is about 119.8"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("frame rate is 119.8801 fps (120000/1001), constant"),
+            "{e}"
+        );
         assert!(VideoFrames::open(&ntsc, 120_000.0 / 1001.0).is_ok());
     }
 

@@ -31,7 +31,7 @@ fn run_probe(
             entries,
         ])
         .args(["-of", format])
-        .arg(path)
+        .arg(file_arg(path))
         .stdin(Stdio::null())
         .output()
         .map_err(|source| program_missing(ffprobe, path, source))?;
@@ -142,7 +142,7 @@ pub(super) fn probe_times(path: &Path, ffprobe: &str) -> Result<Vec<f64>, VideoE
         Command::new(ffprobe)
             .args(["-v", "error", "-select_streams", "v:0"])
             .args(["-show_entries", "packet=pts_time,flags", "-of", "csv=p=0"])
-            .arg(path),
+            .arg(file_arg(path)),
         ffprobe,
         path,
     )?;
@@ -265,6 +265,33 @@ pub(super) fn check_times(
             fps,
         });
     }
+    let n = times.len();
+    let own = (n >= 2 && times[n - 1] > 0.0).then(|| (n - 1) as f64 / times[n - 1]);
+    let own_text = own.map(rate_text).unwrap_or_default();
+    // a constant rate other than --fps: named as such, never a dropped frame or a variable rate
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    if let Some(&median) = steps.get(steps.len() / 2) {
+        // two timestamps each rounded to the time base differ by up to one tick
+        let step_tol = time_base_s + 2e-6;
+        let regular = steps.iter().all(|s| (s - median).abs() <= step_tol);
+        if regular {
+            if let Some(i) = (1..n).find(|&i| (times[i] - i as f64 * period).abs() > tol) {
+                return Err(VideoError::IrregularTimestamps {
+                    path: path.into(),
+                    frame: i,
+                    time_s: times[i],
+                    expected_s: i as f64 * period,
+                    fps,
+                    what: format!(
+                        "the video's frame rate is {own_text}, constant, not {fps}; give that \
+                         as --fps"
+                    ),
+                });
+            }
+            return Ok(());
+        }
+    }
     for i in 1..times.len() {
         let expected = i as f64 * period;
         let step = times[i] - times[i - 1];
@@ -294,8 +321,22 @@ pub(super) fn check_times(
             time_s: times[i],
             expected_s: expected,
             fps,
-            what,
+            what: format!("{what} (the video's mean frame rate is {own_text})"),
         });
     }
     Ok(())
+}
+
+/// A frame rate measured from timestamps as a message gives it: `29.9700 fps (30000/1001)`
+/// when it is within 1e-4 of a whole number of frames per second or per 1.001 s (the NTSC
+/// rates), else `about 47.1234 fps`.
+fn rate_text(fps: f64) -> String {
+    for (scale, den) in [(1.0, 1.0), (1000.0, 1001.0)] {
+        let num = (fps * den / scale).round() * scale;
+        let exact = num / den;
+        if num > 0.0 && (exact - fps).abs() < 1e-4 * fps {
+            return format!("{exact:.4} fps ({num}/{den})");
+        }
+    }
+    format!("about {fps:.4} fps")
 }

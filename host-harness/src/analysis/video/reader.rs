@@ -17,6 +17,11 @@ pub struct VideoFrames {
     finished: bool,
 }
 
+/// Decoder notes that are not damage: FFmpeg's MJPEG decoder says "EOI missing, emulating" for
+/// every frame of many AVI files whose JPEG frames end without the end-of-image marker (the
+/// image data is whole; a truncated frame is caught by the byte count and by other messages).
+const BENIGN: [&str; 1] = ["EOI missing, emulating"];
+
 impl VideoFrames {
     /// Opens `path`, reads its stream properties and timestamps with `ffprobe`, checks the
     /// timestamps against `expected_fps`, and starts decoding.
@@ -54,7 +59,7 @@ impl VideoFrames {
             Command::new(ffmpeg)
                 .args(["-nostdin", "-v", "warning", "-xerror", "-noautorotate"])
                 .args(["-err_detect", "explode", "-i"])
-                .arg(path)
+                .arg(file_arg(path))
                 .args(["-map", "0:v:0", "-vsync", "passthrough", "-f", "rawvideo"])
                 .args(["-pix_fmt", &out_fmt, "-"]),
             ffmpeg,
@@ -174,6 +179,7 @@ impl VideoFrames {
         let prefix = format!("[{} @", self.info.codec);
         let lib_prefix = format!("[lib{}", self.info.codec);
         said.lines()
+            .filter(|l| !BENIGN.iter().any(|b| l.contains(b)))
             .find(|l| l.starts_with(&prefix) || l.starts_with(&lib_prefix))
             .map(|l| l.trim().to_string())
     }

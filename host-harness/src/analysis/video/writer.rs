@@ -65,7 +65,7 @@ impl Ffv1Writer {
                     "1",
                 ])
                 .args(["-pix_fmt", fmt, "-f", "matroska"])
-                .arg(path)
+                .arg(file_arg(path))
                 .stdin(Stdio::piped())
                 .stdout(Stdio::null())
                 .stderr(Stdio::piped()),
