@@ -451,3 +451,62 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
     let o = analyze("ntsc.mkv", "30000/1001", "a5");
     assert_exit_2(&o, "no record of up to 1200 frames spans a whole number");
 }
+
+#[test]
+fn a_study_resumed_with_more_runs_keeps_its_runs_and_equals_a_fresh_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = |out: &Path, runs: &str, extra: &[&str]| {
+        let mut a = vec![
+            "study",
+            "--runs",
+            runs,
+            "--exposures-ms",
+            "40",
+            "--seed",
+            "5",
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        harness(&a)
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    assert_ok(&study(&a, "3", &[]));
+    // what an adaptive study's "raise runs to at least N" asks for: the runs done are kept
+    assert_ok(&study(&a, "5", &["--resume"]));
+    let lines = std::fs::read_to_string(a.join("runs.jsonl")).unwrap();
+    assert_eq!(lines.lines().count(), 5);
+    assert_ok(&study(&b, "5", &[]));
+    assert_eq!(
+        std::fs::read(a.join("summary.csv")).unwrap(),
+        std::fs::read(b.join("summary.csv")).unwrap()
+    );
+    // lowering is refused, naming both counts
+    assert_exit_2(&study(&a, "4", &["--resume"]), "--runs 4 is below the 5");
+}
+
+#[test]
+fn thirty_three_blobs_are_counted_not_called_a_capacity_overflow() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    // 33 ragged blobs (V-shaped: two labels each until the arms join) in a row: 66 labels at
+    // once, more than the 64 slots the tracker once had
+    let (w, h) = (400u32, 16u32);
+    let mut img = image::GrayImage::new(w, h);
+    for b in 0..33 {
+        let (cx, cy) = (6 + 12 * b, 8);
+        // a V whose two arms start on the top row and meet at the bottom
+        for d in 0..=3 {
+            img.put_pixel(cx - 3 + d, cy - 3 + d, image::Luma([250]));
+            img.put_pixel(cx + 3 - d, cy - 3 + d, image::Luma([250]));
+        }
+    }
+    for k in 0..120 {
+        img.save(rec.frames.join(format!("frame_{k}.png"))).unwrap();
+    }
+    let o = analyze_into(&rec, &rec.dir.join("out"), &["--targets", "2"]);
+    assert_exit_2(
+        &o,
+        "33 targets above the threshold in the first frame, --targets 2 expected",
+    );
+}

@@ -338,10 +338,20 @@ fn frame_count_not_matching_the_accelerometer_is_an_error_naming_both() {
         &["--tick-offset", "1500", "--tick-hz", "30720"],
     );
     assert_bad_input(&o, &["15 frames", "300 samples"]);
-    // 14 frames at 120 fps are 238.93 samples at 2048 Hz: not an integer
+    // 14 frames at 120 fps are 238.93 samples at 2048 Hz, and no shorter record is whole
+    // (that needs a multiple of 15 frames)
     let (_tmp, rec) = make_recording(14, 300);
     let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
-    assert_bad_input(&o, &["14 frames", "not a whole number"]);
+    assert_bad_input(&o, &["14 frames", "spans a whole number"]);
+    // 17 frames: the first 15 (256 samples) are analysed, the report says 2 were left out
+    let (_tmp, rec) = make_recording(17, 300);
+    let o = analyze(&rec, rec.frames.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("the last 2 of 17 frames were left out"),
+        "{report}"
+    );
 }
 
 #[test]
@@ -419,16 +429,19 @@ fn more_than_five_percent_lost_frames_fails_the_analysis() {
 }
 
 /// Runs analyze with the recording's own command plus `extra` (which may replace
-/// `--threshold`) into `out`; returns the modes.
+/// `--threshold` and `--window`) into `out`; returns the modes.
 fn analyze_recording(
     args: &[String],
     extra: &[&str],
     out: &Path,
 ) -> (Vec<(String, usize, f64, f64)>, String) {
     let mut a: Vec<&str> = args.iter().map(String::as_str).collect();
-    if extra.contains(&"--threshold") {
-        let i = a.iter().position(|x| *x == "--threshold").unwrap();
-        a.drain(i..i + 2);
+    for flag in ["--threshold", "--window"] {
+        if extra.contains(&flag) {
+            if let Some(i) = a.iter().position(|x| *x == flag) {
+                a.drain(i..i + 2);
+            }
+        }
     }
     let i = a.iter().position(|x| *x == "--out").unwrap();
     a[i + 1] = out.to_str().unwrap();
@@ -468,12 +481,13 @@ fn synthetic_cantilever_recording_round_trip() {
     .unwrap();
     let spec = RecordingSpec::cantilever(2016, 0.5);
 
-    // 1. rectangular window: closed form, binary centroid
-    let (modes, report) = analyze_recording(
-        &files.analyze_args,
-        &["--window", "rect"],
-        &tmp.path().join("rect"),
-    );
+    // 1. the recording's own command (its README.txt's: a rectangular window): closed form,
+    // binary centroid
+    assert!(files
+        .analyze_args
+        .windows(2)
+        .any(|w| w == ["--window", "rect"]));
+    let (modes, report) = analyze_recording(&files.analyze_args, &[], &tmp.path().join("rect"));
     assert!(report.contains("lost frames: 0 of 1200"), "{report}");
     // the damping column: a single-mode fit to each system's complex FRF in the band (the
     // periodic record and the rectangular window leave no leakage to widen the peak)
@@ -531,7 +545,7 @@ fn synthetic_cantilever_recording_round_trip() {
     // 2. the rig's one Hann segment, weighted centroid
     let (modes, _) = analyze_recording(
         &files.analyze_args,
-        &["--mode", "weighted", "--threshold", "0"],
+        &["--mode", "weighted", "--threshold", "0", "--window", "hann"],
         &tmp.path().join("hann"),
     );
     for i in 0..2 {

@@ -19,8 +19,9 @@ use num_complex::Complex64;
 
 /// Widest frame the multi-target labelling buffer holds, px.
 const MAX_WIDTH: usize = 8192;
-/// Most detections per frame (targets plus clutter).
-const MAX_DETECTIONS: usize = 64;
+/// Most components labelled at once per frame (targets plus clutter, plus the provisional
+/// parts of ragged components that join further down).
+const MAX_DETECTIONS: usize = 512;
 
 /// Each target's centroid per frame (an empty centroid where it was lost) and where it was
 /// first seen.
@@ -253,7 +254,10 @@ fn detect(
     r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))?;
     if mc.flags().contains(Flags::CAPACITY) {
         return Err(bad_input(format!(
-            "{label}: more than {MAX_DETECTIONS} components above the threshold"
+            "{label}: more than {MAX_DETECTIONS} components above the threshold at once while \
+             labelling the frame ({} kept; a ragged component, e.g. noise near the threshold, \
+             holds several until its parts join): raise --threshold or narrow --roi",
+            mc.targets().len()
         )));
     }
     Ok(mc.targets().iter().map(|t| t.centroid).collect())

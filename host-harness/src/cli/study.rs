@@ -123,9 +123,14 @@ pub fn default_out(cfg: &StudyConfig, shard: Shard) -> PathBuf {
     // FNV-1a 64 of the resolved configuration's TOML and the model revision: stable across
     // runs and platforms; a new code revision starts a new directory instead of resuming
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    // the run count too: studies of other lengths get directories of their own
+    let key = study::StudyConfig {
+        runs: cfg.runs,
+        ..cfg.runs_key()
+    };
     let text = format!(
         "{}model_revision = {}\n",
-        cfg.runs_key().to_toml(),
+        key.to_toml(),
         study::MODEL_REVISION
     );
     for b in text.bytes() {

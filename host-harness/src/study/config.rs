@@ -266,6 +266,9 @@ impl StudyConfig {
     pub fn runs_key(&self) -> StudyConfig {
         StudyConfig {
             coverage: default_coverage(),
+            // every run has its own stream (seed, run index): the run count (an adaptive
+            // study's cap) can be raised on resume without changing the runs already done
+            runs: 0,
             ..self.clone()
         }
     }

@@ -70,7 +70,7 @@ pub fn read_shards(dirs: &[PathBuf]) -> anyhow::Result<Merged> {
                 m.revision
             )));
         }
-        if m.config.runs_key() != c.runs_key() {
+        if m.config.runs_key() != c.runs_key() || m.config.runs != c.runs {
             return Err(bad_input(format!(
                 "{}: configuration differs from {}; only shards of one study can be merged",
                 p.display(),

@@ -114,8 +114,17 @@ fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
     if old.runs_key() != cfg.runs_key() {
         return Err(bad_input(format!(
             "--resume: the configuration differs from the one in {} (resume with the same \
-             preset, runs, exposures, seed and options)",
+             preset, exposures, seed and options; runs may be raised)",
             cfg_path.display()
+        )));
+    }
+    if cfg.runs < old.runs {
+        return Err(bad_input(format!(
+            "--resume: --runs {} is below the {} the study in {} was started with; runs can \
+             be raised on resume (each run has its own random stream), not lowered",
+            cfg.runs,
+            old.runs,
+            exec.out.display()
         )));
     }
     let revision = checkpoint::recorded_revision(&exec.out)?;
@@ -172,7 +181,7 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
         )));
     }
     check_resumable(cfg, exec)?;
-    // only the reporting changed (the coverage probability): record the new value
+    // only the reporting (the coverage probability) or the run count changed: record it
     let old_text = std::fs::read_to_string(&cfg_path).unwrap_or_default();
     if old_text != cfg.to_toml() {
         checkpoint::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
