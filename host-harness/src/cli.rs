@@ -42,7 +42,7 @@ enum Command {
     /// Fourier upsampling of a CSV column from one rate to another.
     Upsample(upsample::Args),
     /// Analyse a real recording: image sequence + accelerometer CSV -> FRFs and modes.
-    Analyze(analyze::Args),
+    Analyze(Box<analyze::Args>),
     /// Write PNG frames of the simulated target, sharp and blurred.
     Render(render::Args),
     /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
@@ -61,7 +61,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Centroid(a) => centroid::run(a),
         Command::Frf(a) => frf::run(a),
         Command::Upsample(a) => upsample::run(a),
-        Command::Analyze(a) => analyze::run(a),
+        Command::Analyze(a) => analyze::run(*a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),
         Command::Calibrate(a) => calibrate::run(a),

@@ -215,6 +215,33 @@ pub fn parse_bands(s: &str) -> Result<Bands, String> {
     Ok(Bands(out))
 }
 
+/// A rate as users write it: a decimal (`120`, `29.97`) or a ratio (`30000/1001`, as video
+/// containers state NTSC rates), finite and > 0.
+pub fn parse_rate(s: &str) -> Result<f64, String> {
+    let v = match s.split_once('/') {
+        Some((n, d)) => {
+            let (n, d): (f64, f64) = (
+                n.trim()
+                    .parse()
+                    .map_err(|_| format!("`{s}`: expected N or N/D"))?,
+                d.trim()
+                    .parse()
+                    .map_err(|_| format!("`{s}`: expected N or N/D"))?,
+            );
+            n / d
+        }
+        None => s
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{s}`: expected a number or a ratio N/D"))?,
+    };
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("`{s}`: must be a positive rate"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,32 +270,5 @@ mod tests {
         for bad in ["1,2,3", "1,2,3,x", "-1,2,3,4", "0,0,0,4"] {
             assert!(parse_roi(bad).is_err(), "{bad}");
         }
-    }
-}
-
-/// A rate as users write it: a decimal (`120`, `29.97`) or a ratio (`30000/1001`, as video
-/// containers state NTSC rates), finite and > 0.
-pub fn parse_rate(s: &str) -> Result<f64, String> {
-    let v = match s.split_once('/') {
-        Some((n, d)) => {
-            let (n, d): (f64, f64) = (
-                n.trim()
-                    .parse()
-                    .map_err(|_| format!("`{s}`: expected N or N/D"))?,
-                d.trim()
-                    .parse()
-                    .map_err(|_| format!("`{s}`: expected N or N/D"))?,
-            );
-            n / d
-        }
-        None => s
-            .trim()
-            .parse()
-            .map_err(|_| format!("`{s}`: expected a number or a ratio N/D"))?,
-    };
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("`{s}`: must be a positive rate"))
     }
 }
