@@ -209,53 +209,24 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
     let report = std::fs::read_to_string(with_ref.join("report.txt")).unwrap();
     assert!(report.contains("MAC against --shape-reference"), "{report}");
     assert!(report.contains("vision target 3 (co-located"), "{report}");
-    // a reference missing a target, or naming a target beyond K, is refused, naming the row
-    std::fs::write(&reference, "mode,target,re\n1,1,0.5\n1,2,1\n").unwrap();
-    assert_exit_2(
-        &analyze_with(
-            &png_frames,
-            &with_ref,
-            "5",
-            &["--shape-reference", refarg, "--force"],
+    // a reference missing a target, naming a target beyond K, all zero or for a mode --bands
+    // does not have is refused, naming the row or the mode
+    for (text, needle) in [
+        (
+            "mode,target,re\n1,1,0.5\n1,2,1\n",
+            "mode 1 has no component for target(s) [3, 4, 5]",
         ),
-        "mode 1 has no component for target(s) [3, 4, 5]",
-    );
-    std::fs::write(&reference, "mode,target,re\n1,9,0.5\n").unwrap();
-    assert_exit_2(
-        &analyze_with(
-            &png_frames,
-            &with_ref,
-            "5",
-            &["--shape-reference", refarg, "--force"],
+        ("mode,target,re\n1,9,0.5\n", "row 2: mode 1, target 9"),
+        (
+            "mode,target,re\n1,1,0\n1,2,0\n1,3,0\n1,4,0\n1,5,0\n",
+            "every component of mode 1 is zero",
         ),
-        "row 2: mode 1, target 9",
-    );
-
-    // an all-zero reference, or one for a mode --bands does not have, is refused
-    std::fs::write(
-        &reference,
-        "mode,target,re\n1,1,0\n1,2,0\n1,3,0\n1,4,0\n1,5,0\n",
-    )
-    .unwrap();
-    assert_exit_2(
-        &analyze_with(
-            &png_frames,
-            &with_ref,
-            "5",
-            &["--shape-reference", refarg, "--force"],
-        ),
-        "every component of mode 1 is zero",
-    );
-    std::fs::write(&reference, "mode,target,re\n3,1,1\n").unwrap();
-    assert_exit_2(
-        &analyze_with(
-            &png_frames,
-            &with_ref,
-            "5",
-            &["--shape-reference", refarg, "--force"],
-        ),
-        "modes count from 1 to 2",
-    );
+        ("mode,target,re\n3,1,1\n", "modes count from 1 to 2"),
+    ] {
+        std::fs::write(&reference, text).unwrap();
+        let flags = ["--shape-reference", refarg, "--force"];
+        assert_exit_2(&analyze_with(&png_frames, &with_ref, "5", &flags), needle);
+    }
     // every vision fit is resolvable or empty (a one-bin "resonance" of a weakly excited
     // target is not a mode): no damping below half a bin's bandwidth
     for r in modes(&out).iter().filter(|r| r.0 == "vision") {
