@@ -335,7 +335,7 @@ fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
     let calibrate = |rows: &str, extra: &[&str]| {
         std::fs::write(
             &obs,
-            format!("rig,mode,exposure_ms,quantity,value,u\n{rows}"),
+            format!("rig,mode,exposure_ms,quantity,value,u,unit\n{rows}"),
         )
         .unwrap();
         let mut a = vec![
@@ -352,7 +352,7 @@ fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
         a.extend_from_slice(extra);
         harness(&a)
     };
-    let chi = "cantilever,1,2,chi_mu,95.5,\n";
+    let chi = "cantilever,1,2,chi_mu,95.5,,percent\n";
     // too few runs for the model's uncertainty of a chi index: refused before any run
     assert_exit_2(
         &calibrate(chi, &["--runs", "5"]),
@@ -360,16 +360,21 @@ fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
     );
     // a mode the rig does not report, a negative uncertainty, a knob freed twice
     assert_exit_2(
-        &calibrate("cantilever,3,2,chi_mu,95.5,\n", &[]),
+        &calibrate("cantilever,3,2,chi_mu,95.5,,percent\n", &[]),
         "row 2: mode `3` must be 1 to 2",
     );
     assert_exit_2(
-        &calibrate("cantilever,1,2,chi_mu,95.5,-1\n", &[]),
+        &calibrate("cantilever,1,2,chi_mu,95.5,-1,percent\n", &[]),
         "row 2: u `-1` is negative",
     );
     assert_exit_2(
         &calibrate(chi, &["--free", "target_radius_px=6:9"]),
         "--free target_radius_px: given twice",
+    );
+    // a chi without its unit is not guessed from its size
+    assert_exit_2(
+        &calibrate("cantilever,1,2,chi_mu,1.5,\n", &[]),
+        "chi_mu needs its unit",
     );
     assert!(!out.exists());
 }

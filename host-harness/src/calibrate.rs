@@ -79,7 +79,7 @@ pub struct Observation {
     pub u: Option<f64>,
 }
 
-/// Reads `rig,mode,exposure_ms,quantity,value[,u]` and keeps the rows of `rig` (the others are
+/// Reads `rig,mode,exposure_ms,quantity,value[,u][,unit]` and keeps the rows of `rig` (the others are
 /// counted in the second value). Chi indices above 2 are taken as percent. Errors name the file
 /// and row.
 pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observation>, usize)> {
@@ -102,6 +102,7 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
         |name: &str| col(name).ok_or_else(|| bad_input(format!("{}: no column `{name}`", file())));
     let (ci_rig, ci_mode, ci_exp) = (need("rig")?, need("mode")?, need("exposure_ms")?);
     let (ci_q, ci_v, ci_u) = (need("quantity")?, need("value")?, col("u"));
+    let ci_unit = col("unit");
     let (mut out, mut other) = (Vec::new(), 0);
     for (i, row) in reader.records().enumerate() {
         let at = || format!("{} row {}", file(), i + 2);
@@ -156,9 +157,39 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
             }
             None => None,
         };
-        if matches!(quantity, Quantity::ChiMu | Quantity::ChiSigma) && value > 2.0 {
-            value /= 100.0;
-            u = u.map(|u| u / 100.0);
+        // a ratio's unit is stated, never guessed from its size (1.5 % is not 150 %)
+        let unit = ci_unit
+            .map(|c| cell(c).to_ascii_lowercase())
+            .unwrap_or_default();
+        if matches!(quantity, Quantity::ChiMu | Quantity::ChiSigma) {
+            match unit.as_str() {
+                "percent" | "%" => {
+                    value /= 100.0;
+                    u = u.map(|u| u / 100.0);
+                }
+                "fraction" => {}
+                "" => {
+                    return Err(bad_input(format!(
+                        "{}: {} needs its unit: a `unit` column with `percent` (95.5) or \
+                         `fraction` (0.955)",
+                        at(),
+                        quantity.name()
+                    )))
+                }
+                other => {
+                    return Err(bad_input(format!(
+                        "{}: unit `{other}`: `percent` or `fraction`",
+                        at()
+                    )))
+                }
+            }
+        } else if !unit.is_empty() {
+            return Err(bad_input(format!(
+                "{}: unit `{unit}` for {}: only chi_mu and chi_sigma take a unit (the others \
+                 are in the study's own units)",
+                at(),
+                quantity.name()
+            )));
         }
         out.push(Observation {
             mode,

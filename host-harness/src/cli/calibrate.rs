@@ -11,9 +11,9 @@ use std::path::PathBuf;
 /// Arguments of `host-harness calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Observed figures: CSV `rig,mode,exposure_ms,quantity,value[,u]` (`quantity` one of
-    /// mu_a, sigma_a, mu_f, ratio_to_first, chi_mu, chi_sigma; chi in percent or as fractions);
-    /// only the rows of the study's rig are used.
+    /// Observed figures: CSV `rig,mode,exposure_ms,quantity,value[,u][,unit]` (`quantity` one
+    /// of mu_a, sigma_a, mu_f, ratio_to_first, chi_mu, chi_sigma; a chi row's `unit` is
+    /// `percent` or `fraction`, never guessed); only the rows of the study's rig are used.
     #[arg(long, value_name = "FILE.csv")]
     pub observed: PathBuf,
     /// The study to calibrate (TOML, as `study --config`); its `[imaging]` and `[rig]` values not set free
