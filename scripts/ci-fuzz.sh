@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every cargo-fuzz target of fuzz/ for a fixed time (issue 11): FUZZ_SECONDS each
+# Runs every cargo-fuzz target of fuzz/ for a fixed time: FUZZ_SECONDS each
 # (default 40), starting from the committed corpus in fuzz/corpus/TARGET. Installs the nightly
 # toolchain and cargo-fuzz when missing. A crash fails the step and leaves the input in
 # fuzz/artifacts/TARGET/ (turn it into a regression test).

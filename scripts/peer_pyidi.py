@@ -2,7 +2,7 @@
 """Analyse a multi-target synthetic recording with a Python peer -- pyidi (Lucas-Kanade
 displacement of every target from the frames) and pyFRF (H1 against the base acceleration) --
 and with `host-harness analyze --targets`, and print their accuracy against the model and
-their wall times side by side (issue 14).
+their wall times side by side.
 
     host-harness render --preset cantilever --recording REC --targets 5 --exposure-ms 2 \
         --read-noise 2 --video

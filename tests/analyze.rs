@@ -454,7 +454,7 @@ fn analyze_recording(
     )
 }
 
-/// Round trip (issue 5 item 3): a synthetic cantilever recording with low blur (0.5 ms) and
+/// Round trip: a synthetic cantilever recording with low blur (0.5 ms) and
 /// known modal parameters through `analyze`.
 ///
 /// The synthetic record is periodic over its 10 s (see `host_harness::recording`), so with a

@@ -1,4 +1,4 @@
-//! `host-harness plan` (issue 12): the CSV contract, the weighted centroid's rows against the
+//! `host-harness plan`: the CSV contract, the weighted centroid's rows against the
 //! closed-form sinc, the longest exposure at `1 - tolerance`, the warnings, the preset, and
 //! bad flags refused with exit code 2 naming the flag.
 

@@ -1,4 +1,4 @@
-//! Adversarial end-to-end cases (issue 11): each fixed defect stays fixed. A study directory is
+//! Adversarial end-to-end cases: each fixed defect stays fixed. A study directory is
 //! locked, its checkpoint is never emptied or double counted, sizes are bounded, undefined
 //! statistics are empty cells.
 
@@ -181,7 +181,7 @@ fn one_run_gives_empty_cells_not_nan() {
 }
 
 /// `study --help` states the defaults of --runs and --seed and the units of the outputs
-/// (#11: it stated neither).
+/// (it stated neither).
 #[test]
 fn study_help_states_defaults_and_units() {
     let o = harness(&["study", "--help"]);
@@ -198,7 +198,7 @@ fn study_help_states_defaults_and_units() {
 }
 
 /// Shards of two layouts (1/2 and 1/3) overlap; `merge` says so instead of "run 0 appears in
-/// more than one directory" (#11 defect 8).
+/// more than one directory".
 #[test]
 fn merging_shards_of_two_layouts_names_the_layouts() {
     let dir = tempfile::tempdir().unwrap();
@@ -556,7 +556,7 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
 
 /// Every vision run failing (a target too dark for the threshold: all frames lost) leaves the
 /// vision rows with runs = 0 and empty statistics, in the files and in the printed table, never
-/// `NaN`; the transducer rows are computed (#11 defect 7).
+/// `NaN`; the transducer rows are computed.
 #[test]
 fn all_failed_vision_rows_are_empty_not_nan() {
     let dir = tempfile::tempdir().unwrap();

@@ -339,7 +339,7 @@ mod upsample {
     }
 
     /// Values whose f32 transform would overflow (1e37: the sums reach 1e39 > f32::MAX) are
-    /// scaled into range, not written as NaN (#11 defect 7).
+    /// scaled into range, not written as NaN.
     #[test]
     fn values_beyond_the_f32_range_are_scaled_not_nan() {
         sinusoid_matches_the_analytic_values(1e37);

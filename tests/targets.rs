@@ -1,4 +1,4 @@
-//! Several targets along the cantilever (issue 14): a synthetic 5-target recording (2 ms
+//! Several targets along the cantilever: a synthetic 5-target recording (2 ms
 //! exposure, read noise on) analysed with `analyze --targets` from its PNG frames and from its
 //! lossless video, with identical results: frequencies within one bin, damping within 10 % of
 //! the model, mode shapes with MAC >= 0.99 against the model's, lost frames per target, bad

@@ -1,4 +1,4 @@
-//! Displacement to acceleration (SPEC 2.3): the displacement spectrum times `-omega^2`
+//! Displacement to acceleration (method.md §2.3): the displacement spectrum times `-omega^2`
 //! (`omega = 2 pi f` at each bin, negative frequencies for the upper half, DC zeroed), then the
 //! inverse transform; plus the unit scalings of the vision channel.
 //!

@@ -1,4 +1,4 @@
-//! Exposure transfer function and its compensation (SPEC 2.6, 2.8).
+//! Exposure transfer function and its compensation (method.md §2.6, §2.8).
 //!
 //! # The box exposure
 //!

@@ -1,4 +1,4 @@
-//! Resonance frequency and amplitude by peak picking of an H1 estimate (SPEC 2.5).
+//! Resonance frequency and amplitude by peak picking of an H1 estimate (method.md §2.5).
 //!
 //! For each frequency band `[lo, hi]` of a mode the resonance frequency is the frequency of the
 //! bin with the largest `|Im H1|` inside the band, and the resonant amplitude is `|H1|` at that

@@ -1,6 +1,6 @@
 //! The whole vision channel of a camera firmware in one fixed working set: camera samples at
 //! the frame rate and ADC samples at the ADC rate in, streaming H1 and coherence out
-//! (SPEC 2.2 -> 2.3 -> 2.4).
+//! (method.md §2.2 -> §2.3 -> §2.4).
 //!
 //! Frames arrive one displacement (or centroid) at a time. Blocks of `n` frames, one every
 //! `n / 2` frames (half overlap), are Fourier-upsampled to `m` samples at the ADC rate
@@ -18,7 +18,7 @@
 //! camera.
 //!
 //! # Why overlapping, end-matched blocks
-//! The Fourier method (SPEC 2.2) treats a block as one period of a periodic signal. A block of
+//! The Fourier method (method.md §2.2) treats a block as one period of a periodic signal. A block of
 //! a random response does not end where it starts: upsampled on its own and wholly kept, its
 //! edges ring (Gibbs), and `-omega^2` amplifies the ringing. Measured on the cantilever rig
 //! (`cargo run --release -p host-harness --example pipeline_blocks`, 20 runs, 1 s blocks,
@@ -124,7 +124,7 @@ pub struct PipelineConfig {
     /// (spectrum times `-(2 pi f)^2 * scale`, e.g. `1e-3` for mm in, m/s^2 out). `None`: keep
     /// the camera unit.
     pub acceleration_scale: Option<f32>,
-    /// `Some(te)`: exposure compensation (issue #12): each block's spectrum is divided by the
+    /// `Some(te)`: exposure compensation: each block's spectrum is divided by the
     /// box transfer `sinc(pi f te)` of a centred exposure of `te` seconds (finite, `>= 0`)
     /// before the inverse transform, except its bins with `E2PR = |f| te > 0.8`, left
     /// uncorrected ([`upsample::ExposureCompensation`]; which bins, see

@@ -1,4 +1,4 @@
-//! Streaming Welch estimator of the H1 frequency response and the coherence (SPEC 2.4).
+//! Streaming Welch estimator of the H1 frequency response and the coherence (method.md §2.4).
 //!
 //! Samples of the input channel `x` (force, base acceleration) and the output channel `y`
 //! (displacement, tip acceleration) are pushed as they arrive, in chunks of any size. The

@@ -1,4 +1,4 @@
-//! Camera / ADC synchronisation from one time base (SPEC 2.7).
+//! Camera / ADC synchronisation from one time base (method.md §2.7).
 //!
 //! Camera triggers and ADC conversions are both derived from one fast tick. The tick rate is the
 //! least common multiple of the two rates: for 2048 Hz and 120 fps it is 30 720 Hz, with one ADC

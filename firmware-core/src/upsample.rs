@@ -1,4 +1,4 @@
-//! Fourier (zero-padding) upsampling of camera-rate displacement to the ADC rate (SPEC 2.2),
+//! Fourier (zero-padding) upsampling of camera-rate displacement to the ADC rate (method.md §2.2),
 //! optionally fused with the displacement-to-acceleration conversion of [`crate::convert`].
 //!
 //! A record of `n` samples becomes `m >= n` samples spanning the same time: `X = DFT_n(x)`;
@@ -136,7 +136,7 @@ pub struct UpsampleOptions {
     pub exposure: Option<ExposureCompensation>,
 }
 
-/// Exposure compensation in the upsampling (issue #12, SPEC 2.6): every bin of the input's
+/// Exposure compensation in the upsampling (method.md §2.6): every bin of the input's
 /// `n`-point spectrum is divided by the box transfer `sinc(pi f Te)` of a centred exposure
 /// ([`exposure::BoxTransfer`], exact for the weighted centroid), except the bins with
 /// `E2PR = |f| Te >` [`exposure::E2PR_LIMIT`] (0.8, a noise gain of 4.3 and growing without
@@ -551,7 +551,7 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
             .process_with(input, output, None, &mut self.work, &mut self.scratch)
     }
 
-    /// Upsamples and converts displacement to acceleration in one pass (SPEC 2.3 fused with
+    /// Upsamples and converts displacement to acceleration in one pass (method.md §2.3 fused with
     /// 2.2): the spectrum is multiplied by `-(2 pi f)^2 * scale` (DC zeroed) before the inverse
     /// transform. `fs_in_hz` is the input sampling rate (the bins are at `k fs_in / n`);
     /// `scale` converts the input unit times s^-2 to the output unit (e.g. `1e-3` for mm in,
@@ -614,7 +614,7 @@ mod tests {
     use std::vec;
     use std::vec::Vec;
 
-    /// f64 reference: direct DFT, SPEC 2.2 bin mapping, direct inverse.
+    /// f64 reference: direct DFT, method.md §2.2 bin mapping, direct inverse.
     fn reference(x: &[f32], m: usize) -> Vec<f64> {
         let n = x.len();
         let tau = std::f64::consts::TAU;

@@ -5,7 +5,7 @@
 //! overlaps from 0 to 94 %, `nfft > nperseg`, and non-power-of-two `nperseg` / `nfft` (the
 //! grandstand's 1111/555/5000, 4800, 97, 1000) are covered.
 //!
-//! Acceptance (issue 3 item 3): H1 within 1e-4 relative on every bin whose coherence is above
+//! Acceptance: H1 within 1e-4 relative on every bin whose coherence is above
 //! 0.1, and the coherence within 1e-4 relative there. Bins where scipy's own Pxx is below 1e-10
 //! of its maximum are skipped: they are mathematically empty (the DC bin of a rectangular window
 //! after mean removal) and both implementations only return rounding noise there. The Pxx and

@@ -20,7 +20,7 @@ fn main() {
         .nth(1)
         .map(|a| a.parse().expect("RUNS must be a number"))
         .unwrap_or(2);
-    // the study's target and exposures (Grandstand::new, SPEC 3.1)
+    // the study's target and exposures (Grandstand::new, method.md §3.1)
     let target = DiskTarget {
         radius_px: 12.0,
         level: 200.0,

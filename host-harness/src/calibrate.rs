@@ -1,5 +1,5 @@
-//! Identifying what a rig leaves unreported from observed study figures (method.md §3.5,
-//! issue 13): the imaging knobs of a study file's `[imaging]` table (target radius and edge,
+//! Identifying what a rig leaves unreported from observed study figures (method.md §3.5):
+//! the imaging knobs of a study file's `[imaging]` table (target radius and edge,
 //! threshold, read noise, optical blur, gain, the cantilever's projected tip rotation) and the
 //! `[rig]` table's beam length (the tip accelerometer's tilt reading) fitted to observed values of `mu_a`, `sigma_a`,
 //! `mu_f`, `ratio_to_first`, `chi_mu` and `chi_sigma`.

@@ -1,4 +1,4 @@
-//! Failpoints for crash tests (issue 11): `VIBCAM_FAILPOINT=NAME` or `NAME:N` in the environment
+//! Failpoints for crash tests: `VIBCAM_FAILPOINT=NAME` or `NAME:N` in the environment
 //! aborts the process (as `kill -9` would: no destructors, no flush) at the first, or the
 //! `N`-th, time the point `NAME` is reached. Points sit after each write, sync and rename of a
 //! checkpoint or an output directory; the tests kill a study at every one in turn and check

@@ -1,4 +1,4 @@
-//! Exposure planner (method.md §3.4, issue 12): before a test, per mode, how much the exposure
+//! Exposure planner (method.md §3.4): before a test, per mode, how much the exposure
 //! will lower the vision amplitude, the longest exposure within a tolerance, what remains
 //! after compensation, and whether frames will be lost. A pure function of its inputs
 //! ([`plan`]); the CLI prints or writes its rows.
@@ -128,7 +128,7 @@ pub struct PlanRow {
     pub lost_frame_risk: f64,
 }
 
-/// The CSV header of the plan's rows (the command-line contract of issue 12).
+/// The CSV header of the plan's rows (the command-line contract).
 pub const PLAN_CSV_HEADER: [&str; 8] = [
     "mode",
     "f_hz",

@@ -649,7 +649,7 @@ fn bench_upsample_2048() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Tracking window (SPEC 2.9) and a driver-shaped scenario
+// Tracking window (method.md §2.9) and a driver-shaped scenario
 
 /// Pixels added around the last bounding box: more than the target moves between frames.
 const MARGIN: u32 = 4;

@@ -1,4 +1,4 @@
-//! Thresholded centre of gravity of the bright target(s) in a frame, row by row (SPEC 2.1).
+//! Thresholded centre of gravity of the bright target(s) in a frame, row by row (method.md §2.1).
 //!
 //! # Conventions
 //!

@@ -197,7 +197,7 @@ pub struct Settings {
     pub exposure_s: Option<f64>,
     /// Subtract the line through the displacement record's first and last samples before
     /// the Fourier upsampling ([`chain::vision_acceleration_end_matched`]): a real record is
-    /// not periodic. `false` takes the record as periodic (as before issue 14).
+    /// not periodic. `false` takes the record as periodic .
     pub end_match: bool,
 }
 

@@ -1,4 +1,4 @@
-//! Several targets in one recording (issue 14, `analyze --targets K`): firmware-core's
+//! Several targets in one recording (`analyze --targets K`): firmware-core's
 //! multi-target centroider on every frame, targets numbered left to right (then top to bottom)
 //! in the first frame, each followed by its nearest detection within a gate; a target with no
 //! detection in the gate, whose detection is also the nearest of another target (two targets

@@ -1,5 +1,5 @@
 //! Exposure transfer of the centroid computed with the imaging model, and the correction
-//! tables the firmware divides by (method.md §2.8, issue 12).
+//! tables the firmware divides by (method.md §2.8).
 //!
 //! For the weighted centroid with its threshold at the background level the transfer of a
 //! centred exposure is the sinc of `firmware_core::exposure`. The binary centroid is not

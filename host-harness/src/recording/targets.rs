@@ -1,4 +1,4 @@
-//! Synthetic recordings with several targets along the cantilever (issue 14,
+//! Synthetic recordings with several targets along the cantilever (
 //! `render --recording --targets K`): target `k` of `K` sits at `xi = k / K` of the beam (the
 //! last at the tip), moves with the model's mode shapes there (`model::simulate_at`), and is
 //! drawn in its own column strip of the frame, left to right; `recording.toml` gets the true
