@@ -94,3 +94,108 @@ fn the_docs_stand_on_their_own_and_the_readme_is_a_front_page() {
     }
     assert!(found.is_empty(), "{}", found.join("\n"));
 }
+
+/// host-harness's rooms in the order data flows; a module may use its own room and those
+/// before it, never one after it (`cli` calls them all). ARCHITECTURE.md explains the order.
+const ROOMS: [&[&str]; 11] = [
+    &[
+        "stats",
+        "uncertainty",
+        "csvio",
+        "testing",
+        "failpoint",
+        "outdir",
+        "report",
+        "plots",
+        "lost_frames",
+    ],
+    &["model"],
+    &["imaging"],
+    &["frames"],
+    &["chain"],
+    &["study"],
+    &["recording"],
+    &["analysis"],
+    &["plan"],
+    &["calibrate"],
+    &["cli"],
+];
+
+/// The rooms a source text names as `crate::ROOM` (also inside `use crate::{a, b::c}`),
+/// comments left out.
+fn crate_paths(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let code = line.split("//").next().unwrap_or("");
+        let mut rest = code;
+        while let Some(i) = rest.find("crate::") {
+            rest = &rest[i + "crate::".len()..];
+            if let Some(group) = rest.strip_prefix('{') {
+                let end = group.find('}').unwrap_or(group.len());
+                for item in group[..end].split(',') {
+                    let name: String = item
+                        .trim()
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    out.push(name);
+                }
+            } else {
+                out.push(
+                    rest.chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect(),
+                );
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_room_of_host_harness_uses_one_after_it() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("src")
+        .canonicalize()
+        .unwrap();
+    let rank = |room: &str| ROOMS.iter().position(|r| r.contains(&room));
+    let mut bad = Vec::new();
+    let mut unknown = Vec::new();
+    let mut checked = 0;
+    for p in workspace_files(&[".rs"]) {
+        let p = p.canonicalize().unwrap();
+        let Ok(rel) = p.strip_prefix(&src) else {
+            continue;
+        };
+        checked += 1;
+        let room = rel
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy()
+            .trim_end_matches(".rs")
+            .to_string();
+        if room == "lib" || room == "main" || room == "cli" {
+            continue;
+        }
+        let Some(own) = rank(&room) else {
+            unknown.push(room);
+            continue;
+        };
+        let text = std::fs::read_to_string(&p).unwrap();
+        for used in crate_paths(&text) {
+            match rank(&used) {
+                Some(r) if r > own => bad.push(format!("{}: crate::{used}", rel.display())),
+                _ => {}
+            }
+        }
+    }
+    assert!(checked > 50, "only {checked} source files found");
+    unknown.sort();
+    unknown.dedup();
+    assert!(unknown.is_empty(), "rooms not in ROOMS: {unknown:?}");
+    bad.sort();
+    bad.dedup();
+    assert!(bad.is_empty(), "uses of a later room:\n{}", bad.join("\n"));
+}

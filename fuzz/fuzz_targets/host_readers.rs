@@ -9,8 +9,8 @@ fuzz_target!(|data: &[u8]| {
     for name in ["f.png", "f.tif"] {
         let p = dir.join(name);
         if std::fs::write(&p, data).is_ok() {
-            let _ = host_harness::analysis::frames::load_frame(&p);
-            let _ = host_harness::analysis::frames::for_each_tiff_page(&p, |_, _| Ok(()));
+            let _ = host_harness::frames::load_frame(&p);
+            let _ = host_harness::frames::for_each_tiff_page(&p, |_, _| Ok(()));
         }
     }
     let p = dir.join("a.csv");

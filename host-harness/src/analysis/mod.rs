@@ -32,15 +32,13 @@
 //!   dimensionless (acceleration over acceleration).
 
 pub mod compensate;
-pub mod frames;
 pub mod modal;
 pub mod report;
 pub mod targets;
 pub mod uff;
-pub mod video;
 
 pub use crate::chain::displacement::{
-    displacement_mm, Axis, Displacement, DisplacementSettings, GreyFrame, MAX_LOST_FRACTION,
+    displacement_mm, Axis, Displacement, DisplacementSettings, MAX_LOST_FRACTION,
 };
 pub use crate::chain::frf::{Defaults, Frf, PickedMode, WelchSettings};
 pub use firmware_core::spectrum::Window;
@@ -413,6 +411,7 @@ pub fn check_channel(values: &[f64], what: &str) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frames::GreyFrame;
 
     #[test]
     fn records_are_trimmed_to_a_whole_number_of_samples() {

@@ -9,11 +9,11 @@
 //! ([`super::modal`]): the accelerometer's and each target's pole (frequency, damping) and the
 //! shape across targets from one pole fitted to all their FRFs.
 
-use super::frames::FrameSource;
 use super::modal::{self, FrfForm};
 use super::{Analysis, Displacement, DisplacementSettings, Settings};
 use crate::bad_input;
-use crate::chain::displacement::GreyFrame;
+use crate::frames::FrameSource;
+use crate::frames::GreyFrame;
 use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Frame, Moments, MultiCentroider};
 use num_complex::Complex64;
 
@@ -35,7 +35,7 @@ pub struct Tracks {
     /// its lost frames.
     pub refused: Vec<usize>,
     /// The frames' bit depth and largest value.
-    pub depth: super::frames::FrameDepth,
+    pub depth: crate::frames::FrameDepth,
 }
 
 /// Pixel counts of a target's accepted detections this many frames back are its reference.

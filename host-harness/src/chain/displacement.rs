@@ -16,150 +16,11 @@
 //!   as failed and leaves it out, an analysis stops with an error.
 
 use crate::bad_input;
-use firmware_core::centroid::{self, Centroid, CentroidConfig};
+use firmware_core::centroid::Centroid;
 
-/// Largest fraction of lost frames (no centroid) a measurement accepts: 5 %.
-pub const MAX_LOST_FRACTION: f64 = 0.05;
-
-/// What a lost frame's value becomes (`[imaging] lost_frame_policy`, `analyze --lost-frames`).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum LostFramePolicy {
-    /// Linear interpolation between the neighbouring valid frames ([`fill_lost_frames`]).
-    #[default]
-    Interpolate,
-    /// The last valid frame's value (the first valid one's before it): a zero-order hold.
-    Hold,
-}
-
-/// [`fill_lost_frames`] with a policy: interpolation, or a hold of the last valid value.
-/// Returns the number of lost frames.
-pub fn fill_lost_frames_with(values: &mut [f64], valid: &[bool], policy: LostFramePolicy) -> usize {
-    match policy {
-        LostFramePolicy::Interpolate => fill_lost_frames(values, valid),
-        LostFramePolicy::Hold => {
-            let n = values.len().min(valid.len());
-            let lost = valid[..n].iter().filter(|v| !**v).count();
-            let Some(first) = valid[..n].iter().position(|v| *v) else {
-                return lost;
-            };
-            let mut last = values[first];
-            for i in 0..n {
-                if valid[i] {
-                    last = values[i];
-                } else {
-                    values[i] = last;
-                }
-            }
-            lost
-        }
-    }
-}
-
-/// Fills the values of lost frames (`valid[i] == false`) by linear interpolation between the
-/// neighbouring valid frames; lost frames before the first or after the last valid one take its
-/// value. Returns the number of lost frames; with no valid frame at all, nothing is changed and
-/// the count equals the length.
-pub fn fill_lost_frames(values: &mut [f64], valid: &[bool]) -> usize {
-    let n = values.len().min(valid.len());
-    let lost = valid[..n].iter().filter(|v| !**v).count();
-    let Some(first) = valid[..n].iter().position(|v| *v) else {
-        return lost;
-    };
-    let mut prev = first;
-    for i in 0..first {
-        values[i] = values[first];
-    }
-    for i in first + 1..n {
-        if valid[i] {
-            let gap = i - prev;
-            for j in prev + 1..i {
-                let w = (j - prev) as f64 / gap as f64;
-                values[j] = values[prev] * (1.0 - w) + values[i] * w;
-            }
-            prev = i;
-        }
-    }
-    for i in prev + 1..n {
-        values[i] = values[prev];
-    }
-    lost
-}
-
-/// Whether `lost` of `frames` lost frames exceed [`MAX_LOST_FRACTION`].
-pub fn too_many_lost(lost: usize, frames: usize) -> bool {
-    lost as f64 > MAX_LOST_FRACTION * frames as f64
-}
-
-/// A grey frame in memory, 8 or 16 bits per pixel, row-major without padding.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum GreyFrame {
-    /// 8-bit pixels.
-    U8 {
-        /// Columns.
-        width: usize,
-        /// Rows.
-        height: usize,
-        /// `width * height` pixels, row 0 first.
-        data: Vec<u8>,
-    },
-    /// 16-bit pixels.
-    U16 {
-        /// Columns.
-        width: usize,
-        /// Rows.
-        height: usize,
-        /// `width * height` pixels, row 0 first.
-        data: Vec<u16>,
-    },
-}
-
-impl GreyFrame {
-    /// `(width, height)` in pixels.
-    pub fn dimensions(&self) -> (usize, usize) {
-        match self {
-            GreyFrame::U8 { width, height, .. } | GreyFrame::U16 { width, height, .. } => {
-                (*width, *height)
-            }
-        }
-    }
-
-    /// Centroid with the firmware-core single-target centroider. `label` names the frame (file,
-    /// page) in the error when its shape is inconsistent.
-    pub fn centroid(&self, config: &CentroidConfig, label: &str) -> anyhow::Result<Centroid> {
-        fn of<P: centroid::Pixel>(
-            config: &CentroidConfig,
-            data: &[P],
-            (width, height): (usize, usize),
-        ) -> Result<Centroid, centroid::FrameError> {
-            centroid::Frame::new(data, width, height, width)
-                .and_then(|f| centroid::centroid(config, &f))
-        }
-        if let (GreyFrame::U8 { .. }, Some(s)) = (self, config.saturation) {
-            if s > 255 {
-                return Err(bad_input(format!(
-                    "{label}: --saturation {s} is above 255, the largest level of an 8-bit \
-                     frame: no pixel could ever be flagged saturated"
-                )));
-            }
-        }
-        let r = match self {
-            GreyFrame::U8 { data, .. } => of(config, data, self.dimensions()),
-            GreyFrame::U16 { data, .. } => of(config, data, self.dimensions()),
-        };
-        r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
-    }
-}
+pub use crate::lost_frames::{
+    fill_lost_frames, fill_lost_frames_with, too_many_lost, LostFramePolicy, MAX_LOST_FRACTION,
+};
 
 /// Which image axis carries the displacement (see the module documentation for the sign).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -207,16 +68,6 @@ pub struct Displacement {
     pub reference_px: f64,
     /// How the lost frames were filled.
     pub policy: LostFramePolicy,
-}
-
-impl LostFramePolicy {
-    /// How a report says what the policy did to the lost frames.
-    pub fn describe(self) -> &'static str {
-        match self {
-            LostFramePolicy::Interpolate => "filled by linear interpolation",
-            LostFramePolicy::Hold => "held at the last valid value",
-        }
-    }
 }
 
 impl Displacement {

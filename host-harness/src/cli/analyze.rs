@@ -4,9 +4,9 @@
 
 use super::args::{parse_bands, Bands, CentroidArgs, ModeArg, WelchArgs};
 use crate::analysis::compensate::{compensate, Compensated};
-use crate::analysis::frames::{centroid_source, discover_frames, FrameSource};
 use crate::analysis::{self, Axis, DisplacementSettings, Settings};
 use crate::bad_input;
+use crate::frames::{centroid_source, discover_frames, FrameSource};
 use crate::outdir::Staged;
 use std::path::{Path, PathBuf};
 
@@ -94,8 +94,8 @@ pub struct Args {
     pub out: PathBuf,
     /// What a lost frame's value becomes: `interpolate` (linearly between its valid
     /// neighbours) or `hold` (the last valid value, as firmware repeating its last output).
-    #[arg(long, value_enum, default_value_t = crate::chain::displacement::LostFramePolicy::Interpolate)]
-    pub lost_frames: crate::chain::displacement::LostFramePolicy,
+    #[arg(long, value_enum, default_value_t = crate::lost_frames::LostFramePolicy::Interpolate)]
+    pub lost_frames: crate::lost_frames::LostFramePolicy,
     /// Take the displacement record as periodic in the Fourier upsampling (no end matching):
     /// by default the line through its first and last samples is subtracted first, since a
     /// real record is not periodic (docs/method.md §3.2).

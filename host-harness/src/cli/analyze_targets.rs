@@ -4,10 +4,10 @@
 //! and `report.txt` into the staged output directory.
 
 use super::analyze::Args;
-use crate::analysis::frames::FrameSource;
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::uff::{self, Dataset58, Dof};
 use crate::analysis::{DisplacementSettings, Settings};
+use crate::frames::FrameSource;
 use crate::outdir::Staged;
 use std::fmt::Write as _;
 

@@ -8,8 +8,8 @@
 //! code 2 at the end.
 
 use super::args::CentroidArgs;
-use crate::analysis::frames::{for_each_tiff_page, load_frame};
 use crate::bad_input;
+use crate::frames::{for_each_tiff_page, load_frame};
 use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -189,7 +189,7 @@ pub struct Effects {
     /// tip, with the accelerometer).
     pub target_position_xi: f64,
     /// What a lost frame's value becomes (not an image effect).
-    pub lost_frame_policy: crate::chain::displacement::LostFramePolicy,
+    pub lost_frame_policy: crate::lost_frames::LostFramePolicy,
 }
 
 impl Effects {

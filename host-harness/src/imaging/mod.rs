@@ -14,8 +14,9 @@ pub mod effects;
 pub mod fastpath;
 pub mod render;
 
+pub use crate::model::DiskTarget;
 pub use effects::{Camera, Effects};
-pub use render::{BlurRenderer, DiskTarget};
+pub use render::BlurRenderer;
 
 use serde::{Deserialize, Serialize};
 
@@ -121,7 +122,7 @@ pub struct ImagingOptions {
     /// the tip, 1); the tip when absent.
     pub target_position_xi: Option<f64>,
     /// What a lost frame's value becomes (`interpolate` or `hold`); interpolate when absent.
-    pub lost_frame_policy: Option<crate::chain::displacement::LostFramePolicy>,
+    pub lost_frame_policy: Option<crate::lost_frames::LostFramePolicy>,
 }
 
 impl ImagingOptions {

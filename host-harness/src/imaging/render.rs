@@ -25,32 +25,10 @@
 //! centroid). Its spectrum falls as `exp(-(2 pi f sigma)^2 / 2)`, 1.5e-5 of the DC at the
 //! Nyquist frequency: band-limited, so the phase-shift translation is exact.
 
+use crate::model::DiskTarget;
 use num_complex::Complex32;
 use realfft::{ComplexToReal, RealFftPlanner};
 use std::sync::Arc;
-
-/// A bright disk with a Gaussian-smoothed edge on a black background.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DiskTarget {
-    /// Disk radius, px.
-    pub radius_px: f64,
-    /// Grey level of the disk (8-bit scale).
-    pub level: f64,
-    /// Gaussian sigma of the edge, px.
-    pub edge_sigma_px: f64,
-}
-
-impl DiskTarget {
-    /// Grey level at distance `r` (px) from the centre.
-    pub fn profile(&self, r: f64) -> f64 {
-        self.level * 0.5 * libm::erfc((r - self.radius_px) / (self.edge_sigma_px * 2f64.sqrt()))
-    }
-
-    /// Half-extent (px) beyond which the profile is below 1e-6 of the level.
-    pub fn extent(&self) -> f64 {
-        self.radius_px + 7.0 * self.edge_sigma_px
-    }
-}
 
 /// Renders motion-blurred 8-bit frames of a [`DiskTarget`] moving along `y`.
 pub struct BlurRenderer {

@@ -7,7 +7,7 @@
 //! `tip = xb + sum phi_i q_i`, so the transmissibility from base to tip acceleration is
 //! `T(w) = 1 + sum G_i phi_i w^2 / (w_i^2 - w^2 + 2 i h_i w_i w)`.
 
-use crate::imaging::DiskTarget;
+use super::DiskTarget;
 use firmware_core::spectrum::{Detrend, WelchConfig, Window};
 use num_complex::Complex64;
 use rand::Rng;

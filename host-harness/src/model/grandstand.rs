@@ -3,7 +3,7 @@
 //! held process noise, the exact response, a load cell and a laser as transducers, and the
 //! camera that looks at a painted disk on the platform. The only place the rig's constants live.
 
-use crate::imaging::DiskTarget;
+use super::DiskTarget;
 use crate::model::{normal, uniform_ms};
 use firmware_core::spectrum::{Detrend, WelchConfig, Window};
 use num_complex::Complex64;

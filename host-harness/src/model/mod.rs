@@ -12,6 +12,9 @@
 
 pub mod cantilever;
 pub mod grandstand;
+pub mod target;
+
+pub use target::DiskTarget;
 
 use crate::bad_input;
 use num_complex::Complex64;

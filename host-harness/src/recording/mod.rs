@@ -126,7 +126,7 @@ pub(crate) struct FrameSink {
     frames_to: PathBuf,
     /// The frames directory as it will be named.
     frames_dir: PathBuf,
-    video: Option<(crate::analysis::video::Ffv1Writer, PathBuf)>,
+    video: Option<(crate::frames::video::Ffv1Writer, PathBuf)>,
     noise: Option<(f64, rand_chacha::ChaCha8Rng)>,
     size: (usize, usize),
     px: Vec<u8>,
@@ -146,7 +146,7 @@ impl FrameSink {
         std::fs::create_dir_all(&frames_to)
             .with_context(|| format!("cannot create {}", frames_dir.display()))?;
         let video = if spec.video {
-            let w = crate::analysis::video::Ffv1Writer::create(
+            let w = crate::frames::video::Ffv1Writer::create(
                 &write_to.join("frames.mkv"),
                 size.0,
                 size.1,

@@ -169,7 +169,7 @@ pub fn boxed_welch<const NPERSEG: usize, const NFFT: usize, const SCRATCH: usize
 #[allow(clippy::too_many_arguments)]
 pub fn measure_vision<E: std::fmt::Display>(
     exposure_ms: f64,
-    policy: crate::chain::displacement::LostFramePolicy,
+    policy: crate::lost_frames::LostFramePolicy,
     disp: &mut [f64],
     valid: &mut [bool],
     bands: usize,

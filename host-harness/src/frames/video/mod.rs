@@ -44,7 +44,7 @@
 //! damaged frame stops it rather than being concealed), or more frames than timestamps is an
 //! error naming the file and the frame index.
 
-use crate::analysis::GreyFrame;
+use crate::frames::GreyFrame;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};

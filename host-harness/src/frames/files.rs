@@ -4,7 +4,7 @@
 //! frame, never skipped silently.
 
 use crate::bad_input;
-use crate::chain::displacement::GreyFrame;
+use crate::frames::GreyFrame;
 use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -17,7 +17,7 @@ pub enum FrameSource {
     /// One multi-page TIFF, one page per frame.
     MultiPageTiff(PathBuf),
     /// One video file (AVI, MKV, MP4, MOV, ...), decoded frame by frame by FFmpeg
-    /// ([`super::video`]).
+    /// ([`crate::frames::video`]).
     Video(PathBuf),
 }
 
@@ -395,7 +395,8 @@ impl FrameSource {
             FrameSource::Files(f) => Ok(Some(f.len())),
             FrameSource::MultiPageTiff(_) => Ok(None),
             FrameSource::Video(p) => {
-                let v = super::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+                let v =
+                    crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
                 Ok(Some(v.info().frames))
             }
         }
@@ -418,7 +419,8 @@ impl FrameSource {
             }
             FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, |label, frame| f(label, &frame)),
             FrameSource::Video(p) => {
-                let mut v = super::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+                let mut v =
+                    crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
                 let mut frame = GreyFrame::U8 {
                     width: 0,
                     height: 0,

@@ -1,0 +1,74 @@
+//! Frames as they come from a camera or a file: the decoded grey frame, files (PNG/TIFF
+//! directories, patterns, multi-page TIFF) and videos (through FFmpeg). Every frame source of the
+//! toolkit lives here; what is done with a frame (centroid, tracking, analysis) lives above it.
+
+pub mod files;
+pub mod video;
+
+pub use files::{
+    centroid_source, discover_frames, for_each_tiff_page, load_frame, Discovered, FrameDepth,
+    FrameSource,
+};
+
+use crate::bad_input;
+use firmware_core::centroid::{self, Centroid, CentroidConfig};
+
+/// A grey frame in memory, 8 or 16 bits per pixel, row-major without padding.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GreyFrame {
+    /// 8-bit pixels.
+    U8 {
+        /// Columns.
+        width: usize,
+        /// Rows.
+        height: usize,
+        /// `width * height` pixels, row 0 first.
+        data: Vec<u8>,
+    },
+    /// 16-bit pixels.
+    U16 {
+        /// Columns.
+        width: usize,
+        /// Rows.
+        height: usize,
+        /// `width * height` pixels, row 0 first.
+        data: Vec<u16>,
+    },
+}
+
+impl GreyFrame {
+    /// `(width, height)` in pixels.
+    pub fn dimensions(&self) -> (usize, usize) {
+        match self {
+            GreyFrame::U8 { width, height, .. } | GreyFrame::U16 { width, height, .. } => {
+                (*width, *height)
+            }
+        }
+    }
+
+    /// Centroid with the firmware-core single-target centroider. `label` names the frame (file,
+    /// page) in the error when its shape is inconsistent.
+    pub fn centroid(&self, config: &CentroidConfig, label: &str) -> anyhow::Result<Centroid> {
+        fn of<P: centroid::Pixel>(
+            config: &CentroidConfig,
+            data: &[P],
+            (width, height): (usize, usize),
+        ) -> Result<Centroid, centroid::FrameError> {
+            centroid::Frame::new(data, width, height, width)
+                .and_then(|f| centroid::centroid(config, &f))
+        }
+        if let (GreyFrame::U8 { .. }, Some(s)) = (self, config.saturation) {
+            if s > 255 {
+                return Err(bad_input(format!(
+                    "{label}: --saturation {s} is above 255, the largest level of an 8-bit \
+                     frame: no pixel could ever be flagged saturated"
+                )));
+            }
+        }
+        let r = match self {
+            GreyFrame::U8 { data, .. } => of(config, data, self.dimensions()),
+            GreyFrame::U16 { data, .. } => of(config, data, self.dimensions()),
+        };
+        r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
+    }
+}
