@@ -4,7 +4,6 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 pub mod analyze;
-pub mod analyze_targets;
 pub mod args;
 pub mod calibrate;
 pub mod centroid;

@@ -34,7 +34,9 @@
 pub mod compensate;
 pub mod modal;
 pub mod report;
+pub mod run;
 pub mod targets;
+pub mod targets_run;
 pub mod uff;
 
 pub use crate::chain::displacement::{

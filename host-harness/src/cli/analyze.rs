@@ -1,14 +1,11 @@
-//! `host-harness analyze`: a real recording (frames + accelerometer CSV) through the chain of
-//! [`crate::analysis`]. This file only parses arguments, loads the inputs, calls the chain and
-//! writes the outputs.
+//! `host-harness analyze`: the flags checked into an [`analysis::run::Request`], one call to
+//! [`analysis::run::run`], its report printed.
 
 use super::args::{parse_bands, Bands, CentroidArgs, ModeArg, WelchArgs};
-use crate::analysis::compensate::{compensate, Compensated};
+use crate::analysis::run::{AccelInput, Request, TargetsRequest};
 use crate::analysis::{self, Axis, DisplacementSettings, Settings};
 use crate::bad_input;
-use crate::frames::{centroid_source, discover_frames, FrameSource};
-use crate::outdir::Staged;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `host-harness analyze`.
 ///
@@ -130,21 +127,6 @@ pub struct Args {
     pub shape_reference: Option<PathBuf>,
 }
 
-impl Args {
-    /// The files and folders the run reads (an output directory holding one is never
-    /// replaced).
-    pub fn inputs(&self) -> Vec<&Path> {
-        let mut v = vec![Path::new(self.frames.as_str()), self.accel.as_path()];
-        v.extend(self.shape_reference.as_deref());
-        v
-    }
-
-    /// Whether the motion is measured along the image's x axis.
-    pub fn axis_is_x(&self) -> bool {
-        self.axis == AxisArg::X
-    }
-}
-
 /// `--axis`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum AxisArg {
@@ -195,260 +177,71 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, Some(k), Some(hz)) => analysis::tick_offset_to_seconds(k, hz)?,
         _ => 0.0,
     };
-    let config = args.centroid.config(None)?;
-    let settings = Settings {
-        frame_rate_hz: args.fps,
-        accel_rate_hz: args.fs,
-        time_offset_s,
-        welch: args.welch.settings(),
-        bands: args.bands.pairs(),
-        exposure_s: args.exposure_ms.map(|e| e / 1000.0),
-        end_match: !args.no_end_match,
-    };
-    let dsettings = DisplacementSettings {
-        lost_frames: args.lost_frames,
-        mm_per_px: args.mm_per_px,
-        axis: match args.axis {
-            AxisArg::X => Axis::X,
-            AxisArg::Y => Axis::Y,
+    let request = Request {
+        frames: args.frames.clone(),
+        accel: AccelInput {
+            path: args.accel.clone(),
+            fs: args.fs,
+            input_col: args.input_col.clone(),
+            output_col: args.output_col.clone(),
+            time_col: args.time_col.clone(),
         },
-        invert: args.invert,
+        settings: Settings {
+            frame_rate_hz: args.fps,
+            accel_rate_hz: args.fs,
+            time_offset_s,
+            welch: args.welch.settings(),
+            bands: args.bands.pairs(),
+            exposure_s: args.exposure_ms.map(|e| e / 1000.0),
+            end_match: !args.no_end_match,
+        },
+        displacement: DisplacementSettings {
+            lost_frames: args.lost_frames,
+            mm_per_px: args.mm_per_px,
+            axis: match args.axis {
+                AxisArg::X => Axis::X,
+                AxisArg::Y => Axis::Y,
+            },
+            invert: args.invert,
+        },
+        centroid: args.centroid.config(None)?,
+        binary: args.centroid.mode == ModeArg::Binary,
+        compensate_exposure: args.compensate_exposure,
+        exposure_ms: args.exposure_ms,
+        targets: targets_request(&args)?,
+        out: args.out.clone(),
+        force: args.force,
     };
-
-    // Inputs first (cheap checks before the frames are decoded).
-    let (base, tip) = analysis::load_accel(
-        &args.accel,
-        args.fs,
-        &args.input_col,
-        &args.output_col,
-        args.time_col.as_deref(),
-    )?;
-    let found = discover_frames(&args.frames)?;
-    let source = found.source.clone();
-    let ignored = ignored_note(&found.ignored);
-    if let Some(n) = &ignored {
-        eprintln!("warning: {n}");
-    }
-    if let Some(n) = source.count(args.fps)? {
-        // The frame count is known before decoding: check the record lengths now.
-        let n = analysis::usable_frames_or_error(n, args.fps, args.fs)?;
-        analysis::align(n, args.fps, base.len(), args.fs, time_offset_s)?;
-    }
-    if let Some(k) = args.targets {
-        return super::analyze_targets::run(
-            &args,
-            &source,
-            (&base, &tip),
-            (&settings, &dsettings),
-            k,
-            ignored.as_deref(),
-        );
-    }
-    let (centroids, depth) = centroid_source(&source, args.fps, &config)?;
-    let depth_warning = depth.threshold_warning(args.centroid.threshold);
-    if let Some(w) = &depth_warning {
-        eprintln!("warning: {w}");
-    }
-    let disp = analysis::displacement_mm(&centroids, &dsettings)?;
-
-    // every output is staged and the directory moved into place at the end (complete or absent)
-    let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
-    let mut inputs = describe_inputs(&args, &source, centroids.len(), base.len(), time_offset_s);
-    if let Some(n) = ignored {
-        inputs.push(("ignored".into(), n));
-    }
-    inputs.push(("frame depth".into(), depth.describe()));
-    if let Some(w) = depth_warning {
-        inputs.push(("WARNING".into(), w));
-    }
-    out.write(
-        "displacement.csv",
-        analysis::displacement_csv(&centroids, &disp, args.fps, time_offset_s),
-    )?;
-    let (result, compensation) = analyze_and_compensate(&args, &disp, (&base, &tip), &settings)?;
-    let (a, failure) = match &result {
-        Ok(a) => (Some(a), None),
-        Err(e) => (None, Some(format!("{e:#}"))),
-    };
-    let mut report = analysis::report_text(&inputs, &disp, a, failure.as_deref());
-    append_compensation(&out, compensation.as_ref(), &mut report)?;
-    if let Some(a) = a {
-        out.write("frf.csv", analysis::frf_csv(a))?;
-        out.write("modes.csv", analysis::modes_csv(a))?;
-        let plots = write_plot(out.dir(), a, args.fps)?;
-        let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
-        let names: Vec<String> = plots
-            .iter()
-            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-            .collect();
-        files.extend(names.iter().map(String::as_str));
-        let files: Vec<String> = files
-            .iter()
-            .map(|f| args.out.join(f).display().to_string())
-            .collect();
-        report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
-    }
-    out.write("report.txt", &report)?;
-    if result.is_ok() {
-        out.commit()?;
-    } else if !out.commit_unless_replacing()? {
-        report.push_str(&format!(
-            "\nthe analysis failed: the earlier output in {} was left as it was\n",
-            args.out.display()
-        ));
-    }
-    print!("{report}");
-    result.map(|_| ())
+    let outcome = analysis::run::run(&request)?;
+    print!("{}", outcome.report);
+    outcome.result
 }
 
-/// The analysis (its failure is reported, not returned) and, with `--compensate-exposure`,
-/// its vision H1 divided by the exposure's transfer (`analysis::compensate`).
-fn analyze_and_compensate(
-    args: &Args,
-    disp: &analysis::Displacement,
-    (base, tip): (&[f64], &[f64]),
-    settings: &Settings,
-) -> anyhow::Result<(anyhow::Result<analysis::Analysis>, Option<Compensated>)> {
-    let mut result = analysis::analyze(disp, base, tip, settings);
-    let compensation = match (&mut result, settings.exposure_s) {
-        (Ok(a), Some(e)) if args.compensate_exposure => {
-            let binary = args.centroid.mode == ModeArg::Binary;
-            Some(compensate(a, e, &settings.bands, binary)?)
-        }
-        _ => None,
+/// `--targets K` and its flags, checked.
+fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
+    let Some(k) = args.targets else {
+        return Ok(None);
     };
-    Ok((result, compensation))
-}
-
-/// Appends the compensation's section to the report and writes `compensation.csv`.
-fn append_compensation(
-    out: &Staged,
-    c: Option<&Compensated>,
-    report: &mut String,
-) -> anyhow::Result<()> {
-    if let Some(c) = c {
-        let p = out.write("compensation.csv", c.csv())?;
-        report.push_str(&c.report());
-        report.push_str(&format!("  written: {}\n", p.display()));
+    if !(2..=32).contains(&k) {
+        return Err(bad_input(format!("--targets {k}: between 2 and 32")));
     }
-    Ok(())
-}
-
-/// The sentence naming image files beside the frames that are not of their numbered sequence.
-pub fn ignored_note(ignored: &[PathBuf]) -> Option<String> {
-    if ignored.is_empty() {
-        return None;
+    let gate_px = args.gate_px.unwrap_or(10.0);
+    if !(gate_px.is_finite() && gate_px > 0.0) {
+        return Err(bad_input(format!(
+            "--gate-px {gate_px}: must be a positive number of pixels (how far a target may \
+             move between two frames and still be the same)"
+        )));
     }
-    let names: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
-    Some(format!(
-        "{} image file(s) beside the frames are not of their numbered sequence and were \
-         ignored: {}",
-        names.len(),
-        names.join(", ")
-    ))
-}
-
-/// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
-/// camera's Nyquist frequency (the vision path has no content above it, and outside the
-/// excitation band H1 is noise over noise).
-fn write_plot(out: &Path, a: &analysis::Analysis, fps: f64) -> anyhow::Result<Vec<PathBuf>> {
-    let top = a
-        .acc_modes
-        .iter()
-        .map(|m| m.band_hz.1 * 1.1)
-        .fold(0.0, f64::max);
-    let top = if top > 0.0 {
-        top.min(fps / 2.0)
-    } else {
-        fps / 2.0
-    };
-    let keep = a.acc_frf.freq_hz.iter().take_while(|&&f| f <= top).count();
-    let freq = &a.acc_frf.freq_hz[..keep];
-    let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
-    let acc: Vec<f64> = abs(&a.acc_frf.h1);
-    let vis: Vec<f64> = abs(&a.vis_frf.h1);
-    crate::plots::write_frf_plot(
-        &out.join("frf"),
-        "H1 of the recording: accelerometer and vision",
-        "|H1|",
-        &[("accelerometer", freq, &acc), ("vision", freq, &vis)],
-    )
-}
-
-fn describe_inputs(
-    args: &Args,
-    source: &FrameSource,
-    frames: usize,
-    samples: usize,
-    time_offset_s: f64,
-) -> Vec<(String, String)> {
-    let src = match source {
-        FrameSource::Files(f) => format!(
-            "{} ({} files, {} .. {})",
-            args.frames,
-            f.len(),
-            f.first()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default(),
-            f.last()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
-        ),
-        FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
-        FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
-    };
-    let mut v = vec![
-        ("frames".to_string(), src),
-        (
-            "frame count".into(),
-            format!(
-                "{frames} at {} fps ({:.4} s)",
-                args.fps,
-                frames as f64 / args.fps
-            ),
-        ),
-        (
-            "accelerometer".into(),
-            format!(
-                "{}: input `{}`, output `{}`, {samples} samples at {} Hz ({:.4} s)",
-                args.accel.display(),
-                args.input_col,
-                args.output_col,
-                args.fs,
-                samples as f64 / args.fs
-            ),
-        ),
-        (
-            "alignment".into(),
-            format!("first frame at {time_offset_s} s after the first sample"),
-        ),
-        (
-            "centroid".into(),
-            format!(
-                "threshold {}, {:?}, ROI {}",
-                args.centroid.threshold,
-                args.centroid.mode,
-                args.centroid
-                    .roi
-                    .map(|r| format!("{},{},{},{}", r.x, r.y, r.width, r.height))
-                    .unwrap_or_else(|| "none".into())
-            ),
-        ),
-        (
-            "displacement".into(),
-            format!(
-                "{} mm/px, axis {}{}",
-                args.mm_per_px,
-                match args.axis {
-                    AxisArg::X => "x (positive right)",
-                    AxisArg::Y => "y (positive up in the image)",
-                },
-                if args.invert { ", inverted" } else { "" }
-            ),
-        ),
-    ];
-    if let Some(e) = args.exposure_ms {
-        v.push(("exposure".into(), format!("{e} ms")));
+    let accel_target = args.accel_target.unwrap_or(k);
+    if !(1..=k).contains(&accel_target) {
+        return Err(bad_input(format!(
+            "--accel-target {accel_target}: targets are numbered 1 to {k}"
+        )));
     }
-    v
+    Ok(Some(TargetsRequest {
+        k,
+        gate_px,
+        accel_target,
+        shape_reference: args.shape_reference.clone(),
+    }))
 }

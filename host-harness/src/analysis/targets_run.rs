@@ -1,66 +1,103 @@
-//! `analyze --targets K`: the multi-target path of `host-harness analyze`
-//! ([`crate::analysis::targets`]); writes `modes.csv`, `shapes.csv`, `frf.csv`,
-//! `displacement.csv`, `frf.uff`, `shapes.png`/`.svg`, `mac.csv` (with `--shape-reference`)
-//! and `report.txt` into the staged output directory.
+//! `analyze --targets K` ([`super::run`] with a [`TargetsRequest`]): the targets tracked and
+//! analysed ([`crate::analysis::targets`]), then `modes.csv`, `shapes.csv`, `frf.csv`,
+//! `displacement.csv`, `frf.uff`, `shapes.png`/`.svg`, `mac.csv` (with a shape reference),
+//! `compensation.csv` (with the compensation) and `report.txt` written into the staged output
+//! directory.
 
-use super::analyze::Args;
+use super::run::{Outcome, Request, TargetsRequest};
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::uff::{self, Dataset58, Dof};
-use crate::analysis::{DisplacementSettings, Settings};
+use crate::analysis::Axis;
 use crate::frames::FrameSource;
 use crate::outdir::Staged;
 use std::fmt::Write as _;
 
-/// Runs the multi-target analysis of `k` targets.
+/// Runs the multi-target analysis `t` of the request.
 pub fn run(
-    args: &Args,
+    req: &Request,
+    t: &TargetsRequest,
     source: &FrameSource,
     (base, tip): (&[f64], &[f64]),
-    (settings, ds): (&Settings, &DisplacementSettings),
-    k: usize,
     ignored: Option<&str>,
-) -> anyhow::Result<()> {
-    if !(2..=32).contains(&k) {
-        return Err(crate::bad_input(format!("--targets {k}: between 2 and 32")));
-    }
-    let gate_px = args.gate_px.unwrap_or(10.0);
-    if !(gate_px.is_finite() && gate_px > 0.0) {
-        return Err(crate::bad_input(format!(
-            "--gate-px {gate_px}: must be a positive number of pixels (how far a target may \
-             move between two frames and still be the same)"
-        )));
-    }
-    let accel_target = args.accel_target.unwrap_or(k);
-    if !(1..=k).contains(&accel_target) {
-        return Err(crate::bad_input(format!(
-            "--accel-target {accel_target}: targets are numbered 1 to {k}"
-        )));
-    }
+) -> anyhow::Result<Outcome> {
+    let (settings, k) = (&req.settings, t.k);
     // the reference is read before the frames: a bad file fails at once
-    let reference = match &args.shape_reference {
-        Some(p) => Some(targets::read_shape_reference(p, k, settings.bands.len())?),
-        None => None,
-    };
-    let config = args.centroid.config(None)?;
-    let tracks = targets::track(source, args.fps, &config, k, gate_px)?;
-    let compensate = match (args.compensate_exposure, settings.exposure_s) {
+    let reference = t
+        .shape_reference
+        .as_deref()
+        .map(|p| targets::read_shape_reference(p, k, settings.bands.len()))
+        .transpose()?;
+    let tracks = targets::track(source, settings.frame_rate_hz, &req.centroid, k, t.gate_px)?;
+    let compensate = match (req.compensate_exposure, settings.exposure_s) {
         (true, Some(exposure_s)) => Some(targets::CompensationRequest {
             exposure_s,
-            binary: args.centroid.mode == super::args::ModeArg::Binary,
+            binary: req.binary,
         }),
         _ => None,
     };
-    let a = targets::analyze_targets(&tracks, ds, (base, tip), settings, compensate)?;
-    let out = Staged::new(&args.out, args.force, "analyze", &args.inputs())?;
+    let a = targets::analyze_targets(
+        &tracks,
+        &req.displacement,
+        (base, tip),
+        settings,
+        compensate,
+    )?;
+    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
+    let macs = reference.as_ref().map(|r| targets::macs(&a, r));
+    write_tables(&out, req, &a, &tracks, macs.as_deref())?;
+    let along_x = req.displacement.axis == Axis::X;
+    shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
+    let report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
+    let failed = a.failures();
+    out.write("report.txt", &report)?;
+    // a run with failed targets exits 2: it never replaces an earlier output
+    let written = if failed.is_empty() {
+        out.commit().map(|()| true)?
+    } else {
+        out.commit_unless_replacing()?
+    };
+    let result = if failed.is_empty() {
+        Ok(())
+    } else {
+        let list: Vec<String> = failed
+            .iter()
+            .map(|(t, why)| format!("target {t}: {why}"))
+            .collect();
+        let whereabouts = if written {
+            format!("the others' results are in {}", req.out.display())
+        } else {
+            format!(
+                "nothing was written: the earlier output in {} was left as it was",
+                req.out.display()
+            )
+        };
+        Err(crate::bad_input(format!(
+            "{} of {k} targets could not be analysed ({}); {whereabouts}",
+            failed.len(),
+            list.join("; "),
+        )))
+    };
+    Ok(Outcome { report, result })
+}
+
+/// The CSV files and the UFF of a multi-target analysis.
+fn write_tables(
+    out: &Staged,
+    req: &Request,
+    a: &TargetAnalysis,
+    tracks: &Tracks,
+    macs: Option<&[(usize, f64)]>,
+) -> anyhow::Result<()> {
+    let s = &req.settings;
     out.write("modes.csv", targets::modes_csv(&a.modes))?;
-    out.write("shapes.csv", targets::shapes_csv(&a, &tracks.first))?;
-    out.write("frf.csv", targets::frf_csv(&a))?;
+    out.write("shapes.csv", targets::shapes_csv(a, &tracks.first))?;
+    out.write("frf.csv", targets::frf_csv(a))?;
     out.write(
         "displacement.csv",
-        targets::displacement_csv(&tracks, &a, args.fps, settings.time_offset_s),
+        targets::displacement_csv(tracks, a, s.frame_rate_hz, s.time_offset_s),
     )?;
-    out.write("frf.uff", uff_bytes(&a)?)?;
-    if compensate.is_some() {
+    out.write("frf.uff", uff_bytes(a)?)?;
+    if a.compensation.iter().any(Option::is_some) {
         let mut csv = String::from("target,mode,f_hz,e2pr,transfer,factor,compensated\n");
         for (t, c) in a.compensation.iter().enumerate() {
             if let Some(c) = c {
@@ -69,16 +106,26 @@ pub fn run(
         }
         out.write("compensation.csv", csv)?;
     }
-    let macs = reference.as_ref().map(|r| targets::macs(&a, r));
-    if let Some(m) = &macs {
+    if let Some(m) = macs {
         let mut csv = String::from("mode,mac\n");
         for (mode, v) in m {
             let _ = writeln!(csv, "{mode},{v}");
         }
         out.write("mac.csv", csv)?;
     }
-    shape_plot(&out, &a, &tracks, reference.as_ref(), args.axis_is_x())?;
-    let mut report = report(&a, &tracks, (k, accel_target), macs.as_deref());
+    Ok(())
+}
+
+/// The whole report: [`report`], then the notes on the frames and the compensation.
+fn full_report(
+    req: &Request,
+    t: &TargetsRequest,
+    a: &TargetAnalysis,
+    tracks: &Tracks,
+    macs: Option<&[(usize, f64)]>,
+    ignored: Option<&str>,
+) -> String {
+    let mut report = report(a, tracks, (t.k, t.accel_target), macs);
     if let Some(n) = ignored {
         report.push_str(&format!("\nnote: {n}\n"));
     }
@@ -93,7 +140,7 @@ pub fn run(
             ));
         }
     }
-    if let Some(w) = tracks.depth.threshold_warning(args.centroid.threshold) {
+    if let Some(w) = tracks.depth.threshold_warning(req.centroid.threshold) {
         eprintln!("warning: {w}");
         report.push_str(&format!("WARNING: {w}\n"));
     }
@@ -103,35 +150,7 @@ pub fn run(
             report.push_str(&c.report());
         }
     }
-    let failed = a.failures();
-    out.write("report.txt", &report)?;
-    // a run with failed targets exits 2: it never replaces an earlier output
-    let written = if failed.is_empty() {
-        out.commit().map(|()| true)?
-    } else {
-        out.commit_unless_replacing()?
-    };
-    print!("{report}");
-    if !failed.is_empty() {
-        let list: Vec<String> = failed
-            .iter()
-            .map(|(t, why)| format!("target {t}: {why}"))
-            .collect();
-        let whereabouts = if written {
-            format!("the others' results are in {}", args.out.display())
-        } else {
-            format!(
-                "nothing was written: the earlier output in {} was left as it was",
-                args.out.display()
-            )
-        };
-        return Err(crate::bad_input(format!(
-            "{} of {k} targets could not be analysed ({}); {whereabouts}",
-            failed.len(),
-            list.join("; "),
-        )));
-    }
-    Ok(())
+    report
 }
 
 /// One dataset 58 per FRF: the accelerometer (node 100) and each analysed target (node

@@ -1,0 +1,329 @@
+//! `analyze` as one library call: a checked [`Request`] (what `cli::analyze` builds from its
+//! flags) -> the inputs loaded and checked -> the chain for one target or several
+//! ([`super::targets_run`]) -> every output file staged and moved into place (`outdir`) -> the
+//! report text, which the caller prints.
+
+use super::compensate::{compensate, Compensated};
+use super::{Axis, DisplacementSettings, Settings};
+use crate::frames::{centroid_source, discover_frames, FrameSource};
+use crate::outdir::Staged;
+use firmware_core::centroid::CentroidConfig;
+use std::path::{Path, PathBuf};
+
+/// The accelerometer record of a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelInput {
+    /// The CSV file.
+    pub path: PathBuf,
+    /// Its sample rate, Hz.
+    pub fs: f64,
+    /// Column of the FRF input (base acceleration, or a force).
+    pub input_col: String,
+    /// Column of the output (tip) acceleration.
+    pub output_col: String,
+    /// Optional time column, s.
+    pub time_col: Option<String>,
+}
+
+/// Several targets (`--targets K`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TargetsRequest {
+    /// Number of targets, 2..=32.
+    pub k: usize,
+    /// How far a target may move between frames, px (> 0).
+    pub gate_px: f64,
+    /// The target co-located with the output accelerometer, 1..=K.
+    pub accel_target: usize,
+    /// Reference shapes to compute the MAC against.
+    pub shape_reference: Option<PathBuf>,
+}
+
+/// A checked `analyze` request: every value in range (the CLI's checks), nothing read yet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Request {
+    /// `--frames` as the user wrote it.
+    pub frames: String,
+    /// The accelerometer record.
+    pub accel: AccelInput,
+    /// The chain's settings (rates, alignment, Welch, bands, exposure, end matching).
+    pub settings: Settings,
+    /// Pixels to millimetres, axis, sign, lost-frame policy.
+    pub displacement: DisplacementSettings,
+    /// The centroid's settings.
+    pub centroid: CentroidConfig,
+    /// Whether the centroid is the binary one (the compensation's transfer is then approximate).
+    pub binary: bool,
+    /// Divide the vision H1 by the exposure's transfer.
+    pub compensate_exposure: bool,
+    /// The exposure as the user gave it, ms (`settings.exposure_s` is computed from it; this
+    /// is how the report states it).
+    pub exposure_ms: Option<f64>,
+    /// Several targets, or one.
+    pub targets: Option<TargetsRequest>,
+    /// Output directory, and whether an earlier analysis there may be replaced.
+    pub out: PathBuf,
+    /// `--force`.
+    pub force: bool,
+}
+
+impl Request {
+    /// The files and folders the run reads (an output directory holding one is never
+    /// replaced).
+    pub fn inputs(&self) -> Vec<&Path> {
+        let mut v = vec![Path::new(self.frames.as_str()), self.accel.path.as_path()];
+        if let Some(t) = &self.targets {
+            v.extend(t.shape_reference.as_deref());
+        }
+        v
+    }
+}
+
+/// What an analysis printed, and whether it succeeded (a failure's report is printed too).
+#[derive(Debug)]
+pub struct Outcome {
+    /// The report (as written to `report.txt` when it was written).
+    pub report: String,
+    /// `Err` when the analysis failed (bad input: exit 2).
+    pub result: anyhow::Result<()>,
+}
+
+/// Runs the analysis the request describes; see the module documentation.
+pub fn run(req: &Request) -> anyhow::Result<Outcome> {
+    let settings = &req.settings;
+    let time_offset_s = settings.time_offset_s;
+    // Inputs first (cheap checks before the frames are decoded).
+    let a = &req.accel;
+    let (base, tip) = super::load_accel(
+        &a.path,
+        a.fs,
+        &a.input_col,
+        &a.output_col,
+        a.time_col.as_deref(),
+    )?;
+    let found = discover_frames(&req.frames)?;
+    let source = found.source.clone();
+    let ignored = ignored_note(&found.ignored);
+    if let Some(n) = &ignored {
+        eprintln!("warning: {n}");
+    }
+    let fps = settings.frame_rate_hz;
+    if let Some(n) = source.count(fps)? {
+        // The frame count is known before decoding: check the record lengths now.
+        let n = super::usable_frames_or_error(n, fps, a.fs)?;
+        super::align(n, fps, base.len(), a.fs, time_offset_s)?;
+    }
+    if let Some(t) = &req.targets {
+        return super::targets_run::run(req, t, &source, (&base, &tip), ignored.as_deref());
+    }
+    let (centroids, depth) = centroid_source(&source, fps, &req.centroid)?;
+    let depth_warning = depth.threshold_warning(req.centroid.threshold);
+    if let Some(w) = &depth_warning {
+        eprintln!("warning: {w}");
+    }
+    let disp = super::displacement_mm(&centroids, &req.displacement)?;
+
+    // every output is staged and the directory moved into place at the end (complete or absent)
+    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
+    let mut inputs = describe_inputs(req, &source, centroids.len(), base.len());
+    if let Some(n) = ignored {
+        inputs.push(("ignored".into(), n));
+    }
+    inputs.push(("frame depth".into(), depth.describe()));
+    if let Some(w) = depth_warning {
+        inputs.push(("WARNING".into(), w));
+    }
+    out.write(
+        "displacement.csv",
+        super::displacement_csv(&centroids, &disp, fps, time_offset_s),
+    )?;
+    let (result, compensation) = analyze_and_compensate(req, &disp, (&base, &tip))?;
+    let (a, failure) = match &result {
+        Ok(a) => (Some(a), None),
+        Err(e) => (None, Some(format!("{e:#}"))),
+    };
+    let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
+    append_compensation(&out, compensation.as_ref(), &mut report)?;
+    if let Some(a) = a {
+        out.write("frf.csv", super::frf_csv(a))?;
+        out.write("modes.csv", super::modes_csv(a))?;
+        let plots = write_plot(out.dir(), a, fps)?;
+        let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
+        let names: Vec<String> = plots
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        files.extend(names.iter().map(String::as_str));
+        let files: Vec<String> = files
+            .iter()
+            .map(|f| req.out.join(f).display().to_string())
+            .collect();
+        report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
+    }
+    out.write("report.txt", &report)?;
+    if result.is_ok() {
+        out.commit()?;
+    } else if !out.commit_unless_replacing()? {
+        report.push_str(&format!(
+            "\nthe analysis failed: the earlier output in {} was left as it was\n",
+            req.out.display()
+        ));
+    }
+    Ok(Outcome {
+        report,
+        result: result.map(|_| ()),
+    })
+}
+
+/// The analysis (its failure is reported, not returned) and, with `--compensate-exposure`,
+/// its vision H1 divided by the exposure's transfer (`analysis::compensate`).
+fn analyze_and_compensate(
+    req: &Request,
+    disp: &super::Displacement,
+    (base, tip): (&[f64], &[f64]),
+) -> anyhow::Result<(anyhow::Result<super::Analysis>, Option<Compensated>)> {
+    let settings = &req.settings;
+    let mut result = super::analyze(disp, base, tip, settings);
+    let compensation = match (&mut result, settings.exposure_s) {
+        (Ok(a), Some(e)) if req.compensate_exposure => {
+            Some(compensate(a, e, &settings.bands, req.binary)?)
+        }
+        _ => None,
+    };
+    Ok((result, compensation))
+}
+
+/// Appends the compensation's section to the report and writes `compensation.csv`.
+fn append_compensation(
+    out: &Staged,
+    c: Option<&Compensated>,
+    report: &mut String,
+) -> anyhow::Result<()> {
+    if let Some(c) = c {
+        let p = out.write("compensation.csv", c.csv())?;
+        report.push_str(&c.report());
+        report.push_str(&format!("  written: {}\n", p.display()));
+    }
+    Ok(())
+}
+
+/// The sentence naming image files beside the frames that are not of their numbered sequence.
+pub fn ignored_note(ignored: &[PathBuf]) -> Option<String> {
+    if ignored.is_empty() {
+        return None;
+    }
+    let names: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
+    Some(format!(
+        "{} image file(s) beside the frames are not of their numbered sequence and were \
+         ignored: {}",
+        names.len(),
+        names.join(", ")
+    ))
+}
+
+/// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
+/// camera's Nyquist frequency (the vision path has no content above it, and outside the
+/// excitation band H1 is noise over noise).
+fn write_plot(out: &Path, a: &super::Analysis, fps: f64) -> anyhow::Result<Vec<PathBuf>> {
+    let top = a
+        .acc_modes
+        .iter()
+        .map(|m| m.band_hz.1 * 1.1)
+        .fold(0.0, f64::max);
+    let top = if top > 0.0 {
+        top.min(fps / 2.0)
+    } else {
+        fps / 2.0
+    };
+    let keep = a.acc_frf.freq_hz.iter().take_while(|&&f| f <= top).count();
+    let freq = &a.acc_frf.freq_hz[..keep];
+    let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
+    let acc: Vec<f64> = abs(&a.acc_frf.h1);
+    let vis: Vec<f64> = abs(&a.vis_frf.h1);
+    crate::plots::write_frf_plot(
+        &out.join("frf"),
+        "H1 of the recording: accelerometer and vision",
+        "|H1|",
+        &[("accelerometer", freq, &acc), ("vision", freq, &vis)],
+    )
+}
+
+fn describe_inputs(
+    req: &Request,
+    source: &FrameSource,
+    frames: usize,
+    samples: usize,
+) -> Vec<(String, String)> {
+    let src = match source {
+        FrameSource::Files(f) => format!(
+            "{} ({} files, {} .. {})",
+            req.frames,
+            f.len(),
+            f.first()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            f.last()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        ),
+        FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
+        FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
+    };
+    let (fps, a, d, c) = (
+        req.settings.frame_rate_hz,
+        &req.accel,
+        &req.displacement,
+        &req.centroid,
+    );
+    let mut v = vec![
+        ("frames".to_string(), src),
+        (
+            "frame count".into(),
+            format!("{frames} at {fps} fps ({:.4} s)", frames as f64 / fps),
+        ),
+        (
+            "accelerometer".into(),
+            format!(
+                "{}: input `{}`, output `{}`, {samples} samples at {} Hz ({:.4} s)",
+                a.path.display(),
+                a.input_col,
+                a.output_col,
+                a.fs,
+                samples as f64 / a.fs
+            ),
+        ),
+        (
+            "alignment".into(),
+            format!(
+                "first frame at {} s after the first sample",
+                req.settings.time_offset_s
+            ),
+        ),
+        (
+            "centroid".into(),
+            format!(
+                "threshold {}, {:?}, ROI {}",
+                c.threshold,
+                c.mode,
+                c.roi
+                    .map(|r| format!("{},{},{},{}", r.x, r.y, r.width, r.height))
+                    .unwrap_or_else(|| "none".into())
+            ),
+        ),
+        (
+            "displacement".into(),
+            format!(
+                "{} mm/px, axis {}{}",
+                d.mm_per_px,
+                match d.axis {
+                    Axis::X => "x (positive right)",
+                    Axis::Y => "y (positive up in the image)",
+                },
+                if d.invert { ", inverted" } else { "" }
+            ),
+        ),
+    ];
+    if let Some(e) = req.exposure_ms {
+        v.push(("exposure".into(), format!("{e} ms")));
+    }
+    v
+}
