@@ -146,7 +146,7 @@ impl Frf {
 }
 
 /// Power of two `2^e` with `max |v| / 2^e` in `[0.5, 1)` (1 for an all-zero column).
-fn pow2_scale(v: &[f64]) -> f64 {
+pub(crate) fn pow2_scale(v: &[f64]) -> f64 {
     let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if m > 0.0 && m.is_finite() {
         2f64.powi(m.log2().floor() as i32 + 1)

@@ -7,12 +7,14 @@
 //!   that centres and scales in `f64` before the `f32` core) -> peaks of |Im H1| in bands;
 //! - [`exposure`]: the exposure transfer the vision amplitudes are divided by (sinc for the
 //!   weighted centroid, a measured table for the binary one);
+//! - [`resample`]: one column of samples upsampled (the `upsample` command);
 //! - [`vision_acceleration`]: displacement at the frame rate -> acceleration at the transducer
 //!   rate (firmware-core's Fourier upsampling fused with `-omega^2`).
 
 pub mod displacement;
 pub mod exposure;
 pub mod frf;
+pub mod resample;
 
 /// Runs `job` on a helper thread with a 64 MiB stack: firmware-core's estimators keep their
 /// fixed buffers inline (several MiB at the host's capacities), which would overflow the stack
