@@ -480,14 +480,18 @@ pub fn read_shape_reference(
     bands: usize,
 ) -> anyhow::Result<ShapeReference> {
     let name = path.display();
-    let text = std::fs::read_to_string(path)
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .flexible(true)
+        .from_path(path)
         .map_err(|e| bad_input(format!("--shape-reference {name}: cannot read it: {e}")))?;
-    let mut lines = text.lines().enumerate();
-    let header: Vec<&str> = lines
-        .next()
-        .map(|(_, l)| l.split(',').map(str::trim).collect())
-        .unwrap_or_default();
-    let col = |c: &str| header.iter().position(|h| *h == c);
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| bad_input(format!("--shape-reference {name}: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let col = |c: &str| header.iter().position(|h| h == c);
     let (Some(cm), Some(ct), Some(cr)) = (col("mode"), col("target"), col("re")) else {
         return Err(bad_input(format!(
             "{name}: the header must name the columns mode, target and re (and optionally \
@@ -496,16 +500,13 @@ pub fn read_shape_reference(
     };
     let ci = col("im");
     let mut raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>> = Default::default();
-    for (i, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let row = i + 1;
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    for record in reader.records() {
+        let record = record.map_err(|e| bad_input(format!("{name}: {e}")))?;
+        let row = record.position().map_or(0, |p| p.line());
+        let line = record.iter().collect::<Vec<_>>().join(",");
         let cell = |c: usize, what: &str| -> anyhow::Result<&str> {
-            cells
+            record
                 .get(c)
-                .copied()
                 .ok_or_else(|| bad_input(format!("{name} row {row}: no {what} column ({line:?})")))
         };
         let int = |c: usize, what: &str| -> anyhow::Result<usize> {
@@ -681,4 +682,29 @@ pub fn shapes_csv(a: &TargetAnalysis, first: &[(f64, f64)]) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shape_reference_is_read_as_csv_with_quoted_cells() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ref.csv");
+        // a label column whose cells hold commas: split on ',' would shift every column
+        std::fs::write(
+            &p,
+            "mode,target,label,re\n1,1,\"tip, left\",1\n1,2,\"root, right\",-0.5\n",
+        )
+        .unwrap();
+        let r = read_shape_reference(&p, 2, 2).unwrap();
+        assert_eq!(
+            r[&1],
+            vec![Complex64::new(1.0, 0.0), Complex64::new(-0.5, 0.0)]
+        );
+        std::fs::write(&p, "mode,target,re\n1,1,1\n1,2,x\n").unwrap();
+        let e = read_shape_reference(&p, 2, 2).unwrap_err().to_string();
+        assert!(e.contains("row 3, column re"), "{e}");
+    }
 }

@@ -92,8 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 if args.preset != Preset::Cantilever {
                     return Err(bad_input("--targets: only with --preset cantilever"));
                 }
-                crate::recording::targets::write_targets_recording(&spec, k, (out.dir(), dir))
-                    .map_err(|e| bad_input(format!("{e:#}")))?
+                crate::recording::targets::write_targets_recording(&spec, k, (out.dir(), dir))?
             }
         };
         out.commit()?;

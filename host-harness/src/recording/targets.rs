@@ -44,10 +44,14 @@ pub fn write_targets_recording(
 ) -> anyhow::Result<RecordingFiles> {
     spec.validate()?;
     if !(2..=16).contains(&targets) {
-        anyhow::bail!("--targets {targets}: between 2 and 16 targets");
+        return Err(crate::bad_input(format!(
+            "--targets {targets}: between 2 and 16 targets"
+        )));
     }
     let Rig::Cantilever(beam) = &spec.rig else {
-        anyhow::bail!("--targets: only the cantilever has targets along it");
+        return Err(crate::bad_input(
+            "--targets: only the cantilever has targets along it",
+        ));
     };
     let xis = positions(targets);
     let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
