@@ -245,85 +245,204 @@ pub struct RecordingFiles {
     pub frame_count: usize,
 }
 
-/// `recording.toml`: the parameters of the recording (also the modal parameters to expect).
-pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> String {
-    use std::fmt::Write as _;
-    let preset = match spec.rig {
-        Rig::Cantilever(_) => "cantilever",
-        Rig::Grandstand(_) => "grandstand",
-    };
-    let mut s = format!(
-        "# synthetic recording written by host-harness render --recording\n\
-         preset = \"{preset}\"\nseed = {}\nexposure_ms = {}\nfps = {}\nfs = {}\nframes = {}\n\
-         samples = {}\nmm_per_px = {}\nradius_px = {}\nlevel = {}\nedge_sigma_px = {}\n\
-         threshold = {}\nframe_size = [{}, {}]\nread_noise = {:?}\n",
-        spec.seed,
-        spec.exposure_ms,
-        spec.acquisition.fps,
-        spec.acquisition.fs,
-        spec.acquisition.frames,
-        spec.samples(),
-        spec.mm_per_px,
-        spec.target.radius_px,
-        spec.target.level,
-        spec.target.edge_sigma_px,
-        spec.threshold,
-        frame_size.0,
-        frame_size.1,
-        spec.read_noise,
-    );
-    match &spec.rig {
-        Rig::Cantilever(cantilever::Rig {
-            modes,
-            band_hz,
-            tip_pp_mm,
-            accel_noise_g,
-            accel_tilt_gain,
-            beam_length_m,
-        }) => {
-            let _ = write!(
-                s,
-                "band_hz = [{}, {}]\ntip_pp_mm = {tip_pp_mm}\naccel_noise_g = {accel_noise_g}\n",
-                band_hz.0, band_hz.1
-            );
-            if *accel_tilt_gain != 0.0 {
-                let _ = write!(
-                    s,
-                    "accel_tilt_gain = {accel_tilt_gain}\nbeam_length_m = {beam_length_m}\n"
-                );
+/// One mode of the simulated structure in `recording.toml` (`[[modes]]`): the cantilever's
+/// participation `g_phi` or the grandstand's modal mass, whichever the rig has.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ModeRow {
+    /// Natural frequency, Hz.
+    pub f_hz: f64,
+    /// Damping ratio.
+    pub zeta: f64,
+    /// Cantilever: participation times tip shape.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub g_phi: Option<f64>,
+    /// Grandstand: modal mass, kg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass_kg: Option<f64>,
+}
+
+/// The true shape of one mode across the targets (`[[target_shapes]]`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TargetShape {
+    /// Mode number, from 1.
+    pub mode: usize,
+    /// Per target, relative to the tip, unit largest modulus.
+    pub shape: Vec<f64>,
+}
+
+/// Everything `recording.toml` states: the run's parameters, the rig's, the targets' (when
+/// several) and the modes; written by `toml::to_string` (keys before tables).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RecordingToml {
+    /// `cantilever` or `grandstand`.
+    pub preset: &'static str,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Exposure, ms.
+    pub exposure_ms: f64,
+    /// Frame rate, Hz.
+    pub fps: f64,
+    /// Transducer rate, Hz.
+    pub fs: f64,
+    /// Frames.
+    pub frames: usize,
+    /// Transducer samples.
+    pub samples: usize,
+    /// Scale, mm per pixel.
+    pub mm_per_px: f64,
+    /// Target radius, px.
+    pub radius_px: f64,
+    /// Target grey level.
+    pub level: f64,
+    /// Target edge sigma, px.
+    pub edge_sigma_px: f64,
+    /// Threshold of the `README.txt` command.
+    pub threshold: u16,
+    /// Frame width and height, px.
+    pub frame_size: [usize; 2],
+    /// Read noise, grey levels.
+    pub read_noise: f64,
+    /// Cantilever: excitation band, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub band_hz: Option<[f64; 2]>,
+    /// Cantilever: tip motion, mm peak to peak.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip_pp_mm: Option<f64>,
+    /// Cantilever: accelerometer noise, g RMS.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accel_noise_g: Option<f64>,
+    /// Cantilever standing upright: the tip accelerometer's tilt gain.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accel_tilt_gain: Option<f64>,
+    /// Cantilever standing upright: its length, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub beam_length_m: Option<f64>,
+    /// Grandstand: force peak, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f0_n: Option<f64>,
+    /// Grandstand: pulse rate, 1/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<f64>,
+    /// Grandstand: pulse start, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t0_s: Option<f64>,
+    /// Grandstand: process noise, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub process_noise_n: Option<f64>,
+    /// Grandstand: load cell SNR.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force_snr: Option<f64>,
+    /// Grandstand: accelerometer SNR.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accel_snr: Option<f64>,
+    /// Several targets: how many.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub targets: Option<usize>,
+    /// Several targets: their positions along the beam, `x / L`, left to right.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_xi: Option<Vec<f64>>,
+    /// Several targets: their columns in the frame, px.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_x_px: Option<Vec<f64>>,
+    /// The modes of the structure.
+    pub modes: Vec<ModeRow>,
+    /// Several targets: the true shapes.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub target_shapes: Vec<TargetShape>,
+}
+
+impl RecordingToml {
+    /// The parameters of a recording of `spec` with frames of `frame_size` (one target).
+    pub fn of(spec: &RecordingSpec, frame_size: (usize, usize)) -> Self {
+        let mut t = RecordingToml {
+            preset: match spec.rig {
+                Rig::Cantilever(_) => "cantilever",
+                Rig::Grandstand(_) => "grandstand",
+            },
+            seed: spec.seed,
+            exposure_ms: spec.exposure_ms,
+            fps: spec.acquisition.fps,
+            fs: spec.acquisition.fs,
+            frames: spec.acquisition.frames,
+            samples: spec.samples(),
+            mm_per_px: spec.mm_per_px,
+            radius_px: spec.target.radius_px,
+            level: spec.target.level,
+            edge_sigma_px: spec.target.edge_sigma_px,
+            threshold: spec.threshold,
+            frame_size: [frame_size.0, frame_size.1],
+            read_noise: spec.read_noise,
+            band_hz: None,
+            tip_pp_mm: None,
+            accel_noise_g: None,
+            accel_tilt_gain: None,
+            beam_length_m: None,
+            f0_n: None,
+            alpha: None,
+            t0_s: None,
+            process_noise_n: None,
+            force_snr: None,
+            accel_snr: None,
+            targets: None,
+            target_xi: None,
+            target_x_px: None,
+            modes: Vec::new(),
+            target_shapes: Vec::new(),
+        };
+        match &spec.rig {
+            Rig::Cantilever(r) => {
+                t.band_hz = Some([r.band_hz.0, r.band_hz.1]);
+                t.tip_pp_mm = Some(r.tip_pp_mm);
+                t.accel_noise_g = Some(r.accel_noise_g);
+                if r.accel_tilt_gain != 0.0 {
+                    t.accel_tilt_gain = Some(r.accel_tilt_gain);
+                    t.beam_length_m = Some(r.beam_length_m);
+                }
+                t.modes = r
+                    .modes
+                    .iter()
+                    .map(|m| ModeRow {
+                        f_hz: m.f_hz,
+                        zeta: m.zeta,
+                        g_phi: Some(m.g_phi),
+                        mass_kg: None,
+                    })
+                    .collect();
             }
-            for m in modes {
-                let _ = write!(
-                    s,
-                    "\n[[modes]]\nf_hz = {}\nzeta = {}\ng_phi = {}\n",
-                    m.f_hz, m.zeta, m.g_phi
-                );
+            Rig::Grandstand(g) => {
+                t.f0_n = Some(g.f0_n);
+                t.alpha = Some(g.alpha);
+                t.t0_s = Some(g.t0_s);
+                t.process_noise_n = Some(g.process_noise_n);
+                t.force_snr = Some(g.force_snr);
+                t.accel_snr = Some(g.accel_snr);
+                t.modes = g
+                    .modes
+                    .iter()
+                    .map(|m| ModeRow {
+                        f_hz: m.f_hz,
+                        zeta: m.zeta,
+                        g_phi: None,
+                        mass_kg: Some(m.mass_kg),
+                    })
+                    .collect();
             }
         }
-        Rig::Grandstand(grandstand::DecayTest {
-            modes,
-            f0_n,
-            alpha,
-            t0_s,
-            process_noise_n,
-            force_snr,
-            accel_snr,
-        }) => {
-            let _ = write!(
-                s,
-                "f0_n = {f0_n}\nalpha = {alpha}\nt0_s = {t0_s}\nprocess_noise_n = \
-                 {process_noise_n}\nforce_snr = {force_snr}\naccel_snr = {accel_snr}\n"
-            );
-            for m in modes {
-                let _ = write!(
-                    s,
-                    "\n[[modes]]\nf_hz = {}\nzeta = {}\nmass_kg = {}\n",
-                    m.f_hz, m.zeta, m.mass_kg
-                );
-            }
-        }
+        t
     }
-    s
+
+    /// The file's text: a comment line, then `toml::to_string`.
+    pub fn to_text(&self) -> anyhow::Result<String> {
+        let body = toml::to_string(self).context("cannot write recording.toml")?;
+        Ok(format!(
+            "# synthetic recording written by host-harness render --recording\n{body}"
+        ))
+    }
+}
+
+/// `recording.toml` of a one-target recording of `spec` ([`RecordingToml`]).
+pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> anyhow::Result<String> {
+    RecordingToml::of(spec, frame_size).to_text()
 }
 
 /// The analyze arguments for a recording written in `dir`.
@@ -454,7 +573,7 @@ pub fn write_recording_into(
     let toml = dir.join("recording.toml");
     std::fs::write(
         write_to.join("recording.toml"),
-        recording_toml(spec, (w, h)),
+        recording_toml(spec, (w, h))?,
     )
     .with_context(|| format!("cannot write {}", toml.display()))?;
     let args = analyze_args(spec, dir);

@@ -100,27 +100,20 @@ pub fn write_targets_recording(
     }
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
-    let mut toml = super::recording_toml(spec, (w, h));
-    // top-level keys go before the first table (after it they would belong to the last mode)
-    let tables = toml.find("\n[[").unwrap_or(toml.len());
-    let mut keys = String::new();
-    let _ = write!(
-        keys,
-        "\n# targets left to right at xi = x / L along the beam, centred in strips of {sw} px;\n\
-         # shapes: per mode, relative to the tip, unit largest modulus\ntargets = {targets}\n\
-         target_xi = {xis:?}\ntarget_x_px = {:?}\n",
+    let mut toml = super::RecordingToml::of(spec, (w, h));
+    toml.targets = Some(targets);
+    toml.target_xi = Some(xis.clone());
+    toml.target_x_px = Some(
         (0..targets)
             .map(|t| (t * sw) as f64 + renderers[t].rest_x())
-            .collect::<Vec<_>>()
+            .collect(),
     );
-    toml.insert_str(tables, &keys);
-    for (i, s) in true_shapes(beam.modes.len(), &xis).iter().enumerate() {
-        let _ = write!(
-            toml,
-            "\n[[target_shapes]]\nmode = {}\nshape = {s:?}\n",
-            i + 1
-        );
-    }
+    toml.target_shapes = true_shapes(beam.modes.len(), &xis)
+        .into_iter()
+        .enumerate()
+        .map(|(i, shape)| super::TargetShape { mode: i + 1, shape })
+        .collect();
+    let toml = toml.to_text()?;
     std::fs::write(write_to.join("recording.toml"), toml)
         .with_context(|| format!("cannot write {}", dir.join("recording.toml").display()))?;
     let mut args = super::analyze_args(spec, dir);
