@@ -622,6 +622,160 @@ fn fin(v: f64) -> String {
     }
 }
 
+/// A checked `calibrate` request (what `cli::calibrate` builds from its flags).
+#[derive(Debug, Clone)]
+pub struct Request {
+    /// The study whose knobs are fitted (the file's, or the preset's).
+    pub base: StudyConfig,
+    /// The observed figures (`read_observations`).
+    pub observed: std::path::PathBuf,
+    /// The free knobs and their ranges, each once.
+    pub free: Vec<Free>,
+    /// Runs per evaluation, >= 2.
+    pub runs: u64,
+    /// Grid points per free knob, >= 2.
+    pub grid: usize,
+    /// Rounds of the local search.
+    pub refine: usize,
+    /// Output directory (created).
+    pub out: std::path::PathBuf,
+}
+
+/// Runs a calibration: reads the observations, searches, writes `fitted.toml`,
+/// `parameters.csv`, `residuals.csv` and `evaluations.csv` atomically into `req.out`, and
+/// returns the summary to print (progress goes to stderr as it happens).
+pub fn run(req: &Request) -> anyhow::Result<String> {
+    let obs = checked_observations(req)?;
+    let mut small = req.base.clone();
+    small.runs = req.runs;
+    small.adaptive = None;
+    eprintln!(
+        "calibrate {}: {} observations, {} free parameters, {} runs per evaluation (seed {}), grid {} then {} refinement rounds",
+        req.base.preset.name(),
+        obs.len(),
+        req.free.len(),
+        req.runs,
+        req.base.seed,
+        req.grid,
+        req.refine
+    );
+    let started = std::time::Instant::now();
+    let mut count = 0;
+    let fit = search(&small, &req.free, &obs, (req.grid, req.refine), |e| {
+        count += 1;
+        let at: Vec<String> = req
+            .free
+            .iter()
+            .zip(&e.x)
+            .map(|(f, v)| format!("{}={v:.4}", f.knob.name()))
+            .collect();
+        eprintln!(
+            "  evaluation {count}: {} -> chi2 {:.3}, objective {:.3} ({:.0} s)",
+            at.join(" "),
+            e.chi2,
+            e.objective,
+            started.elapsed().as_secs_f64()
+        );
+    })?;
+    write_outputs(req, &obs, &fit)?;
+    let mut summary = summary_text(req, obs.len(), &fit);
+    summary.push_str(&format!(
+        "wrote parameters.csv, residuals.csv, evaluations.csv and fitted.toml in {} ({} evaluations, {:.0} s)\n",
+        req.out.display(),
+        fit.evaluations.len(),
+        started.elapsed().as_secs_f64()
+    ));
+    Ok(summary)
+}
+
+/// The observations of the request's rig, refused when the run count cannot give the model's
+/// uncertainty of a chi index (a bootstrap of at least `min_values` runs).
+fn checked_observations(req: &Request) -> anyhow::Result<Vec<Observation>> {
+    let (obs, other) = read_observations(&req.observed, req.base.preset)?;
+    let chi = obs
+        .iter()
+        .any(|o| matches!(o.quantity, Quantity::ChiMu | Quantity::ChiSigma));
+    let needed = crate::uncertainty::min_values(req.base.coverage).unwrap_or(2) as u64;
+    if chi && req.runs < needed {
+        return Err(bad_input(format!(
+            "--runs {}: the chi_mu/chi_sigma observations need the model's bootstrap \
+             uncertainty, which needs at least {needed} runs per evaluation (coverage {})",
+            req.runs, req.base.coverage
+        )));
+    }
+    if other > 0 {
+        eprintln!(
+            "{}: {other} rows of another rig left out",
+            req.observed.display()
+        );
+    }
+    Ok(obs)
+}
+
+/// `fitted.toml` (the study file with the fitted values), `parameters.csv`, `residuals.csv`
+/// and `evaluations.csv`, each written atomically.
+fn write_outputs(req: &Request, obs: &[Observation], fit: &Fit) -> anyhow::Result<()> {
+    use crate::study::checkpoint::write_atomic;
+    std::fs::create_dir_all(&req.out)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", req.out.display()))?;
+    let mut fitted = req.base.clone();
+    for (f, v) in req.free.iter().zip(&fit.best.x) {
+        let one = config_at(&fitted, std::slice::from_ref(f), &[*v], obs);
+        (fitted.imaging, fitted.rig) = (one.imaging, one.rig);
+    }
+    let header = format!(
+        "# fitted by `host-harness calibrate` to {} ({} observations, {} runs per evaluation)\n",
+        req.observed.display(),
+        obs.len(),
+        req.runs
+    );
+    let out = |name: &str| req.out.join(name);
+    write_atomic(&out("fitted.toml"), (header + &fitted.to_toml()).as_bytes())?;
+    write_atomic(&out("parameters.csv"), &parameters_csv(&req.free, fit))?;
+    write_atomic(&out("residuals.csv"), &residuals_csv(&fit.best))?;
+    write_atomic(
+        &out("evaluations.csv"),
+        &evaluations_csv(&req.free, &fit.evaluations),
+    )?;
+    Ok(())
+}
+
+/// The printed result: the fitted values with their uncertainty, and the residuals.
+fn summary_text(req: &Request, observations: usize, fit: &Fit) -> String {
+    use std::fmt::Write as _;
+    let mut summary = format!(
+        "fitted (chi2 {:.3}, objective {:.3}, over {observations} observations):\n",
+        fit.best.chi2, fit.best.objective,
+    );
+    for ((f, v), u) in req.free.iter().zip(&fit.best.x).zip(&fit.u) {
+        let u = u.map_or("not determined (objective not convex there)".into(), |u| {
+            format!("+/- {u:.4}")
+        });
+        let _ = writeln!(
+            summary,
+            "  {:<22} {v:.4} {u}   (range {} .. {})",
+            f.knob.name(),
+            f.lo,
+            f.hi
+        );
+    }
+    summary.push_str("mode | exposure_ms | quantity       |   observed |      model | residual\n");
+    for r in &fit.best.residuals {
+        let o = &r.observed;
+        let _ = writeln!(
+            summary,
+            "{:>4} | {:>11} | {:<14} | {:>10.4} | {:>10.4} | {:>8.2}",
+            o.mode,
+            o.exposure_ms,
+            o.quantity.name(),
+            o.value,
+            r.model,
+            r.r
+        );
+    }
+    summary
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,8 +3,7 @@
 //! `evaluations.csv` and `fitted.toml` (a study file that uses the fitted values), each atomically.
 
 use crate::bad_input;
-use crate::calibrate::{self, Free, Quantity};
-use crate::study::checkpoint::write_atomic;
+use crate::calibrate::{self, Free};
 use crate::study::{Preset, StudyConfig};
 use std::path::PathBuf;
 
@@ -79,119 +78,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )));
         }
     }
-    let (obs, other) = calibrate::read_observations(&args.observed, base.preset)?;
-    let chi = obs
-        .iter()
-        .any(|o| matches!(o.quantity, Quantity::ChiMu | Quantity::ChiSigma));
-    let needed = crate::uncertainty::min_values(base.coverage).unwrap_or(2) as u64;
-    if chi && args.runs < needed {
-        return Err(bad_input(format!(
-            "--runs {}: the chi_mu/chi_sigma observations need the model's bootstrap \
-             uncertainty, which needs at least {needed} runs per evaluation (coverage {})",
-            args.runs, base.coverage
-        )));
-    }
-    if other > 0 {
-        eprintln!(
-            "{}: {other} rows of another rig left out",
-            args.observed.display()
-        );
-    }
-    let mut small = base.clone();
-    small.runs = args.runs;
-    small.adaptive = None;
-    eprintln!(
-        "calibrate {}: {} observations, {} free parameters, {} runs per evaluation (seed {}), grid {} then {} refinement rounds",
-        base.preset.name(),
-        obs.len(),
-        args.free.len(),
-        args.runs,
-        base.seed,
-        args.grid,
-        args.refine
-    );
-    let started = std::time::Instant::now();
-    let mut count = 0;
-    let fit = calibrate::search(&small, &args.free, &obs, (args.grid, args.refine), |e| {
-        count += 1;
-        let at: Vec<String> = args
-            .free
-            .iter()
-            .zip(&e.x)
-            .map(|(f, v)| format!("{}={v:.4}", f.knob.name()))
-            .collect();
-        eprintln!(
-            "  evaluation {count}: {} -> chi2 {:.3}, objective {:.3} ({:.0} s)",
-            at.join(" "),
-            e.chi2,
-            e.objective,
-            started.elapsed().as_secs_f64()
-        );
+    let summary = calibrate::run(&calibrate::Request {
+        base,
+        observed: args.observed.clone(),
+        free: args.free.clone(),
+        runs: args.runs,
+        grid: args.grid,
+        refine: args.refine,
+        out: args.out.clone(),
     })?;
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", args.out.display()))?;
-    let mut fitted = base.clone();
-    for (f, v) in args.free.iter().zip(&fit.best.x) {
-        let one = calibrate::config_at(&fitted, std::slice::from_ref(f), &[*v], &obs);
-        (fitted.imaging, fitted.rig) = (one.imaging, one.rig);
-    }
-    let header = format!(
-        "# fitted by `host-harness calibrate` to {} ({} observations, {} runs per evaluation)\n",
-        args.observed.display(),
-        obs.len(),
-        args.runs
-    );
-    write_atomic(
-        &args.out.join("fitted.toml"),
-        (header + &fitted.to_toml()).as_bytes(),
-    )?;
-    write_atomic(
-        &args.out.join("parameters.csv"),
-        &calibrate::parameters_csv(&args.free, &fit),
-    )?;
-    write_atomic(
-        &args.out.join("residuals.csv"),
-        &calibrate::residuals_csv(&fit.best),
-    )?;
-    write_atomic(
-        &args.out.join("evaluations.csv"),
-        &calibrate::evaluations_csv(&args.free, &fit.evaluations),
-    )?;
-    println!(
-        "fitted (chi2 {:.3}, objective {:.3}, over {} observations):",
-        fit.best.chi2,
-        fit.best.objective,
-        obs.len()
-    );
-    for ((f, v), u) in args.free.iter().zip(&fit.best.x).zip(&fit.u) {
-        let u = u.map_or("not determined (objective not convex there)".into(), |u| {
-            format!("+/- {u:.4}")
-        });
-        println!(
-            "  {:<22} {v:.4} {u}   (range {} .. {})",
-            f.knob.name(),
-            f.lo,
-            f.hi
-        );
-    }
-    println!("mode | exposure_ms | quantity       |   observed |      model | residual");
-    for r in &fit.best.residuals {
-        let o = &r.observed;
-        println!(
-            "{:>4} | {:>11} | {:<14} | {:>10.4} | {:>10.4} | {:>8.2}",
-            o.mode,
-            o.exposure_ms,
-            o.quantity.name(),
-            o.value,
-            r.model,
-            r.r
-        );
-    }
-    println!(
-        "wrote parameters.csv, residuals.csv, evaluations.csv and fitted.toml in {} ({} evaluations, {:.0} s)",
-        args.out.display(),
-        fit.evaluations.len(),
-        started.elapsed().as_secs_f64()
-    );
+    print!("{summary}");
     Ok(())
 }
