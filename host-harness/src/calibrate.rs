@@ -80,8 +80,8 @@ pub struct Observation {
 }
 
 /// Reads `rig,mode,exposure_ms,quantity,value[,u][,unit]` and keeps the rows of `rig` (the others are
-/// counted in the second value). Chi indices above 2 are taken as percent. Errors name the file
-/// and row.
+/// counted in the second value). A chi index states its unit (`percent` or `fraction`). Errors
+/// name the file and row.
 pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observation>, usize)> {
     let modes = crate::study::scenario_for(&StudyConfig::preset(rig))?
         .reporting()
@@ -100,104 +100,28 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
     let col = |name: &str| headers.iter().position(|h| h == name);
     let need =
         |name: &str| col(name).ok_or_else(|| bad_input(format!("{}: no column `{name}`", file())));
-    let (ci_rig, ci_mode, ci_exp) = (need("rig")?, need("mode")?, need("exposure_ms")?);
-    let (ci_q, ci_v, ci_u) = (need("quantity")?, need("value")?, col("u"));
-    let ci_unit = col("unit");
+    let cols = ObservationColumns {
+        rig: need("rig")?,
+        mode: need("mode")?,
+        exposure: need("exposure_ms")?,
+        quantity: need("quantity")?,
+        value: need("value")?,
+        u: col("u"),
+        unit: col("unit"),
+    };
     let (mut out, mut other) = (Vec::new(), 0);
     for (i, row) in reader.records().enumerate() {
-        let at = || format!("{} row {}", file(), i + 2);
-        let row = row.map_err(|e| bad_input(format!("{}: {e}", at())))?;
-        let cell = |c: usize| row.get(c).unwrap_or("");
-        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
-            cell(c)
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad_input(format!("{}: {what} `{}` is not a number", at(), cell(c))))
-        };
-        if !cell(ci_rig).eq_ignore_ascii_case(rig.name()) {
+        let at = format!("{} row {}", file(), i + 2);
+        let row = row.map_err(|e| bad_input(format!("{at}: {e}")))?;
+        if !row
+            .get(cols.rig)
+            .unwrap_or("")
+            .eq_ignore_ascii_case(rig.name())
+        {
             other += 1;
             continue;
         }
-        let mode = cell(ci_mode)
-            .parse::<usize>()
-            .ok()
-            .filter(|m| (1..=modes).contains(m))
-            .ok_or_else(|| {
-                bad_input(format!(
-                    "{}: mode `{}` must be 1 to {modes}, the modes the {} rig reports",
-                    at(),
-                    cell(ci_mode),
-                    rig.name()
-                ))
-            })?;
-        let quantity = Quantity::parse(cell(ci_q)).ok_or_else(|| {
-            bad_input(format!(
-                "{}: quantity `{}` is not one of mu_a, sigma_a, mu_f, ratio_to_first, chi_mu, chi_sigma",
-                at(),
-                cell(ci_q)
-            ))
-        })?;
-        let exposure_ms = num(ci_exp, "exposure_ms")?;
-        if exposure_ms < 0.0 {
-            return Err(bad_input(format!("{}: exposure_ms must be >= 0", at())));
-        }
-        let mut value = num(ci_v, "value")?;
-        let mut u = match ci_u.filter(|c| !cell(*c).is_empty()) {
-            Some(c) => {
-                let u = num(c, "u")?;
-                if u < 0.0 {
-                    return Err(bad_input(format!(
-                        "{}: u `{}` is negative; a standard uncertainty is >= 0",
-                        at(),
-                        cell(c)
-                    )));
-                }
-                Some(u)
-            }
-            None => None,
-        };
-        // a ratio's unit is stated, never guessed from its size (1.5 % is not 150 %)
-        let unit = ci_unit
-            .map(|c| cell(c).to_ascii_lowercase())
-            .unwrap_or_default();
-        if matches!(quantity, Quantity::ChiMu | Quantity::ChiSigma) {
-            match unit.as_str() {
-                "percent" | "%" => {
-                    value /= 100.0;
-                    u = u.map(|u| u / 100.0);
-                }
-                "fraction" => {}
-                "" => {
-                    return Err(bad_input(format!(
-                        "{}: {} needs its unit: a `unit` column with `percent` (95.5) or \
-                         `fraction` (0.955)",
-                        at(),
-                        quantity.name()
-                    )))
-                }
-                other => {
-                    return Err(bad_input(format!(
-                        "{}: unit `{other}`: `percent` or `fraction`",
-                        at()
-                    )))
-                }
-            }
-        } else if !unit.is_empty() {
-            return Err(bad_input(format!(
-                "{}: unit `{unit}` for {}: only chi_mu and chi_sigma take a unit (the others \
-                 are in the study's own units)",
-                at(),
-                quantity.name()
-            )));
-        }
-        out.push(Observation {
-            mode,
-            exposure_ms,
-            quantity,
-            value,
-            u,
-        });
+        out.push(parse_observation(&row, &cols, (rig, modes), &at)?);
     }
     if out.is_empty() {
         return Err(bad_input(format!(
@@ -207,6 +131,103 @@ pub fn read_observations(path: &Path, rig: Preset) -> anyhow::Result<(Vec<Observ
         )));
     }
     Ok((out, other))
+}
+
+/// Where the columns of an observations file are.
+struct ObservationColumns {
+    rig: usize,
+    mode: usize,
+    exposure: usize,
+    quantity: usize,
+    value: usize,
+    u: Option<usize>,
+    unit: Option<usize>,
+}
+
+/// One row of `rig`'s (which reports `modes` modes) as an observation; `at` names the row.
+fn parse_observation(
+    row: &csv::StringRecord,
+    c: &ObservationColumns,
+    (rig, modes): (Preset, usize),
+    at: &str,
+) -> anyhow::Result<Observation> {
+    let cell = |i: usize| row.get(i).unwrap_or("");
+    let num = |i: usize, what: &str| -> anyhow::Result<f64> {
+        cell(i)
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| bad_input(format!("{at}: {what} `{}` is not a number", cell(i))))
+    };
+    let mode = cell(c.mode)
+        .parse::<usize>()
+        .ok()
+        .filter(|m| (1..=modes).contains(m))
+        .ok_or_else(|| {
+            bad_input(format!(
+                "{at}: mode `{}` must be 1 to {modes}, the modes the {} rig reports",
+                cell(c.mode),
+                rig.name()
+            ))
+        })?;
+    let quantity = Quantity::parse(cell(c.quantity)).ok_or_else(|| {
+        bad_input(format!(
+            "{at}: quantity `{}` is not one of mu_a, sigma_a, mu_f, ratio_to_first, chi_mu, chi_sigma",
+            cell(c.quantity)
+        ))
+    })?;
+    let exposure_ms = num(c.exposure, "exposure_ms")?;
+    if exposure_ms < 0.0 {
+        return Err(bad_input(format!("{at}: exposure_ms must be >= 0")));
+    }
+    let u = match c.u.filter(|i| !cell(*i).is_empty()) {
+        Some(i) if num(i, "u")? < 0.0 => {
+            return Err(bad_input(format!(
+                "{at}: u `{}` is negative; a standard uncertainty is >= 0",
+                cell(i)
+            )))
+        }
+        Some(i) => Some(num(i, "u")?),
+        None => None,
+    };
+    let unit = c
+        .unit
+        .map(|i| cell(i).to_ascii_lowercase())
+        .unwrap_or_default();
+    let per = unit_divisor(quantity, &unit, at)?;
+    Ok(Observation {
+        mode,
+        exposure_ms,
+        quantity,
+        value: num(c.value, "value")? / per,
+        u: u.map(|u| u / per),
+    })
+}
+
+/// What an observation is divided by to be in the study's units: a chi index's stated unit
+/// (`percent`: 100, `fraction`: 1; never guessed from its size, 1.5 % is not 150 %); the other
+/// quantities are in the study's own units and take none.
+fn unit_divisor(quantity: Quantity, unit: &str, at: &str) -> anyhow::Result<f64> {
+    match (
+        matches!(quantity, Quantity::ChiMu | Quantity::ChiSigma),
+        unit,
+    ) {
+        (true, "percent" | "%") => Ok(100.0),
+        (true, "fraction") | (false, "") => Ok(1.0),
+        (true, "") => Err(bad_input(format!(
+            "{at}: {} needs its unit: a `unit` column with `percent` (95.5) or `fraction` \
+             (0.955)",
+            quantity.name()
+        ))),
+        (true, other) => Err(bad_input(format!(
+            "{at}: unit `{other}`: `percent` or `fraction`"
+        ))),
+        (false, other) => Err(bad_input(format!(
+            "{at}: unit `{other}` for {}: only chi_mu and chi_sigma take a unit (the others \
+             are in the study's own units)",
+            quantity.name()
+        ))),
+    }
 }
 
 /// An `[imaging]` (or `[rig]`) knob a calibration may turn.
