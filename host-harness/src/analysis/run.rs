@@ -112,10 +112,21 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
         let n = super::usable_frames_or_error(n, fps, a.fs)?;
         super::align(n, fps, base.len(), a.fs, time_offset_s)?;
     }
-    if let Some(t) = &req.targets {
-        return super::targets_run::run(req, t, &source, (&base, &tip), ignored.as_deref());
+    match &req.targets {
+        Some(t) => super::targets_run::run(req, t, &source, (&base, &tip), ignored.as_deref()),
+        None => one_target(req, &source, (&base, &tip), ignored),
     }
-    let (centroids, depth) = centroid_source(&source, fps, &req.centroid)?;
+}
+
+/// The single-target analysis of `source` (see [`run`]).
+fn one_target(
+    req: &Request,
+    source: &FrameSource,
+    (base, tip): (&[f64], &[f64]),
+    ignored: Option<String>,
+) -> anyhow::Result<Outcome> {
+    let fps = req.settings.frame_rate_hz;
+    let (centroids, depth) = centroid_source(source, fps, &req.centroid)?;
     let depth_warning = depth.threshold_warning(req.centroid.threshold);
     if let Some(w) = &depth_warning {
         eprintln!("warning: {w}");
@@ -124,7 +135,7 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
 
     // every output is staged and the directory moved into place at the end (complete or absent)
     let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
-    let mut inputs = describe_inputs(req, &source, centroids.len(), base.len());
+    let mut inputs = describe_inputs(req, source, centroids.len(), base.len());
     if let Some(n) = ignored {
         inputs.push(("ignored".into(), n));
     }
@@ -132,11 +143,12 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     if let Some(w) = depth_warning {
         inputs.push(("WARNING".into(), w));
     }
+    let time_offset_s = req.settings.time_offset_s;
     out.write(
         "displacement.csv",
         super::displacement_csv(&centroids, &disp, fps, time_offset_s),
     )?;
-    let (result, compensation) = analyze_and_compensate(req, &disp, (&base, &tip))?;
+    let (result, compensation) = analyze_and_compensate(req, &disp, (base, tip))?;
     let (a, failure) = match &result {
         Ok(a) => (Some(a), None),
         Err(e) => (None, Some(format!("{e:#}"))),
@@ -144,20 +156,7 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
     append_compensation(&out, compensation.as_ref(), &mut report)?;
     if let Some(a) = a {
-        out.write("frf.csv", super::frf_csv(a))?;
-        out.write("modes.csv", super::modes_csv(a))?;
-        let plots = write_plot(out.dir(), a, fps)?;
-        let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
-        let names: Vec<String> = plots
-            .iter()
-            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-            .collect();
-        files.extend(names.iter().map(String::as_str));
-        let files: Vec<String> = files
-            .iter()
-            .map(|f| req.out.join(f).display().to_string())
-            .collect();
-        report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
+        write_results(&out, req, a, &mut report)?;
     }
     out.write("report.txt", &report)?;
     if result.is_ok() {
@@ -172,6 +171,30 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
         report,
         result: result.map(|_| ()),
     })
+}
+
+/// `frf.csv`, `modes.csv` and the plot of a successful analysis, named in the report.
+fn write_results(
+    out: &Staged,
+    req: &Request,
+    a: &super::Analysis,
+    report: &mut String,
+) -> anyhow::Result<()> {
+    out.write("frf.csv", super::frf_csv(a))?;
+    out.write("modes.csv", super::modes_csv(a))?;
+    let plots = write_plot(out.dir(), a, req.settings.frame_rate_hz)?;
+    let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
+    let names: Vec<String> = plots
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    files.extend(names.iter().map(String::as_str));
+    let files: Vec<String> = files
+        .iter()
+        .map(|f| req.out.join(f).display().to_string())
+        .collect();
+    report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
+    Ok(())
 }
 
 /// The analysis (its failure is reported, not returned) and, with `--compensate-exposure`,

@@ -160,23 +160,7 @@ pub fn track(
         tracks.depth.add(frame);
         let found = detect(&mut mc, frame, &label)?;
         if frame_no == 1 {
-            if found.len() != k {
-                return Err(bad_input(format!(
-                    "{label}: {} targets above the threshold in the first frame, --targets {k} \
-                     expected",
-                    found.len()
-                )));
-            }
-            if let Some(c) = found.iter().find(|c| c.flags.contains(Flags::BORDER)) {
-                return Err(bad_input(format!(
-                    "{label}: the target at ({:.1}, {:.1}) px touches the frame border in the \
-                     first frame (its centroid would be biased): every target must be wholly \
-                     inside the frame (or --roi) in the first frame",
-                    c.cx, c.cy
-                )));
-            }
-            let mut order: Vec<Centroid> = found.clone();
-            order.sort_by(|a, b| a.cx.total_cmp(&b.cx).then(a.cy.total_cmp(&b.cy)));
+            let order = first_frame(found, k, &label)?;
             last = order.iter().map(|c| (c.cx as f64, c.cy as f64)).collect();
             tracks.first = last.clone();
             for (t, c) in order.into_iter().enumerate() {
@@ -185,24 +169,7 @@ pub fn track(
             }
             return Ok(());
         }
-        let nearest: Vec<Option<usize>> = last
-            .iter()
-            .map(|&(x, y)| {
-                let d =
-                    |c: &Centroid| ((c.cx as f64 - x).powi(2) + (c.cy as f64 - y).powi(2)).sqrt();
-                let mut inside: Vec<usize> = (0..found.len())
-                    .filter(|&j| d(&found[j]) <= gate_px)
-                    .collect();
-                inside.sort_by(|&a, &b| d(&found[a]).total_cmp(&d(&found[b])));
-                // two detections equally near: ambiguous
-                match inside.as_slice() {
-                    [] => None,
-                    [j] => Some(*j),
-                    [j, n, ..] if d(&found[*n]) - d(&found[*j]) > 1e-3 => Some(*j),
-                    _ => None,
-                }
-            })
-            .collect();
+        let nearest = nearest_in_gate(&last, &found, gate_px);
         for t in 0..k {
             let claimed =
                 nearest[t].filter(|j| nearest.iter().filter(|n| **n == Some(*j)).count() == 1);
@@ -233,6 +200,49 @@ pub fn track(
     };
     source.for_each(fps, &mut one)?;
     Ok(tracks)
+}
+
+/// The targets of the first frame, numbered left to right (then top to bottom): exactly `k`
+/// detections, none touching the border, else an error naming the frame.
+fn first_frame(found: Vec<Centroid>, k: usize, label: &str) -> anyhow::Result<Vec<Centroid>> {
+    if found.len() != k {
+        return Err(bad_input(format!(
+            "{label}: {} targets above the threshold in the first frame, --targets {k} \
+             expected",
+            found.len()
+        )));
+    }
+    if let Some(c) = found.iter().find(|c| c.flags.contains(Flags::BORDER)) {
+        return Err(bad_input(format!(
+            "{label}: the target at ({:.1}, {:.1}) px touches the frame border in the \
+             first frame (its centroid would be biased): every target must be wholly \
+             inside the frame (or --roi) in the first frame",
+            c.cx, c.cy
+        )));
+    }
+    let mut order = found;
+    order.sort_by(|a, b| a.cx.total_cmp(&b.cx).then(a.cy.total_cmp(&b.cy)));
+    Ok(order)
+}
+
+/// For each target's last position, the nearest detection within `gate_px`; `None` when there
+/// is none, or when two are equally near (ambiguous).
+fn nearest_in_gate(last: &[(f64, f64)], found: &[Centroid], gate_px: f64) -> Vec<Option<usize>> {
+    last.iter()
+        .map(|&(x, y)| {
+            let d = |c: &Centroid| ((c.cx as f64 - x).powi(2) + (c.cy as f64 - y).powi(2)).sqrt();
+            let mut inside: Vec<usize> = (0..found.len())
+                .filter(|&j| d(&found[j]) <= gate_px)
+                .collect();
+            inside.sort_by(|&a, &b| d(&found[a]).total_cmp(&d(&found[b])));
+            match inside.as_slice() {
+                [] => None,
+                [j] => Some(*j),
+                [j, n, ..] if d(&found[*n]) - d(&found[*j]) > 1e-3 => Some(*j),
+                _ => None,
+            }
+        })
+        .collect()
 }
 
 /// The detections of one frame.
@@ -403,58 +413,8 @@ pub fn analyze_targets(
     let mut modes = Vec::new();
     let mut shapes = Vec::new();
     for (b, &band) in s.bands.iter().enumerate() {
-        let fit = |f: &crate::chain::frf::Frf| {
-            modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
-                .ok()
-                .filter(|m| resolvable(&m.pole, band, &f.freq_hz))
-        };
-        let a = fit(&acc_frf);
-        modes.push(TargetMode {
-            target: 0,
-            mode: b + 1,
-            band_hz: band,
-            f_hz: a.as_ref().map(|m| m.pole.f_hz),
-            amplitude: acc_modes[b].amplitude,
-            damping: a.as_ref().map(|m| m.pole.damping),
-            e2pr: None,
-        });
-        for (t, an) in analyses.iter().enumerate() {
-            let Ok(an) = an else { continue };
-            let v = fit(&an.vis_frf);
-            modes.push(TargetMode {
-                target: t + 1,
-                mode: b + 1,
-                band_hz: band,
-                f_hz: v.as_ref().map(|m| m.pole.f_hz),
-                amplitude: an.vis_modes[b].amplitude,
-                damping: v.as_ref().map(|m| m.pole.damping),
-                // at the fitted frequency (the picked bin's when the fit failed)
-                e2pr: an.vis_modes[b].e2pr.map(|e| {
-                    let picked = an.vis_modes[b].f_hz;
-                    match v.as_ref() {
-                        Some(m) if picked > 0.0 => e / picked * m.pole.f_hz,
-                        _ => e,
-                    }
-                }),
-            });
-        }
-        let good: Vec<usize> = (0..analyses.len())
-            .filter(|&t| analyses[t].is_ok())
-            .collect();
-        let frfs: Vec<&[Complex64]> = good
-            .iter()
-            .filter_map(|&t| analyses[t].as_ref().ok())
-            .map(|a| a.vis_frf.h1.as_slice())
-            .collect();
-        let shape =
-            modal::fit_shape(&acc_frf.freq_hz, &frfs, band, FrfForm::Accelerance, None).ok();
-        shapes.push(shape.map(|sh| {
-            let mut full = vec![None; analyses.len()];
-            for (&t, c) in good.iter().zip(sh.shape) {
-                full[t] = Some(c);
-            }
-            (sh.pole, full)
-        }));
+        modes.extend(band_modes(b, band, (&acc_frf, &acc_modes), &analyses));
+        shapes.push(band_shape(band, &acc_frf, &analyses));
     }
     Ok(TargetAnalysis {
         displacements,
@@ -467,9 +427,123 @@ pub fn analyze_targets(
     })
 }
 
+/// Band `b`'s modes: the accelerometer's (target 0) and every analysed target's, each its own
+/// pole fit (left empty when it is not [`resolvable`]).
+fn band_modes(
+    b: usize,
+    band: (f64, f64),
+    (acc_frf, acc_modes): (&crate::chain::frf::Frf, &[crate::chain::frf::PickedMode]),
+    analyses: &[Result<Analysis, String>],
+) -> Vec<TargetMode> {
+    let fit = |f: &crate::chain::frf::Frf| {
+        modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
+            .ok()
+            .filter(|m| resolvable(&m.pole, band, &f.freq_hz))
+    };
+    let a = fit(acc_frf);
+    let mut modes = vec![TargetMode {
+        target: 0,
+        mode: b + 1,
+        band_hz: band,
+        f_hz: a.as_ref().map(|m| m.pole.f_hz),
+        amplitude: acc_modes[b].amplitude,
+        damping: a.as_ref().map(|m| m.pole.damping),
+        e2pr: None,
+    }];
+    for (t, an) in analyses.iter().enumerate() {
+        let Ok(an) = an else { continue };
+        let v = fit(&an.vis_frf);
+        modes.push(TargetMode {
+            target: t + 1,
+            mode: b + 1,
+            band_hz: band,
+            f_hz: v.as_ref().map(|m| m.pole.f_hz),
+            amplitude: an.vis_modes[b].amplitude,
+            damping: v.as_ref().map(|m| m.pole.damping),
+            // at the fitted frequency (the picked bin's when the fit failed)
+            e2pr: an.vis_modes[b].e2pr.map(|e| {
+                let picked = an.vis_modes[b].f_hz;
+                match v.as_ref() {
+                    Some(m) if picked > 0.0 => e / picked * m.pole.f_hz,
+                    _ => e,
+                }
+            }),
+        });
+    }
+    modes
+}
+
+/// The shape in `band`: one pole fitted over every analysed target's FRF, the components of
+/// failed targets `None`; `None` when the fit fails.
+fn band_shape(
+    band: (f64, f64),
+    acc_frf: &crate::chain::frf::Frf,
+    analyses: &[Result<Analysis, String>],
+) -> Option<(modal::Pole, Vec<Option<Complex64>>)> {
+    let good: Vec<usize> = (0..analyses.len())
+        .filter(|&t| analyses[t].is_ok())
+        .collect();
+    let frfs: Vec<&[Complex64]> = good
+        .iter()
+        .filter_map(|&t| analyses[t].as_ref().ok())
+        .map(|a| a.vis_frf.h1.as_slice())
+        .collect();
+    let shape = modal::fit_shape(&acc_frf.freq_hz, &frfs, band, FrfForm::Accelerance, None).ok();
+    shape.map(|sh| {
+        let mut full = vec![None; analyses.len()];
+        for (&t, c) in good.iter().zip(sh.shape) {
+            full[t] = Some(c);
+        }
+        (sh.pole, full)
+    })
+}
+
 /// A reference mode shape per mode (`--shape-reference`): `mode -> components of targets
 /// 1..K` (complex; a missing `im` column is 0).
 pub type ShapeReference = std::collections::BTreeMap<usize, Vec<Complex64>>;
+
+/// One row of a shape reference: `(mode, target, component)`, checked against `k` targets and
+/// `bands` modes; `at` names the file and row. `[mode, target, re]` and `im` are column indices.
+fn reference_row(
+    record: &csv::StringRecord,
+    ([cm, ct, cr], ci): ([usize; 3], Option<usize>),
+    (k, bands): (usize, usize),
+    at: &str,
+) -> anyhow::Result<(usize, usize, Complex64)> {
+    let line = record.iter().collect::<Vec<_>>().join(",");
+    let cell = |c: usize, what: &str| -> anyhow::Result<&str> {
+        record
+            .get(c)
+            .ok_or_else(|| bad_input(format!("{at}: no {what} column ({line:?})")))
+    };
+    let int = |c: usize, what: &str| -> anyhow::Result<usize> {
+        let v = cell(c, what)?;
+        v.parse().map_err(|_| {
+            bad_input(format!(
+                "{at}, column {what}: {v:?} is not a positive integer"
+            ))
+        })
+    };
+    let num = |c: usize, what: &str| -> anyhow::Result<f64> {
+        let v = cell(c, what)?;
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| bad_input(format!("{at}, column {what}: {v:?} is not a finite number")))
+    };
+    let (mode, target) = (int(cm, "mode")?, int(ct, "target")?);
+    if !(1..=bands).contains(&mode) || !(1..=k).contains(&target) {
+        return Err(bad_input(format!(
+            "{at}: mode {mode}, target {target}: modes count from 1 to {bands} (one per \
+             --bands band) and targets from 1 to {k} (--targets {k})"
+        )));
+    }
+    let im = match ci {
+        Some(c) => num(c, "im")?,
+        None => 0.0,
+    };
+    Ok((mode, target, Complex64::new(num(cr, "re")?, im)))
+}
 
 /// Reads a reference shape CSV with a header naming at least `mode`, `target` and `re` (and
 /// optionally `im`): the layout of `shapes.csv`, or a hand-written table. Every mode present
@@ -498,54 +572,24 @@ pub fn read_shape_reference(
              im), as shapes.csv does; found {header:?}"
         )));
     };
-    let ci = col("im");
+    let cols = [cm, ct, cr];
     let mut raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>> = Default::default();
     for record in reader.records() {
         let record = record.map_err(|e| bad_input(format!("{name}: {e}")))?;
         let row = record.position().map_or(0, |p| p.line());
-        let line = record.iter().collect::<Vec<_>>().join(",");
-        let cell = |c: usize, what: &str| -> anyhow::Result<&str> {
-            record
-                .get(c)
-                .ok_or_else(|| bad_input(format!("{name} row {row}: no {what} column ({line:?})")))
-        };
-        let int = |c: usize, what: &str| -> anyhow::Result<usize> {
-            let v = cell(c, what)?;
-            v.parse().map_err(|_| {
-                bad_input(format!(
-                    "{name} row {row}, column {what}: {v:?} is not a positive integer"
-                ))
-            })
-        };
-        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
-            let v = cell(c, what)?;
-            v.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    bad_input(format!(
-                        "{name} row {row}, column {what}: {v:?} is not a finite number"
-                    ))
-                })
-        };
-        let (mode, target) = (int(cm, "mode")?, int(ct, "target")?);
-        if !(1..=bands).contains(&mode) || !(1..=k).contains(&target) {
-            return Err(bad_input(format!(
-                "{name} row {row}: mode {mode}, target {target}: modes count from 1 to {bands} \
-                 (one per --bands band) and targets from 1 to {k} (--targets {k})"
-            )));
-        }
-        let im = match ci {
-            Some(c) => num(c, "im")?,
-            None => 0.0,
-        };
+        let (mode, target, c) = reference_row(
+            &record,
+            (cols, col("im")),
+            (k, bands),
+            &format!("{name} row {row}"),
+        )?;
         let v = raw.entry(mode).or_insert_with(|| vec![None; k]);
         if v[target - 1].is_some() {
             return Err(bad_input(format!(
                 "{name} row {row}: mode {mode}, target {target} is given twice"
             )));
         }
-        v[target - 1] = Some(Complex64::new(num(cr, "re")?, im));
+        v[target - 1] = Some(c);
     }
     if raw.is_empty() {
         return Err(bad_input(format!("{name}: no shape rows")));
