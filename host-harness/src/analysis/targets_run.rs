@@ -298,6 +298,33 @@ fn report(
         );
     }
     colocated(&mut s, a, accel_target);
+    shapes_text(&mut s, a, tracks);
+    s.push('\n');
+    if let Some(m) = macs {
+        s.push_str("\nMAC against --shape-reference:");
+        for (mode, v) in m {
+            let _ = write!(s, " mode {mode}: {v:.6}");
+        }
+        s.push('\n');
+    }
+    for (t, mode, f, pole) in a.doubtful_fits() {
+        let f = f.map_or("no fit".into(), |f| format!("{f:.4} Hz"));
+        let _ = writeln!(
+            s,
+            "note: target {t}, mode {mode}: its own fit ({f}) is more than three half-power \
+             bandwidths from the shared pole ({:.4} Hz): its own FRF shows the mode weakly (a \
+             target near a node, or a spurious peak where the input is weak), so its own \
+             frequency and damping are not to be trusted (its shape component, from the shared \
+             pole, is)",
+            pole.f_hz
+        );
+    }
+    s
+}
+
+/// Each band's shape in the report: its pole and every target's component (`-` for a failed
+/// target), or that the fit failed.
+fn shapes_text(s: &mut String, a: &TargetAnalysis, tracks: &Tracks) {
     for (b, shape) in a.shapes.iter().enumerate() {
         match shape {
             Some((pole, v)) => {
@@ -324,27 +351,6 @@ fn report(
             }
         }
     }
-    s.push('\n');
-    if let Some(m) = macs {
-        s.push_str("\nMAC against --shape-reference:");
-        for (mode, v) in m {
-            let _ = write!(s, " mode {mode}: {v:.6}");
-        }
-        s.push('\n');
-    }
-    for (t, mode, f, pole) in a.doubtful_fits() {
-        let f = f.map_or("no fit".into(), |f| format!("{f:.4} Hz"));
-        let _ = writeln!(
-            s,
-            "note: target {t}, mode {mode}: its own fit ({f}) is more than three half-power \
-             bandwidths from the shared pole ({:.4} Hz): its own FRF shows the mode weakly (a \
-             target near a node, or a spurious peak where the input is weak), so its own \
-             frequency and damping are not to be trusted (its shape component, from the shared \
-             pole, is)",
-            pole.f_hz
-        );
-    }
-    s
 }
 
 /// The target co-located with the accelerometer against it, per mode: fitted frequency

@@ -55,6 +55,61 @@ pub fn write_targets_recording(
     };
     let xis = positions(targets);
     let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
+    let (sink, renderers, (sw, w, h)) =
+        render_strips(spec, &run, &at_mm, targets, (write_to, dir))?;
+    let (frames_dir, video) = sink.finish()?;
+    let x_px: Vec<f64> = (0..targets)
+        .map(|t| (t * sw) as f64 + renderers[t].rest_x())
+        .collect();
+    let shapes = true_shapes(beam.modes.len(), &xis);
+    let args = write_texts(
+        spec,
+        &run,
+        TargetsLayout {
+            xi: xis,
+            x_px,
+            shapes,
+            frame_size: (w, h),
+        },
+        video.as_deref(),
+        (write_to, dir),
+    )?;
+    Ok(RecordingFiles {
+        frames_dir,
+        video,
+        accel_csv: dir.join("accel.csv"),
+        toml: dir.join("recording.toml"),
+        readme: dir.join("README.txt"),
+        analyze_args: args,
+        frame_size: (w, h),
+        frame_count: spec.acquisition.frames,
+    })
+}
+
+/// Where the targets of a recording are and how they move: the true shapes and geometry
+/// `recording.toml` states.
+struct TargetsLayout {
+    /// Positions along the beam, `x / L`, left to right.
+    xi: Vec<f64>,
+    /// Their columns in the frame, px.
+    x_px: Vec<f64>,
+    /// Per mode, the true shape across the targets.
+    shapes: Vec<Vec<f64>>,
+    /// Frame width and height, px.
+    frame_size: (usize, usize),
+}
+
+/// The frames: each target rendered in its own strip of the frame by its own renderer, all on
+/// one intensity scale; returns the sink (to finish), the renderers and (strip width, frame
+/// width, height).
+#[allow(clippy::type_complexity)]
+fn render_strips(
+    spec: &RecordingSpec,
+    run: &model::SyntheticRun,
+    at_mm: &[Vec<f64>],
+    targets: usize,
+    (write_to, dir): (&Path, &Path),
+) -> anyhow::Result<(super::FrameSink, Vec<BlurRenderer>, (usize, usize, usize))> {
     let fine_hz = spec.acquisition.fps * run.fine_per_frame as f64;
     let pad = TargetPath::pad_for(spec.exposure_ms, fine_hz);
     let paths: Vec<TargetPath> = at_mm
@@ -93,22 +148,31 @@ pub fn write_targets_recording(
         }
         sink.put(k, &frame)?;
     }
-    let (frames_dir, video) = sink.finish()?;
+    Ok((sink, renderers, (sw, w, h)))
+}
+
+/// `accel.csv`, `recording.toml` and `README.txt` (the `analyze --targets` command, returned);
+/// `video` the lossless video when one was written.
+fn write_texts(
+    spec: &RecordingSpec,
+    run: &model::SyntheticRun,
+    layout: TargetsLayout,
+    video: Option<&Path>,
+    (write_to, dir): (&Path, &Path),
+) -> anyhow::Result<Vec<String>> {
     let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
     for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
         let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
     }
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
-    let mut toml = super::RecordingToml::of(spec, (w, h));
+    let targets = layout.xi.len();
+    let mut toml = super::RecordingToml::of(spec, layout.frame_size);
     toml.targets = Some(targets);
-    toml.target_xi = Some(xis.clone());
-    toml.target_x_px = Some(
-        (0..targets)
-            .map(|t| (t * sw) as f64 + renderers[t].rest_x())
-            .collect(),
-    );
-    toml.target_shapes = true_shapes(beam.modes.len(), &xis)
+    toml.target_xi = Some(layout.xi);
+    toml.target_x_px = Some(layout.x_px);
+    toml.target_shapes = layout
+        .shapes
         .into_iter()
         .enumerate()
         .map(|(i, shape)| super::TargetShape { mode: i + 1, shape })
@@ -130,17 +194,8 @@ pub fn write_targets_recording(
         spec.seed,
         args.join(" ")
     );
-    readme.push_str(&super::video_readme(video.as_deref()));
+    readme.push_str(&super::video_readme(video));
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", dir.join("README.txt").display()))?;
-    Ok(RecordingFiles {
-        frames_dir,
-        video,
-        accel_csv: dir.join("accel.csv"),
-        toml: dir.join("recording.toml"),
-        readme: dir.join("README.txt"),
-        analyze_args: args,
-        frame_size: (w, h),
-        frame_count: spec.acquisition.frames,
-    })
+    Ok(args)
 }
