@@ -515,3 +515,26 @@ fn thirty_three_blobs_are_counted_not_called_a_capacity_overflow() {
         "33 targets above the threshold in the first frame, --targets 2 expected",
     );
 }
+
+#[test]
+fn a_new_study_never_writes_into_a_folder_of_someone_elses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mine = tmp.path().join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("summary.csv"), "my own table").unwrap();
+    let o = harness(&[
+        "study",
+        "--runs",
+        "2",
+        "--exposures-ms",
+        "40",
+        "--no-plots",
+        "--out",
+        mine.to_str().unwrap(),
+    ]);
+    assert_exit_2(&o, "holds summary.csv, which is not a study's");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("summary.csv")).unwrap(),
+        "my own table"
+    );
+}

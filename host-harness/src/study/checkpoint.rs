@@ -156,6 +156,34 @@ pub fn read_checkpoint(path: &Path) -> anyhow::Result<Checkpoint> {
     })
 }
 
+/// Refuses to start a study in `dir` when it holds anything a study's own start does not write
+/// (the lock, the revision, the shard, the configuration and their temporary files): a new
+/// study never writes its outputs over files of someone else's in an existing folder.
+pub fn refuse_foreign_entries(dir: &Path) -> anyhow::Result<()> {
+    let own = [
+        files::LOCK,
+        files::REVISION,
+        files::SHARD,
+        files::CONFIG,
+        files::RUNS,
+    ];
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let temporary = own.iter().any(|o| name.starts_with(&format!(".{o}.tmp-")));
+        if !own.contains(&name.as_str()) && !temporary {
+            return Err(bad_input(format!(
+                "{}: holds {name}, which is not a study's; a new study goes into a new or \
+                 empty --out (nothing in a folder of yours is overwritten)",
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, synced, renamed
 /// over `path`, and the directory synced, so that a reader (or a crash) sees the old file or the
 /// new one, never a part.

@@ -111,6 +111,7 @@ pub fn write_merged(out: &Path, m: &Merged) -> anyhow::Result<()> {
             out.display()
         )));
     }
+    super::checkpoint::refuse_foreign_entries(out)?;
     // each file whole or absent; runs.jsonl last, so that a directory holding it is complete
     let write = super::checkpoint::write_atomic;
     write(&out.join(files::CONFIG), m.config.to_toml().as_bytes())?;

@@ -163,6 +163,7 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
     let cfg_path = exec.out.join(files::CONFIG);
     let runs_path = exec.out.join(files::RUNS);
     if !(runs_path.exists() || cfg_path.exists()) {
+        checkpoint::refuse_foreign_entries(&exec.out)?;
         checkpoint::write_atomic(
             &exec.out.join(files::REVISION),
             format!("{MODEL_REVISION}\n").as_bytes(),
