@@ -67,27 +67,24 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// Writes `text` to standard output and flushes it: a standard output that cannot be written
+/// (a full disk, a closed pipe) is an error naming it, never a panic. Every command prints
+/// through this (or a writer whose errors it returns), never with `print!`.
+pub fn stdout(text: &str) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
+}
+
 /// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    // `println!` panics when standard output cannot be written (a full disk, a closed pipe):
-    // that is an error of the command, named as such, not a crash with a backtrace
-    let default_hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        if stdout_failure(info.payload()).is_none() {
-            default_hook(info)
-        }
-    }));
-    let result = match std::panic::catch_unwind(|| run(cli)) {
-        Ok(result) => result.and_then(|()| {
-            std::io::Write::flush(&mut std::io::stdout())
-                .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
-        }),
-        Err(payload) => match stdout_failure(payload.as_ref()) {
-            Some(why) => Err(anyhow::anyhow!("cannot write to standard output: {why}")),
-            None => std::panic::resume_unwind(payload),
-        },
-    };
+    let result = run(cli).and_then(|()| {
+        std::io::Write::flush(&mut std::io::stdout())
+            .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -99,14 +96,4 @@ pub fn main() -> ExitCode {
             }
         }
     }
-}
-
-/// The reason in a `println!` panic on standard output ("failed printing to stdout: REASON").
-fn stdout_failure(payload: &(dyn std::any::Any + Send)) -> Option<String> {
-    let text = payload
-        .downcast_ref::<String>()
-        .map(String::as_str)
-        .or_else(|| payload.downcast_ref::<&str>().copied())?;
-    text.strip_prefix("failed printing to stdout: ")
-        .map(str::to_owned)
 }

@@ -213,7 +213,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         force: args.force,
     };
     let outcome = analysis::run::run(&request)?;
-    print!("{}", outcome.report);
+    super::stdout(&outcome.report)?;
     outcome.result
 }
 

@@ -87,6 +87,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         refine: args.refine,
         out: args.out.clone(),
     })?;
-    print!("{summary}");
-    Ok(())
+    super::stdout(&summary)
 }

@@ -33,11 +33,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         merged.records.len(),
         args.dirs.len()
     );
-    study::finish(
+    let text = study::finish(
         &merged.config,
         scenario.as_ref(),
         &merged.records,
         &args.out,
         !args.no_plots,
-    )
+    )?;
+    super::stdout(&text)
 }

@@ -360,14 +360,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
         plans.push(plan::plan(&one).map_err(|e| bad_input(format!("plan: {e}")))?);
     }
-    print!("{}", table(&input, &plans));
+    let mut text = table(&input, &plans);
     if args.preset.is_some() || args.config.is_some() {
-        println!(
+        text.push_str(
             "transfer: averaged over the Welch segments of a nominal record, weighted by their \
              input energy, as the study's vision_compensated rows; lost-frame risk: peak of each \
-             mode's response to the mean decay pulse (method.md §3.4)"
+             mode's response to the mean decay pulse (method.md §3.4)\n",
         );
     }
+    super::stdout(&text)?;
     if let Some(path) = &args.out {
         let config: Vec<&std::path::Path> = args.config.iter().map(|p| p.as_path()).collect();
         crate::outdir::refuse_overwriting_input(path, &config)?;

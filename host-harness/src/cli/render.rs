@@ -96,8 +96,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         };
         out.commit()?;
-        println!(
-            "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}",
+        return super::stdout(&format!(
+            "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}\n",
             args.preset.name(),
             dir.display(),
             files.frame_count,
@@ -110,8 +110,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             files.accel_csv.display(),
             files.toml.display(),
             dir.join("README.txt").display()
-        );
-        return Ok(());
+        ));
     }
     let scene = match args.preset {
         Preset::Grandstand => grandstand_scene(&args, exposure_ms),
@@ -120,10 +119,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let out = Staged::new(&args.out, args.force, "render", &[])?;
     let written = write_frames(out.dir(), &scene, exposure_ms)?;
     out.commit()?;
+    let mut list = String::new();
     for p in &written {
         let name = p.file_name().unwrap_or_default();
-        println!("{}", args.out.join(name).display());
+        list.push_str(&format!("{}\n", args.out.join(name).display()));
     }
+    super::stdout(&list)?;
     eprintln!("wrote {} frames in {}", written.len(), args.out.display());
     Ok(())
 }

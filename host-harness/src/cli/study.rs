@@ -200,7 +200,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let done = study::execute(&cfg, scenario.as_ref(), &exec)?;
     let elapsed = started.elapsed();
-    study::finish(&cfg, scenario.as_ref(), &done.records, &out, !args.no_plots)?;
+    let text = study::finish(&cfg, scenario.as_ref(), &done.records, &out, !args.no_plots)?;
+    super::stdout(&text)?;
     eprintln!(
         "{} runs computed in {:.1} s ({} in the study)",
         done.computed,

@@ -272,15 +272,15 @@ pub fn scenario_for(cfg: &StudyConfig) -> anyhow::Result<Box<dyn Scenario>> {
     })
 }
 
-/// Aggregates, writes CSV files and plots, prints the table. Shared by `study` and `merge`
-/// (plots only when `plots`).
+/// Aggregates, writes CSV files and plots, and returns the table and notes to print. Shared
+/// by `study` and `merge` (plots only when `plots`).
 pub fn finish(
     cfg: &StudyConfig,
     scenario: &dyn Scenario,
     records: &[RunRecord],
     out: &std::path::Path,
     plots: bool,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<String> {
     let correction = scenario.exposure_correction()?;
     let mut records = records;
     let mut adaptive_report = None;
@@ -311,27 +311,34 @@ pub fn finish(
                 .with_context(|| format!("cannot write the figures in {}", out.display()))?,
         );
     }
-    println!(
-        "{}",
+    use std::fmt::Write as _;
+    let mut text = format!(
+        "{}\n",
         crate::report::table(&outputs.summary, scenario.amplitude_unit(), cfg.coverage)
     );
-    println!("vision_compensated: {}", outputs.correction);
+    let _ = writeln!(text, "vision_compensated: {}", outputs.correction);
     for l in aggregate::lost_by_exposure(&outputs) {
-        println!(
+        let _ = writeln!(
+            text,
             "exposure {} ms: {} of {} frames lost (filled by interpolation), {} failed runs (> 5 % lost, left out)",
             l.exposure_ms, l.lost, l.frames, l.failed_runs
         );
     }
     for n in scenario.notes() {
-        println!("note: {n}");
+        let _ = writeln!(text, "note: {n}");
     }
     for line in aggregate::chi_statements(&outputs) {
-        println!("{line}");
+        let _ = writeln!(text, "{line}");
     }
     if let Some(r) = adaptive_report {
-        print!("{r}");
+        text.push_str(&r);
         written.push(out.join(files::ADAPTIVE));
     }
-    println!("wrote {} files in {}", written.len() + 2, out.display());
-    Ok(())
+    let _ = writeln!(
+        text,
+        "wrote {} files in {}",
+        written.len() + 2,
+        out.display()
+    );
+    Ok(text)
 }
