@@ -177,7 +177,7 @@ pub use num_complex::Complex32;
 pub use heapless;
 
 /// A caller buffer has the wrong length: the one **run-time** error of the functions that work
-/// in caller-provided buffers ([`dft::Dft::process`], [`upsample::UpsamplePlan::process_with`],
+/// in caller-provided buffers ([`dft::Dft::process`], [`upsample::UpsamplePlan::process`],
 /// [`spectrum::WelchAccumulator::add_segment`]). Nothing was written when it is returned.
 /// Settings are checked once, by each stage's `try_new`, and have their own `ConfigError`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -677,9 +677,10 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
         loop {
             // a block is complete with the frame after it (the end-matching line's end point)
             if self.cam_fill > n && self.vis_fill + keep <= HIST {
-                let accel = self
-                    .acceleration_scale
-                    .map(|s| (self.config().frame_rate_hz(), s));
+                let accel = self.acceleration_scale.map(|scale| upsample::Accel {
+                    fs_in_hz: self.config().frame_rate_hz(),
+                    scale,
+                });
                 let exposure = self.exposure();
                 if let (Some(input), Some(&next), Some(out)) = (
                     self.camera.get(..n),
@@ -771,6 +772,7 @@ pub const fn scratch_capacity(n: usize, m: usize, nfft: usize) -> usize {
 mod tests {
     use super::*;
     use crate::spectrum::{Detrend, WelchH1, Window};
+    use crate::upsample::Accel;
     use core::f32::consts::PI;
     use proptest::prelude::*;
     use std::vec;
@@ -844,12 +846,19 @@ mod tests {
         let mut out = vec![0.0f32; M / 2];
         let mut start = 0;
         while start + N < cam.len() {
-            plan.process_part(
+            let options = UpsampleOptions {
+                accel: accel.map(|scale| Accel {
+                    fs_in_hz: 12.0,
+                    scale,
+                }),
+                end_match: Some(cam[start + N]),
+                exposure: None,
+            };
+            plan.process(
                 &cam[start..start + N],
                 &mut out,
                 M / 4,
-                accel.map(|s| (12.0, s)),
-                Some(cam[start + N]),
+                options,
                 &mut work,
                 &mut scratch,
             )
@@ -936,7 +945,14 @@ mod tests {
             let mut scratch = vec![Complex32::new(0.0, 0.0); S2];
             let mut vision = vec![0.0f32; adc.len()];
             for (blk, out) in frames.chunks(N2).zip(vision.chunks_mut(M2)) {
-                plan.process_with(blk, out, Some((48.0, 1e-3)), &mut work, &mut scratch)
+                let options = UpsampleOptions {
+                    accel: Some(Accel {
+                        fs_in_hz: 48.0,
+                        scale: 1e-3,
+                    }),
+                    ..UpsampleOptions::default()
+                };
+                plan.process(blk, out, 0, options, &mut work, &mut scratch)
                     .unwrap();
             }
             let mut w = std::boxed::Box::new(WelchH1::<M2, M2, S2>::try_new(welch).unwrap());

@@ -118,18 +118,27 @@ pub const fn output_len(n: usize, from_hz: u32, to_hz: u32) -> Option<usize> {
     Some((num / from_hz as u64) as usize)
 }
 
+/// The displacement-to-acceleration conversion fused with the upsampling: the spectrum times
+/// `-(2 pi f)^2 * scale` (DC zeroed), as [`Upsampler::process_acceleration`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Accel {
+    /// The input's sample rate, Hz (the bins are at `k fs_in_hz / n`).
+    pub fs_in_hz: f32,
+    /// The unit conversion: input unit times s^-2 to the output unit (`1e-3` for mm in, m/s^2
+    /// out).
+    pub scale: f32,
+}
+
 /// What a run of an [`UpsamplePlan`] does besides upsampling: the options of
-/// [`UpsamplePlan::process_part_options`] and [`Upsampler::process_options`]. The default
-/// is plain upsampling.
+/// [`UpsamplePlan::process`] and [`Upsampler::process_options`]. The default is plain
+/// upsampling.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct UpsampleOptions {
-    /// `Some((fs_in_hz, scale))`: convert displacement to acceleration, the spectrum times
-    /// `-(2 pi f)^2 * scale` (DC zeroed), as [`Upsampler::process_acceleration`]; `fs_in_hz`
-    /// is the input rate (Hz), `scale` the unit conversion.
-    pub accel: Option<(f32, f32)>,
-    /// `Some(next)`: end matching of a streamed block (see
-    /// [`process_part`](UpsamplePlan::process_part)).
+    /// `Some(_)`: convert displacement to acceleration ([`Accel`]).
+    pub accel: Option<Accel>,
+    /// `Some(next)`: end matching of a streamed block (see [`UpsamplePlan::process`]).
     pub end_match: Option<f32>,
     /// `Some(_)`: divide the input spectrum by the exposure transfer (see
     /// [`ExposureCompensation`]).
@@ -163,7 +172,7 @@ impl ExposureCompensation {
 }
 
 /// The plan of an `n -> m` Fourier upsampling (lengths and the two DFT plans), with no
-/// buffers: [`process_with`](Self::process_with) runs it in caller buffers, so a firmware can
+/// buffers: [`process`](Self::process) runs it in caller buffers, so a firmware can
 /// lend it the work buffer of another stage (the Welch estimate's, see [`crate::pipeline`]).
 /// [`Upsampler`] is the same with owned buffers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -219,7 +228,7 @@ impl UpsamplePlan {
         self.m
     }
 
-    /// Scratch values [`process_with`](Self::process_with) needs (the larger of the two
+    /// Scratch values [`process`](Self::process) needs (the larger of the two
     /// transforms' [`crate::dft::scratch_len`]).
     pub const fn scratch_len(&self) -> usize {
         let (a, b) = (self.fwd.scratch_len(), self.inv.scratch_len());
@@ -230,81 +239,23 @@ impl UpsamplePlan {
         }
     }
 
-    /// Upsamples `input` (`n` values) into `output` (`m` values) using `work` (at least `m`
-    /// values) and `scratch` (at least [`scratch_len`](Self::scratch_len)); both are
-    /// overwritten. With `accel = Some((fs_in_hz, scale))` the spectrum is multiplied by
-    /// `-(2 pi f)^2 * scale` before the inverse transform, as
-    /// [`Upsampler::process_acceleration`].
+    /// Upsamples `input` (`n` values) into the output samples `first .. first + output.len()`
+    /// (`first + output.len() <= m`; `first = 0` and `m` values for a whole record), using
+    /// `work` (at least `m` values) and `scratch` (at least [`scratch_len`](Self::scratch_len)),
+    /// both overwritten, with the [`UpsampleOptions`]; returns what the exposure compensation
+    /// did ([`Compensation::default`] without one). The one entry point of the plan.
     ///
-    /// Errors (nothing written to `output`): [`BufferError`] for a wrong `input`, `output` or
-    /// `work` length or too small a `scratch`.
-    pub fn process_with(
-        &self,
-        input: &[f32],
-        output: &mut [f32],
-        accel: Option<(f32, f32)>,
-        work: &mut [Complex32],
-        scratch: &mut [Complex32],
-    ) -> Result<(), BufferError> {
-        self.check_whole(output)?;
-        let options = UpsampleOptions {
-            accel,
-            ..UpsampleOptions::default()
-        };
-        self.process_part_options(input, output, 0, options, work, scratch)
-            .map(|_| ())
-    }
-
-    /// `Ok` when `output` holds the whole record (`m` values).
-    fn check_whole(&self, output: &[f32]) -> Result<(), BufferError> {
-        if output.len() != self.m {
-            return Err(BufferError {
-                expected: self.m,
-                got: output.len(),
-            });
-        }
-        Ok(())
-    }
-
-    /// As [`process_with`](Self::process_with), with two options for block-wise streaming
-    /// ([`crate::pipeline`]): only the output samples `first .. first + output.len()` are
-    /// written (`first + output.len() <= m`), and with `end_match = Some(next)`, `next` being
-    /// the sample that follows the block, the straight line through the first input sample
-    /// (at position 0) and `next` (at position `n`) is subtracted before the transform and
-    /// added back to the output (its second derivative is zero, so nothing is added with
-    /// `accel`). The subtraction removes the jump that the transform's periodic extension of a
-    /// block would otherwise see between its last and first samples (Gibbs ringing, amplified
-    /// by `omega^2` in the acceleration); a block that already holds whole periods has
-    /// `next == input[0]` and is left as it is.
+    /// With `options.end_match = Some(next)`, `next` being the sample that follows the block,
+    /// the straight line through the first input sample (at position 0) and `next` (at position
+    /// `n`) is subtracted before the transform and added back to the output (its second
+    /// derivative is zero, so nothing is added with `accel`). The subtraction removes the jump
+    /// that the transform's periodic extension of a block would otherwise see between its last
+    /// and first samples (Gibbs ringing, amplified by `omega^2` in the acceleration); a block
+    /// that already holds whole periods has `next == input[0]` and is left as it is.
     ///
-    /// Errors: as [`process_with`](Self::process_with); [`BufferError`] with
-    /// `expected = m - first` when the range runs past `m`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn process_part(
-        &self,
-        input: &[f32],
-        output: &mut [f32],
-        first: usize,
-        accel: Option<(f32, f32)>,
-        end_match: Option<f32>,
-        work: &mut [Complex32],
-        scratch: &mut [Complex32],
-    ) -> Result<(), BufferError> {
-        let options = UpsampleOptions {
-            accel,
-            end_match,
-            exposure: None,
-        };
-        self.process_part_options(input, output, first, options, work, scratch)
-            .map(|_| ())
-    }
-
-    /// As [`process_part`](Self::process_part), with all the [`UpsampleOptions`] (`first = 0`
-    /// and `m` output values for a whole record); returns what the exposure compensation did
-    /// ([`Compensation::default`] without one).
-    ///
-    /// Errors: as [`process_part`](Self::process_part).
-    pub fn process_part_options(
+    /// Errors (nothing written to `output`): [`BufferError`] for a wrong `input` length, a
+    /// range past `m` (`expected = m - first`), too short a `work` or too small a `scratch`.
+    pub fn process(
         &self,
         input: &[f32],
         output: &mut [f32],
@@ -341,7 +292,7 @@ impl UpsamplePlan {
         Ok(self.run_part(input, output, first, options, work, scratch))
     }
 
-    /// [`process_part`](Self::process_part) for the crate's own callers, whose buffers follow
+    /// [`process`](Self::process) for the crate's own callers, whose buffers follow
     /// from a validated configuration: infallible (a buffer of the wrong length, impossible
     /// there, leaves `output` untouched and reports no compensation).
     pub(crate) fn run_part(
@@ -418,7 +369,11 @@ impl UpsamplePlan {
                 }
             }
         }
-        if let Some((fs, scale)) = accel {
+        if let Some(Accel {
+            fs_in_hz: fs,
+            scale,
+        }) = accel
+        {
             let df = fs / n as f32;
             if let Some(w0) = work.first_mut() {
                 *w0 = Complex32::new(0.0, 0.0);
@@ -547,8 +502,8 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
 
     /// Upsamples `input` (`n` values) into `output` (`m` values).
     pub fn process(&mut self, input: &[f32], output: &mut [f32]) -> Result<(), BufferError> {
-        self.plan
-            .process_with(input, output, None, &mut self.work, &mut self.scratch)
+        self.process_options(input, output, UpsampleOptions::default())
+            .map(|_| ())
     }
 
     /// Upsamples and converts displacement to acceleration in one pass (method.md §2.3 fused with
@@ -563,18 +518,16 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
         fs_in_hz: f32,
         scale: f32,
     ) -> Result<(), BufferError> {
-        self.plan.process_with(
-            input,
-            output,
-            Some((fs_in_hz, scale)),
-            &mut self.work,
-            &mut self.scratch,
-        )
+        let options = UpsampleOptions {
+            accel: Some(Accel { fs_in_hz, scale }),
+            ..UpsampleOptions::default()
+        };
+        self.process_options(input, output, options).map(|_| ())
     }
 
     /// Upsamples `input` (`n` values) into `output` (`m` values) with the [`UpsampleOptions`]
     /// (acceleration, end matching, exposure compensation: see
-    /// [`UpsamplePlan::process_part_options`]); returns what the exposure compensation did.
+    /// [`UpsamplePlan::process`]); returns what the exposure compensation did.
     ///
     /// ```
     /// use firmware_core::upsample::{scratch_capacity, ExposureCompensation, UpsampleOptions, Upsampler};
@@ -601,10 +554,14 @@ impl<const M: usize, const SCRATCH: usize> Upsampler<M, SCRATCH> {
         output: &mut [f32],
         options: UpsampleOptions,
     ) -> Result<Compensation, BufferError> {
-        self.plan.check_whole(output)?;
+        if output.len() != self.plan.m {
+            return Err(BufferError {
+                expected: self.plan.m,
+                got: output.len(),
+            });
+        }
         let (work, scratch) = (&mut self.work, &mut self.scratch);
-        self.plan
-            .process_part_options(input, output, 0, options, work, scratch)
+        self.plan.process(input, output, 0, options, work, scratch)
     }
 }
 
@@ -729,15 +686,16 @@ mod tests {
         let mut scratch = vec![Complex32::new(0.0, 0.0); plan.scratch_len()];
         let x = signal(n);
         let mut full = vec![0.0f32; m];
-        plan.process_with(&x, &mut full, None, &mut work, &mut scratch)
+        let plain = UpsampleOptions::default();
+        plan.process(&x, &mut full, 0, plain, &mut work, &mut scratch)
             .unwrap();
         // a part is the same samples as the whole output
         let mut part = vec![0.0f32; 100];
-        plan.process_part(&x, &mut part, 64, None, None, &mut work, &mut scratch)
+        plan.process(&x, &mut part, 64, plain, &mut work, &mut scratch)
             .unwrap();
         assert_eq!(part[..], full[64..164]);
         assert_eq!(
-            plan.process_part(&x, &mut part, 157, None, None, &mut work, &mut scratch),
+            plan.process(&x, &mut part, 157, plain, &mut work, &mut scratch),
             Err(BufferError {
                 expected: 99,
                 got: 100
@@ -747,31 +705,30 @@ mod tests {
         // acceleration is zero; without it the jump rings through the whole block
         let ramp: Vec<f32> = (0..n).map(|i| 0.5 + 0.1 * i as f32).collect();
         let want = |j: usize| 0.5 + 0.1 * (j * n) as f32 / m as f32;
-        plan.process_part(
-            &ramp,
-            &mut full,
-            0,
-            None,
-            Some(0.5 + 0.1 * n as f32),
-            &mut work,
-            &mut scratch,
-        )
-        .unwrap();
+        let matched = UpsampleOptions {
+            end_match: Some(0.5 + 0.1 * n as f32),
+            ..plain
+        };
+        plan.process(&ramp, &mut full, 0, matched, &mut work, &mut scratch)
+            .unwrap();
         for (j, v) in full.iter().enumerate() {
             assert!((v - want(j)).abs() < 1e-5, "sample {j}: {v} vs {}", want(j));
         }
-        plan.process_part(
+        let accel = Some(Accel {
+            fs_in_hz: 60.0,
+            scale: 1.0,
+        });
+        plan.process(
             &ramp,
             &mut full,
             0,
-            Some((60.0, 1.0)),
-            Some(0.5 + 0.1 * n as f32),
+            UpsampleOptions { accel, ..matched },
             &mut work,
             &mut scratch,
         )
         .unwrap();
         assert!(full.iter().all(|v| v.abs() < 1e-2), "{:?}", &full[..4]);
-        plan.process_with(&ramp, &mut full, None, &mut work, &mut scratch)
+        plan.process(&ramp, &mut full, 0, plain, &mut work, &mut scratch)
             .unwrap();
         let worst = (0..m)
             .map(|j| (full[j] - want(j)).abs())
@@ -868,7 +825,10 @@ mod tests {
         // fused with -omega^2 in the same pass: -(2 pi f)^2 sin, scaled to amplitude 1
         let w2 = (std::f64::consts::TAU * f).powi(2);
         let options = UpsampleOptions {
-            accel: Some((120.0, (1.0 / w2) as f32)),
+            accel: Some(Accel {
+                fs_in_hz: 120.0,
+                scale: (1.0 / w2) as f32,
+            }),
             exposure,
             end_match: None,
         };
@@ -928,11 +888,17 @@ mod tests {
         type Up = Upsampler<363, { scratch_capacity(121, 363) }>;
         let mut up = Up::try_new(121, 363).unwrap();
         let x = signal(121);
-        for accel in [None, Some((120.0, 1e-3))] {
+        let a = Accel {
+            fs_in_hz: 120.0,
+            scale: 1e-3,
+        };
+        for accel in [None, Some(a)] {
             let mut want = vec![0.0f32; 363];
             match accel {
                 None => up.process(&x, &mut want).unwrap(),
-                Some((fs, s)) => up.process_acceleration(&x, &mut want, fs, s).unwrap(),
+                Some(a) => up
+                    .process_acceleration(&x, &mut want, a.fs_in_hz, a.scale)
+                    .unwrap(),
             }
             let mut y = vec![0.0f32; 363];
             let options = UpsampleOptions {

@@ -75,7 +75,7 @@ fn vision_acceleration_with(
     m: usize,
     end_match: bool,
 ) -> anyhow::Result<Vec<f64>> {
-    use firmware_core::upsample::{UpsampleOptions, Upsampler};
+    use firmware_core::upsample::{Accel, UpsampleOptions, Upsampler};
     let n = disp_mm.len();
     let input: Vec<f32> = disp_mm.iter().map(|&v| v as f32).collect();
     // the sample that would follow the record on the line through its first and last samples
@@ -90,7 +90,10 @@ fn vision_acceleration_with(
         );
         let mut out = vec![0.0f32; m];
         let options = UpsampleOptions {
-            accel: Some((fc as f32, 1.0e-3)),
+            accel: Some(Accel {
+                fs_in_hz: fc as f32,
+                scale: 1.0e-3,
+            }),
             end_match: next,
             exposure: None,
         };
