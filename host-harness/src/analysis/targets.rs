@@ -31,7 +31,7 @@ pub struct Tracks {
     pub centroids: Vec<Vec<Centroid>>,
     /// Position in the first frame, px.
     pub first: Vec<(f64, f64)>,
-    /// Per target, the detections refused as implausible ([`History::check`]), counted among
+    /// Per target, the detections refused as implausible ([`History::plausible`]), counted among
     /// its lost frames.
     pub refused: Vec<usize>,
     /// The frames' bit depth and largest value.
@@ -66,30 +66,33 @@ pub struct History {
 }
 
 impl History {
-    /// Why detection `c` is not plausible for this target, if it is not.
-    pub fn check(&self, c: &Centroid) -> Option<String> {
-        let mut recent: Vec<u64> = self.pixels.iter().copied().collect();
-        recent.sort_unstable();
-        if let Some(&median) = recent.get(recent.len() / 2) {
-            let p = c.moments.pixels as f64;
-            let m = median as f64;
+    /// Whether detection `c` is plausible for this target: its pixel count within a factor 1.5
+    /// of the median of its last 15, and (once the history has 10 residuals) its distance from
+    /// the constant-velocity prediction within max(3 px, 6 RMS residuals). Runs per target and
+    /// frame: no allocation.
+    pub fn plausible(&self, c: &Centroid) -> bool {
+        let mut recent = [0u64; PIXEL_HISTORY];
+        let n = self.pixels.len();
+        for (r, p) in recent.iter_mut().zip(&self.pixels) {
+            *r = *p;
+        }
+        recent[..n].sort_unstable();
+        if let Some(&median) = recent[..n].get(n / 2) {
+            let (p, m) = (c.moments.pixels as f64, median as f64);
             if p > m * PIXEL_FACTOR || p * PIXEL_FACTOR < m {
-                return Some(format!("{p} px against {m} px recently"));
+                return false;
             }
         }
         if let (Some(last), Some(before)) = (self.last, self.before) {
             if self.residuals >= JUMP_WARMUP {
                 let r = self.residual(last, before, c);
                 let rms = (self.residual_sq / self.residuals as f64).sqrt();
-                let allowed = JUMP_FLOOR_PX.max(JUMP_SIGMAS * rms);
-                if r > allowed {
-                    return Some(format!(
-                        "{r:.1} px from where its motion predicts it (allowed {allowed:.1})"
-                    ));
+                if r > JUMP_FLOOR_PX.max(JUMP_SIGMAS * rms) {
+                    return false;
                 }
             }
         }
-        None
+        true
     }
 
     fn residual(&self, last: (f64, f64), before: (f64, f64), c: &Centroid) -> f64 {
@@ -179,7 +182,7 @@ pub fn track(
                     history[t].miss();
                     tracks.centroids[t].push(lost())
                 }
-                Some(j) if history[t].check(&found[j]).is_some() => {
+                Some(j) if !history[t].plausible(&found[j]) => {
                     history[t].miss();
                     tracks.refused[t] += 1;
                     tracks.centroids[t].push(lost())

@@ -13,11 +13,12 @@ use std::path::PathBuf;
 /// positive upwards in the image, with `--axis x` positive to the right; `--invert` flips it.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Frames: a directory (all *.png, *.tif, *.tiff in it, in natural name order, so
-    /// frame_2 comes before frame_10), a pattern with `*`/`?` in the file name part
-    /// (`rec/frame_*.png`), one multi-page TIFF, or a video file (.avi, .mkv, .mp4, .mov,
-    /// .m4v, .webm, .mxf; decoded by the `ffmpeg` program, luma, its timestamps checked against
-    /// --fps). 8- or 16-bit grey. Numbered files must be consecutive (a gap is an error).
+    /// Frames: a directory (its numbered *.png, *.tif, *.tiff sequence in natural name order,
+    /// so frame_2 comes before frame_10; other images beside it are named and ignored), a
+    /// pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, or a
+    /// video file (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg` program,
+    /// luma, its timestamps checked against --fps). 8- or 16-bit grey. Numbered files must be
+    /// consecutive (a gap is an error).
     #[arg(long, value_name = "DIR|GLOB|FILE.tif|VIDEO")]
     pub frames: String,
     /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`).
