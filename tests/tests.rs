@@ -105,7 +105,7 @@ const ROOMS: [&[&str]; 11] = [
         "testing",
         "failpoint",
         "outdir",
-        "report",
+        "export",
         "plots",
         "lost_frames",
     ],
@@ -198,4 +198,43 @@ fn no_room_of_host_harness_uses_one_after_it() {
     bad.sort();
     bad.dedup();
     assert!(bad.is_empty(), "uses of a later room:\n{}", bad.join("\n"));
+}
+
+/// `cli/` parses flags into a checked request and calls the library: no file is written,
+/// staged or formatted there (every writer is in `export/`, every output directory is staged by
+/// the library call).
+#[test]
+fn the_cli_writes_no_file_itself() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let forbidden = [
+        "std::fs",
+        "fs::write",
+        "File::create",
+        "OpenOptions",
+        "write_atomic",
+        "csv::Writer",
+        "Staged",
+    ];
+    let mut files = vec![src.join("cli.rs")];
+    for e in std::fs::read_dir(src.join("cli")).unwrap() {
+        files.push(e.unwrap().path());
+    }
+    assert!(files.len() > 10, "only {} cli files", files.len());
+    let mut bad = Vec::new();
+    for p in files {
+        let text = std::fs::read_to_string(&p).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for f in forbidden {
+                if code.contains(f) {
+                    bad.push(format!("{}:{}: {f}", p.display(), i + 1));
+                }
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "cli/ writes files itself:\n{}",
+        bad.join("\n")
+    );
 }

@@ -12,7 +12,7 @@
 //! ```
 
 use host_harness::analysis::modal::{self, FrfForm};
-use host_harness::analysis::uff::{self, Dataset58, Dof};
+use host_harness::export::uff::{self, Dataset58, Dof};
 use host_harness::model::Rig;
 use host_harness::recording::RecordingSpec;
 use num_complex::Complex64;

@@ -19,7 +19,8 @@
 
 use crate::bad_input;
 use crate::chain::exposure::ExposureCorrection;
-use crate::report::{CoverageRow, SummaryRow, System};
+use crate::export::calibrate::{ParameterRow, ResidualRow};
+use crate::export::study::{CoverageRow, SummaryRow, System};
 use crate::study::{aggregate, run_rng, scenario_for, Preset, RunRecord, StudyConfig};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -584,63 +585,38 @@ pub fn search(
     })
 }
 
-/// `residuals.csv` bytes.
-pub fn residuals_csv(e: &Evaluation) -> Vec<u8> {
-    let mut s =
-        String::from("mode,exposure_ms,quantity,observed,u_observed,model,u_model,residual\n");
-    for r in &e.residuals {
-        let o = &r.observed;
-        s += &format!(
-            "{},{},{},{},{},{},{},{}\n",
-            o.mode,
-            o.exposure_ms,
-            o.quantity.name(),
-            o.value,
-            o.u.map_or(String::new(), |u| u.to_string()),
-            fin(r.model),
-            fin(r.u_model),
-            fin(r.r)
-        );
-    }
-    s.into_bytes()
+/// The rows of `residuals.csv` of evaluation `e`.
+pub fn residual_rows(e: &Evaluation) -> Vec<ResidualRow> {
+    e.residuals
+        .iter()
+        .map(|r| {
+            let o = &r.observed;
+            ResidualRow {
+                mode: o.mode,
+                exposure_ms: o.exposure_ms,
+                quantity: o.quantity.name(),
+                observed: o.value,
+                u_observed: o.u,
+                model: r.model,
+                u_model: r.u_model,
+                residual: r.r,
+            }
+        })
+        .collect()
 }
 
-/// `evaluations.csv` bytes: the free parameters' values, chi2 and the objective of every
-/// evaluation.
-pub fn evaluations_csv(free: &[Free], evals: &[Evaluation]) -> Vec<u8> {
-    let mut s: String = free.iter().map(|f| format!("{},", f.knob.name())).collect();
-    s += "chi2,objective\n";
-    for e in evals {
-        for v in &e.x {
-            s += &format!("{v},");
-        }
-        s += &format!("{},{}\n", e.chi2, e.objective);
-    }
-    s.into_bytes()
-}
-
-/// `parameters.csv` bytes: `name,value,u,lo,hi`.
-pub fn parameters_csv(free: &[Free], fit: &Fit) -> Vec<u8> {
-    let mut s = String::from("name,value,u,lo,hi\n");
-    for ((f, v), u) in free.iter().zip(&fit.best.x).zip(&fit.u) {
-        s += &format!(
-            "{},{v},{},{},{}\n",
-            f.knob.name(),
-            u.map_or(String::new(), |u| u.to_string()),
-            f.lo,
-            f.hi
-        );
-    }
-    s.into_bytes()
-}
-
-/// Empty for a non-finite value (never NaN in a CSV).
-fn fin(v: f64) -> String {
-    if v.is_finite() {
-        v.to_string()
-    } else {
-        String::new()
-    }
+/// The rows of `parameters.csv`: the fitted value of each free knob.
+pub fn parameter_rows(free: &[Free], fit: &Fit) -> Vec<ParameterRow> {
+    free.iter()
+        .zip(&fit.best.x)
+        .zip(&fit.u)
+        .map(|((f, &value), &u)| ParameterRow {
+            name: f.knob.name(),
+            value,
+            u,
+            range: (f.lo, f.hi),
+        })
+        .collect()
 }
 
 /// A checked `calibrate` request (what `cli::calibrate` builds from its flags).
@@ -736,7 +712,8 @@ fn checked_observations(req: &Request) -> anyhow::Result<Vec<Observation>> {
 /// `fitted.toml` (the study file with the fitted values), `parameters.csv`, `residuals.csv`
 /// and `evaluations.csv`, each written atomically.
 fn write_outputs(req: &Request, obs: &[Observation], fit: &Fit) -> anyhow::Result<()> {
-    use crate::study::checkpoint::write_atomic;
+    use crate::export::calibrate::{evaluations_csv, parameters_csv, residuals_csv};
+    use crate::export::write_atomic;
     std::fs::create_dir_all(&req.out)
         .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", req.out.display()))?;
     let mut fitted = req.base.clone();
@@ -752,12 +729,18 @@ fn write_outputs(req: &Request, obs: &[Observation], fit: &Fit) -> anyhow::Resul
     );
     let out = |name: &str| req.out.join(name);
     write_atomic(&out("fitted.toml"), (header + &fitted.to_toml()).as_bytes())?;
-    write_atomic(&out("parameters.csv"), &parameters_csv(&req.free, fit))?;
-    write_atomic(&out("residuals.csv"), &residuals_csv(&fit.best))?;
+    let rows = parameter_rows(&req.free, fit);
+    write_atomic(&out("parameters.csv"), &parameters_csv(&rows))?;
     write_atomic(
-        &out("evaluations.csv"),
-        &evaluations_csv(&req.free, &fit.evaluations),
+        &out("residuals.csv"),
+        &residuals_csv(&residual_rows(&fit.best)),
     )?;
+    let names: Vec<&str> = req.free.iter().map(|f| f.knob.name()).collect();
+    let evals = fit
+        .evaluations
+        .iter()
+        .map(|e| (e.x.as_slice(), e.chi2, e.objective));
+    write_atomic(&out("evaluations.csv"), &evaluations_csv(&names, evals))?;
     Ok(())
 }
 

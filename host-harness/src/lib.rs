@@ -19,7 +19,7 @@
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`uncertainty`] | JCGM 101: coverage intervals, standard uncertainty of the mean, the adaptive Monte Carlo procedure |
 //! | [`plan`] | the exposure planner: per mode, the longest exposure meeting a tolerance, the compensated residual, the lost-frame risk |
-//! | [`report`] | study rows (summary, realizations, FRF band) as CSV and the printed table |
+//! | [`export`] | every output file's columns: typed rows -> bytes (one module per family), `write_atomic` |
 //! | [`plots`] | PNG and SVG figures |
 //! | [`csvio`] | numeric CSV columns with errors naming row and column |
 //! | [`outdir`] | output directories that are complete or absent (staged, synced, moved into place) |
@@ -33,6 +33,7 @@ pub mod calibrate;
 pub mod chain;
 pub mod cli;
 pub mod csvio;
+pub mod export;
 pub mod failpoint;
 pub mod frames;
 pub mod imaging;
@@ -42,7 +43,6 @@ pub mod outdir;
 pub mod plan;
 pub mod plots;
 pub mod recording;
-pub mod report;
 pub mod stats;
 pub mod study;
 pub mod testing;

@@ -9,7 +9,7 @@
 //! * `sigma_vs_mu`: sigma_a against mu_a across exposures, per mode;
 //! * `band_width`: width of the 90 % band against frequency, per exposure and system.
 
-use crate::report::{FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::export::study::{FrfBandRow, RealizationRow, SummaryRow, System};
 use anyhow::Context as _;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;

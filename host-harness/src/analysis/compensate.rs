@@ -12,6 +12,7 @@
 
 use super::Analysis;
 use crate::chain::frf;
+use crate::export::analysis::CompensationRow;
 use firmware_core::exposure::{BoxTransfer, ExposureTransfer, E2PR_LIMIT};
 
 /// What the compensation did to one vision mode.
@@ -131,39 +132,17 @@ impl Compensated {
         s
     }
 
-    /// `compensation.csv`: `mode,f_hz,e2pr,transfer,factor,compensated` (`transfer` empty and
-    /// `compensated` false for a flagged mode).
-    pub fn csv(&self) -> String {
-        let mut s = String::from("mode,f_hz,e2pr,transfer,factor,compensated\n");
-        s += &self.rows("");
-        s
+    /// The rows of `compensation.csv` ([`crate::export::analysis::compensation_csv`]).
+    pub fn rows(&self) -> Vec<CompensationRow> {
+        self.modes
+            .iter()
+            .map(|m| CompensationRow {
+                mode: m.mode,
+                f_hz: m.f_hz,
+                e2pr: m.e2pr,
+                transfer: m.ratio,
+                factor: m.factor(),
+            })
+            .collect()
     }
-
-    /// The rows of [`csv`](Self::csv), each after `prefix` (e.g. `3,` for a target column).
-    pub fn rows(&self, prefix: &str) -> String {
-        let mut s = String::new();
-        for m in &self.modes {
-            s += &format!(
-                "{prefix}{},{},{},{},{},{}\n",
-                m.mode,
-                m.f_hz,
-                round_e2pr(m.e2pr),
-                m.ratio.map(|r| r.to_string()).unwrap_or_default(),
-                m.factor(),
-                m.ratio.is_some()
-            );
-        }
-        s
-    }
-}
-
-/// An E2PR as written in CSV files: rounded to 9 significant digits, so that the product of a
-/// frequency and an exposure is `0.0646`, not `0.06459999999999999`.
-pub fn round_e2pr(e: f64) -> f64 {
-    if e == 0.0 || !e.is_finite() {
-        return e;
-    }
-    let digits = 9 - 1 - e.abs().log10().floor() as i32;
-    let scale = 10f64.powi(digits);
-    (e * scale).round() / scale
 }

@@ -31,20 +31,20 @@
 //! * **Units.** Accelerations are in m/s^2 (the accelerometer CSV must be in m/s^2); the FRFs are
 //!   dimensionless (acceleration over acceleration).
 
+pub mod columns;
 pub mod compensate;
 pub mod modal;
 pub mod report;
 pub mod run;
 pub mod targets;
 pub mod targets_run;
-pub mod uff;
 
 pub use crate::chain::displacement::{
     displacement_mm, Axis, Displacement, DisplacementSettings, MAX_LOST_FRACTION,
 };
 pub use crate::chain::frf::{Defaults, Frf, PickedMode, WelchSettings};
 pub use firmware_core::spectrum::Window;
-pub use report::{displacement_csv, frf_csv, modes_csv, report_text};
+pub use report::{mode_rows, report_text, spectrum};
 
 use crate::bad_input;
 use crate::chain::{self, frf};

@@ -1,98 +1,43 @@
-//! The outputs of an analysis as text (pure writers: results in, text out; the caller writes the
-//! files): `frf.csv`, `modes.csv`, `displacement.csv` and the human report.
+//! An analysis's results as the rows of its output files (written by [`crate::export`]) and
+//! the human report.
 
 use super::{Analysis, Displacement, MAX_LOST_FRACTION};
-use firmware_core::centroid::Centroid;
+use crate::export::analysis::{ModeRow, Spectrum};
 
-/// `frf.csv`: `freq_hz,acc_h1_re,acc_h1_im,acc_h1_abs,acc_coherence,vis_h1_re,vis_h1_im,
-/// vis_h1_abs,vis_coherence`, one row per bin.
-pub fn frf_csv(a: &Analysis) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::from(
-        "freq_hz,acc_h1_re,acc_h1_im,acc_h1_abs,acc_coherence,vis_h1_re,vis_h1_im,vis_h1_abs,\
-         vis_coherence\n",
-    );
-    for (k, f) in a.acc_frf.freq_hz.iter().enumerate() {
-        let (ha, ca) = (a.acc_frf.h1[k], a.acc_frf.coherence[k]);
-        let (hv, cv) = (a.vis_frf.h1[k], a.vis_frf.coherence[k]);
-        let _ = writeln!(
-            s,
-            "{f},{},{},{},{ca},{},{},{},{cv}",
-            ha.re,
-            ha.im,
-            ha.norm(),
-            hv.re,
-            hv.im,
-            hv.norm()
-        );
-    }
-    s
-}
-
-/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr` (`system` is
-/// `accelerometer` or `vision`, `mode` is 1-based, `f_hz` and `amplitude` the picked peak,
-/// `damping` the ratio of a single-mode fit to the complex FRF in the band
-/// ([`super::modal::fit_mode`]; empty when the fit fails), `e2pr` empty without an exposure).
-pub fn modes_csv(a: &Analysis) -> String {
+/// The rows of `modes.csv` ([`crate::export::analysis::modes_csv`]): both systems' picked
+/// modes, each with the damping of a single-mode fit to the complex FRF in its band
+/// ([`super::modal::fit_mode`]; `None` when the fit fails).
+pub fn mode_rows(a: &Analysis) -> Vec<ModeRow> {
     use super::modal::{fit_mode, FrfForm};
-    use std::fmt::Write as _;
-    let mut s = String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
+    let mut rows = Vec::new();
     for (system, modes, frf) in [
         ("accelerometer", &a.acc_modes, &a.acc_frf),
         ("vision", &a.vis_modes, &a.vis_frf),
     ] {
         for (i, m) in modes.iter().enumerate() {
-            let e2pr = m
-                .e2pr
-                .map(|e| super::compensate::round_e2pr(e).to_string())
-                .unwrap_or_default();
-            let damping = fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
-                .map(|f| f.pole.damping.to_string())
-                .unwrap_or_default();
-            let _ = writeln!(
-                s,
-                "{system},{},{},{},{},{},{damping},{e2pr}",
-                i + 1,
-                m.band_hz.0,
-                m.band_hz.1,
-                m.f_hz,
-                m.amplitude
-            );
+            rows.push(ModeRow {
+                system,
+                mode: i + 1,
+                band_hz: m.band_hz,
+                f_hz: m.f_hz,
+                amplitude: m.amplitude,
+                damping: fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
+                    .map(|f| f.pole.damping)
+                    .ok(),
+                e2pr: m.e2pr,
+            });
         }
     }
-    s
+    rows
 }
 
-/// `displacement.csv`: `frame,t_s,cx,cy,pixels,flags,disp_mm,lost`, one row per frame. `t_s` is
-/// the frame time from the first accelerometer sample (`time_offset_s + frame / fc`); `cx`,
-/// `cy` are empty for lost frames, `flags` is the firmware-core flag byte, `lost` is 0 or 1.
-pub fn displacement_csv(
-    centroids: &[Centroid],
-    disp: &Displacement,
-    frame_rate_hz: f64,
-    time_offset_s: f64,
-) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::from("frame,t_s,cx,cy,pixels,flags,disp_mm,lost\n");
-    for (k, (c, (d, lost))) in centroids
-        .iter()
-        .zip(disp.mm.iter().zip(&disp.lost))
-        .enumerate()
-    {
-        let t = time_offset_s + k as f64 / frame_rate_hz;
-        let (cx, cy) = match c.position() {
-            Some((x, y)) => (x.to_string(), y.to_string()),
-            None => (String::new(), String::new()),
-        };
-        let _ = writeln!(
-            s,
-            "{k},{t},{cx},{cy},{},{},{d},{}",
-            c.pixels(),
-            c.flags.bits(),
-            u8::from(*lost)
-        );
+/// An H1 estimate as [`crate::export`] takes it.
+pub fn spectrum(f: &crate::chain::frf::Frf) -> Spectrum<'_> {
+    Spectrum {
+        freq_hz: &f.freq_hz,
+        h1: &f.h1,
+        coherence: &f.coherence,
     }
-    s
 }
 
 /// `x` with about 5 significant digits: fixed notation between 0.01 and 1e5, else scientific.

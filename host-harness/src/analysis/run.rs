@@ -5,6 +5,7 @@
 
 use super::compensate::{compensate, Compensated};
 use super::{Axis, DisplacementSettings, Settings};
+use crate::export::analysis as export;
 use crate::frames::{centroid_source, discover_frames, FrameSource};
 use crate::outdir::Staged;
 use firmware_core::centroid::CentroidConfig;
@@ -146,7 +147,7 @@ fn one_target(
     let time_offset_s = req.settings.time_offset_s;
     out.write(
         "displacement.csv",
-        super::displacement_csv(&centroids, &disp, fps, time_offset_s),
+        export::displacement_csv(&centroids, (&disp.mm, &disp.lost), fps, time_offset_s),
     )?;
     let (result, compensation) = analyze_and_compensate(req, &disp, (base, tip))?;
     let (a, failure) = match &result {
@@ -180,8 +181,9 @@ fn write_results(
     a: &super::Analysis,
     report: &mut String,
 ) -> anyhow::Result<()> {
-    out.write("frf.csv", super::frf_csv(a))?;
-    out.write("modes.csv", super::modes_csv(a))?;
+    let (acc, vis) = (super::spectrum(&a.acc_frf), super::spectrum(&a.vis_frf));
+    out.write("frf.csv", export::frf_csv(acc, vis))?;
+    out.write("modes.csv", export::modes_csv(&super::mode_rows(a)))?;
     let plots = write_plot(out.dir(), a, req.settings.frame_rate_hz)?;
     let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
     let names: Vec<String> = plots
@@ -222,7 +224,7 @@ fn append_compensation(
     report: &mut String,
 ) -> anyhow::Result<()> {
     if let Some(c) = c {
-        let p = out.write("compensation.csv", c.csv())?;
+        let p = out.write("compensation.csv", export::compensation_csv(&c.rows()))?;
         report.push_str(&c.report());
         report.push_str(&format!("  written: {}\n", p.display()));
     }

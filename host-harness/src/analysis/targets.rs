@@ -12,6 +12,8 @@
 use super::modal::{self, FrfForm};
 use super::{Analysis, Displacement, DisplacementSettings, Settings};
 use crate::bad_input;
+use crate::export::analysis::Spectrum;
+use crate::export::targets::{ShapeRow, Track};
 use crate::frames::FrameSource;
 use crate::frames::GreyFrame;
 use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Frame, Moments, MultiCentroider};
@@ -276,24 +278,9 @@ fn detect(
     Ok(mc.targets().iter().map(|t| t.centroid).collect())
 }
 
-/// One mode of one system (accelerometer: target 0; vision: targets 1..K).
-#[derive(Debug, Clone, PartialEq)]
-pub struct TargetMode {
-    /// 0 for the accelerometer, 1..K for the targets.
-    pub target: usize,
-    /// 1-based mode (band) number.
-    pub mode: usize,
-    /// The band, Hz.
-    pub band_hz: (f64, f64),
-    /// Fitted natural frequency, Hz (`None` when the fit failed).
-    pub f_hz: Option<f64>,
-    /// Picked |H1| at the band's peak.
-    pub amplitude: f64,
-    /// Fitted damping ratio.
-    pub damping: Option<f64>,
-    /// Exposure-to-period ratio at the peak (vision only).
-    pub e2pr: Option<f64>,
-}
+/// One mode of one system (accelerometer: target 0; vision: targets 1..K): a row of
+/// `modes.csv`.
+pub use crate::export::targets::ModeRow as TargetMode;
 
 /// Per target: the displacement and the analysis.
 #[derive(Debug)]
@@ -633,102 +620,49 @@ pub fn macs(a: &TargetAnalysis, reference: &ShapeReference) -> Vec<(usize, f64)>
     v
 }
 
-/// `frf.csv` of several targets: `target,freq_hz,h1_re,h1_im,h1_abs,coherence`, target 0 the
-/// accelerometer, then each analysed target, one row per bin.
-pub fn frf_csv(a: &TargetAnalysis) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::from("target,freq_hz,h1_re,h1_im,h1_abs,coherence\n");
-    let frfs = std::iter::once((0, &a.acc_frf)).chain(
-        a.analyses
-            .iter()
-            .enumerate()
-            .filter_map(|(t, an)| an.as_ref().ok().map(|an| (t + 1, &an.vis_frf))),
-    );
-    for (t, frf) in frfs {
-        for ((f, h), c) in frf.freq_hz.iter().zip(&frf.h1).zip(&frf.coherence) {
-            let _ = writeln!(s, "{t},{f},{},{},{},{c}", h.re, h.im, h.norm());
-        }
-    }
-    s
+/// The H1 of each `(target, H1)` of `frf.csv`: target 0 the accelerometer, then each analysed
+/// target.
+pub fn frf_spectra(a: &TargetAnalysis) -> Vec<(usize, Spectrum<'_>)> {
+    std::iter::once((0, super::spectrum(&a.acc_frf)))
+        .chain(a.analyses.iter().enumerate().filter_map(|(t, an)| {
+            an.as_ref()
+                .ok()
+                .map(|an| (t + 1, super::spectrum(&an.vis_frf)))
+        }))
+        .collect()
 }
 
-/// `displacement.csv` of several targets: `frame,t_s,target,cx,cy,pixels,disp_mm,lost`, one row
-/// per frame and target (`cx`, `cy` empty where the target was lost).
-pub fn displacement_csv(
-    tracks: &Tracks,
-    a: &TargetAnalysis,
-    frame_rate_hz: f64,
-    time_offset_s: f64,
-) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::from("frame,t_s,target,cx,cy,pixels,disp_mm,lost\n");
-    let frames = tracks.centroids.first().map_or(0, Vec::len);
-    for k in 0..frames {
-        let t_s = time_offset_s + k as f64 / frame_rate_hz;
-        for (t, (c, d)) in tracks.centroids.iter().zip(&a.displacements).enumerate() {
-            let c = &c[k];
-            let (cx, cy) = match c.position() {
-                Some((x, y)) => (x.to_string(), y.to_string()),
-                None => (String::new(), String::new()),
-            };
-            let _ = writeln!(
-                s,
-                "{k},{t_s},{},{cx},{cy},{},{},{}",
-                t + 1,
-                c.pixels(),
-                d.mm[k],
-                u8::from(d.lost[k])
-            );
-        }
-    }
-    s
+/// Each target's track for `displacement.csv`.
+pub fn track_rows<'a>(tracks: &'a Tracks, a: &'a TargetAnalysis) -> Vec<Track<'a>> {
+    tracks
+        .centroids
+        .iter()
+        .zip(&a.displacements)
+        .map(|(c, d)| Track {
+            centroids: c,
+            mm: &d.mm,
+            lost: &d.lost,
+        })
+        .collect()
 }
 
-/// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr` (f_hz and
-/// damping fitted; empty where the fit failed).
-pub fn modes_csv(modes: &[TargetMode]) -> String {
-    let opt = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
-    let mut s =
-        String::from("system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
-    for m in modes {
-        let system = if m.target == 0 {
-            "accelerometer"
-        } else {
-            "vision"
-        };
-        s.push_str(&format!(
-            "{system},{},{},{},{},{},{},{},{}\n",
-            m.target,
-            m.mode,
-            m.band_hz.0,
-            m.band_hz.1,
-            opt(m.f_hz),
-            m.amplitude,
-            opt(m.damping),
-            opt(m.e2pr.map(super::compensate::round_e2pr))
-        ));
-    }
-    s
-}
-
-/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs` (failed targets left out).
-pub fn shapes_csv(a: &TargetAnalysis, first: &[(f64, f64)]) -> String {
-    let mut s = String::from("mode,target,x_px,y_px,re,im,abs\n");
+/// The rows of `shapes.csv` (failed targets left out); `first` is each target's position in
+/// the first frame.
+pub fn shape_rows(a: &TargetAnalysis, first: &[(f64, f64)]) -> Vec<ShapeRow> {
+    let mut rows = Vec::new();
     for (b, shape) in a.shapes.iter().enumerate() {
         let Some((_, v)) = shape else { continue };
-        for (t, (c, &(x, y))) in v.iter().zip(first).enumerate() {
+        for (t, (c, &xy_px)) in v.iter().zip(first).enumerate() {
             let Some(c) = c else { continue };
-            s.push_str(&format!(
-                "{},{},{x},{y},{},{},{}\n",
-                b + 1,
-                t + 1,
-                c.re,
-                c.im,
-                c.norm()
-            ));
+            rows.push(ShapeRow {
+                mode: b + 1,
+                target: t + 1,
+                xy_px,
+                value: *c,
+            });
         }
     }
-    s
+    rows
 }
 
 #[cfg(test)]

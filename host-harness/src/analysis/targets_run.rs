@@ -6,8 +6,9 @@
 
 use super::run::{Outcome, Request, TargetsRequest};
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
-use crate::analysis::uff::{self, Dataset58, Dof};
 use crate::analysis::Axis;
+use crate::export::targets as export;
+use crate::export::uff::{self, Dataset58, Dof};
 use crate::frames::FrameSource;
 use crate::outdir::Staged;
 use std::fmt::Write as _;
@@ -89,29 +90,33 @@ fn write_tables(
     macs: Option<&[(usize, f64)]>,
 ) -> anyhow::Result<()> {
     let s = &req.settings;
-    out.write("modes.csv", targets::modes_csv(&a.modes))?;
-    out.write("shapes.csv", targets::shapes_csv(a, &tracks.first))?;
-    out.write("frf.csv", targets::frf_csv(a))?;
+    out.write("modes.csv", export::modes_csv(&a.modes))?;
+    out.write(
+        "shapes.csv",
+        export::shapes_csv(&targets::shape_rows(a, &tracks.first)),
+    )?;
+    out.write("frf.csv", export::frf_csv(targets::frf_spectra(a)))?;
     out.write(
         "displacement.csv",
-        targets::displacement_csv(tracks, a, s.frame_rate_hz, s.time_offset_s),
+        export::displacement_csv(
+            &targets::track_rows(tracks, a),
+            s.frame_rate_hz,
+            s.time_offset_s,
+        ),
     )?;
     out.write("frf.uff", uff_bytes(a)?)?;
     if a.compensation.iter().any(Option::is_some) {
-        let mut csv = String::from("target,mode,f_hz,e2pr,transfer,factor,compensated\n");
-        for (t, c) in a.compensation.iter().enumerate() {
-            if let Some(c) = c {
-                csv += &c.rows(&format!("{},", t + 1));
-            }
-        }
+        let rows: Vec<(usize, Vec<_>)> = a
+            .compensation
+            .iter()
+            .enumerate()
+            .filter_map(|(t, c)| c.as_ref().map(|c| (t + 1, c.rows())))
+            .collect();
+        let csv = export::compensation_csv(rows.iter().map(|(t, r)| (*t, r.as_slice())));
         out.write("compensation.csv", csv)?;
     }
     if let Some(m) = macs {
-        let mut csv = String::from("mode,mac\n");
-        for (mode, v) in m {
-            let _ = writeln!(csv, "{mode},{v}");
-        }
-        out.write("mac.csv", csv)?;
+        out.write("mac.csv", export::mac_csv(m))?;
     }
     Ok(())
 }

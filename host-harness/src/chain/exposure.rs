@@ -7,7 +7,7 @@
 //! firmware's ratio floor) nothing is corrected: [`ExposureCorrection::ratio`] is `None`.
 
 use crate::imaging::compensation::{correction_table, CompensationError, TransferSetup};
-use crate::imaging::{DiskTarget, Effects};
+use crate::imaging::{DiskTarget, Measurement};
 pub use crate::model::{equivalent_amplitude_px, MotionSegment};
 use firmware_core::exposure::{BoxTransfer, CorrectionTable, ExposureTransfer};
 
@@ -33,7 +33,7 @@ impl ExposureCorrection {
     /// centroid is measured too: with its threshold above the background it is not linear in
     /// the image either, and departs from the sinc by about 1 % at E2PR 0.3.
     pub fn for_segments(
-        effects: &Effects,
+        measurement: &Measurement,
         target: DiskTarget,
         threshold: u16,
         segments: &[MotionSegment],
@@ -49,8 +49,8 @@ impl ExposureCorrection {
         let mut eff = 0.0;
         for (a, w) in groups {
             let setup = TransferSetup {
-                frame_range_frac: effects.frame_range_frac,
-                ..TransferSetup::new(target, threshold, effects.centroid.mode(), a)
+                frame_range_frac: measurement.frame_range_frac,
+                ..TransferSetup::new(target, threshold, measurement.centroid.mode(), a)
             };
             let t = correction_table::<TABLE_NODES>(&setup, TABLE_STEP)?;
             for (i, r) in ratios.iter_mut().enumerate() {

@@ -106,7 +106,7 @@ pub struct Args {
     /// Several targets (2-32): numbered left to right (then top to bottom) in the first frame
     /// and followed frame to frame; writes modes.csv with a target column and the fitted
     /// damping, shapes.csv and frf.uff (docs/cli.md).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", value_parser = super::args::int_range(2..=32))]
     pub targets: Option<usize>,
     /// With --targets: how far a target may move between frames and still be the same, px
     /// (> 0; default 10).
@@ -114,7 +114,8 @@ pub struct Args {
         long,
         value_name = "PX",
         requires = "targets",
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = super::args::parse_gate_px
     )]
     pub gate_px: Option<f64>,
     /// With --targets: the target (1..K) co-located with the output accelerometer, compared
@@ -223,16 +224,8 @@ fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
     let Some(k) = args.targets else {
         return Ok(None);
     };
-    if !(2..=32).contains(&k) {
-        return Err(bad_input(format!("--targets {k}: between 2 and 32")));
-    }
+    // K in 2..=32 and a positive gate: checked by their value parsers
     let gate_px = args.gate_px.unwrap_or(10.0);
-    if !(gate_px.is_finite() && gate_px > 0.0) {
-        return Err(bad_input(format!(
-            "--gate-px {gate_px}: must be a positive number of pixels (how far a target may \
-             move between two frames and still be the same)"
-        )));
-    }
     let accel_target = args.accel_target.unwrap_or(k);
     if !(1..=k).contains(&accel_target) {
         return Err(bad_input(format!(

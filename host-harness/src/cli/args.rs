@@ -215,6 +215,24 @@ pub fn parse_bands(s: &str) -> Result<Bands, String> {
     Ok(Bands(out))
 }
 
+/// `--gate-px`: how far a target may move between two frames, a positive number of pixels.
+pub fn parse_gate_px(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "--gate-px {s}: must be a positive number of pixels (how far a target may move \
+             between two frames and still be the same)"
+        )),
+    }
+}
+
+/// An integer flag's range, checked by clap (the message names the flag and the range).
+pub fn int_range(
+    range: std::ops::RangeInclusive<u64>,
+) -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(range)
+}
+
 /// A rate as users write it: a decimal (`120`, `29.97`) or a ratio (`30000/1001`, as video
 /// containers state NTSC rates), finite and > 0.
 pub fn parse_rate(s: &str) -> Result<f64, String> {

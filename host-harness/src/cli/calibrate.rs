@@ -28,10 +28,10 @@ pub struct Args {
     #[arg(long = "free", value_name = "NAME=LO:HI", required = true, value_parser = calibrate::parse_free)]
     pub free: Vec<Free>,
     /// Runs per evaluation (the same runs every time: common random numbers).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u64).range(2..))]
     pub runs: u64,
     /// Grid points per free parameter in the coarse search (ends included, >= 2).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = super::args::int_range(2..=10_000))]
     pub grid: usize,
     /// Rounds of the local pattern search after the grid.
     #[arg(long, default_value_t = 8)]
@@ -47,13 +47,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => StudyConfig::from_toml_file(path)?,
         None => StudyConfig::preset(args.preset),
     };
-    if args.runs < 2 {
-        return Err(bad_input(format!(
-            "--runs {}: at least 2 runs per evaluation",
-            args.runs
-        )));
-    }
-    if args.grid < 2 || args.grid.pow(args.free.len() as u32) > 10_000 {
+    // --runs >= 2 and --grid >= 2 are checked by their value parsers
+    let points = args.grid.checked_pow(args.free.len() as u32);
+    if points.is_none_or(|p| p > 10_000) {
         return Err(bad_input(format!(
             "--grid {}: between 2 and a grid of at most 10 000 points over the {} free parameters",
             args.grid,

@@ -9,6 +9,7 @@
 
 use super::args::CentroidArgs;
 use crate::bad_input;
+use crate::export::signals;
 use crate::frames::{for_each_tiff_page, load_frame};
 use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::io::Write;
@@ -85,37 +86,18 @@ fn centroid_pages(
     (rows, result.err())
 }
 
-/// One CSV row: `file,cx,cy,pixels,flags` (cx, cy empty when there is no centroid).
-fn row(file: &str, c: &Centroid) -> [String; 5] {
-    let (cx, cy) = match c.position() {
-        Some((x, y)) => (x.to_string(), y.to_string()),
-        None => (String::new(), String::new()),
-    };
-    [
-        file.to_string(),
-        cx,
-        cy,
-        c.pixels().to_string(),
-        c.flags.bits().to_string(),
-    ]
-}
-
 /// Runs `host-harness centroid`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let config = args.centroid.config(args.saturation)?;
-    let stdout = std::io::stdout();
-    let mut out = csv::Writer::from_writer(stdout.lock());
-    out.write_record(["file", "cx", "cy", "pixels", "flags"])
-        .map_err(stdout_error)?;
-    out.flush().map_err(|e| stdout_error(e.into()))?;
+    let print = |bytes: Vec<u8>| super::stdout(&String::from_utf8_lossy(&bytes));
+    print(signals::centroid_header())?;
     let mut failed = 0usize;
     let (mut empty, mut flagged) = (0usize, 0usize);
     let mut frames = 0usize;
     for path in &args.files {
         let (rows, error) = centroid_pages(&config, path);
         for (label, c) in &rows {
-            out.write_record(row(label, c)).map_err(stdout_error)?;
-            out.flush().map_err(|e| stdout_error(e.into()))?;
+            print(signals::centroid_row(label, c))?;
             empty += usize::from(c.position().is_none());
             flagged += usize::from(!c.flags.is_clear());
         }
@@ -125,7 +107,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("error: {e:#}");
         }
     }
-    drop(out);
     let total = args.files.len();
     eprintln!(
         "centroid: {frames} frame(s) of {} of {total} file(s) measured ({empty} without centroid, \
@@ -139,9 +120,4 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )));
     }
     Ok(())
-}
-
-/// A failed write of the CSV to standard output, named as such.
-fn stdout_error(e: csv::Error) -> anyhow::Error {
-    anyhow::anyhow!("cannot write to standard output: {e}")
 }

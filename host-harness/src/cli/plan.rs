@@ -6,7 +6,7 @@
 use super::args::ModeArg;
 use crate::bad_input;
 use crate::imaging::DiskTarget;
-use crate::plan::{self, preset, Plan, PlanInput, PlanMode, PLAN_CSV_HEADER};
+use crate::plan::{self, preset, Plan, PlanInput, PlanMode};
 use crate::study::{Preset, StudyConfig};
 use firmware_core::centroid::Mode;
 use std::path::PathBuf;
@@ -339,16 +339,6 @@ pub fn table(input: &PlanInput, plans: &[Plan]) -> String {
     s
 }
 
-/// The CSV of the plans' rows (header [`PLAN_CSV_HEADER`]).
-pub fn csv(plans: &[Plan]) -> anyhow::Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(PLAN_CSV_HEADER)?;
-    for r in plans.iter().flat_map(|p| &p.rows) {
-        w.write_record(r.csv_record())?;
-    }
-    Ok(w.into_inner()?)
-}
-
 /// Runs `host-harness plan`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let input = resolve(&args)?;
@@ -371,8 +361,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     super::stdout(&text)?;
     if let Some(path) = &args.out {
         let config: Vec<&std::path::Path> = args.config.iter().map(|p| p.as_path()).collect();
-        crate::outdir::refuse_overwriting_input(path, &config)?;
-        crate::study::checkpoint::write_atomic(path, &csv(&plans)?)?;
+        plan::write_csv(path, &plans, &config)?;
         eprintln!("wrote {}", path.display());
     }
     Ok(())

@@ -3,12 +3,10 @@
 //! accelerometer CSV) that `host-harness analyze` can read.
 
 use crate::bad_input;
-use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};
-use crate::model::{self, grandstand};
-use crate::outdir::Staged;
-use crate::recording::{camera_path, save_grey_png, RecordingSpec};
-use crate::study::{run_rng, Preset};
-use std::path::{Path, PathBuf};
+use crate::recording::scene::Scene;
+use crate::recording::RecordingSpec;
+use crate::study::Preset;
+use std::path::PathBuf;
 
 /// Arguments of `host-harness render`.
 #[derive(Debug, clap::Args)]
@@ -46,7 +44,7 @@ pub struct Args {
     /// With --recording and the cantilever: K targets (2-16) along the beam, target k at
     /// k/K of its length (the last at the tip), each moving with the mode shapes there; the true
     /// shapes go into recording.toml.
-    #[arg(long, value_name = "K", requires = "recording")]
+    #[arg(long, value_name = "K", requires = "recording", value_parser = super::args::int_range(2..=16))]
     pub targets: Option<usize>,
     /// With --recording: also write the frames as a lossless video, `frames.mkv` (FFV1 in
     /// Matroska, bit-identical to the PNGs; needs the `ffmpeg` program).
@@ -83,19 +81,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Preset::Grandstand => RecordingSpec::grandstand(args.seed, exposure_ms),
         };
         check_recording_exposure(&args, spec.acquisition.fps)?;
-        let out = Staged::new(dir, args.force, "render --recording", &[])?;
         spec.read_noise = args.read_noise;
         spec.video = args.video;
-        let files = match args.targets {
-            None => crate::recording::write_recording_into(&spec, out.dir(), dir)?,
-            Some(k) => {
-                if args.preset != Preset::Cantilever {
-                    return Err(bad_input("--targets: only with --preset cantilever"));
-                }
-                crate::recording::targets::write_targets_recording(&spec, k, (out.dir(), dir))?
-            }
-        };
-        out.commit()?;
+        if args.targets.is_some() && args.preset != Preset::Cantilever {
+            return Err(bad_input("--targets: only with --preset cantilever"));
+        }
+        let files = crate::recording::write_recording_dir(&spec, args.targets, dir, args.force)?;
         return super::stdout(&format!(
             "wrote a synthetic {} recording in {}: {} frames of {} x {} px in {}, {}, {}; see {}\n",
             args.preset.name(),
@@ -112,13 +103,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             dir.join("README.txt").display()
         ));
     }
-    let scene = match args.preset {
-        Preset::Grandstand => grandstand_scene(&args, exposure_ms),
-        Preset::Cantilever => cantilever_scene(&args, exposure_ms)?,
-    };
-    let out = Staged::new(&args.out, args.force, "render", &[])?;
-    let written = write_frames(out.dir(), &scene, exposure_ms)?;
-    out.commit()?;
+    let scene = Scene::of(args.preset, args.seed, args.times.clone(), exposure_ms)?;
+    let written = scene.write_frames(&args.out, args.force, exposure_ms)?;
     let mut list = String::new();
     for p in &written {
         let name = p.file_name().unwrap_or_default();
@@ -143,87 +129,4 @@ fn check_recording_exposure(args: &Args, fps: f64) -> anyhow::Result<()> {
         ))),
         Some(_) => Ok(()),
     }
-}
-
-/// What the camera of a preset looks at: the target and its path.
-#[derive(Debug)]
-struct Scene {
-    /// The target.
-    target: DiskTarget,
-    /// Its motion; fine step `pad` is t = 0.
-    path: TargetPath,
-    /// Frame times, s: `--times` or the preset's default instants.
-    times: Vec<f64>,
-}
-
-/// Writes the sharp and the blurred frame at each time of `scene.times`.
-fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<Vec<PathBuf>> {
-    let Scene {
-        target,
-        path,
-        times,
-    } = scene;
-    let mut r = BlurRenderer::for_path(target, &path.path_px, 1);
-    let (w, h) = (r.width(), r.height());
-    let mut frame = vec![0u8; w * h];
-    let n = path.path_px.len();
-    let span = (n - 2 * path.pad) as f64 / path.fine_hz;
-    let mut written = Vec::new();
-    for &t in times {
-        let c = path.pad as f64 + t * path.fine_hz;
-        let (a, b) = path.window(c, exposure_ms);
-        if !(t.is_finite() && a >= 0.0 && b <= (n - 1) as f64) {
-            return Err(bad_input(format!(
-                "--times: {t} s is outside the simulated record (0 .. {span:.1} s) with this \
-                 exposure"
-            )));
-        }
-        for (label, a, b) in [
-            ("sharp".to_string(), c, c),
-            (format!("exp{exposure_ms}ms"), a, b),
-        ] {
-            r.render(a, b, &mut frame);
-            let p = out.join(format!("frame_t{t}_{label}.png"));
-            save_grey_png(&p, (w, h), &frame)?;
-            written.push(p);
-        }
-    }
-    Ok(written)
-}
-
-/// The grandstand of run 0 of `--seed`, as the study simulates it.
-fn grandstand_scene(args: &Args, exposure_ms: f64) -> Scene {
-    let fine_hz = grandstand::FS_HZ * grandstand::FINE as f64;
-    let pad = TargetPath::pad_for(exposure_ms, fine_hz);
-    let mut rng = run_rng(args.seed, 0);
-    let sim = grandstand::simulate(&mut rng, false, pad);
-    Scene {
-        target: grandstand::TARGET,
-        path: TargetPath {
-            path_px: sim
-                .fine_disp_m
-                .iter()
-                .map(|x| -x * 1000.0 * grandstand::PX_PER_MM)
-                .collect(),
-            pad,
-            fine_per_frame: grandstand::FINE,
-            fine_hz,
-        },
-        times: args
-            .times
-            .clone()
-            .unwrap_or_else(|| vec![33.2, 33.4, 33.6, 34.0]),
-    }
-}
-
-/// The nominal cantilever, as a synthetic recording simulates it.
-fn cantilever_scene(args: &Args, exposure_ms: f64) -> anyhow::Result<Scene> {
-    let spec = RecordingSpec::cantilever(args.seed, exposure_ms);
-    let sim = model::simulate(&spec.rig, &spec.acquisition, spec.seed)?;
-    let (path, _) = camera_path(&spec, &sim);
-    Ok(Scene {
-        target: spec.target,
-        path,
-        times: args.times.clone().unwrap_or_else(|| vec![1.0, 1.01, 1.02]),
-    })
 }

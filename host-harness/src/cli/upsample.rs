@@ -33,29 +33,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )));
         }
     }
-    crate::outdir::refuse_overwriting_input(&args.out, &[&args.input])?;
-    let cols = crate::csvio::read_columns(&args.input, &[args.col.as_str()])?;
-    let raw = &cols.values[0];
-    if let Some((i, v)) = raw.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(bad_input(format!(
-            "{}: row {}: `{}` is {v}, not a finite number",
-            args.input.display(),
-            i + 2,
-            args.col
-        )));
-    }
-    let up = crate::chain::resample::upsample_column(raw, args.from_hz, args.to_hz)?;
-    let (n, m) = (raw.len(), up.values.len());
-    let mut text = String::from("t_s,value\n");
-    for (k, v) in up.values.iter().enumerate() {
-        let t = k as f64 / args.to_hz;
-        if up.scale == 1.0 {
-            text.push_str(&format!("{t},{v}\n"));
-        } else {
-            text.push_str(&format!("{t},{}\n", *v as f64 * up.scale));
-        }
-    }
-    crate::study::checkpoint::write_atomic(&args.out, text.as_bytes())?;
+    let (n, m) = crate::analysis::columns::upsample(&crate::analysis::columns::UpsampleRequest {
+        input: args.input.clone(),
+        col: args.col.clone(),
+        from_hz: args.from_hz,
+        to_hz: args.to_hz,
+        out: args.out.clone(),
+    })?;
     eprintln!(
         "upsampled {n} samples at {} Hz to {m} samples at {} Hz -> {}",
         args.from_hz,

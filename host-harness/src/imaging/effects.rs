@@ -21,6 +21,7 @@ use rand_distr::{Distribution, StandardNormal};
 #[derive(Debug)]
 pub struct Camera {
     effects: Effects,
+    measurement: Measurement,
     config: CentroidConfig,
     plain: bool,
     w: usize,
@@ -37,11 +38,13 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// A `w x h` camera with `effects` and the binary threshold `threshold` on the 8-bit scale.
-    /// With effects, the seed of its noise streams is drawn from `rng` (nothing is drawn
-    /// otherwise, so the identity camera leaves a run's stream as it was).
+    /// A `w x h` camera with `effects`, measuring with `measurement` at the threshold
+    /// `threshold` on the 8-bit scale. With effects, the seed of its noise streams is drawn
+    /// from `rng` (nothing is drawn otherwise, so the identity camera leaves a run's stream as
+    /// it was).
     pub fn new(
         effects: &Effects,
+        measurement: &Measurement,
         threshold: u16,
         w: usize,
         h: usize,
@@ -50,7 +53,7 @@ impl Camera {
         let plain = effects.is_identity();
         let noise_seed: u64 = if plain { 0 } else { rng.random() };
         let config = CentroidConfig {
-            mode: effects.centroid.mode(),
+            mode: measurement.centroid.mode(),
             ..CentroidConfig::binary(if plain {
                 threshold
             } else {
@@ -64,6 +67,7 @@ impl Camera {
         };
         Camera {
             effects: effects.clone(),
+            measurement: *measurement,
             config,
             plain,
             w,
@@ -83,8 +87,8 @@ impl Camera {
     /// `target` seen by `renderer`, when the effects are the identity; otherwise nothing changes.
     pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
         if self.plain
-            && self.effects.fast_path
-            && self.effects.frame_range_frac.is_none()
+            && self.measurement.fast_path
+            && self.measurement.frame_range_frac.is_none()
             && self.config.mode == firmware_core::centroid::Mode::Binary
         {
             self.fast = Some(super::fastpath::FastDiskCamera::new(
@@ -132,7 +136,7 @@ impl Camera {
     /// `min + frac (max - min)` of the frame's grey levels (rounded down; a flat frame gets its
     /// one level, so nothing is above it and the frame is lost).
     fn config_for<P: Copy + Into<u32>>(&self, frame: &[P]) -> CentroidConfig {
-        match self.effects.frame_range_frac {
+        match self.measurement.frame_range_frac {
             None => self.config,
             Some(frac) => CentroidConfig {
                 threshold: frame_range_threshold(frame, frac),
@@ -154,7 +158,54 @@ pub fn frame_range_threshold<P: Copy + Into<u32>>(frame: &[P], frac: f64) -> u16
     threshold.min(u16::MAX as u32) as u16
 }
 
-/// The resolved effects (identity when built from default options).
+/// How the firmware measures a frame (the `[imaging]` fields that are not an effect on the
+/// image): which centroid, whether the identity camera may take the fast path (the same
+/// pixels either way), and the threshold rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement {
+    /// The firmware's centroid.
+    pub centroid: super::CentroidKind,
+    /// Whether identity effects with the binary centroid take the fast path.
+    pub fast_path: bool,
+    /// With [`super::ThresholdRule::FrameRange`], the fraction of each frame's grey-level range
+    /// the threshold sits at; `None`: the fixed threshold.
+    pub frame_range_frac: Option<f64>,
+}
+
+impl Measurement {
+    /// Resolves and checks the options; the message names the field.
+    pub fn from_options(o: &ImagingOptions) -> anyhow::Result<Measurement> {
+        let m = Measurement {
+            centroid: o.centroid.unwrap_or_default(),
+            fast_path: o.fast_path.unwrap_or(true),
+            frame_range_frac: match o.threshold_rule.unwrap_or_default() {
+                super::ThresholdRule::Fixed => None,
+                super::ThresholdRule::FrameRange => Some(o.threshold_frac.unwrap_or(0.5)),
+            },
+        };
+        if let Some(f) = m.frame_range_frac {
+            if !(f.is_finite() && f > 0.0 && f < 1.0) {
+                return Err(crate::bad_input(
+                    "imaging.threshold_frac: must be a fraction in (0, 1)",
+                ));
+            }
+        }
+        Ok(m)
+    }
+}
+
+impl Default for Measurement {
+    /// The binary centroid at a fixed threshold, fast path allowed.
+    fn default() -> Measurement {
+        Measurement {
+            centroid: super::CentroidKind::default(),
+            fast_path: true,
+            frame_range_frac: None,
+        }
+    }
+}
+
+/// The resolved image effects (identity when built from default options).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Effects {
     /// Contrast gain (1 = none).
@@ -172,24 +223,6 @@ pub struct Effects {
     pub shot_e_per_level: f64,
     /// Quantisation bits (8, 12 or 16).
     pub bits: u32,
-    /// The firmware's centroid (not an image effect: [`Effects::is_identity`] ignores it).
-    pub centroid: super::CentroidKind,
-    /// Whether identity effects with the binary centroid take the fast path (not an effect:
-    /// the same pixels either way).
-    pub fast_path: bool,
-    /// When the exposure happens relative to the frame's timestamp.
-    pub alignment: super::ExposureAlignment,
-    /// With [`super::ThresholdRule::FrameRange`], the fraction of each frame's grey-level range
-    /// the threshold sits at (not an effect on the image: [`Effects::is_identity`] ignores it).
-    pub frame_range_frac: Option<f64>,
-    /// The cantilever's projected tip rotation, beam lengths (not an image effect: it changes
-    /// the motion the camera sees; 0 = none).
-    pub tip_rotation_lever: f64,
-    /// The cantilever target's position along the beam, `x / L` (not an image effect; 1 = the
-    /// tip, with the accelerometer).
-    pub target_position_xi: f64,
-    /// What a lost frame's value becomes (not an image effect).
-    pub lost_frame_policy: crate::lost_frames::LostFramePolicy,
 }
 
 impl Effects {
@@ -203,16 +236,6 @@ impl Effects {
             read_noise: o.read_noise.unwrap_or(0.0),
             shot_e_per_level: o.shot_noise_e_per_level.unwrap_or(0.0),
             bits: o.bits.unwrap_or(8),
-            centroid: o.centroid.unwrap_or_default(),
-            fast_path: o.fast_path.unwrap_or(true),
-            alignment: o.exposure_alignment.unwrap_or_default(),
-            frame_range_frac: match o.threshold_rule.unwrap_or_default() {
-                super::ThresholdRule::Fixed => None,
-                super::ThresholdRule::FrameRange => Some(o.threshold_frac.unwrap_or(0.5)),
-            },
-            tip_rotation_lever: o.tip_rotation_lever.unwrap_or(0.0),
-            lost_frame_policy: o.lost_frame_policy.unwrap_or_default(),
-            target_position_xi: o.target_position_xi.unwrap_or(1.0),
         };
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         if !(e.gain.is_finite() && e.gain > 0.0) {
@@ -229,23 +252,6 @@ impl Effects {
         }
         if !(e.shot_e_per_level.is_finite() && e.shot_e_per_level >= 0.0) {
             return Err(bad("shot_noise_e_per_level", "must be >= 0"));
-        }
-        if !(e.tip_rotation_lever.is_finite() && e.tip_rotation_lever.abs() <= 0.5) {
-            return Err(bad(
-                "tip_rotation_lever",
-                "must be between -0.5 and 0.5 beam lengths",
-            ));
-        }
-        if !(e.target_position_xi > 0.0 && e.target_position_xi <= 1.0) {
-            return Err(bad(
-                "target_position_xi",
-                "must be a position along the beam in (0, 1] (1 = the tip)",
-            ));
-        }
-        if let Some(f) = e.frame_range_frac {
-            if !(f.is_finite() && f > 0.0 && f < 1.0) {
-                return Err(bad("threshold_frac", "must be a fraction in (0, 1)"));
-            }
         }
         if ![8, 12, 16].contains(&e.bits) {
             return Err(bad("bits", "must be 8, 12 or 16"));
@@ -546,15 +552,19 @@ mod tests {
         for bits in [8, 12] {
             let mut rng = ChaCha8Rng::seed_from_u64(1);
             let fixed = effects(|o| o.bits = Some(bits));
-            let mut camera = Camera::new(&fixed, 100, w, h, &mut rng);
+            let fixed_rule = Measurement::default();
+            let mut camera = Camera::new(&fixed, &fixed_rule, 100, w, h, &mut rng);
             let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
             assert!(c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
-            let range = effects(|o| {
-                o.bits = Some(bits);
-                o.threshold_rule = Some(ThresholdRule::FrameRange);
-            });
+            let range_options = ImagingOptions {
+                bits: Some(bits),
+                threshold_rule: Some(ThresholdRule::FrameRange),
+                ..ImagingOptions::default()
+            };
+            let range = Effects::from_options(&range_options).unwrap();
+            let range_rule = Measurement::from_options(&range_options).unwrap();
             assert_eq!(range.is_identity(), bits == 8);
-            let mut camera = Camera::new(&range, 100, w, h, &mut rng);
+            let mut camera = Camera::new(&range, &range_rule, 100, w, h, &mut rng);
             camera.use_fast_path(&target, &renderer);
             let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
             assert!(!c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
@@ -566,10 +576,10 @@ mod tests {
             // a short exposure sees the whole target: range 0..200, the same threshold of 100
             // as the fixed rule and the same centroid
             let short = camera.frame(&mut renderer, 0.0, 1.0).unwrap();
-            let mut camera = Camera::new(&fixed, 100, w, h, &mut rng);
+            let mut camera = Camera::new(&fixed, &fixed_rule, 100, w, h, &mut rng);
             assert_eq!(short, camera.frame(&mut renderer, 0.0, 1.0).unwrap());
         }
-        let bad = Effects::from_options(&ImagingOptions {
+        let bad = Measurement::from_options(&ImagingOptions {
             threshold_rule: Some(ThresholdRule::FrameRange),
             threshold_frac: Some(1.5),
             ..ImagingOptions::default()

@@ -15,7 +15,7 @@ pub mod fastpath;
 pub mod render;
 
 pub use crate::model::DiskTarget;
-pub use effects::{Camera, Effects};
+pub use effects::{Camera, Effects, Measurement};
 pub use render::BlurRenderer;
 
 use serde::{Deserialize, Serialize};
@@ -74,6 +74,61 @@ impl CentroidKind {
             CentroidKind::Binary => "binary",
             CentroidKind::Weighted => "weighted",
         }
+    }
+}
+
+/// What a study's `[imaging]` table resolves to, each part in its own type: the effects on the
+/// image, how the firmware measures it, when the exposure happens, where on the rig the camera
+/// looks, and what a lost frame becomes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setup {
+    /// The image-formation effects.
+    pub effects: Effects,
+    /// The centroid and its threshold rule.
+    pub measurement: Measurement,
+    /// When the exposure happens relative to the frame's timestamp.
+    pub alignment: ExposureAlignment,
+    /// Where the camera sees the cantilever (the tip, without a lever, by default; the
+    /// grandstand accepts only the default).
+    pub view: crate::model::cantilever::View,
+    /// What a lost frame's value becomes.
+    pub lost_frame_policy: crate::lost_frames::LostFramePolicy,
+}
+
+impl Setup {
+    /// Resolves and checks the options; the message names the field.
+    pub fn from_options(o: &ImagingOptions) -> anyhow::Result<Setup> {
+        let effects = Effects::from_options(o)?;
+        let view = crate::model::cantilever::View {
+            lever: o.tip_rotation_lever.unwrap_or(0.0),
+            xi: o.target_position_xi.unwrap_or(1.0),
+        };
+        let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
+        if !(view.lever.is_finite() && view.lever.abs() <= 0.5) {
+            return Err(bad(
+                "tip_rotation_lever",
+                "must be between -0.5 and 0.5 beam lengths",
+            ));
+        }
+        if !(view.xi > 0.0 && view.xi <= 1.0) {
+            return Err(bad(
+                "target_position_xi",
+                "must be a position along the beam in (0, 1] (1 = the tip)",
+            ));
+        }
+        Ok(Setup {
+            effects,
+            measurement: Measurement::from_options(o)?,
+            alignment: o.exposure_alignment.unwrap_or_default(),
+            view,
+            lost_frame_policy: o.lost_frame_policy.unwrap_or_default(),
+        })
+    }
+
+    /// Whether the camera looks at the tip without a lever (the only view the grandstand
+    /// has).
+    pub fn sees_the_tip(&self) -> bool {
+        self.view.lever == 0.0 && self.view.xi == 1.0
     }
 }
 

@@ -176,6 +176,23 @@ pub fn simulate_at(
     simulate_seen(rig, acq, seed, &views)
 }
 
+/// The factor that takes the unnormalised inverse transforms of [`simulate_seen`] to
+/// physical units: the cantilever's tip motion scaled to its peak to peak (`tip_pp_mm`), the
+/// grandstand's `1 / n`.
+fn output_scale(rig: &Rig, tip_mm: &[Complex64], n: usize) -> f64 {
+    match rig {
+        Rig::Cantilever(cantilever::Rig { tip_pp_mm, .. }) => {
+            let (lo, hi) = tip_mm
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v.re), b.max(v.re))
+                });
+            tip_pp_mm / (hi - lo)
+        }
+        Rig::Grandstand(_) => 1.0 / n as f64,
+    }
+}
+
 /// [`simulate`], and what each of `views` sees of the cantilever (mm on the fine time base, as
 /// `tip_mm`; [`cantilever::View`]: a position along the beam and a projected rotation).
 pub fn simulate_seen(
@@ -235,17 +252,7 @@ pub fn simulate_seen(
         ifft.process(buf);
     }
     // the inverse is unnormalised: one common factor, removed by the scaling below
-    let scale = match rig {
-        Rig::Cantilever(cantilever::Rig { tip_pp_mm, .. }) => {
-            let (lo, hi) = tip_mm
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                    (a.min(v.re), b.max(v.re))
-                });
-            tip_pp_mm / (hi - lo)
-        }
-        Rig::Grandstand(_) => 1.0 / n as f64,
-    };
+    let scale = output_scale(rig, &tip_mm, n);
     let step = acq.fine_per_sample;
     let clean_in: Vec<f64> = input.iter().step_by(step).map(|v| v.re * scale).collect();
     let clean_tip: Vec<f64> = tip_acc.iter().step_by(step).map(|v| v.re * scale).collect();

@@ -12,6 +12,7 @@
 //! Frame `k` is at `t = k / fps`, its exposure centred on it. A positive tip displacement moves the
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
+pub mod scene;
 pub mod targets;
 
 use crate::bad_input;
@@ -245,111 +246,7 @@ pub struct RecordingFiles {
     pub frame_count: usize,
 }
 
-/// One mode of the simulated structure in `recording.toml` (`[[modes]]`): the cantilever's
-/// participation `g_phi` or the grandstand's modal mass, whichever the rig has.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct ModeRow {
-    /// Natural frequency, Hz.
-    pub f_hz: f64,
-    /// Damping ratio.
-    pub zeta: f64,
-    /// Cantilever: participation times tip shape.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub g_phi: Option<f64>,
-    /// Grandstand: modal mass, kg.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub mass_kg: Option<f64>,
-}
-
-/// The true shape of one mode across the targets (`[[target_shapes]]`).
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct TargetShape {
-    /// Mode number, from 1.
-    pub mode: usize,
-    /// Per target, relative to the tip, unit largest modulus.
-    pub shape: Vec<f64>,
-}
-
-/// Everything `recording.toml` states: the run's parameters, the rig's, the targets' (when
-/// several) and the modes; written by `toml::to_string` (keys before tables).
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct RecordingToml {
-    /// `cantilever` or `grandstand`.
-    pub preset: &'static str,
-    /// Seed of the run.
-    pub seed: u64,
-    /// Exposure, ms.
-    pub exposure_ms: f64,
-    /// Frame rate, Hz.
-    pub fps: f64,
-    /// Transducer rate, Hz.
-    pub fs: f64,
-    /// Frames.
-    pub frames: usize,
-    /// Transducer samples.
-    pub samples: usize,
-    /// Scale, mm per pixel.
-    pub mm_per_px: f64,
-    /// Target radius, px.
-    pub radius_px: f64,
-    /// Target grey level.
-    pub level: f64,
-    /// Target edge sigma, px.
-    pub edge_sigma_px: f64,
-    /// Threshold of the `README.txt` command.
-    pub threshold: u16,
-    /// Frame width and height, px.
-    pub frame_size: [usize; 2],
-    /// Read noise, grey levels.
-    pub read_noise: f64,
-    /// Cantilever: excitation band, Hz.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub band_hz: Option<[f64; 2]>,
-    /// Cantilever: tip motion, mm peak to peak.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub tip_pp_mm: Option<f64>,
-    /// Cantilever: accelerometer noise, g RMS.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub accel_noise_g: Option<f64>,
-    /// Cantilever standing upright: the tip accelerometer's tilt gain.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub accel_tilt_gain: Option<f64>,
-    /// Cantilever standing upright: its length, m.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub beam_length_m: Option<f64>,
-    /// Grandstand: force peak, N.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub f0_n: Option<f64>,
-    /// Grandstand: pulse rate, 1/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub alpha: Option<f64>,
-    /// Grandstand: pulse start, s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub t0_s: Option<f64>,
-    /// Grandstand: process noise, N.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub process_noise_n: Option<f64>,
-    /// Grandstand: load cell SNR.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub force_snr: Option<f64>,
-    /// Grandstand: accelerometer SNR.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub accel_snr: Option<f64>,
-    /// Several targets: how many.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub targets: Option<usize>,
-    /// Several targets: their positions along the beam, `x / L`, left to right.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub target_xi: Option<Vec<f64>>,
-    /// Several targets: their columns in the frame, px.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub target_x_px: Option<Vec<f64>>,
-    /// The modes of the structure.
-    pub modes: Vec<ModeRow>,
-    /// Several targets: the true shapes.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub target_shapes: Vec<TargetShape>,
-}
+pub use crate::export::recording::{ModeRow, RecordingToml, TargetShape};
 
 impl RecordingToml {
     /// The parameters of a recording of `spec` with frames of `frame_size` (one target).
@@ -430,19 +327,29 @@ impl RecordingToml {
         }
         t
     }
-
-    /// The file's text: a comment line, then `toml::to_string`.
-    pub fn to_text(&self) -> anyhow::Result<String> {
-        let body = toml::to_string(self).context("cannot write recording.toml")?;
-        Ok(format!(
-            "# synthetic recording written by host-harness render --recording\n{body}"
-        ))
-    }
 }
 
 /// `recording.toml` of a one-target recording of `spec` ([`RecordingToml`]).
 pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> anyhow::Result<String> {
     RecordingToml::of(spec, frame_size).to_text()
+}
+
+/// Writes the recording of `spec` (with `targets`: K targets along the cantilever,
+/// [`targets::write_targets_recording`]) into the new directory `dir`, staged and moved into
+/// place (`force`: replacing an earlier `render --recording` output there).
+pub fn write_recording_dir(
+    spec: &RecordingSpec,
+    targets: Option<usize>,
+    dir: &Path,
+    force: bool,
+) -> anyhow::Result<RecordingFiles> {
+    let out = crate::outdir::Staged::new(dir, force, "render --recording", &[])?;
+    let files = match targets {
+        None => write_recording_into(spec, out.dir(), dir)?,
+        Some(k) => targets::write_targets_recording(spec, k, (out.dir(), dir))?,
+    };
+    out.commit()?;
+    Ok(files)
 }
 
 /// The analyze arguments for a recording written in `dir`.
@@ -563,10 +470,11 @@ pub fn write_recording_into(
         sink.put(k, &img)?;
     }
     let (frames_dir, video) = sink.finish()?;
-    let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
-    for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
-        let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
-    }
+    let csv = crate::export::recording::accel_csv(
+        spec.rig.input_col(),
+        (&run.input, &run.tip_acc),
+        spec.acquisition.fs,
+    );
     let accel_csv = dir.join("accel.csv");
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", accel_csv.display()))?;

@@ -8,7 +8,6 @@ use super::{RecordingFiles, RecordingSpec};
 use crate::imaging::{BlurRenderer, TargetPath};
 use crate::model::{self, cantilever, Rig};
 use anyhow::Context as _;
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// Positions `xi = k / K`, `k = 1..=K`, along the beam.
@@ -160,10 +159,11 @@ fn write_texts(
     video: Option<&Path>,
     (write_to, dir): (&Path, &Path),
 ) -> anyhow::Result<Vec<String>> {
-    let mut csv = format!("t_s,{},tip_acc\n", spec.rig.input_col());
-    for (j, (b, t)) in run.input.iter().zip(&run.tip_acc).enumerate() {
-        let _ = writeln!(csv, "{},{b},{t}", j as f64 / spec.acquisition.fs);
-    }
+    let csv = crate::export::recording::accel_csv(
+        spec.rig.input_col(),
+        (&run.input, &run.tip_acc),
+        spec.acquisition.fs,
+    );
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
     let targets = layout.xi.len();

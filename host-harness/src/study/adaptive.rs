@@ -14,7 +14,7 @@ use super::aggregate::{picks, SYSTEMS};
 use super::{RunRecord, StudyConfig};
 use crate::bad_input;
 use crate::chain::exposure::ExposureCorrection;
-use crate::report::System;
+use crate::export::study::{AdaptiveRow, System};
 use crate::uncertainty::{
     coverage_summary, AdaptiveQuantity, BatchResult, IntervalKind, Stability,
 };
@@ -271,46 +271,20 @@ pub fn outcome(
     last.ok_or_else(|| bad_input("no whole batch"))
 }
 
-/// `adaptive.csv` bytes: per watched quantity the procedure's state at the stop point.
+/// `adaptive.csv` bytes ([`crate::export::study::adaptive_csv`]) of `o`.
 pub fn adaptive_csv(o: &Outcome) -> Vec<u8> {
-    let mut s = String::from(
-        "system,exposure_ms,mode,quantity,batches,runs,estimate,std_uncertainty,delta,\
-         twice_s_estimate,twice_s_u,twice_s_lo,twice_s_hi,stable\n",
-    );
-    for q in &o.quantities {
-        let k = &q.key;
-        let _ = write!(
-            s,
-            "{},{},{},{},",
-            k.system.name(),
-            k.exposure_ms,
-            k.mode + 1,
-            if k.amplitude { "a" } else { "f_hz" }
-        );
-        match &q.status {
-            Some(st) => {
-                let t = &st.twice_std;
-                let _ = writeln!(
-                    s,
-                    "{},{},{},{},{},{},{},{},{},{}",
-                    st.batches,
-                    st.runs,
-                    st.estimate,
-                    st.std_uncertainty,
-                    st.delta,
-                    t.estimate,
-                    t.std_uncertainty,
-                    t.lo,
-                    t.hi,
-                    st.is_stable()
-                );
-            }
-            None => {
-                let _ = writeln!(s, "{},{},,,,,,,,not assessable", o.batches, o.runs);
-            }
-        }
-    }
-    s.into_bytes()
+    let rows: Vec<AdaptiveRow<'_>> = o
+        .quantities
+        .iter()
+        .map(|q| AdaptiveRow {
+            system: q.key.system,
+            exposure_ms: q.key.exposure_ms,
+            mode: q.key.mode + 1,
+            quantity: if q.key.amplitude { "a" } else { "f_hz" },
+            stability: q.status.as_ref(),
+        })
+        .collect();
+    crate::export::study::adaptive_csv(&rows, (o.batches, o.runs))
 }
 
 /// The lines printed after an adaptive study: the stop point, then per quantity the achieved

@@ -4,26 +4,13 @@
 
 use super::{checkpoint::files, PeakRecord, RunRecord, Scenario, StudyConfig, SystemRecord};
 use crate::chain::exposure::ExposureCorrection;
-use crate::report::{CoverageRow, FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::export::study::{CoverageRow, FrfBandRow, RealizationRow, SummaryRow, System};
 use crate::uncertainty::coverage_summary;
 use crate::{bad_input, stats};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Lost frames of one run at one exposure (a row of `lost_frames.csv`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LostFrames {
-    /// Run index.
-    pub run: u64,
-    /// Exposure time, ms.
-    pub exposure_ms: f64,
-    /// Frames without a centroid (filled by interpolation).
-    pub lost: u64,
-    /// Frames in the record.
-    pub frames: u64,
-    /// More than 5 % lost: the run is left out at this exposure.
-    pub failed: bool,
-}
+pub use crate::export::study::LostFrames;
 
 /// Lost frames of all runs at one exposure.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -425,18 +412,6 @@ pub fn aggregate_with(
     Ok(out)
 }
 
-/// `lost_frames.csv` bytes: `run,exposure_ms,lost_frames,frames,failed`.
-pub fn lost_frames_csv(lost: &[LostFrames]) -> Vec<u8> {
-    let mut s = String::from("run,exposure_ms,lost_frames,frames,failed\n");
-    for l in lost {
-        s.push_str(&format!(
-            "{},{},{},{},{}\n",
-            l.run, l.exposure_ms, l.lost, l.frames, l.failed
-        ));
-    }
-    s.into_bytes()
-}
-
 /// Writes the CSV outputs (and returns their paths). Plots are written separately.
 pub fn write_outputs(
     dir: &Path,
@@ -446,20 +421,29 @@ pub fn write_outputs(
     let items: [(&str, Vec<u8>); 5] = [
         (
             files::SUMMARY,
-            crate::report::summary_csv(&out.summary, scenario.with_chi()),
+            crate::export::study::summary_csv(&out.summary, scenario.with_chi()),
         ),
         (
             files::REALIZATIONS,
-            crate::report::realizations_csv(&out.realizations),
+            crate::export::study::realizations_csv(&out.realizations),
         ),
-        (files::FRF_BAND, crate::report::frf_band_csv(&out.frf_band)),
-        (files::LOST_FRAMES, lost_frames_csv(&out.lost)),
-        (files::COVERAGE, crate::report::coverage_csv(&out.coverage)),
+        (
+            files::FRF_BAND,
+            crate::export::study::frf_band_csv(&out.frf_band),
+        ),
+        (
+            files::LOST_FRAMES,
+            crate::export::study::lost_frames_csv(&out.lost),
+        ),
+        (
+            files::COVERAGE,
+            crate::export::study::coverage_csv(&out.coverage),
+        ),
     ];
     let mut paths = Vec::new();
     for (name, bytes) in items {
         let p = dir.join(name);
-        super::checkpoint::write_atomic(&p, &bytes)?;
+        crate::export::write_atomic(&p, &bytes)?;
         paths.push(p);
     }
     Ok(paths)

@@ -9,7 +9,7 @@
 use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
 use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
-use crate::imaging::{Effects, TargetPath};
+use crate::imaging::{Setup, TargetPath};
 use crate::model::cantilever::{
     Rig, BANDS, FINE_PER_SAMPLE, FPS, FRAMES, FS_HZ, MM_PER_PX, SAMPLES, TARGET, THRESHOLD, WELCH,
 };
@@ -33,8 +33,9 @@ pub const ACQUISITION: Acquisition = Acquisition {
 /// The cantilever study.
 #[derive(Debug)]
 pub struct Cantilever {
-    /// Optional image-formation effects (identity by default: the fast 8-bit path).
-    effects: Effects,
+    /// The resolved `[imaging]` table: effects (identity by default: the fast 8-bit path),
+    /// centroid, exposure alignment, view and lost-frame policy.
+    imaging: Setup,
     /// The target and the binary threshold (the rig's, or the study file's `[imaging]`).
     target: crate::imaging::DiskTarget,
     threshold: u16,
@@ -50,7 +51,7 @@ impl Cantilever {
 
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
-        let effects = Effects::from_options(&cfg.imaging)?;
+        let imaging = Setup::from_options(&cfg.imaging)?;
         let (target, threshold) = cfg.imaging.target_and_threshold(TARGET, THRESHOLD)?;
         let period_ms = 1000.0 / FPS;
         if let Some(e) = cfg.exposures_ms.iter().find(|e| **e >= period_ms) {
@@ -59,7 +60,7 @@ impl Cantilever {
             )));
         }
         Ok(Cantilever {
-            effects,
+            imaging,
             target,
             threshold,
             exposures_ms: cfg.exposures_ms.clone(),
@@ -93,7 +94,7 @@ impl Scenario for Cantilever {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            &self.effects,
+            &self.imaging.measurement,
             self.target,
             self.threshold,
             &crate::model::cantilever::nominal_motion_segments(&ACQUISITION)?,
@@ -111,10 +112,7 @@ impl Scenario for Cantilever {
         // what the camera sees: the tip's deflection, or the target's position along the beam,
         // plus the projected rotation when a lever is set (the same run: the transducer records
         // are the same either way)
-        let (lever, xi) = (
-            self.effects.tip_rotation_lever,
-            self.effects.target_position_xi,
-        );
+        let (lever, xi) = (self.imaging.view.lever, self.imaging.view.xi);
         let (sim, seen) = if lever == 0.0 && xi == 1.0 {
             (
                 model::simulate(&model::Rig::Cantilever(rig), &ACQUISITION, seed)?,
@@ -137,7 +135,7 @@ impl Scenario for Cantilever {
         let fine_hz = FPS * sim.fine_per_frame as f64;
         let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
         // an exposure starting at the trigger reaches a whole exposure past a frame
-        let reach_ms = match self.effects.alignment {
+        let reach_ms = match self.imaging.alignment {
             crate::imaging::ExposureAlignment::Centred => max_exp,
             crate::imaging::ExposureAlignment::Trigger => 2.0 * max_exp,
         };
@@ -153,7 +151,7 @@ impl Scenario for Cantilever {
             Box::new(Up::try_new(FRAMES, SAMPLES).map_err(|e| anyhow::anyhow!("upsampler: {e}"))?);
         let mut acc = vec![0.0f32; SAMPLES];
         let camera = Filming {
-            effects: &self.effects,
+            imaging: &self.imaging,
             target: &self.target,
             threshold: self.threshold,
             block: 16,
@@ -262,7 +260,9 @@ mod tests {
                 .summary
                 .iter()
                 .find(|r| {
-                    r.system == crate::report::System::Vision && r.exposure_ms == e && r.mode == 1
+                    r.system == crate::export::study::System::Vision
+                        && r.exposure_ms == e
+                        && r.mode == 1
                 })
                 .unwrap();
             let x = std::f64::consts::PI * 7.1 * e / 1000.0;
@@ -299,7 +299,7 @@ mod tests {
                         out.summary
                             .iter()
                             .find(|r| {
-                                r.system == crate::report::System::Vision
+                                r.system == crate::export::study::System::Vision
                                     && r.exposure_ms == 2.0
                                     && r.mode == mode
                             })

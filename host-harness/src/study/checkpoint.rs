@@ -184,32 +184,6 @@ pub fn refuse_foreign_entries(dir: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same directory, synced, renamed
-/// over `path`, and the directory synced, so that a reader (or a crash) sees the old file or the
-/// new one, never a part.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    use std::io::Write as _;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        crate::failpoint::hit("atomic-synced");
-        std::fs::rename(&tmp, path)?;
-        crate::failpoint::hit("atomic-renamed");
-        if let Ok(d) = std::fs::File::open(dir) {
-            d.sync_all().ok();
-        }
-        Ok(())
-    };
-    write().map_err(|e| {
-        std::fs::remove_file(&tmp).ok();
-        anyhow::Error::new(e).context(format!("cannot write {}", path.display()))
-    })
-}
-
 /// An exclusive lock on a study directory, held while the value lives (`flock` on
 /// `DIR/.lock`, which also records the holder's pid).
 #[derive(Debug)]

@@ -7,7 +7,7 @@
 use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
 use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
-use crate::imaging::{Effects, TargetPath};
+use crate::imaging::{Setup, TargetPath};
 use crate::model::grandstand::{
     simulate, BANDS, FINE, FS_HZ, N, NFFT, NPERSEG, PX_PER_MM, TARGET, THRESHOLD, WELCH,
 };
@@ -27,8 +27,9 @@ fn gcd(a: usize, b: usize) -> usize {
 /// The grandstand study.
 #[derive(Debug)]
 pub struct Grandstand {
-    /// Optional image-formation effects (identity by default: the fast 8-bit path).
-    effects: Effects,
+    /// The resolved `[imaging]` table: effects (identity by default: the fast 8-bit path),
+    /// centroid, exposure alignment, view and lost-frame policy.
+    imaging: Setup,
     exposures_ms: Vec<f64>,
     /// Path segments per precomputed ramp block: the largest step that divides the frame
     /// period and every half exposure (in fine steps), so windows cover whole blocks.
@@ -49,7 +50,7 @@ impl Grandstand {
         let dt_ms = 1000.0 / (FS_HZ * FINE as f64);
         let max_exp = self.exposures_ms.iter().cloned().fold(0.0, f64::max);
         // an exposure starting at the trigger reaches a whole exposure past the last frame
-        let reach = match self.effects.alignment {
+        let reach = match self.imaging.alignment {
             crate::imaging::ExposureAlignment::Centred => max_exp / 2.0,
             crate::imaging::ExposureAlignment::Trigger => max_exp,
         };
@@ -63,8 +64,8 @@ impl Grandstand {
 
     /// Builds the scenario from a resolved configuration.
     pub fn new(cfg: &StudyConfig) -> anyhow::Result<Self> {
-        let effects = Effects::from_options(&cfg.imaging)?;
-        if effects.tip_rotation_lever != 0.0 || effects.target_position_xi != 1.0 {
+        let imaging = Setup::from_options(&cfg.imaging)?;
+        if !imaging.sees_the_tip() {
             return Err(crate::bad_input(
                 "imaging.tip_rotation_lever, imaging.target_position_xi: only the cantilever \
                  has a beam to place the target along",
@@ -82,7 +83,7 @@ impl Grandstand {
             };
         }
         Ok(Grandstand {
-            effects,
+            imaging,
             block: block.max(1),
             exposures_ms: cfg.exposures_ms.clone(),
             fixed: cfg.fixed_structure,
@@ -128,7 +129,7 @@ impl Scenario for Grandstand {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            &self.effects,
+            &self.imaging.measurement,
             self.target,
             self.threshold,
             &crate::model::grandstand::nominal_motion_segments(),
@@ -160,7 +161,7 @@ impl Scenario for Grandstand {
             fine_hz: FS_HZ * FINE as f64,
         };
         let camera = Filming {
-            effects: &self.effects,
+            imaging: &self.imaging,
             target: &self.target,
             threshold: self.threshold,
             block: self.block,

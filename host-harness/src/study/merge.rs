@@ -113,7 +113,7 @@ pub fn write_merged(out: &Path, m: &Merged) -> anyhow::Result<()> {
     }
     super::checkpoint::refuse_foreign_entries(out)?;
     // each file whole or absent; runs.jsonl last, so that a directory holding it is complete
-    let write = super::checkpoint::write_atomic;
+    let write = crate::export::write_atomic;
     write(&out.join(files::CONFIG), m.config.to_toml().as_bytes())?;
     write(
         &out.join(files::REVISION),

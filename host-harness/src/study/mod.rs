@@ -211,8 +211,8 @@ pub fn measure_vision<E: std::fmt::Display>(
 /// The camera of a scenario: effects, target and threshold, and the renderer's ramp block.
 #[derive(Debug, Clone, Copy)]
 pub struct Filming<'a> {
-    /// Image-formation effects (and the centroid).
-    pub effects: &'a crate::imaging::Effects,
+    /// The resolved `[imaging]` table.
+    pub imaging: &'a crate::imaging::Setup,
     /// The target.
     pub target: &'a crate::imaging::DiskTarget,
     /// Centroid threshold on the 8-bit scale.
@@ -239,7 +239,9 @@ impl Filming<'_> {
             crate::imaging::BlurRenderer::for_path(self.target, &path.path_px, self.block);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let mut camera = crate::imaging::Camera::new(self.effects, self.threshold, w, h, rng);
+        let im = self.imaging;
+        let mut camera =
+            crate::imaging::Camera::new(&im.effects, &im.measurement, self.threshold, w, h, rng);
         camera.use_fast_path(self.target, &renderer);
         let mut disp = vec![0.0f64; frames];
         let mut valid = vec![false; frames];
@@ -248,12 +250,12 @@ impl Filming<'_> {
             camera.start_exposure(ei);
             vision.push(measure_vision(
                 exp,
-                self.effects.lost_frame_policy,
+                self.imaging.lost_frame_policy,
                 &mut disp,
                 &mut valid,
                 bands,
                 |k| {
-                    let (a, b) = path.aligned_window(k, exp, self.effects.alignment);
+                    let (a, b) = path.aligned_window(k, exp, self.imaging.alignment);
                     camera.frame(&mut renderer, a, b)
                 },
                 |cy| to_disp(cy as f64 - rest_y),
@@ -292,7 +294,7 @@ pub fn finish(
     };
     if let Some(a) = cfg.adaptive.as_ref().filter(|a| from_start(a.batch)) {
         let o = adaptive::outcome(cfg, a, scenario.bands().len(), &correction, records)?;
-        checkpoint::write_atomic(&out.join(files::ADAPTIVE), &adaptive::adaptive_csv(&o))?;
+        crate::export::write_atomic(&out.join(files::ADAPTIVE), &adaptive::adaptive_csv(&o))?;
         records = &records[..o.runs];
         adaptive_report = Some(adaptive::report(&o, a));
     }
@@ -314,7 +316,7 @@ pub fn finish(
     use std::fmt::Write as _;
     let mut text = format!(
         "{}\n",
-        crate::report::table(&outputs.summary, scenario.amplitude_unit(), cfg.coverage)
+        crate::export::study::table(&outputs.summary, scenario.amplitude_unit(), cfg.coverage)
     );
     let _ = writeln!(text, "vision_compensated: {}", outputs.correction);
     for l in aggregate::lost_by_exposure(&outputs) {

@@ -164,15 +164,15 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
     let runs_path = exec.out.join(files::RUNS);
     if !(runs_path.exists() || cfg_path.exists()) {
         checkpoint::refuse_foreign_entries(&exec.out)?;
-        checkpoint::write_atomic(
+        crate::export::write_atomic(
             &exec.out.join(files::REVISION),
             format!("{MODEL_REVISION}\n").as_bytes(),
         )?;
         if exec.shard != Shard::ALL {
             let shard_text = format!("{}/{}\n", exec.shard.index, exec.shard.count);
-            checkpoint::write_atomic(&exec.out.join(files::SHARD), shard_text.as_bytes())?;
+            crate::export::write_atomic(&exec.out.join(files::SHARD), shard_text.as_bytes())?;
         }
-        checkpoint::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
+        crate::export::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
         return Ok((lock, Vec::new()));
     }
     if !exec.resume {
@@ -185,7 +185,7 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
     // only the reporting (the coverage probability) or the run count changed: record it
     let old_text = std::fs::read_to_string(&cfg_path).unwrap_or_default();
     if old_text != cfg.to_toml() {
-        checkpoint::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
+        crate::export::write_atomic(&cfg_path, cfg.to_toml().as_bytes())?;
     }
     let ck = checkpoint::read_checkpoint(&runs_path)?;
     if ck.torn_tail {

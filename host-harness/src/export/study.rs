@@ -1,8 +1,9 @@
-//! Study outputs as rows, CSV bytes and a printed table. Writers here are pure (results in,
-//! bytes out); putting the bytes on disk is the caller's separate step, so they are testable
-//! without the disk. Plots live in [`crate::plots`].
+//! A study's outputs: `summary.csv`, `coverage.csv`, `realizations.csv`, `frf_band.csv`,
+//! `lost_frames.csv`, `adaptive.csv` as rows -> bytes, and the table a study prints. Plots live
+//! in [`crate::plots`].
 
-use crate::uncertainty::CoverageSummary;
+use super::{csv_bytes, num};
+use crate::uncertainty::{CoverageSummary, Stability};
 use std::fmt::Write as _;
 
 /// Which measurement system a row describes.
@@ -105,36 +106,10 @@ pub struct FrfBandRow {
     pub p95_abs: f64,
 }
 
-/// Formats a float for CSV: shortest representation that round-trips (Rust's `Display`), so
-/// files are exact and identical for identical numbers. An undefined value (a standard deviation
-/// of one run, a mean of none) is an empty cell, never `NaN`.
-fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        String::new()
-    }
-}
-
 /// The coverage columns appended to `summary.csv`: the standard uncertainty of the mean and
 /// the shortest coverage interval (JCGM 101 7.6, 7.7.2) of the amplitude, then of the
 /// frequency. The names say 95 whatever the coverage probability (recorded in `config.toml`).
 pub const COVERAGE_COLUMNS: &str = "u_mu_a,a_lo95,a_hi95,u_mu_f,f_lo95,f_hi95";
-
-/// CSV bytes: the `header` line, then the `cells` of each row joined by commas.
-fn csv_bytes<T, const N: usize>(
-    header: &str,
-    rows: &[T],
-    cells: impl Fn(&T) -> [String; N],
-) -> Vec<u8> {
-    let mut s = String::from(header);
-    s.push('\n');
-    for r in rows {
-        s.push_str(&cells(r).join(","));
-        s.push('\n');
-    }
-    s.into_bytes()
-}
 
 /// `summary.csv` bytes. `with_chi` adds the `chi_mu,chi_sigma` columns (cantilever); the
 /// [`COVERAGE_COLUMNS`] come last.
@@ -412,4 +387,88 @@ mod tests {
         assert!(t.contains("a 95 % interval"), "{t}");
         assert!(t.contains("vision") && t.contains("mm/kN"));
     }
+}
+
+/// Lost frames of one run at one exposure (a row of `lost_frames.csv`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LostFrames {
+    /// Run index.
+    pub run: u64,
+    /// Exposure time, ms.
+    pub exposure_ms: f64,
+    /// Frames without a centroid (filled by interpolation).
+    pub lost: u64,
+    /// Frames in the record.
+    pub frames: u64,
+    /// More than 5 % lost: the run is left out at this exposure.
+    pub failed: bool,
+}
+
+/// `lost_frames.csv` bytes: `run,exposure_ms,lost_frames,frames,failed`.
+pub fn lost_frames_csv(lost: &[LostFrames]) -> Vec<u8> {
+    let mut s = String::from("run,exposure_ms,lost_frames,frames,failed\n");
+    for l in lost {
+        s.push_str(&format!(
+            "{},{},{},{},{}\n",
+            l.run, l.exposure_ms, l.lost, l.frames, l.failed
+        ));
+    }
+    s.into_bytes()
+}
+
+/// One row of `adaptive.csv`: a quantity the adaptive procedure watches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptiveRow<'a> {
+    /// Measurement system.
+    pub system: System,
+    /// Exposure, ms.
+    pub exposure_ms: f64,
+    /// Mode, 1-based.
+    pub mode: usize,
+    /// `a` or `f_hz`.
+    pub quantity: &'static str,
+    /// The procedure's state at the stop point (`None`: not assessable).
+    pub stability: Option<&'a Stability>,
+}
+
+/// `adaptive.csv` bytes: per watched quantity the procedure's state at the stop point;
+/// `(batches, runs)` are the study's, written for a quantity that is not assessable.
+pub fn adaptive_csv(rows: &[AdaptiveRow<'_>], (batches, runs): (usize, usize)) -> Vec<u8> {
+    let mut s = String::from(
+        "system,exposure_ms,mode,quantity,batches,runs,estimate,std_uncertainty,delta,\
+         twice_s_estimate,twice_s_u,twice_s_lo,twice_s_hi,stable\n",
+    );
+    for r in rows {
+        let _ = write!(
+            s,
+            "{},{},{},{},",
+            r.system.name(),
+            r.exposure_ms,
+            r.mode,
+            r.quantity
+        );
+        match r.stability {
+            Some(st) => {
+                let t = &st.twice_std;
+                let _ = writeln!(
+                    s,
+                    "{},{},{},{},{},{},{},{},{},{}",
+                    st.batches,
+                    st.runs,
+                    st.estimate,
+                    st.std_uncertainty,
+                    st.delta,
+                    t.estimate,
+                    t.std_uncertainty,
+                    t.lo,
+                    t.hi,
+                    st.is_stable()
+                );
+            }
+            None => {
+                let _ = writeln!(s, "{batches},{runs},,,,,,,,not assessable");
+            }
+        }
+    }
+    s.into_bytes()
 }

@@ -1,0 +1,157 @@
+//! The outputs of `analyze --targets K`: `frf.csv`, `displacement.csv`, `modes.csv`,
+//! `shapes.csv`, `mac.csv` and `compensation.csv` (the UFF is [`super::uff`]). Targets are
+//! numbered 1..=K left to right in the first frame; target 0 is the accelerometer.
+
+use super::analysis::{position, push_compensation_row, round_e2pr, CompensationRow, Spectrum};
+use super::opt;
+use firmware_core::centroid::Centroid;
+use num_complex::Complex64;
+use std::fmt::Write as _;
+
+/// `frf.csv`: `target,freq_hz,h1_re,h1_im,h1_abs,coherence`, one row per line of each
+/// `(target, H1)` in the order given.
+pub fn frf_csv<'a>(frfs: impl IntoIterator<Item = (usize, Spectrum<'a>)>) -> Vec<u8> {
+    let mut s = String::from("target,freq_hz,h1_re,h1_im,h1_abs,coherence\n");
+    for (t, frf) in frfs {
+        for ((f, h), c) in frf.freq_hz.iter().zip(frf.h1).zip(frf.coherence) {
+            let _ = writeln!(s, "{t},{f},{},{},{},{c}", h.re, h.im, h.norm());
+        }
+    }
+    s.into_bytes()
+}
+
+/// One target's track as `displacement.csv` shows it: its centroid per frame, and the
+/// displacement (mm) and lost flag per frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Track<'a> {
+    /// Centroid per frame.
+    pub centroids: &'a [Centroid],
+    /// Displacement per frame, mm.
+    pub mm: &'a [f64],
+    /// Lost per frame.
+    pub lost: &'a [bool],
+}
+
+/// `displacement.csv`: `frame,t_s,target,cx,cy,pixels,disp_mm,lost`, one row per frame and
+/// target (`cx`, `cy` empty where the target was lost); `tracks[t]` is target `t + 1`.
+pub fn displacement_csv(tracks: &[Track<'_>], frame_rate_hz: f64, time_offset_s: f64) -> Vec<u8> {
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,disp_mm,lost\n");
+    let frames = tracks.first().map_or(0, |t| t.centroids.len());
+    for k in 0..frames {
+        let t_s = time_offset_s + k as f64 / frame_rate_hz;
+        for (t, tr) in tracks.iter().enumerate() {
+            let c = &tr.centroids[k];
+            let (cx, cy) = position(c);
+            let _ = writeln!(
+                s,
+                "{k},{t_s},{},{cx},{cy},{},{},{}",
+                t + 1,
+                c.pixels(),
+                tr.mm[k],
+                u8::from(tr.lost[k])
+            );
+        }
+    }
+    s.into_bytes()
+}
+
+/// One row of the multi-target `modes.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeRow {
+    /// 0 for the accelerometer, else the target, 1-based.
+    pub target: usize,
+    /// Mode (band) number, 1-based.
+    pub mode: usize,
+    /// The band, Hz.
+    pub band_hz: (f64, f64),
+    /// Fitted natural frequency, Hz (`None`: the fit failed).
+    pub f_hz: Option<f64>,
+    /// |H1| at the picked peak.
+    pub amplitude: f64,
+    /// Fitted damping ratio (`None`: the fit failed).
+    pub damping: Option<f64>,
+    /// E2PR (`None` without an exposure).
+    pub e2pr: Option<f64>,
+}
+
+/// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr`
+/// (`system` `accelerometer` for target 0, else `vision`; empty cells where absent).
+pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
+    let mut s =
+        String::from("system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
+    for m in rows {
+        let system = if m.target == 0 {
+            "accelerometer"
+        } else {
+            "vision"
+        };
+        let _ = writeln!(
+            s,
+            "{system},{},{},{},{},{},{},{},{}",
+            m.target,
+            m.mode,
+            m.band_hz.0,
+            m.band_hz.1,
+            opt(m.f_hz),
+            m.amplitude,
+            opt(m.damping),
+            opt(m.e2pr.map(round_e2pr))
+        );
+    }
+    s.into_bytes()
+}
+
+/// One row of `shapes.csv`: one target's complex modal coefficient in one mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeRow {
+    /// Mode (band), 1-based.
+    pub mode: usize,
+    /// Target, 1-based.
+    pub target: usize,
+    /// The target's position in the first frame, px.
+    pub xy_px: (f64, f64),
+    /// The normalised coefficient.
+    pub value: Complex64,
+}
+
+/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs`.
+pub fn shapes_csv(rows: &[ShapeRow]) -> Vec<u8> {
+    let mut s = String::from("mode,target,x_px,y_px,re,im,abs\n");
+    for r in rows {
+        let (x, y) = r.xy_px;
+        let c = r.value;
+        let _ = writeln!(
+            s,
+            "{},{},{x},{y},{},{},{}",
+            r.mode,
+            r.target,
+            c.re,
+            c.im,
+            c.norm()
+        );
+    }
+    s.into_bytes()
+}
+
+/// `mac.csv`: `mode,mac`, one row per `(mode, MAC)` against the reference shape.
+pub fn mac_csv(macs: &[(usize, f64)]) -> Vec<u8> {
+    let mut s = String::from("mode,mac\n");
+    for (mode, v) in macs {
+        let _ = writeln!(s, "{mode},{v}");
+    }
+    s.into_bytes()
+}
+
+/// `compensation.csv`: `target,mode,f_hz,e2pr,transfer,factor,compensated`, the rows of each
+/// compensated target (`(target, rows)`, target 1-based).
+pub fn compensation_csv<'a>(
+    targets: impl IntoIterator<Item = (usize, &'a [CompensationRow])>,
+) -> Vec<u8> {
+    let mut s = String::from("target,mode,f_hz,e2pr,transfer,factor,compensated\n");
+    for (t, rows) in targets {
+        for r in rows {
+            push_compensation_row(&mut s, &format!("{t},"), r);
+        }
+    }
+    s.into_bytes()
+}
