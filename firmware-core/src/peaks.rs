@@ -8,7 +8,7 @@
 //!
 //! Conventions:
 //! * bin `k` has frequency `f_k = k * df_hz`, computed in `f32` exactly like
-//!   [`crate::spectrum::WelchH1::freq`];
+//!   [`crate::spectrum::WelchAccumulator::freq`];
 //! * the band is inclusive at both ends: bin `k` is inside when `lo <= f_k <= hi` (so two bands
 //!   that share an edge frequency both contain a bin that falls exactly on it);
 //! * bins whose H1 is not finite are ignored; among equal `|Im H1|` the lowest bin wins;

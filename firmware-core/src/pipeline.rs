@@ -869,7 +869,7 @@ mod tests {
         let len = vision.len().min(adc.len() - M / 4);
         let mut w = WelchH1::<SEG, M, S>::try_new(config(None).welch).unwrap();
         w.push(&adc[M / 4..M / 4 + len], &vision[..len]).unwrap();
-        (w.segments(), sums_bits(w.accumulator()))
+        (w.accumulator().segments(), sums_bits(w.accumulator()))
     }
 
     #[test]
@@ -957,7 +957,7 @@ mod tests {
             }
             let mut w = std::boxed::Box::new(WelchH1::<M2, M2, S2>::try_new(welch).unwrap());
             w.push(&adc, &vision).unwrap();
-            worst(&|k| w.h1(k).unwrap())
+            worst(&|k| w.accumulator().h1(k).unwrap())
         }
     }
 

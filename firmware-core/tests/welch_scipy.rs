@@ -160,23 +160,28 @@ fn h1_and_coherence_match_scipy() {
         }
         let step = c.nperseg - c.noverlap;
         let segments = (case.n - c.nperseg) / step + 1;
-        assert_eq!(w.segments() as usize, segments, "{}", case.name);
-        assert_eq!(w.bins(), r.freq.len(), "{}", case.name);
+        assert_eq!(
+            w.accumulator().segments() as usize,
+            segments,
+            "{}",
+            case.name
+        );
+        assert_eq!(w.accumulator().bins(), r.freq.len(), "{}", case.name);
 
         let pxx_max = r.pxx.iter().cloned().fold(0.0, f64::max);
         let pyy_max = r.pyy.iter().cloned().fold(0.0, f64::max);
         let density = 1.0 / (segments as f64 * c.fs_hz as f64 * window_power(&c));
         let (mut worst_h1, mut worst_coh, mut worst_p, mut checked) = (0.0f64, 0.0f64, 0.0f64, 0);
-        for k in 0..w.bins() {
+        for k in 0..w.accumulator().bins() {
             assert!(
-                (w.freq(k) as f64 - r.freq[k]).abs() <= 1e-6 * r.freq[k].max(1.0),
+                (w.accumulator().freq(k) as f64 - r.freq[k]).abs() <= 1e-6 * r.freq[k].max(1.0),
                 "{} bin {k}: {} Hz vs {}",
                 case.name,
-                w.freq(k),
+                w.accumulator().freq(k),
                 r.freq[k]
             );
             // density scaling, one-sided doubling except DC and (even nfft) Nyquist
-            let s = w.sums(k).unwrap();
+            let s = w.accumulator().sums(k).unwrap();
             let one_sided = if k == 0 || 2 * k == c.nfft { 1.0 } else { 2.0 };
             for (ours, theirs, max) in [(s.pxx, r.pxx[k], pxx_max), (s.pyy, r.pyy[k], pyy_max)] {
                 if theirs > 1e-4 * max {
@@ -190,7 +195,7 @@ fn h1_and_coherence_match_scipy() {
                 continue;
             }
             checked += 1;
-            let h: Complex32 = w.h1(k).unwrap();
+            let h: Complex32 = w.accumulator().h1(k).unwrap();
             let (hr, hi) = r.h1[k];
             let mag = (hr * hr + hi * hi).sqrt();
             let e = ((h.re as f64 - hr).powi(2) + (h.im as f64 - hi).powi(2)).sqrt() / mag;
@@ -200,7 +205,7 @@ fn h1_and_coherence_match_scipy() {
                 "{} bin {k}: H1 {h} vs ({hr}, {hi}): relative error {e:e}",
                 case.name
             );
-            let coh = w.coherence(k).unwrap() as f64;
+            let coh = w.accumulator().coherence(k).unwrap() as f64;
             let e = (coh - coh_ref).abs() / coh_ref;
             worst_coh = worst_coh.max(e);
             assert!(
@@ -213,7 +218,7 @@ fn h1_and_coherence_match_scipy() {
         report.push(format!(
             "{:32} segments {segments:5} bins checked {checked:5}/{:5}  max rel err H1 {worst_h1:.1e} coherence {worst_coh:.1e} Pxx/Pyy {worst_p:.1e}",
             case.name,
-            w.bins()
+            w.accumulator().bins()
         ));
     }
     // visible with --nocapture; the figures quoted in the README come from here

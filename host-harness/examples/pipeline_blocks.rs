@@ -99,9 +99,9 @@ fn main() -> anyhow::Result<()> {
             let pick = |h1: &dyn Fn(usize) -> Option<firmware_core::Complex32>| {
                 peaks::pick_with(SEG / 2 + 1, 1.0, band, false, h1)
             };
-            let r = pick(&|k| reference.h1(k));
+            let r = pick(&|k| reference.accumulator().h1(k));
             let s = pick(&|k| pw.h1(k));
-            let o = pick(&|k| old.h1(k));
+            let o = pick(&|k| old.accumulator().h1(k));
             if let (Some(r), Some(s), Some(o)) = (r, s, o) {
                 ratios[0][b].push((s.amplitude / r.amplitude) as f64);
                 ratios[1][b].push((o.amplitude / r.amplitude) as f64);

@@ -409,11 +409,11 @@ fn check_h1(rep: &mut Report) {
         }
         ok &= welch.push(&xs, &ys).is_ok();
     }
-    rep.check("Welch push", ok && welch.segments() == 31);
-    let df = welch.df_hz();
+    rep.check("Welch push", ok && welch.accumulator().segments() == 31);
+    let df = welch.accumulator().df_hz();
     let band = (100.0, 300.0);
-    let got = peaks::pick_with(welch.bins(), df, band, false, |k| welch.h1(k));
-    let want = peaks::pick_with(welch.bins(), df, band, false, |k| {
+    let got = peaks::pick_with(welch.accumulator().bins(), df, band, false, |k| welch.accumulator().h1(k));
+    let want = peaks::pick_with(welch.accumulator().bins(), df, band, false, |k| {
         Some(res.response(k as f32 * df))
     });
     match (got, want) {
@@ -587,7 +587,7 @@ fn bench_welch<const N: usize>(x: &mut [f32; N], y: &mut [f32; N]) {
             _ => measured("welch segment pair 4096", || w.push(x, y)),
         }
         .ok();
-        black_box(w.h1(1));
+        black_box(w.accumulator().h1(1));
     }
 }
 

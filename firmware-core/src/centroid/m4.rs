@@ -26,7 +26,7 @@
 //! without any pixel above `t` the returned `max` is 0 on this path (documented on
 //! [`row_binary_u8`](super::row_binary_u8)).
 
-use super::kernel::{Pixel, RowSums, WindowSums};
+use super::sums::{Level, RowSums, WindowSums};
 use super::MAX_DIM;
 
 const H: u32 = 0x8080_8080;
@@ -240,7 +240,7 @@ pub(super) fn row_weighted_u16(row: &[u16], t: u16) -> RowSums {
 /// The block skip around `full`, the sums of one block of [`BLOCK_PX`] pixels given the running
 /// maximum; the row's remainder takes the per-pixel pass.
 #[inline(always)]
-fn row_sparse<P: Pixel, const WEIGHTED: bool>(
+fn row_sparse<P: Level, const WEIGHTED: bool>(
     row: &[P],
     t: P,
     or: fn(&[P]) -> P,
@@ -275,7 +275,7 @@ fn row_sparse<P: Pixel, const WEIGHTED: bool>(
 /// Count, weight, block-local x moment (`<= 65 535 * 2016 < 2^27` for a block of 64) and the
 /// running maximum over one block (or the row's remainder, fewer than 64 pixels).
 #[inline(never)]
-fn block_pass<P: Pixel, const WEIGHTED: bool>(block: &[P], t: P, cur: P) -> (u32, u32, u32, P) {
+fn block_pass<P: Level, const WEIGHTED: bool>(block: &[P], t: P, cur: P) -> (u32, u32, u32, P) {
     let (mut n, mut w, mut s, mut m) = (0u32, 0u32, 0u32, cur);
     for (x, &p) in (0u32..).zip(block) {
         let above = u32::from(p > t);
@@ -621,7 +621,7 @@ mod tests {
             } else {
                 (row8, row16)
             };
-            use super::super::kernel as k;
+            use super::super::portable as k;
             prop_assert_eq!(row_weighted_u8(&row8, t8), portable(k::row_weighted_u8, &row8, t8));
             prop_assert_eq!(row_binary_u16(&row16, t16), portable(k::row_binary_u16, &row16, t16));
             prop_assert_eq!(

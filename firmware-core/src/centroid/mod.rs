@@ -66,10 +66,12 @@
 //! the capacity; pixels of the excess components were dropped), [`Flags::CLIPPED`] (a row wider
 //! than the supported width: the columns past it were ignored).
 
-mod kernel;
 #[cfg(any(test, target_arch = "arm"))]
 mod m4;
 mod multi;
+mod pixel;
+mod portable;
+mod sums;
 pub mod track;
 
 #[cfg(test)]
@@ -77,10 +79,9 @@ mod tests;
 
 use core::fmt;
 
-pub use kernel::{
-    row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, Pixel, RowSums, BLOCK,
-};
 pub use multi::{BoundingBox, MultiCentroider, Target};
+pub use pixel::{row_binary_u16, row_binary_u8, row_weighted_u16, row_weighted_u8, Pixel};
+pub use sums::{RowSums, BLOCK};
 
 /// Largest frame width and height (pixels) the moments are proven not to overflow for.
 pub const MAX_DIM: usize = 65_536;
@@ -824,14 +825,7 @@ impl Centroider {
 
     /// [`push`](Self::push) for a region row `y` whose segment (`seg_len` pixels from column
     /// `x0` of a row of `row_len`) went through the tracking window's one-pass kernel.
-    fn push_window(
-        &mut self,
-        w: &kernel::WindowSums,
-        y: u32,
-        x0: usize,
-        ends: bool,
-        row_len: usize,
-    ) {
+    fn push_window(&mut self, w: &sums::WindowSums, y: u32, x0: usize, ends: bool, row_len: usize) {
         self.next_y = y.saturating_add(1);
         self.flags.set_if(Flags::CLIPPED, row_len > MAX_DIM);
         let s = RowSums {

@@ -10,8 +10,7 @@
 //! might have joined one of them) and labelling goes on.
 
 use super::{
-    kernel::Pixel, Centroid, CentroidConfig, ConfigError, Flags, Frame, FrameError, Moments,
-    MAX_DIM,
+    Centroid, CentroidConfig, ConfigError, Flags, Frame, FrameError, Moments, Pixel, MAX_DIM,
 };
 
 /// Smallest rectangle holding every pixel of a target (inclusive, full-frame pixels).

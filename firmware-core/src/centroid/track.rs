@@ -38,7 +38,7 @@
 //! assert_eq!(tracker.rows(), (16, 27));
 //! ```
 
-use super::kernel::WindowSums;
+use super::sums::WindowSums;
 use super::{Centroid, Centroider, ConfigError, Flags, Mode, Pixel, Roi, MAX_DIM};
 
 /// Settings of a [`Tracker`]: plain data, checked once by [`Tracker::try_new`].

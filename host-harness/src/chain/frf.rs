@@ -185,33 +185,33 @@ pub fn estimate(x: &[f64], y: &[f64], config: WelchConfig) -> anyhow::Result<Frf
         welch
             .push(&xs, &ys)
             .map_err(|e| anyhow::anyhow!("internal: {e}"))?;
-        if welch.segments() == 0 {
+        if welch.accumulator().segments() == 0 {
             return Err(bad_input(format!(
                 "no usable segment: {} samples, nperseg {}; {} segment(s) skipped because a \
                  sample is not finite or beyond the f32 range",
                 xs.len(),
                 config.nperseg,
-                welch.skipped_segments()
+                welch.accumulator().skipped_segments()
             )));
         }
         let gain = ay / ax;
-        let bins = welch.bins();
+        let bins = welch.accumulator().bins();
         Ok(Frf {
             freq_hz: (0..bins)
                 .map(|k| k as f64 * config.fs_hz as f64 / config.nfft as f64)
                 .collect(),
             h1: (0..bins)
                 .map(|k| {
-                    let h = welch.h1(k).unwrap_or_default();
+                    let h = welch.accumulator().h1(k).unwrap_or_default();
                     Complex64::new(h.re as f64 * gain, h.im as f64 * gain)
                 })
                 .collect(),
             coherence: (0..bins)
-                .map(|k| f64::from(welch.coherence(k).unwrap_or(0.0)))
+                .map(|k| f64::from(welch.accumulator().coherence(k).unwrap_or(0.0)))
                 .collect(),
             config,
-            segments: welch.segments(),
-            skipped: welch.skipped_segments(),
+            segments: welch.accumulator().segments(),
+            skipped: welch.accumulator().skipped_segments(),
         })
     };
     super::on_large_stack("Welch", job)?
@@ -307,11 +307,11 @@ pub fn measure<const SEG: usize, const NFFT: usize, const SCR: usize>(
         .iter()
         .map(|&(lo, hi)| {
             peaks::pick_with(
-                welch.bins(),
-                welch.df_hz(),
+                welch.accumulator().bins(),
+                welch.accumulator().df_hz(),
                 (lo as f32, hi as f32),
                 false,
-                |k| welch.h1(k),
+                |k| welch.accumulator().h1(k),
             )
             .map(|p| PeakRecord {
                 f_hz: p.f_hz as f64,
@@ -319,9 +319,10 @@ pub fn measure<const SEG: usize, const NFFT: usize, const SCR: usize>(
             })
         })
         .collect();
-    let frf_abs = (0..keep_bins.min(welch.bins()))
+    let frf_abs = (0..keep_bins.min(welch.accumulator().bins()))
         .map(|k| {
             welch
+                .accumulator()
                 .h1(k)
                 .map_or(f32::NAN, |h| (h.norm() as f64 * scale) as f32)
         })
