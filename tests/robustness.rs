@@ -592,3 +592,29 @@ fn all_failed_vision_rows_are_empty_not_nan() {
     assert!(s.contains("\nvision,40,1,0,,,,,"), "{s}");
     assert!(s.contains("\ntransducer,40,1,2,"), "{s}");
 }
+
+/// A reader that stops early (`host-harness centroid ... | head -1`) closes the pipe: the
+/// command ends quietly with success, as ripgrep does, instead of an error about a write.
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::io::Read as _;
+    let dir = tempfile::tempdir().unwrap();
+    let frame = square_png(dir.path());
+    let f = frame.to_str().unwrap();
+    // about 3000 rows of ~40 bytes: more than a pipe buffer holds
+    let mut args = vec!["centroid", "--threshold", "100"];
+    args.extend(std::iter::repeat_n(f, 3000));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_host-harness"))
+        .args(&args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // the read end is dropped here: the next write fails with EPIPE
+    let o = child.wait_with_output().unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    assert!(!e.contains("error") && !e.contains("panicked"), "{e}");
+}

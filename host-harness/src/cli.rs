@@ -75,18 +75,32 @@ pub fn stdout(text: &str) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())
         .and_then(|()| out.flush())
-        .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
+        .map_err(stdout_error)
+}
+
+/// A failed write to standard output, named as such, the `io::Error` kept as its source (a
+/// closed pipe is recognised by [`main`]).
+fn stdout_error(e: std::io::Error) -> anyhow::Error {
+    anyhow::Error::new(e).context("cannot write to standard output")
+}
+
+/// Whether `e` is a write into a closed pipe (`host-harness ... | head`): the reader has what it
+/// wanted, so the command ends quietly with success, as ripgrep does.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = run(cli).and_then(|()| {
-        std::io::Write::flush(&mut std::io::stdout())
-            .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
-    });
+    let result =
+        run(cli).and_then(|()| std::io::Write::flush(&mut std::io::stdout()).map_err(stdout_error));
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             if e.chain().any(|c| c.is::<crate::BadInput>()) {
