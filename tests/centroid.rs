@@ -2,7 +2,7 @@
 //! directory, centroids checked against naive sums computed here, bad files reported by name.
 
 use crate::util::{assert_exit_2, harness};
-use image::{ImageBuffer, Luma, Rgb};
+use image::{ImageBuffer, Luma};
 use std::path::{Path, PathBuf};
 
 /// Writes a grey frame of `T` (`u8` or `u16`; format from the extension).
@@ -179,10 +179,14 @@ fn bad_files_are_named_and_the_others_still_processed() {
         8,
         spot(|x, y| (x, y) == (3, 2), 200),
     );
-    let rgb = dir.path().join("colour.png");
-    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_fn(8, 8, |_, _| Rgb([1, 2, 3]))
-        .save(&rgb)
-        .unwrap();
+    // 32-bit float pixels: neither grey nor colour of 8 or 16 bits
+    let rgb = dir.path().join("float.tif");
+    {
+        use tiff::encoder::{colortype, TiffEncoder};
+        let mut enc = TiffEncoder::new(std::fs::File::create(&rgb).unwrap()).unwrap();
+        enc.write_image::<colortype::Gray32Float>(8, 8, &[0f32; 64])
+            .unwrap();
+    }
     let junk = dir.path().join("junk.png");
     std::fs::write(&junk, b"not an image at all").unwrap();
     let missing = dir.path().join("missing.tif");
@@ -204,7 +208,7 @@ fn bad_files_are_named_and_the_others_still_processed() {
             r.stderr
         );
     }
-    assert!(r.stderr.contains("not a grey frame"), "{}", r.stderr);
+    assert!(r.stderr.contains("float.tif"), "{}", r.stderr);
     assert!(r.stderr.contains("4 of 6"), "{}", r.stderr);
 }
 

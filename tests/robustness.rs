@@ -256,7 +256,7 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
             .unwrap();
         enc.write_image::<colortype::Gray8>(8, 8, &[0u8; 64])
             .unwrap();
-        enc.write_image::<colortype::RGB8>(16, 16, &[0u8; 768])
+        enc.write_image::<colortype::Gray32Float>(16, 16, &[0f32; 256])
             .unwrap();
     }
     let o = harness(&["centroid", "--threshold", "100", good.to_str().unwrap()]);
@@ -277,7 +277,7 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
     );
     // page 2 (another size, no target) is measured on its own; page 3 is colour: named
     let o = harness(&["centroid", "--threshold", "100", bad.to_str().unwrap()]);
-    assert_exit_2(&o, "bad.tif page 3: not a grey frame");
+    assert_exit_2(&o, "bad.tif page 3: unsupported colour type");
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
         out.contains("bad.tif#1,3.5") && out.contains("bad.tif#2,,"),

@@ -7,6 +7,7 @@ mod util;
 mod adversarial;
 mod analyze;
 mod centroid;
+mod formats;
 mod plan;
 mod robustness;
 mod signal;

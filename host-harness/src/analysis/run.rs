@@ -59,6 +59,8 @@ pub struct Request {
     /// The exposure as the user gave it, ms (`settings.exposure_s` is computed from it; this
     /// is how the report states it).
     pub exposure_ms: Option<f64>,
+    /// Remarks for the report (where the frame rate or exposure came from).
+    pub notes: Vec<String>,
     /// Several targets, or one.
     pub targets: Option<TargetsRequest>,
     /// Output directory, and whether an earlier analysis there may be replaced.
@@ -107,6 +109,11 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     if let Some(n) = &ignored {
         eprintln!("warning: {n}");
     }
+    // remarks on the frames and their rate go into the report with the note on ignored files
+    let mut notes: Vec<String> = req.notes.clone();
+    notes.extend(source.note()?);
+    notes.extend(ignored);
+    let ignored = (!notes.is_empty()).then(|| notes.join("; "));
     let fps = settings.frame_rate_hz;
     if let Some(n) = source.count(fps)? {
         // The frame count is known before decoding: check the record lengths now.
@@ -138,7 +145,7 @@ fn one_target(
     let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let mut inputs = describe_inputs(req, source, centroids.len(), base.len());
     if let Some(n) = ignored {
-        inputs.push(("ignored".into(), n));
+        inputs.push(("note".into(), n));
     }
     inputs.push(("frame depth".into(), depth.describe()));
     if let Some(w) = depth_warning {
@@ -292,6 +299,7 @@ fn describe_inputs(
         ),
         FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
         FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
+        FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
     };
     let (fps, a, d, c) = (
         req.settings.frame_rate_hz,

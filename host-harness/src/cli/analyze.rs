@@ -13,17 +13,22 @@ use std::path::PathBuf;
 /// positive upwards in the image, with `--axis x` positive to the right; `--invert` flips it.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Frames: a directory (its numbered *.png, *.tif, *.tiff sequence in natural name order,
-    /// so frame_2 comes before frame_10; other images beside it are named and ignored), a
-    /// pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, or a
-    /// video file (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg` program,
-    /// luma, its timestamps checked against --fps). 8- or 16-bit grey. Numbered files must be
-    /// consecutive (a gap is an error).
-    #[arg(long, value_name = "DIR|GLOB|FILE.tif|VIDEO")]
+    /// Frames: a directory (its numbered *.png, *.tif, *.tiff, *.jpg sequence in natural name
+    /// order, so frame_2 comes before frame_10; other images beside it are named and ignored),
+    /// a pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, a
+    /// Photron recording named by its .cih/.cihx (8, 12-bit packed or 16 bit; the .mraw beside
+    /// it), or a video file (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg`
+    /// program, luma, its timestamps checked against --fps). Grey frames as stored (8 or 16
+    /// bits); colour frames as their BT.601 luma, 0.299 R + 0.587 G + 0.114 B rounded, alpha
+    /// ignored. Numbered files must be consecutive (a gap is an error).
+    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|VIDEO")]
     pub frames: String,
-    /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`).
+    /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`). Default: the
+    /// rate a camera file states (Photron); needed for image files and videos (a container's
+    /// rate is often not the capture rate: phone slow motion stores 30 fps for 240). Given with
+    /// a camera file, it overrides the file's rate (the report names both).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
-    pub fps: f64,
+    pub fps: Option<f64>,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
     /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
     /// vision acceleration is computed in.
@@ -73,13 +78,14 @@ pub struct Args {
     /// Flip the sign of the displacement.
     #[arg(long)]
     pub invert: bool,
-    /// Camera exposure time, ms (for the E2PR of each mode).
+    /// Camera exposure time, ms (for the E2PR of each mode). Default: the shutter a camera
+    /// file states (Photron).
     #[arg(long, value_name = "MS")]
     pub exposure_ms: Option<f64>,
     /// Divide the vision H1 by the exposure's transfer sinc(pi f --exposure-ms) up to E2PR 0.8
     /// (exact for --mode weighted with the threshold at the background; an approximation,
     /// noted in the report, for binary); writes compensation.csv.
-    #[arg(long, requires = "exposure_ms")]
+    #[arg(long)]
     pub compensate_exposure: bool,
     /// Welch estimator settings (default: the rig's single whole-record Hann segment).
     #[command(flatten)]
@@ -138,24 +144,76 @@ pub enum AxisArg {
     Y,
 }
 
+/// The frame rate and exposure: as given, else as the recording's own header states them
+/// (a camera file); notes for the report when a given rate overrides the file's.
+fn rates(args: &Args) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
+    let recorded = crate::frames::discover_frames(&args.frames)?
+        .source
+        .recorded_rate()?;
+    let mut notes = Vec::new();
+    let fps = match (args.fps, recorded) {
+        (Some(f), Some((r, _))) => {
+            if (f - r).abs() > 1e-9 * r {
+                notes.push(format!(
+                    "--fps {f} overrides the {r} fps that {} states",
+                    args.frames
+                ));
+            }
+            f
+        }
+        (Some(f), None) => f,
+        (None, Some((r, _))) => {
+            notes.push(format!("frame rate {r} fps, as {} states", args.frames));
+            r
+        }
+        (None, None) => {
+            return Err(bad_input(format!(
+                "--fps is needed: {} does not state the rate the camera recorded at (image \
+                 files and videos; a video container's rate is often not the capture rate)",
+                args.frames
+            )))
+        }
+    };
+    let exposure_ms = match (args.exposure_ms, recorded.and_then(|r| r.1)) {
+        (Some(e), _) => Some(e),
+        (None, Some(s)) => {
+            notes.push(format!(
+                "exposure {} ms, as {} states",
+                s * 1000.0,
+                args.frames
+            ));
+            Some(s * 1000.0)
+        }
+        (None, None) => None,
+    };
+    if args.compensate_exposure && exposure_ms.is_none() {
+        return Err(bad_input(
+            "--compensate-exposure needs the exposure: give --exposure-ms (the frames do not \
+             state it)",
+        ));
+    }
+    Ok((fps, exposure_ms, notes))
+}
+
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    for (name, v) in [("--fps", args.fps), ("--mm-per-px", args.mm_per_px)] {
+    let (fps, exposure_ms, notes) = rates(&args)?;
+    for (name, v) in [("--fps", fps), ("--mm-per-px", args.mm_per_px)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(bad_input(format!("{name} must be positive, got {v}")));
         }
     }
-    if let Some(e) = args.exposure_ms {
+    if let Some(e) = exposure_ms {
         if !(e.is_finite() && e >= 0.0) {
             return Err(bad_input(format!("--exposure-ms must be >= 0, got {e}")));
         }
-        let period_ms = 1000.0 / args.fps;
+        let period_ms = 1000.0 / fps;
         if e > period_ms {
             let why = format!(
                 "--exposure-ms {e} is longer than the frame period ({period_ms:.3} ms at {} \
                  fps): no camera exposes longer than it records; check --exposure-ms (in ms) \
                  and --fps",
-                args.fps
+                fps
             );
             // dividing by the transfer of an impossible exposure would be a wrong number
             if args.compensate_exposure {
@@ -165,12 +223,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     for &(lo, hi) in &args.bands.pairs() {
-        if hi > args.fps / 2.0 {
+        if hi > fps / 2.0 {
             return Err(bad_input(format!(
                 "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz at {} \
                  fps), where the vision record has no content; keep every band below it",
-                args.fps / 2.0,
-                args.fps
+                fps / 2.0,
+                fps
             )));
         }
     }
@@ -189,12 +247,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             time_col: args.time_col.clone(),
         },
         settings: Settings {
-            frame_rate_hz: args.fps,
+            frame_rate_hz: fps,
             accel_rate_hz: args.fs,
             time_offset_s,
             welch: args.welch.settings(),
             bands: args.bands.pairs(),
-            exposure_s: args.exposure_ms.map(|e| e / 1000.0),
+            exposure_s: exposure_ms.map(|e| e / 1000.0),
             end_match: !args.no_end_match,
         },
         displacement: DisplacementSettings {
@@ -209,7 +267,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         centroid: args.centroid.config(None)?,
         binary: args.centroid.mode == ModeArg::Binary,
         compensate_exposure: args.compensate_exposure,
-        exposure_ms: args.exposure_ms,
+        exposure_ms,
+        notes,
         targets: targets_request(&args)?,
         out: args.out.clone(),
         force: args.force,

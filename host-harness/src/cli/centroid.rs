@@ -1,9 +1,12 @@
-//! `host-harness centroid`: thresholded centroid of the target in PNG/TIFF frames, through
-//! `firmware_core::centroid` (the single-target whole-frame path the firmware runs).
+//! `host-harness centroid`: thresholded centroid of the target in PNG/TIFF/JPEG frames and
+//! Photron recordings, through `firmware_core::centroid` (the single-target whole-frame path
+//! the firmware runs).
 //!
 //! Output: CSV on stdout, `file,cx,cy,pixels,flags`, one row per frame that could be read;
-//! every page of a multi-page TIFF is measured, each page a row named `file#N` (1-based).
-//! A file (or page) that cannot be read, is not 8- or 16-bit grey, or does not hold the ROI gets
+//! every page of a multi-page TIFF and every frame of a Photron recording (named by its
+//! `.cih`/`.cihx`) is measured, each a row named `file#N` (1-based). Colour frames are read as
+//! their BT.601 luma (0.299 R + 0.587 G + 0.114 B, rounded; alpha ignored).
+//! A file (or page) that cannot be read, is not 8- or 16-bit, or does not hold the ROI gets
 //! an error naming it on stderr; the other files are still processed, and the command exits with
 //! code 2 at the end.
 
@@ -26,7 +29,9 @@ pub struct Args {
     /// for 16-bit frames); must be above T.
     #[arg(long, value_name = "LEVEL")]
     pub saturation: Option<u16>,
-    /// PNG or TIFF frames, 8- or 16-bit grey.
+    /// PNG, TIFF or JPEG frames (8- or 16-bit grey, or colour read as its BT.601 luma
+    /// 0.299 R + 0.587 G + 0.114 B, rounded, alpha ignored), or Photron recordings named by
+    /// their .cih/.cihx (one row per frame, FILE#N).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
 }
@@ -59,6 +64,9 @@ fn centroid_pages(
     path: &Path,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let name = path.to_string_lossy().into_owned();
+    if crate::frames::photron::is_header(path) || crate::frames::photron::is_mraw(path) {
+        return recording_frames(config, path, &name);
+    }
     let is_tiff = path
         .extension()
         .and_then(|e| e.to_str())
@@ -83,6 +91,26 @@ fn centroid_pages(
             false => (name.clone(), c),
         })
         .collect();
+    (rows, result.err())
+}
+
+/// Every frame of a camera recording (Photron), labelled `file#N` from 1.
+fn recording_frames(
+    config: &CentroidConfig,
+    path: &Path,
+    name: &str,
+) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
+    let mut rows = Vec::new();
+    let result = crate::frames::discover_frames(name).and_then(|found| {
+        found.source.for_each(1.0, |label, frame| {
+            rows.push((
+                format!("{name}#{}", rows.len() + 1),
+                frame.centroid(config, &label)?,
+            ));
+            Ok(())
+        })
+    });
+    debug_assert_eq!(path.to_string_lossy(), name);
     (rows, result.err())
 }
 

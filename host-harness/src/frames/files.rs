@@ -19,6 +19,9 @@ pub enum FrameSource {
     /// One video file (AVI, MKV, MP4, MOV, ...), decoded frame by frame by FFmpeg
     /// ([`crate::frames::video`]).
     Video(PathBuf),
+    /// A Photron recording, named by its header (`.cih` / `.cihx`; frames in the `.mraw`
+    /// beside it, [`crate::frames::photron`]).
+    Photron(PathBuf),
 }
 
 /// Extensions read as video files.
@@ -31,9 +34,12 @@ fn is_video(p: &Path) -> bool {
 }
 
 fn has_frame_ext(p: &Path) -> bool {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "tif" | "tiff"))
+    p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        matches!(
+            e.to_ascii_lowercase().as_str(),
+            "png" | "tif" | "tiff" | "jpg" | "jpeg"
+        )
+    })
 }
 
 fn is_tiff(p: &Path) -> bool {
@@ -204,7 +210,8 @@ fn numbered_sequence(
     if top.len() > 1 {
         let seqs: Vec<String> = top.iter().map(|(p, s)| format!("{p}N{s}")).collect();
         return Err(bad_input(format!(
-            "{what}: {} numbered sequences of {best} files each ({}); name the frames with a              pattern, e.g. --frames 'DIR/{}*{}'",
+            "{what}: {} numbered sequences of {best} files each ({}); name the frames with a \
+             pattern, e.g. --frames 'DIR/{}*{}'",
             top.len(),
             seqs.join(", "),
             top[0].0,
@@ -225,7 +232,7 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
         let files = sorted_files(path, |n| has_frame_ext(Path::new(n)))?;
         if files.is_empty() {
             return Err(bad_input(format!(
-                "{}: no *.png, *.tif or *.tiff frames in this directory",
+                "{}: no *.png, *.tif, *.tiff, *.jpg or *.jpeg frames in this directory",
                 path.display()
             )));
         }
@@ -264,6 +271,13 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
         ignored: Vec::new(),
     };
     if path.is_file() {
+        if super::photron::is_header(path) {
+            super::photron::read_header(path)?;
+            return Ok(whole(FrameSource::Photron(path.to_path_buf())));
+        }
+        if super::photron::is_mraw(path) {
+            return Err(super::photron::mraw_named(path));
+        }
         if is_tiff(path) {
             return Ok(whole(FrameSource::MultiPageTiff(path.to_path_buf())));
         }
@@ -302,7 +316,8 @@ fn refuse_low_bit_png(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads one 8- or 16-bit grey PNG/TIFF frame; errors name the file.
+/// Loads one PNG, TIFF or JPEG frame (baseline or progressive) as grey: 8- or 16-bit grey as
+/// stored, colour as its BT.601 luma ([`luma`]; alpha ignored); errors name the file.
 pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
     refuse_low_bit_png(path)?;
     let img = image::ImageReader::open(path)
@@ -322,11 +337,69 @@ pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
             height,
             data: b.into_raw(),
         }),
+        image::DynamicImage::ImageLumaA8(b) => Ok(GreyFrame::U8 {
+            width,
+            height,
+            data: b.pixels().map(|p| p.0[0]).collect(),
+        }),
+        image::DynamicImage::ImageLumaA16(b) => Ok(GreyFrame::U16 {
+            width,
+            height,
+            data: b.pixels().map(|p| p.0[0]).collect(),
+        }),
+        image::DynamicImage::ImageRgb8(b) => Ok(GreyFrame::U8 {
+            width,
+            height,
+            data: luma(b.as_raw(), 3),
+        }),
+        image::DynamicImage::ImageRgba8(b) => Ok(GreyFrame::U8 {
+            width,
+            height,
+            data: luma(b.as_raw(), 4),
+        }),
+        image::DynamicImage::ImageRgb16(b) => Ok(GreyFrame::U16 {
+            width,
+            height,
+            data: luma(b.as_raw(), 3),
+        }),
+        image::DynamicImage::ImageRgba16(b) => Ok(GreyFrame::U16 {
+            width,
+            height,
+            data: luma(b.as_raw(), 4),
+        }),
         other => Err(bad_input(format!(
-            "{}: not a grey frame (colour type {:?}); 8- or 16-bit grey images are needed",
+            "{}: unsupported pixel format {:?}; 8- or 16-bit grey or colour images are needed",
             path.display(),
             other.color()
         ))),
+    }
+}
+
+/// Grey levels of interleaved colour pixels of `channels` samples (R, G, B first; alpha
+/// ignored): the BT.601 luma `0.299 R + 0.587 G + 0.114 B`, rounded to the nearest level
+/// (what PIL's `convert("L")` and most JPEG viewers show, within one level).
+pub fn luma<T: Copy + Into<f64> + LumaLevel>(samples: &[T], channels: usize) -> Vec<T> {
+    samples
+        .chunks_exact(channels)
+        .map(|p| T::from_luma(0.299 * p[0].into() + 0.587 * p[1].into() + 0.114 * p[2].into()))
+        .collect()
+}
+
+/// A grey level built from a luma value (rounded, clamped to the type's range).
+pub trait LumaLevel: Sized {
+    /// `y` rounded to the nearest level.
+    fn from_luma(y: f64) -> Self;
+}
+
+impl LumaLevel for u8 {
+    fn from_luma(y: f64) -> u8 {
+        y.round().clamp(0.0, 255.0) as u8
+    }
+}
+
+impl LumaLevel for u16 {
+    fn from_luma(y: f64) -> u16 {
+        y.round().clamp(0.0, 65_535.0) as u16
     }
 }
 
@@ -348,22 +421,36 @@ pub fn for_each_tiff_page(
         let err = |e: tiff::TiffError| bad_input(format!("{label}: cannot decode: {e}"));
         let (w, h) = dec.dimensions().map_err(err)?;
         let ct = dec.colortype().map_err(err)?;
-        if !matches!(ct, ColorType::Gray(8) | ColorType::Gray(16)) {
-            return Err(bad_input(format!(
-                "{label}: not a grey frame (colour type {ct:?}); 8- or 16-bit grey is needed"
-            )));
-        }
+        let channels = match ct {
+            ColorType::Gray(8) | ColorType::Gray(16) => 1,
+            ColorType::RGB(8) | ColorType::RGB(16) => 3,
+            ColorType::RGBA(8) | ColorType::RGBA(16) => 4,
+            _ => {
+                return Err(bad_input(format!(
+                    "{label}: unsupported colour type {ct:?}; 8- or 16-bit grey, RGB or RGBA \
+                     is needed"
+                )))
+            }
+        };
         let (width, height) = (w as usize, h as usize);
         let frame = match dec.read_image().map_err(err)? {
             DecodingResult::U8(data) => GreyFrame::U8 {
                 width,
                 height,
-                data,
+                data: if channels == 1 {
+                    data
+                } else {
+                    luma(&data, channels)
+                },
             },
             DecodingResult::U16(data) => GreyFrame::U16 {
                 width,
                 height,
-                data,
+                data: if channels == 1 {
+                    data
+                } else {
+                    luma(&data, channels)
+                },
             },
             _ => {
                 return Err(bad_input(format!(
@@ -394,11 +481,33 @@ impl FrameSource {
         match self {
             FrameSource::Files(f) => Ok(Some(f.len())),
             FrameSource::MultiPageTiff(_) => Ok(None),
+            FrameSource::Photron(p) => Ok(Some(super::photron::read_header(p)?.frames)),
             FrameSource::Video(p) => {
                 let v =
                     crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
                 Ok(Some(v.info().frames))
             }
+        }
+    }
+
+    /// The frame rate (Hz) and exposure (s) the recording's own header states: a camera file's
+    /// (Photron); `None` for image files and videos, whose container rate is not trusted as
+    /// the capture rate.
+    pub fn recorded_rate(&self) -> anyhow::Result<Option<(f64, Option<f64>)>> {
+        match self {
+            FrameSource::Photron(p) => {
+                let h = super::photron::read_header(p)?;
+                Ok(h.fps.map(|fps| (fps, h.shutter_s)))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// A remark on how the frames are read (a Bayer mosaic kept as grey), if any.
+    pub fn note(&self) -> anyhow::Result<Option<String>> {
+        match self {
+            FrameSource::Photron(p) => Ok(super::photron::read_header(p)?.note()),
+            _ => Ok(None),
         }
     }
 
@@ -418,6 +527,19 @@ impl FrameSource {
                 Ok(())
             }
             FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, |label, frame| f(label, &frame)),
+            FrameSource::Photron(p) => {
+                let mut r = super::photron::MrawFrames::open(p)?;
+                let n = r.header().frames;
+                let mut frame = GreyFrame::U8 {
+                    width: 0,
+                    height: 0,
+                    data: Vec::new(),
+                };
+                while let Some(k) = r.next_frame(&mut frame)? {
+                    f(format!("{} frame {} of {n}", p.display(), k + 1), &frame)?;
+                }
+                Ok(())
+            }
             FrameSource::Video(p) => {
                 let mut v =
                     crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;

@@ -3,6 +3,7 @@
 //! toolkit lives here; what is done with a frame (centroid, tracking, analysis) lives above it.
 
 pub mod files;
+pub mod photron;
 pub mod video;
 
 pub use files::{

@@ -1,0 +1,99 @@
+"""Checks host-harness's frame decoding against independent readers, pixel for pixel.
+
+- Photron: the sample recordings shipped in the pyMRAW source package (a 16-bit .cih, a 16-bit
+  .cihx, a 12-bit packed Bayer .cihx), and 8-, 12- and 16-bit recordings written here (8 and
+  16 by pyMRAW's own save_mraw, 12-bit packed by this script), read by pyMRAW.load_video and
+  by host-harness (examples/frame_dump.rs): every pixel equal.
+- JPEG and colour PNG/TIFF: frames written by PIL (a colour scene with noise; baseline and
+  progressive JPEG), host-harness's grey against PIL's convert("L"): within 1 grey level.
+
+usage: python scripts/check_frames.py FRAME_DUMP_BINARY PYMRAW_DATA_DIR WORKDIR
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pyMRAW
+from PIL import Image
+
+dump, data_dir, work = sys.argv[1], sys.argv[2], sys.argv[3]
+os.makedirs(work, exist_ok=True)
+failures = []
+
+
+def ours(path):
+    out = os.path.join(work, "dump.bin")
+    line = subprocess.run([dump, path, out], check=True, capture_output=True, text=True).stdout
+    w, h, bits, n = map(int, line.split())
+    dtype = np.uint8 if bits == 8 else np.dtype("<u2")
+    return np.fromfile(out, dtype=dtype).reshape(n, h, w)
+
+
+def compare(name, got, want, tol=0):
+    want = np.asarray(want)
+    if got.shape != want.shape:
+        failures.append(f"{name}: shape {got.shape} != {want.shape}")
+        return
+    d = np.abs(got.astype(np.int64) - want.astype(np.int64))
+    if d.max() > tol:
+        failures.append(f"{name}: {int((d > tol).sum())} pixels differ by more than {tol} "
+                        f"(max {int(d.max())})")
+    print(f"{name}: {got.shape[0]} frame(s) {got.shape[2]}x{got.shape[1]}, max difference "
+          f"{int(d.max())} (allowed {tol})")
+
+
+# Photron: pyMRAW's sample files
+for f in ["sample_60k_16bit.cih", "beam.cihx", "ball_12bit.cihx"]:
+    p = os.path.join(data_dir, f)
+    images, cih = pyMRAW.load_video(p)
+    compare(f"pyMRAW sample {f}", ours(p), images)
+
+# Photron: recordings written here, 8 and 16 bit by pyMRAW, 12-bit packed by this script
+rng = np.random.default_rng(7)
+for bits in [8, 16]:
+    top = 255 if bits == 8 else 4095
+    seq = rng.integers(0, top + 1, size=(5, 24, 40)).astype(np.uint16)
+    _, cih = pyMRAW.save_mraw(seq, os.path.join(work, f"w{bits}.cih"), bit_depth=bits)
+    images, _ = pyMRAW.load_video(cih)
+    compare(f"save_mraw {bits}-bit", ours(cih), images)
+seq = rng.integers(0, 4096, size=(3, 10, 16)).astype(np.uint16)
+flat = seq.reshape(-1, 2)
+packed = np.stack([flat[:, 0] >> 4, ((flat[:, 0] & 15) << 4) | (flat[:, 1] >> 8),
+                   flat[:, 1] & 255], axis=1).astype(np.uint8)
+base = os.path.join(work, "w12")
+packed.tofile(base + ".mraw")
+with open(base + ".cih", "w") as fh:
+    fh.write("#Camera Information Header\nRecord Rate(fps) : 1000\nShutter Speed(s) : 1/2000\n"
+             "Total Frame : 3\nImage Width : 16\nImage Height : 10\nColor Type : Mono\n"
+             "Color Bit : 12\nFile Format : MRaw\nEffectiveBit Depth : 12\n"
+             "EffectiveBit Side : Lower\n\n")
+images, _ = pyMRAW.load_video(base + ".cih")
+compare("12-bit packed (written here)", ours(base + ".cih"), images)
+compare("12-bit packed against the values written", ours(base + ".cih"), seq)
+
+# JPEG and colour images against PIL's luma
+yy, xx = np.mgrid[0:60, 0:80]
+scene = np.stack([(xx * 3) % 256, (yy * 4) % 256, (xx + yy) % 256], axis=2).astype(np.float64)
+scene += rng.normal(0, 20, scene.shape)
+scene = np.clip(scene, 0, 255).astype(np.uint8)
+for name, kw in [("baseline.jpg", dict(quality=90)),
+                 ("progressive.jpg", dict(quality=85, progressive=True)),
+                 ("colour.png", {}), ("colour.tif", {})]:
+    d = os.path.join(work, "img_" + name.replace(".", "_"))
+    os.makedirs(d, exist_ok=True)
+    p = os.path.join(d, "frame_0." + name.split(".")[1])
+    Image.fromarray(scene).save(p, **kw)
+    want = np.asarray(Image.open(p).convert("L"))[None]
+    compare(f"{name} luma vs PIL convert('L')", ours(d), want, tol=1)
+rgba = np.concatenate([scene, np.full(scene.shape[:2] + (1,), 128, np.uint8)], axis=2)
+d = os.path.join(work, "img_rgba")
+os.makedirs(d, exist_ok=True)
+Image.fromarray(rgba, "RGBA").save(os.path.join(d, "frame_0.png"))
+compare("RGBA PNG (alpha ignored) vs PIL", ours(d),
+        np.asarray(Image.fromarray(scene).convert("L"))[None], tol=1)
+
+if failures:
+    print("FAILED:\n  " + "\n  ".join(failures))
+    sys.exit(1)
+print("all frame decoders agree")

@@ -1,0 +1,213 @@
+//! Frames as cameras and ordinary tools write them: Photron recordings (8, 12-bit packed and
+//! 16-bit; the header's rate and shutter as defaults), colour PNG and JPEG frames (BT.601
+//! luma), and the errors a damaged or mismatched camera file gives. The pixel-for-pixel
+//! comparison with pyMRAW and PIL is `scripts/check_frames.py`, run by CI.
+
+use crate::analyze::{disk, make_recording, position_px, FPS, H, W};
+use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use host_harness::frames::photron::write_recording;
+use std::path::Path;
+
+/// The 1 s recording's frames as Photron `rec.cih` + `rec.mraw` at `bits`, levels scaled by
+/// `scale` (the threshold scales with them).
+fn photron(dir: &Path, bits: u32, scale: u16) -> std::path::PathBuf {
+    let frames: Vec<Vec<u16>> = (0..120)
+        .map(|k| {
+            disk(position_px(k as f64 / FPS), W, H)
+                .into_iter()
+                .map(|v| u16::from(v) * scale)
+                .collect()
+        })
+        .collect();
+    let cih = dir.join(format!("rec{bits}.cih"));
+    write_recording(&cih, (W as usize, H as usize), bits, FPS, 0.002, &frames).unwrap();
+    cih
+}
+
+fn analyze(frames: &Path, accel: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "analyze",
+        "--frames",
+        frames.to_str().unwrap(),
+        "--accel",
+        accel.to_str().unwrap(),
+        "--fs",
+        "2048",
+        "--mm-per-px",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+/// The `modes.csv` cells `f_hz,amplitude` of every row.
+fn modes(out: &Path) -> Vec<String> {
+    std::fs::read_to_string(out.join("modes.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').skip(4).take(2).collect::<Vec<_>>().join(","))
+        .collect()
+}
+
+#[test]
+fn a_photron_recording_gives_the_modes_of_its_png_frames_at_the_header_rate() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let png_out = rec.dir.join("png");
+    let o = analyze(
+        &rec.frames,
+        &rec.accel,
+        &png_out,
+        &["--fps", "120", "--threshold", "100", "--exposure-ms", "2"],
+    );
+    assert_ok(&o);
+    let want = modes(&png_out);
+    for (bits, scale, threshold) in [(8, 1, "100"), (12, 16, "1600"), (16, 256, "25600")] {
+        let cih = photron(&rec.dir, bits, scale);
+        let out = rec.dir.join(format!("ph{bits}"));
+        // no --fps, no --exposure-ms: the header's 120 fps and 1/500 s
+        let o = analyze(&cih, &rec.accel, &out, &["--threshold", threshold]);
+        assert_ok(&o);
+        assert_eq!(modes(&out), want, "{bits} bits");
+        let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+        assert!(
+            report.contains("frame rate 120 fps, as") && report.contains("exposure 2 ms, as"),
+            "{report}"
+        );
+    }
+    // --fps overrides the header's rate, and the report says so
+    let cih = rec.dir.join("rec8.cih");
+    let out = rec.dir.join("override");
+    let o = analyze(
+        &cih,
+        &rec.accel,
+        &out,
+        &["--threshold", "100", "--fps", "240"],
+    );
+    assert_ok(&o);
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("--fps 240 overrides the 120 fps that"),
+        "{report}"
+    );
+    // image files state no rate: --fps is needed
+    let nofps = rec.dir.join("nofps");
+    let o = analyze(&rec.frames, &rec.accel, &nofps, &["--threshold", "100"]);
+    assert_exit_2(&o, "--fps is needed");
+}
+
+#[test]
+fn centroid_reads_every_frame_of_a_photron_recording() {
+    let (_tmp, rec) = make_recording(2, 64);
+    let cih = photron(&rec.dir, 12, 16);
+    let o = harness(&["centroid", "--threshold", "1600", cih.to_str().unwrap()]);
+    assert_ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let rows: Vec<&str> = out.lines().skip(1).collect();
+    assert_eq!(rows.len(), 120, "{out}");
+    let c = cih.to_str().unwrap();
+    assert!(rows[0].starts_with(&format!("{c}#1,12,")), "{}", rows[0]);
+    assert!(rows[119].starts_with(&format!("{c}#120,")), "{}", rows[119]);
+}
+
+#[test]
+fn damaged_or_mismatched_photron_files_are_named() {
+    let (_tmp, rec) = make_recording(2, 64);
+    let cih = photron(&rec.dir, 16, 256);
+    let mraw = cih.with_extension("mraw");
+    let args = |f: &Path| {
+        harness(&[
+            "analyze",
+            "--frames",
+            f.to_str().unwrap(),
+            "--accel",
+            rec.accel.to_str().unwrap(),
+            "--fs",
+            "2048",
+            "--threshold",
+            "100",
+            "--mm-per-px",
+            "0.1",
+            "--out",
+            rec.dir.join("out").to_str().unwrap(),
+        ])
+    };
+    // the frames file named instead of the header
+    assert_exit_2(&args(&mraw), "named by its header: give");
+    // truncated
+    let bytes = std::fs::read(&mraw).unwrap();
+    std::fs::write(&mraw, &bytes[..bytes.len() - 100]).unwrap();
+    let o = args(&cih);
+    assert_exit_2(&o, "truncated");
+    assert!(stderr(&o).contains("rec16.mraw"), "{}", stderr(&o));
+    // a header whose frame count disagrees with the data
+    std::fs::write(&mraw, &bytes).unwrap();
+    let text = std::fs::read_to_string(&cih).unwrap();
+    std::fs::write(&cih, text.replace("Total Frame : 120", "Total Frame : 100")).unwrap();
+    assert_exit_2(&args(&cih), "states 100 frames");
+    // an unsupported bit depth, and a compressed format
+    std::fs::write(&cih, text.replace("Color Bit : 16", "Color Bit : 10")).unwrap();
+    assert_exit_2(&args(&cih), "10 bits per pixel");
+    std::fs::write(
+        &cih,
+        text.replace("File Format : MRaw", "File Format : AVI"),
+    )
+    .unwrap();
+    assert_exit_2(&args(&cih), "only MRaw");
+    // not a header at all
+    std::fs::write(&cih, "hello\n").unwrap();
+    assert_exit_2(&args(&cih), "no `File Format`");
+}
+
+#[test]
+fn colour_png_and_jpeg_frames_are_read_as_their_luma() {
+    let dir = tempfile::tempdir().unwrap();
+    // a colour spot (200, 100, 50): luma 0.299*200 + 0.587*100 + 0.114*50 = 124.2 -> 124
+    let mut img = image::RgbImage::new(16, 12);
+    for (x, y) in [(5, 4), (6, 4), (5, 5), (6, 5)] {
+        img.put_pixel(x, y, image::Rgb([200, 100, 50]));
+    }
+    let png = dir.path().join("spot.png");
+    img.save(&png).unwrap();
+    let at = |t: &str, f: &Path| {
+        let o = harness(&["centroid", "--threshold", t, f.to_str().unwrap()]);
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .nth(1)
+            .unwrap_or("")
+            .to_string()
+    };
+    let p = png.to_str().unwrap();
+    assert_eq!(at("123", &png), format!("{p},5.5,4.5,4,0"));
+    // 124 is not above 124: the luma is exactly 124
+    assert_eq!(at("124", &png), format!("{p},,,0,1"));
+    // the same scene as a JPEG (lossy: the centroid within 0.05 px, the level within a few)
+    let jpg = dir.path().join("spot.jpg");
+    let mut big = image::RgbImage::new(64, 48);
+    for y in 16..28 {
+        for x in 20..36 {
+            big.put_pixel(x, y, image::Rgb([200, 100, 50]));
+        }
+    }
+    image::DynamicImage::ImageRgb8(big)
+        .save_with_format(&jpg, image::ImageFormat::Jpeg)
+        .unwrap();
+    let row = at("60", &jpg);
+    let cells: Vec<f64> = row
+        .split(',')
+        .skip(1)
+        .take(2)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        (cells[0] - 27.5).abs() < 0.05 && (cells[1] - 21.5).abs() < 0.05,
+        "{row}"
+    );
+    // a file named .jpg that is not one
+    let bad = dir.path().join("bad.jpg");
+    std::fs::write(&bad, b"GIF89a not a jpeg").unwrap();
+    let o = harness(&["centroid", "--threshold", "60", bad.to_str().unwrap()]);
+    assert_exit_2(&o, "bad.jpg");
+}
