@@ -4,6 +4,9 @@
   .cihx, a 12-bit packed Bayer .cihx), and 8-, 12- and 16-bit recordings written here (8 and
   16 by pyMRAW's own save_mraw, 12-bit packed by this script), read by pyMRAW.load_video and
   by host-harness (examples/frame_dump.rs): every pixel equal.
+- Phantom cine: 8-, 16-bit and packed 10-bit files written here with pycine's own header
+  structures (ctypes), read by host-harness: 8/16-bit upright as written and as pycine reads
+  16-bit frames; packed 10-bit equal to pycine's unpacked codes through pycine's linLUT.
 - JPEG and colour PNG/TIFF: frames written by PIL (a colour scene with noise; baseline and
   progressive JPEG), host-harness's grey against PIL's convert("L"): within 1 grey level.
 
@@ -13,9 +16,16 @@ import os
 import subprocess
 import sys
 
+import ctypes
+import struct
+
 import numpy as np
 import pyMRAW
 from PIL import Image
+from pycine import cine
+from pycine.file import read_header as cine_header
+from pycine.linLUT import linLUT
+from pycine.raw import create_raw_array, unpack_10bit
 
 dump, data_dir, work = sys.argv[1], sys.argv[2], sys.argv[3]
 os.makedirs(work, exist_ok=True)
@@ -71,6 +81,76 @@ with open(base + ".cih", "w") as fh:
 images, _ = pyMRAW.load_video(base + ".cih")
 compare("12-bit packed (written here)", ours(base + ".cih"), images)
 compare("12-bit packed against the values written", ours(base + ".cih"), seq)
+
+# Phantom cine files written with pycine's structures
+def write_cine(path, frames, bits, compression, fps=2000, shutter_ns=250000):
+    n, h, w = frames.shape
+    if compression == 256:
+        images = []
+        for f in frames:
+            c = f.reshape(-1, 4).astype(np.uint64)
+            word = (c[:, 0] << 30) | (c[:, 1] << 20) | (c[:, 2] << 10) | c[:, 3]
+            b = np.stack([(word >> s) & 255 for s in (32, 24, 16, 8, 0)], axis=1)
+            images.append(b.astype(np.uint8).tobytes())
+        real = 12
+    else:
+        dt = np.uint8 if bits == 8 else np.dtype("<u2")
+        images = [np.flipud(f).astype(dt).tobytes() for f in frames]
+        real = 8 if bits == 8 else 12
+    setup = cine.SETUP()
+    setup.Length = ctypes.sizeof(setup)
+    setup.FrameRate, setup.ShutterNs, setup.RealBPP = fps, shutter_ns, real
+    setup.BlackLevel, setup.WhiteLevel = 0, 2 ** real - 1
+    fh = cine.CINEFILEHEADER()
+    fh.Type, fh.Headersize, fh.Version = 0x4943, 44, 1
+    fh.ImageCount = fh.TotalImageCount = n
+    fh.OffImageHeader, fh.OffSetup = 44, 84
+    fh.OffImageOffsets = 84 + ctypes.sizeof(setup)
+    bmi = cine.BITMAPINFOHEADER()
+    bmi.biSize, bmi.biWidth, bmi.biHeight, bmi.biPlanes = 40, w, h, 1
+    bmi.biBitCount, bmi.biCompression, bmi.biSizeImage = bits, compression, len(images[0])
+    with open(path, "wb") as f:
+        f.write(bytes(fh))
+        f.write(bytes(bmi))
+        f.write(bytes(setup))
+        first = fh.OffImageOffsets + 8 * n
+        offsets = [first + k * (8 + len(images[0])) for k in range(n)]
+        f.write(struct.pack(f"<{n}q", *offsets))
+        for img in images:
+            f.write(struct.pack("<II", 8, len(img)))
+            f.write(img)
+
+
+def pycine_images(path):
+    """Each frame's stored bytes, found through pycine's header and image offsets."""
+    h = cine_header(path)
+    out = []
+    with open(path, "rb") as f:
+        for off in h["pImage"]:
+            f.seek(off)
+            ann = struct.unpack("<I", f.read(4))[0]
+            f.seek(off + ann - 4)
+            size = struct.unpack("<I", f.read(4))[0]
+            out.append(f.read(size))
+    return h, out
+
+
+for bits, comp, top in [(8, 0, 256), (16, 0, 4096), (10, 256, 1024)]:
+    seq = rng.integers(0, top, size=(4, 6, 12)).astype(np.uint16)
+    p = os.path.join(work, f"p{bits}.cine")
+    write_cine(p, seq, bits, comp)
+    got = ours(p)
+    h, images = pycine_images(p)
+    w, hh = h["bitmapinfoheader"].biWidth, h["bitmapinfoheader"].biHeight
+    if comp == 256:
+        codes = np.stack([unpack_10bit(img, w, hh) for img in images])
+        compare("cine packed 10-bit: pycine's codes before the table", seq, codes)
+        compare("cine packed 10-bit vs pycine's codes through linLUT", got, linLUT[codes])
+    elif bits == 16:
+        want = np.stack([create_raw_array(img, h) for img in images])
+        compare("cine 16-bit vs pycine (upright)", got, want)
+    else:
+        compare("cine 8-bit, upright as written", got, seq)
 
 # JPEG and colour images against PIL's luma
 yy, xx = np.mgrid[0:60, 0:80]

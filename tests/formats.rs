@@ -211,3 +211,96 @@ fn colour_png_and_jpeg_frames_are_read_as_their_luma() {
     let o = harness(&["centroid", "--threshold", "60", bad.to_str().unwrap()]);
     assert_exit_2(&o, "bad.jpg");
 }
+
+/// The 1 s recording's frames as a Phantom cine (`bits`, `compression`), levels scaled.
+fn cine(dir: &Path, bits: u16, compression: u32, scale: u16) -> std::path::PathBuf {
+    let frames: Vec<Vec<u16>> = (0..120)
+        .map(|k| {
+            disk(position_px(k as f64 / FPS), W, H)
+                .into_iter()
+                .map(|v| u16::from(v) * scale)
+                .collect()
+        })
+        .collect();
+    let p = dir.join(format!("rec{bits}_{compression}.cine"));
+    host_harness::frames::phantom::write_cine(
+        &p,
+        (W as usize, H as usize),
+        (bits, compression),
+        (120, 2_000_000),
+        &frames,
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn a_phantom_cine_gives_the_modes_of_its_png_frames_at_its_own_rate() {
+    let (_tmp, rec) = make_recording(120, 2048);
+    let png_out = rec.dir.join("png");
+    let o = analyze(
+        &rec.frames,
+        &rec.accel,
+        &png_out,
+        &["--fps", "120", "--threshold", "100"],
+    );
+    assert_ok(&o);
+    let want = modes(&png_out);
+    // 8 and 16 bits (stored bottom-up), and packed 10-bit codes 4 v (through the monotonic
+    // 10-to-12-bit table, LIN_LUT[400] = 623 < LIN_LUT[401] = 626: a pixel is above 623 exactly
+    // when v is above 100, the same binary mask as the PNG frames at 100)
+    for (bits, comp, scale, threshold) in
+        [(8, 0, 1, "100"), (16, 0, 16, "1600"), (10, 256, 4, "623")]
+    {
+        let p = cine(&rec.dir, bits, comp, scale);
+        let out = rec.dir.join(format!("cine{bits}"));
+        let o = analyze(&p, &rec.accel, &out, &["--threshold", threshold]);
+        assert_ok(&o);
+        assert_eq!(modes(&out), want, "{bits} bits");
+        let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+        assert!(
+            report.contains("frame rate 120 fps, as") && report.contains("exposure 2 ms, as"),
+            "{report}"
+        );
+    }
+    let p = rec.dir.join("rec8_0.cine");
+    let o = harness(&["centroid", "--threshold", "100", p.to_str().unwrap()]);
+    assert_ok(&o);
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 121);
+}
+
+#[test]
+fn damaged_phantom_files_are_named() {
+    let (_tmp, rec) = make_recording(2, 64);
+    let p = cine(&rec.dir, 16, 0, 1);
+    let centroid = |f: &Path| harness(&["centroid", "--threshold", "100", f.to_str().unwrap()]);
+    let bytes = std::fs::read(&p).unwrap();
+    // truncated: the last frame beyond the end
+    std::fs::write(&p, &bytes[..bytes.len() - 10]).unwrap();
+    assert_exit_2(
+        &centroid(&p),
+        "frame 120 of 120 lies beyond the end of the file",
+    );
+    // a dropped frame: frame 51's time stamp two periods after frame 50's
+    let mut b = bytes.clone();
+    let setup = u32::from_le_bytes(b[28..32].try_into().unwrap()) as usize;
+    let stamps = setup + 13_484 + 8;
+    for k in 50..120 {
+        let at = stamps + 8 * k;
+        let frac = u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+        let v = (u64::from(u32::from_le_bytes(b[at + 4..at + 8].try_into().unwrap())) << 32
+            | u64::from(frac))
+            + (1u64 << 32) / 120;
+        b[at..at + 4].copy_from_slice(&(v as u32).to_le_bytes());
+        b[at + 4..at + 8].copy_from_slice(&((v >> 32) as u32).to_le_bytes());
+    }
+    std::fs::write(&p, &b).unwrap();
+    assert_exit_2(&centroid(&p), "frame 51 comes 16.667 ms after frame 50");
+    // not a cine, and an unsupported compression
+    std::fs::write(&p, [b"RIFF".as_slice(), &[0u8; 60]].concat()).unwrap();
+    assert_exit_2(&centroid(&p), "not a Phantom cine file");
+    let mut b = bytes;
+    b[44 + 16..44 + 20].copy_from_slice(&2u32.to_le_bytes());
+    std::fs::write(&p, &b).unwrap();
+    assert_exit_2(&centroid(&p), "compression 2");
+}

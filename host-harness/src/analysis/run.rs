@@ -300,6 +300,7 @@ fn describe_inputs(
         FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
         FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
         FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
+        FrameSource::Cine(p) => format!("{} (Phantom cine recording)", p.display()),
     };
     let (fps, a, d, c) = (
         req.settings.frame_rate_hz,

@@ -17,16 +17,17 @@ pub struct Args {
     /// order, so frame_2 comes before frame_10; other images beside it are named and ignored),
     /// a pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, a
     /// Photron recording named by its .cih/.cihx (8, 12-bit packed or 16 bit; the .mraw beside
-    /// it), or a video file (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg`
-    /// program, luma, its timestamps checked against --fps). Grey frames as stored (8 or 16
-    /// bits); colour frames as their BT.601 luma, 0.299 R + 0.587 G + 0.114 B rounded, alpha
-    /// ignored. Numbered files must be consecutive (a gap is an error).
-    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|VIDEO")]
+    /// it), a Phantom .cine (8, 16, packed 10-bit linearised to 12, packed 12), or a video file
+    /// (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg` program, luma, its
+    /// timestamps checked against --fps). Grey frames as stored (8 or 16 bits); colour frames
+    /// as their BT.601 luma, 0.299 R + 0.587 G + 0.114 B rounded, alpha ignored. Numbered files
+    /// must be consecutive (a gap is an error).
+    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|REC.cine|VIDEO")]
     pub frames: String,
     /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`). Default: the
-    /// rate a camera file states (Photron); needed for image files and videos (a container's
-    /// rate is often not the capture rate: phone slow motion stores 30 fps for 240). Given with
-    /// a camera file, it overrides the file's rate (the report names both).
+    /// rate a camera file states (Photron, Phantom); needed for image files and videos (a
+    /// container's rate is often not the capture rate: phone slow motion stores 30 fps for
+    /// 240). Given with a camera file, it overrides the file's rate (the report names both).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
@@ -79,7 +80,7 @@ pub struct Args {
     #[arg(long)]
     pub invert: bool,
     /// Camera exposure time, ms (for the E2PR of each mode). Default: the shutter a camera
-    /// file states (Photron).
+    /// file states (Photron, Phantom).
     #[arg(long, value_name = "MS")]
     pub exposure_ms: Option<f64>,
     /// Divide the vision H1 by the exposure's transfer sinc(pi f --exposure-ms) up to E2PR 0.8

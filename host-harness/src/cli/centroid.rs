@@ -1,11 +1,12 @@
 //! `host-harness centroid`: thresholded centroid of the target in PNG/TIFF/JPEG frames and
-//! Photron recordings, through `firmware_core::centroid` (the single-target whole-frame path
-//! the firmware runs).
+//! Photron and Phantom recordings, through `firmware_core::centroid` (the single-target
+//! whole-frame path the firmware runs).
 //!
 //! Output: CSV on stdout, `file,cx,cy,pixels,flags`, one row per frame that could be read;
 //! every page of a multi-page TIFF and every frame of a Photron recording (named by its
-//! `.cih`/`.cihx`) is measured, each a row named `file#N` (1-based). Colour frames are read as
-//! their BT.601 luma (0.299 R + 0.587 G + 0.114 B, rounded; alpha ignored).
+//! `.cih`/`.cihx`) or a Phantom `.cine` is measured, each a row named `file#N` (1-based).
+//! Colour frames are read as their BT.601 luma (0.299 R + 0.587 G + 0.114 B, rounded; alpha
+//! ignored).
 //! A file (or page) that cannot be read, is not 8- or 16-bit, or does not hold the ROI gets
 //! an error naming it on stderr; the other files are still processed, and the command exits with
 //! code 2 at the end.
@@ -30,8 +31,8 @@ pub struct Args {
     #[arg(long, value_name = "LEVEL")]
     pub saturation: Option<u16>,
     /// PNG, TIFF or JPEG frames (8- or 16-bit grey, or colour read as its BT.601 luma
-    /// 0.299 R + 0.587 G + 0.114 B, rounded, alpha ignored), or Photron recordings named by
-    /// their .cih/.cihx (one row per frame, FILE#N).
+    /// 0.299 R + 0.587 G + 0.114 B, rounded, alpha ignored), Photron recordings named by
+    /// their .cih/.cihx, or Phantom .cine files (one row per frame, FILE#N).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
 }
@@ -64,7 +65,10 @@ fn centroid_pages(
     path: &Path,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let name = path.to_string_lossy().into_owned();
-    if crate::frames::photron::is_header(path) || crate::frames::photron::is_mraw(path) {
+    if crate::frames::photron::is_header(path)
+        || crate::frames::photron::is_mraw(path)
+        || crate::frames::phantom::is_cine(path)
+    {
         return recording_frames(config, path, &name);
     }
     let is_tiff = path
@@ -94,7 +98,7 @@ fn centroid_pages(
     (rows, result.err())
 }
 
-/// Every frame of a camera recording (Photron), labelled `file#N` from 1.
+/// Every frame of a camera recording (Photron, Phantom), labelled `file#N` from 1.
 fn recording_frames(
     config: &CentroidConfig,
     path: &Path,

@@ -22,6 +22,8 @@ pub enum FrameSource {
     /// A Photron recording, named by its header (`.cih` / `.cihx`; frames in the `.mraw`
     /// beside it, [`crate::frames::photron`]).
     Photron(PathBuf),
+    /// A Phantom `.cine` recording ([`crate::frames::phantom`]).
+    Cine(PathBuf),
 }
 
 /// Extensions read as video files.
@@ -278,6 +280,10 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
         if super::photron::is_mraw(path) {
             return Err(super::photron::mraw_named(path));
         }
+        if super::phantom::is_cine(path) {
+            super::phantom::read_header(path)?;
+            return Ok(whole(FrameSource::Cine(path.to_path_buf())));
+        }
         if is_tiff(path) {
             return Ok(whole(FrameSource::MultiPageTiff(path.to_path_buf())));
         }
@@ -482,6 +488,7 @@ impl FrameSource {
             FrameSource::Files(f) => Ok(Some(f.len())),
             FrameSource::MultiPageTiff(_) => Ok(None),
             FrameSource::Photron(p) => Ok(Some(super::photron::read_header(p)?.frames)),
+            FrameSource::Cine(p) => Ok(Some(super::phantom::read_header(p)?.offsets.len())),
             FrameSource::Video(p) => {
                 let v =
                     crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
@@ -491,12 +498,16 @@ impl FrameSource {
     }
 
     /// The frame rate (Hz) and exposure (s) the recording's own header states: a camera file's
-    /// (Photron); `None` for image files and videos, whose container rate is not trusted as
+    /// (Photron, Phantom); `None` for image files and videos, whose container rate is not trusted as
     /// the capture rate.
     pub fn recorded_rate(&self) -> anyhow::Result<Option<(f64, Option<f64>)>> {
         match self {
             FrameSource::Photron(p) => {
                 let h = super::photron::read_header(p)?;
+                Ok(h.fps.map(|fps| (fps, h.shutter_s)))
+            }
+            FrameSource::Cine(p) => {
+                let h = super::phantom::read_header(p)?;
                 Ok(h.fps.map(|fps| (fps, h.shutter_s)))
             }
             _ => Ok(None),
@@ -507,6 +518,7 @@ impl FrameSource {
     pub fn note(&self) -> anyhow::Result<Option<String>> {
         match self {
             FrameSource::Photron(p) => Ok(super::photron::read_header(p)?.note()),
+            FrameSource::Cine(p) => Ok(super::phantom::read_header(p)?.note()),
             _ => Ok(None),
         }
     }
@@ -530,6 +542,19 @@ impl FrameSource {
             FrameSource::Photron(p) => {
                 let mut r = super::photron::MrawFrames::open(p)?;
                 let n = r.header().frames;
+                let mut frame = GreyFrame::U8 {
+                    width: 0,
+                    height: 0,
+                    data: Vec::new(),
+                };
+                while let Some(k) = r.next_frame(&mut frame)? {
+                    f(format!("{} frame {} of {n}", p.display(), k + 1), &frame)?;
+                }
+                Ok(())
+            }
+            FrameSource::Cine(p) => {
+                let mut r = super::phantom::CineFrames::open(p)?;
+                let n = r.header().offsets.len();
                 let mut frame = GreyFrame::U8 {
                     width: 0,
                     height: 0,

@@ -3,6 +3,8 @@
 //! toolkit lives here; what is done with a frame (centroid, tracking, analysis) lives above it.
 
 pub mod files;
+pub mod phantom;
+pub mod phantom_lut;
 pub mod photron;
 pub mod video;
 
