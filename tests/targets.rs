@@ -611,3 +611,193 @@ fn a_merged_or_jumping_blob_within_the_gate_is_refused_not_taken() {
     assert_ok(&analyze_hand(&dir, dir.join("frames").to_str().unwrap()));
     assert_eq!(lost_counts(&dir), vec![0, 0, 3]);
 }
+
+/// A cluttered scene: the three bobbing targets, plus a bright wall patch at the right
+/// (columns 145..160, as bright as the tags) and a "hand" blob drifting along the bottom. The
+/// blob numbering of `--targets 3` finds five blobs and stops with a message naming them and
+/// `--points`; `--points` with one window per target gives exactly the clean recording's
+/// modes (the windows never see the clutter); `--threshold auto` finds a threshold between
+/// the levels in every window, and a points file with a window outside the frame or a
+/// duplicate target is an error naming it.
+#[test]
+fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
+    hand_recording(&clean, &resting, 2048);
+    hand_recording(&cluttered, &resting, 2048);
+    for k in 0..FRAMES {
+        let p = cluttered.join("frames").join(format!("f_{k:05}.png"));
+        let mut img = image::open(&p).unwrap().into_luma8();
+        for y in 0..H as u32 {
+            for x in 145..W as u32 {
+                img.put_pixel(x, y, image::Luma([230]));
+            }
+        }
+        let hx = 10.0 + k as f64 * 0.8;
+        for (px, py) in disk_pixels(hx, 43.0) {
+            img.put_pixel(px as u32, py as u32, image::Luma([200]));
+        }
+        img.save(&p).unwrap();
+    }
+    let frames = |d: &Path| d.join("frames").to_str().unwrap().to_string();
+    assert_ok(&analyze_hand(&clean, &frames(&clean)));
+    let o = analyze_hand(&cluttered, &frames(&cluttered));
+    assert_exit_2(&o, "--points");
+    let points = tmp.path().join("points.csv");
+    std::fs::write(
+        &points,
+        "target,x,y,w,h\n1,30,24,17,17\n2,80,24.5,17,17\n3,130,24,16,17\n",
+    )
+    .unwrap();
+    let p = points.to_str().unwrap();
+    let with_points = |extra: &[&str]| {
+        let mut args = vec!["--points", p];
+        args.extend_from_slice(extra);
+        // analyze_hand_with passes --targets 3: drop it for --points
+        let accel = cluttered.join("accel.csv");
+        let out = cluttered.join("out");
+        let mut all = vec![
+            "analyze",
+            "--frames",
+            frames(&cluttered).leak(),
+            "--fps",
+            "120",
+            "--accel",
+            accel.to_str().unwrap().to_string().leak(),
+            "--fs",
+            "2048",
+            "--time-col",
+            "t_s",
+            "--mm-per-px",
+            "0.1",
+            "--out",
+            out.to_str().unwrap().to_string().leak(),
+            "--force",
+        ];
+        all.extend_from_slice(&args);
+        harness(&all)
+    };
+    assert_ok(&with_points(&["--threshold", "127"]));
+    let read = |d: &Path, f: &str| std::fs::read_to_string(d.join("out").join(f)).unwrap();
+    assert_eq!(read(&cluttered, "modes.csv"), read(&clean, "modes.csv"));
+    assert_eq!(read(&cluttered, "shapes.csv"), read(&clean, "shapes.csv"));
+    let report = read(&cluttered, "report.txt");
+    assert!(
+        report.contains("target 3: window 16x17 px, threshold 127, 0 of 120 frames lost"),
+        "{report}"
+    );
+    // Otsu's threshold of each window: between the background and the tag, same modes
+    assert_ok(&with_points(&["--threshold", "auto"]));
+    assert_eq!(read(&cluttered, "modes.csv"), read(&clean, "modes.csv"));
+    // a window outside the first frame, a duplicate target, a gap in the numbering
+    for (text, needle) in [
+        (
+            "target,x,y,w,h\n1,30,24,17,17\n2,5,24,17,17\n",
+            "target 2: the 17x17 window",
+        ),
+        (
+            "target,x,y,w,h\n1,30,24,17,17\n1,80,24,17,17\n",
+            "row 3: target 1 is given twice",
+        ),
+        (
+            "target,x,y,w,h\n1,30,24,17,17\n3,80,24,17,17\n",
+            "target 2 is missing",
+        ),
+        ("target,x,y,w,h\n1,30,24,2,17\n", "`w` is 2"),
+    ] {
+        std::fs::write(&points, text).unwrap();
+        assert_exit_2(&with_points(&["--threshold", "127"]), needle);
+    }
+}
+
+/// `track`: frames in, positions out, no accelerometer. Chosen points in the cluttered scene
+/// give exactly the positions `--targets 3` gives in the clean one (the windows never see the
+/// clutter), with the documented columns; `disp_mm` is empty without a scale and filled with
+/// one; a camera-less folder needs `--fps`.
+#[test]
+fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
+    hand_recording(&clean, &resting, 64);
+    hand_recording(&cluttered, &resting, 64);
+    for k in 0..FRAMES {
+        let p = cluttered.join("frames").join(format!("f_{k:05}.png"));
+        let mut img = image::open(&p).unwrap().into_luma8();
+        for y in 0..H as u32 {
+            for x in 145..W as u32 {
+                img.put_pixel(x, y, image::Luma([230]));
+            }
+        }
+        img.save(&p).unwrap();
+    }
+    let points = tmp.path().join("points.csv");
+    std::fs::write(
+        &points,
+        "target,x,y,w,h\n1,30,24,17,17\n2,80,24,17,17\n3,130,24,17,17\n",
+    )
+    .unwrap();
+    let track = |frames: &Path, out: &Path, extra: &[&str]| {
+        let f = frames.join("frames");
+        let mut args = vec![
+            "track",
+            "--frames",
+            f.to_str().unwrap(),
+            "--threshold",
+            "127",
+            "--out",
+            out.to_str().unwrap(),
+            "--no-plots",
+        ];
+        args.extend_from_slice(extra);
+        harness(&args)
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    assert_ok(&track(&clean, &a, &["--fps", "120", "--targets", "3"]));
+    assert_ok(&track(
+        &cluttered,
+        &b,
+        &[
+            "--fps",
+            "120",
+            "--points",
+            points.to_str().unwrap(),
+            "--mm-per-px",
+            "0.1",
+        ],
+    ));
+    let read = |d: &Path| std::fs::read_to_string(d.join("displacement.csv")).unwrap();
+    let (ta, tb) = (read(&a), read(&b));
+    assert!(
+        ta.starts_with("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n"),
+        "{ta}"
+    );
+    assert_eq!(ta.lines().count(), 1 + 3 * FRAMES);
+    let cols = |t: &str, n: usize| -> Vec<String> {
+        t.lines()
+            .map(|l| l.split(',').take(n).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(cols(&ta, 7), cols(&tb, 7));
+    // disp_mm: empty without a scale, -(y - y0) * 0.1 with it (the first frame's is 0 only if
+    // the track starts at its own mean: just check that it is filled and finite)
+    let first_a = ta
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(7)
+        .unwrap()
+        .to_string();
+    let first_b: f64 = tb
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(7)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(first_a.is_empty() && first_b.is_finite());
+    let o = track(&clean, &tmp.path().join("c"), &["--targets", "3"]);
+    assert_exit_2(&o, "--fps is needed");
+}

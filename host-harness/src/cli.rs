@@ -12,6 +12,7 @@ pub mod merge;
 pub mod plan;
 pub mod render;
 pub mod study;
+pub mod track;
 pub mod upsample;
 
 /// Vision-based vibration and modal measurement: Monte Carlo studies of motion blur and
@@ -34,7 +35,8 @@ enum Command {
     Study(study::Args),
     /// Combine the outputs of `study --shard K/N` runs into one study output.
     Merge(merge::Args),
-    /// Centroid of the thresholded target in PNG/TIFF frames; CSV on stdout.
+    /// Centroid of the thresholded target in image files and camera recordings; CSV on
+    /// stdout.
     Centroid(centroid::Args),
     /// H1 frequency response and coherence of two CSV columns (streaming Welch).
     Frf(frf::Args),
@@ -42,6 +44,9 @@ enum Command {
     Upsample(upsample::Args),
     /// Analyse a real recording: image sequence + accelerometer CSV -> FRFs and modes.
     Analyze(Box<analyze::Args>),
+    /// Follow targets through frames (chosen points, or the blobs of the first frame):
+    /// displacement.csv, a report and a plot; no accelerometer needed.
+    Track(Box<track::Args>),
     /// Write PNG frames of the simulated target, sharp and blurred.
     Render(render::Args),
     /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
@@ -61,6 +66,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Frf(a) => frf::run(a),
         Command::Upsample(a) => upsample::run(a),
         Command::Analyze(a) => analyze::run(*a),
+        Command::Track(a) => track::run(*a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),
         Command::Calibrate(a) => calibrate::run(a),

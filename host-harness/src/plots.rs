@@ -496,6 +496,59 @@ pub fn write_frf_plot(
     figure!(dir, name, |r| draw_curves(r, title, y_label, curves))
 }
 
+/// Tracks over time: one curve per `(label, t_s, value)`, written as `path_stem.png` and
+/// `path_stem.svg` (the value's axis spans the curves' range, negative values included).
+pub fn write_tracks_plot(
+    path_stem: &Path,
+    title: &str,
+    y_label: &str,
+    curves: &[(&str, &[f64], &[f64])],
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let (dir, name) = split_stem(path_stem)?;
+    figure!(dir, name, |r| draw_tracks(r, title, y_label, curves))
+}
+
+fn draw_tracks<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    y_label: &str,
+    curves: &[(&str, &[f64], &[f64])],
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let xr = finite_range(curves.iter().flat_map(|c| c.1.iter().copied())).unwrap_or((0.0, 1.0));
+    let (lo, hi) =
+        finite_range(curves.iter().flat_map(|c| c.2.iter().copied())).unwrap_or((-1.0, 1.0));
+    let pad = ((hi - lo) * 0.05).max(1e-9);
+    let mut chart = build_chart(
+        &root,
+        SINGLE,
+        title,
+        xr.0..xr.1,
+        lo - pad..hi + pad,
+        "time (s)",
+        y_label,
+    )?;
+    for (i, (label, t, v)) in curves.iter().enumerate() {
+        draw_line(
+            &mut chart,
+            t.iter()
+                .zip(v.iter())
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+                .map(|(x, y)| (*x, *y)),
+            exposure_colour(i, curves.len().max(2)),
+            1,
+            *label,
+        )?;
+    }
+    draw_legend(&mut chart, SINGLE)?;
+    root.present()?;
+    Ok(())
+}
+
 fn draw_curves<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,

@@ -34,10 +34,12 @@
 pub mod columns;
 pub mod compensate;
 pub mod modal;
+pub mod points;
 pub mod report;
 pub mod run;
 pub mod targets;
 pub mod targets_run;
+pub mod track_run;
 
 pub use crate::chain::displacement::{
     displacement_mm, Axis, Displacement, DisplacementSettings, MAX_LOST_FRACTION,

@@ -37,6 +37,9 @@ pub struct TargetsRequest {
     pub accel_target: usize,
     /// Reference shapes to compute the MAC against.
     pub shape_reference: Option<PathBuf>,
+    /// Chosen points and their threshold rule (`--points`); `None`: the K blobs of the first
+    /// frame, numbered left to right.
+    pub points: Option<(Vec<super::points::Point>, super::points::ThresholdRule)>,
 }
 
 /// A checked `analyze` request: every value in range (the CLI's checks), nothing read yet.
@@ -61,6 +64,8 @@ pub struct Request {
     pub exposure_ms: Option<f64>,
     /// Remarks for the report (where the frame rate or exposure came from).
     pub notes: Vec<String>,
+    /// The points file, when `--points` was given (an input: never overwritten).
+    pub points_file: Option<PathBuf>,
     /// Several targets, or one.
     pub targets: Option<TargetsRequest>,
     /// Output directory, and whether an earlier analysis there may be replaced.
@@ -77,6 +82,7 @@ impl Request {
         if let Some(t) = &self.targets {
             v.extend(t.shape_reference.as_deref());
         }
+        v.extend(self.points_file.as_deref());
         v
     }
 }
@@ -360,4 +366,47 @@ fn describe_inputs(
         v.push(("exposure".into(), format!("{e} ms")));
     }
     v
+}
+
+/// The frame rate (Hz) and exposure (ms): as given, else as the recording's own header states
+/// them (a camera file); with notes for the report on where they came from, and when a given
+/// rate overrides the file's. Image files and videos state no rate: `--fps` is then needed.
+pub fn resolve_rates(
+    frames: &str,
+    fps: Option<f64>,
+    exposure_ms: Option<f64>,
+) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
+    let recorded = discover_frames(frames)?.source.recorded_rate()?;
+    let mut notes = Vec::new();
+    let fps = match (fps, recorded) {
+        (Some(f), Some((r, _))) => {
+            if (f - r).abs() > 1e-9 * r {
+                notes.push(format!(
+                    "--fps {f} overrides the {r} fps that {frames} states"
+                ));
+            }
+            f
+        }
+        (Some(f), None) => f,
+        (None, Some((r, _))) => {
+            notes.push(format!("frame rate {r} fps, as {frames} states"));
+            r
+        }
+        (None, None) => {
+            return Err(crate::bad_input(format!(
+                "--fps is needed: {frames} does not state the rate the camera recorded at \
+                 (image files and videos; a video container's rate is often not the capture \
+                 rate)"
+            )))
+        }
+    };
+    let exposure_ms = match (exposure_ms, recorded.and_then(|r| r.1)) {
+        (Some(e), _) => Some(e),
+        (None, Some(s)) => {
+            notes.push(format!("exposure {} ms, as {frames} states", s * 1000.0));
+            Some(s * 1000.0)
+        }
+        (None, None) => None,
+    };
+    Ok((fps, exposure_ms, notes))
 }

@@ -213,7 +213,8 @@ fn first_frame(found: Vec<Centroid>, k: usize, label: &str) -> anyhow::Result<Ve
     if found.len() != k {
         return Err(bad_input(format!(
             "{label}: {} targets above the threshold in the first frame, --targets {k} \
-             expected",
+             expected; in a scene with other bright things, choose the targets with --points \
+             FILE.csv (a window per target)",
             found.len()
         )));
     }

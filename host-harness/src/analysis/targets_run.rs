@@ -28,7 +28,22 @@ pub fn run(
         .as_deref()
         .map(|p| targets::read_shape_reference(p, k, settings.bands.len()))
         .transpose()?;
-    let tracks = targets::track(source, settings.frame_rate_hz, &req.centroid, k, t.gate_px)?;
+    let (tracks, windows) = match &t.points {
+        Some((points, rule)) => {
+            let (tracks, info) = super::points::track_points(
+                source,
+                settings.frame_rate_hz,
+                points,
+                &req.centroid,
+                *rule,
+            )?;
+            (tracks, Some(info))
+        }
+        None => (
+            targets::track(source, settings.frame_rate_hz, &req.centroid, k, t.gate_px)?,
+            None,
+        ),
+    };
     let compensate = match (req.compensate_exposure, settings.exposure_s) {
         (true, Some(exposure_s)) => Some(targets::CompensationRequest {
             exposure_s,
@@ -48,7 +63,10 @@ pub fn run(
     write_tables(&out, req, &a, &tracks, macs.as_deref())?;
     let along_x = req.displacement.axis == Axis::X;
     shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
-    let report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
+    let mut report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
+    if let Some(w) = &windows {
+        report.push_str(&windows_report(w, &tracks));
+    }
     let failed = a.failures();
     out.write("report.txt", &report)?;
     // a run with failed targets exits 2: it never replaces an earlier output
@@ -119,6 +137,29 @@ fn write_tables(
         out.write("mac.csv", export::mac_csv(m))?;
     }
     Ok(())
+}
+
+/// The `--points` windows: per target its window, threshold and lost frames.
+pub fn windows_report(w: &super::points::PointsInfo, tracks: &Tracks) -> String {
+    let mut s = String::from("\npoints (each target in its own window):\n");
+    for (t, ((size, th), c)) in w
+        .sizes
+        .iter()
+        .zip(&w.thresholds)
+        .zip(&tracks.centroids)
+        .enumerate()
+    {
+        let lost = c.iter().filter(|c| c.position().is_none()).count();
+        let _ = writeln!(
+            s,
+            "  target {}: window {}x{} px, threshold {th}, {lost} of {} frames lost",
+            t + 1,
+            size.0,
+            size.1,
+            c.len()
+        );
+    }
+    s
 }
 
 /// The whole report: [`report`], then the notes on the frames and the compensation.

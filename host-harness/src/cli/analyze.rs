@@ -125,14 +125,22 @@ pub struct Args {
         value_parser = super::args::parse_gate_px
     )]
     pub gate_px: Option<f64>,
-    /// With --targets: the target (1..K) co-located with the output accelerometer, compared
-    /// with it in the report (default: the last, K).
-    #[arg(long, value_name = "J", requires = "targets")]
+    /// Chosen points (a cluttered scene): CSV `target,x,y,w,h[,threshold]`, target 1..K, the
+    /// centre (px) in the first frame and a window (px, >= 3) that follows each target; the
+    /// threshold per window from the column, --threshold T, or --threshold auto (Otsu's of the
+    /// window in the first frame). A target lost in its window (or a window at the frame edge)
+    /// is a lost frame of it; the window stays where the target was last seen. Outputs as with
+    /// --targets.
+    #[arg(long, value_name = "FILE.csv", conflicts_with = "targets")]
+    pub points: Option<PathBuf>,
+    /// With --targets or --points: the target (1..K) co-located with the output accelerometer,
+    /// compared with it in the report (default: the last, K).
+    #[arg(long, value_name = "J")]
     pub accel_target: Option<usize>,
     /// With --targets: a reference mode shape CSV (header `mode,target,re[,im]`, e.g. an
     /// earlier shapes.csv or a model's): the MAC of each fitted shape against it goes into the
     /// report and mac.csv, the reference into the shape plot.
-    #[arg(long, value_name = "FILE.csv", requires = "targets")]
+    #[arg(long, value_name = "FILE.csv")]
     pub shape_reference: Option<PathBuf>,
 }
 
@@ -145,60 +153,16 @@ pub enum AxisArg {
     Y,
 }
 
-/// The frame rate and exposure: as given, else as the recording's own header states them
-/// (a camera file); notes for the report when a given rate overrides the file's.
-fn rates(args: &Args) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
-    let recorded = crate::frames::discover_frames(&args.frames)?
-        .source
-        .recorded_rate()?;
-    let mut notes = Vec::new();
-    let fps = match (args.fps, recorded) {
-        (Some(f), Some((r, _))) => {
-            if (f - r).abs() > 1e-9 * r {
-                notes.push(format!(
-                    "--fps {f} overrides the {r} fps that {} states",
-                    args.frames
-                ));
-            }
-            f
-        }
-        (Some(f), None) => f,
-        (None, Some((r, _))) => {
-            notes.push(format!("frame rate {r} fps, as {} states", args.frames));
-            r
-        }
-        (None, None) => {
-            return Err(bad_input(format!(
-                "--fps is needed: {} does not state the rate the camera recorded at (image \
-                 files and videos; a video container's rate is often not the capture rate)",
-                args.frames
-            )))
-        }
-    };
-    let exposure_ms = match (args.exposure_ms, recorded.and_then(|r| r.1)) {
-        (Some(e), _) => Some(e),
-        (None, Some(s)) => {
-            notes.push(format!(
-                "exposure {} ms, as {} states",
-                s * 1000.0,
-                args.frames
-            ));
-            Some(s * 1000.0)
-        }
-        (None, None) => None,
-    };
+/// Runs `host-harness analyze`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let (fps, exposure_ms, notes) =
+        analysis::run::resolve_rates(&args.frames, args.fps, args.exposure_ms)?;
     if args.compensate_exposure && exposure_ms.is_none() {
         return Err(bad_input(
             "--compensate-exposure needs the exposure: give --exposure-ms (the frames do not \
              state it)",
         ));
     }
-    Ok((fps, exposure_ms, notes))
-}
-
-/// Runs `host-harness analyze`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, exposure_ms, notes) = rates(&args)?;
     for (name, v) in [("--fps", fps), ("--mm-per-px", args.mm_per_px)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(bad_input(format!("{name} must be positive, got {v}")));
@@ -265,11 +229,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             invert: args.invert,
         },
-        centroid: args.centroid.config(None)?,
+        centroid: args.centroid.config_with(None, args.points.is_some())?,
         binary: args.centroid.mode == ModeArg::Binary,
         compensate_exposure: args.compensate_exposure,
         exposure_ms,
         notes,
+        points_file: args.points.clone(),
         targets: targets_request(&args)?,
         out: args.out.clone(),
         force: args.force,
@@ -281,7 +246,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// `--targets K` and its flags, checked.
 fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
-    let Some(k) = args.targets else {
+    let points = match &args.points {
+        Some(p) => Some(crate::analysis::points::read_points(p)?),
+        None => None,
+    };
+    let Some(k) = args.targets.or(points.as_ref().map(Vec::len)) else {
+        if args.accel_target.is_some() || args.shape_reference.is_some() {
+            return Err(bad_input(
+                "--accel-target and --shape-reference need several targets: --targets K or \
+                 --points FILE.csv",
+            ));
+        }
         return Ok(None);
     };
     // K in 2..=32 and a positive gate: checked by their value parsers
@@ -297,5 +272,6 @@ fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
         gate_px,
         accel_target,
         shape_reference: args.shape_reference.clone(),
+        points: points.map(|p| (p, args.centroid.rule())),
     }))
 }

@@ -71,7 +71,8 @@ impl WelchArgs {
 /// Weighting of the pixels above the threshold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ModeArg {
-    /// Weight 1 for every pixel with value > T (the paper's method).
+    /// Weight 1 for every pixel with value > T (the paper's method; also `blob`).
+    #[value(alias = "blob")]
     Binary,
     /// Weight value - T for every pixel with value > T.
     Weighted,
@@ -91,11 +92,13 @@ impl ModeArg {
 #[derive(Debug, Clone, clap::Args)]
 pub struct CentroidArgs {
     /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
-    /// frames a T of 255 or more selects nothing.
-    #[arg(long, value_name = "T")]
-    pub threshold: u16,
-    /// Pixel weighting.
-    #[arg(long, value_enum, default_value_t = ModeArg::Binary)]
+    /// frames a T of 255 or more selects nothing. With --points also `auto`: Otsu's threshold
+    /// of each window in the first frame.
+    #[arg(long, value_name = "T|auto", value_parser = parse_threshold)]
+    pub threshold: ThresholdArg,
+    /// Pixel weighting (the tracker: `binary`, also called `blob`, or `weighted`); `--tracker`
+    /// is the same flag.
+    #[arg(long, alias = "tracker", value_enum, default_value_t = ModeArg::Binary)]
     pub mode: ModeArg,
     /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
     /// the frame; W, H >= 1); coordinates stay those of the full frame. Must lie inside every
@@ -104,11 +107,59 @@ pub struct CentroidArgs {
     pub roi: Option<Roi>,
 }
 
+/// `--threshold`: a grey level, or `auto` (Otsu's threshold of each `--points` window).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThresholdArg {
+    /// A grey level.
+    Level(u16),
+    /// Otsu's threshold per window.
+    Auto,
+}
+
+/// Parses `--threshold`: 0-65535 or `auto`.
+pub fn parse_threshold(s: &str) -> Result<ThresholdArg, String> {
+    if s.trim().eq_ignore_ascii_case("auto") {
+        return Ok(ThresholdArg::Auto);
+    }
+    s.trim()
+        .parse::<u16>()
+        .map(ThresholdArg::Level)
+        .map_err(|_| format!("`{s}`: a grey level 0-65535, or `auto` (with --points)"))
+}
+
 impl CentroidArgs {
-    /// The firmware configuration, with an optional saturation level; errors name the setting.
+    /// The threshold rule of `--points` windows.
+    pub fn rule(&self) -> crate::analysis::points::ThresholdRule {
+        match self.threshold {
+            ThresholdArg::Level(t) => crate::analysis::points::ThresholdRule::Level(t),
+            ThresholdArg::Auto => crate::analysis::points::ThresholdRule::Auto,
+        }
+    }
+
+    /// The firmware configuration, with an optional saturation level; errors name the setting
+    /// (`--threshold auto` is an error here: it needs the windows of `--points`).
     pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
+        self.config_with(saturation, false)
+    }
+
+    /// [`config`](Self::config); with `points`, `--threshold auto` is accepted (the level is
+    /// then chosen per window, and 0 stands in the configuration).
+    pub fn config_with(
+        &self,
+        saturation: Option<u16>,
+        points: bool,
+    ) -> anyhow::Result<CentroidConfig> {
+        let threshold = match (self.threshold, points) {
+            (ThresholdArg::Level(t), _) => t,
+            (ThresholdArg::Auto, true) => 0,
+            (ThresholdArg::Auto, false) => {
+                return Err(crate::bad_input(
+                    "--threshold auto: only with --points (Otsu's threshold of each window)",
+                ))
+            }
+        };
         CentroidConfig {
-            threshold: self.threshold,
+            threshold,
             mode: self.mode.mode(),
             roi: self.roi,
             saturation,

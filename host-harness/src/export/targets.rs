@@ -155,3 +155,38 @@ pub fn compensation_csv<'a>(
     }
     s.into_bytes()
 }
+
+/// One target's track as `track` writes it: centroids, and the displacement (mm; `None`
+/// without a scale, or when too many frames were lost to fill them) and lost flag per frame.
+#[derive(Debug, Clone, Copy)]
+pub struct TrackRow<'a> {
+    /// Centroid per frame (an empty one where the target was lost).
+    pub centroids: &'a [Centroid],
+    /// Displacement per frame, mm, if computed.
+    pub mm: Option<&'a [f64]>,
+}
+
+/// `track`'s `displacement.csv`: `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per
+/// frame and target (`cx`, `cy` empty where the target was lost, `flags` the firmware-core
+/// flag byte, `disp_mm` empty without a scale), `t_s = frame / fps`.
+pub fn track_csv(tracks: &[TrackRow<'_>], frame_rate_hz: f64) -> Vec<u8> {
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
+    let frames = tracks.first().map_or(0, |t| t.centroids.len());
+    for k in 0..frames {
+        let t_s = k as f64 / frame_rate_hz;
+        for (t, tr) in tracks.iter().enumerate() {
+            let c = &tr.centroids[k];
+            let (cx, cy) = position(c);
+            let _ = writeln!(
+                s,
+                "{k},{t_s},{},{cx},{cy},{},{},{},{}",
+                t + 1,
+                c.pixels(),
+                c.flags.bits(),
+                opt(tr.mm.map(|m| m[k])),
+                u8::from(c.position().is_none())
+            );
+        }
+    }
+    s.into_bytes()
+}

@@ -1,0 +1,387 @@
+//! Chosen points (`--points FILE.csv`): each target followed in its own window, which moves with
+//! it, through firmware-core's centroid restricted to the window (its ROI) at the window's own
+//! threshold. Nothing outside a window is ever looked at, so a bright wall, a phone or a hand
+//! elsewhere in a cluttered scene cannot be taken for a target.
+//!
+//! The file: header `target,x,y,w,h` and optionally `threshold`; `target` the integers 1..K,
+//! each once; `x, y` the target's centre in the first frame, px (origin at the centre of the
+//! top-left pixel, x right, y down; fractions allowed); `w, h` the window, px (>= 3). A window
+//! of `w` columns centred on `x` starts at column `round(x - (w - 1) / 2)`: an odd `w` is
+//! centred on the nearest pixel, an even one has its extra column on the right when `x` is a
+//! whole pixel. Every window must lie inside the first frame.
+//!
+//! Per frame and target: the window is centred on where the target was last seen; the centroid
+//! of the pixels above the threshold in it is the target's position. A target that touches
+//! the window's edge may reach past it: the window is re-centred on that partial centroid and
+//! measured once more in the same frame (so a motion of up to about half a window per frame is
+//! followed); still at the edge, or nothing above the threshold, or a window that would leave
+//! the frame: a lost frame of that target, counted, and the window stays where the target was
+//! last seen (never a search of the whole frame, which in a cluttered scene finds the wall).
+//! Thresholds: `--threshold T` for all, the file's `threshold` column per target, or `--threshold
+//! auto`: Otsu's threshold of each window in the first frame.
+
+use super::targets::Tracks;
+use crate::bad_input;
+use crate::frames::{FrameSource, GreyFrame};
+use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Moments, Roi};
+use std::path::Path;
+
+/// One chosen point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// Target number, 1..=K.
+    pub target: usize,
+    /// Centre in the first frame, px.
+    pub xy: (f64, f64),
+    /// Window size, px.
+    pub size: (u32, u32),
+    /// The file's threshold for this target, if it has the column.
+    pub threshold: Option<u16>,
+}
+
+/// How each window's threshold is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThresholdRule {
+    /// One level for every window (the file's `threshold` column overrides it per target).
+    Level(u16),
+    /// Otsu's threshold of each window in the first frame (the file's column overrides it).
+    Auto,
+}
+
+/// Reads and checks a points file; errors name the file and row (the header is row 1).
+pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
+    let name = path.display();
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| bad_input(format!("{name}: cannot read: {e}")))?;
+    let header: Vec<String> = rdr
+        .headers()
+        .map_err(|e| bad_input(format!("{name}: cannot read the header: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let col = |c: &str| header.iter().position(|h| h == c);
+    let mut idx = Vec::new();
+    for c in ["target", "x", "y", "w", "h"] {
+        idx.push(col(c).ok_or_else(|| {
+            bad_input(format!(
+                "{name}: no column `{c}` (the header must be target,x,y,w,h[,threshold]; it is \
+                 {})",
+                header.join(",")
+            ))
+        })?);
+    }
+    let threshold_col = col("threshold");
+    let mut points: Vec<Point> = Vec::new();
+    for (i, rec) in rdr.records().enumerate() {
+        let row = i + 2;
+        let rec = rec.map_err(|e| bad_input(format!("{name}: row {row}: {e}")))?;
+        let cell = |j: usize, c: &str| -> anyhow::Result<&str> {
+            rec.get(j)
+                .filter(|v| !v.is_empty())
+                .ok_or_else(|| bad_input(format!("{name}: row {row}: `{c}` is empty")))
+        };
+        let num = |j: usize, c: &str| -> anyhow::Result<f64> {
+            let v = cell(j, c)?;
+            v.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    bad_input(format!("{name}: row {row}: `{c}` is `{v}`, not a number"))
+                })
+        };
+        let whole = |j: usize, c: &str, min: f64| -> anyhow::Result<f64> {
+            let v = num(j, c)?;
+            if v.fract() != 0.0 || v < min || v > 65_536.0 {
+                return Err(bad_input(format!(
+                    "{name}: row {row}: `{c}` is {v}: a whole number of at least {min} is needed"
+                )));
+            }
+            Ok(v)
+        };
+        let target = whole(idx[0], "target", 1.0)? as usize;
+        if points.iter().any(|p| p.target == target) {
+            return Err(bad_input(format!(
+                "{name}: row {row}: target {target} is given twice"
+            )));
+        }
+        let threshold = match threshold_col.map(|j| rec.get(j).unwrap_or("")) {
+            None | Some("") => None,
+            Some(_) => {
+                Some(whole(threshold_col.unwrap_or(0), "threshold", 0.0)?.min(65_535.0) as u16)
+            }
+        };
+        points.push(Point {
+            target,
+            xy: (num(idx[1], "x")?, num(idx[2], "y")?),
+            size: (
+                whole(idx[3], "w", 3.0)? as u32,
+                whole(idx[4], "h", 3.0)? as u32,
+            ),
+            threshold,
+        });
+    }
+    if points.is_empty() {
+        return Err(bad_input(format!("{name}: no points (only a header)")));
+    }
+    points.sort_by_key(|p| p.target);
+    if let Some((k, p)) = points.iter().enumerate().find(|(k, p)| p.target != k + 1) {
+        return Err(bad_input(format!(
+            "{name}: targets must be numbered 1 to {} without gaps; target {} is missing",
+            points.len(),
+            p.target.min(k + 1)
+        )));
+    }
+    Ok(points)
+}
+
+/// The window of `size` centred on `(x, y)`, if it lies inside a `w x h` frame.
+pub fn window(xy: (f64, f64), size: (u32, u32), (w, h): (usize, usize)) -> Option<Roi> {
+    let x0 = (xy.0 - (f64::from(size.0) - 1.0) / 2.0).round();
+    let y0 = (xy.1 - (f64::from(size.1) - 1.0) / 2.0).round();
+    let fits = x0 >= 0.0
+        && y0 >= 0.0
+        && x0 + f64::from(size.0) <= w as f64
+        && y0 + f64::from(size.1) <= h as f64;
+    fits.then_some(Roi {
+        x: x0 as u32,
+        y: y0 as u32,
+        width: size.0,
+        height: size.1,
+    })
+}
+
+/// Otsu's threshold of the pixels of `roi`: the level that best splits them into two classes
+/// (largest between-class variance), on a 256-bin histogram of the window's range.
+pub fn otsu(frame: &GreyFrame, roi: Roi) -> u16 {
+    let (w, _) = frame.dimensions();
+    let value = |x: u32, y: u32| -> u32 {
+        let i = y as usize * w + x as usize;
+        match frame {
+            GreyFrame::U8 { data, .. } => u32::from(data[i]),
+            GreyFrame::U16 { data, .. } => u32::from(data[i]),
+        }
+    };
+    let pixels: Vec<u32> = (roi.y..roi.y + roi.height)
+        .flat_map(|y| (roi.x..roi.x + roi.width).map(move |x| (x, y)))
+        .map(|(x, y)| value(x, y))
+        .collect();
+    let (lo, hi) = pixels
+        .iter()
+        .fold((u32::MAX, 0), |(a, b), &v| (a.min(v), b.max(v)));
+    if hi <= lo {
+        return hi.min(65_535) as u16;
+    }
+    let bins = 256usize;
+    let span = f64::from(hi - lo);
+    let bin =
+        |v: u32| (((f64::from(v - lo)) / span * (bins - 1) as f64).round() as usize).min(bins - 1);
+    let mut hist = vec![0f64; bins];
+    for &v in &pixels {
+        hist[bin(v)] += 1.0;
+    }
+    let total = pixels.len() as f64;
+    let sum_all: f64 = hist.iter().enumerate().map(|(i, n)| i as f64 * n).sum();
+    let (mut w0, mut sum0, mut best, mut best_i) = (0.0, 0.0, -1.0, 0usize);
+    for (i, n) in hist.iter().enumerate() {
+        w0 += n;
+        sum0 += i as f64 * n;
+        let w1 = total - w0;
+        if w0 == 0.0 || w1 == 0.0 {
+            continue;
+        }
+        let (m0, m1) = (sum0 / w0, (sum_all - sum0) / w1);
+        let between = w0 * w1 * (m0 - m1).powi(2);
+        if between > best {
+            (best, best_i) = (between, i);
+        }
+    }
+    // pixels of bin <= best_i are the dark class: the threshold is the top of that bin
+    let level = f64::from(lo) + (best_i as f64 + 0.5) * span / (bins - 1) as f64;
+    (level.floor() as u32).min(65_535) as u16
+}
+
+/// A centroid standing for a lost frame.
+fn lost() -> Centroid {
+    Centroid {
+        cx: 0.0,
+        cy: 0.0,
+        moments: Moments::default(),
+        flags: Flags::EMPTY,
+    }
+}
+
+/// What tracking the points found, beside the tracks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointsInfo {
+    /// Each target's threshold, as used.
+    pub thresholds: Vec<u16>,
+    /// Each target's window size, px.
+    pub sizes: Vec<(u32, u32)>,
+}
+
+/// Follows every point through `source` (see the module documentation). `config` gives the
+/// centroid's mode and saturation.
+pub fn track_points(
+    source: &FrameSource,
+    fps: f64,
+    points: &[Point],
+    config: &CentroidConfig,
+    rule: ThresholdRule,
+) -> anyhow::Result<(Tracks, PointsInfo)> {
+    let k = points.len();
+    let mut tracks = Tracks {
+        centroids: vec![Vec::new(); k],
+        first: points.iter().map(|p| p.xy).collect(),
+        refused: vec![0; k],
+        depth: Default::default(),
+    };
+    let mut last: Vec<(f64, f64)> = tracks.first.clone();
+    let mut thresholds: Vec<u16> = Vec::new();
+    let mut size0: Option<(usize, usize)> = None;
+    source.for_each(fps, |label, frame| {
+        tracks.depth.add(frame);
+        let dims = frame.dimensions();
+        match size0 {
+            None => {
+                size0 = Some(dims);
+                thresholds = first_windows(points, frame, rule, &label)?;
+            }
+            Some(d) if d != dims => {
+                return Err(bad_input(format!(
+                    "{label}: {}x{} pixels, but the first frame is {}x{}",
+                    dims.0, dims.1, d.0, d.1
+                )))
+            }
+            Some(_) => {}
+        }
+        for (t, p) in points.iter().enumerate() {
+            let cfg = CentroidConfig {
+                threshold: thresholds[t],
+                ..*config
+            };
+            let c = follow(frame, &cfg, last[t], p.size, &label)?;
+            if let Some((x, y)) = c.position() {
+                last[t] = (f64::from(x), f64::from(y));
+                // where the target is, as `--targets` states it: its centroid in frame 1
+                if tracks.centroids[t].is_empty() {
+                    tracks.first[t] = last[t];
+                }
+            }
+            tracks.centroids[t].push(c);
+        }
+        Ok(())
+    })?;
+    Ok((
+        tracks,
+        PointsInfo {
+            thresholds,
+            sizes: points.iter().map(|p| p.size).collect(),
+        },
+    ))
+}
+
+/// The thresholds of the windows in the first frame, every window checked to lie inside it.
+fn first_windows(
+    points: &[Point],
+    frame: &GreyFrame,
+    rule: ThresholdRule,
+    label: &str,
+) -> anyhow::Result<Vec<u16>> {
+    let dims = frame.dimensions();
+    points
+        .iter()
+        .map(|p| {
+            let roi = window(p.xy, p.size, dims).ok_or_else(|| {
+                bad_input(format!(
+                    "target {}: the {}x{} window at ({}, {}) does not lie inside the first \
+                     frame ({label}, {}x{} pixels)",
+                    p.target, p.size.0, p.size.1, p.xy.0, p.xy.1, dims.0, dims.1
+                ))
+            })?;
+            Ok(match (p.threshold, rule) {
+                (Some(t), _) => t,
+                (None, ThresholdRule::Level(t)) => t,
+                (None, ThresholdRule::Auto) => otsu(frame, roi),
+            })
+        })
+        .collect()
+}
+
+/// One target in one frame: its window at `last`, re-centred once if the target touches the
+/// window's edge; a lost centroid when it cannot be measured whole.
+fn follow(
+    frame: &GreyFrame,
+    cfg: &CentroidConfig,
+    last: (f64, f64),
+    size: (u32, u32),
+    label: &str,
+) -> anyhow::Result<Centroid> {
+    let dims = frame.dimensions();
+    let mut at = last;
+    for _ in 0..2 {
+        let Some(roi) = window(at, size, dims) else {
+            return Ok(lost());
+        };
+        let c = frame.centroid(
+            &CentroidConfig {
+                roi: Some(roi),
+                ..*cfg
+            },
+            label,
+        )?;
+        if c.flags.contains(Flags::EMPTY) {
+            return Ok(lost());
+        }
+        if !c.flags.contains(Flags::BORDER) {
+            return Ok(c);
+        }
+        at = (f64::from(c.cx), f64::from(c.cy));
+    }
+    Ok(lost())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(w: usize, h: usize, f: impl Fn(usize, usize) -> u8) -> GreyFrame {
+        GreyFrame::U8 {
+            width: w,
+            height: h,
+            data: (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| f(x, y))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn windows_are_centred_as_documented() {
+        let r = window((10.0, 10.0), (5, 4), (40, 40)).unwrap();
+        assert_eq!((r.x, r.y, r.width, r.height), (8, 9, 5, 4));
+        assert!(window((1.0, 10.0), (5, 5), (40, 40)).is_none());
+        assert!(window((37.0, 10.0), (5, 5), (40, 40)).is_some());
+        assert!(window((38.0, 10.0), (5, 5), (40, 40)).is_none());
+    }
+
+    #[test]
+    fn otsu_splits_a_two_level_window_between_its_levels() {
+        let f = frame(20, 20, |x, y| {
+            if (5..10).contains(&x) && (5..10).contains(&y) {
+                200
+            } else {
+                30
+            }
+        });
+        let roi = Roi {
+            x: 0,
+            y: 0,
+            width: 20,
+            height: 20,
+        };
+        let t = otsu(&f, roi);
+        assert!((30..200).contains(&t), "{t}");
+    }
+}

@@ -1,0 +1,200 @@
+//! `track` as one library call: frames in, each target's position per frame out
+//! (`displacement.csv`, `report.txt`, `tracks.png`/`.svg`), no accelerometer needed. The targets
+//! are chosen points (`--points`, [`super::points`]) or the K blobs of the first frame
+//! (`--targets`, [`super::targets::track`]), exactly as `analyze` follows them.
+
+use super::points::{Point, PointsInfo, ThresholdRule};
+use super::targets::Tracks;
+use super::DisplacementSettings;
+use crate::export::targets::{track_csv, TrackRow};
+use crate::frames::discover_frames;
+use crate::outdir::Staged;
+use firmware_core::centroid::CentroidConfig;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Which targets are followed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Targets {
+    /// Chosen points and their threshold rule.
+    Points(Vec<Point>, ThresholdRule),
+    /// The K blobs of the first frame, with the gate (px).
+    Blobs(usize, f64),
+}
+
+/// A checked `track` request.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Request {
+    /// `--frames` as given.
+    pub frames: String,
+    /// Frame rate, Hz.
+    pub fps: f64,
+    /// The targets.
+    pub targets: Targets,
+    /// The centroid's settings (mode, saturation; the threshold of `--targets`).
+    pub centroid: CentroidConfig,
+    /// Pixels to millimetres, axis and sign, when a scale was given.
+    pub displacement: Option<DisplacementSettings>,
+    /// Draw the tracks.
+    pub plots: bool,
+    /// Remarks for the report.
+    pub notes: Vec<String>,
+    /// Output directory, and whether an earlier `track` output may be replaced.
+    pub out: PathBuf,
+    /// `--force`.
+    pub force: bool,
+    /// Input files besides the frames (the points file).
+    pub inputs: Vec<PathBuf>,
+}
+
+/// Runs `track`; returns the report (also written to `report.txt`).
+pub fn run(req: &Request) -> anyhow::Result<String> {
+    let source = discover_frames(&req.frames)?.source;
+    let (tracks, windows) = match &req.targets {
+        Targets::Points(points, rule) => {
+            let (t, w) =
+                super::points::track_points(&source, req.fps, points, &req.centroid, *rule)?;
+            (t, Some(w))
+        }
+        Targets::Blobs(k, gate) => (
+            super::targets::track(&source, req.fps, &req.centroid, *k, *gate)?,
+            None,
+        ),
+    };
+    let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
+    inputs.extend(req.inputs.iter().map(PathBuf::as_path));
+    let out = Staged::new(&req.out, req.force, "track", &inputs)?;
+    let (mm, failures) = displacements(&tracks, req.displacement.as_ref());
+    let rows: Vec<TrackRow<'_>> = tracks
+        .centroids
+        .iter()
+        .zip(&mm)
+        .map(|(c, m)| TrackRow {
+            centroids: c,
+            mm: m.as_deref(),
+        })
+        .collect();
+    out.write("displacement.csv", track_csv(&rows, req.fps))?;
+    let mut report = report(req, &tracks, windows.as_ref(), &failures);
+    if req.plots {
+        let along_x = req
+            .displacement
+            .as_ref()
+            .is_some_and(|d| d.axis == super::Axis::X);
+        let plots = plot(out.dir(), &tracks, req.fps, along_x)?;
+        let names: Vec<String> = plots
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        let _ = writeln!(report, "plots: {}", names.join(", "));
+    }
+    out.write("report.txt", &report)?;
+    out.commit()?;
+    Ok(report)
+}
+
+/// Each target's displacement (mm, lost frames filled by the policy) when a scale was given;
+/// a target with too many lost frames gets none, and the reason.
+fn displacements(
+    tracks: &Tracks,
+    settings: Option<&DisplacementSettings>,
+) -> (Vec<Option<Vec<f64>>>, Vec<String>) {
+    let mut failures = Vec::new();
+    let mm = tracks
+        .centroids
+        .iter()
+        .enumerate()
+        .map(|(t, c)| {
+            let s = settings?;
+            match super::displacement_mm(c, s) {
+                Ok(d) => Some(d.mm),
+                Err(e) => {
+                    failures.push(format!("target {}: {e:#}", t + 1));
+                    None
+                }
+            }
+        })
+        .collect();
+    (mm, failures)
+}
+
+fn report(
+    req: &Request,
+    tracks: &Tracks,
+    windows: Option<&PointsInfo>,
+    failures: &[String],
+) -> String {
+    let frames = tracks.centroids.first().map_or(0, Vec::len);
+    let mut s = format!(
+        "track: {} ({frames} frames at {} fps, {}), {} target(s)\n",
+        req.frames,
+        req.fps,
+        tracks.depth.describe(),
+        tracks.centroids.len()
+    );
+    for n in &req.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    match windows {
+        Some(w) => s.push_str(&super::targets_run::windows_report(w, tracks)),
+        None => {
+            for (t, c) in tracks.centroids.iter().enumerate() {
+                let lost = c.iter().filter(|c| c.position().is_none()).count();
+                let _ = writeln!(
+                    s,
+                    "  target {}: first seen at ({:.2}, {:.2}) px, {lost} of {frames} frames \
+                     lost ({} refused as implausible)",
+                    t + 1,
+                    tracks.first[t].0,
+                    tracks.first[t].1,
+                    tracks.refused[t]
+                );
+            }
+        }
+    }
+    if req.displacement.is_none() {
+        s.push_str("disp_mm: empty (no --mm-per-px)\n");
+    }
+    for f in failures {
+        let _ = writeln!(s, "no displacement for {f}");
+    }
+    s
+}
+
+/// Each target's motion from its first position along the image's y (or x), px, against time.
+fn plot(dir: &Path, tracks: &Tracks, fps: f64, along_x: bool) -> anyhow::Result<Vec<PathBuf>> {
+    let series: Vec<(String, Vec<f64>, Vec<f64>)> = tracks
+        .centroids
+        .iter()
+        .enumerate()
+        .map(|(t, c)| {
+            let (x0, y0) = tracks.first[t];
+            let (mut ts, mut d) = (Vec::new(), Vec::new());
+            for (k, c) in c.iter().enumerate() {
+                if let Some((x, y)) = c.position() {
+                    ts.push(k as f64 / fps);
+                    d.push(if along_x {
+                        f64::from(x) - x0
+                    } else {
+                        f64::from(y) - y0
+                    });
+                }
+            }
+            (format!("target {}", t + 1), ts, d)
+        })
+        .collect();
+    let curves: Vec<(&str, &[f64], &[f64])> = series
+        .iter()
+        .map(|(l, t, d)| (l.as_str(), t.as_slice(), d.as_slice()))
+        .collect();
+    crate::plots::write_tracks_plot(
+        &dir.join("tracks"),
+        if along_x {
+            "Tracks: x - x(first frame), image x right"
+        } else {
+            "Tracks: y - y(first frame), image y down"
+        },
+        "px",
+        &curves,
+    )
+}

@@ -1,0 +1,99 @@
+//! `host-harness track`: frames in, each target's position per frame out, no accelerometer
+//! needed; the library call is [`crate::analysis::track_run`].
+
+use super::analyze::AxisArg;
+use super::args::CentroidArgs;
+use crate::analysis::track_run::{self, Request, Targets};
+use crate::analysis::{Axis, DisplacementSettings};
+use crate::bad_input;
+use std::path::PathBuf;
+
+/// Arguments of `host-harness track`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Frames: as `analyze --frames` (image files, a multi-page TIFF, a Photron .cih/.cihx, a
+    /// Phantom .cine or a video).
+    #[arg(long, value_name = "PATH")]
+    pub frames: String,
+    /// Camera frame rate, Hz (default: the rate a camera file states; needed for image files
+    /// and videos).
+    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    pub fps: Option<f64>,
+    /// Chosen points: CSV `target,x,y,w,h[,threshold]` (as `analyze --points`).
+    #[arg(
+        long,
+        value_name = "FILE.csv",
+        conflicts_with = "targets",
+        required_unless_present = "targets"
+    )]
+    pub points: Option<PathBuf>,
+    /// The K blobs of the first frame (global threshold), numbered left to right.
+    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
+    pub targets: Option<usize>,
+    /// With --targets: how far a target may move between frames and still be the same, px.
+    #[arg(long, value_name = "PX", default_value_t = 10.0, value_parser = super::args::parse_gate_px)]
+    pub gate_px: f64,
+    /// Centroid settings (`--threshold T|auto`, `--tracker binary|blob|weighted`, `--roi`).
+    #[command(flatten)]
+    pub centroid: CentroidArgs,
+    /// Millimetres per pixel: fills `disp_mm` (empty without it).
+    #[arg(long, value_name = "MM")]
+    pub mm_per_px: Option<f64>,
+    /// Image axis of the displacement (and of the plot).
+    #[arg(long, value_enum, default_value_t = AxisArg::Y)]
+    pub axis: AxisArg,
+    /// What a lost frame's displacement becomes (as `analyze`).
+    #[arg(long, value_enum, default_value_t = crate::lost_frames::LostFramePolicy::Interpolate)]
+    pub lost_frames: crate::lost_frames::LostFramePolicy,
+    /// No tracks.png/.svg.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Output directory (new or empty).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Replace --out if it is an earlier output of `track`, as a whole.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `host-harness track`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let (fps, _, notes) = crate::analysis::run::resolve_rates(&args.frames, args.fps, None)?;
+    let targets = match (&args.points, args.targets) {
+        (Some(p), _) => Targets::Points(
+            crate::analysis::points::read_points(p)?,
+            args.centroid.rule(),
+        ),
+        (None, Some(k)) => Targets::Blobs(k, args.gate_px),
+        (None, None) => return Err(bad_input("give --points FILE.csv or --targets K")),
+    };
+    let displacement = match args.mm_per_px {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            return Err(bad_input(format!("--mm-per-px must be positive, got {s}")))
+        }
+        Some(mm_per_px) => Some(DisplacementSettings {
+            lost_frames: args.lost_frames,
+            mm_per_px,
+            axis: match args.axis {
+                AxisArg::X => Axis::X,
+                AxisArg::Y => Axis::Y,
+            },
+            invert: false,
+        }),
+        None => None,
+    };
+    let req = Request {
+        frames: args.frames.clone(),
+        fps,
+        centroid: args.centroid.config_with(None, args.points.is_some())?,
+        targets,
+        displacement,
+        plots: !args.no_plots,
+        notes,
+        out: args.out.clone(),
+        force: args.force,
+        inputs: args.points.iter().cloned().collect(),
+    };
+    let report = track_run::run(&req)?;
+    super::stdout(&report)
+}
