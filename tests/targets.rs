@@ -801,3 +801,87 @@ fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
     let o = track(&clean, &tmp.path().join("c"), &["--targets", "3"]);
     assert_exit_2(&o, "--fps is needed");
 }
+
+/// The synthetic cluttered scene (5 tags on the structure, a wall as bright as the tags above
+/// and below it, a phone beside it, colour JPEG frames): `--targets 5` stops with a message
+/// pointing to `--points`, and `analyze --points points.csv` (the file the renderer writes)
+/// gives the clean recording's frequencies (within one 0.1 Hz bin), damping (within 10 %) and
+/// shapes (MAC >= 0.99 per mode).
+#[test]
+fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
+    for (dir, scene) in [(&clean, "plain"), (&cluttered, "cluttered")] {
+        assert_ok(&harness(&[
+            "render",
+            "--preset",
+            "cantilever",
+            "--recording",
+            dir.to_str().unwrap(),
+            "--targets",
+            "5",
+            "--exposure-ms",
+            "2",
+            "--read-noise",
+            "1",
+            "--scene",
+            scene,
+        ]));
+    }
+    assert!(cluttered.join("frames/frame_00000.jpg").is_file());
+    let analyze = |dir: &Path, pick: &[&str]| {
+        let (frames, accel, out) = (dir.join("frames"), dir.join("accel.csv"), dir.join("an"));
+        let mut args = vec![
+            "analyze",
+            "--frames",
+            frames.to_str().unwrap(),
+            "--fps",
+            "120",
+            "--accel",
+            accel.to_str().unwrap(),
+            "--fs",
+            "2048",
+            "--time-col",
+            "t_s",
+            "--threshold",
+            "127",
+            "--mm-per-px",
+            "0.1266",
+            "--window",
+            "rect",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(pick);
+        harness(&args)
+    };
+    assert_ok(&analyze(&clean, &["--targets", "5"]));
+    assert_exit_2(&analyze(&cluttered, &["--targets", "5"]), "--points");
+    let points = cluttered.join("points.csv");
+    assert_ok(&analyze(
+        &cluttered,
+        &["--points", points.to_str().unwrap()],
+    ));
+    let (a, b) = (modes(&clean.join("an")), modes(&cluttered.join("an")));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!((&x.0, x.1, x.2), (&y.0, y.1, y.2));
+        if x.3.is_finite() && y.3.is_finite() {
+            assert!((x.3 - y.3).abs() <= 0.1, "{x:?} {y:?}");
+            assert!((x.4 - y.4).abs() <= 0.1 * x.4, "{x:?} {y:?}");
+        }
+    }
+    let shape = |dir: &Path, mode: &str| -> Vec<f64> {
+        std::fs::read_to_string(dir.join("an/shapes.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .filter(|l| l.split(',').next() == Some(mode))
+            .map(|l| l.split(',').nth(4).unwrap().parse().unwrap())
+            .collect()
+    };
+    for mode in ["1", "2"] {
+        let m = mac(&shape(&clean, mode), &shape(&cluttered, mode));
+        assert!(m >= 0.99, "mode {mode}: MAC {m}");
+    }
+}

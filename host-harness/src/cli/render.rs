@@ -59,6 +59,21 @@ pub struct Args {
         requires = "recording"
     )]
     pub read_noise: f64,
+    /// With --recording --targets: `cluttered` frames the structure with a textured wall as
+    /// bright as the tags and a phone beside it, in colour JPEG frames, and writes points.csv
+    /// (a window per target for `analyze --points`); `plain` (default): grey PNG frames of the
+    /// targets on black.
+    #[arg(long, value_enum, default_value_t = SceneArg::Plain, requires = "targets")]
+    pub scene: SceneArg,
+}
+
+/// The scene around the targets of a recording.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneArg {
+    /// The targets on black.
+    Plain,
+    /// A wall, a phone and colour JPEG frames around them.
+    Cluttered,
 }
 
 /// Runs `host-harness render`.
@@ -83,6 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         check_recording_exposure(&args, spec.acquisition.fps)?;
         spec.read_noise = args.read_noise;
         spec.video = args.video;
+        spec.cluttered = args.scene == SceneArg::Cluttered;
         if args.targets.is_some() && args.preset != Preset::Cantilever {
             return Err(bad_input("--targets: only with --preset cantilever"));
         }

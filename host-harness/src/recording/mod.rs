@@ -12,6 +12,7 @@
 //! Frame `k` is at `t = k / fps`, its exposure centred on it. A positive tip displacement moves the
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
+pub mod cluttered;
 pub mod scene;
 pub mod targets;
 
@@ -44,6 +45,9 @@ pub struct RecordingSpec {
     pub read_noise: f64,
     /// Also write every frame into `frames.mkv`, a lossless FFV1/Matroska video.
     pub video: bool,
+    /// Frame the structure with a textured wall and a phone, in colour JPEG frames
+    /// ([`cluttered`]).
+    pub cluttered: bool,
 }
 
 impl RecordingSpec {
@@ -60,6 +64,7 @@ impl RecordingSpec {
             rig: Rig::Cantilever(cantilever::Rig::nominal()),
             read_noise: 0.0,
             video: false,
+            cluttered: false,
         }
     }
 
@@ -81,6 +86,7 @@ impl RecordingSpec {
             rig: Rig::Grandstand(grandstand::DecayTest::nominal(seed)),
             read_noise: 0.0,
             video: false,
+            cluttered: false,
         }
     }
 
@@ -131,6 +137,7 @@ pub(crate) struct FrameSink {
     noise: Option<(f64, rand_chacha::ChaCha8Rng)>,
     size: (usize, usize),
     px: Vec<u8>,
+    clutter: Option<cluttered::Clutter>,
 }
 
 impl FrameSink {
@@ -171,6 +178,9 @@ impl FrameSink {
             noise,
             size,
             px: vec![0; size.0 * size.1],
+            clutter: spec
+                .cluttered
+                .then(|| cluttered::Clutter::new(size, spec.seed)),
         })
     }
 
@@ -189,11 +199,14 @@ impl FrameSink {
             // as BlurRenderer::render rounds: without noise the pixels are the same
             *o = (v + 0.5).clamp(0.0, 255.0) as u8;
         }
-        save_grey_png(
-            &self.frames_to.join(format!("frame_{k:05}.png")),
-            self.size,
-            &self.px,
-        )?;
+        match &self.clutter {
+            Some(c) => c.write_jpeg(&self.px, &self.frames_to.join(format!("frame_{k:05}.jpg")))?,
+            None => save_grey_png(
+                &self.frames_to.join(format!("frame_{k:05}.png")),
+                self.size,
+                &self.px,
+            )?,
+        }
         if let Some((w, _)) = &mut self.video {
             w.write_frame(&self.px).map_err(|e| e.into_anyhow())?;
         }

@@ -54,9 +54,23 @@ pub fn write_targets_recording(
     };
     let xis = positions(targets);
     let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
-    let (sink, renderers, (sw, w, h)) =
+    if spec.cluttered && spec.video {
+        return Err(crate::bad_input(
+            "--scene cluttered writes colour JPEG frames: --video (a grey lossless video) is \
+             not available with it",
+        ));
+    }
+    let (sink, renderers, (sw, w, h), first) =
         render_strips(spec, &run, &at_mm, targets, (write_to, dir))?;
     let (frames_dir, video) = sink.finish()?;
+    if spec.cluttered {
+        write_points(&first, sw, h, (write_to, dir))?;
+    }
+    let (w, h) = if spec.cluttered {
+        super::cluttered::Clutter::new((w, h), spec.seed).outer()
+    } else {
+        (w, h)
+    };
     let x_px: Vec<f64> = (0..targets)
         .map(|t| (t * sw) as f64 + renderers[t].rest_x())
         .collect();
@@ -98,9 +112,48 @@ struct TargetsLayout {
     frame_size: (usize, usize),
 }
 
+/// `points.csv` of a cluttered recording: each target's centroid in the first frame (in the
+/// composed frame's pixels) and a window that holds the tag and its motion between two frames
+/// but not the wall or a neighbour: the strip's width less 2 (odd), 31 rows.
+fn write_points(
+    first: &[(f64, f64)],
+    strip_w: usize,
+    inner_h: usize,
+    (write_to, dir): (&Path, &Path),
+) -> anyhow::Result<()> {
+    let w = (strip_w - 2) | 1;
+    let h = 31.min(inner_h.saturating_sub(2)) | 1;
+    let mut csv = String::from("target,x,y,w,h\n");
+    for (t, &(x, y)) in first.iter().enumerate() {
+        csv.push_str(&format!(
+            "{},{x},{},{w},{h}\n",
+            t + 1,
+            y + super::cluttered::WALL_PX as f64
+        ));
+    }
+    std::fs::write(write_to.join("points.csv"), csv)
+        .with_context(|| format!("cannot write {}", dir.join("points.csv").display()))
+}
+
+/// The centroid of the pixels above half the target's level in columns `x0..x0 + sw` of the
+/// float frame `img` (`w` wide): a target's position in the first frame.
+fn strip_centroid(img: &[f32], w: usize, (x0, sw): (usize, usize), half: f32) -> (f64, f64) {
+    let (mut n, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
+    for (y, row) in img.chunks_exact(w).enumerate() {
+        for (x, &v) in row.iter().enumerate().skip(x0).take(sw) {
+            if v > half {
+                n += 1.0;
+                sx += x as f64;
+                sy += y as f64;
+            }
+        }
+    }
+    (sx / n.max(1.0), sy / n.max(1.0))
+}
+
 /// The frames: each target rendered in its own strip of the frame by its own renderer, all on
-/// one intensity scale; returns the sink (to finish), the renderers and (strip width, frame
-/// width, height).
+/// one intensity scale; returns the sink (to finish), the renderers, (strip width, frame
+/// width, height) and each target's position in the first frame.
 #[allow(clippy::type_complexity)]
 fn render_strips(
     spec: &RecordingSpec,
@@ -108,7 +161,12 @@ fn render_strips(
     at_mm: &[Vec<f64>],
     targets: usize,
     (write_to, dir): (&Path, &Path),
-) -> anyhow::Result<(super::FrameSink, Vec<BlurRenderer>, (usize, usize, usize))> {
+) -> anyhow::Result<(
+    super::FrameSink,
+    Vec<BlurRenderer>,
+    (usize, usize, usize),
+    Vec<(f64, f64)>,
+)> {
     let fine_hz = spec.acquisition.fps * run.fine_per_frame as f64;
     let pad = TargetPath::pad_for(spec.exposure_ms, fine_hz);
     let paths: Vec<TargetPath> = at_mm
@@ -136,6 +194,7 @@ fn render_strips(
     let w = sw * targets;
     let mut sink = super::FrameSink::create(spec, (write_to, dir), (w, h))?;
     let (mut strip, mut frame) = (vec![0f32; sw * h], vec![0f32; w * h]);
+    let mut first = Vec::new();
     for k in 0..spec.acquisition.frames {
         for (t, (r, p)) in renderers.iter_mut().zip(&paths).enumerate() {
             let (a, b) = p.frame_window(k, spec.exposure_ms);
@@ -145,9 +204,15 @@ fn render_strips(
                     .copy_from_slice(&strip[y * sw..(y + 1) * sw]);
             }
         }
+        if k == 0 {
+            let half = spec.target.level as f32 / 2.0;
+            first = (0..targets)
+                .map(|t| strip_centroid(&frame, w, (t * sw, sw), half))
+                .collect();
+        }
         sink.put(k, &frame)?;
     }
-    Ok((sink, renderers, (sw, w, h)))
+    Ok((sink, renderers, (sw, w, h), first))
 }
 
 /// `accel.csv`, `recording.toml` and `README.txt` (the `analyze --targets` command, returned);
@@ -182,8 +247,13 @@ fn write_texts(
         .with_context(|| format!("cannot write {}", dir.join("recording.toml").display()))?;
     let mut args = super::analyze_args(spec, dir);
     let at = args.iter().position(|a| a == "--out").unwrap_or(args.len());
-    args.insert(at, targets.to_string());
-    args.insert(at, "--targets".into());
+    if spec.cluttered {
+        args.insert(at, dir.join("points.csv").display().to_string());
+        args.insert(at, "--points".into());
+    } else {
+        args.insert(at, targets.to_string());
+        args.insert(at, "--targets".into());
+    }
     let mut readme = format!(
         "Synthetic cantilever recording with {targets} targets along the beam ({} frames at {} \
          fps, exposure {} ms, seed {}); true mode shapes in recording.toml.\n\nAnalyse it with:\n\n  \
