@@ -298,34 +298,55 @@ impl CineFrames {
         self.file.seek(SeekFrom::Start(at + ann)).map_err(err)?;
         self.file.read_exact(&mut self.bytes).map_err(err)?;
         let (w, rows) = (h.width, h.height);
+        // the source row of output row r: bottom-up frames are turned upright
+        let src = |r: usize| if h.bottom_up { rows - 1 - r } else { r };
         if h.bits == 8 {
-            let mut data = Vec::with_capacity(w * rows);
-            for r in 0..rows {
-                let src = if h.bottom_up { rows - 1 - r } else { r };
-                data.extend_from_slice(&self.bytes[src * w..(src + 1) * w]);
+            if !matches!(frame, GreyFrame::U8 { .. }) {
+                *frame = GreyFrame::U8 {
+                    width: w,
+                    height: rows,
+                    data: Vec::new(),
+                };
             }
-            *frame = GreyFrame::U8 {
-                width: w,
-                height: rows,
+            if let GreyFrame::U8 {
+                width,
+                height,
                 data,
-            };
+            } = frame
+            {
+                (*width, *height) = (w, rows);
+                data.resize(w * rows, 0);
+                for (r, out) in data.chunks_exact_mut(w).enumerate() {
+                    out.copy_from_slice(&self.bytes[src(r) * w..(src(r) + 1) * w]);
+                }
+            }
         } else {
-            let mut values = Vec::with_capacity(w * rows);
-            match h.compression {
-                P10 => unpack_10(&self.bytes, &mut values),
-                P12L => super::photron::unpack_12(&self.bytes, &mut values),
-                _ => super::photron::unpack_16(&self.bytes, &mut values),
+            if !matches!(frame, GreyFrame::U16 { .. }) {
+                *frame = GreyFrame::U16 {
+                    width: w,
+                    height: rows,
+                    data: Vec::new(),
+                };
             }
-            let data = if h.bottom_up {
-                values.chunks_exact(w).rev().flatten().copied().collect()
-            } else {
-                values
-            };
-            *frame = GreyFrame::U16 {
-                width: w,
-                height: rows,
+            if let GreyFrame::U16 {
+                width,
+                height,
                 data,
-            };
+            } = frame
+            {
+                (*width, *height) = (w, rows);
+                data.resize(w * rows, 0);
+                match h.compression {
+                    P10 => unpack_10_into(&self.bytes, data),
+                    P12L => super::photron::unpack_12_into(&self.bytes, data),
+                    _ => {
+                        for (r, out) in data.chunks_exact_mut(w).enumerate() {
+                            let row = &self.bytes[src(r) * 2 * w..(src(r) + 1) * 2 * w];
+                            super::photron::unpack_16_into(row, out);
+                        }
+                    }
+                }
+            }
         }
         self.next += 1;
         Ok(Some(k))
@@ -333,14 +354,26 @@ impl CineFrames {
 }
 
 /// Four 10-bit codes in five bytes (a big-endian 40-bit word, most significant bit first),
-/// each linearised to 12 bits ([`super::phantom_lut::LIN_LUT`]).
+/// each linearised to 12 bits ([`super::phantom_lut::LIN_LUT`]); appended to `out`.
 pub fn unpack_10(bytes: &[u8], out: &mut Vec<u16>) {
-    for b in bytes.chunks_exact(5) {
-        let word = b.iter().fold(0u64, |acc, &v| acc << 8 | u64::from(v));
-        for i in (0..4).rev() {
-            let code = (word >> (10 * i)) & 0x3FF;
-            out.push(super::phantom_lut::LIN_LUT[code as usize]);
-        }
+    let at = out.len();
+    out.resize(at + bytes.len() / 5 * 4, 0);
+    unpack_10_into(bytes, &mut out[at..]);
+}
+
+/// [`unpack_10`] into `out` (`bytes.len() / 5 * 4` values).
+pub fn unpack_10_into(bytes: &[u8], out: &mut [u16]) {
+    let lut = &super::phantom_lut::LIN_LUT;
+    for (o, b) in out.chunks_exact_mut(4).zip(bytes.chunks_exact(5)) {
+        let word = u64::from(b[0]) << 32
+            | u64::from(b[1]) << 24
+            | u64::from(b[2]) << 16
+            | u64::from(b[3]) << 8
+            | u64::from(b[4]);
+        o[0] = lut[(word >> 30) as usize & 0x3FF];
+        o[1] = lut[(word >> 20) as usize & 0x3FF];
+        o[2] = lut[(word >> 10) as usize & 0x3FF];
+        o[3] = lut[word as usize & 0x3FF];
     }
 }
 

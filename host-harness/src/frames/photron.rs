@@ -352,11 +352,11 @@ impl MrawFrames {
             }
             set_size(frame, width, height);
             if let GreyFrame::U16 { data, .. } = frame {
-                data.clear();
+                data.resize(width * height, 0);
                 if h.bits == 16 {
-                    unpack_16(&self.bytes, data);
+                    unpack_16_into(&self.bytes, data);
                 } else {
-                    unpack_12(&self.bytes, data);
+                    unpack_12_into(&self.bytes, data);
                 }
             }
         }
@@ -373,21 +373,33 @@ fn set_size(frame: &mut GreyFrame, w: usize, h: usize) {
     }
 }
 
-/// Little-endian 16-bit words.
+/// Little-endian 16-bit words (appended to `out`).
 pub fn unpack_16(bytes: &[u8], out: &mut Vec<u16>) {
-    out.extend(
-        bytes
-            .chunks_exact(2)
-            .map(|b| u16::from_le_bytes([b[0], b[1]])),
-    );
+    let at = out.len();
+    out.resize(at + bytes.len() / 2, 0);
+    unpack_16_into(bytes, &mut out[at..]);
 }
 
-/// Two 12-bit pixels in three bytes, most significant bit first.
+/// Little-endian 16-bit words into `out` (`bytes.len() / 2` values).
+pub fn unpack_16_into(bytes: &[u8], out: &mut [u16]) {
+    for (o, b) in out.iter_mut().zip(bytes.chunks_exact(2)) {
+        *o = u16::from_le_bytes([b[0], b[1]]);
+    }
+}
+
+/// Two 12-bit pixels in three bytes, most significant bit first (appended to `out`).
 pub fn unpack_12(bytes: &[u8], out: &mut Vec<u16>) {
-    for b in bytes.chunks_exact(3) {
+    let at = out.len();
+    out.resize(at + bytes.len() / 3 * 2, 0);
+    unpack_12_into(bytes, &mut out[at..]);
+}
+
+/// [`unpack_12`] into `out` (`bytes.len() / 3 * 2` values).
+pub fn unpack_12_into(bytes: &[u8], out: &mut [u16]) {
+    for (o, b) in out.chunks_exact_mut(2).zip(bytes.chunks_exact(3)) {
         let (b0, b1, b2) = (u16::from(b[0]), u16::from(b[1]), u16::from(b[2]));
-        out.push(b0 << 4 | b1 >> 4);
-        out.push((b1 & 15) << 8 | b2);
+        o[0] = b0 << 4 | b1 >> 4;
+        o[1] = (b1 & 15) << 8 | b2;
     }
 }
 
