@@ -446,7 +446,7 @@ fn targets_leaving_the_frame_or_merging_are_lost_frames_of_those_targets_only() 
         .filter(|l| l.split(',').nth(2) == Some("3"))
         .map(|l| {
             let c: Vec<&str> = l.split(',').collect();
-            (c[6].parse().unwrap(), c[7] == "1")
+            (c[7].parse().unwrap(), c[8] == "1")
         })
         .collect();
     let held = rows.windows(2).filter(|w| w[1].1).count();
@@ -591,7 +591,7 @@ fn a_merged_or_jumping_blob_within_the_gate_is_refused_not_taken() {
         .lines()
         .skip(1)
         .map(|l| l.split(',').collect::<Vec<_>>())
-        .filter(|c| c[2] == "3" && c[7] == "1")
+        .filter(|c| c[2] == "3" && c[8] == "1")
         .map(|c| c[0].parse().unwrap())
         .collect();
     assert_eq!(lost3, window.clone().collect::<Vec<_>>());

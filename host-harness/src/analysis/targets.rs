@@ -641,8 +641,8 @@ pub fn track_rows<'a>(tracks: &'a Tracks, a: &'a TargetAnalysis) -> Vec<Track<'a
         .zip(&a.displacements)
         .map(|(c, d)| Track {
             centroids: c,
-            mm: &d.mm,
-            lost: &d.lost,
+            mm: Some(&d.mm),
+            lost: Some(&d.lost),
         })
         .collect()
 }

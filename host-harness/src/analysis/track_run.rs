@@ -6,7 +6,7 @@
 use super::points::{Point, PointsInfo, ThresholdRule};
 use super::targets::Tracks;
 use super::DisplacementSettings;
-use crate::export::targets::{track_csv, TrackRow};
+use crate::export::targets::{displacement_csv, Track};
 use crate::frames::discover_frames;
 use crate::outdir::Staged;
 use firmware_core::centroid::CentroidConfig;
@@ -65,16 +65,17 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));
     let out = Staged::new(&req.out, req.force, "track", &inputs)?;
     let (mm, failures) = displacements(&tracks, req.displacement.as_ref());
-    let rows: Vec<TrackRow<'_>> = tracks
+    let rows: Vec<Track<'_>> = tracks
         .centroids
         .iter()
         .zip(&mm)
-        .map(|(c, m)| TrackRow {
+        .map(|(c, m)| Track {
             centroids: c,
-            mm: m.as_deref(),
+            mm: m.as_ref().map(|d| d.0.as_slice()),
+            lost: m.as_ref().map(|d| d.1.as_slice()),
         })
         .collect();
-    out.write("displacement.csv", track_csv(&rows, req.fps))?;
+    out.write("displacement.csv", displacement_csv(&rows, req.fps, 0.0))?;
     let mut report = report(req, &tracks, windows.as_ref(), &failures);
     if req.plots {
         let along_x = req
@@ -93,12 +94,13 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     Ok(report)
 }
 
-/// Each target's displacement (mm, lost frames filled by the policy) when a scale was given;
-/// a target with too many lost frames gets none, and the reason.
+/// Each target's displacement (mm, lost frames filled by the policy) and lost flags when a
+/// scale was given; a target with too many lost frames gets none, and the reason.
+#[allow(clippy::type_complexity)]
 fn displacements(
     tracks: &Tracks,
     settings: Option<&DisplacementSettings>,
-) -> (Vec<Option<Vec<f64>>>, Vec<String>) {
+) -> (Vec<Option<(Vec<f64>, Vec<bool>)>>, Vec<String>) {
     let mut failures = Vec::new();
     let mm = tracks
         .centroids
@@ -107,7 +109,7 @@ fn displacements(
         .map(|(t, c)| {
             let s = settings?;
             match super::displacement_mm(c, s) {
-                Ok(d) => Some(d.mm),
+                Ok(d) => Some((d.mm, d.lost)),
                 Err(e) => {
                     failures.push(format!("target {}: {e:#}", t + 1));
                     None

@@ -82,28 +82,20 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
     s.into_bytes()
 }
 
-/// `displacement.csv`: `frame,t_s,cx,cy,pixels,flags,disp_mm,lost`, one row per frame. `t_s` is
-/// the frame time from the first accelerometer sample (`time_offset_s + frame / fc`); `cx`,
-/// `cy` are empty for lost frames, `flags` is the firmware-core flag byte, `lost` is 0 or 1.
+/// `displacement.csv` of one target: the columns of several targets
+/// ([`super::targets::displacement_csv`]), `target` 1.
 pub fn displacement_csv(
     centroids: &[Centroid],
     (mm, lost): (&[f64], &[bool]),
     frame_rate_hz: f64,
     time_offset_s: f64,
 ) -> Vec<u8> {
-    let mut s = String::from("frame,t_s,cx,cy,pixels,flags,disp_mm,lost\n");
-    for (k, (c, (d, lost))) in centroids.iter().zip(mm.iter().zip(lost)).enumerate() {
-        let t = time_offset_s + k as f64 / frame_rate_hz;
-        let (cx, cy) = position(c);
-        let _ = writeln!(
-            s,
-            "{k},{t},{cx},{cy},{},{},{d},{}",
-            c.pixels(),
-            c.flags.bits(),
-            u8::from(*lost)
-        );
-    }
-    s.into_bytes()
+    let track = super::targets::Track {
+        centroids,
+        mm: Some(mm),
+        lost: Some(lost),
+    };
+    super::targets::displacement_csv(&[track], frame_rate_hz, time_offset_s)
 }
 
 /// A centroid's `cx`, `cy` cells (`f32` text), empty when the frame has none.

@@ -20,35 +20,40 @@ pub fn frf_csv<'a>(frfs: impl IntoIterator<Item = (usize, Spectrum<'a>)>) -> Vec
     s.into_bytes()
 }
 
-/// One target's track as `displacement.csv` shows it: its centroid per frame, and the
-/// displacement (mm) and lost flag per frame.
+/// One target's track as `displacement.csv` shows it: its centroid per frame, and, when
+/// computed, the displacement (mm) and the lost flag per frame (else lost = no centroid).
 #[derive(Debug, Clone, Copy)]
 pub struct Track<'a> {
-    /// Centroid per frame.
+    /// Centroid per frame (an empty one where the target was lost).
     pub centroids: &'a [Centroid],
-    /// Displacement per frame, mm.
-    pub mm: &'a [f64],
-    /// Lost per frame.
-    pub lost: &'a [bool],
+    /// Displacement per frame, mm (`None`: no scale, or too many frames lost to fill them).
+    pub mm: Option<&'a [f64]>,
+    /// Lost per frame (`None`: the frames without a centroid).
+    pub lost: Option<&'a [bool]>,
 }
 
-/// `displacement.csv`: `frame,t_s,target,cx,cy,pixels,disp_mm,lost`, one row per frame and
-/// target (`cx`, `cy` empty where the target was lost); `tracks[t]` is target `t + 1`.
+/// `displacement.csv` of `analyze` (one target or several) and `track`:
+/// `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per frame and target (`tracks[t]`
+/// is target `t + 1`); `t_s = time_offset_s + frame / fps`; `cx`, `cy` in pixels of the full
+/// frame, empty where the target was lost; `flags` the firmware-core flag byte; `disp_mm` empty
+/// where it was not computed; `lost` 0 or 1.
 pub fn displacement_csv(tracks: &[Track<'_>], frame_rate_hz: f64, time_offset_s: f64) -> Vec<u8> {
-    let mut s = String::from("frame,t_s,target,cx,cy,pixels,disp_mm,lost\n");
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
     let frames = tracks.first().map_or(0, |t| t.centroids.len());
     for k in 0..frames {
         let t_s = time_offset_s + k as f64 / frame_rate_hz;
         for (t, tr) in tracks.iter().enumerate() {
             let c = &tr.centroids[k];
             let (cx, cy) = position(c);
+            let lost = tr.lost.map_or(c.position().is_none(), |l| l[k]);
             let _ = writeln!(
                 s,
-                "{k},{t_s},{},{cx},{cy},{},{},{}",
+                "{k},{t_s},{},{cx},{cy},{},{},{},{}",
                 t + 1,
                 c.pixels(),
-                tr.mm[k],
-                u8::from(tr.lost[k])
+                c.flags.bits(),
+                opt(tr.mm.map(|m| m[k])),
+                u8::from(lost)
             );
         }
     }
@@ -151,41 +156,6 @@ pub fn compensation_csv<'a>(
     for (t, rows) in targets {
         for r in rows {
             push_compensation_row(&mut s, &format!("{t},"), r);
-        }
-    }
-    s.into_bytes()
-}
-
-/// One target's track as `track` writes it: centroids, and the displacement (mm; `None`
-/// without a scale, or when too many frames were lost to fill them) and lost flag per frame.
-#[derive(Debug, Clone, Copy)]
-pub struct TrackRow<'a> {
-    /// Centroid per frame (an empty one where the target was lost).
-    pub centroids: &'a [Centroid],
-    /// Displacement per frame, mm, if computed.
-    pub mm: Option<&'a [f64]>,
-}
-
-/// `track`'s `displacement.csv`: `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per
-/// frame and target (`cx`, `cy` empty where the target was lost, `flags` the firmware-core
-/// flag byte, `disp_mm` empty without a scale), `t_s = frame / fps`.
-pub fn track_csv(tracks: &[TrackRow<'_>], frame_rate_hz: f64) -> Vec<u8> {
-    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
-    let frames = tracks.first().map_or(0, |t| t.centroids.len());
-    for k in 0..frames {
-        let t_s = k as f64 / frame_rate_hz;
-        for (t, tr) in tracks.iter().enumerate() {
-            let c = &tr.centroids[k];
-            let (cx, cy) = position(c);
-            let _ = writeln!(
-                s,
-                "{k},{t_s},{},{cx},{cy},{},{},{},{}",
-                t + 1,
-                c.pixels(),
-                c.flags.bits(),
-                opt(tr.mm.map(|m| m[k])),
-                u8::from(c.position().is_none())
-            );
         }
     }
     s.into_bytes()
