@@ -689,6 +689,11 @@ fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
     // Otsu's threshold of each window: between the background and the tag, same modes
     assert_ok(&with_points(&["--threshold", "auto"]));
     assert_eq!(read(&cluttered, "modes.csv"), read(&clean, "modes.csv"));
+    // --roi means nothing with --points: refused, not ignored
+    assert_exit_2(
+        &with_points(&["--threshold", "127", "--roi", "0,0,100,40"]),
+        "--roi with --points",
+    );
     // a window outside the first frame, a duplicate target, a gap in the numbering
     for (text, needle) in [
         (

@@ -246,6 +246,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// `--targets K` and its flags, checked.
 fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
+    if args.points.is_some() && args.centroid.roi.is_some() {
+        return Err(bad_input(
+            "--roi with --points: each point's window is its region; leave --roi out",
+        ));
+    }
     let points = match &args.points {
         Some(p) => Some(crate::analysis::points::read_points(p)?),
         None => None,

@@ -59,6 +59,11 @@ pub struct Args {
 /// Runs `host-harness track`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (fps, _, notes) = crate::analysis::run::resolve_rates(&args.frames, args.fps, None)?;
+    if args.points.is_some() && args.centroid.roi.is_some() {
+        return Err(bad_input(
+            "--roi with --points: each point's window is its region; leave --roi out",
+        ));
+    }
     let targets = match (&args.points, args.targets) {
         (Some(p), _) => Targets::Points(
             crate::analysis::points::read_points(p)?,
