@@ -304,3 +304,43 @@ fn damaged_phantom_files_are_named() {
     std::fs::write(&p, &b).unwrap();
     assert_exit_2(&centroid(&p), "compression 2");
 }
+
+#[test]
+fn centroid_reads_a_video_at_its_rate_and_needs_one() {
+    let (_tmp, rec) = make_recording(6, 128);
+    let video = rec.dir.join("v.mkv");
+    let mut w =
+        host_harness::frames::video::Ffv1Writer::create(&video, W as usize, H as usize, FPS)
+            .unwrap();
+    for k in 0..6 {
+        w.write_frame(&disk(position_px(k as f64 / FPS), W, H))
+            .unwrap();
+    }
+    w.finish().unwrap();
+    let v = video.to_str().unwrap();
+    let o = harness(&["centroid", "--threshold", "100", "--fps", "120", v]);
+    assert_ok(&o);
+    let rows: Vec<String> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .skip(1)
+        .map(str::to_string)
+        .collect();
+    assert_eq!(rows.len(), 6);
+    // the same pixels as the PNG frames (FFV1 is lossless): the same centroids
+    for (k, row) in rows.iter().enumerate() {
+        let png = rec.frames.join(format!("frame_{k}.png"));
+        let p = harness(&["centroid", "--threshold", "100", png.to_str().unwrap()]);
+        let want = String::from_utf8_lossy(&p.stdout)
+            .lines()
+            .nth(1)
+            .unwrap()
+            .to_string();
+        let strip = |r: &str| r.split_once(',').unwrap().1.to_string();
+        assert!(row.starts_with(&format!("{v}#{},", k + 1)), "{row}");
+        assert_eq!(strip(row), strip(&want));
+    }
+    assert_exit_2(
+        &harness(&["centroid", "--threshold", "100", v]),
+        "a video needs --fps",
+    );
+}

@@ -26,13 +26,17 @@ pub struct Args {
     /// Centroid settings.
     #[command(flatten)]
     pub centroid: CentroidArgs,
+    /// With a video file: its frame rate, Hz (the timestamps are checked against it).
+    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    pub fps: Option<f64>,
     /// Grey level at or above which a pixel counts as saturated (default: 255 for 8-bit, 65535
     /// for 16-bit frames); must be above T.
     #[arg(long, value_name = "LEVEL")]
     pub saturation: Option<u16>,
     /// PNG, TIFF or JPEG frames (8- or 16-bit grey, or colour read as its BT.601 luma
     /// 0.299 R + 0.587 G + 0.114 B, rounded, alpha ignored), Photron recordings named by
-    /// their .cih/.cihx, or Phantom .cine files (one row per frame, FILE#N).
+    /// their .cih/.cihx, Phantom .cine files, or videos with --fps (one row per frame,
+    /// FILE#N).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
 }
@@ -63,13 +67,25 @@ pub fn centroid_file(config: &CentroidConfig, path: &Path) -> anyhow::Result<Cen
 fn centroid_pages(
     config: &CentroidConfig,
     path: &Path,
+    fps: Option<f64>,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let name = path.to_string_lossy().into_owned();
     if crate::frames::photron::is_header(path)
         || crate::frames::photron::is_mraw(path)
         || crate::frames::phantom::is_cine(path)
     {
-        return recording_frames(config, path, &name);
+        return recording_frames(config, path, &name, 1.0);
+    }
+    if crate::frames::files::is_video(path) {
+        return match fps {
+            Some(fps) => recording_frames(config, path, &name, fps),
+            None => (
+                Vec::new(),
+                Some(bad_input(format!(
+                    "{name}: a video needs --fps (its timestamps are checked against it)"
+                ))),
+            ),
+        };
     }
     let is_tiff = path
         .extension()
@@ -98,15 +114,17 @@ fn centroid_pages(
     (rows, result.err())
 }
 
-/// Every frame of a camera recording (Photron, Phantom), labelled `file#N` from 1.
+/// Every frame of a camera recording (Photron, Phantom) or a video (timestamps checked against
+/// `fps`), labelled `file#N` from 1.
 fn recording_frames(
     config: &CentroidConfig,
     path: &Path,
     name: &str,
+    fps: f64,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let mut rows = Vec::new();
     let result = crate::frames::discover_frames(name).and_then(|found| {
-        found.source.for_each(1.0, |label, frame| {
+        found.source.for_each(fps, |label, frame| {
             rows.push((
                 format!("{name}#{}", rows.len() + 1),
                 frame.centroid(config, &label)?,
@@ -127,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (mut empty, mut flagged) = (0usize, 0usize);
     let mut frames = 0usize;
     for path in &args.files {
-        let (rows, error) = centroid_pages(&config, path);
+        let (rows, error) = centroid_pages(&config, path, args.fps);
         for (label, c) in &rows {
             print(signals::centroid_row(label, c))?;
             empty += usize::from(c.position().is_none());

@@ -29,7 +29,8 @@ pub enum FrameSource {
 /// Extensions read as video files.
 const VIDEO_EXTENSIONS: [&str; 7] = ["avi", "mkv", "mp4", "mov", "m4v", "webm", "mxf"];
 
-fn is_video(p: &Path) -> bool {
+/// Whether `p` names a video file (by its extension).
+pub fn is_video(p: &Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| VIDEO_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
