@@ -8,17 +8,22 @@ use crate::util::{assert_exit_2, assert_ok, harness, stderr};
 use host_harness::frames::photron::write_recording;
 use std::path::Path;
 
-/// The 1 s recording's frames as Photron `rec.cih` + `rec.mraw` at `bits`, levels scaled by
-/// `scale` (the threshold scales with them).
-fn photron(dir: &Path, bits: u32, scale: u16) -> std::path::PathBuf {
-    let frames: Vec<Vec<u16>> = (0..120)
+/// The 1 s recording's 120 frames, levels multiplied by `scale`.
+fn scaled_frames(scale: u16) -> Vec<Vec<u16>> {
+    (0..120)
         .map(|k| {
             disk(position_px(k as f64 / FPS), W, H)
                 .into_iter()
                 .map(|v| u16::from(v) * scale)
                 .collect()
         })
-        .collect();
+        .collect()
+}
+
+/// The 1 s recording's frames as Photron `rec.cih` + `rec.mraw` at `bits`, levels scaled by
+/// `scale` (the threshold scales with them).
+fn photron(dir: &Path, bits: u32, scale: u16) -> std::path::PathBuf {
+    let frames = scaled_frames(scale);
     let cih = dir.join(format!("rec{bits}.cih"));
     write_recording(&cih, (W as usize, H as usize), bits, FPS, 0.002, &frames).unwrap();
     cih
@@ -214,14 +219,7 @@ fn colour_png_and_jpeg_frames_are_read_as_their_luma() {
 
 /// The 1 s recording's frames as a Phantom cine (`bits`, `compression`), levels scaled.
 fn cine(dir: &Path, bits: u16, compression: u32, scale: u16) -> std::path::PathBuf {
-    let frames: Vec<Vec<u16>> = (0..120)
-        .map(|k| {
-            disk(position_px(k as f64 / FPS), W, H)
-                .into_iter()
-                .map(|v| u16::from(v) * scale)
-                .collect()
-        })
-        .collect();
+    let frames = scaled_frames(scale);
     let p = dir.join(format!("rec{bits}_{compression}.cine"));
     host_harness::frames::phantom::write_cine(
         &p,

@@ -612,6 +612,26 @@ fn a_merged_or_jumping_blob_within_the_gate_is_refused_not_taken() {
     assert_eq!(lost_counts(&dir), vec![0, 0, 3]);
 }
 
+/// Paints clutter into the frames of the hand recording in `dir`: a wall patch as bright as
+/// the tags at the right (columns 145..160) and, with `hand`, a blob drifting along the bottom.
+fn add_clutter(dir: &Path, hand: bool) {
+    for k in 0..FRAMES {
+        let p = dir.join("frames").join(format!("f_{k:05}.png"));
+        let mut img = image::open(&p).unwrap().into_luma8();
+        for y in 0..H as u32 {
+            for x in 145..W as u32 {
+                img.put_pixel(x, y, image::Luma([230]));
+            }
+        }
+        if hand {
+            for (px, py) in disk_pixels(10.0 + k as f64 * 0.8, 43.0) {
+                img.put_pixel(px as u32, py as u32, image::Luma([200]));
+            }
+        }
+        img.save(&p).unwrap();
+    }
+}
+
 /// A cluttered scene: the three bobbing targets, plus a bright wall patch at the right
 /// (columns 145..160, as bright as the tags) and a "hand" blob drifting along the bottom. The
 /// blob numbering of `--targets 3` finds five blobs and stops with a message naming them and
@@ -625,20 +645,7 @@ fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
     let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
     hand_recording(&clean, &resting, 2048);
     hand_recording(&cluttered, &resting, 2048);
-    for k in 0..FRAMES {
-        let p = cluttered.join("frames").join(format!("f_{k:05}.png"));
-        let mut img = image::open(&p).unwrap().into_luma8();
-        for y in 0..H as u32 {
-            for x in 145..W as u32 {
-                img.put_pixel(x, y, image::Luma([230]));
-            }
-        }
-        let hx = 10.0 + k as f64 * 0.8;
-        for (px, py) in disk_pixels(hx, 43.0) {
-            img.put_pixel(px as u32, py as u32, image::Luma([200]));
-        }
-        img.save(&p).unwrap();
-    }
+    add_clutter(&cluttered, true);
     let frames = |d: &Path| d.join("frames").to_str().unwrap().to_string();
     assert_ok(&analyze_hand(&clean, &frames(&clean)));
     let o = analyze_hand(&cluttered, &frames(&cluttered));
@@ -725,16 +732,7 @@ fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
     let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
     hand_recording(&clean, &resting, 64);
     hand_recording(&cluttered, &resting, 64);
-    for k in 0..FRAMES {
-        let p = cluttered.join("frames").join(format!("f_{k:05}.png"));
-        let mut img = image::open(&p).unwrap().into_luma8();
-        for y in 0..H as u32 {
-            for x in 145..W as u32 {
-                img.put_pixel(x, y, image::Luma([230]));
-            }
-        }
-        img.save(&p).unwrap();
-    }
+    add_clutter(&cluttered, false);
     let points = tmp.path().join("points.csv");
     std::fs::write(
         &points,

@@ -493,7 +493,13 @@ pub fn write_frf_plot(
 ) -> anyhow::Result<Vec<PathBuf>> {
     register_font();
     let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_curves(r, title, y_label, curves))
+    figure!(dir, name, |r| draw_lines(
+        r,
+        title,
+        y_label,
+        curves,
+        Lines::Frf
+    ))
 }
 
 /// Tracks over time: one curve per `(label, t_s, value)`, written as `path_stem.png` and
@@ -506,89 +512,63 @@ pub fn write_tracks_plot(
 ) -> anyhow::Result<Vec<PathBuf>> {
     register_font();
     let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_tracks(r, title, y_label, curves))
+    figure!(dir, name, |r| draw_lines(
+        r,
+        title,
+        y_label,
+        curves,
+        Lines::Tracks
+    ))
 }
 
-fn draw_tracks<DB: DrawingBackend>(
+/// How [`draw_lines`] draws a figure: an FRF (frequency axis, values from 0, the first curve
+/// the transducer's, thick lines) or tracks (time axis, the values' own range, thin lines in
+/// the exposure colours).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Lines {
+    Frf,
+    Tracks,
+}
+
+fn draw_lines<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
     y_label: &str,
     curves: &[(&str, &[f64], &[f64])],
+    lines: Lines,
 ) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
     let xr = finite_range(curves.iter().flat_map(|c| c.1.iter().copied())).unwrap_or((0.0, 1.0));
-    let (lo, hi) =
-        finite_range(curves.iter().flat_map(|c| c.2.iter().copied())).unwrap_or((-1.0, 1.0));
-    let pad = ((hi - lo) * 0.05).max(1e-9);
-    let mut chart = build_chart(
-        &root,
-        SINGLE,
-        title,
-        xr.0..xr.1,
-        lo - pad..hi + pad,
-        "time (s)",
-        y_label,
-    )?;
-    for (i, (label, t, v)) in curves.iter().enumerate() {
-        draw_line(
-            &mut chart,
-            t.iter()
-                .zip(v.iter())
-                .filter(|(x, y)| x.is_finite() && y.is_finite())
-                .map(|(x, y)| (*x, *y)),
-            exposure_colour(i, curves.len().max(2)),
-            1,
-            *label,
-        )?;
-    }
-    draw_legend(&mut chart, SINGLE)?;
-    root.present()?;
-    Ok(())
-}
-
-fn draw_curves<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    title: &str,
-    y_label: &str,
-    curves: &[(&str, &[f64], &[f64])],
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let xr = finite_range(curves.iter().flat_map(|c| c.1.iter().copied())).unwrap_or((0.0, 1.0));
-    let y_max = curves
-        .iter()
-        .flat_map(|c| c.2.iter().copied())
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max)
-        * 1.05;
-    let mut chart = build_chart(
-        &root,
-        SINGLE,
-        title,
-        xr.0..xr.1,
-        0.0..y_max.max(1e-12),
-        "frequency (Hz)",
-        y_label,
-    )?;
-    for (i, (label, f, a)) in curves.iter().enumerate() {
-        let colour = if i == 0 {
-            TRANSDUCER
-        } else {
-            exposure_colour(i, curves.len().max(2))
+    let values = || curves.iter().flat_map(|c| c.2.iter().copied());
+    let (y_range, x_label) = match lines {
+        Lines::Frf => {
+            let y_max = values().filter(|v| v.is_finite()).fold(0.0f64, f64::max) * 1.05;
+            (0.0..y_max.max(1e-12), "frequency (Hz)")
+        }
+        Lines::Tracks => {
+            let (lo, hi) = finite_range(values()).unwrap_or((-1.0, 1.0));
+            let pad = ((hi - lo) * 0.05).max(1e-9);
+            (lo - pad..hi + pad, "time (s)")
+        }
+    };
+    let mut chart = build_chart(&root, SINGLE, title, xr.0..xr.1, y_range, x_label, y_label)?;
+    for (i, (label, x, y)) in curves.iter().enumerate() {
+        let (colour, width) = match lines {
+            Lines::Frf if i == 0 => (TRANSDUCER, 2),
+            Lines::Frf => (exposure_colour(i, curves.len().max(2)), 2),
+            Lines::Tracks => (exposure_colour(i, curves.len().max(2)), 1),
         };
         draw_line(
             &mut chart,
-            f.iter()
-                .zip(a.iter())
+            x.iter()
+                .zip(y.iter())
                 .filter(|(x, y)| x.is_finite() && y.is_finite())
                 .map(|(x, y)| (*x, *y)),
             colour,
-            2,
+            width,
             *label,
         )?;
     }

@@ -20,10 +20,10 @@
 //! Thresholds: `--threshold T` for all, the file's `threshold` column per target, or `--threshold
 //! auto`: Otsu's threshold of each window in the first frame.
 
-use super::targets::Tracks;
+use super::targets::{lost, Tracks};
 use crate::bad_input;
 use crate::frames::{FrameSource, GreyFrame};
-use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Moments, Roi};
+use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Roi};
 use std::path::Path;
 
 /// One chosen point.
@@ -200,16 +200,6 @@ pub fn otsu(frame: &GreyFrame, roi: Roi) -> u16 {
     // pixels of bin <= best_i are the dark class: the threshold is the top of that bin
     let level = f64::from(lo) + (best_i as f64 + 0.5) * span / (bins - 1) as f64;
     (level.floor() as u32).min(65_535) as u16
-}
-
-/// A centroid standing for a lost frame.
-fn lost() -> Centroid {
-    Centroid {
-        cx: 0.0,
-        cy: 0.0,
-        moments: Moments::default(),
-        flags: Flags::EMPTY,
-    }
 }
 
 /// What tracking the points found, beside the tracks.

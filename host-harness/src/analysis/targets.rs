@@ -125,7 +125,7 @@ impl History {
 }
 
 /// A centroid standing for a lost frame.
-fn lost() -> Centroid {
+pub(crate) fn lost() -> Centroid {
     Centroid {
         cx: 0.0,
         cy: 0.0,

@@ -74,11 +74,11 @@ fn centroid_pages(
         || crate::frames::photron::is_mraw(path)
         || crate::frames::phantom::is_cine(path)
     {
-        return recording_frames(config, path, &name, 1.0);
+        return recording_frames(config, &name, 1.0);
     }
     if crate::frames::files::is_video(path) {
         return match fps {
-            Some(fps) => recording_frames(config, path, &name, fps),
+            Some(fps) => recording_frames(config, &name, fps),
             None => (
                 Vec::new(),
                 Some(bad_input(format!(
@@ -118,7 +118,6 @@ fn centroid_pages(
 /// `fps`), labelled `file#N` from 1.
 fn recording_frames(
     config: &CentroidConfig,
-    path: &Path,
     name: &str,
     fps: f64,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
@@ -132,7 +131,6 @@ fn recording_frames(
             Ok(())
         })
     });
-    debug_assert_eq!(path.to_string_lossy(), name);
     (rows, result.err())
 }
 

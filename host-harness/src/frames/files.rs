@@ -543,28 +543,12 @@ impl FrameSource {
             FrameSource::Photron(p) => {
                 let mut r = super::photron::MrawFrames::open(p)?;
                 let n = r.header().frames;
-                let mut frame = GreyFrame::U8 {
-                    width: 0,
-                    height: 0,
-                    data: Vec::new(),
-                };
-                while let Some(k) = r.next_frame(&mut frame)? {
-                    f(format!("{} frame {} of {n}", p.display(), k + 1), &frame)?;
-                }
-                Ok(())
+                each_recorded_frame(p, n, |frame| r.next_frame(frame), &mut f)
             }
             FrameSource::Cine(p) => {
                 let mut r = super::phantom::CineFrames::open(p)?;
                 let n = r.header().offsets.len();
-                let mut frame = GreyFrame::U8 {
-                    width: 0,
-                    height: 0,
-                    data: Vec::new(),
-                };
-                while let Some(k) = r.next_frame(&mut frame)? {
-                    f(format!("{} frame {} of {n}", p.display(), k + 1), &frame)?;
-                }
-                Ok(())
+                each_recorded_frame(p, n, |frame| r.next_frame(frame), &mut f)
             }
             FrameSource::Video(p) => {
                 let mut v =
@@ -584,6 +568,25 @@ impl FrameSource {
             }
         }
     }
+}
+
+/// Calls `f` for every frame `next` reads into one reused buffer (a camera file's reader:
+/// `Ok(None)` after its last frame), labelled `PATH frame K of N` (K from 1).
+fn each_recorded_frame(
+    path: &Path,
+    n: usize,
+    mut next: impl FnMut(&mut GreyFrame) -> anyhow::Result<Option<usize>>,
+    f: &mut impl FnMut(String, &GreyFrame) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut frame = GreyFrame::U8 {
+        width: 0,
+        height: 0,
+        data: Vec::new(),
+    };
+    while let Some(k) = next(&mut frame)? {
+        f(format!("{} frame {} of {n}", path.display(), k + 1), &frame)?;
+    }
+    Ok(())
 }
 
 /// Centroids every frame of `source` (one frame in memory at a time; a video's timestamps are

@@ -49,6 +49,53 @@ impl GreyFrame {
         }
     }
 
+    /// The frame made an 8-bit `width x height` one, its buffer reused (resized, contents
+    /// unspecified): the pixels to fill, row 0 first.
+    pub fn u8_pixels(&mut self, width: usize, height: usize) -> &mut [u8] {
+        if !matches!(self, GreyFrame::U8 { .. }) {
+            *self = GreyFrame::U8 {
+                width,
+                height,
+                data: Vec::new(),
+            };
+        }
+        match self {
+            GreyFrame::U8 {
+                width: w,
+                height: h,
+                data,
+            } => {
+                (*w, *h) = (width, height);
+                data.resize(width * height, 0);
+                data
+            }
+            GreyFrame::U16 { .. } => &mut [],
+        }
+    }
+
+    /// [`u8_pixels`](Self::u8_pixels) for a 16-bit frame.
+    pub fn u16_pixels(&mut self, width: usize, height: usize) -> &mut [u16] {
+        if !matches!(self, GreyFrame::U16 { .. }) {
+            *self = GreyFrame::U16 {
+                width,
+                height,
+                data: Vec::new(),
+            };
+        }
+        match self {
+            GreyFrame::U16 {
+                width: w,
+                height: h,
+                data,
+            } => {
+                (*w, *h) = (width, height);
+                data.resize(width * height, 0);
+                data
+            }
+            GreyFrame::U8 { .. } => &mut [],
+        }
+    }
+
     /// Centroid with the firmware-core single-target centroider. `label` names the frame (file,
     /// page) in the error when its shape is inconsistent.
     pub fn centroid(&self, config: &CentroidConfig, label: &str) -> anyhow::Result<Centroid> {

@@ -301,49 +301,19 @@ impl CineFrames {
         // the source row of output row r: bottom-up frames are turned upright
         let src = |r: usize| if h.bottom_up { rows - 1 - r } else { r };
         if h.bits == 8 {
-            if !matches!(frame, GreyFrame::U8 { .. }) {
-                *frame = GreyFrame::U8 {
-                    width: w,
-                    height: rows,
-                    data: Vec::new(),
-                };
-            }
-            if let GreyFrame::U8 {
-                width,
-                height,
-                data,
-            } = frame
-            {
-                (*width, *height) = (w, rows);
-                data.resize(w * rows, 0);
-                for (r, out) in data.chunks_exact_mut(w).enumerate() {
-                    out.copy_from_slice(&self.bytes[src(r) * w..(src(r) + 1) * w]);
-                }
+            let data = frame.u8_pixels(w, rows);
+            for (r, out) in data.chunks_exact_mut(w).enumerate() {
+                out.copy_from_slice(&self.bytes[src(r) * w..(src(r) + 1) * w]);
             }
         } else {
-            if !matches!(frame, GreyFrame::U16 { .. }) {
-                *frame = GreyFrame::U16 {
-                    width: w,
-                    height: rows,
-                    data: Vec::new(),
-                };
-            }
-            if let GreyFrame::U16 {
-                width,
-                height,
-                data,
-            } = frame
-            {
-                (*width, *height) = (w, rows);
-                data.resize(w * rows, 0);
-                match h.compression {
-                    P10 => unpack_10_into(&self.bytes, data),
-                    P12L => super::photron::unpack_12_into(&self.bytes, data),
-                    _ => {
-                        for (r, out) in data.chunks_exact_mut(w).enumerate() {
-                            let row = &self.bytes[src(r) * 2 * w..(src(r) + 1) * 2 * w];
-                            super::photron::unpack_16_into(row, out);
-                        }
+            let data = frame.u16_pixels(w, rows);
+            match h.compression {
+                P10 => unpack_10_into(&self.bytes, data),
+                P12L => super::photron::unpack_12_into(&self.bytes, data),
+                _ => {
+                    for (r, out) in data.chunks_exact_mut(w).enumerate() {
+                        let row = &self.bytes[src(r) * 2 * w..(src(r) + 1) * 2 * w];
+                        super::photron::unpack_16_into(row, out);
                     }
                 }
             }

@@ -327,49 +327,13 @@ impl MrawFrames {
             ))
         })?;
         let (width, height) = (h.width, h.height);
-        if h.bits == 8 {
-            match frame {
-                GreyFrame::U8 { data, .. } => {
-                    data.clear();
-                    data.extend_from_slice(&self.bytes);
-                }
-                _ => {
-                    *frame = GreyFrame::U8 {
-                        width,
-                        height,
-                        data: self.bytes.clone(),
-                    }
-                }
-            }
-            set_size(frame, width, height);
-        } else {
-            if !matches!(frame, GreyFrame::U16 { .. }) {
-                *frame = GreyFrame::U16 {
-                    width,
-                    height,
-                    data: Vec::new(),
-                };
-            }
-            set_size(frame, width, height);
-            if let GreyFrame::U16 { data, .. } = frame {
-                data.resize(width * height, 0);
-                if h.bits == 16 {
-                    unpack_16_into(&self.bytes, data);
-                } else {
-                    unpack_12_into(&self.bytes, data);
-                }
-            }
+        match h.bits {
+            8 => frame.u8_pixels(width, height).copy_from_slice(&self.bytes),
+            16 => unpack_16_into(&self.bytes, frame.u16_pixels(width, height)),
+            _ => unpack_12_into(&self.bytes, frame.u16_pixels(width, height)),
         }
         self.next += 1;
         Ok(Some(k))
-    }
-}
-
-fn set_size(frame: &mut GreyFrame, w: usize, h: usize) {
-    match frame {
-        GreyFrame::U8 { width, height, .. } | GreyFrame::U16 { width, height, .. } => {
-            (*width, *height) = (w, h);
-        }
     }
 }
 
