@@ -16,14 +16,14 @@
 #    (kept, with its path printed, when a check failed).
 #
 # Settings (environment): HOST_HARNESS (binary; default target/debug/host-harness, the one the
-# CI test step builds, else target/release/host-harness), CI_SLURM_RUNS (24: 8 runs per task,
-# a window of several seconds for the requeue),
+# CI test step builds, else target/release/host-harness), CI_SLURM_RUNS (96: 32 runs per task,
+# a window of a few seconds for the requeue even on a fast machine; 8 per task took 0.6 s),
 # CI_SLURM_EXPOSURES (40,180), CI_SLURM_SEED (3), CI_SLURM_TIMEOUT (seconds per wait, 300),
 # CI_SLURM_KEEP=1 keeps the temporary directory (logs, outputs, slurm.conf).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-RUNS=${CI_SLURM_RUNS:-24}
+RUNS=${CI_SLURM_RUNS:-96}
 EXPOSURES=${CI_SLURM_EXPOSURES:-40,180}
 SEED=${CI_SLURM_SEED:-3}
 TIMEOUT=${CI_SLURM_TIMEOUT:-300}
@@ -81,6 +81,8 @@ dump_logs() {
 fail() {
   echo "[ci-slurm] FAILED: $*" >&2
   dump_logs >&2
+  # said again after the logs: a CI summary that keeps only the tail still shows why
+  echo "[ci-slurm] FAILED: $*" >&2
   KEEP=1
   exit 1
 }
@@ -282,9 +284,21 @@ while :; do
 done
 scontrol requeue "${JOB}_2" || fail "scontrol requeue ${JOB}_2 failed"
 say "requeued task ${JOB}_2 after $before of its $PER_SHARD runs"
-# a requeued job waits for its begin time; release it at once so CI does not sit idle
-wait_for 30 "task 2 to be back in the queue" sh -c "squeue -h -j ${JOB}_2 -o %T | grep -Eqx 'PENDING|RUNNING|COMPLETED'"
-scontrol update JobId="${JOB}_2" StartTime=now >/dev/null 2>&1 || true
+# A requeued job waits for its begin time (Slurm sets one in the future); release it so CI does
+# not sit idle. Right after `scontrol requeue` squeue may still show the old RUNNING state, and
+# an update sent before the job is PENDING is refused, so keep releasing until it runs again.
+end=$(($(date +%s) + 120))
+while :; do
+  st=$(squeue -h -j "${JOB}_2" -o '%T %r' 2>/dev/null || true)
+  case $st in
+  PENDING*) scontrol update JobId="${JOB}_2" StartTime=now >/dev/null 2>&1 || true ;;
+  esac
+  # started again: its log has the line of a restarted task (scripts/slurm-study.sh)
+  grep -q ', restart [1-9]' "$T"/logs/requeue-*_2.log 2>/dev/null && break
+  [ "$(date +%s)" -lt "$end" ] || fail "the requeued task ${JOB}_2 did not start again within 120 s (state: ${st:-gone})"
+  sleep 0.5
+done
+say "requeued task ${JOB}_2 released: $st"
 wait_array "$JOB"
 LOG2=$(ls "$T"/logs/requeue-*_2.log)
 restarts=$(scontrol show job "${JOB}_2" | grep -o 'Restarts=[0-9]*' | cut -d= -f2)
