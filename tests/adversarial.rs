@@ -404,7 +404,7 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
         "--exposure-ms",
         "2",
     ]));
-    let analyze = |frames: &str, fps: &str, out: &str| {
+    let analyze_with = |frames: &str, fps: &str, out: &str, extra: &[&str]| {
         // one band below the Nyquist frequency of the slowest rate here (15 Hz at 30 fps)
         let bands = if fps.starts_with('3') {
             "5-14"
@@ -433,9 +433,11 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
                 "--out",
                 out,
             ])
+            .args(extra)
             .output()
             .unwrap()
     };
+    let analyze = |frames: &str, fps: &str, out: &str| analyze_with(frames, fps, out, &[]);
     // an MJPEG AVI of 33 px wide frames: FFmpeg notes "EOI missing" on every frame, which is
     // not damage
     encode(&rec, "120", &["-c:v", "mjpeg", "-q:v", "2"], "mjpeg.avi");
@@ -448,6 +450,26 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
     encode(&rec, "60", &["-c:v", "ffv1"], "v60.mkv");
     let o = analyze("v60.mkv", "120", "a3");
     assert_exit_2(&o, "frame rate is 60.0000 fps (60/1), constant, not 120");
+    assert_exit_2(&o, "or add --retime");
+    // said to be slow motion (--retime), the same frames read 1/120 s apart: the analysis of
+    // the 120 fps file, with a note naming both rates
+    assert_ok(&analyze_with("v60.mkv", "120", "a6", &["--retime"]));
+    for f in ["modes.csv", "displacement.csv"] {
+        let (a, b) = (rec.join("a2").join(f), rec.join("a6").join(f));
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{f}: retimed 60 fps file differs from the 120 fps one"
+        );
+    }
+    let report = std::fs::read_to_string(rec.join("a6/report.txt")).unwrap();
+    assert!(
+        report.contains("--fps 120 retimes v60.mkv, whose container plays at 60.0000 fps"),
+        "{report}"
+    );
+    // --retime is for videos: with image files it is refused, naming the flag
+    let o = analyze_with("frames", "120", "a7", &["--retime"]);
+    assert_exit_2(&o, "--retime applies to a video file");
     encode(&rec, "30000/1001", &["-c:v", "ffv1"], "ntsc.mkv");
     let o = analyze("ntsc.mkv", "30", "a4");
     assert_exit_2(&o, "29.9700 fps (30000/1001), constant");

@@ -47,6 +47,8 @@ pub struct TargetsRequest {
 pub struct Request {
     /// `--frames` as the user wrote it.
     pub frames: String,
+    /// `--retime`: the frame rate retimes a video's container rate (slow motion).
+    pub retime: bool,
     /// The accelerometer record.
     pub accel: AccelInput,
     /// The chain's settings (rates, alignment, Welch, bands, exposure, end matching).
@@ -110,7 +112,7 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
         a.time_col.as_deref(),
     )?;
     let found = discover_frames(&req.frames)?;
-    let source = found.source.clone();
+    let source = found.source.clone().retimed(req.retime)?;
     let ignored = ignored_note(&found.ignored);
     if let Some(n) = &ignored {
         eprintln!("warning: {n}");
@@ -304,7 +306,7 @@ fn describe_inputs(
                 .unwrap_or_default()
         ),
         FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
-        FrameSource::Video(p) => format!("{} (video, decoded by FFmpeg)", p.display()),
+        FrameSource::Video { path: p, .. } => format!("{} (video, decoded by FFmpeg)", p.display()),
         FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
         FrameSource::Cine(p) => format!("{} (Phantom cine recording)", p.display()),
     };
@@ -370,13 +372,16 @@ fn describe_inputs(
 
 /// The frame rate (Hz) and exposure (ms): as given, else as the recording's own header states
 /// them (a camera file); with notes for the report on where they came from, and when a given
-/// rate overrides the file's. Image files and videos state no rate: `--fps` is then needed.
+/// rate overrides the file's. Image files and videos state no rate: `--fps` is then needed;
+/// with `retime` (a video only) it may retime the container's constant rate, a note naming both.
 pub fn resolve_rates(
     frames: &str,
     fps: Option<f64>,
     exposure_ms: Option<f64>,
+    retime: bool,
 ) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
-    let recorded = discover_frames(frames)?.source.recorded_rate()?;
+    let source = discover_frames(frames)?.source.retimed(retime)?;
+    let recorded = source.recorded_rate()?;
     let mut notes = Vec::new();
     let fps = match (fps, recorded) {
         (Some(f), Some((r, _))) => {
@@ -400,6 +405,18 @@ pub fn resolve_rates(
             )))
         }
     };
+    if let crate::frames::FrameSource::Video { path, .. } = &source {
+        if let Some(rate) =
+            crate::frames::video::check_rate(path, fps, retime).map_err(|e| e.into_anyhow())?
+        {
+            notes.push(format!(
+                "--fps {fps} retimes {frames}, whose container plays at {}: frames \
+                 are 1/{fps} s apart (a slow-motion or time-lapse file; the timestamps were \
+                 checked regular at the container's rate)",
+                crate::frames::video::rate_text(rate)
+            ));
+        }
+    }
     let exposure_ms = match (exposure_ms, recorded.and_then(|r| r.1)) {
         (Some(e), _) => Some(e),
         (None, Some(s)) => {

@@ -27,6 +27,8 @@ pub enum Targets {
 pub struct Request {
     /// `--frames` as given.
     pub frames: String,
+    /// `--retime`: the frame rate retimes a video's container rate (slow motion).
+    pub retime: bool,
     /// Frame rate, Hz.
     pub fps: f64,
     /// The targets.
@@ -49,7 +51,7 @@ pub struct Request {
 
 /// Runs `track`; returns the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
-    let source = discover_frames(&req.frames)?.source;
+    let source = discover_frames(&req.frames)?.source.retimed(req.retime)?;
     let (tracks, windows) = match &req.targets {
         Targets::Points(points, rule) => {
             let (t, w) =

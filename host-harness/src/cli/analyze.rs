@@ -30,6 +30,13 @@ pub struct Args {
     /// 240). Given with a camera file, it overrides the file's rate (the report names both).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
+    /// With a video whose container plays at another constant rate than the camera recorded
+    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
+    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
+    /// container's rate, and the report names both rates. Without it a rate other than the
+    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
+    #[arg(long, requires = "fps")]
+    pub retime: bool,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
     /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
     /// vision acceleration is computed in.
@@ -156,7 +163,7 @@ pub enum AxisArg {
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (fps, exposure_ms, notes) =
-        analysis::run::resolve_rates(&args.frames, args.fps, args.exposure_ms)?;
+        analysis::run::resolve_rates(&args.frames, args.fps, args.exposure_ms, args.retime)?;
     if args.compensate_exposure && exposure_ms.is_none() {
         return Err(bad_input(
             "--compensate-exposure needs the exposure: give --exposure-ms (the frames do not \
@@ -204,6 +211,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let request = Request {
         frames: args.frames.clone(),
+        retime: args.retime,
         accel: AccelInput {
             path: args.accel.clone(),
             fs: args.fs,

@@ -29,6 +29,13 @@ pub struct Args {
     /// With a video file: its frame rate, Hz (the timestamps are checked against it).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
+    /// With a video whose container plays at another constant rate than the camera recorded
+    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
+    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
+    /// container's rate, and the report names both rates. Without it a rate other than the
+    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
+    #[arg(long, requires = "fps")]
+    pub retime: bool,
     /// Grey level at or above which a pixel counts as saturated (default: 255 for 8-bit, 65535
     /// for 16-bit frames); must be above T.
     #[arg(long, value_name = "LEVEL")]
@@ -68,17 +75,18 @@ fn centroid_pages(
     config: &CentroidConfig,
     path: &Path,
     fps: Option<f64>,
+    retime: bool,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let name = path.to_string_lossy().into_owned();
     if crate::frames::photron::is_header(path)
         || crate::frames::photron::is_mraw(path)
         || crate::frames::phantom::is_cine(path)
     {
-        return recording_frames(config, &name, 1.0);
+        return recording_frames(config, &name, 1.0, retime);
     }
     if crate::frames::files::is_video(path) {
         return match fps {
-            Some(fps) => recording_frames(config, &name, fps),
+            Some(fps) => recording_frames(config, &name, fps, retime),
             None => (
                 Vec::new(),
                 Some(bad_input(format!(
@@ -120,10 +128,11 @@ fn recording_frames(
     config: &CentroidConfig,
     name: &str,
     fps: f64,
+    retime: bool,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let mut rows = Vec::new();
     let result = crate::frames::discover_frames(name).and_then(|found| {
-        found.source.for_each(fps, |label, frame| {
+        found.source.retimed(retime)?.for_each(fps, |label, frame| {
             rows.push((
                 format!("{name}#{}", rows.len() + 1),
                 frame.centroid(config, &label)?,
@@ -143,7 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (mut empty, mut flagged) = (0usize, 0usize);
     let mut frames = 0usize;
     for path in &args.files {
-        let (rows, error) = centroid_pages(&config, path, args.fps);
+        let (rows, error) = centroid_pages(&config, path, args.fps, args.retime);
         for (label, c) in &rows {
             print(signals::centroid_row(label, c))?;
             empty += usize::from(c.position().is_none());

@@ -19,6 +19,13 @@ pub struct Args {
     /// and videos).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
+    /// With a video whose container plays at another constant rate than the camera recorded
+    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
+    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
+    /// container's rate, and the report names both rates. Without it a rate other than the
+    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
+    #[arg(long, requires = "fps")]
+    pub retime: bool,
     /// Chosen points: CSV `target,x,y,w,h[,threshold]` (as `analyze --points`).
     #[arg(
         long,
@@ -58,7 +65,8 @@ pub struct Args {
 
 /// Runs `host-harness track`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, _, notes) = crate::analysis::run::resolve_rates(&args.frames, args.fps, None)?;
+    let (fps, _, notes) =
+        crate::analysis::run::resolve_rates(&args.frames, args.fps, None, args.retime)?;
     if args.points.is_some() && args.centroid.roi.is_some() {
         return Err(bad_input(
             "--roi with --points: each point's window is its region; leave --roi out",
@@ -89,6 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let req = Request {
         frames: args.frames.clone(),
+        retime: args.retime,
         fps,
         centroid: args.centroid.config_with(None, args.points.is_some())?,
         targets,

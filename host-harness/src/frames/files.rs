@@ -17,8 +17,16 @@ pub enum FrameSource {
     /// One multi-page TIFF, one page per frame.
     MultiPageTiff(PathBuf),
     /// One video file (AVI, MKV, MP4, MOV, ...), decoded frame by frame by FFmpeg
-    /// ([`crate::frames::video`]).
-    Video(PathBuf),
+    /// ([`crate::frames::video`]); `retime`: its container may play at another constant rate
+    /// than the one it is read at (`--retime`, [`FrameSource::retimed`]).
+    Video {
+        /// The file.
+        path: PathBuf,
+        /// Whether the rate given retimes the container's ([`VideoFrames::open_retimed`]).
+        ///
+        /// [`VideoFrames::open_retimed`]: crate::frames::video::VideoFrames::open_retimed
+        retime: bool,
+    },
     /// A Photron recording, named by its header (`.cih` / `.cihx`; frames in the `.mraw`
     /// beside it, [`crate::frames::photron`]).
     Photron(PathBuf),
@@ -289,7 +297,10 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
             return Ok(whole(FrameSource::MultiPageTiff(path.to_path_buf())));
         }
         if is_video(path) {
-            return Ok(whole(FrameSource::Video(path.to_path_buf())));
+            return Ok(whole(FrameSource::Video {
+                path: path.to_path_buf(),
+                retime: false,
+            }));
         }
         return Err(bad_input(format!(
             "--frames {spec}: a single {} file is one frame; give a directory of frames, a \
@@ -490,9 +501,8 @@ impl FrameSource {
             FrameSource::MultiPageTiff(_) => Ok(None),
             FrameSource::Photron(p) => Ok(Some(super::photron::read_header(p)?.frames)),
             FrameSource::Cine(p) => Ok(Some(super::phantom::read_header(p)?.offsets.len())),
-            FrameSource::Video(p) => {
-                let v =
-                    crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+            FrameSource::Video { path, retime } => {
+                let v = open_video(path, fps, *retime)?;
                 Ok(Some(v.info().frames))
             }
         }
@@ -512,6 +522,20 @@ impl FrameSource {
                 Ok(h.fps.map(|fps| (fps, h.shutter_s)))
             }
             _ => Ok(None),
+        }
+    }
+
+    /// This source with a video's container rate retimed to the rate it is read at (`--retime`:
+    /// a slow-motion or time-lapse file); `on == false` leaves it as it is. Refused for a
+    /// source that is not a video (image files and camera files have no container rate).
+    pub fn retimed(self, on: bool) -> anyhow::Result<Self> {
+        match self {
+            _ if !on => Ok(self),
+            FrameSource::Video { path, .. } => Ok(FrameSource::Video { path, retime: true }),
+            _ => Err(bad_input(
+                "--retime applies to a video file (its container's rate), not to image files \
+                 or camera files: give their capture rate as --fps",
+            )),
         }
     }
 
@@ -550,9 +574,8 @@ impl FrameSource {
                 let n = r.header().offsets.len();
                 each_recorded_frame(p, n, |frame| r.next_frame(frame), &mut f)
             }
-            FrameSource::Video(p) => {
-                let mut v =
-                    crate::frames::video::VideoFrames::open(p, fps).map_err(|e| e.into_anyhow())?;
+            FrameSource::Video { path: p, retime } => {
+                let mut v = open_video(p, fps, *retime)?;
                 let mut frame = GreyFrame::U8 {
                     width: 0,
                     height: 0,
@@ -568,6 +591,20 @@ impl FrameSource {
             }
         }
     }
+}
+
+/// Opens a video at `fps`, retimed when `retime` ([`FrameSource::Video`]).
+fn open_video(
+    path: &Path,
+    fps: f64,
+    retime: bool,
+) -> anyhow::Result<crate::frames::video::VideoFrames> {
+    let v = if retime {
+        crate::frames::video::VideoFrames::open_retimed(path, fps)
+    } else {
+        crate::frames::video::VideoFrames::open(path, fps)
+    };
+    v.map_err(|e| e.into_anyhow())
 }
 
 /// Calls `f` for every frame `next` reads into one reused buffer (a camera file's reader:

@@ -34,7 +34,12 @@
 //! be within one tick of the stream's time base (plus 2 µs for ffprobe's printed rounding) of
 //! `T` and `0`: a dropped frame (a gap of two periods), a variable frame rate, or a container
 //! rate other than `expected_fps` is an error naming the first irregular frame (0-based index).
-//! The timestamps (8 bytes a frame) are the only per-frame data kept for the whole video.
+//! [`VideoFrames::open_retimed`] (the CLI's `--retime`) accepts timestamps regular at another
+//! constant rate as a retiming (a phone's 240 fps slow motion stored as 30 fps, a high-speed
+//! camera's AVI export at 25 fps): frames are then `1 / expected_fps` apart, and
+//! [`VideoInfo::container_fps`] keeps the container's own rate so callers can name both.
+//! Without it a near miss (29.97 fps read as 30) or a wrong rate is an error, as a retiming
+//! cannot be told from a mistake by the numbers alone.
 //!
 //! # Memory and errors
 //!
@@ -55,6 +60,7 @@ mod probe;
 mod reader;
 mod writer;
 
+pub use probe::rate_text;
 pub use reader::VideoFrames;
 pub use writer::Ffv1Writer;
 
@@ -77,8 +83,23 @@ pub struct VideoInfo {
     pub frames: usize,
     /// The expected (checked) frame rate, Hz.
     pub fps: f64,
-    /// Frame times from the container, seconds after the first frame.
+    /// The container's own constant rate, Hz, when `fps` retimes it
+    /// ([`VideoFrames::open_retimed`]); `None` when they agree.
+    pub container_fps: Option<f64>,
+    /// Frame times, seconds after the first frame: the container's, scaled to `fps` when it
+    /// retimes them.
     pub times_s: Vec<f64>,
+}
+
+/// Checks `path`'s timestamps against `fps` without decoding (ffprobe only), as
+/// [`VideoFrames::open_retimed`] (`retime`) or [`VideoFrames::open`] would: `Ok(Some(rate))`
+/// when `fps` retimes the container's constant `rate`, `Ok(None)` when they agree.
+pub fn check_rate(path: &Path, fps: f64, retime: bool) -> Result<Option<f64>, VideoError> {
+    let stream = probe::probe_stream(path, "ffprobe")?;
+    let times_s = probe::probe_times(path, "ffprobe")?;
+    let rate = probe::check_times(path, &times_s, fps, stream.time_base_s, retime)?;
+    probe::check_complete(path, &times_s, rate.unwrap_or(fps), &stream)?;
+    Ok(rate)
 }
 
 /// The frame just read.
@@ -643,8 +664,14 @@ mod tests {
 
     #[test]
     fn missing_ffmpeg_says_how_to_install_it() {
-        let e = VideoFrames::open_with(Path::new("x.mkv"), 120.0, "ffprobe-not-here", "ffmpeg")
-            .unwrap_err();
+        let e = VideoFrames::open_with(
+            Path::new("x.mkv"),
+            120.0,
+            false,
+            "ffprobe-not-here",
+            "ffmpeg",
+        )
+        .unwrap_err();
         assert!(matches!(e, VideoError::ProgramMissing { .. }));
         assert!(!e.is_bad_input());
         let msg = e.to_string();
@@ -689,25 +716,43 @@ mod tests {
     fn timestamp_check_closed_cases() {
         let p = Path::new("t.mkv");
         let regular: Vec<f64> = (0..100).map(|i| i as f64 / 120.0).collect();
-        assert!(check_times(p, &regular, 120.0, 1e-3).is_ok());
+        assert!(check_times(p, &regular, 120.0, 1e-3, false).is_ok());
         // Millisecond rounding (Matroska) stays within one tick.
         let ms: Vec<f64> = regular.iter().map(|t| (t * 1e3).round() / 1e3).collect();
-        assert!(check_times(p, &ms, 120.0, 1e-3).is_ok());
+        assert!(check_times(p, &ms, 120.0, 1e-3, false).is_ok());
         let mut dropped = regular.clone();
         dropped.remove(40);
-        let e = check_times(p, &dropped, 120.0, 1e-3).unwrap_err();
+        let e = check_times(p, &dropped, 120.0, 1e-3, false).unwrap_err();
         assert!(matches!(
             e,
             VideoError::IrregularTimestamps { frame: 40, .. }
         ));
         // AVI counts frames (time base 1/fps): exact, and a 0.1 ms error is already irregular.
-        assert!(check_times(p, &regular, 120.0, 1.0 / 120.0).is_ok());
+        assert!(check_times(p, &regular, 120.0, 1.0 / 120.0, false).is_ok());
         let mut late = regular.clone();
         late[60] += 1e-4;
-        assert!(check_times(p, &late, 120.0, 1.0 / 120.0).is_err());
+        assert!(check_times(p, &late, 120.0, 1.0 / 120.0, false).is_err());
+        // A slow-motion file (240 fps stored as 30) read at 240: an error naming the
+        // container's rate and --retime, and with it a retiming that returns that rate; a
+        // retiming still needs regular timestamps (a dropped frame stays one).
+        let slow: Vec<f64> = (0..100).map(|i| i as f64 / 30.0).collect();
+        match check_times(p, &slow, 240.0, 1e-3, false) {
+            Err(e @ VideoError::IrregularTimestamps { .. }) => {
+                let text = e.to_string();
+                assert!(text.contains("30.0000 fps (30/1), constant"), "{text}");
+                assert!(text.contains("--retime"), "{text}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let rate = check_times(p, &slow, 240.0, 1e-3, true).unwrap().unwrap();
+        assert!((rate - 30.0).abs() < 1e-9, "{rate}");
+        assert_eq!(check_times(p, &slow, 30.0, 1e-3, true).unwrap(), None);
+        let mut slow_dropped = slow.clone();
+        slow_dropped.remove(50);
+        assert!(check_times(p, &slow_dropped, 240.0, 1e-3, true).is_err());
         // A time base of 1/50 s cannot resolve 120 fps.
         assert!(matches!(
-            check_times(p, &regular, 120.0, 0.02),
+            check_times(p, &regular, 120.0, 0.02, false),
             Err(VideoError::CoarseTimeBase { .. })
         ));
     }

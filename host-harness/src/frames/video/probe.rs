@@ -250,12 +250,15 @@ pub(super) fn check_complete(
 }
 
 /// Checks frame times (relative to the first) against `fps` (see the module documentation).
+/// With `retime`, timestamps regular at a constant rate other than `fps` are accepted as a
+/// retiming and that rate (Hz) returned (`Ok(Some(rate))`); `Ok(None)`: they agree with `fps`.
 pub(super) fn check_times(
     path: &Path,
     times: &[f64],
     fps: f64,
     time_base_s: f64,
-) -> Result<(), VideoError> {
+    retime: bool,
+) -> Result<Option<f64>, VideoError> {
     let period = 1.0 / fps;
     let tol = time_tolerance(period, time_base_s);
     if tol >= period / 3.0 {
@@ -277,6 +280,9 @@ pub(super) fn check_times(
         let regular = steps.iter().all(|s| (s - median).abs() <= step_tol);
         if regular {
             if let Some(i) = (1..n).find(|&i| (times[i] - i as f64 * period).abs() > tol) {
+                if let Some(own) = own.filter(|_| retime) {
+                    return Ok(Some(own));
+                }
                 return Err(VideoError::IrregularTimestamps {
                     path: path.into(),
                     frame: i,
@@ -285,11 +291,12 @@ pub(super) fn check_times(
                     fps,
                     what: format!(
                         "the video's frame rate is {own_text}, constant, not {fps}; give that \
-                         as --fps"
+                         as --fps, or add --retime if the camera recorded at {fps} fps and \
+                         the file plays it at another rate (slow motion, a time lapse)"
                     ),
                 });
             }
-            return Ok(());
+            return Ok(None);
         }
     }
     for i in 1..times.len() {
@@ -324,13 +331,13 @@ pub(super) fn check_times(
             what: format!("{what} (the video's mean frame rate is {own_text})"),
         });
     }
-    Ok(())
+    Ok(None)
 }
 
 /// A frame rate measured from timestamps as a message gives it: `29.9700 fps (30000/1001)`
 /// when it is within 1e-4 of a whole number of frames per second or per 1.001 s (the NTSC
 /// rates), else `about 47.1234 fps`.
-fn rate_text(fps: f64) -> String {
+pub fn rate_text(fps: f64) -> String {
     for (scale, den) in [(1.0, 1.0), (1000.0, 1001.0)] {
         let num = (fps * den / scale).round() * scale;
         let exact = num / den;

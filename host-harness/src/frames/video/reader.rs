@@ -26,12 +26,20 @@ impl VideoFrames {
     /// Opens `path`, reads its stream properties and timestamps with `ffprobe`, checks the
     /// timestamps against `expected_fps`, and starts decoding.
     pub fn open(path: &Path, expected_fps: f64) -> Result<Self, VideoError> {
-        Self::open_with(path, expected_fps, "ffprobe", "ffmpeg")
+        Self::open_with(path, expected_fps, false, "ffprobe", "ffmpeg")
+    }
+
+    /// As [`VideoFrames::open`], but a container whose timestamps are regular at another
+    /// constant rate is retimed to `fps` (a slow-motion or time-lapse file: frames `1 / fps`
+    /// apart, [`VideoInfo::container_fps`] its own rate) instead of refused.
+    pub fn open_retimed(path: &Path, fps: f64) -> Result<Self, VideoError> {
+        Self::open_with(path, fps, true, "ffprobe", "ffmpeg")
     }
 
     pub(super) fn open_with(
         path: &Path,
         expected_fps: f64,
+        retime: bool,
         ffprobe: &str,
         ffmpeg: &str,
     ) -> Result<Self, VideoError> {
@@ -43,8 +51,20 @@ impl VideoFrames {
         }
         let stream = probe_stream(path, ffprobe)?;
         let times_s = probe_times(path, ffprobe)?;
-        check_times(path, &times_s, expected_fps, stream.time_base_s)?;
-        check_complete(path, &times_s, expected_fps, &stream)?;
+        let mut times_s = times_s;
+        let container_fps = check_times(path, &times_s, expected_fps, stream.time_base_s, retime)?;
+        check_complete(
+            path,
+            &times_s,
+            container_fps.unwrap_or(expected_fps),
+            &stream,
+        )?;
+        if let Some(r) = container_fps {
+            // retimed: frame i was captured i / expected_fps after the first
+            for t in &mut times_s {
+                *t *= r / expected_fps;
+            }
+        }
         let out_fmt = match stream.bits {
             8 => "gray".to_string(),
             b @ (9 | 10 | 12 | 14 | 16) => format!("gray{b}le"),
@@ -82,6 +102,7 @@ impl VideoFrames {
                 bits,
                 frames: times_s.len(),
                 fps: expected_fps,
+                container_fps,
                 times_s,
             },
             child,
