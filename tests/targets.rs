@@ -815,7 +815,7 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
     let tmp = tempfile::tempdir().unwrap();
     let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
     for (dir, scene) in [(&clean, "plain"), (&cluttered, "cluttered")] {
-        assert_ok(&harness(&[
+        let mut args = vec![
             "render",
             "--preset",
             "cantilever",
@@ -829,11 +829,16 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
             "1",
             "--scene",
             scene,
-        ]));
+        ];
+        if scene == "cluttered" {
+            // also the same colour frames, losslessly, as a video
+            args.push("--video");
+        }
+        assert_ok(&harness(&args));
     }
     assert!(cluttered.join("frames/frame_00000.jpg").is_file());
-    let analyze = |dir: &Path, pick: &[&str]| {
-        let (frames, accel, out) = (dir.join("frames"), dir.join("accel.csv"), dir.join("an"));
+    let analyze_as = |dir: &Path, frames: &str, out: &str, pick: &[&str]| {
+        let (frames, accel, out) = (dir.join(frames), dir.join("accel.csv"), dir.join(out));
         let mut args = vec![
             "analyze",
             "--frames",
@@ -858,6 +863,7 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
         args.extend_from_slice(pick);
         harness(&args)
     };
+    let analyze = |dir: &Path, pick: &[&str]| analyze_as(dir, "frames", "an", pick);
     assert_ok(&analyze(&clean, &["--targets", "5"]));
     assert_exit_2(&analyze(&cluttered, &["--targets", "5"]), "--points");
     let points = cluttered.join("points.csv");
@@ -886,5 +892,21 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
     for mode in ["1", "2"] {
         let m = mac(&shape(&clean, mode), &shape(&cluttered, mode));
         assert!(m >= 0.99, "mode {mode}: MAC {m}");
+    }
+    // the colour video of the same scene (read as its luma, as the JPEGs are): the same modes
+    assert_ok(&analyze_as(
+        &cluttered,
+        "frames.mkv",
+        "an_video",
+        &["--points", points.to_str().unwrap()],
+    ));
+    let c = modes(&cluttered.join("an_video"));
+    assert_eq!(c.len(), b.len());
+    for (x, y) in b.iter().zip(&c) {
+        assert_eq!((&x.0, x.1, x.2), (&y.0, y.1, y.2));
+        if x.3.is_finite() && y.3.is_finite() {
+            assert!((x.3 - y.3).abs() <= 0.1, "{x:?} {y:?}");
+            assert!((x.4 - y.4).abs() <= 0.1 * x.4, "{x:?} {y:?}");
+        }
     }
 }

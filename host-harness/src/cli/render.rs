@@ -47,7 +47,8 @@ pub struct Args {
     #[arg(long, value_name = "K", requires = "recording", value_parser = super::args::int_range(2..=16))]
     pub targets: Option<usize>,
     /// With --recording: also write the frames as a lossless video, `frames.mkv` (FFV1 in
-    /// Matroska, bit-identical to the PNGs; needs the `ffmpeg` program).
+    /// Matroska, bit-identical to the PNGs; with --scene cluttered the colour frames before
+    /// JPEG compression; needs the `ffmpeg` program).
     #[arg(long, requires = "recording")]
     pub video: bool,
     /// With --recording: sensor read noise added to every frame before rounding to 8 bits,

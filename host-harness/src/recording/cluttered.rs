@@ -1,7 +1,8 @@
 //! A cluttered scene around the targets of a synthetic recording, as a phone or an ordinary
 //! camera sees a test: the rendered frame (the tags on the dark structure) framed by a
 //! textured warm-white wall as bright as the tags above and below it, and a phone (a bright
-//! rectangle) beside it, written as colour JPEG frames. A global threshold that finds the
+//! rectangle) beside it, written as colour JPEG frames (and, with `--video`, the same colour
+//! frames losslessly in `frames.mkv`). A global threshold that finds the
 //! tags finds the wall and the phone too; a window around each tag (`--points`) sees only the
 //! structure and its tag.
 
@@ -93,18 +94,15 @@ impl Clutter {
         }
         img
     }
+}
 
-    /// Writes the composed frame of `px` as a JPEG at `path`.
-    pub fn write_jpeg(&self, px: &[u8], path: &std::path::Path) -> anyhow::Result<()> {
-        use anyhow::Context as _;
-        let img = self.compose(px);
-        let file = std::fs::File::create(path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(
-            std::io::BufWriter::new(file),
-            QUALITY,
-        );
-        enc.encode_image(&img)
-            .with_context(|| format!("cannot write {}", path.display()))
-    }
+/// Writes a composed frame ([`Clutter::compose`]) as a JPEG at `path`.
+pub fn write_jpeg(img: &RgbImage, path: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut enc =
+        image::codecs::jpeg::JpegEncoder::new_with_quality(std::io::BufWriter::new(file), QUALITY);
+    enc.encode_image(img)
+        .with_context(|| format!("cannot write {}", path.display()))
 }

@@ -126,7 +126,8 @@ impl RecordingSpec {
 
 /// Where a recording's frames go: `frames/frame_00000.png` ... and, with
 /// [`RecordingSpec::video`], the same frames into `frames.mkv` (FFV1, lossless: the video's
-/// frames are the PNGs' pixels bit for bit). Read noise is added here, to the float image,
+/// frames are the PNGs' pixels bit for bit; a cluttered scene's JPEGs and colour video both hold
+/// the composed colour frame, the video losslessly). Read noise is added here, to the float image,
 /// before rounding to 8 bits.
 pub(crate) struct FrameSink {
     /// The frames directory being written (in the staging directory).
@@ -153,13 +154,17 @@ impl FrameSink {
         let frames_to = write_to.join("frames");
         std::fs::create_dir_all(&frames_to)
             .with_context(|| format!("cannot create {}", frames_dir.display()))?;
+        let clutter = spec
+            .cluttered
+            .then(|| cluttered::Clutter::new(size, spec.seed));
         let video = if spec.video {
-            let w = crate::frames::video::Ffv1Writer::create(
-                &write_to.join("frames.mkv"),
-                size.0,
-                size.1,
-                spec.acquisition.fps,
-            )
+            use crate::frames::video::Ffv1Writer;
+            let (file, fps) = (write_to.join("frames.mkv"), spec.acquisition.fps);
+            let w = match &clutter {
+                // the colour frames the JPEGs hold, losslessly
+                Some(c) => Ffv1Writer::create_rgb(&file, c.outer().0, c.outer().1, fps),
+                None => Ffv1Writer::create(&file, size.0, size.1, fps),
+            }
             .map_err(|e| e.into_anyhow())?;
             Some((w, dir.join("frames.mkv")))
         } else {
@@ -178,9 +183,7 @@ impl FrameSink {
             noise,
             size,
             px: vec![0; size.0 * size.1],
-            clutter: spec
-                .cluttered
-                .then(|| cluttered::Clutter::new(size, spec.seed)),
+            clutter,
         })
     }
 
@@ -200,15 +203,21 @@ impl FrameSink {
             *o = (v + 0.5).clamp(0.0, 255.0) as u8;
         }
         match &self.clutter {
-            Some(c) => c.write_jpeg(&self.px, &self.frames_to.join(format!("frame_{k:05}.jpg")))?,
-            None => save_grey_png(
-                &self.frames_to.join(format!("frame_{k:05}.png")),
-                self.size,
-                &self.px,
-            )?,
-        }
-        if let Some((w, _)) = &mut self.video {
-            w.write_frame(&self.px).map_err(|e| e.into_anyhow())?;
+            Some(c) => {
+                let img = c.compose(&self.px);
+                cluttered::write_jpeg(&img, &self.frames_to.join(format!("frame_{k:05}.jpg")))?;
+                if let Some((w, _)) = &mut self.video {
+                    w.write_frame_rgb(img.as_raw())
+                        .map_err(|e| e.into_anyhow())?;
+                }
+            }
+            None => {
+                let png = self.frames_to.join(format!("frame_{k:05}.png"));
+                save_grey_png(&png, self.size, &self.px)?;
+                if let Some((w, _)) = &mut self.video {
+                    w.write_frame(&self.px).map_err(|e| e.into_anyhow())?;
+                }
+            }
         }
         Ok(())
     }
@@ -437,12 +446,17 @@ pub fn write_synthetic_recording(
     write_recording_into(&spec, write_to, dir)
 }
 
-/// The README.txt paragraph on the recording's video, when it has one.
-fn video_readme(video: Option<&Path>) -> String {
+/// The README.txt paragraph on the recording's video, when it has one: the PNGs' frames bit
+/// for bit, or (`colour`, a cluttered scene) the colour frames before JPEG compression.
+fn video_readme(video: Option<&Path>, colour: bool) -> String {
+    let what = if colour {
+        "The same colour frames, losslessly (the JPEGs are lossy: luma within a few grey levels),"
+    } else {
+        "The same frames, bit for bit,"
+    };
     video.map_or(String::new(), |v| {
         format!(
-            "\nThe same frames, bit for bit, are in {} (FFV1 in Matroska): give --frames {} to \
-             analyse the video.\n",
+            "\n{what} are in {} (FFV1 in Matroska): give --frames {} to analyse the video.\n",
             v.display(),
             v.display()
         )
@@ -527,7 +541,7 @@ pub fn write_recording_into(
         " for both systems (one record is one noisy estimate); see recording.toml for all \
          parameters.\n",
     );
-    readme.push_str(&video_readme(video.as_deref()));
+    readme.push_str(&video_readme(video.as_deref(), false));
     let readme_path = dir.join("README.txt");
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", readme_path.display()))?;

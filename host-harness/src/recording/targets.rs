@@ -54,12 +54,6 @@ pub fn write_targets_recording(
     };
     let xis = positions(targets);
     let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
-    if spec.cluttered && spec.video {
-        return Err(crate::bad_input(
-            "--scene cluttered writes colour JPEG frames: --video (a grey lossless video) is \
-             not available with it",
-        ));
-    }
     let (sink, renderers, (sw, w, h), first) =
         render_strips(spec, &run, &at_mm, targets, (write_to, dir))?;
     let (frames_dir, video) = sink.finish()?;
@@ -264,7 +258,7 @@ fn write_texts(
         spec.seed,
         args.join(" ")
     );
-    readme.push_str(&super::video_readme(video));
+    readme.push_str(&super::video_readme(video, spec.cluttered));
     std::fs::write(write_to.join("README.txt"), readme)
         .with_context(|| format!("cannot write {}", dir.join("README.txt").display()))?;
     Ok(args)

@@ -2,9 +2,10 @@
 
 use super::*;
 
-/// Writes a lossless FFV1 video in a Matroska container from grey frames, through an `ffmpeg`
-/// subprocess fed on its standard input: intra-only (every frame a key frame), slice CRCs on (a
-/// damaged frame is detected on reading), pixel format `gray` or `gray16le`.
+/// Writes a lossless FFV1 video in a Matroska container from grey (or RGB) frames, through an
+/// `ffmpeg` subprocess fed on its standard input: intra-only (every frame a key frame), slice
+/// CRCs on (a damaged frame is detected on reading), pixel format `gray`, `gray16le` or, for
+/// colour frames, `gbrp` (planar RGB, 8 bits: lossless; read back as its BT.601 luma).
 #[derive(Debug)]
 pub struct Ffv1Writer {
     path: PathBuf,
@@ -13,15 +14,63 @@ pub struct Ffv1Writer {
     stderr: Option<JoinHandle<String>>,
     width: usize,
     height: usize,
-    sixteen: bool,
+    kind: Pixels,
     bytes: Vec<u8>,
     frames: usize,
+}
+
+/// What a frame given to an [`Ffv1Writer`] holds per pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pixels {
+    /// One 8-bit grey value.
+    Grey8,
+    /// One 16-bit grey value.
+    Grey16,
+    /// Three 8-bit values, R, G, B.
+    Rgb8,
+}
+
+impl Pixels {
+    /// FFmpeg's names of the raw input format and the stored one.
+    fn formats(self) -> (&'static str, &'static str) {
+        match self {
+            Pixels::Grey8 => ("gray", "gray"),
+            Pixels::Grey16 => ("gray16le", "gray16le"),
+            Pixels::Rgb8 => ("rgb24", "gbrp"),
+        }
+    }
+
+    /// Values per pixel.
+    fn values(self) -> usize {
+        match self {
+            Pixels::Rgb8 => 3,
+            _ => 1,
+        }
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            Pixels::Grey8 => "8-bit grey",
+            Pixels::Grey16 => "16-bit grey",
+            Pixels::Rgb8 => "8-bit RGB",
+        }
+    }
 }
 
 impl Ffv1Writer {
     /// Starts an 8-bit (`gray`) video of `width x height` frames at `fps` frames per second.
     pub fn create(path: &Path, width: usize, height: usize, fps: f64) -> Result<Self, VideoError> {
-        Self::start(path, width, height, fps, false)
+        Self::start(path, width, height, fps, Pixels::Grey8)
+    }
+
+    /// Starts a colour video of 8-bit RGB frames (stored as planar RGB, lossless).
+    pub fn create_rgb(
+        path: &Path,
+        width: usize,
+        height: usize,
+        fps: f64,
+    ) -> Result<Self, VideoError> {
+        Self::start(path, width, height, fps, Pixels::Rgb8)
     }
 
     /// Starts a 16-bit (`gray16le`) video.
@@ -31,7 +80,7 @@ impl Ffv1Writer {
         height: usize,
         fps: f64,
     ) -> Result<Self, VideoError> {
-        Self::start(path, width, height, fps, true)
+        Self::start(path, width, height, fps, Pixels::Grey16)
     }
 
     fn start(
@@ -39,7 +88,7 @@ impl Ffv1Writer {
         width: usize,
         height: usize,
         fps: f64,
-        sixteen: bool,
+        kind: Pixels,
     ) -> Result<Self, VideoError> {
         if width == 0 || height == 0 || !(fps.is_finite() && fps > 0.0) {
             return Err(VideoError::BadFrame {
@@ -47,10 +96,10 @@ impl Ffv1Writer {
                 what: format!("cannot write {width}x{height} frames at {fps} fps"),
             });
         }
-        let fmt = if sixteen { "gray16le" } else { "gray" };
+        let (input, stored) = kind.formats();
         let mut child = spawn(
             Command::new("ffmpeg")
-                .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", fmt])
+                .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", input])
                 .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
                 .args([
                     "-i",
@@ -64,7 +113,7 @@ impl Ffv1Writer {
                     "-slicecrc",
                     "1",
                 ])
-                .args(["-pix_fmt", fmt, "-f", "matroska"])
+                .args(["-pix_fmt", stored, "-f", "matroska"])
                 .arg(file_arg(path))
                 .stdin(Stdio::piped())
                 .stdout(Stdio::null())
@@ -81,7 +130,7 @@ impl Ffv1Writer {
             stderr,
             width,
             height,
-            sixteen,
+            kind,
             bytes: Vec::new(),
             frames: 0,
         })
@@ -89,27 +138,34 @@ impl Ffv1Writer {
 
     /// Appends an 8-bit frame (`width * height` pixels, row 0 first).
     pub fn write_frame(&mut self, frame: &[u8]) -> Result<(), VideoError> {
-        self.check(frame.len(), false)?;
+        self.check(frame.len(), Pixels::Grey8)?;
+        self.send_frame(|bytes| bytes.extend_from_slice(frame))
+    }
+
+    /// Appends a colour frame (a writer from [`Ffv1Writer::create_rgb`]): `width * height`
+    /// pixels of R, G, B, row 0 first.
+    pub fn write_frame_rgb(&mut self, frame: &[u8]) -> Result<(), VideoError> {
+        self.check(frame.len(), Pixels::Rgb8)?;
         self.send_frame(|bytes| bytes.extend_from_slice(frame))
     }
 
     /// Appends a 16-bit frame (a writer from [`Ffv1Writer::create_u16`]).
     pub fn write_frame_u16(&mut self, frame: &[u16]) -> Result<(), VideoError> {
-        self.check(frame.len(), true)?;
+        self.check(frame.len(), Pixels::Grey16)?;
         self.send_frame(|bytes| bytes.extend(frame.iter().flat_map(|v| v.to_le_bytes())))
     }
 
-    fn check(&self, len: usize, sixteen: bool) -> Result<(), VideoError> {
-        if sixteen != self.sixteen || len != self.width * self.height {
+    fn check(&self, len: usize, kind: Pixels) -> Result<(), VideoError> {
+        if kind != self.kind || len != self.width * self.height * kind.values() {
             return Err(VideoError::BadFrame {
                 path: self.path.clone(),
                 what: format!(
-                    "frame {}: {len} {}-bit pixels given, the video has {}x{} {}-bit pixels",
+                    "frame {}: {len} {} values given, the video has {}x{} {} pixels",
                     self.frames,
-                    if sixteen { 16 } else { 8 },
+                    kind.describe(),
                     self.width,
                     self.height,
-                    if self.sixteen { 16 } else { 8 }
+                    self.kind.describe()
                 ),
             });
         }
