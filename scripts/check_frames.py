@@ -6,11 +6,16 @@
   by host-harness (examples/frame_dump.rs): every pixel equal.
 - Phantom cine: 8-, 16-bit and packed 10-bit files written here with pycine's own header
   structures (ctypes), read by host-harness: 8/16-bit upright as written and as pycine reads
-  16-bit frames; packed 10-bit equal to pycine's unpacked codes through pycine's linLUT.
+  16-bit frames; packed 10-bit equal to pycine's unpacked codes through pycine's linLUT. A
+  second reader, cine-handler (cine_reader): the packed 10-bit values equal its table's, and
+  8/16-bit frames equal its rows (which it returns as stored) turned upright as the bitmap
+  header's positive height says. The real camera file in pycine's source package
+  (testfiles/chart1.cine, a packed 10-bit colour sensor's mosaic, 2048 x 1080) when its
+  directory is given: equal to cine-handler's frame and to pycine's codes through linLUT.
 - JPEG and colour PNG/TIFF: frames written by PIL (a colour scene with noise; baseline and
   progressive JPEG), host-harness's grey against PIL's convert("L"): within 1 grey level.
 
-usage: python scripts/check_frames.py FRAME_DUMP_BINARY PYMRAW_DATA_DIR WORKDIR
+usage: python scripts/check_frames.py FRAME_DUMP_BINARY PYMRAW_DATA_DIR WORKDIR [PYCINE_TESTFILES]
 """
 import os
 import subprocess
@@ -26,8 +31,10 @@ from pycine import cine
 from pycine.file import read_header as cine_header
 from pycine.linLUT import linLUT
 from pycine.raw import create_raw_array, unpack_10bit
+from cine_reader import Cine
 
 dump, data_dir, work = sys.argv[1], sys.argv[2], sys.argv[3]
+pycine_files = sys.argv[4] if len(sys.argv) > 4 else None
 os.makedirs(work, exist_ok=True)
 failures = []
 
@@ -92,7 +99,7 @@ def write_cine(path, frames, bits, compression, fps=2000, shutter_ns=250000):
             word = (c[:, 0] << 30) | (c[:, 1] << 20) | (c[:, 2] << 10) | c[:, 3]
             b = np.stack([(word >> s) & 255 for s in (32, 24, 16, 8, 0)], axis=1)
             images.append(b.astype(np.uint8).tobytes())
-        real = 12
+        real = 10  # as Phantom's own packed files state the sensor (chart1.cine: 10)
     else:
         dt = np.uint8 if bits == 8 else np.dtype("<u2")
         images = [np.flipud(f).astype(dt).tobytes() for f in frames]
@@ -108,7 +115,9 @@ def write_cine(path, frames, bits, compression, fps=2000, shutter_ns=250000):
     fh.OffImageOffsets = 84 + ctypes.sizeof(setup)
     bmi = cine.BITMAPINFOHEADER()
     bmi.biSize, bmi.biWidth, bmi.biHeight, bmi.biPlanes = 40, w, h, 1
-    bmi.biBitCount, bmi.biCompression, bmi.biSizeImage = bits, compression, len(images[0])
+    # packed frames state 16 bits per pixel, as the cameras write them (chart1.cine)
+    stored_bits = 16 if compression == 256 else bits
+    bmi.biBitCount, bmi.biCompression, bmi.biSizeImage = stored_bits, compression, len(images[0])
     with open(path, "wb") as f:
         f.write(bytes(fh))
         f.write(bytes(bmi))
@@ -119,6 +128,17 @@ def write_cine(path, frames, bits, compression, fps=2000, shutter_ns=250000):
         for img in images:
             f.write(struct.pack("<II", 8, len(img)))
             f.write(img)
+
+
+def cine_handler_frames(path):
+    """Every frame as cine-handler decodes it (no dead-pixel repair, no debayering)."""
+    c = Cine(path, keep_annotations=False)
+    out = []
+    for k in range(c.total_frames):
+        c.load_frame(c.first_frame_number + k)
+        out.append(np.array(c.pixel_array))
+    c.close_file()
+    return np.stack(out)
 
 
 def pycine_images(path):
@@ -142,15 +162,33 @@ for bits, comp, top in [(8, 0, 256), (16, 0, 4096), (10, 256, 1024)]:
     got = ours(p)
     h, images = pycine_images(p)
     w, hh = h["bitmapinfoheader"].biWidth, h["bitmapinfoheader"].biHeight
+    handler = cine_handler_frames(p)
     if comp == 256:
         codes = np.stack([unpack_10bit(img, w, hh) for img in images])
         compare("cine packed 10-bit: pycine's codes before the table", seq, codes)
         compare("cine packed 10-bit vs pycine's codes through linLUT", got, linLUT[codes])
-    elif bits == 16:
-        want = np.stack([create_raw_array(img, h) for img in images])
-        compare("cine 16-bit vs pycine (upright)", got, want)
+        compare("cine packed 10-bit vs cine-handler's table values", got, handler)
     else:
-        compare("cine 8-bit, upright as written", got, seq)
+        if bits == 16:
+            want = np.stack([create_raw_array(img, h) for img in images])
+            compare("cine 16-bit vs pycine (upright)", got, want)
+        else:
+            compare("cine 8-bit, upright as written", got, seq)
+        # cine-handler returns the rows as stored: bottom row first for a positive height
+        assert hh > 0
+        compare(f"cine {bits}-bit vs cine-handler's stored rows turned upright", got,
+                handler[:, ::-1, :])
+
+# A real camera file: pycine's test recording (its source package's testfiles/)
+if pycine_files:
+    p = os.path.join(pycine_files, "chart1.cine")
+    got = ours(p)
+    h, images = pycine_images(p)
+    w, hh = h["bitmapinfoheader"].biWidth, h["bitmapinfoheader"].biHeight
+    codes = np.stack([unpack_10bit(img, w, hh) for img in images])
+    compare("pycine's chart1.cine (camera file, packed 10-bit) vs pycine's codes through linLUT",
+            got, linLUT[codes])
+    compare("pycine's chart1.cine vs cine-handler", got, cine_handler_frames(p))
 
 # JPEG and colour images against PIL's luma
 yy, xx = np.mgrid[0:60, 0:80]

@@ -408,7 +408,13 @@ pub fn write_cine(
     put(&mut b, off_bmi + 4, &(width as i32).to_le_bytes());
     put(&mut b, off_bmi + 8, &(height as i32).to_le_bytes());
     put(&mut b, off_bmi + 12, &1u16.to_le_bytes());
-    put(&mut b, off_bmi + 14, &bits.to_le_bytes());
+    // packed frames: the bit count of the unpacked words, 16, as the cameras write it
+    let stored_bits: u16 = if matches!(compression, P10 | P12L) {
+        16
+    } else {
+        bits
+    };
+    put(&mut b, off_bmi + 14, &stored_bits.to_le_bytes());
     put(&mut b, off_bmi + 16, &compression.to_le_bytes());
     put(
         &mut b,
@@ -423,8 +429,10 @@ pub fn write_cine(
         s + SETUP_SHUTTER_US,
         &(shutter_ns / 1000).to_le_bytes(),
     );
+    // the sensor's depth, as cameras state it: 10 for packed 10-bit (Phantom's own files,
+    // e.g. pycine's chart1.cine, say 10 there; the linearised values are 12-bit)
     let real: u32 = if compression == P10 {
-        12
+        10
     } else {
         u32::from(bits).min(12)
     };
