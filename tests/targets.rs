@@ -910,3 +910,73 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
         }
     }
 }
+
+/// `--targets 1`: the multi-target path with one target (blob labelling, the count checked,
+/// the target column and the fitted damping) on a one-target recording gives the amplitudes
+/// and damping of the single-target analysis of the same frames.
+#[test]
+fn one_target_by_the_multi_target_path_agrees_with_the_single_target_analysis() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--exposure-ms",
+        "2",
+    ]));
+    let analyze = |out: &str, extra: &[&str]| {
+        let (frames, accel, out) = (rec.join("frames"), rec.join("accel.csv"), rec.join(out));
+        let mut args = vec![
+            "analyze",
+            "--frames",
+            frames.to_str().unwrap(),
+            "--fps",
+            "120",
+            "--accel",
+            accel.to_str().unwrap(),
+            "--fs",
+            "2048",
+            "--time-col",
+            "t_s",
+            "--threshold",
+            "127",
+            "--mm-per-px",
+            "0.1266",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        assert_ok(&harness(&args));
+        std::fs::read_to_string(rec.join(out).join("modes.csv")).unwrap()
+    };
+    // system -> (amplitude, damping) per mode, from either layout of modes.csv
+    let rows = |text: &str| -> Vec<(String, f64, f64)> {
+        let mut lines = text.lines();
+        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+        let (s, a, d) = (col("system"), col("amplitude"), col("damping"));
+        let mut v: Vec<(String, f64, f64)> = lines
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                (
+                    c[s].to_string(),
+                    c[a].parse().unwrap(),
+                    c[d].parse().unwrap(),
+                )
+            })
+            .collect();
+        v.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
+        v
+    };
+    let single = rows(&analyze("single", &[]));
+    let one = rows(&analyze("one", &["--targets", "1"]));
+    assert_eq!(single.len(), one.len());
+    for (x, y) in single.iter().zip(&one) {
+        assert_eq!(x.0, y.0);
+        assert!((x.1 - y.1).abs() <= 1e-9 * x.1, "{x:?} {y:?}");
+        assert!((x.2 - y.2).abs() <= 1e-9, "{x:?} {y:?}");
+    }
+}

@@ -29,7 +29,7 @@ pub struct AccelInput {
 /// Several targets (`--targets K`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetsRequest {
-    /// Number of targets, 2..=32.
+    /// Number of targets, 1..=32.
     pub k: usize,
     /// How far a target may move between frames, px (> 0).
     pub gate_px: f64,

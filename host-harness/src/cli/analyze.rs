@@ -117,10 +117,10 @@ pub struct Args {
     /// it, and it holds no input of this run), as a whole. A failed run replaces nothing.
     #[arg(long)]
     pub force: bool,
-    /// Several targets (2-32): numbered left to right (then top to bottom) in the first frame
+    /// Targets (1-32): numbered left to right (then top to bottom) in the first frame
     /// and followed frame to frame; writes modes.csv with a target column and the fitted
     /// damping, shapes.csv and frf.uff (docs/cli.md).
-    #[arg(long, value_name = "K", value_parser = super::args::int_range(2..=32))]
+    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
     pub targets: Option<usize>,
     /// With --targets: how far a target may move between frames and still be the same, px
     /// (> 0; default 10).
@@ -272,7 +272,7 @@ fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
         }
         return Ok(None);
     };
-    // K in 2..=32 and a positive gate: checked by their value parsers
+    // K in 1..=32 and a positive gate: checked by their value parsers
     let gate_px = args.gate_px.unwrap_or(10.0);
     let accel_target = args.accel_target.unwrap_or(k);
     if !(1..=k).contains(&accel_target) {
