@@ -230,6 +230,8 @@ error_display!(FrameError, f, {
 /// | 2 | 4 | `saturated` | a target pixel is at or above the saturation level |
 /// | 3 | 8 | `capacity` | more components than the target capacity (multi-target) |
 /// | 4 | 16 | `clipped` | a row was wider than supported; columns past it were ignored |
+/// | 5 | 32 | `flat` | gradient tracker: too little texture in the window (lost) |
+/// | 6 | 64 | `diverged` | gradient tracker: no match, or the motion may exceed the search (lost) |
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Flags(u8);
@@ -247,14 +249,21 @@ impl Flags {
     pub const CAPACITY: Flags = Flags(8);
     /// A row was wider than supported ([`MAX_DIM`] or the label buffer): columns were ignored.
     pub const CLIPPED: Flags = Flags(16);
+    /// Gradient tracker ([`crate::lk`]): the template has too little texture in some direction.
+    pub const FLAT: Flags = Flags(32);
+    /// Gradient tracker ([`crate::lk`]): no match (score below the minimum, the refinement did
+    /// not settle, or the motion may exceed the search range).
+    pub const DIVERGED: Flags = Flags(64);
 
     /// Every flag with its name, in bit order.
-    pub const NAMES: [(Flags, &'static str); 5] = [
+    pub const NAMES: [(Flags, &'static str); 7] = [
         (Flags::EMPTY, "empty"),
         (Flags::BORDER, "border"),
         (Flags::SATURATED, "saturated"),
         (Flags::CAPACITY, "capacity"),
         (Flags::CLIPPED, "clipped"),
+        (Flags::FLAT, "flat"),
+        (Flags::DIVERGED, "diverged"),
     ];
 
     /// The bit mask (see the table above).
@@ -264,7 +273,7 @@ impl Flags {
 
     /// Flags from a bit mask; unknown bits are dropped.
     pub const fn from_bits_truncate(bits: u8) -> Self {
-        Flags(bits & 0x1f)
+        Flags(bits & 0x7f)
     }
 
     /// Whether every flag of `other` is set in `self`.

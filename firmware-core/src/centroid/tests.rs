@@ -643,7 +643,7 @@ fn flags_display_and_bits() {
         "border|saturated"
     );
     assert_eq!(u8::from(Flags::EMPTY | Flags::CAPACITY), 9);
-    assert_eq!(Flags::from_bits_truncate(0xff).bits(), 31);
+    assert_eq!(Flags::from_bits_truncate(0xff).bits(), 127);
 }
 
 // ---------------------------------------------------------------------------------------------

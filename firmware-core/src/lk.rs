@@ -1,0 +1,860 @@
+//! Lucas-Kanade tracking of one textured window (docs/method.md §2.10): the sub-pixel
+//! translation of a template taken from a reference frame, for targets a threshold cannot
+//! separate (speckle, bolts, a beam's edge, tags barely brighter than the wall) and at the
+//! noise limit for any target.
+//!
+//! # Method
+//!
+//! * **Template**: the `width x height` pixels of the window in the reference frame
+//!   ([`LkTracker::set_template`]), with their gradients by central differences (which reads
+//!   one pixel around the window) and the 2 x 2 Hessian `H = sum [gx gx, gx gy; gx gy, gy gy]`,
+//!   computed once per template: the **inverse-compositional** form (Baker and Matthews, 2004)
+//!   for a translation, so an iteration costs one interpolation of the window and two
+//!   multiply-adds per pixel.
+//! * **Refinement** ([`LkTracker::track`]): from the start `p`, the frame is interpolated at
+//!   the template's pixels shifted by `p` (bicubic, Keys' kernel with `a = -0.5`, or bilinear,
+//!   [`Interpolation`]); with the error `e = I(x + p) - T(x)`, `dp = H^-1 sum [gx e, gy e]` and
+//!   `p <- p - dp`, until `|dp|` is below [`LkConfig::tolerance`] or after
+//!   [`LkConfig::max_iterations`]. Every template pixel shares the fractional part of `p`, so the
+//!   interpolation is separable with the same four (or two) weights per axis.
+//! * **Where to start**: the last displacement. When that does not converge to a match (its
+//!   zero-normalised cross-correlation, ZNCC, below [`LkConfig::accept_score`]) and
+//!   [`LkConfig::search`] is not 0, a **coarse integer search** over `+-search` pixels around
+//!   it: ZNCC of `b x b` block sums of the template and the frame at offsets `b` apart (`b` the
+//!   largest of 1, `search / 8` and no more than a third of the window), then of the pixels at
+//!   every offset within `+-b` of the best one; the refinement starts there.
+//! * **Template refresh**: never by default, so every frame is measured against the reference
+//!   frame and no drift accumulates (right for vibration, where the target's appearance does
+//!   not change). With [`LkConfig::refresh_below`] above the acceptance level, a match whose
+//!   score falls below it (but not below [`LkConfig::min_score`]) re-takes the template at the
+//!   current position (appearance change, e.g. slow rotation or lighting); each refresh adds
+//!   that frame's refinement error to every later position (drift).
+//!
+//! # When a result is lost
+//!
+//! A result has no displacement ([`LkResult::displacement`] is `None`) and the reason in its
+//! [`Flags`] when: the window (with the interpolation's support) leaves the frame
+//! ([`Flags::BORDER`]); the template has too little texture in some direction (the smaller
+//! eigenvalue of `H` per pixel below [`LkConfig::min_texture`]: [`Flags::FLAT`], a uniform
+//! window or a straight edge moving along itself); a pixel of the window is at or above the
+//! saturation level ([`Flags::SATURATED`]: a clipped pixel does not move with the template);
+//! the match is poor (ZNCC below [`LkConfig::min_score`]), the refinement does not settle
+//! (last step above 0.1 px), or the coarse search's best offset is on the edge of its range
+//! (the motion may exceed it): [`Flags::DIVERGED`]. A lost frame keeps the last displacement
+//! as the next start. Nothing here panics; memory is the tracker's three `N`-pixel arrays
+//! and a `4 W`-value row ring (capacities as const generics).
+
+use crate::centroid::{Flags, Frame, Pixel};
+use libm::{fabsf, floorf, sqrtf};
+
+/// How the frame is sampled between pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Interpolation {
+    /// Two taps per axis: cheap, but it smooths sharp edges by a shift-dependent amount, a bias
+    /// of a few hundredths of a pixel on a hard-edged target.
+    Bilinear,
+    /// Keys' cubic convolution (`a = -0.5`), four taps per axis: exact for quadratics.
+    Bicubic,
+}
+
+/// Settings of an [`LkTracker`]: plain data, checked by [`LkConfig::validate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LkConfig {
+    /// Template width, pixels (>= 3; `width * height` at most the capacity `N`, `width` at
+    /// most the row capacity `W`).
+    pub width: u16,
+    /// Template height, pixels (>= 3).
+    pub height: u16,
+    /// Coarse search range, pixels: the largest motion between two frames to catch (0: no
+    /// search, the refinement alone, which converges within about a feature's size).
+    pub search: u16,
+    /// Most refinement iterations per start (1-50).
+    pub max_iterations: u8,
+    /// Convergence: a step `|dp|` below this, px (> 0).
+    pub tolerance: f32,
+    /// A match from the last displacement with a ZNCC at least this is taken without the
+    /// coarse search (in `[min_score, 1]`).
+    pub accept_score: f32,
+    /// Below this ZNCC a result is lost (in `[-1, 1]`).
+    pub min_score: f32,
+    /// Template refresh: a match scoring below this (and at least `min_score`) re-takes the
+    /// template where it is; at or below `min_score`: never (the default, no drift).
+    pub refresh_below: f32,
+    /// Smallest eigenvalue of the Hessian per template pixel, grey levels^2 / px^2, below which
+    /// the template is flat (>= 0).
+    pub min_texture: f32,
+    /// Saturation level: a window pixel at or above it makes the result lost (0: the pixel
+    /// type's full scale).
+    pub saturation: u16,
+    /// Sampling between pixels.
+    pub interpolation: Interpolation,
+}
+
+impl LkConfig {
+    /// A `width x height` template with the defaults: a search of half the larger side,
+    /// bicubic, 20 iterations, tolerance 0.001 px, acceptance 0.9, lost below 0.5, no
+    /// refresh, minimum texture 0.5 grey levels^2/px^2 per pixel, saturation at full scale.
+    pub const fn new(width: u16, height: u16) -> Self {
+        let larger = if width > height { width } else { height };
+        LkConfig {
+            width,
+            height,
+            search: larger / 2,
+            max_iterations: 20,
+            tolerance: 0.001,
+            accept_score: 0.9,
+            min_score: 0.5,
+            refresh_below: 0.5,
+            min_texture: 0.5,
+            saturation: 0,
+            interpolation: Interpolation::Bicubic,
+        }
+    }
+
+    /// Checks every field against the capacities `n` (pixels) and `w` (row length).
+    pub fn validate(self, n: usize, w: usize) -> Result<Self, LkError> {
+        let (tw, th) = (usize::from(self.width), usize::from(self.height));
+        if tw < 3 || th < 3 {
+            return Err(LkError::WindowTooSmall);
+        }
+        if tw * th > n || tw > w {
+            return Err(LkError::WindowTooLarge {
+                pixels: tw * th,
+                capacity: n,
+            });
+        }
+        let unit = |v: f32| (-1.0..=1.0).contains(&v);
+        let ok = (1..=50).contains(&self.max_iterations)
+            && self.tolerance > 0.0
+            && self.tolerance.is_finite()
+            && unit(self.min_score)
+            && unit(self.accept_score)
+            && unit(self.refresh_below)
+            && self.accept_score >= self.min_score
+            && self.min_texture >= 0.0
+            && self.min_texture.is_finite();
+        if ok {
+            Ok(self)
+        } else {
+            Err(LkError::Setting)
+        }
+    }
+}
+
+/// Why a configuration or a template is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LkError {
+    /// The template is narrower or lower than 3 pixels.
+    WindowTooSmall,
+    /// The template has more pixels than the capacity, or a row longer than the row capacity.
+    WindowTooLarge {
+        /// Pixels asked for.
+        pixels: usize,
+        /// The capacity `N`.
+        capacity: usize,
+    },
+    /// A setting outside its range (see [`LkConfig`]).
+    Setting,
+    /// The template (with the one pixel around it its gradients need) is not inside the frame.
+    Outside,
+    /// The template is flat: too little texture to track ([`LkConfig::min_texture`]).
+    Flat,
+}
+
+impl core::fmt::Display for LkError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LkError::WindowTooSmall => write!(f, "the window must be at least 3 x 3 pixels"),
+            LkError::WindowTooLarge { pixels, capacity } => write!(
+                f,
+                "the window has {pixels} pixels, more than the capacity of {capacity} (or a row \
+                 longer than the row capacity)"
+            ),
+            LkError::Setting => write!(f, "a tracker setting is out of range"),
+            LkError::Outside => write!(
+                f,
+                "the window and the pixel around it are not inside the frame"
+            ),
+            LkError::Flat => write!(
+                f,
+                "the window is flat: too little texture in some direction to track"
+            ),
+        }
+    }
+}
+
+/// One frame's result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LkResult {
+    /// Displacement since the reference frame, columns (px; valid unless lost).
+    pub dx: f32,
+    /// Displacement since the reference frame, rows (px, down; valid unless lost).
+    pub dy: f32,
+    /// Why the result is lost, if it is (see the module documentation).
+    pub flags: Flags,
+    /// Refinement iterations used (all starts).
+    pub iterations: u8,
+    /// ZNCC of the template and the frame at the result.
+    pub score: f32,
+    /// Whether the coarse search ran.
+    pub searched: bool,
+}
+
+impl LkResult {
+    /// The displacement, `None` when the result is lost (any flag set: a tracker result
+    /// carries a flag only when it is lost).
+    pub fn displacement(&self) -> Option<(f32, f32)> {
+        if self.flags.is_clear() {
+            Some((self.dx, self.dy))
+        } else {
+            None
+        }
+    }
+}
+
+/// A Lucas-Kanade tracker of one window of up to `N` pixels and rows of up to `W` pixels.
+/// RAM: `12 N + 16 W` bytes and a few words (31 x 31 window: about 12 KiB).
+#[derive(Debug, Clone)]
+pub struct LkTracker<const N: usize, const W: usize> {
+    config: LkConfig,
+    /// Template values, row-major.
+    t: [f32; N],
+    /// Template gradients.
+    gx: [f32; N],
+    gy: [f32; N],
+    /// Mean and root sum of squares about it of the template.
+    t_mean: f32,
+    t_norm: f32,
+    /// Inverse Hessian `[a, b, c]` of `[[a, b], [b, c]]`.
+    h_inv: [f32; 3],
+    /// Top-left pixel of the template in the frame it was taken from.
+    origin: (i32, i32),
+    /// Displacement of the target in the current template since the reference frame.
+    base: (f32, f32),
+    /// Displacement since the template was taken (the state between frames).
+    p: (f32, f32),
+    /// Horizontally interpolated rows (a ring of four).
+    ring: [[f32; W]; 4],
+    ready: bool,
+}
+
+/// Keys' cubic convolution weights of the four taps at `-1, 0, 1, 2` for a fraction `f`.
+fn cubic_weights(f: f32) -> [f32; 4] {
+    const A: f32 = -0.5;
+    let near = |t: f32| ((A + 2.0) * t - (A + 3.0)) * t * t + 1.0;
+    let far = |t: f32| ((A * t - 5.0 * A) * t + 8.0 * A) * t - 4.0 * A;
+    [far(1.0 + f), near(f), near(1.0 - f), far(2.0 - f)]
+}
+
+impl<const N: usize, const W: usize> LkTracker<N, W> {
+    /// A tracker with checked settings (no template yet).
+    pub fn try_new(config: LkConfig) -> Result<Self, LkError> {
+        let config = config.validate(N, W)?;
+        Ok(LkTracker {
+            config,
+            t: [0.0; N],
+            gx: [0.0; N],
+            gy: [0.0; N],
+            t_mean: 0.0,
+            t_norm: 0.0,
+            h_inv: [0.0; 3],
+            origin: (0, 0),
+            base: (0.0, 0.0),
+            p: (0.0, 0.0),
+            ring: [[0.0; W]; 4],
+            ready: false,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &LkConfig {
+        &self.config
+    }
+
+    /// Takes the template: the window whose top-left pixel is `(x0, y0)` in `frame` (the
+    /// reference frame; displacements are counted from it). Refused when the window and the
+    /// pixel around it leave the frame, or when it is flat.
+    pub fn set_template<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        x0: i32,
+        y0: i32,
+    ) -> Result<(), LkError> {
+        self.base = (0.0, 0.0);
+        self.p = (0.0, 0.0);
+        self.ready = false;
+        self.take(frame, x0, y0)
+    }
+
+    /// The template at `(x0, y0)`, its gradients and inverse Hessian.
+    fn take<P: Pixel>(&mut self, frame: &Frame<'_, P>, x0: i32, y0: i32) -> Result<(), LkError> {
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        let (fw, fh) = (frame.width() as i64, frame.height() as i64);
+        let (x0l, y0l) = (i64::from(x0), i64::from(y0));
+        if x0l < 1 || y0l < 1 || x0l + tw as i64 + 1 > fw || y0l + th as i64 + 1 > fh {
+            return Err(LkError::Outside);
+        }
+        let (x0u, y0u) = (x0 as usize, y0 as usize);
+        let at = |x: usize, y: usize| -> f32 {
+            frame
+                .row(y)
+                .and_then(|r| r.get(x))
+                .map_or(0.0, |&v| f32::from(v.into()))
+        };
+        let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for j in 0..th {
+            for i in 0..tw {
+                let (x, y) = (x0u + i, y0u + j);
+                let gx = 0.5 * (at(x + 1, y) - at(x - 1, y));
+                let gy = 0.5 * (at(x, y + 1) - at(x, y - 1));
+                let v = at(x, y);
+                let k = j * tw + i;
+                if let (Some(t), Some(a), Some(b)) =
+                    (self.t.get_mut(k), self.gx.get_mut(k), self.gy.get_mut(k))
+                {
+                    *t = v;
+                    *a = gx;
+                    *b = gy;
+                }
+                sum += v;
+                sxx += gx * gx;
+                sxy += gx * gy;
+                syy += gy * gy;
+            }
+        }
+        let n = (tw * th) as f32;
+        // smaller eigenvalue of [[sxx, sxy], [sxy, syy]], per pixel
+        let half_tr = 0.5 * (sxx + syy);
+        let det = sxx * syy - sxy * sxy;
+        let disc = sqrtf((half_tr * half_tr - det).max(0.0));
+        let lambda_min = half_tr - disc;
+        // written so that a NaN (no texture at all) is flat too
+        let textured = lambda_min / n >= self.config.min_texture && det > 0.0;
+        if !textured {
+            return Err(LkError::Flat);
+        }
+        self.h_inv = [syy / det, -sxy / det, sxx / det];
+        let mean = sum / n;
+        let mut ss = 0.0f32;
+        for v in self.t.iter().take(tw * th) {
+            ss += (v - mean) * (v - mean);
+        }
+        self.t_mean = mean;
+        self.t_norm = sqrtf(ss);
+        self.origin = (x0, y0);
+        self.ready = true;
+        Ok(())
+    }
+
+    /// The displacement since the reference frame at the last result that was not lost.
+    pub fn displacement(&self) -> (f32, f32) {
+        (self.base.0 + self.p.0, self.base.1 + self.p.1)
+    }
+
+    /// Tracks the template in `frame` (see the module documentation).
+    pub fn track<P: Pixel>(&mut self, frame: &Frame<'_, P>) -> LkResult {
+        let mut out = LkResult {
+            dx: 0.0,
+            dy: 0.0,
+            flags: Flags::NONE,
+            iterations: 0,
+            score: 0.0,
+            searched: false,
+        };
+        if !self.ready {
+            out.flags = Flags::DIVERGED;
+            return out;
+        }
+        let sat = match self.config.saturation {
+            0 => P::FULL,
+            s => s,
+        };
+        let start = self.p;
+        let first = self.refine(frame, start, sat, &mut out);
+        let accepted = match first {
+            Ok((p, score, settled)) if settled && score >= self.config.accept_score => {
+                Some((p, score))
+            }
+            _ => None,
+        };
+        let result = match accepted {
+            Some(r) => Ok(r),
+            None if self.config.search > 0 => {
+                out.searched = true;
+                match self.search(frame, start) {
+                    Err(flags) => Err(flags),
+                    Ok(q) => match self.refine(frame, q, sat, &mut out) {
+                        Ok((p, score, true)) if score >= self.config.min_score => Ok((p, score)),
+                        Ok((_, score, _)) => {
+                            out.score = score;
+                            Err(Flags::DIVERGED)
+                        }
+                        Err(f) => Err(f),
+                    },
+                }
+            }
+            None => match first {
+                Ok((p, score, true)) if score >= self.config.min_score => Ok((p, score)),
+                Ok((_, score, _)) => {
+                    out.score = score;
+                    Err(Flags::DIVERGED)
+                }
+                Err(f) => Err(f),
+            },
+        };
+        match result {
+            Ok((p, score)) => {
+                self.p = p;
+                out.score = score;
+                let (dx, dy) = self.displacement();
+                out.dx = dx;
+                out.dy = dy;
+                if score < self.config.refresh_below {
+                    self.refresh(frame);
+                }
+            }
+            Err(f) => out.flags.insert(f),
+        }
+        out
+    }
+
+    /// Re-takes the template at the current position (the refresh rule); a refused template
+    /// keeps the old one.
+    fn refresh<P: Pixel>(&mut self, frame: &Frame<'_, P>) {
+        let (rx, ry) = (floorf(self.p.0 + 0.5), floorf(self.p.1 + 0.5));
+        let (x0, y0) = (self.origin.0 + rx as i32, self.origin.1 + ry as i32);
+        let saved = (self.origin, self.h_inv, self.t_mean, self.t_norm);
+        let (t, gx, gy) = (self.t, self.gx, self.gy);
+        if self.take(frame, x0, y0).is_ok() {
+            self.base = (self.base.0 + rx, self.base.1 + ry);
+            self.p = (self.p.0 - rx, self.p.1 - ry);
+        } else {
+            (self.origin, self.h_inv, self.t_mean, self.t_norm) = saved;
+            (self.t, self.gx, self.gy) = (t, gx, gy);
+            self.ready = true;
+        }
+    }
+
+    /// Inverse-compositional refinement from `p`: the displacement, its ZNCC and whether the
+    /// last step was below 0.1 px; `Err(flags)` when the window leaves the frame or saturates.
+    fn refine<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        mut p: (f32, f32),
+        sat: u16,
+        out: &mut LkResult,
+    ) -> Result<((f32, f32), f32, bool), Flags> {
+        let mut step = f32::INFINITY;
+        let mut score = 0.0;
+        for _ in 0..self.config.max_iterations {
+            out.iterations = out.iterations.saturating_add(1);
+            let (b, s) = self.warp_error(frame, p, sat)?;
+            score = s;
+            let dx = self.h_inv[0] * b.0 + self.h_inv[1] * b.1;
+            let dy = self.h_inv[1] * b.0 + self.h_inv[2] * b.1;
+            p = (p.0 - dx, p.1 - dy);
+            step = sqrtf(dx * dx + dy * dy);
+            if !step.is_finite() {
+                return Err(Flags::DIVERGED);
+            }
+            if step < self.config.tolerance {
+                break;
+            }
+            // a refinement that runs away (more than the window) has lost the target
+            if fabsf(p.0 - self.p.0) > f32::from(self.config.width) + f32::from(self.config.search)
+                || fabsf(p.1 - self.p.1)
+                    > f32::from(self.config.height) + f32::from(self.config.search)
+            {
+                return Err(Flags::DIVERGED);
+            }
+        }
+        Ok((p, score, step < 0.1))
+    }
+
+    /// Interpolates the frame at the template's pixels shifted by `p`: returns
+    /// `sum [gx e, gy e]` with `e = I(x + p) - T(x)`, and the ZNCC of the warped window and the
+    /// template.
+    fn warp_error<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        p: (f32, f32),
+        sat: u16,
+    ) -> Result<((f32, f32), f32), Flags> {
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        let (ix, iy) = (floorf(p.0), floorf(p.1));
+        let (fx, fy) = (p.0 - ix, p.1 - iy);
+        if !(ix.is_finite() && iy.is_finite()) || fabsf(ix) > 1e6 || fabsf(iy) > 1e6 {
+            return Err(Flags::DIVERGED);
+        }
+        let bicubic = self.config.interpolation == Interpolation::Bicubic;
+        let (wx, wy, lead, taps) = if bicubic {
+            (cubic_weights(fx), cubic_weights(fy), 1i64, 4usize)
+        } else {
+            (
+                [1.0 - fx, fx, 0.0, 0.0],
+                [1.0 - fy, fy, 0.0, 0.0],
+                0i64,
+                2usize,
+            )
+        };
+        // source columns x0 - lead .. x0 - lead + tw + taps - 1, rows likewise
+        let x_first = i64::from(self.origin.0) + ix as i64 - lead;
+        let y_first = i64::from(self.origin.1) + iy as i64 - lead;
+        let (fw, fh) = (frame.width() as i64, frame.height() as i64);
+        if x_first < 0
+            || y_first < 0
+            || x_first + (tw + taps - 1) as i64 > fw
+            || y_first + (th + taps - 1) as i64 > fh
+        {
+            return Err(Flags::BORDER);
+        }
+        let (xf, yf) = (x_first as usize, y_first as usize);
+        let mut saturated = false;
+        // horizontal pass of source row `r` into ring slot `r % 4`
+        let mut fill = |ring: &mut [[f32; W]; 4], r: usize| {
+            let slot = &mut ring[r % 4];
+            let row = frame.row(yf + r).unwrap_or(&[]);
+            let src = row.get(xf..xf + tw + taps - 1).unwrap_or(&[]);
+            for (i, o) in slot.iter_mut().take(tw).enumerate() {
+                let mut v = 0.0;
+                for (k, w) in wx.iter().take(taps).enumerate() {
+                    let s = src.get(i + k).map_or(0, |&s| s.into());
+                    saturated |= s >= sat;
+                    v += w * f32::from(s);
+                }
+                *o = v;
+            }
+        };
+        for r in 0..taps - 1 {
+            fill(&mut self.ring, r);
+        }
+        let (mut bx, mut by) = (0.0f32, 0.0f32);
+        let (mut sd, mut sdd, mut sdt) = (0.0f32, 0.0f32, 0.0f32);
+        let m = self.t_mean;
+        for j in 0..th {
+            fill(&mut self.ring, j + taps - 1);
+            for i in 0..tw {
+                let mut v = 0.0;
+                for (k, w) in wy.iter().take(taps).enumerate() {
+                    v += w * self.ring[(j + k) % 4].get(i).copied().unwrap_or(0.0);
+                }
+                let k = j * tw + i;
+                let t = self.t.get(k).copied().unwrap_or(0.0);
+                let e = v - t;
+                bx += self.gx.get(k).copied().unwrap_or(0.0) * e;
+                by += self.gy.get(k).copied().unwrap_or(0.0) * e;
+                // the ZNCC's sums about the template mean (small numbers: no cancellation)
+                let d = v - m;
+                sd += d;
+                sdd += d * d;
+                sdt += d * (t - m);
+            }
+        }
+        if saturated {
+            return Err(Flags::SATURATED);
+        }
+        let n = (tw * th) as f32;
+        let var = sdd - sd * sd / n;
+        let score = if var > 0.0 && self.t_norm > 0.0 {
+            sdt / (sqrtf(var) * self.t_norm)
+        } else {
+            0.0
+        };
+        Ok(((bx, by), score))
+    }
+
+    /// The coarse integer search around `p` (see the module documentation): the best integer
+    /// displacement, or `Err(flags)` when no offset fits in the frame or the best one is on the
+    /// edge of the range.
+    fn search<P: Pixel>(&self, frame: &Frame<'_, P>, p: (f32, f32)) -> Result<(f32, f32), Flags> {
+        let (tw, th) = (i64::from(self.config.width), i64::from(self.config.height));
+        let r = i64::from(self.config.search);
+        let b = (r / 8).clamp(1, (tw.min(th) / 3).max(1));
+        let (cx, cy) = (floorf(p.0 + 0.5) as i64, floorf(p.1 + 0.5) as i64);
+        let mut best: Option<(f32, i64, i64)> = None;
+        let consider = |dx: i64, dy: i64, block: i64, best: &mut Option<(f32, i64, i64)>| {
+            if (dx - cx).abs() > r || (dy - cy).abs() > r {
+                return;
+            }
+            if let Some(s) = self.zncc_at(frame, dx, dy, block) {
+                if best.is_none_or(|(bs, _, _)| s > bs) {
+                    *best = Some((s, dx, dy));
+                }
+            }
+        };
+        if b > 1 {
+            let steps = r / b;
+            for sy in -steps..=steps {
+                for sx in -steps..=steps {
+                    consider(cx + sx * b, cy + sy * b, b, &mut best);
+                }
+            }
+        }
+        let (fx, fy, span) = match best {
+            Some((_, x, y)) => (x, y, b),
+            None => (cx, cy, r),
+        };
+        let mut fine: Option<(f32, i64, i64)> = None;
+        for dy in fy - span..=fy + span {
+            for dx in fx - span..=fx + span {
+                consider(dx, dy, 1, &mut fine);
+            }
+        }
+        let Some((score, x, y)) = fine else {
+            return Err(Flags::BORDER);
+        };
+        if score < self.config.min_score {
+            return Err(Flags::DIVERGED);
+        }
+        if r > 0 && ((x - cx).abs() == r || (y - cy).abs() == r) {
+            return Err(Flags::DIVERGED);
+        }
+        // saturation is judged by the refinement that follows
+        Ok((x as f32, y as f32))
+    }
+
+    /// ZNCC of `block x block` sums of the template and of the frame window displaced by
+    /// `(dx, dy)` whole pixels; `None` when the window leaves the frame.
+    fn zncc_at<P: Pixel>(&self, frame: &Frame<'_, P>, dx: i64, dy: i64, block: i64) -> Option<f32> {
+        let (tw, th) = (i64::from(self.config.width), i64::from(self.config.height));
+        let (x0, y0) = (i64::from(self.origin.0) + dx, i64::from(self.origin.1) + dy);
+        if x0 < 0 || y0 < 0 || x0 + tw > frame.width() as i64 || y0 + th > frame.height() as i64 {
+            return None;
+        }
+        let (bw, bh) = (tw / block, th / block);
+        let m = self.t_mean;
+        let (mut st, mut stt, mut sf, mut sff, mut sft) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for by in 0..bh {
+            for bx in 0..bw {
+                let (mut vt, mut vf) = (0.0f32, 0.0f32);
+                for j in by * block..(by + 1) * block {
+                    let row = frame.row((y0 + j) as usize)?;
+                    for i in bx * block..(bx + 1) * block {
+                        let k = (j * tw + i) as usize;
+                        vt += self.t.get(k).copied().unwrap_or(0.0) - m;
+                        vf += f32::from(row.get((x0 + i) as usize).copied()?.into()) - m;
+                    }
+                }
+                st += vt;
+                stt += vt * vt;
+                sf += vf;
+                sff += vf * vf;
+                sft += vf * vt;
+            }
+        }
+        let n = (bw * bh) as f32;
+        let (vt, vf) = (stt - st * st / n, sff - sf * sf / n);
+        if vt > 0.0 && vf > 0.0 {
+            Some((sft - st * sf / n) / sqrtf(vt * vf))
+        } else {
+            Some(0.0)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::vec::Vec;
+
+    const FW: usize = 96;
+    const FH: usize = 80;
+
+    /// A speckle pattern (a few Gaussian spots of sigma 2 px) displaced by `(dx, dy)`, sampled
+    /// at the pixel centres, 8-bit with `gain` (values up to about `40 + gain`).
+    fn speckle(dx: f64, dy: f64, gain: f64) -> Vec<u8> {
+        let spots = [
+            (40.0, 35.0, 1.0),
+            (47.0, 38.0, 0.7),
+            (43.0, 44.0, 0.9),
+            (52.0, 33.0, 0.6),
+            (36.0, 42.0, 0.8),
+            (50.0, 46.0, 0.5),
+        ];
+        let mut px = Vec::with_capacity(FW * FH);
+        for y in 0..FH {
+            for x in 0..FW {
+                let mut v = 40.0;
+                for (sx, sy, a) in spots {
+                    let (ex, ey) = (x as f64 - sx - dx, y as f64 - sy - dy);
+                    v += gain * a * libm::exp(-(ex * ex + ey * ey) / 8.0);
+                }
+                px.push(libm::round(v).clamp(0.0, 255.0) as u8);
+            }
+        }
+        px
+    }
+
+    fn frame(px: &[u8]) -> Frame<'_, u8> {
+        Frame::new(px, FW, FH, FW).unwrap()
+    }
+
+    type Lk = LkTracker<{ 31 * 31 }, 31>;
+
+    fn tracker(search: u16, interpolation: Interpolation) -> Lk {
+        let mut cfg = LkConfig::new(31, 31);
+        cfg.search = search;
+        cfg.interpolation = interpolation;
+        let mut t = Lk::try_new(cfg).unwrap();
+        let reference = speckle(0.0, 0.0, 200.0);
+        t.set_template(&frame(&reference), 44 - 15, 40 - 15)
+            .unwrap();
+        t
+    }
+
+    #[test]
+    fn sub_pixel_shifts_are_measured_to_a_few_thousandths() {
+        for interpolation in [Interpolation::Bicubic, Interpolation::Bilinear] {
+            let mut worst = 0.0f32;
+            for &(dx, dy) in &[(0.3, -0.7), (-0.45, 0.25), (0.5, 0.5), (1.2, -0.9)] {
+                let mut t = tracker(0, interpolation);
+                let img = speckle(dx, dy, 200.0);
+                let r = t.track(&frame(&img));
+                let (mx, my) = r.displacement().expect("tracked");
+                worst = worst
+                    .max((mx - dx as f32).abs())
+                    .max((my - dy as f32).abs());
+                assert!(r.score > 0.99, "{r:?}");
+                assert!(!r.searched);
+            }
+            // rounding to 8 bits alone limits it; bilinear smooths the pattern (a bias)
+            let limit = match interpolation {
+                Interpolation::Bicubic => 0.01,
+                Interpolation::Bilinear => 0.05,
+            };
+            assert!(worst < limit, "{interpolation:?}: {worst}");
+        }
+    }
+
+    #[test]
+    fn the_coarse_search_catches_motions_of_many_pixels_and_its_edge_is_a_loss() {
+        let mut t = tracker(12, Interpolation::Bicubic);
+        let img = speckle(8.4, -5.3, 200.0);
+        let r = t.track(&frame(&img));
+        assert!(r.searched);
+        let (mx, my) = r.displacement().expect("found by the search");
+        assert!((mx - 8.4).abs() < 0.01 && (my + 5.3).abs() < 0.01, "{r:?}");
+        // the next frame starts from there: a small step needs no search
+        let img = speckle(8.9, -5.0, 200.0);
+        let r = t.track(&frame(&img));
+        assert!(!r.searched, "{r:?}");
+        assert!((r.dx - 8.9).abs() < 0.01, "{r:?}");
+        // a jump beyond the range: lost, flagged, and the state kept
+        let mut t = tracker(6, Interpolation::Bicubic);
+        let img = speckle(14.0, 0.0, 200.0);
+        let r = t.track(&frame(&img));
+        assert_eq!(r.displacement(), None, "{r:?}");
+        assert!(r.flags.contains(Flags::DIVERGED), "{r:?}");
+        assert_eq!(t.displacement(), (0.0, 0.0));
+    }
+
+    #[test]
+    fn flat_windows_edges_and_saturation_are_refused_or_lost() {
+        let mut t = Lk::try_new(LkConfig::new(31, 31)).unwrap();
+        let flat = [77u8; FW * FH];
+        assert_eq!(t.set_template(&frame(&flat), 10, 10), Err(LkError::Flat));
+        // a straight edge moving along itself has no texture across one axis
+        let edge: Vec<u8> = (0..FW * FH)
+            .map(|i| if i % FW < 48 { 30 } else { 200 })
+            .collect();
+        assert_eq!(t.set_template(&frame(&edge), 30, 20), Err(LkError::Flat));
+        // the template and its one-pixel margin must be inside the frame
+        let img = speckle(0.0, 0.0, 200.0);
+        assert_eq!(t.set_template(&frame(&img), 0, 10), Err(LkError::Outside));
+        assert_eq!(t.set_template(&frame(&img), 65, 10), Err(LkError::Outside));
+        // the target moved so far that the window would leave the frame: lost at the border
+        let mut t = tracker(0, Interpolation::Bicubic);
+        let img = speckle(-14.5, 0.0, 200.0);
+        let r = t.track(&frame(&img));
+        assert_eq!(r.displacement(), None);
+        // brighter and clipped at 255: the clipped pixels do not move with the template
+        let mut t = tracker(4, Interpolation::Bicubic);
+        let img = speckle(0.2, 0.1, 400.0);
+        let r = t.track(&frame(&img));
+        assert!(r.flags.contains(Flags::SATURATED), "{r:?}");
+        assert_eq!(r.displacement(), None);
+        // a tracker without a template reports no displacement
+        let mut t = Lk::try_new(LkConfig::new(31, 31)).unwrap();
+        assert_eq!(t.track(&frame(&img)).displacement(), None);
+    }
+
+    #[test]
+    fn settings_are_checked_against_the_capacities() {
+        assert_eq!(
+            Lk::try_new(LkConfig::new(2, 31)).err(),
+            Some(LkError::WindowTooSmall)
+        );
+        assert!(matches!(
+            Lk::try_new(LkConfig::new(33, 29)).err(),
+            Some(LkError::WindowTooLarge { .. })
+        ));
+        let mut c = LkConfig::new(31, 31);
+        c.tolerance = 0.0;
+        assert_eq!(Lk::try_new(c).err(), Some(LkError::Setting));
+        let mut c = LkConfig::new(31, 31);
+        c.accept_score = 0.2;
+        assert_eq!(Lk::try_new(c).err(), Some(LkError::Setting));
+    }
+
+    #[test]
+    fn sixteen_bit_frames_track_as_eight_bit_ones() {
+        let img8 = speckle(0.35, -0.6, 200.0);
+        let img16: Vec<u16> = img8.iter().map(|&v| u16::from(v) * 16).collect();
+        let mut t = LkTracker::<{ 31 * 31 }, 31>::try_new(LkConfig::new(31, 31)).unwrap();
+        let reference: Vec<u16> = speckle(0.0, 0.0, 200.0)
+            .iter()
+            .map(|&v| u16::from(v) * 16)
+            .collect();
+        fn f16(p: &[u16]) -> Frame<'_, u16> {
+            Frame::new(p, FW, FH, FW).unwrap()
+        }
+        t.set_template(&f16(&reference), 29, 25).unwrap();
+        let a = t.track(&f16(&img16)).displacement().unwrap();
+        let b = tracker(15, Interpolation::Bicubic)
+            .track(&frame(&img8))
+            .displacement()
+            .unwrap();
+        assert!(
+            (a.0 - b.0).abs() < 1e-3 && (a.1 - b.1).abs() < 1e-3,
+            "{a:?} {b:?}"
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn nothing_panics_on_any_frame_or_setting(
+            seed in proptest::collection::vec(0u8..=255, FW * FH),
+            x0 in -5i32..100,
+            y0 in -5i32..90,
+            w in 0u16..40,
+            h in 0u16..40,
+            search in 0u16..40,
+            bilinear in proptest::bool::ANY,
+        ) {
+            let mut cfg = LkConfig::new(w, h);
+            cfg.search = search;
+            if bilinear {
+                cfg.interpolation = Interpolation::Bilinear;
+            }
+            if let Ok(mut t) = LkTracker::<{ 31 * 31 }, 31>::try_new(cfg) {
+                let f = frame(&seed);
+                let _ = t.set_template(&f, x0, y0);
+                let r = t.track(&f);
+                if let Some((dx, dy)) = r.displacement() {
+                    proptest::prop_assert!(dx.is_finite() && dy.is_finite());
+                }
+            }
+        }
+    }
+}
