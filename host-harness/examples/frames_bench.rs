@@ -11,7 +11,7 @@
 //! cargo run --release -p host-harness --example frames_bench
 //! ```
 
-use host_harness::analysis::points::{read_points, track_points, ThresholdRule};
+use host_harness::analysis::points::{read_points, track_points, PointTracker, ThresholdRule};
 use host_harness::frames::{discover_frames, phantom, photron, FrameSource};
 use std::path::Path;
 use std::time::Instant;
@@ -67,8 +67,11 @@ fn render(dir: &Path, scene: &str) -> anyhow::Result<()> {
 
 fn main() -> anyhow::Result<()> {
     let tmp = tempfile::tempdir()?;
-    println!("| what | decode only, s | with tracking, s | ratio |");
-    println!("|---|---:|---:|---:|");
+    println!(
+        "| what | decode only, s | with blob tracking, s | ratio | with LK tracking, s | ratio | \
+         LK per target-frame, us |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|");
     for scene in ["cluttered", "plain"] {
         let dir = tmp.path().join(scene);
         render(&dir, scene)?;
@@ -84,18 +87,25 @@ fn main() -> anyhow::Result<()> {
         let source = discover_frames(dir.join("frames").to_str().unwrap_or(""))?.source;
         let config = firmware_core::centroid::CentroidConfig::binary(127);
         let decode = best(|| decode_all(&source))?;
-        let track = best(|| {
-            track_points(&source, 120.0, &points, &config, ThresholdRule::Level(127))?;
-            Ok(())
-        })?;
+        let run = |tracker: PointTracker| {
+            best(|| {
+                track_points(&source, 120.0, &points, &config, tracker)?;
+                Ok(())
+            })
+        };
+        let track = run(PointTracker::Centroid(ThresholdRule::Level(127)))?;
+        let lk = run(PointTracker::Lk { search_px: None })?;
         println!(
-            "| 5 points x 1200 frames, {} | {decode:.3} | {track:.3} | {:.2} |",
+            "| 5 points x 1200 frames, {} | {decode:.3} | {track:.3} | {:.2} | {lk:.3} | {:.2} | \
+             {:.1} |",
             if scene == "cluttered" {
                 "colour JPEG 205 x 128"
             } else {
                 "grey PNG 165 x 80"
             },
-            track / decode
+            track / decode,
+            lk / decode,
+            (lk - decode) / (5.0 * 1200.0) * 1e6
         );
     }
     println!();

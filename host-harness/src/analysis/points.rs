@@ -202,6 +202,25 @@ pub fn otsu(frame: &GreyFrame, roi: Roi) -> u16 {
     (level.floor() as u32).min(65_535) as u16
 }
 
+/// How each window is followed: the thresholded centroid (the default), or Lucas-Kanade.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointTracker {
+    /// firmware-core's centroid in the window at the window's threshold (module documentation).
+    Centroid(ThresholdRule),
+    /// firmware-core's Lucas-Kanade tracker ([`firmware_core::lk`]): the window in the first
+    /// frame is the template; `search_px` the coarse search range (default: half the window's
+    /// larger side).
+    Lk {
+        /// `--search-px`.
+        search_px: Option<u16>,
+    },
+}
+
+/// The host's capacities of a Lucas-Kanade window: pixels and row length.
+const LK_PIXELS: usize = 128 * 128;
+const LK_ROW: usize = 128;
+type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
+
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointsInfo {
@@ -218,8 +237,14 @@ pub fn track_points(
     fps: f64,
     points: &[Point],
     config: &CentroidConfig,
-    rule: ThresholdRule,
+    tracker: PointTracker,
 ) -> anyhow::Result<(Tracks, PointsInfo)> {
+    let rule = match tracker {
+        PointTracker::Centroid(rule) => rule,
+        PointTracker::Lk { search_px } => {
+            return track_points_lk(source, fps, points, config, search_px)
+        }
+    };
     let k = points.len();
     let mut tracks = Tracks {
         centroids: vec![Vec::new(); k],
@@ -270,6 +295,141 @@ pub fn track_points(
             sizes: points.iter().map(|p| p.size).collect(),
         },
     ))
+}
+
+/// [`track_points`] with Lucas-Kanade: each window of the first frame is its target's template
+/// (firmware-core's [`firmware_core::lk::LkTracker`]); a frame where a target is lost (a flat
+/// template, the window at the frame's edge, saturation, no match within the search range) is a
+/// lost frame of that target with the reason in its flags. `thresholds` are reported as 0.
+pub fn track_points_lk(
+    source: &FrameSource,
+    fps: f64,
+    points: &[Point],
+    config: &CentroidConfig,
+    search_px: Option<u16>,
+) -> anyhow::Result<(Tracks, PointsInfo)> {
+    use firmware_core::lk::{LkConfig, LkError};
+    let k = points.len();
+    let mut trackers: Vec<Box<HostLk>> = Vec::with_capacity(k);
+    for p in points {
+        let (w, h) = (
+            u16::try_from(p.size.0).unwrap_or(u16::MAX),
+            u16::try_from(p.size.1).unwrap_or(u16::MAX),
+        );
+        let mut cfg = LkConfig::new(w, h);
+        if let Some(r) = search_px {
+            cfg.search = r;
+        }
+        cfg.saturation = config.saturation.unwrap_or(0);
+        let t = HostLk::try_new(cfg).map_err(|e| {
+            bad_input(format!(
+                "target {}: {e} (--tracker lk windows: at most {LK_ROW} pixels wide and                  {LK_PIXELS} pixels in all)",
+                p.target
+            ))
+        })?;
+        trackers.push(Box::new(t));
+    }
+    let mut tracks = Tracks {
+        centroids: vec![Vec::new(); k],
+        first: points.iter().map(|p| p.xy).collect(),
+        refused: vec![0; k],
+        depth: Default::default(),
+    };
+    // per target: the template could not be taken (why), so every frame is lost
+    let mut refused: Vec<Option<Flags>> = vec![None; k];
+    let mut size0: Option<(usize, usize)> = None;
+    source.for_each(fps, |label, frame| {
+        tracks.depth.add(frame);
+        let dims = frame.dimensions();
+        match size0 {
+            None => {
+                size0 = Some(dims);
+                for (t, p) in points.iter().enumerate() {
+                    let roi = window(p.xy, p.size, dims).ok_or_else(|| {
+                        bad_input(format!(
+                            "target {}: the {}x{} window at ({}, {}) does not lie inside the \
+                             first frame ({label}, {}x{} pixels)",
+                            p.target, p.size.0, p.size.1, p.xy.0, p.xy.1, dims.0, dims.1
+                        ))
+                    })?;
+                    let r = with_frame(frame, |f| match f {
+                        AnyFrame::U8(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
+                        AnyFrame::U16(f) => {
+                            trackers[t].set_template(&f, roi.x as i32, roi.y as i32)
+                        }
+                    })?;
+                    refused[t] = match r {
+                        Ok(()) => None,
+                        Err(LkError::Flat) => Some(Flags::FLAT),
+                        Err(_) => Some(Flags::BORDER),
+                    };
+                }
+            }
+            Some(d) if d != dims => {
+                return Err(bad_input(format!(
+                    "{label}: {}x{} pixels, but the first frame is {}x{}",
+                    dims.0, dims.1, d.0, d.1
+                )))
+            }
+            Some(_) => {}
+        }
+        for (t, p) in points.iter().enumerate() {
+            let c = match refused[t] {
+                Some(why) => lost_because(why),
+                None => {
+                    let r = with_frame(frame, |f| match f {
+                        AnyFrame::U8(f) => trackers[t].track(&f),
+                        AnyFrame::U16(f) => trackers[t].track(&f),
+                    })?;
+                    match r.displacement() {
+                        Some((dx, dy)) => Centroid {
+                            cx: (p.xy.0 + f64::from(dx)) as f32,
+                            cy: (p.xy.1 + f64::from(dy)) as f32,
+                            moments: firmware_core::centroid::Moments {
+                                pixels: u64::from(p.size.0) * u64::from(p.size.1),
+                                ..Default::default()
+                            },
+                            flags: Flags::NONE,
+                        },
+                        None => lost_because(r.flags),
+                    }
+                }
+            };
+            tracks.centroids[t].push(c);
+        }
+        Ok(())
+    })?;
+    Ok((
+        tracks,
+        PointsInfo {
+            thresholds: vec![0; k],
+            sizes: points.iter().map(|p| p.size).collect(),
+        },
+    ))
+}
+
+/// A lost result with the tracker's reason beside `empty` (no position).
+fn lost_because(why: Flags) -> Centroid {
+    let mut c = lost();
+    c.flags.insert(why);
+    c
+}
+
+/// A decoded frame as firmware-core's view of it.
+enum AnyFrame<'a> {
+    U8(firmware_core::centroid::Frame<'a, u8>),
+    U16(firmware_core::centroid::Frame<'a, u16>),
+}
+
+/// Calls `f` with `frame` as a firmware-core frame.
+fn with_frame<R>(frame: &GreyFrame, f: impl FnOnce(AnyFrame<'_>) -> R) -> anyhow::Result<R> {
+    use firmware_core::centroid::Frame;
+    let (w, h) = frame.dimensions();
+    let any = match frame {
+        GreyFrame::U8 { data, .. } => AnyFrame::U8(Frame::new(data, w, h, w)?),
+        GreyFrame::U16 { data, .. } => AnyFrame::U16(Frame::new(data, w, h, w)?),
+    };
+    Ok(f(any))
 }
 
 /// The thresholds of the windows in the first frame, every window checked to lie inside it.

@@ -37,9 +37,9 @@ pub struct TargetsRequest {
     pub accel_target: usize,
     /// Reference shapes to compute the MAC against.
     pub shape_reference: Option<PathBuf>,
-    /// Chosen points and their threshold rule (`--points`); `None`: the K blobs of the first
-    /// frame, numbered left to right.
-    pub points: Option<(Vec<super::points::Point>, super::points::ThresholdRule)>,
+    /// Chosen points and how their windows are followed (`--points`); `None`: the K blobs of
+    /// the first frame, numbered left to right.
+    pub points: Option<(Vec<super::points::Point>, super::points::PointTracker)>,
 }
 
 /// A checked `analyze` request: every value in range (the CLI's checks), nothing read yet.

@@ -3,7 +3,7 @@
 //! are chosen points (`--points`, [`super::points`]) or the K blobs of the first frame
 //! (`--targets`, [`super::targets::track`]), exactly as `analyze` follows them.
 
-use super::points::{Point, PointsInfo, ThresholdRule};
+use super::points::{Point, PointsInfo};
 use super::targets::Tracks;
 use super::DisplacementSettings;
 use crate::export::targets::{displacement_csv, Track};
@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq)]
 pub enum Targets {
     /// Chosen points and their threshold rule.
-    Points(Vec<Point>, ThresholdRule),
+    Points(Vec<Point>, super::points::PointTracker),
     /// The K blobs of the first frame, with the gate (px).
     Blobs(usize, f64),
 }

@@ -140,6 +140,12 @@ pub struct Args {
     /// --targets.
     #[arg(long, value_name = "FILE.csv", conflicts_with = "targets")]
     pub points: Option<PathBuf>,
+    /// With --points and --tracker lk: the largest motion between two frames to catch, px (a
+    /// coarse search over +-R before the sub-pixel refinement, when the refinement from the
+    /// last position finds no match; default: half the window's larger side). A best match on
+    /// the edge of the range is a lost frame (the motion may be larger).
+    #[arg(long, value_name = "R", requires = "points")]
+    pub search_px: Option<u16>,
     /// With --targets or --points: the target (1..K) co-located with the output accelerometer,
     /// compared with it in the report (default: the last, K).
     #[arg(long, value_name = "J")]
@@ -285,6 +291,9 @@ fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
         gate_px,
         accel_target,
         shape_reference: args.shape_reference.clone(),
-        points: points.map(|p| (p, args.centroid.rule())),
+        points: match points {
+            Some(p) => Some((p, args.centroid.point_tracker(args.search_px)?)),
+            None => None,
+        },
     }))
 }

@@ -76,13 +76,16 @@ pub enum ModeArg {
     Binary,
     /// Weight value - T for every pixel with value > T.
     Weighted,
+    /// Lucas-Kanade (firmware-core's gradient tracker): each `--points` window of the first
+    /// frame is its target's template; no threshold (`track` and `analyze` with `--points`).
+    Lk,
 }
 
 impl ModeArg {
-    /// The firmware's centroid mode.
+    /// The firmware's centroid mode (`lk` has none: binary stands in, unused).
     pub fn mode(self) -> Mode {
         match self {
-            ModeArg::Binary => Mode::Binary,
+            ModeArg::Binary | ModeArg::Lk => Mode::Binary,
             ModeArg::Weighted => Mode::Weighted,
         }
     }
@@ -94,10 +97,12 @@ pub struct CentroidArgs {
     /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
     /// frames a T of 255 or more selects nothing. With --points also `auto`: Otsu's threshold
     /// of each window in the first frame.
+    /// Needed except with `--tracker lk`.
     #[arg(long, value_name = "T|auto", value_parser = parse_threshold)]
-    pub threshold: ThresholdArg,
-    /// Pixel weighting (the tracker: `binary`, also called `blob`, or `weighted`); `--tracker`
-    /// is the same flag.
+    pub threshold: Option<ThresholdArg>,
+    /// The tracker: pixel weighting of the centroid (`binary`, also called `blob`, or
+    /// `weighted`), or `lk` (Lucas-Kanade in `--points` windows, `track` and `analyze` only);
+    /// `--mode` is the same flag.
     #[arg(long, alias = "tracker", value_enum, default_value_t = ModeArg::Binary)]
     pub mode: ModeArg,
     /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
@@ -128,11 +133,24 @@ pub fn parse_threshold(s: &str) -> Result<ThresholdArg, String> {
 }
 
 impl CentroidArgs {
-    /// The threshold rule of `--points` windows.
-    pub fn rule(&self) -> crate::analysis::points::ThresholdRule {
-        match self.threshold {
-            ThresholdArg::Level(t) => crate::analysis::points::ThresholdRule::Level(t),
-            ThresholdArg::Auto => crate::analysis::points::ThresholdRule::Auto,
+    /// How `--points` windows are followed: Lucas-Kanade with `search_px`, or the centroid at
+    /// the threshold rule (`--threshold T|auto`, needed then).
+    pub fn point_tracker(
+        &self,
+        search_px: Option<u16>,
+    ) -> anyhow::Result<crate::analysis::points::PointTracker> {
+        use crate::analysis::points::{PointTracker, ThresholdRule};
+        match (self.mode, self.threshold, search_px) {
+            (ModeArg::Lk, _, _) => Ok(PointTracker::Lk { search_px }),
+            (_, _, Some(_)) => Err(crate::bad_input(
+                "--search-px: the coarse search of --tracker lk (a centroid window re-centres \
+                 itself on a partial target, about half a window per frame)",
+            )),
+            (_, Some(ThresholdArg::Level(t)), None) => {
+                Ok(PointTracker::Centroid(ThresholdRule::Level(t)))
+            }
+            (_, Some(ThresholdArg::Auto), None) => Ok(PointTracker::Centroid(ThresholdRule::Auto)),
+            (_, None, None) => Err(missing_threshold()),
         }
     }
 
@@ -143,20 +161,29 @@ impl CentroidArgs {
     }
 
     /// [`config`](Self::config); with `points`, `--threshold auto` is accepted (the level is
-    /// then chosen per window, and 0 stands in the configuration).
+    /// then chosen per window, and 0 stands in the configuration), and so is `--tracker lk`
+    /// without a threshold (0 stands in: the gradient tracker has none).
     pub fn config_with(
         &self,
         saturation: Option<u16>,
         points: bool,
     ) -> anyhow::Result<CentroidConfig> {
+        if self.mode == ModeArg::Lk && !points {
+            return Err(crate::bad_input(
+                "--tracker lk follows the windows of --points (each window is its template): \
+                 give --points FILE.csv (`centroid` and --targets K take binary or weighted)",
+            ));
+        }
         let threshold = match (self.threshold, points) {
-            (ThresholdArg::Level(t), _) => t,
-            (ThresholdArg::Auto, true) => 0,
-            (ThresholdArg::Auto, false) => {
+            (Some(ThresholdArg::Level(t)), _) => t,
+            (Some(ThresholdArg::Auto), true) => 0,
+            (None, _) if self.mode == ModeArg::Lk => 0,
+            (Some(ThresholdArg::Auto), false) => {
                 return Err(crate::bad_input(
                     "--threshold auto: only with --points (Otsu's threshold of each window)",
                 ))
             }
+            (None, _) => return Err(missing_threshold()),
         };
         CentroidConfig {
             threshold,
@@ -167,6 +194,14 @@ impl CentroidArgs {
         .validate()
         .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
     }
+}
+
+/// The error of a centroid without `--threshold`.
+fn missing_threshold() -> anyhow::Error {
+    crate::bad_input(
+        "--threshold T (a grey level, or `auto` with --points) is needed by the centroid; only \
+         --tracker lk has none",
+    )
 }
 
 /// Parses `--coverage P`: a probability strictly between 0 and 1 (study and merge).

@@ -34,6 +34,12 @@ pub struct Args {
         required_unless_present = "targets"
     )]
     pub points: Option<PathBuf>,
+    /// With --points and --tracker lk: the largest motion between two frames to catch, px (a
+    /// coarse search over +-R before the sub-pixel refinement, when the refinement from the
+    /// last position finds no match; default: half the window's larger side). A best match on
+    /// the edge of the range is a lost frame (the motion may be larger).
+    #[arg(long, value_name = "R", requires = "points")]
+    pub search_px: Option<u16>,
     /// The K blobs of the first frame (global threshold), numbered left to right.
     #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
     pub targets: Option<usize>,
@@ -75,7 +81,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let targets = match (&args.points, args.targets) {
         (Some(p), _) => Targets::Points(
             crate::analysis::points::read_points(p)?,
-            args.centroid.rule(),
+            args.centroid.point_tracker(args.search_px)?,
         ),
         (None, Some(k)) => Targets::Blobs(k, args.gate_px),
         (None, None) => return Err(bad_input("give --points FILE.csv or --targets K")),

@@ -129,3 +129,16 @@ pub fn accel_csv(input_col: &str, (input, tip): (&[f64], &[f64]), fs: f64) -> St
     }
     csv
 }
+
+/// `truth.csv` of a recording with targets: per frame and target, the exact exposure-averaged
+/// position of the target's centre, px (origin at the centre of the top-left pixel, x right,
+/// y down): `truth[k][t] = (x, y)`.
+pub fn truth_csv(truth: &[Vec<(f64, f64)>]) -> String {
+    let mut csv = String::from("frame,target,x_px,y_px\n");
+    for (k, row) in truth.iter().enumerate() {
+        for (t, (x, y)) in row.iter().enumerate() {
+            let _ = writeln!(csv, "{k},{},{x},{y}", t + 1);
+        }
+    }
+    csv
+}

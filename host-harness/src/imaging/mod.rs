@@ -269,6 +269,37 @@ impl TargetPath {
         (centre - half, centre + half)
     }
 
+    /// The exact mean of the path (linear between its samples) over the fine-step window
+    /// `(a, b)`: where an exposure of that window sees the target on average, px. Outside the
+    /// path its end values hold.
+    pub fn mean_px(&self, (a, b): (f64, f64)) -> f64 {
+        let p = &self.path_px;
+        let n = p.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let at = |t: f64| -> f64 {
+            let t = t.clamp(0.0, (n - 1) as f64);
+            let i = (t.floor() as usize).min(n - 1);
+            let f = t - i as f64;
+            let next = p[(i + 1).min(n - 1)];
+            p[i] + f * (next - p[i])
+        };
+        if b - a <= 1e-12 {
+            return at(a);
+        }
+        // the integral piece by piece between the sample instants (trapezoids are exact on a
+        // linear segment)
+        let mut sum = 0.0;
+        let mut t = a;
+        while t < b {
+            let next = (t.floor() + 1.0).min(b);
+            sum += 0.5 * (at(t) + at(next)) * (next - t);
+            t = next;
+        }
+        sum / (b - a)
+    }
+
     /// The window of frame `k` (see [`window`](Self::window)).
     pub fn frame_window(&self, k: usize, exposure_ms: f64) -> (f64, f64) {
         self.window((self.pad + k * self.fine_per_frame) as f64, exposure_ms)

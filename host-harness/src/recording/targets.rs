@@ -54,8 +54,13 @@ pub fn write_targets_recording(
     };
     let xis = positions(targets);
     let (run, at_mm) = model::simulate_at(&spec.rig, &spec.acquisition, spec.seed, &xis)?;
-    let (sink, renderers, (sw, w, h), first) =
+    let (sink, renderers, (sw, w, h), first, truth) =
         render_strips(spec, &run, &at_mm, targets, (write_to, dir))?;
+    std::fs::write(
+        write_to.join("truth.csv"),
+        crate::export::recording::truth_csv(&truth),
+    )
+    .with_context(|| format!("cannot write {}", dir.join("truth.csv").display()))?;
     let (frames_dir, video) = sink.finish()?;
     if spec.cluttered {
         write_points(&first, sw, h, (write_to, dir))?;
@@ -160,6 +165,7 @@ fn render_strips(
     Vec<BlurRenderer>,
     (usize, usize, usize),
     Vec<(f64, f64)>,
+    Vec<Vec<(f64, f64)>>,
 )> {
     let fine_hz = spec.acquisition.fps * run.fine_per_frame as f64;
     let pad = TargetPath::pad_for(spec.exposure_ms, fine_hz);
@@ -189,9 +195,21 @@ fn render_strips(
     let mut sink = super::FrameSink::create(spec, (write_to, dir), (w, h))?;
     let (mut strip, mut frame) = (vec![0f32; sw * h], vec![0f32; w * h]);
     let mut first = Vec::new();
+    // the exact exposure-averaged centres, in the written frame's pixels
+    let wall = if spec.cluttered {
+        super::cluttered::WALL_PX as f64
+    } else {
+        0.0
+    };
+    let mut truth = Vec::with_capacity(spec.acquisition.frames);
     for k in 0..spec.acquisition.frames {
+        let mut at = Vec::with_capacity(targets);
         for (t, (r, p)) in renderers.iter_mut().zip(&paths).enumerate() {
             let (a, b) = p.frame_window(k, spec.exposure_ms);
+            at.push((
+                (t * sw) as f64 + r.rest_x(),
+                wall + r.rest_y() + p.mean_px((a, b)),
+            ));
             r.render_float(a, b, &mut strip);
             for y in 0..h {
                 frame[y * w + t * sw..y * w + (t + 1) * sw]
@@ -205,8 +223,9 @@ fn render_strips(
                 .collect();
         }
         sink.put(k, &frame)?;
+        truth.push(at);
     }
-    Ok((sink, renderers, (sw, w, h), first))
+    Ok((sink, renderers, (sw, w, h), first, truth))
 }
 
 /// `accel.csv`, `recording.toml` and `README.txt` (the `analyze --targets` command, returned);
