@@ -13,6 +13,7 @@ mod robustness;
 mod signal;
 mod study;
 mod targets;
+mod trackers;
 
 #[test]
 fn help_lists_every_subcommand() {

@@ -449,6 +449,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         };
         let result = match accepted {
             Some(r) => Ok(r),
+            // the window at the last position reaches past the frame's edge: the target is
+            // leaving; a search would find something else
+            None if first == Err(Flags::BORDER) => Err(Flags::BORDER),
             None if self.config.search > 0 => {
                 out.searched = true;
                 match self.search(frame, start) {

@@ -62,9 +62,12 @@ pub fn write_targets_recording(
     )
     .with_context(|| format!("cannot write {}", dir.join("truth.csv").display()))?;
     let (frames_dir, video) = sink.finish()?;
-    if spec.cluttered {
-        write_points(&first, sw, h, (write_to, dir))?;
-    }
+    let wall = if spec.cluttered {
+        super::cluttered::WALL_PX as f64
+    } else {
+        0.0
+    };
+    write_points(&first, sw, h, wall, (write_to, dir))?;
     let (w, h) = if spec.cluttered {
         super::cluttered::Clutter::new((w, h), spec.seed).outer()
     } else {
@@ -111,24 +114,21 @@ struct TargetsLayout {
     frame_size: (usize, usize),
 }
 
-/// `points.csv` of a cluttered recording: each target's centroid in the first frame (in the
-/// composed frame's pixels) and a window that holds the tag and its motion between two frames
+/// `points.csv` of a recording with targets: each target's centroid in the first frame (in the
+/// written frame's pixels: a cluttered scene's wall rows `wall` above the structure) and a window that holds the tag and its motion between two frames
 /// but not the wall or a neighbour: the strip's width less 2 (odd), 31 rows.
 fn write_points(
     first: &[(f64, f64)],
     strip_w: usize,
     inner_h: usize,
+    wall: f64,
     (write_to, dir): (&Path, &Path),
 ) -> anyhow::Result<()> {
     let w = (strip_w - 2) | 1;
     let h = 31.min(inner_h.saturating_sub(2)) | 1;
     let mut csv = String::from("target,x,y,w,h\n");
     for (t, &(x, y)) in first.iter().enumerate() {
-        csv.push_str(&format!(
-            "{},{x},{},{w},{h}\n",
-            t + 1,
-            y + super::cluttered::WALL_PX as f64
-        ));
+        csv.push_str(&format!("{},{x},{},{w},{h}\n", t + 1, y + wall));
     }
     std::fs::write(write_to.join("points.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("points.csv").display()))

@@ -1,0 +1,142 @@
+//! Each `--points` tracker's RMS position error on the 5-target cantilever recording with read
+//! noise, against the exact exposure-averaged motion (`truth.csv`), beside the Cramér-Rao lower
+//! bound of a translation estimate for that target and noise (docs/method.md §2.11).
+//!
+//! RMS error as users compute it: per target, the estimated `y` minus the true one, its mean
+//! removed (a constant offset is not an error of a displacement), over all 1200 frames.
+//!
+//! The bound: `sigma^2 / sum (dI/dy)^2` over the target's pixels, with `sigma^2` the read noise
+//! variance plus the 8-bit quantisation's `1/12`, and `dI/dy` the renderer's own image
+//! derivative (central difference of two renderings 0.01 px apart) of the unblurred target.
+//! Motion blur lowers the gradients of a frame, so this static bound is the lowest of the
+//! per-frame bounds.
+//!
+//! ```text
+//! cargo build --release -p host-harness
+//! cargo run --release -p host-harness --example trackers_noise_limit [READ_NOISE ...]
+//! ```
+
+use host_harness::analysis::points::{read_points, track_points, PointTracker, ThresholdRule};
+use host_harness::frames::discover_frames;
+use host_harness::imaging::BlurRenderer;
+use std::collections::HashMap;
+use std::path::Path;
+
+fn render(dir: &Path, noise: f64) -> anyhow::Result<()> {
+    let exe = std::env::current_exe()?;
+    let bin = exe
+        .parent()
+        .and_then(|p| p.parent())
+        .map(|p| p.join("host-harness"))
+        .filter(|p| p.is_file())
+        .ok_or_else(|| anyhow::anyhow!("build host-harness first (cargo build --release)"))?;
+    let ok = std::process::Command::new(bin)
+        .args(["render", "--preset", "cantilever", "--recording"])
+        .arg(dir)
+        .args(["--targets", "5", "--exposure-ms", "2", "--read-noise"])
+        .arg(noise.to_string())
+        .output()?
+        .status
+        .success();
+    anyhow::ensure!(ok, "render failed");
+    Ok(())
+}
+
+/// The Cramér-Rao bound (px) of the target's `y` for noise `sigma` (grey levels).
+fn crlb_y(sigma: f64) -> f64 {
+    let target = host_harness::model::cantilever::TARGET;
+    let d = 0.01;
+    let mut image = |shift: f64| {
+        let mut r = BlurRenderer::for_path(&target, &[shift, shift], 1);
+        let mut out = vec![0f32; r.width() * r.height()];
+        r.render_float(0.0, 1.0, &mut out);
+        out
+    };
+    let (a, b) = (image(-d), image(d));
+    let fisher: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| {
+            let g = (f64::from(*y) - f64::from(*x)) / (2.0 * d);
+            g * g
+        })
+        .sum();
+    ((sigma * sigma + 1.0 / 12.0) / fisher).sqrt()
+}
+
+fn main() -> anyhow::Result<()> {
+    let noises: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse())
+        .collect::<Result<_, _>>()?;
+    let noises = if noises.is_empty() { vec![1.0] } else { noises };
+    println!(
+        "| read noise | tracker | RMS error per target, px | mean | Cramér-Rao bound, px | mean / bound |"
+    );
+    println!("|---:|---|---|---:|---:|---:|");
+    for noise in noises {
+        let tmp = tempfile::tempdir()?;
+        let dir = tmp.path().join("rec");
+        render(&dir, noise)?;
+        let truth: HashMap<(usize, usize), f64> = std::fs::read_to_string(dir.join("truth.csv"))?
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                Ok(((c[0].parse()?, c[1].parse()?), c[3].parse()?))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        let points = read_points(&dir.join("points.csv"))?;
+        let source = discover_frames(dir.join("frames").to_str().unwrap_or(""))?.source;
+        let bound = crlb_y(noise);
+        for (name, tracker, mode) in [
+            (
+                "blob",
+                PointTracker::Centroid(ThresholdRule::Level(127)),
+                firmware_core::centroid::Mode::Binary,
+            ),
+            (
+                "weighted",
+                PointTracker::Centroid(ThresholdRule::Level(127)),
+                firmware_core::centroid::Mode::Weighted,
+            ),
+            (
+                "lk",
+                PointTracker::Lk { search_px: None },
+                firmware_core::centroid::Mode::Binary,
+            ),
+        ] {
+            let config = firmware_core::centroid::CentroidConfig {
+                mode,
+                ..firmware_core::centroid::CentroidConfig::binary(127)
+            };
+            let (tracks, _) = track_points(&source, 120.0, &points, &config, tracker)?;
+            let rms: Vec<f64> = tracks
+                .centroids
+                .iter()
+                .enumerate()
+                .map(|(t, cs)| {
+                    let e: Vec<f64> = cs
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(k, c)| {
+                            c.position().map(|(_, y)| f64::from(y) - truth[&(k, t + 1)])
+                        })
+                        .collect();
+                    let m = e.iter().sum::<f64>() / e.len() as f64;
+                    (e.iter().map(|v| (v - m).powi(2)).sum::<f64>() / e.len() as f64).sqrt()
+                })
+                .collect();
+            let mean = rms.iter().sum::<f64>() / rms.len() as f64;
+            println!(
+                "| {noise} | {name} | {} | {mean:.4} | {bound:.4} | {:.1} |",
+                rms.iter()
+                    .map(|v| format!("{v:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                mean / bound
+            );
+        }
+    }
+    Ok(())
+}
