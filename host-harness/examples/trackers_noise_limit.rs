@@ -46,7 +46,7 @@ fn render(dir: &Path, noise: f64) -> anyhow::Result<()> {
 fn crlb_y(sigma: f64) -> f64 {
     let target = host_harness::model::cantilever::TARGET;
     let d = 0.01;
-    let mut image = |shift: f64| {
+    let image = |shift: f64| {
         let mut r = BlurRenderer::for_path(&target, &[shift, shift], 1);
         let mut out = vec![0f32; r.width() * r.height()];
         r.render_float(0.0, 1.0, &mut out);
