@@ -1,4 +1,4 @@
-//! Lucas-Kanade tracking of one textured window (docs/method.md §2.10): the sub-pixel
+//! Lucas-Kanade tracking of one textured window (docs/method.md §2.11): the sub-pixel
 //! translation of a template taken from a reference frame, for targets a threshold cannot
 //! separate (speckle, bolts, a beam's edge, tags barely brighter than the wall) and at the
 //! noise limit for any target.
