@@ -36,7 +36,7 @@ awk '
     }
   }' "$tmp/out.txt" "$tmp/marks.log"
 echo
-grep "^ram:" "$tmp/out.txt" | sed 's/^ram: /RAM of the 2048-point pipeline (size_of): /'
+grep "^ram:" "$tmp/out.txt" | sed 's/^ram: /RAM (size_of): /'
 echo
 # memory: whole image, and firmware-core symbols per module (LTO inlines much of a module into
 # its callers; these are the out-of-line functions and data that keep the module's name)

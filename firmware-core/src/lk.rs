@@ -44,7 +44,7 @@
 //! (last step above 0.1 px), or the coarse search's best offset is on the edge of its range
 //! (the motion may exceed it): [`Flags::DIVERGED`]. A lost frame keeps the last displacement
 //! as the next start. Nothing here panics; memory is the tracker's three `N`-pixel arrays
-//! and an `8 W`-value row ring (capacities as const generics).
+//! and `10 W` values of row buffers (capacities as const generics).
 
 use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
@@ -64,8 +64,8 @@ pub enum Interpolation {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LkConfig {
-    /// Template width, pixels (>= 3; `width * height` at most the capacity `N`, `width` at
-    /// most the row capacity `W`).
+    /// Template width, pixels (>= 3; `width * height` at most the capacity `N`, `width + 7`
+    /// at most the row capacity `W`: a row with the interpolation's support).
     pub width: u16,
     /// Template height, pixels (>= 3).
     pub height: u16,
@@ -152,7 +152,7 @@ impl LkConfig {
         if tw < 3 || th < 3 {
             return Err(LkError::WindowTooSmall);
         }
-        if tw * th > n || tw > w {
+        if tw * th > n || tw + 7 > w {
             return Err(LkError::WindowTooLarge {
                 pixels: tw * th,
                 capacity: n,
@@ -182,7 +182,8 @@ impl LkConfig {
 pub enum LkError {
     /// The template is narrower or lower than 3 pixels.
     WindowTooSmall,
-    /// The template has more pixels than the capacity, or a row longer than the row capacity.
+    /// The template has more pixels than the capacity, or a row (plus 7) longer than the row
+    /// capacity.
     WindowTooLarge {
         /// Pixels asked for.
         pixels: usize,
@@ -247,7 +248,8 @@ impl LkResult {
 }
 
 /// A Lucas-Kanade tracker of one window of up to `N` pixels and rows of up to `W` pixels.
-/// RAM: `12 N + 32 W` bytes and a few words (31 x 31 window: about 12 KiB).
+/// RAM: `12 N + 40 W` bytes and a few words (a 31 x 31 window in `LkTracker<961, 38>`:
+/// about 13 KiB).
 #[derive(Debug, Clone)]
 pub struct LkTracker<const N: usize, const W: usize> {
     config: LkConfig,
@@ -271,7 +273,20 @@ pub struct LkTracker<const N: usize, const W: usize> {
     p: (f32, f32),
     /// Horizontally interpolated rows (a ring of eight: the most taps).
     ring: [[f32; W]; 8],
+    /// One source row as floats (the window's width plus up to 7 taps).
+    src: [f32; W],
+    /// One row of the vertical pass.
+    acc: [f32; W],
     ready: bool,
+}
+
+/// The first `T` of eight weights.
+fn taps_of<const T: usize>(w: &[f32; 8]) -> [f32; T] {
+    let mut out = [0.0; T];
+    for (o, v) in out.iter_mut().zip(w) {
+        *o = *v;
+    }
+    out
 }
 
 /// Keys' cubic convolution weights of the four taps at `-1, 0, 1, 2` for a fraction `f`.
@@ -299,6 +314,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             base: (0.0, 0.0),
             p: (0.0, 0.0),
             ring: [[0.0; W]; 8],
+            src: [0.0; W],
+            acc: [0.0; W],
             ready: false,
         })
     }
@@ -340,8 +357,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (x0u, y0u) = (x0 as usize + 3, y0 as usize + 3);
         let raw = |x: usize, y: usize| -> f32 {
             let (x, y) = (
-                (x as i64 - 3).clamp(0, fw - 1) as usize,
-                (y as i64 - 3).clamp(0, fh - 1) as usize,
+                (x as i64 - 3).min(fw - 1).max(0) as usize,
+                (y as i64 - 3).min(fh - 1).max(0) as usize,
             );
             frame
                 .row(y)
@@ -585,80 +602,147 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         p: (f32, f32),
         sat: u16,
     ) -> Result<((f32, f32), f32), Flags> {
+        let (ix, iy) = (floorf(p.0), floorf(p.1));
+        if !(ix.is_finite() && iy.is_finite()) || fabsf(ix) > 1e6 || fabsf(iy) > 1e6 {
+            return Err(Flags::DIVERGED);
+        }
+        let (fx, fy) = (p.0 - ix, p.1 - iy);
+        let (wx, lead, taps) = self.weights(fx);
+        let (wy, _, _) = self.weights(fy);
+        let at = (ix as i64, iy as i64, lead);
+        // one monomorphised pass per tap count, so every inner loop has a constant length
+        match taps {
+            2 => self.warp::<P, 2>(frame, at, (&wx, &wy), sat),
+            4 => self.warp::<P, 4>(frame, at, (&wx, &wy), sat),
+            6 => self.warp::<P, 6>(frame, at, (&wx, &wy), sat),
+            _ => self.warp::<P, 8>(frame, at, (&wx, &wy), sat),
+        }
+    }
+
+    /// [`warp_error`](Self::warp_error) with `T` taps per axis: the window's top-left source
+    /// pixel at the template's origin plus `(ix, iy)` less `lead`.
+    fn warp<P: Pixel, const T: usize>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        (ix, iy, lead): (i64, i64, i64),
+        (wx, wy): (&[f32; 8], &[f32; 8]),
+        sat: u16,
+    ) -> Result<((f32, f32), f32), Flags> {
         let (tw, th) = (
             usize::from(self.config.width),
             usize::from(self.config.height),
         );
-        let (ix, iy) = (floorf(p.0), floorf(p.1));
-        let (fx, fy) = (p.0 - ix, p.1 - iy);
-        if !(ix.is_finite() && iy.is_finite()) || fabsf(ix) > 1e6 || fabsf(iy) > 1e6 {
-            return Err(Flags::DIVERGED);
-        }
-        let (wx, lead, taps) = self.weights(fx);
-        let (wy, _, _) = self.weights(fy);
-        // source columns x0 - lead .. x0 - lead + tw + taps - 1, rows likewise; the window
-        // itself must be inside the frame, the interpolation's support beyond it repeats the
-        // edge pixels
-        let x_first = i64::from(self.origin.0) + ix as i64 - lead;
-        let y_first = i64::from(self.origin.1) + iy as i64 - lead;
+        let (wx, wy): ([f32; T], [f32; T]) = (taps_of(wx), taps_of(wy));
+        // source columns x_first .. x_first + tw + T - 1, rows likewise; the window itself must
+        // be inside the frame, the interpolation's support beyond it repeats the edge pixels
+        let x_first = i64::from(self.origin.0) + ix - lead;
+        let y_first = i64::from(self.origin.1) + iy - lead;
         let (fw, fh) = (frame.width() as i64, frame.height() as i64);
         let (x_win, y_win) = (x_first + lead, y_first + lead);
         if x_win < 0 || y_win < 0 || x_win + tw as i64 > fw || y_win + th as i64 > fh {
             return Err(Flags::BORDER);
         }
-        let inside = x_first >= 0 && x_first + (tw + taps - 1) as i64 <= fw;
-        let clamp_y = |r: usize| (y_first + r as i64).clamp(0, fh - 1) as usize;
-        let clamp_x = |c: i64| (x_first + c).clamp(0, fw - 1) as usize;
+        let span = tw + T - 1;
         let lead = lead as usize;
-        // saturated pixels of the window at the whole-pixel part of `p`
         let mut saturated = 0u32;
-        // horizontal pass of source row `r` into ring slot `r % 8`
-        let mut fill = |ring: &mut [[f32; W]; 8], r: usize| {
-            let slot = &mut ring[r % 8];
-            let row = frame.row(clamp_y(r)).unwrap_or(&[]);
-            let in_window = (lead..lead + th).contains(&r);
-            let px = |c: usize| -> u16 {
-                let at = if inside {
-                    (x_first as usize).saturating_add(c)
-                } else {
-                    clamp_x(c as i64)
+        let (bx, by, sd, sdd, sdt) = {
+            let LkTracker {
+                t,
+                gx,
+                gy,
+                ring,
+                src,
+                acc,
+                t_mean,
+                ..
+            } = self;
+            let m = *t_mean;
+            // source row `r` to floats (edge pixels repeated), then its horizontal pass into
+            // ring slot `r % 8`
+            let mut fill = |ring: &mut [[f32; W]; 8], r: usize| {
+                let y = (y_first + r as i64).min(fh - 1).max(0) as usize;
+                let row = frame.row(y).unwrap_or(&[]);
+                let Some(src) = src.get_mut(..span) else {
+                    return;
                 };
-                row.get(at).map_or(0, |&s| s.into())
+                let inside = x_first >= 0 && x_first + span as i64 <= fw;
+                match row.get(x_first.max(0) as usize..).filter(|_| inside) {
+                    Some(seg) => {
+                        for (o, v) in src.iter_mut().zip(seg) {
+                            *o = f32::from((*v).into());
+                        }
+                        if (lead..lead + th).contains(&r) {
+                            let whole = seg.get(lead..lead + tw).unwrap_or(&[]);
+                            saturated += whole
+                                .iter()
+                                .map(|&v| u32::from(v.into() >= sat))
+                                .sum::<u32>();
+                        }
+                    }
+                    None => {
+                        for (c, o) in src.iter_mut().enumerate() {
+                            let x = (x_first + c as i64).min(fw - 1).max(0) as usize;
+                            let v = row.get(x).map_or(0, |v| (*v).into());
+                            *o = f32::from(v);
+                            let in_window = (lead..lead + tw).contains(&c);
+                            saturated +=
+                                u32::from(in_window && v >= sat && (lead..lead + th).contains(&r));
+                        }
+                    }
+                }
+                let slot = &mut ring[r % 8];
+                for (o, win) in slot.iter_mut().zip(src.windows(T)) {
+                    let mut v = 0.0;
+                    for (a, b) in wx.iter().zip(win) {
+                        v += a * b;
+                    }
+                    *o = v;
+                }
             };
-            for (i, o) in slot.iter_mut().take(tw).enumerate() {
-                let mut v = 0.0;
-                for (k, w) in wx.iter().take(taps).enumerate() {
-                    v += w * f32::from(px(i + k));
-                }
-                saturated += u32::from(in_window && px(i + lead) >= sat);
-                *o = v;
+            for r in 0..T - 1 {
+                fill(ring, r);
             }
+            let (mut bx, mut by) = (0.0f32, 0.0f32);
+            let (mut sd, mut sdd, mut sdt) = (0.0f32, 0.0f32, 0.0f32);
+            for j in 0..th {
+                fill(ring, j + T - 1);
+                let Some(acc) = acc.get_mut(..tw) else {
+                    break;
+                };
+                // the vertical pass, the first tap's row written, the others added
+                let mut first = true;
+                for (k, w) in wy.iter().enumerate() {
+                    let row = &ring[(j + k) % 8];
+                    if first {
+                        for (a, r) in acc.iter_mut().zip(row.iter()) {
+                            *a = w * r;
+                        }
+                        first = false;
+                    } else {
+                        for (a, r) in acc.iter_mut().zip(row.iter()) {
+                            *a += w * r;
+                        }
+                    }
+                }
+                let rows = j * tw..(j + 1) * tw;
+                let (Some(t), Some(gx), Some(gy)) =
+                    (t.get(rows.clone()), gx.get(rows.clone()), gy.get(rows))
+                else {
+                    break;
+                };
+                for (((&v, &t), &gx), &gy) in acc.iter().zip(t).zip(gx).zip(gy) {
+                    let e = v - t;
+                    bx += gx * e;
+                    by += gy * e;
+                    // the ZNCC's sums about the template mean (small numbers: no cancellation)
+                    let d = v - m;
+                    sd += d;
+                    sdd += d * d;
+                    sdt += d * (t - m);
+                }
+            }
+            (bx, by, sd, sdd, sdt)
         };
-        for r in 0..taps - 1 {
-            fill(&mut self.ring, r);
-        }
-        let (mut bx, mut by) = (0.0f32, 0.0f32);
-        let (mut sd, mut sdd, mut sdt) = (0.0f32, 0.0f32, 0.0f32);
-        let m = self.t_mean;
-        for j in 0..th {
-            fill(&mut self.ring, j + taps - 1);
-            for i in 0..tw {
-                let mut v = 0.0;
-                for (k, w) in wy.iter().take(taps).enumerate() {
-                    v += w * self.ring[(j + k) % 8].get(i).copied().unwrap_or(0.0);
-                }
-                let k = j * tw + i;
-                let t = self.t.get(k).copied().unwrap_or(0.0);
-                let e = v - t;
-                bx += self.gx.get(k).copied().unwrap_or(0.0) * e;
-                by += self.gy.get(k).copied().unwrap_or(0.0) * e;
-                // the ZNCC's sums about the template mean (small numbers: no cancellation)
-                let d = v - m;
-                sd += d;
-                sdd += d * d;
-                sdt += d * (t - m);
-            }
-        }
         // a clipped plateau that moves with the template is tracked; more clipped pixels than
         // the template had (brighter, or a neighbour's) break brightness constancy
         if saturated > self.t_sat + self.t_sat / 4 + 2 {
@@ -680,7 +764,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     fn search<P: Pixel>(&self, frame: &Frame<'_, P>, p: (f32, f32)) -> Result<(f32, f32), Flags> {
         let (tw, th) = (i64::from(self.config.width), i64::from(self.config.height));
         let r = i64::from(self.config.search);
-        let b = (r / 8).clamp(1, (tw.min(th) / 3).max(1));
+        let b = (r / 8).min(tw.min(th) / 3).max(1);
         let (cx, cy) = (floorf(p.0 + 0.5) as i64, floorf(p.1 + 0.5) as i64);
         let mut best: Option<(f32, i64, i64)> = None;
         let consider = |dx: i64, dy: i64, block: i64, best: &mut Option<(f32, i64, i64)>| {
@@ -801,7 +885,7 @@ mod tests {
         Frame::new(px, FW, FH, FW).unwrap()
     }
 
-    type Lk = LkTracker<{ 31 * 31 }, 31>;
+    type Lk = LkTracker<{ 31 * 31 }, 38>;
 
     fn tracker(search: u16, interpolation: Interpolation) -> Lk {
         let mut cfg = LkConfig::new(31, 31);
@@ -909,7 +993,7 @@ mod tests {
             Some(LkError::WindowTooSmall)
         );
         assert!(matches!(
-            Lk::try_new(LkConfig::new(33, 29)).err(),
+            Lk::try_new(LkConfig::new(32, 29)).err(),
             Some(LkError::WindowTooLarge { .. })
         ));
         let mut c = LkConfig::new(31, 31);
@@ -924,7 +1008,7 @@ mod tests {
     fn sixteen_bit_frames_track_as_eight_bit_ones() {
         let img8 = speckle(0.35, -0.6, 200.0);
         let img16: Vec<u16> = img8.iter().map(|&v| u16::from(v) * 16).collect();
-        let mut t = LkTracker::<{ 31 * 31 }, 31>::try_new(LkConfig::new(31, 31)).unwrap();
+        let mut t = LkTracker::<{ 31 * 31 }, 38>::try_new(LkConfig::new(31, 31)).unwrap();
         let reference: Vec<u16> = speckle(0.0, 0.0, 200.0)
             .iter()
             .map(|&v| u16::from(v) * 16)
@@ -960,7 +1044,7 @@ mod tests {
             if bilinear {
                 cfg.interpolation = Interpolation::Bilinear;
             }
-            if let Ok(mut t) = LkTracker::<{ 31 * 31 }, 31>::try_new(cfg) {
+            if let Ok(mut t) = LkTracker::<{ 31 * 31 }, 38>::try_new(cfg) {
                 let f = frame(&seed);
                 let _ = t.set_template(&f, x0, y0);
                 let r = t.track(&f);

@@ -32,6 +32,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use firmware_core::centroid::track::{TrackConfig, Tracker};
 use firmware_core::centroid::{self, Centroid, CentroidConfig, Frame, FrameError, Mode, Pixel};
 use firmware_core::heapless::spsc::{Consumer, Producer, Queue};
+use firmware_core::lk::{Interpolation, LkConfig, LkTracker, Smoothing};
 use firmware_core::pipeline::{PipelineConfig, VisionH1};
 use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::sync::{SyncConfig, SyncPlan};
@@ -873,6 +874,140 @@ fn check_driver(rep: &mut Report, p: &mut Pipeline) {
 
 // ---------------------------------------------------------------------------------------------
 
+// ---------------------------------------------------------------------------------------------
+// Lucas-Kanade tracking of a textured window
+
+/// The speckle scene of the LK checks: 96 x 80 px.
+const SW: usize = 96;
+const SH: usize = 80;
+/// One LK window of 31 x 31 px (rows up to 31, plus 7 for the interpolation's support).
+type Lk = LkTracker<{ 31 * 31 }, 38>;
+
+/// A speckle pattern (Gaussian spots of sigma 2 px around (44, 40)) displaced by `(dx, dy)`,
+/// 8-bit, into `out`.
+fn speckle(out: &mut [u8; SW * SH], dx: f32, dy: f32) {
+    const SPOTS: [(f32, f32, f32); 6] = [
+        (40.0, 35.0, 1.0),
+        (47.0, 38.0, 0.7),
+        (43.0, 44.0, 0.9),
+        (52.0, 33.0, 0.6),
+        (36.0, 42.0, 0.8),
+        (50.0, 46.0, 0.5),
+    ];
+    for (i, o) in out.iter_mut().enumerate() {
+        let (x, y) = ((i % SW) as f32, (i / SW) as f32);
+        let mut v = 40.0;
+        for (sx, sy, a) in SPOTS {
+            let (ex, ey) = (x - sx - dx, y - sy - dy);
+            v += 200.0 * a * libm::expf(-(ex * ex + ey * ey) / 8.0);
+        }
+        *o = (v + 0.5).clamp(0.0, 255.0) as u8;
+    }
+}
+
+/// An LK tracker with `cfg`, its template at (29, 25) in the undisplaced scene.
+fn lk_at(cfg: LkConfig, scene: &mut [u8; SW * SH]) -> Option<Lk> {
+    let mut t = Lk::try_new(cfg).ok()?;
+    speckle(scene, 0.0, 0.0);
+    let f = Frame::new(&scene[..], SW, SH, SW).ok()?;
+    t.set_template(&f, 29, 25).ok()?;
+    Some(t)
+}
+
+/// Lucas-Kanade on the target: a sub-pixel shift and a jump caught by the coarse search.
+fn check_lk(rep: &mut Report) {
+    let mut scene = [0u8; SW * SH];
+    let mut ok = true;
+    for (dx, dy, search) in [(0.3f32, -0.7f32, 0u16), (20.4, -12.3, 24)] {
+        let mut cfg = LkConfig::new(31, 31);
+        cfg.search = search;
+        let Some(mut t) = lk_at(cfg, &mut scene) else {
+            rep.check("lk: template", false);
+            return;
+        };
+        speckle(&mut scene, dx, dy);
+        let r = Frame::new(&scene[..], SW, SH, SW).map(|f| t.track(&f));
+        let got = r.ok().and_then(|r| r.displacement());
+        // integers only: float formatting would bring core's panicking formatter in
+        let milli = |v: f32| (v * 1000.0) as i32;
+        let (gx, gy) = got.map_or((i32::MIN, i32::MIN), |(x, y)| (milli(x), milli(y)));
+        hprintln!(
+            "lk: shift ({}, {}) mpx measured ({}, {}) mpx",
+            milli(dx),
+            milli(dy),
+            gx,
+            gy
+        );
+        ok &= got.is_some_and(|(x, y)| libm::fabsf(x - dx) < 0.02 && libm::fabsf(y - dy) < 0.02);
+    }
+    rep.check("lk: sub-pixel shift and a 20 px jump, within 0.02 px", ok);
+    hprintln!(
+        "ram: lk tracker of a 31 x 31 window {} B (LkTracker<961, 38>)",
+        core::mem::size_of::<Lk>()
+    );
+}
+
+/// One frame of LK in steady state: the refinement from a start 0.4 px away (up to 3
+/// iterations), per interpolation and smoothing; and one coarse search of +-8 px.
+#[inline(never)]
+fn bench_lk() {
+    let mut scene = [0u8; SW * SH];
+    for (label, interpolation, smoothing) in [
+        (
+            "lk refinement 31 x 31, 3 iterations, bicubic + [1 4 6 4 1] smoothing",
+            Interpolation::Bicubic,
+            Smoothing::Binomial5,
+        ),
+        (
+            "lk refinement 31 x 31, 3 iterations, bicubic + [1 2 1] smoothing",
+            Interpolation::Bicubic,
+            Smoothing::Binomial3,
+        ),
+        (
+            "lk refinement 31 x 31, 3 iterations, bilinear + [1 2 1] smoothing",
+            Interpolation::Bilinear,
+            Smoothing::Binomial3,
+        ),
+        (
+            "lk refinement 31 x 31, 3 iterations, bilinear, no smoothing",
+            Interpolation::Bilinear,
+            Smoothing::None,
+        ),
+    ] {
+        let mut cfg = LkConfig::new(31, 31);
+        cfg.search = 0;
+        cfg.max_iterations = 3;
+        cfg.interpolation = interpolation;
+        cfg.smoothing = smoothing;
+        let Some(mut t) = lk_at(cfg, &mut scene) else {
+            return;
+        };
+        speckle(&mut scene, 0.4, -0.3);
+        let Ok(f) = Frame::new(&scene[..], SW, SH, SW) else {
+            return;
+        };
+        let r = measured(label, || t.track(black_box(&f)));
+        black_box(r);
+    }
+    // the coarse search: a jump the refinement alone does not catch
+    let mut cfg = LkConfig::new(31, 31);
+    cfg.search = 8;
+    cfg.max_iterations = 3;
+    cfg.accept_score = 1.0;
+    let Some(mut t) = lk_at(cfg, &mut scene) else {
+        return;
+    };
+    speckle(&mut scene, 6.4, -5.3);
+    let Ok(f) = Frame::new(&scene[..], SW, SH, SW) else {
+        return;
+    };
+    let r = measured(
+        "lk coarse search +-8 px (289 offsets of 31 x 31) and refinement",
+        || t.track(black_box(&f)),
+    );
+    black_box(r);
+}
+
 #[entry]
 fn main() -> ! {
     hprintln!("mcu-demo: firmware-core on Cortex-M4F (QEMU mps2-an386)");
@@ -908,12 +1043,14 @@ fn main() -> ! {
     check_pipeline(&mut rep, p);
     check_sync(&mut rep);
     check_tracking(&mut rep);
+    check_lk(&mut rep);
     check_driver(&mut rep, p);
 
     // benchmarks
     measured("empty", || ());
     bench_centroids();
     bench_tracking();
+    bench_lk();
     bench_welch::<1024>(&mut [0.0; 1024], &mut [0.0; 1024]);
     bench_welch::<2048>(&mut [0.0; 2048], &mut [0.0; 2048]);
     bench_welch::<4096>(&mut [0.0; 4096], &mut [0.0; 4096]);

@@ -218,7 +218,7 @@ pub enum PointTracker {
 
 /// The host's capacities of a Lucas-Kanade window: pixels and row length.
 const LK_PIXELS: usize = 128 * 128;
-const LK_ROW: usize = 128;
+const LK_ROW: usize = 128 + 7;
 type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
 
 /// What tracking the points found, beside the tracks.
@@ -323,8 +323,10 @@ pub fn track_points_lk(
         cfg.saturation = config.saturation.unwrap_or(0);
         let t = HostLk::try_new(cfg).map_err(|e| {
             bad_input(format!(
-                "target {}: {e} (--tracker lk windows: at most {LK_ROW} pixels wide and                  {LK_PIXELS} pixels in all)",
-                p.target
+                "target {}: {e} (--tracker lk windows: at most {} pixels wide and \
+                 {LK_PIXELS} pixels in all)",
+                p.target,
+                LK_ROW - 7
             ))
         })?;
         trackers.push(Box::new(t));
