@@ -87,7 +87,7 @@ fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::proce
 
 /// The 5-target recording with read noise (disks of radius 10 px with 0.5 px edges, 2 ms
 /// exposure): Lucas-Kanade's RMS error against the exact exposure-averaged motion is below the
-/// weighted centroid's on average and a few thousandths of a pixel on every target, the
+/// weighted centroid's on average and about two thousandths of a pixel on every target, the
 /// binary centroid's about 0.07 px; every frame of every target followed.
 #[test]
 fn lucas_kanade_follows_the_rendered_targets_closer_than_the_centroids() {
@@ -124,9 +124,10 @@ fn lucas_kanade_follows_the_rendered_targets_closer_than_the_centroids() {
         rms.insert(name, rms_errors(&rows, &truth));
     }
     let mean = |v: &Vec<f64>| v.iter().sum::<f64>() / v.len() as f64;
-    // measured: blob 0.068-0.069, weighted 0.0047-0.0053, lk 0.0026-0.0041 px
+    // measured: blob 0.068-0.069, weighted 0.0047-0.0053, lk 0.0018-0.0022 px (pyidi's
+    // LucasKanade on these frames: 0.0019-0.0022, scripts/peer_trackers.py)
     for (t, e) in rms["lk"].iter().enumerate() {
-        assert!(*e < 0.0055, "target {}: LK RMS error {e}", t + 1);
+        assert!(*e < 0.003, "target {}: LK RMS error {e}", t + 1);
     }
     assert!(mean(&rms["lk"]) < mean(&rms["weighted"]), "{rms:?}");
     assert!(rms["blob"].iter().all(|e| *e > 0.03), "{rms:?}");
@@ -229,18 +230,18 @@ fn lucas_kanade_losses_are_flags_and_lost_frames_never_wrong_positions() {
         lost_flags(k, 3, 4);
     }
     // target 4: followed until its window reaches the frame's edge (frame 5: 190 + 10 px),
-    // then lost at the border; gone from the frame in frame 9, where nothing matches
+    // then lost at the border; its centre past the frame's edge from frame 8, where nothing
+    // matches any more
     for k in 0..5 {
-        assert!(
-            !row(k, 4).5 && (row(k, 4).2 - pos4(k)).abs() < 0.05,
-            "{:?}",
-            row(k, 4)
-        );
+        let r = row(k, 4);
+        assert!(!r.5 && (r.2 - pos4(k)).abs() < 0.05, "{r:?}");
     }
-    for k in 5..9 {
+    for k in 5..8 {
         lost_flags(k, 4, 2);
     }
-    assert!(row(9, 4).5 && row(9, 4).3.is_nan());
+    for k in 8..10 {
+        assert!(row(k, 4).5 && row(k, 4).3.is_nan(), "{:?}", row(k, 4));
+    }
     // the report counts them
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
     assert!(report.contains("target 1: window 21x21 px"), "{report}");

@@ -881,7 +881,7 @@ fn check_driver(rep: &mut Report, p: &mut Pipeline) {
 const SW: usize = 96;
 const SH: usize = 80;
 /// One LK window of 31 x 31 px (rows up to 31, plus 7 for the interpolation's support).
-type Lk = LkTracker<{ 31 * 31 }, 38>;
+type Lk = LkTracker<{ 39 * 39 }, 38>;
 
 /// A speckle pattern (Gaussian spots of sigma 2 px around (44, 40)) displaced by `(dx, dy)`,
 /// 8-bit, into `out`.
@@ -942,7 +942,7 @@ fn check_lk(rep: &mut Report) {
     }
     rep.check("lk: sub-pixel shift and a 20 px jump, within 0.02 px", ok);
     hprintln!(
-        "ram: lk tracker of a 31 x 31 window {} B (LkTracker<961, 38>)",
+        "ram: lk tracker of a 31 x 31 window {} B (LkTracker<1521, 38>: the spline's padded template)",
         core::mem::size_of::<Lk>()
     );
 }
@@ -953,6 +953,11 @@ fn check_lk(rep: &mut Report) {
 fn bench_lk() {
     let mut scene = [0u8; SW * SH];
     for (label, interpolation, smoothing) in [
+        (
+            "lk refinement 31 x 31, 3 iterations, spline + [1 4 6 4 1] smoothing",
+            Interpolation::Spline,
+            Smoothing::Binomial5,
+        ),
         (
             "lk refinement 31 x 31, 3 iterations, bicubic + [1 4 6 4 1] smoothing",
             Interpolation::Bicubic,

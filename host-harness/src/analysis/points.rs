@@ -217,7 +217,7 @@ pub enum PointTracker {
 }
 
 /// The host's capacities of a Lucas-Kanade window: pixels and row length.
-const LK_PIXELS: usize = 128 * 128;
+const LK_PIXELS: usize = 136 * 136;
 const LK_ROW: usize = 128 + 7;
 type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
 
