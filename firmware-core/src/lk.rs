@@ -1011,27 +1011,67 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         if x0 < 0 || y0 < 0 || x0 + tw as i64 > fw || y0 + th as i64 > fh {
             return Err(Flags::BORDER);
         }
-        let raw = |x: i64, y: i64| -> u16 {
-            let (x, y) = (x.min(fw - 1).max(0) as usize, y.min(fh - 1).max(0) as usize);
-            frame.row(y).and_then(|r| r.get(x)).map_or(0, |&v| v.into())
-        };
         let (kernel, taps) = self.config.smoothing.kernel();
         let half = (taps / 2) as i64;
         let mut saturated = 0u32;
-        for j in 0..th as i64 {
-            for i in 0..tw as i64 {
-                let (x, y) = (x0 + i, y0 + j);
-                saturated += u32::from(raw(x, y) >= sat);
-                let mut v = 0.0;
-                for (ky, wy) in kernel.iter().take(taps).enumerate() {
-                    let mut row = 0.0;
-                    for (kx, wx) in kernel.iter().take(taps).enumerate() {
-                        row += wx * f32::from(raw(x + kx as i64 - half, y + ky as i64 - half));
+        let LkTracker { g, ring, .. } = self;
+        // source row `r` (frame row y0 - half + r), smoothed along x, into ring slot `r % 8`
+        let fill = |ring: &mut [[f32; W]; 8], r: i64, saturated: &mut u32| {
+            let y = (y0 - half + r).min(fh - 1).max(0) as usize;
+            let row = frame.row(y).unwrap_or(&[]);
+            let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
+            let slot = &mut ring[(r as usize) % 8];
+            let in_window = (half..half + th as i64).contains(&r);
+            match row.get((x0 - half).max(0) as usize..).filter(|_| inside) {
+                Some(seg) => {
+                    for (o, win) in slot.iter_mut().take(tw).zip(seg.windows(taps.max(1))) {
+                        let mut v = 0.0;
+                        for (w, p) in kernel.iter().zip(win) {
+                            v += w * f32::from((*p).into());
+                        }
+                        *o = v;
                     }
-                    v += wy * row;
+                    if in_window {
+                        let whole = seg.get(half as usize..half as usize + tw).unwrap_or(&[]);
+                        *saturated += whole
+                            .iter()
+                            .map(|&v| u32::from(v.into() >= sat))
+                            .sum::<u32>();
+                    }
                 }
-                if let Some(o) = self.g.get_mut((j * tw as i64 + i) as usize) {
-                    *o = v;
+                None => {
+                    for (i, o) in slot.iter_mut().take(tw).enumerate() {
+                        let mut v = 0.0;
+                        for (k, w) in kernel.iter().take(taps).enumerate() {
+                            let x = (x0 + i as i64 + k as i64 - half).min(fw - 1).max(0) as usize;
+                            v += w * row.get(x).map_or(0.0, |p| f32::from((*p).into()));
+                        }
+                        *o = v;
+                        let at = (x0 + i as i64).min(fw - 1).max(0) as usize;
+                        let raw: u16 = row.get(at).map_or(0, |p| (*p).into());
+                        *saturated += u32::from(in_window && raw >= sat);
+                    }
+                }
+            }
+        };
+        for r in 0..(taps - 1) as i64 {
+            fill(ring, r, &mut saturated);
+        }
+        for j in 0..th {
+            fill(ring, j as i64 + taps as i64 - 1, &mut saturated);
+            let Some(out) = g.get_mut(j * tw..(j + 1) * tw) else {
+                break;
+            };
+            for (k, w) in kernel.iter().take(taps).enumerate() {
+                let row = &ring[(j + k) % 8];
+                if k == 0 {
+                    for (o, r) in out.iter_mut().zip(row.iter()) {
+                        *o = w * r;
+                    }
+                } else {
+                    for (o, r) in out.iter_mut().zip(row.iter()) {
+                        *o += w * r;
+                    }
                 }
             }
         }
