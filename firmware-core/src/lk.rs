@@ -277,8 +277,6 @@ pub struct LkTracker<const N: usize, const W: usize> {
     /// Mean and root sum of squares about it of the template.
     t_mean: f32,
     t_norm: f32,
-    /// Template pixels at or above the saturation level.
-    t_sat: u32,
     /// Inverse Hessian `[a, b, c]` of `[[a, b], [b, c]]`.
     h_inv: [f32; 3],
     /// Top-left pixel of the template in the frame it was taken from.
@@ -366,6 +364,26 @@ fn bspline_weights(f: f32) -> [f32; 4] {
     ]
 }
 
+/// A frame pixel at or above the saturation level where the template is below this fraction of
+/// it was clipped by a change (a brighter target, a neighbour's highlight), not by a plateau
+/// that moves with the template.
+const CLIP_FRACTION: f32 = 0.75;
+
+/// Pixels of a window row at or above `sat` where the template's row is below
+/// [`CLIP_FRACTION`] of it.
+fn newly_clipped<P: Pixel>(row: &[P], template: &[f32], sat: u16) -> u32 {
+    let level = CLIP_FRACTION * f32::from(sat);
+    row.iter()
+        .zip(template)
+        .map(|(&v, &t)| u32::from(v.into() >= sat && t < level))
+        .sum()
+}
+
+/// More newly clipped pixels than this in a window of `n` pixels lose the frame: two, and 2 %.
+fn clip_limit(n: usize) -> u32 {
+    2 + (n / 50) as u32
+}
+
 /// The first `T` of eight weights.
 fn taps_of<const T: usize>(w: &[f32; 8]) -> [f32; T] {
     let mut out = [0.0; T];
@@ -394,7 +412,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             gy: [0.0; N],
             t_mean: 0.0,
             t_norm: 0.0,
-            t_sat: 0,
             h_inv: [0.0; 3],
             origin: (0, 0),
             base: (0.0, 0.0),
@@ -470,10 +487,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             }
             v
         };
-        let sat = f32::from(match self.config.saturation {
-            0 => P::FULL,
-            s => s,
-        });
         let spline = self.config.interpolation == Interpolation::Spline;
         let (pw, ph) = (tw + 2 * SPLINE_MARGIN, th + 2 * SPLINE_MARGIN);
         if spline {
@@ -503,7 +516,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 (dy(i - 1) + 4.0 * dy(i) + dy(i + 1)) / 6.0,
             )
         };
-        let mut t_sat = 0u32;
         let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for j in 0..th {
             for i in 0..tw {
@@ -526,7 +538,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     *b = gy;
                 }
                 sum += v;
-                t_sat += u32::from(raw(x, y) >= sat);
                 sxx += gx * gx;
                 sxy += gx * gy;
                 syy += gy * gy;
@@ -551,7 +562,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         self.t_mean = mean;
         self.t_norm = sqrtf(ss);
-        self.t_sat = t_sat;
         self.origin = (x0, y0);
         self.g_at = None;
         self.ready = true;
@@ -640,26 +650,16 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     fn refresh<P: Pixel>(&mut self, frame: &Frame<'_, P>) {
         let (rx, ry) = (floorf(self.p.0 + 0.5), floorf(self.p.1 + 0.5));
         let (x0, y0) = (self.origin.0 + rx as i32, self.origin.1 + ry as i32);
-        let saved = (
-            self.origin,
-            self.h_inv,
-            self.t_mean,
-            self.t_norm,
-            self.t_sat,
-        );
-        let (t, gx, gy) = (self.t, self.gx, self.gy);
+        // a refused template (flat, outside) must leave the old one whole: keep a copy
+        let saved = (self.origin, self.h_inv, self.t_mean, self.t_norm);
+        let (t, gx, gy, coef) = (self.t, self.gx, self.gy, self.coef);
         if self.take(frame, x0, y0).is_ok() {
             self.base = (self.base.0 + rx, self.base.1 + ry);
             self.p = (self.p.0 - rx, self.p.1 - ry);
         } else {
-            (
-                self.origin,
-                self.h_inv,
-                self.t_mean,
-                self.t_norm,
-                self.t_sat,
-            ) = saved;
-            (self.t, self.gx, self.gy) = (t, gx, gy);
+            (self.origin, self.h_inv, self.t_mean, self.t_norm) = saved;
+            (self.t, self.gx, self.gy, self.coef) = (t, gx, gy, coef);
+            self.g_at = None;
             self.ready = true;
         }
     }
@@ -804,10 +804,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         }
                         if (lead..lead + th).contains(&r) {
                             let whole = seg.get(lead..lead + tw).unwrap_or(&[]);
-                            saturated += whole
-                                .iter()
-                                .map(|&v| u32::from(v.into() >= sat))
-                                .sum::<u32>();
+                            let j = r - lead;
+                            let trow = t.get(j * tw..(j + 1) * tw).unwrap_or(&[]);
+                            saturated += newly_clipped(whole, trow, sat);
                         }
                     }
                     None => {
@@ -815,9 +814,16 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                             let x = (x_first + c as i64).min(fw - 1).max(0) as usize;
                             let v = row.get(x).map_or(0, |v| (*v).into());
                             *o = f32::from(v);
-                            let in_window = (lead..lead + tw).contains(&c);
-                            saturated +=
-                                u32::from(in_window && v >= sat && (lead..lead + th).contains(&r));
+                            let in_window =
+                                (lead..lead + tw).contains(&c) && (lead..lead + th).contains(&r);
+                            let tv = if in_window {
+                                t.get((r - lead) * tw + c - lead).copied().unwrap_or(0.0)
+                            } else {
+                                0.0
+                            };
+                            saturated += u32::from(
+                                in_window && v >= sat && tv < CLIP_FRACTION * f32::from(sat),
+                            );
                         }
                     }
                 }
@@ -876,7 +882,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         };
         // a clipped plateau that moves with the template is tracked; more clipped pixels than
         // the template had (brighter, or a neighbour's) break brightness constancy
-        if saturated > self.t_sat + self.t_sat / 4 + 2 {
+        if saturated > clip_limit(tw * th) {
             return Err(Flags::SATURATED);
         }
         let n = (tw * th) as f32;
@@ -1014,7 +1020,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (kernel, taps) = self.config.smoothing.kernel();
         let half = (taps / 2) as i64;
         let mut saturated = 0u32;
-        let LkTracker { g, ring, .. } = self;
+        let LkTracker { g, ring, t, .. } = self;
         // source row `r` (frame row y0 - half + r), smoothed along x, into ring slot `r % 8`
         let fill = |ring: &mut [[f32; W]; 8], r: i64, saturated: &mut u32| {
             let y = (y0 - half + r).min(fh - 1).max(0) as usize;
@@ -1033,10 +1039,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     }
                     if in_window {
                         let whole = seg.get(half as usize..half as usize + tw).unwrap_or(&[]);
-                        *saturated += whole
-                            .iter()
-                            .map(|&v| u32::from(v.into() >= sat))
-                            .sum::<u32>();
+                        let j = (r - half) as usize;
+                        let trow = t.get(j * tw..(j + 1) * tw).unwrap_or(&[]);
+                        *saturated += newly_clipped(whole, trow, sat);
                     }
                 }
                 None => {
@@ -1049,7 +1054,11 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         *o = v;
                         let at = (x0 + i as i64).min(fw - 1).max(0) as usize;
                         let raw: u16 = row.get(at).map_or(0, |p| (*p).into());
-                        *saturated += u32::from(in_window && raw >= sat);
+                        let j = (r - half).max(0) as usize;
+                        let tv = t.get(j * tw + i).copied().unwrap_or(0.0);
+                        *saturated += u32::from(
+                            in_window && raw >= sat && tv < CLIP_FRACTION * f32::from(sat),
+                        );
                     }
                 }
             }
@@ -1075,7 +1084,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 }
             }
         }
-        if saturated > self.t_sat + self.t_sat / 4 + 2 {
+        if saturated > clip_limit(tw * th) {
             return Err(Flags::SATURATED);
         }
         Ok(())
