@@ -285,6 +285,8 @@ pub struct LkTracker<const N: usize, const W: usize> {
     base: (f32, f32),
     /// Displacement since the template was taken (the state between frames).
     p: (f32, f32),
+    /// Its change over the last frame (the prediction's velocity; zero after a loss).
+    v: (f32, f32),
     /// The padded template's B-spline coefficients (`Interpolation::Spline`).
     coef: [f32; N],
     /// The frame's window at whole pixels (`Interpolation::Spline`), and where it was read
@@ -416,6 +418,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             origin: (0, 0),
             base: (0.0, 0.0),
             p: (0.0, 0.0),
+            v: (0.0, 0.0),
             coef: [0.0; N],
             g: [0.0; N],
             g_at: None,
@@ -442,6 +445,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     ) -> Result<(), LkError> {
         self.base = (0.0, 0.0);
         self.p = (0.0, 0.0);
+        self.v = (0.0, 0.0);
         self.ready = false;
         self.take(frame, x0, y0)
     }
@@ -593,8 +597,14 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             0 => P::FULL,
             s => s,
         };
-        let start = self.p;
-        let first = self.refine(frame, start, sat, &mut out);
+        // constant-velocity prediction from the last two tracked frames (none after a loss)
+        let mut start = (self.p.0 + self.v.0, self.p.1 + self.v.1);
+        let mut first = self.refine(frame, start, sat, &mut out);
+        if first == Err(Flags::BORDER) && start != self.p {
+            // the prediction overshoots past the frame's edge: start where the target was
+            start = self.p;
+            first = self.refine(frame, start, sat, &mut out);
+        }
         let accepted = match first {
             Ok((p, score, settled)) if settled && score >= self.config.accept_score => {
                 Some((p, score))
@@ -631,6 +641,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         };
         match result {
             Ok((p, score)) => {
+                self.v = (p.0 - self.p.0, p.1 - self.p.1);
                 self.p = p;
                 out.score = score;
                 let (dx, dy) = self.displacement();
@@ -640,7 +651,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     self.refresh(frame);
                 }
             }
-            Err(f) => out.flags.insert(f),
+            Err(f) => {
+                self.v = (0.0, 0.0);
+                out.flags.insert(f);
+            }
         }
         out
     }
