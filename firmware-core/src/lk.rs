@@ -366,18 +366,31 @@ fn bspline_weights(f: f32) -> [f32; 4] {
     ]
 }
 
-/// A frame pixel at or above the saturation level where the template is below this fraction of
-/// it was clipped by a change (a brighter target, a neighbour's highlight), not by a plateau
+/// A frame pixel at or above the saturation level where the template (and its neighbours) is
+/// below this fraction of it was clipped by a change (a brighter target, a neighbour's highlight), not by a plateau
 /// that moves with the template.
 const CLIP_FRACTION: f32 = 0.75;
 
-/// Pixels of a window row at or above `sat` where the template's row is below
-/// [`CLIP_FRACTION`] of it.
-fn newly_clipped<P: Pixel>(row: &[P], template: &[f32], sat: u16) -> u32 {
+/// Whether the template is below [`CLIP_FRACTION`] of `sat` at pixel `(i, j)` and its eight
+/// neighbours (the frame's window may sit up to a pixel off the template's grid).
+fn dark_near(t: &[f32], (tw, th): (usize, usize), (i, j): (usize, usize), sat: u16) -> bool {
     let level = CLIP_FRACTION * f32::from(sat);
+    for y in j.saturating_sub(1)..(j + 2).min(th) {
+        for x in i.saturating_sub(1)..(i + 2).min(tw) {
+            if t.get(y * tw + x).is_some_and(|&v| v >= level) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Pixels of window row `j` (`row`) at or above `sat` where the template is dark around them
+/// ([`dark_near`]).
+fn newly_clipped<P: Pixel>(row: &[P], t: &[f32], size: (usize, usize), j: usize, sat: u16) -> u32 {
     row.iter()
-        .zip(template)
-        .map(|(&v, &t)| u32::from(v.into() >= sat && t < level))
+        .enumerate()
+        .map(|(i, &v)| u32::from(v.into() >= sat && dark_near(t, size, (i, j), sat)))
         .sum()
 }
 
@@ -818,9 +831,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         }
                         if (lead..lead + th).contains(&r) {
                             let whole = seg.get(lead..lead + tw).unwrap_or(&[]);
-                            let j = r - lead;
-                            let trow = t.get(j * tw..(j + 1) * tw).unwrap_or(&[]);
-                            saturated += newly_clipped(whole, trow, sat);
+                            saturated += newly_clipped(whole, t, (tw, th), r - lead, sat);
                         }
                     }
                     None => {
@@ -830,13 +841,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                             *o = f32::from(v);
                             let in_window =
                                 (lead..lead + tw).contains(&c) && (lead..lead + th).contains(&r);
-                            let tv = if in_window {
-                                t.get((r - lead) * tw + c - lead).copied().unwrap_or(0.0)
-                            } else {
-                                0.0
-                            };
                             saturated += u32::from(
-                                in_window && v >= sat && tv < CLIP_FRACTION * f32::from(sat),
+                                in_window
+                                    && v >= sat
+                                    && dark_near(t, (tw, th), (c - lead, r - lead), sat),
                             );
                         }
                     }
@@ -1053,9 +1061,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     }
                     if in_window {
                         let whole = seg.get(half as usize..half as usize + tw).unwrap_or(&[]);
-                        let j = (r - half) as usize;
-                        let trow = t.get(j * tw..(j + 1) * tw).unwrap_or(&[]);
-                        *saturated += newly_clipped(whole, trow, sat);
+                        *saturated += newly_clipped(whole, t, (tw, th), (r - half) as usize, sat);
                     }
                 }
                 None => {
@@ -1069,9 +1075,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         let at = (x0 + i as i64).min(fw - 1).max(0) as usize;
                         let raw: u16 = row.get(at).map_or(0, |p| (*p).into());
                         let j = (r - half).max(0) as usize;
-                        let tv = t.get(j * tw + i).copied().unwrap_or(0.0);
                         *saturated += u32::from(
-                            in_window && raw >= sat && tv < CLIP_FRACTION * f32::from(sat),
+                            in_window && raw >= sat && dark_near(t, (tw, th), (i, j), sat),
                         );
                     }
                 }
