@@ -470,6 +470,17 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
     // --retime is for videos: with image files it is refused, naming the flag
     let o = analyze_with("frames", "120", "a7", &["--retime"]);
     assert_exit_2(&o, "--retime applies to a video file");
+    let png = rec.join("frames/frame_00000.png");
+    let o = harness(&[
+        "centroid",
+        "--threshold",
+        "127",
+        "--fps",
+        "120",
+        "--retime",
+        png.to_str().unwrap(),
+    ]);
+    assert_exit_2(&o, "--retime applies to a video file");
     encode(&rec, "30000/1001", &["-c:v", "ffv1"], "ntsc.mkv");
     let o = analyze("ntsc.mkv", "30", "a4");
     assert_exit_2(&o, "29.9700 fps (30000/1001), constant");

@@ -68,6 +68,26 @@ fn rms_errors(rows: &[Row], truth: &HashMap<(usize, usize), (f64, f64)>) -> Vec<
         .collect()
 }
 
+/// Renders the 5-target cantilever recording (2 ms exposure, read noise 1) of `scene` into
+/// `rec`.
+fn render_noisy_targets(rec: &Path, scene: &str) {
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--targets",
+        "5",
+        "--exposure-ms",
+        "2",
+        "--read-noise",
+        "1",
+        "--scene",
+        scene,
+    ]));
+}
+
 fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "track",
@@ -93,19 +113,7 @@ fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::proce
 fn lucas_kanade_follows_the_rendered_targets_closer_than_the_centroids() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-        "--read-noise",
-        "1",
-    ]));
+    render_noisy_targets(&rec, "plain");
     let truth = truth(&rec);
     let (frames, points) = (rec.join("frames"), rec.join("points.csv"));
     let mut rms = HashMap::new();
@@ -296,21 +304,7 @@ fn lucas_kanade_flags_are_checked() {
 fn lucas_kanade_follows_the_clipped_tags_of_the_cluttered_scene() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-        "--read-noise",
-        "1",
-        "--scene",
-        "cluttered",
-    ]));
+    render_noisy_targets(&rec, "cluttered");
     let out = tmp.path().join("lk");
     assert_ok(&track(
         &rec.join("frames"),

@@ -947,7 +947,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let m = SPLINE_MARGIN as i64;
         let pw = tw + 2 * SPLINE_MARGIN;
         let LkTracker {
-            t,
             gx,
             gy,
             g,
@@ -976,12 +975,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         for j in 0..th {
             fill(ring, j + 3, ay + 2 + m + j as i64);
             let rows = j * tw..(j + 1) * tw;
-            let (Some(t), Some(gx), Some(gy), Some(g)) = (
-                t.get(rows.clone()),
-                gx.get(rows.clone()),
-                gy.get(rows.clone()),
-                g.get(rows),
-            ) else {
+            let (Some(gx), Some(gy), Some(g)) =
+                (gx.get(rows.clone()), gy.get(rows.clone()), g.get(rows))
+            else {
                 break;
             };
             let (r0, r1, r2, r3) = (
@@ -990,7 +986,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 &ring[(j + 2) % 8],
                 &ring[(j + 3) % 8],
             );
-            for (i, (((&tv, &gxv), &gyv), &gv)) in t.iter().zip(gx).zip(gy).zip(g).enumerate() {
+            for (i, ((&gxv, &gyv), &gv)) in gx.iter().zip(gy).zip(g).enumerate() {
                 let shifted = wy[0] * r0.get(i).copied().unwrap_or(0.0)
                     + wy[1] * r1.get(i).copied().unwrap_or(0.0)
                     + wy[2] * r2.get(i).copied().unwrap_or(0.0)
@@ -1005,7 +1001,6 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 sdt += d * ds;
                 ss += ds;
                 sss += ds * ds;
-                let _ = tv;
             }
         }
         let n = (tw * th) as f32;

@@ -14,6 +14,8 @@
 use host_harness::analysis::points::{read_points, track_points, PointTracker, ThresholdRule};
 use host_harness::frames::{discover_frames, phantom, photron, FrameSource};
 use std::path::Path;
+
+mod common;
 use std::time::Instant;
 
 /// Best of 3 wall-clock runs of `f`, s (one thread: wall clock is CPU time here).
@@ -38,31 +40,7 @@ fn decode_all(source: &FrameSource) -> anyhow::Result<()> {
 }
 
 fn render(dir: &Path, scene: &str) -> anyhow::Result<()> {
-    let exe = std::env::current_exe()?;
-    let bin = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("host-harness"))
-        .filter(|p| p.is_file())
-        .ok_or_else(|| anyhow::anyhow!("build host-harness first (cargo build --release)"))?;
-    let ok = std::process::Command::new(bin)
-        .args(["render", "--preset", "cantilever", "--recording"])
-        .arg(dir)
-        .args([
-            "--targets",
-            "5",
-            "--exposure-ms",
-            "2",
-            "--read-noise",
-            "1",
-            "--scene",
-            scene,
-        ])
-        .output()?
-        .status
-        .success();
-    anyhow::ensure!(ok, "render failed");
-    Ok(())
+    common::render_targets(dir, &["--read-noise", "1", "--scene", scene])
 }
 
 fn main() -> anyhow::Result<()> {

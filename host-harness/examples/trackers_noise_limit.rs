@@ -22,24 +22,10 @@ use host_harness::imaging::BlurRenderer;
 use std::collections::HashMap;
 use std::path::Path;
 
+mod common;
+
 fn render(dir: &Path, noise: f64) -> anyhow::Result<()> {
-    let exe = std::env::current_exe()?;
-    let bin = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("host-harness"))
-        .filter(|p| p.is_file())
-        .ok_or_else(|| anyhow::anyhow!("build host-harness first (cargo build --release)"))?;
-    let ok = std::process::Command::new(bin)
-        .args(["render", "--preset", "cantilever", "--recording"])
-        .arg(dir)
-        .args(["--targets", "5", "--exposure-ms", "2", "--read-noise"])
-        .arg(noise.to_string())
-        .output()?
-        .status
-        .success();
-    anyhow::ensure!(ok, "render failed");
-    Ok(())
+    common::render_targets(dir, &["--read-noise", &noise.to_string()])
 }
 
 /// The Cramér-Rao bound (px) of the target's `y` for noise `sigma` (grey levels).

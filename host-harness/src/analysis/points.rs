@@ -245,31 +245,14 @@ pub fn track_points(
             return track_points_lk(source, fps, points, config, search_px)
         }
     };
-    let k = points.len();
-    let mut tracks = Tracks {
-        centroids: vec![Vec::new(); k],
-        first: points.iter().map(|p| p.xy).collect(),
-        refused: vec![0; k],
-        depth: Default::default(),
-    };
+    let mut tracks = empty_tracks(points);
     let mut last: Vec<(f64, f64)> = tracks.first.clone();
     let mut thresholds: Vec<u16> = Vec::new();
     let mut size0: Option<(usize, usize)> = None;
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
-        let dims = frame.dimensions();
-        match size0 {
-            None => {
-                size0 = Some(dims);
-                thresholds = first_windows(points, frame, rule, &label)?;
-            }
-            Some(d) if d != dims => {
-                return Err(bad_input(format!(
-                    "{label}: {}x{} pixels, but the first frame is {}x{}",
-                    dims.0, dims.1, d.0, d.1
-                )))
-            }
-            Some(_) => {}
+        if is_first(&mut size0, frame, &label)? {
+            thresholds = first_windows(points, frame, rule, &label)?;
         }
         for (t, p) in points.iter().enumerate() {
             let cfg = CentroidConfig {
@@ -331,49 +314,25 @@ pub fn track_points_lk(
         })?;
         trackers.push(Box::new(t));
     }
-    let mut tracks = Tracks {
-        centroids: vec![Vec::new(); k],
-        first: points.iter().map(|p| p.xy).collect(),
-        refused: vec![0; k],
-        depth: Default::default(),
-    };
+    let mut tracks = empty_tracks(points);
     // per target: the template could not be taken (why), so every frame is lost
     let mut refused: Vec<Option<Flags>> = vec![None; k];
     let mut size0: Option<(usize, usize)> = None;
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
-        let dims = frame.dimensions();
-        match size0 {
-            None => {
-                size0 = Some(dims);
-                for (t, p) in points.iter().enumerate() {
-                    let roi = window(p.xy, p.size, dims).ok_or_else(|| {
-                        bad_input(format!(
-                            "target {}: the {}x{} window at ({}, {}) does not lie inside the \
-                             first frame ({label}, {}x{} pixels)",
-                            p.target, p.size.0, p.size.1, p.xy.0, p.xy.1, dims.0, dims.1
-                        ))
-                    })?;
-                    let r = with_frame(frame, |f| match f {
-                        AnyFrame::U8(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
-                        AnyFrame::U16(f) => {
-                            trackers[t].set_template(&f, roi.x as i32, roi.y as i32)
-                        }
-                    })?;
-                    refused[t] = match r {
-                        Ok(()) => None,
-                        Err(LkError::Flat) => Some(Flags::FLAT),
-                        Err(_) => Some(Flags::BORDER),
-                    };
-                }
+        if is_first(&mut size0, frame, &label)? {
+            for (t, p) in points.iter().enumerate() {
+                let roi = first_window(p, frame.dimensions(), &label)?;
+                let r = with_frame(frame, |f| match f {
+                    AnyFrame::U8(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
+                    AnyFrame::U16(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
+                })?;
+                refused[t] = match r {
+                    Ok(()) => None,
+                    Err(LkError::Flat) => Some(Flags::FLAT),
+                    Err(_) => Some(Flags::BORDER),
+                };
             }
-            Some(d) if d != dims => {
-                return Err(bad_input(format!(
-                    "{label}: {}x{} pixels, but the first frame is {}x{}",
-                    dims.0, dims.1, d.0, d.1
-                )))
-            }
-            Some(_) => {}
         }
         for (t, p) in points.iter().enumerate() {
             let c = match refused[t] {
@@ -434,6 +393,49 @@ fn with_frame<R>(frame: &GreyFrame, f: impl FnOnce(AnyFrame<'_>) -> R) -> anyhow
     Ok(f(any))
 }
 
+/// Tracks of `points` with no frame yet, each target's first position its point.
+fn empty_tracks(points: &[Point]) -> Tracks {
+    let k = points.len();
+    Tracks {
+        centroids: vec![Vec::new(); k],
+        first: points.iter().map(|p| p.xy).collect(),
+        refused: vec![0; k],
+        depth: Default::default(),
+    }
+}
+
+/// Whether `frame` is the first (its size then kept in `size0`); a later frame of another size
+/// is an error naming it.
+fn is_first(
+    size0: &mut Option<(usize, usize)>,
+    frame: &GreyFrame,
+    label: &str,
+) -> anyhow::Result<bool> {
+    let dims = frame.dimensions();
+    match *size0 {
+        None => {
+            *size0 = Some(dims);
+            Ok(true)
+        }
+        Some(d) if d != dims => Err(bad_input(format!(
+            "{label}: {}x{} pixels, but the first frame is {}x{}",
+            dims.0, dims.1, d.0, d.1
+        ))),
+        Some(_) => Ok(false),
+    }
+}
+
+/// Point `p`'s window in the first frame (`dims`, labelled `label`), which must lie inside it.
+fn first_window(p: &Point, dims: (usize, usize), label: &str) -> anyhow::Result<Roi> {
+    window(p.xy, p.size, dims).ok_or_else(|| {
+        bad_input(format!(
+            "target {}: the {}x{} window at ({}, {}) does not lie inside the first frame \
+             ({label}, {}x{} pixels)",
+            p.target, p.size.0, p.size.1, p.xy.0, p.xy.1, dims.0, dims.1
+        ))
+    })
+}
+
 /// The thresholds of the windows in the first frame, every window checked to lie inside it.
 fn first_windows(
     points: &[Point],
@@ -441,17 +443,10 @@ fn first_windows(
     rule: ThresholdRule,
     label: &str,
 ) -> anyhow::Result<Vec<u16>> {
-    let dims = frame.dimensions();
     points
         .iter()
         .map(|p| {
-            let roi = window(p.xy, p.size, dims).ok_or_else(|| {
-                bad_input(format!(
-                    "target {}: the {}x{} window at ({}, {}) does not lie inside the first \
-                     frame ({label}, {}x{} pixels)",
-                    p.target, p.size.0, p.size.1, p.xy.0, p.xy.1, dims.0, dims.1
-                ))
-            })?;
+            let roi = first_window(p, frame.dimensions(), label)?;
             Ok(match (p.threshold, rule) {
                 (Some(t), _) => t,
                 (None, ThresholdRule::Level(t)) => t,

@@ -146,6 +146,16 @@ fn recording_frames(
 /// Runs `host-harness centroid`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let config = args.centroid.config(args.saturation)?;
+    if let Some(p) = args
+        .files
+        .iter()
+        .find(|p| args.retime && !crate::frames::files::is_video(p))
+    {
+        return Err(bad_input(format!(
+            "--retime applies to a video file (its container's rate), not to {}",
+            p.display()
+        )));
+    }
     let print = |bytes: Vec<u8>| super::stdout(&String::from_utf8_lossy(&bytes));
     print(signals::centroid_header())?;
     let mut failed = 0usize;
