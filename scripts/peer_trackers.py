@@ -23,7 +23,8 @@ Ours: `host-harness track --points REC/points.csv` with `--tracker lk`, `weighte
 RMS error as users compute it: per target, the estimated y minus the true y, its mean removed,
 over all frames; the table gives each target's and their mean. Runs in a virtual environment
 with pinned packages: $PEER_VENV, else .venv-peer-trackers at the repository root (created
-with pip when missing). Writes REC/peer-trackers.md.
+with pip when missing). Writes REC/peer-trackers.md (an existing one is replaced only with
+--force).
 """
 import argparse
 import os
@@ -80,8 +81,11 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("rec", type=Path)
     ap.add_argument("--harness", default="target/release/host-harness")
+    ap.add_argument("--force", action="store_true", help="replace REC/peer-trackers.md")
     args = ap.parse_args()
     rec = args.rec
+    if (rec / "peer-trackers.md").exists() and not args.force:
+        sys.exit(f"{rec / 'peer-trackers.md'} exists: give --force to replace it")
     points = read_csv(rec / "points.csv")
     truth_rows = read_csv(rec / "truth.csv")
     files = sorted((rec / "frames").glob("frame_*.png"))
