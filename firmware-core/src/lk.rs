@@ -138,7 +138,7 @@ impl Smoothing {
 
 impl LkConfig {
     /// A `width x height` template with the defaults: a search of half the larger side,
-    /// the template's B-spline after `Binomial5` smoothing, 20 iterations, tolerance 0.001 px, acceptance 0.9, lost below 0.5, no
+    /// the template's B-spline after `Binomial3` smoothing, 20 iterations, tolerance 0.001 px, acceptance 0.9, lost below 0.5, no
     /// refresh, minimum texture 0.5 grey levels^2/px^2 per pixel, saturation at full scale.
     pub const fn new(width: u16, height: u16) -> Self {
         let larger = if width > height { width } else { height };
@@ -154,7 +154,7 @@ impl LkConfig {
             min_texture: 0.5,
             saturation: 0,
             interpolation: Interpolation::Spline,
-            smoothing: Smoothing::Binomial5,
+            smoothing: Smoothing::Binomial3,
         }
     }
 
@@ -353,6 +353,17 @@ fn prefilter(c: &mut [f32], w: usize, h: usize) {
     for i in 0..w {
         line(c, i, w, h);
     }
+}
+
+/// The derivatives of [`bspline_weights`] with respect to `f`: the spline's slope at `f`.
+fn bspline_slopes(f: f32) -> [f32; 4] {
+    let g = 1.0 - f;
+    [
+        -0.5 * g * g,
+        (3.0 * f * f - 4.0 * f) / 2.0,
+        (-3.0 * f * f + 2.0 * f + 1.0) / 2.0,
+        0.5 * f * f,
+    ]
 }
 
 /// Cubic B-spline weights of the four coefficients at `-1, 0, 1, 2` for a fraction `f`.
@@ -920,13 +931,24 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     /// [`warp_error`](Self::warp_error) for [`Interpolation::Spline`]: the frame's window at
     /// the whole-pixel part `q` of `p` against the template's spline shifted by `q - p`;
     /// returns `sum [gx e, gy e]` with `e = I(x + q) - T(x - (p - q))` and the ZNCC.
+    ///
+    /// `q` is the nearest whole pixel, except that within a frame the window already read is
+    /// kept while `p` stays within 3/4 px of it (hysteresis): when the template does not match
+    /// the frame exactly (a blur that changes from frame to frame), the error measured on two
+    /// neighbouring windows differs slightly, and with the plain nearest pixel an optimum near
+    /// a half pixel made the iteration jump between the two windows without settling.
     fn spline_error<P: Pixel>(
         &mut self,
         frame: &Frame<'_, P>,
         p: (f32, f32),
         sat: u16,
     ) -> Result<((f32, f32), f32), Flags> {
-        let (qx, qy) = (floorf(p.0 + 0.5), floorf(p.1 + 0.5));
+        let (qx, qy) = match self.g_at {
+            Some((x, y)) if fabsf(p.0 - x as f32) <= 0.75 && fabsf(p.1 - y as f32) <= 0.75 => {
+                (x as f32, y as f32)
+            }
+            _ => (floorf(p.0 + 0.5), floorf(p.1 + 0.5)),
+        };
         if !(qx.is_finite() && qy.is_finite()) || fabsf(qx) > 1e6 || fabsf(qy) > 1e6 {
             return Err(Flags::DIVERGED);
         }
@@ -939,30 +961,33 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             self.load_window(frame, q, sat)?;
             self.g_at = Some(q);
         }
-        // the template's pixels shifted by s = q - p, |s| <= 1/2: taps at a - 1 .. a + 2
+        // the template's pixels shifted by s = q - p, |s| <= 3/4: taps at a - 1 .. a + 2,
+        // within the padded template's margin of 4
         let (sx, sy) = (qx - p.0, qy - p.1);
         let (ax, ay) = (floorf(sx), floorf(sy));
         let (wx, wy) = (bspline_weights(sx - ax), bspline_weights(sy - ay));
+        let (dwx, dwy) = (bspline_slopes(sx - ax), bspline_slopes(sy - ay));
         let (ax, ay) = (ax as i64, ay as i64);
         let m = SPLINE_MARGIN as i64;
         let pw = tw + 2 * SPLINE_MARGIN;
         let LkTracker {
-            gx,
-            gy,
             g,
             coef,
             ring,
             t_mean,
             ..
         } = self;
-        // horizontal pass of padded coefficient row `row` into ring slot `r % 8`
+        // horizontal passes of padded coefficient row `row`: the values into ring slot
+        // `r % 4`, their x slopes into slot `4 + r % 4`
         let col0 = (ax - 1 + m).max(0) as usize;
         let fill = |ring: &mut [[f32; W]; 8], r: usize, row: i64| {
             let start = (row.max(0) as usize) * pw + col0;
             let src = coef.get(start..start + tw + 3).unwrap_or(&[]);
-            let slot = &mut ring[r % 8];
-            for (o, win) in slot.iter_mut().zip(src.windows(4)) {
+            let (values, slopes) = ring.split_at_mut(4);
+            let (v, d) = (&mut values[r % 4], &mut slopes[r % 4]);
+            for ((o, od), win) in v.iter_mut().zip(d.iter_mut()).zip(src.windows(4)) {
                 *o = wx[0] * win[0] + wx[1] * win[1] + wx[2] * win[2] + wx[3] * win[3];
+                *od = dwx[0] * win[0] + dwx[1] * win[1] + dwx[2] * win[2] + dwx[3] * win[3];
             }
         };
         for r in 0..3 {
@@ -974,23 +999,30 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (mut ss, mut sss) = (0.0f32, 0.0f32);
         for j in 0..th {
             fill(ring, j + 3, ay + 2 + m + j as i64);
-            let rows = j * tw..(j + 1) * tw;
-            let (Some(gx), Some(gy), Some(g)) =
-                (gx.get(rows.clone()), gy.get(rows.clone()), g.get(rows))
-            else {
+            let Some(g) = g.get(j * tw..(j + 1) * tw) else {
                 break;
             };
-            let (r0, r1, r2, r3) = (
-                &ring[j % 8],
-                &ring[(j + 1) % 8],
-                &ring[(j + 2) % 8],
-                &ring[(j + 3) % 8],
+            let (v0, v1, v2, v3) = (
+                &ring[j % 4],
+                &ring[(j + 1) % 4],
+                &ring[(j + 2) % 4],
+                &ring[(j + 3) % 4],
             );
-            for (i, ((&gxv, &gyv), &gv)) in gx.iter().zip(gy).zip(g).enumerate() {
-                let shifted = wy[0] * r0.get(i).copied().unwrap_or(0.0)
-                    + wy[1] * r1.get(i).copied().unwrap_or(0.0)
-                    + wy[2] * r2.get(i).copied().unwrap_or(0.0)
-                    + wy[3] * r3.get(i).copied().unwrap_or(0.0);
+            let (d0, d1, d2, d3) = (
+                &ring[4 + j % 4],
+                &ring[4 + (j + 1) % 4],
+                &ring[4 + (j + 2) % 4],
+                &ring[4 + (j + 3) % 4],
+            );
+            for (i, &gv) in g.iter().enumerate() {
+                let at = |r: &[f32; W]| r.get(i).copied().unwrap_or(0.0);
+                let (a0, a1, a2, a3) = (at(v0), at(v1), at(v2), at(v3));
+                let shifted = wy[0] * a0 + wy[1] * a1 + wy[2] * a2 + wy[3] * a3;
+                // the shifted template's gradient (not the reference's): the update is then
+                // the gradient of the squared error itself, whose zero does not depend on the
+                // whole-pixel window when the frame differs from the template (blur)
+                let gxv = wy[0] * at(d0) + wy[1] * at(d1) + wy[2] * at(d2) + wy[3] * at(d3);
+                let gyv = dwy[0] * a0 + dwy[1] * a1 + dwy[2] * a2 + dwy[3] * a3;
                 let e = gv - shifted;
                 bx += gxv * e;
                 by += gyv * e;
@@ -1269,6 +1301,40 @@ mod tests {
                 Interpolation::Bilinear => 0.05,
             };
             assert!(worst < limit, "{interpolation:?}: {worst}");
+        }
+    }
+
+    #[test]
+    fn a_template_blurred_unlike_the_frame_settles_at_every_half_pixel() {
+        // the template smeared over 6 px along y (a long exposure at speed), the frames sharp:
+        // no shift matches exactly, and the window read at whole pixels changes at the half
+        // pixels; the estimate must still settle, and move with the target smoothly
+        let (w, h) = (FW, FH);
+        let mut acc = std::vec![0.0f64; w * h];
+        for s in 0..13 {
+            let img = speckle(0.0, -3.0 + 0.5 * s as f64, 200.0);
+            for (a, v) in acc.iter_mut().zip(&img) {
+                *a += f64::from(*v) / 13.0;
+            }
+        }
+        let blurred: Vec<u8> = acc.iter().map(|v| libm::round(*v) as u8).collect();
+        let mut cfg = LkConfig::new(31, 31);
+        cfg.search = 0;
+        let mut t = Lk::try_new(cfg).unwrap();
+        t.set_template(&frame(&blurred), 44 - 15, 40 - 15).unwrap();
+        let mut last: Option<f32> = None;
+        for k in 0..=20 {
+            let dy = 2.0 + 0.05 * f64::from(k);
+            let r = t.track(&frame(&speckle(0.1, dy, 200.0)));
+            let (_, my) = r
+                .displacement()
+                .unwrap_or_else(|| panic!("lost at {dy}: {r:?}"));
+            assert!((f64::from(my) - dy).abs() < 0.06, "{dy}: {my}");
+            if let Some(l) = last {
+                let step = my - l;
+                assert!((0.03..0.07).contains(&step), "{dy}: step {step}");
+            }
+            last = Some(my);
         }
     }
 

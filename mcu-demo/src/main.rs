@@ -954,6 +954,11 @@ fn bench_lk() {
     let mut scene = [0u8; SW * SH];
     for (label, interpolation, smoothing) in [
         (
+            "lk refinement 31 x 31, 3 iterations, spline + [1 2 1] smoothing",
+            Interpolation::Spline,
+            Smoothing::Binomial3,
+        ),
+        (
             "lk refinement 31 x 31, 3 iterations, spline + [1 4 6 4 1] smoothing",
             Interpolation::Spline,
             Smoothing::Binomial5,
