@@ -25,6 +25,7 @@ fn main() {
         radius_px: 12.0,
         level: 200.0,
         edge_sigma_px: 1.5,
+        texture: host_harness::model::Texture::Plain,
     };
     let exposures_ms: Vec<f64> = (0..8).map(|i| 40.0 + 20.0 * i as f64).collect();
     // the study's ramp block and rest padding before t = 0 (a whole number of blocks, so every

@@ -13,8 +13,11 @@
 //!
 //! ```text
 //! cargo build --release -p host-harness
-//! cargo run --release -p host-harness --example trackers_noise_limit [READ_NOISE ...]
+//! cargo run --release -p host-harness --example trackers_noise_limit [speckle] [READ_NOISE ...]
 //! ```
+//!
+//! `speckle`: the targets painted with speckle (`render --texture speckle`), the bound for that
+//! image.
 
 use host_harness::analysis::points::{read_points, track_points, PointTracker, ThresholdRule};
 use host_harness::frames::discover_frames;
@@ -24,13 +27,19 @@ use std::path::Path;
 
 mod common;
 
-fn render(dir: &Path, noise: f64) -> anyhow::Result<()> {
-    common::render_targets(dir, &["--read-noise", &noise.to_string()])
+fn render(dir: &Path, noise: f64, texture: &str) -> anyhow::Result<()> {
+    common::render_targets(
+        dir,
+        &["--read-noise", &noise.to_string(), "--texture", texture],
+    )
 }
 
 /// The Cramér-Rao bound (px) of the target's `y` for noise `sigma` (grey levels).
-fn crlb_y(sigma: f64) -> f64 {
-    let target = host_harness::model::cantilever::TARGET;
+fn crlb_y(sigma: f64, texture: host_harness::model::Texture) -> f64 {
+    let target = host_harness::model::DiskTarget {
+        texture,
+        ..host_harness::model::cantilever::TARGET
+    };
     let d = 0.01;
     let image = |shift: f64| {
         let mut r = BlurRenderer::for_path(&target, &[shift, shift], 1);
@@ -51,19 +60,26 @@ fn crlb_y(sigma: f64) -> f64 {
 }
 
 fn main() -> anyhow::Result<()> {
+    let speckle = std::env::args().any(|a| a == "speckle");
+    let (texture, name) = if speckle {
+        (host_harness::model::Texture::Speckle, "speckle")
+    } else {
+        (host_harness::model::Texture::Plain, "plain")
+    };
     let noises: Vec<f64> = std::env::args()
         .skip(1)
+        .filter(|a| a != "speckle")
         .map(|a| a.parse())
         .collect::<Result<_, _>>()?;
     let noises = if noises.is_empty() { vec![1.0] } else { noises };
     println!(
-        "| read noise | tracker | RMS error per target, px | mean | Cramér-Rao bound, px | mean / bound |"
+        "| read noise | target | tracker | RMS error per target, px | mean | Cramér-Rao bound, px | mean / bound |"
     );
-    println!("|---:|---|---|---:|---:|---:|");
+    println!("|---:|---|---|---|---:|---:|---:|");
     for noise in noises {
         let tmp = tempfile::tempdir()?;
         let dir = tmp.path().join("rec");
-        render(&dir, noise)?;
+        render(&dir, noise, name)?;
         let truth: HashMap<(usize, usize), f64> = std::fs::read_to_string(dir.join("truth.csv"))?
             .lines()
             .skip(1)
@@ -74,7 +90,7 @@ fn main() -> anyhow::Result<()> {
             .collect::<anyhow::Result<_>>()?;
         let points = read_points(&dir.join("points.csv"))?;
         let source = discover_frames(dir.join("frames").to_str().unwrap_or(""))?.source;
-        let bound = crlb_y(noise);
+        let bound = crlb_y(noise, texture);
         for (name, tracker, mode) in [
             (
                 "blob",
@@ -115,7 +131,7 @@ fn main() -> anyhow::Result<()> {
                 .collect();
             let mean = rms.iter().sum::<f64>() / rms.len() as f64;
             println!(
-                "| {noise} | {name} | {} | {mean:.4} | {bound:.4} | {:.1} |",
+                "| {noise} | {texture:?} | {name} | {} | {mean:.4} | {bound:.4} | {:.2} |",
                 rms.iter()
                     .map(|v| format!("{v:.4}"))
                     .collect::<Vec<_>>()

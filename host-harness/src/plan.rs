@@ -89,6 +89,7 @@ impl PlanInput {
                 radius_px: target_radius_px,
                 level: 200.0,
                 edge_sigma_px: 1.5,
+                texture: crate::model::Texture::Plain,
             },
             threshold_frac,
             fps,
@@ -637,6 +638,7 @@ mod tests {
             radius_px: 4.0,
             level: 200.0,
             edge_sigma_px: 0.8,
+            texture: crate::model::Texture::Plain,
         };
         let setup = TransferSetup::new(target, 150, Mode::Binary, 12.0);
         for e in [0.1, 0.15, 0.35, 0.5, 0.8] {

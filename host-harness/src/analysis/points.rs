@@ -217,9 +217,9 @@ pub enum PointTracker {
 }
 
 /// The host's capacities of a Lucas-Kanade window: pixels and row length.
-const LK_PIXELS: usize = 136 * 136;
-const LK_ROW: usize = 128 + 7;
-type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
+pub(crate) const LK_PIXELS: usize = 136 * 136;
+pub(crate) const LK_ROW: usize = 128 + 7;
+pub(crate) type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
 
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]

@@ -50,7 +50,8 @@ impl ExposureCorrection {
         for (a, w) in groups {
             let setup = TransferSetup {
                 frame_range_frac: measurement.frame_range_frac,
-                ..TransferSetup::new(target, threshold, measurement.centroid.mode(), a)
+                lk: measurement.tracker == crate::imaging::TrackerKind::Lk,
+                ..TransferSetup::new(target, threshold, measurement.tracker.mode(), a)
             };
             let t = correction_table::<TABLE_NODES>(&setup, TABLE_STEP)?;
             for (i, r) in ratios.iter_mut().enumerate() {
@@ -88,7 +89,7 @@ impl ExposureCorrection {
         match self {
             ExposureCorrection::Sinc => "weighted centroid: divided by sinc(pi f Te)".into(),
             ExposureCorrection::Table(_, a) => format!(
-                "divided by the centroid's transfer measured through the renderer at the \
+                "divided by the tracker's transfer measured through the renderer at the \
                  motion of a nominal record (input-energy weighted RMS amplitude {a:.2} px; \
                  {TABLE_NODES} nodes, E2PR step {TABLE_STEP})"
             ),

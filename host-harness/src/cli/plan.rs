@@ -215,6 +215,7 @@ fn resolve_target(args: &Args, base: Option<&PlanInput>) -> anyhow::Result<DiskT
             .edge_sigma_px
             .or(bt.map(|t| t.edge_sigma_px))
             .unwrap_or(1.5),
+        texture: crate::model::Texture::Plain,
     };
     check("--target-radius-px", target.radius_px, |v| v > 0.0, "> 0")?;
     let level_ok = |v: f64| v > 0.0 && v <= 255.0;

@@ -66,6 +66,19 @@ pub struct Args {
     /// targets on black.
     #[arg(long, value_enum, default_value_t = SceneArg::Plain, requires = "targets")]
     pub scene: SceneArg,
+    /// With --recording: what is painted on the targets: `plain` (default) or `speckle` (dark
+    /// dots on the disk: a texture for `--tracker lk`; docs/method.md §2.11).
+    #[arg(long, value_enum, default_value_t = TextureArg::Plain, requires = "recording")]
+    pub texture: TextureArg,
+}
+
+/// What is painted on the targets of a recording.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TextureArg {
+    /// A uniform disk.
+    Plain,
+    /// Dark speckle dots on the disk.
+    Speckle,
 }
 
 /// The scene around the targets of a recording.
@@ -100,6 +113,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         spec.read_noise = args.read_noise;
         spec.video = args.video;
         spec.cluttered = args.scene == SceneArg::Cluttered;
+        spec.target.texture = match args.texture {
+            TextureArg::Plain => crate::model::Texture::Plain,
+            TextureArg::Speckle => crate::model::Texture::Speckle,
+        };
         if args.targets.is_some() && args.preset != Preset::Cantilever {
             return Err(bad_input("--targets: only with --preset cantilever"));
         }

@@ -55,6 +55,8 @@ pub struct RecordingToml {
     pub level: f64,
     /// Target edge sigma, px.
     pub edge_sigma_px: f64,
+    /// What is painted on the target (`plain` or `speckle`).
+    pub texture: crate::model::Texture,
     /// Threshold of the `README.txt` command.
     pub threshold: u16,
     /// Frame width and height, px.

@@ -17,8 +17,9 @@
 //! quadrature component is zero; [`TransferPoint::quadrature`] reports it as a check.
 //! The odd harmonics the binary centroid creates are not in the ratio.
 
-use crate::imaging::{BlurRenderer, DiskTarget};
-use firmware_core::centroid::{centroid, CentroidConfig, Frame, Mode};
+use super::tracker::FrameTracker;
+use crate::imaging::{BlurRenderer, DiskTarget, TrackerKind};
+use firmware_core::centroid::Mode;
 use firmware_core::exposure::{CorrectionTable, TableError};
 
 /// What to measure the transfer of: target, centroid and motion.
@@ -30,6 +31,9 @@ pub struct TransferSetup {
     pub threshold: u16,
     /// Binary or weighted centroid.
     pub mode: Mode,
+    /// Track with Lucas-Kanade instead ([`super::tracker::FrameTracker`]; the binary centroid
+    /// at `threshold` places its window in the first frame of each E2PR's record).
+    pub lk: bool,
     /// Motion amplitude `A` (px, along the image `y` axis).
     pub amplitude_px: f64,
     /// Frames per period of the sinusoid (uniform phases; at least 8). Harmonic `m` of the
@@ -50,6 +54,7 @@ impl TransferSetup {
             target,
             threshold,
             mode,
+            lk: false,
             amplitude_px,
             frames_per_period: 64,
             path_steps_per_period: 1024,
@@ -188,16 +193,31 @@ pub fn transfer_curve(
             amp * (std::f64::consts::TAU * t).sin()
         })
         .collect();
-    let mut renderer = BlurRenderer::for_path(&setup.target, &path, 16);
+    // LK's window reaches as far as the longest blur (the sinusoid's largest excursion
+    // within an exposure, 2 A sin(pi E2PR) up to E2PR 1/2), and the frame holds it
+    let blur = |e: f64| 2.0 * amp * (std::f64::consts::PI * e.min(0.5)).sin();
+    let mut renderer = if setup.lk {
+        let extra = (blur(max_e) / 2.0).ceil() + 8.0;
+        let mut r = BlurRenderer::new(&setup.target, -amp - extra, amp + extra);
+        r.set_path(&path, 16);
+        r
+    } else {
+        BlurRenderer::for_path(&setup.target, &path, 16)
+    };
     let (w, h) = (renderer.width(), renderer.height());
     let mut frame = vec![0u8; w * h];
-    let config = CentroidConfig {
-        threshold: setup.threshold,
-        mode: setup.mode,
-        roi: None,
-        saturation: None,
-    }
-    .validate()
+    let kind = match (setup.lk, setup.mode) {
+        (true, _) => TrackerKind::Lk,
+        (false, Mode::Binary) => TrackerKind::Blob,
+        (false, Mode::Weighted) => TrackerKind::Weighted,
+    };
+    let mut tracker = FrameTracker::new(
+        kind,
+        setup.threshold,
+        setup.frame_range_frac,
+        &setup.target,
+        255,
+    )
     .map_err(|e| CompensationError::Setup(e.to_string()))?;
     let k = setup.frames_per_period;
     let mut out = Vec::with_capacity(e2prs.len());
@@ -206,21 +226,17 @@ pub fn transfer_curve(
         ts.clear();
         ys.clear();
         let half = 0.5 * e * p as f64;
+        tracker
+            .restart(blur(e))
+            .map_err(|e| CompensationError::Setup(e.to_string()))?;
         for j in 0..k {
             let t = j as f64 / k as f64;
             let centre = lead as f64 + t * p as f64;
             renderer.render(centre - half, centre + half, &mut frame);
-            let config = match setup.frame_range_frac {
-                None => config,
-                Some(frac) => CentroidConfig {
-                    threshold: super::effects::frame_range_threshold(&frame, frac),
-                    ..config
-                },
-            };
-            let c = Frame::new(&frame, w, h, w)
-                .and_then(|f| centroid(&config, &f))
+            let c = tracker
+                .measure(&frame, w, h)
                 .map_err(|e| CompensationError::Setup(format!("frame: {e}")))?;
-            if let Some((_, cy)) = c.position() {
+            if let Some((_, cy)) = c {
                 ts.push(t);
                 ys.push(cy as f64);
             }
@@ -429,14 +445,14 @@ mod tests {
         let mut r = BlurRenderer::for_path(&setup.target, &path, 10);
         let (w, h) = (r.width(), r.height());
         let mut frame = vec![0u8; w * h];
-        let config = CentroidConfig::binary(100);
+        let config = firmware_core::centroid::CentroidConfig::binary(100);
         let half = 0.5 * te * fine;
         let y: Vec<f64> = (0..n)
             .map(|j| {
                 let c = (margin + 20 * j) as f64;
                 r.render(c - half, c + half, &mut frame);
-                Frame::new(&frame, w, h, w)
-                    .and_then(|f| centroid(&config, &f))
+                firmware_core::centroid::Frame::new(&frame, w, h, w)
+                    .and_then(|f| firmware_core::centroid::centroid(&config, &f))
                     .unwrap()
                     .cy as f64
             })
@@ -469,6 +485,31 @@ mod tests {
         assert!((fixed / amp - 1.0).abs() < 2e-3, "compensated {fixed}");
         // bins above 0.8 / 0.18 = 4.44 Hz are left alone: |k| > 44.4
         assert_eq!(report.first_uncorrected, Some(45));
+    }
+
+    #[test]
+    fn lucas_kanade_loses_the_exposure_sinc_to_first_order_and_never_a_frame() {
+        // a gradient tracker's estimate is, to first order in the blur, the exposure-averaged
+        // position (linear in the image), so its transfer follows sinc(pi E2PR) at a small
+        // motion; at larger ones the template's own blur (the record's first frame) shapes it.
+        // The blurred template never matches the frames exactly: every frame must still settle
+        for (amp, tolerance) in [(1.0, 0.02), (8.0, 0.05), (16.0, 0.2)] {
+            let setup = TransferSetup {
+                lk: true,
+                ..TransferSetup::new(TARGET, 100, Mode::Binary, amp)
+            };
+            for p in transfer_curve(&setup, &[0.1, 0.2, 0.4]).unwrap() {
+                let want = sinc_pi(p.e2pr as f32) as f64;
+                assert_eq!(p.lost_frames, 0, "{amp} px, E2PR {}", p.e2pr);
+                assert!(
+                    (p.ratio - want).abs() < tolerance,
+                    "{amp} px, E2PR {}: {} vs sinc {want}",
+                    p.e2pr,
+                    p.ratio
+                );
+                assert!(p.quadrature.abs() < 1e-3, "{p:?}");
+            }
+        }
     }
 
     #[test]

@@ -9,20 +9,22 @@
 //! way, so the same scene gives the same centroid at any bit depth without noise.
 
 use super::render::BlurRenderer;
+use super::tracker::FrameTracker;
 use super::ImagingOptions;
-use firmware_core::centroid::{centroid, Centroid, CentroidConfig, Frame, FrameError};
+use firmware_core::centroid::FrameError;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
 /// One simulated camera: EPSA exposure of a [`BlurRenderer`] path, the [`Effects`] and the
-/// firmware's binary centroid, with its frame buffers reused between frames. Identity effects
-/// take the fast path (8-bit render, `centroid_u8`); otherwise the float frame goes through
-/// [`Effects::apply`] and [`Effects::quantise`] to a `centroid_u16` at the scaled threshold.
+/// firmware's measurement ([`FrameTracker`]: a centroid or Lucas-Kanade), with its frame
+/// buffers reused between frames. Identity effects give 8-bit frames (and the binary centroid
+/// of a plain disk the fast path); otherwise the float frame goes through [`Effects::apply`]
+/// and [`Effects::quantise`] to codes of the bit depth, the threshold scaled alike.
 #[derive(Debug)]
 pub struct Camera {
     effects: Effects,
     measurement: Measurement,
-    config: CentroidConfig,
+    tracker: FrameTracker,
     plain: bool,
     w: usize,
     h: usize,
@@ -38,37 +40,40 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// A `w x h` camera with `effects`, measuring with `measurement` at the threshold
-    /// `threshold` on the 8-bit scale. With effects, the seed of its noise streams is drawn
-    /// from `rng` (nothing is drawn otherwise, so the identity camera leaves a run's stream as
-    /// it was).
+    /// A `w x h` camera looking at `target` with `effects`, measuring with `measurement` at the
+    /// threshold `threshold` on the 8-bit scale. With effects, the seed of its noise streams
+    /// is drawn from `rng` (nothing is drawn otherwise, so the identity camera leaves a run's
+    /// stream as it was). Refused when the tracker cannot hold the target's window.
     pub fn new(
         effects: &Effects,
         measurement: &Measurement,
-        threshold: u16,
+        (target, threshold): (&super::DiskTarget, u16),
         w: usize,
         h: usize,
         rng: &mut impl Rng,
-    ) -> Camera {
+    ) -> anyhow::Result<Camera> {
         let plain = effects.is_identity();
         let noise_seed: u64 = if plain { 0 } else { rng.random() };
-        let config = CentroidConfig {
-            mode: measurement.centroid.mode(),
-            ..CentroidConfig::binary(if plain {
+        let tracker = FrameTracker::new(
+            measurement.tracker,
+            if plain {
                 threshold
             } else {
                 effects.threshold(threshold)
-            })
-        };
+            },
+            measurement.frame_range_frac,
+            target,
+            effects.full_scale() as u16,
+        )?;
         let (fimg, frame16) = if plain {
             (Vec::new(), Vec::new())
         } else {
             (vec![0.0f32; w * h], vec![0u16; w * h])
         };
-        Camera {
+        Ok(Camera {
             effects: effects.clone(),
             measurement: *measurement,
-            config,
+            tracker,
             plain,
             w,
             h,
@@ -79,69 +84,62 @@ impl Camera {
             noise_seed,
             noise: rand_chacha::ChaCha8Rng::seed_from_u64(noise_seed),
             fast: None,
-        }
+        })
     }
 
     /// Uses the fast path ([`super::fastpath::FastDiskCamera`]: the binary centroid of the EPSA
     /// frame computed from the rows that matter, the same pixels as rendering the frame) for
-    /// `target` seen by `renderer`, when the effects are the identity; otherwise nothing changes.
-    pub fn use_fast_path(&mut self, target: &super::DiskTarget, renderer: &BlurRenderer) {
+    /// `target` seen by `renderer`, when the effects are the identity and the firmware takes
+    /// the binary centroid at a fixed threshold; otherwise nothing changes.
+    pub fn use_fast_path(
+        &mut self,
+        target: &super::DiskTarget,
+        threshold: u16,
+        renderer: &BlurRenderer,
+    ) {
         if self.plain
             && self.measurement.fast_path
             && self.measurement.frame_range_frac.is_none()
-            && self.config.mode == firmware_core::centroid::Mode::Binary
+            && self.measurement.tracker == super::TrackerKind::Blob
         {
             self.fast = Some(super::fastpath::FastDiskCamera::new(
-                target,
-                renderer,
-                self.config.threshold,
+                target, renderer, threshold,
             ));
         }
     }
 
-    /// Starts the noise stream of exposure `index`: every exposure of a run gets its own
-    /// stream of the run's noise seed, so the exposures do not depend on each other's draws.
-    pub fn start_exposure(&mut self, index: usize) {
+    /// Starts exposure `index`'s record, whose longest blur is `blur_px` (the largest path
+    /// range within one exposure; only LK's window uses it): every exposure of a run gets its
+    /// own stream of the run's noise seed, so the exposures do not depend on each other's
+    /// draws, and the tracker starts afresh (LK's template is the record's first frame).
+    pub fn start_exposure(&mut self, index: usize, blur_px: f64) -> anyhow::Result<()> {
         self.noise = rand_chacha::ChaCha8Rng::seed_from_u64(self.noise_seed);
         self.noise.set_stream(index as u64);
+        self.tracker.restart(blur_px)
     }
 
     /// Exposes the path from `a` to `b` (renderer steps), applies the effects (noise from the
-    /// current exposure's stream) and centroids the frame.
+    /// current exposure's stream) and measures the frame: the target's position `(x, y)`, px,
+    /// `None` when it is lost.
     pub fn frame(
         &mut self,
         renderer: &mut BlurRenderer,
         a: f64,
         b: f64,
-    ) -> Result<Centroid, FrameError> {
+    ) -> Result<Option<(f32, f32)>, FrameError> {
         let (w, h) = (self.w, self.h);
         if let Some(fast) = &mut self.fast {
-            return fast.frame(renderer, a, b);
+            return Ok(fast.frame(renderer, a, b)?.position());
         }
         if self.plain {
             renderer.render(a, b, &mut self.frame);
-            let config = self.config_for(&self.frame);
-            Frame::new(&self.frame, w, h, w).and_then(|f| centroid(&config, &f))
+            self.tracker.measure(&self.frame, w, h)
         } else {
             renderer.render_float(a, b, &mut self.fimg);
             self.effects
                 .apply(&mut self.fimg, w, h, &mut self.noise, &mut self.scratch);
             self.effects.quantise(&self.fimg, &mut self.frame16);
-            let config = self.config_for(&self.frame16);
-            Frame::new(&self.frame16, w, h, w).and_then(|f| centroid(&config, &f))
-        }
-    }
-
-    /// The centroid settings for this frame: the fixed threshold, or with a frame-range rule
-    /// `min + frac (max - min)` of the frame's grey levels (rounded down; a flat frame gets its
-    /// one level, so nothing is above it and the frame is lost).
-    fn config_for<P: Copy + Into<u32>>(&self, frame: &[P]) -> CentroidConfig {
-        match self.measurement.frame_range_frac {
-            None => self.config,
-            Some(frac) => CentroidConfig {
-                threshold: frame_range_threshold(frame, frac),
-                ..self.config
-            },
+            self.tracker.measure(&self.frame16, w, h)
         }
     }
 }
@@ -163,8 +161,8 @@ pub fn frame_range_threshold<P: Copy + Into<u32>>(frame: &[P], frac: f64) -> u16
 /// pixels either way), and the threshold rule.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Measurement {
-    /// The firmware's centroid.
-    pub centroid: super::CentroidKind,
+    /// What the firmware measures in each frame.
+    pub tracker: super::TrackerKind,
     /// Whether identity effects with the binary centroid take the fast path.
     pub fast_path: bool,
     /// With [`super::ThresholdRule::FrameRange`], the fraction of each frame's grey-level range
@@ -175,8 +173,19 @@ pub struct Measurement {
 impl Measurement {
     /// Resolves and checks the options; the message names the field.
     pub fn from_options(o: &ImagingOptions) -> anyhow::Result<Measurement> {
+        let tracker = match (o.tracker, o.centroid.map(super::TrackerKind::of_centroid)) {
+            (Some(t), Some(c)) if t != c => {
+                return Err(crate::bad_input(format!(
+                    "imaging.tracker = \"{}\" and imaging.centroid = \"{}\" disagree: give \
+                     tracker alone (centroid is its older name)",
+                    t.name(),
+                    c.name()
+                )))
+            }
+            (t, c) => t.or(c).unwrap_or_default(),
+        };
         let m = Measurement {
-            centroid: o.centroid.unwrap_or_default(),
+            tracker,
             fast_path: o.fast_path.unwrap_or(true),
             frame_range_frac: match o.threshold_rule.unwrap_or_default() {
                 super::ThresholdRule::Fixed => None,
@@ -198,7 +207,7 @@ impl Default for Measurement {
     /// The binary centroid at a fixed threshold, fast path allowed.
     fn default() -> Measurement {
         Measurement {
-            centroid: super::CentroidKind::default(),
+            tracker: super::TrackerKind::default(),
             fast_path: true,
             frame_range_frac: None,
         }
@@ -540,11 +549,11 @@ mod tests {
     #[test]
     fn a_frame_range_threshold_keeps_a_smeared_target_a_fixed_one_loses() {
         use super::super::{DiskTarget, ThresholdRule};
-        use firmware_core::centroid::Flags;
         let target = DiskTarget {
             radius_px: 3.0,
             level: 200.0,
             edge_sigma_px: 0.7,
+            texture: crate::model::Texture::Plain,
         };
         let path: Vec<f64> = (0..=400).map(|i| i as f64 * 0.1).collect();
         let mut renderer = BlurRenderer::for_path(&target, &path, 1);
@@ -553,9 +562,10 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(1);
             let fixed = effects(|o| o.bits = Some(bits));
             let fixed_rule = Measurement::default();
-            let mut camera = Camera::new(&fixed, &fixed_rule, 100, w, h, &mut rng);
+            let mut camera =
+                Camera::new(&fixed, &fixed_rule, (&target, 100), w, h, &mut rng).unwrap();
             let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
-            assert!(c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
+            assert!(c.is_none(), "{bits} bits: {c:?}");
             let range_options = ImagingOptions {
                 bits: Some(bits),
                 threshold_rule: Some(ThresholdRule::FrameRange),
@@ -564,11 +574,14 @@ mod tests {
             let range = Effects::from_options(&range_options).unwrap();
             let range_rule = Measurement::from_options(&range_options).unwrap();
             assert_eq!(range.is_identity(), bits == 8);
-            let mut camera = Camera::new(&range, &range_rule, 100, w, h, &mut rng);
-            camera.use_fast_path(&target, &renderer);
+            let mut camera =
+                Camera::new(&range, &range_rule, (&target, 100), w, h, &mut rng).unwrap();
+            camera.use_fast_path(&target, 100, &renderer);
             let c = camera.frame(&mut renderer, 0.0, 400.0).unwrap();
-            assert!(!c.flags.contains(Flags::EMPTY), "{bits} bits: {c:?}");
-            let y = c.cy as f64 - rest_y;
+            let Some((_, cy)) = c else {
+                panic!("{bits} bits: lost")
+            };
+            let y = cy as f64 - rest_y;
             assert!(
                 (y - 20.0).abs() < 0.5,
                 "{bits} bits: centroid {y} px, path middle 20"
@@ -576,7 +589,8 @@ mod tests {
             // a short exposure sees the whole target: range 0..200, the same threshold of 100
             // as the fixed rule and the same centroid
             let short = camera.frame(&mut renderer, 0.0, 1.0).unwrap();
-            let mut camera = Camera::new(&fixed, &fixed_rule, 100, w, h, &mut rng);
+            let mut camera =
+                Camera::new(&fixed, &fixed_rule, (&target, 100), w, h, &mut rng).unwrap();
             assert_eq!(short, camera.frame(&mut renderer, 0.0, 1.0).unwrap());
         }
         let bad = Measurement::from_options(&ImagingOptions {

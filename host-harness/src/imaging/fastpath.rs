@@ -166,7 +166,9 @@ impl FastDiskCamera {
         let r_in = radius_at(target, decision + MARGIN);
         let r_out = radius_at(target, decision - MARGIN);
         // no 255 pixel (SATURATED flag) can occur, and the threshold is inside the profile
+        // (a speckled target is not a disk's level set: rendered)
         let mut enabled = threshold < 255
+            && target.is_symmetric()
             && target.level + MARGIN < 254.5
             && decision - MARGIN > 0.0
             && r_out.is_some();
@@ -638,6 +640,7 @@ mod tests {
                 radius_px: radius,
                 level,
                 edge_sigma_px: sigma,
+                texture: crate::model::Texture::Plain,
             };
             let path = random_path(&mut rng, 2000, 15.0);
             let mut renderer = BlurRenderer::for_path(&target, &path, 10);

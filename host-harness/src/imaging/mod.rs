@@ -13,6 +13,7 @@ pub mod compensation;
 pub mod effects;
 pub mod fastpath;
 pub mod render;
+pub mod tracker;
 
 pub use crate::model::DiskTarget;
 pub use effects::{Camera, Effects, Measurement};
@@ -73,6 +74,48 @@ impl CentroidKind {
         match self {
             CentroidKind::Binary => "binary",
             CentroidKind::Weighted => "weighted",
+        }
+    }
+}
+
+/// What the camera's firmware measures in each frame (`[imaging] tracker` of a study file;
+/// [`tracker::FrameTracker`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum TrackerKind {
+    /// The binary centroid above the threshold (the paper's method; the default).
+    #[default]
+    Blob,
+    /// The intensity-weighted centroid above the threshold.
+    Weighted,
+    /// Lucas-Kanade: the displacement of the first frame's window around the target.
+    Lk,
+}
+
+impl TrackerKind {
+    /// `blob`, `weighted` or `lk`.
+    pub fn name(self) -> &'static str {
+        match self {
+            TrackerKind::Blob => "blob",
+            TrackerKind::Weighted => "weighted",
+            TrackerKind::Lk => "lk",
+        }
+    }
+
+    /// The tracker a centroid names (`centroid = "binary" | "weighted"`, the older field).
+    pub fn of_centroid(c: CentroidKind) -> TrackerKind {
+        match c {
+            CentroidKind::Binary => TrackerKind::Blob,
+            CentroidKind::Weighted => TrackerKind::Weighted,
+        }
+    }
+
+    /// The centroid's mode: binary for `blob` (and for `lk`, whose window the binary centroid
+    /// places in the first frame), weighted for `weighted`.
+    pub fn mode(self) -> firmware_core::centroid::Mode {
+        match self {
+            TrackerKind::Weighted => firmware_core::centroid::Mode::Weighted,
+            TrackerKind::Blob | TrackerKind::Lk => firmware_core::centroid::Mode::Binary,
         }
     }
 }
@@ -151,8 +194,15 @@ pub struct ImagingOptions {
     pub shot_noise_e_per_level: Option<f64>,
     /// Quantisation bit depth (8, 12 or 16); 8 when absent.
     pub bits: Option<u32>,
-    /// The firmware's centroid; binary when absent.
+    /// What the firmware measures in each frame: `blob` (the binary centroid), `weighted` or
+    /// `lk`; blob when absent.
+    pub tracker: Option<TrackerKind>,
+    /// The older name of `tracker` for the centroids (`binary` = `blob`, `weighted`), still
+    /// accepted; both given must agree.
     pub centroid: Option<CentroidKind>,
+    /// What is painted on the target: `plain` (the default) or `speckle` (a texture for the
+    /// gradient tracker).
+    pub target_texture: Option<crate::model::Texture>,
     /// Whether identity-effect binary-centroid frames take the fast path
     /// ([`fastpath`], the same pixels as rendering them); true when
     /// absent. `false` renders every frame (the reference, about 4 times slower), e.g. to check
@@ -190,6 +240,9 @@ impl ImagingOptions {
     ) -> anyhow::Result<(DiskTarget, u16)> {
         let bad = |f: &str, why: &str| crate::bad_input(format!("imaging.{f}: {why}"));
         let mut t = target;
+        if let Some(texture) = self.target_texture {
+            t.texture = texture;
+        }
         if let Some(r) = self.target_radius_px {
             if !(r.is_finite() && (1.0..=100.0).contains(&r)) {
                 return Err(bad("target_radius_px", "must be between 1 and 100 px"));
@@ -334,6 +387,7 @@ mod tests {
             radius_px: 12.0,
             level: 200.0,
             edge_sigma_px: 1.5,
+            texture: crate::model::Texture::Plain,
         };
         let o = ImagingOptions::default();
         assert_eq!(o.target_and_threshold(rig, 100).unwrap(), (rig, 100));

@@ -38,7 +38,11 @@ pub struct BlurRenderer {
     rest_y: f64,
     /// Columns `rest_x - half_cols ..= rest_x + half_cols` hold the target.
     half_cols: usize,
-    /// Reference column spectra for columns `rest_x + j`, `j = 0 ..= half_cols` (bins 0..=H/2).
+    /// Whether the target is symmetric about its centre column (then only the columns right
+    /// of it are transformed, each put on both sides).
+    symmetric: bool,
+    /// Reference column spectra (bins 0..=H/2): for columns `rest_x + j`, `j = 0 ..= half_cols`
+    /// of a symmetric target, else for columns `rest_x - half_cols + i`, `i = 0 ..= 2 half_cols`.
     spectra: Vec<Vec<Complex32>>,
     ifft: Arc<dyn ComplexToReal<f32>>,
     // per-frame work buffers
@@ -131,13 +135,18 @@ impl BlurRenderer {
         let fwd = planner.plan_fft_forward(height);
         let ifft = planner.plan_fft_inverse(height);
         let bins = height / 2 + 1;
-        let mut spectra = Vec::with_capacity(half_cols + 1);
+        // a symmetric target needs the columns right of its centre only
+        let first = if target.is_symmetric() {
+            0
+        } else {
+            -(half_cols as i64)
+        };
+        let mut spectra = Vec::with_capacity(2 * half_cols + 1);
         let mut col = vec![0.0f32; height];
-        for j in 0..=half_cols {
+        for j in first..=half_cols as i64 {
             let dx = j as f64;
             for (y, v) in col.iter_mut().enumerate() {
-                let dy = y as f64 - rest_y;
-                *v = target.profile((dx * dx + dy * dy).sqrt()) as f32;
+                *v = target.value(dx, y as f64 - rest_y) as f32;
             }
             let mut s = vec![Complex32::new(0.0, 0.0); bins];
             let mut input = col.clone();
@@ -152,6 +161,7 @@ impl BlurRenderer {
             rest_x,
             rest_y,
             half_cols,
+            symmetric: target.is_symmetric(),
             spectra,
             ifft,
             ramp: vec![Complex32::new(0.0, 0.0); bins],
@@ -261,7 +271,9 @@ impl BlurRenderer {
     }
 
     /// Reference spectrum (bins `0 ..= H/2`, forward real FFT of the sharp column at rest) of
-    /// column `rest_x + j` and `rest_x - j`, `j = 0 ..= half_cols`.
+    /// column `rest_x + j` and `rest_x - j`, `j = 0 ..= half_cols`, of a target symmetric about
+    /// its centre column ([`DiskTarget::is_symmetric`]; of another, the spectrum of column
+    /// `rest_x - half_cols + j`).
     pub fn column_spectrum(&self, j: usize) -> &[Complex32] {
         &self.spectra[j]
     }
@@ -300,12 +312,12 @@ impl BlurRenderer {
         (lo, hi)
     }
 
-    /// Inverse-transforms every target column (spectrum x ramp) and hands it to `put` for both
-    /// mirror columns.
+    /// Inverse-transforms every target column (spectrum x ramp) and hands it to `put` (for
+    /// both mirror columns of a symmetric target).
     fn columns(&mut self, mut put: impl FnMut(usize, &[f32])) {
         let scale = 1.0 / self.height as f32;
         let last = self.spec.len() - 1;
-        for j in 0..=self.half_cols {
+        for j in 0..self.spectra.len() {
             for ((s, r), f) in self.spec.iter_mut().zip(&self.ramp).zip(&self.spectra[j]) {
                 *s = f * r * scale;
             }
@@ -317,9 +329,13 @@ impl BlurRenderer {
             let _ =
                 self.ifft
                     .process_with_scratch(&mut self.spec, &mut self.column, &mut self.scratch);
-            put(self.rest_x + j, &self.column);
-            if j > 0 {
-                put(self.rest_x - j, &self.column);
+            if self.symmetric {
+                put(self.rest_x + j, &self.column);
+                if j > 0 {
+                    put(self.rest_x - j, &self.column);
+                }
+            } else {
+                put(self.rest_x - self.half_cols + j, &self.column);
             }
         }
     }
@@ -482,6 +498,34 @@ mod tests {
         }
         // the phase-shifted band-limited image equals the image drawn at the shifted centre
         assert!(worst < 0.02, "max deviation {worst} grey levels");
+    }
+
+    #[test]
+    fn sharp_speckled_frame_matches_the_analytic_pattern() {
+        // not symmetric about its centre column: every column is transformed
+        let t = crate::model::DiskTarget {
+            texture: crate::model::Texture::Speckle,
+            ..TARGET
+        };
+        let mut r = BlurRenderer::new(&t, -10.0, 10.0);
+        let (w, h) = (r.width(), r.height());
+        let mut img = vec![0.0f32; w * h];
+        r.set_path(&[-3.6], 1);
+        r.render_float(0.0, 0.0, &mut img);
+        let (cx, cy) = (r.rest_x(), r.rest_y() - 3.6);
+        let (mut worst, mut range) = (0.0f64, (f64::MAX, f64::MIN));
+        for y in 0..h {
+            for x in 0..w {
+                let want = t.value(x as f64 - cx, y as f64 - cy);
+                worst = worst.max((img[y * w + x] as f64 - want).abs());
+                if (x as f64 - cx).hypot(y as f64 - cy) < t.radius_px - 2.0 {
+                    range = (range.0.min(want), range.1.max(want));
+                }
+            }
+        }
+        assert!(worst < 0.05, "max deviation {worst} grey levels");
+        // and the pattern is there: dark dots on the bright paint
+        assert!(range.1 - range.0 > 0.5 * t.level, "{range:?}");
     }
 
     #[test]

@@ -35,6 +35,7 @@ pub const TARGET: DiskTarget = DiskTarget {
     radius_px: 10.0,
     level: 255.0,
     edge_sigma_px: 0.5,
+    texture: crate::model::Texture::Plain,
 };
 /// Binary centroid threshold: half the target level.
 pub const THRESHOLD: u16 = 127;

@@ -43,6 +43,7 @@ pub const TARGET: DiskTarget = DiskTarget {
     radius_px: 12.0,
     level: 200.0,
     edge_sigma_px: 1.5,
+    texture: crate::model::Texture::Plain,
 };
 /// Binary centroid threshold (grey levels).
 pub const THRESHOLD: u16 = 100;

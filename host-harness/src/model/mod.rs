@@ -14,7 +14,7 @@ pub mod cantilever;
 pub mod grandstand;
 pub mod target;
 
-pub use target::DiskTarget;
+pub use target::{DiskTarget, Texture};
 
 use crate::bad_input;
 use num_complex::Complex64;

@@ -288,6 +288,7 @@ impl RecordingToml {
             radius_px: spec.target.radius_px,
             level: spec.target.level,
             edge_sigma_px: spec.target.edge_sigma_px,
+            texture: spec.target.texture,
             threshold: spec.threshold,
             frame_size: [frame_size.0, frame_size.1],
             read_noise: spec.read_noise,

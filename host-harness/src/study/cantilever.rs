@@ -314,6 +314,42 @@ mod tests {
     }
 
     #[test]
+    fn lucas_kanade_on_a_plain_or_speckled_target_measures_what_the_weighted_centroid_does() {
+        // the same runs at 2 ms (blur 0.9 % of mode 2's period): the trackers see the same
+        // motion, so their chi_mu agree to the quantisation noise; the speckled target is not
+        // symmetric and takes the general renderer, and the binary centroid still places LK's
+        // window on it
+        let weighted = chi_mu_at_2ms(weighted_at_2ms(4));
+        for texture in [crate::model::Texture::Plain, crate::model::Texture::Speckle] {
+            let mut cfg = weighted_at_2ms(4);
+            cfg.imaging.centroid = None;
+            cfg.imaging.tracker = Some(crate::imaging::TrackerKind::Lk);
+            cfg.imaging.target_texture = Some(texture);
+            let lk = chi_mu_at_2ms(cfg);
+            for (mode, (a, b)) in weighted.iter().zip(&lk).enumerate() {
+                assert!(
+                    (a / b - 1.0).abs() < 0.003,
+                    "{texture:?}, mode {}: weighted {a}, lk {b}",
+                    mode + 1
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn tracker_and_its_older_name_centroid_must_agree() {
+        let mut cfg = weighted_at_2ms(1);
+        cfg.imaging.tracker = Some(crate::imaging::TrackerKind::Weighted);
+        assert!(Cantilever::new(&cfg).is_ok());
+        cfg.imaging.tracker = Some(crate::imaging::TrackerKind::Lk);
+        let e = Cantilever::new(&cfg).unwrap_err().to_string();
+        assert!(
+            e.contains("imaging.tracker") && e.contains("imaging.centroid"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn an_upright_beams_tilting_accelerometer_lowers_mode_1_six_times_more_than_mode_2() {
         // the same runs with the beam horizontal and upright (weighted centroid: no
         // quantisation noise): the camera sees the same motion, the tip accelerometer over-reads

@@ -160,8 +160,9 @@ pub fn boxed_welch<const NPERSEG: usize, const NFFT: usize, const SCRATCH: usize
     ))
 }
 
-/// The vision system at one exposure, as every scenario runs it: centroids frame `k` of
-/// `0..disp.len()` with `centroid(k)`, turns the centroid row `cy` (px) into the displacement
+/// The vision system at one exposure, as every scenario runs it: measures frame `k` of
+/// `0..disp.len()` with `centroid(k)` (the target's position, `None` when lost), turns its row
+/// `cy` (px) into the displacement
 /// with `to_disp`, fills the lost frames (`policy`, [`fill_lost_frames_with`]) and, unless too many of them were lost
 /// ([`crate::chain::displacement::MAX_LOST_FRACTION`]), measures the filled record (as `f32`) with
 /// `measure`. `disp` and `valid` are the caller's buffers, reused across exposures; `bands` is
@@ -173,14 +174,14 @@ pub fn measure_vision<E: std::fmt::Display>(
     disp: &mut [f64],
     valid: &mut [bool],
     bands: usize,
-    mut centroid: impl FnMut(usize) -> Result<firmware_core::centroid::Centroid, E>,
+    mut centroid: impl FnMut(usize) -> Result<Option<(f32, f32)>, E>,
     to_disp: impl Fn(f32) -> f64,
     measure: impl FnOnce(&[f32]) -> anyhow::Result<SystemRecord>,
 ) -> anyhow::Result<VisionRecord> {
     let frames = disp.len();
     for k in 0..frames {
         let c = centroid(k).map_err(|e| anyhow::anyhow!("frame {k}: {e}"))?;
-        match c.position() {
+        match c {
             Some((_, cy)) => {
                 disp[k] = to_disp(cy);
                 valid[k] = true;
@@ -237,17 +238,44 @@ impl Filming<'_> {
     ) -> anyhow::Result<Vec<VisionRecord>> {
         let mut renderer =
             crate::imaging::BlurRenderer::for_path(self.target, &path.path_px, self.block);
+        let im = self.imaging;
+        // LK's template window reaches as far as the record's longest blur: each exposure's,
+        // and a frame tall enough for the longest
+        let lk = im.measurement.tracker == crate::imaging::TrackerKind::Lk;
+        let blur: Vec<f64> = exposures_ms
+            .iter()
+            .map(|&exp| {
+                (0..frames * usize::from(lk))
+                    .map(|k| {
+                        let (a, b) = path.aligned_window(k, exp, im.alignment);
+                        let (lo, hi) = renderer.path_range(a, b);
+                        hi - lo
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        if lk {
+            let (lo, hi) = renderer.path_range(0.0, path.path_px.len() as f64);
+            let extra = (blur.iter().fold(0.0, |m: f64, b| m.max(*b)) / 2.0).ceil() + 8.0;
+            renderer = crate::imaging::BlurRenderer::new(self.target, lo - extra, hi + extra);
+            renderer.set_path(&path.path_px, self.block);
+        }
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
-        let im = self.imaging;
-        let mut camera =
-            crate::imaging::Camera::new(&im.effects, &im.measurement, self.threshold, w, h, rng);
-        camera.use_fast_path(self.target, &renderer);
+        let mut camera = crate::imaging::Camera::new(
+            &im.effects,
+            &im.measurement,
+            (self.target, self.threshold),
+            w,
+            h,
+            rng,
+        )?;
+        camera.use_fast_path(self.target, self.threshold, &renderer);
         let mut disp = vec![0.0f64; frames];
         let mut valid = vec![false; frames];
         let mut vision = Vec::with_capacity(exposures_ms.len());
         for (ei, &exp) in exposures_ms.iter().enumerate() {
-            camera.start_exposure(ei);
+            camera.start_exposure(ei, blur[ei])?;
             vision.push(measure_vision(
                 exp,
                 self.imaging.lost_frame_policy,
