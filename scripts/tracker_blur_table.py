@@ -7,7 +7,7 @@ the run-to-run scatter and the shortest 95 % coverage interval of one run's rati
 compensated. Prints the Markdown table of docs/method.md §2.11.
 
     cargo build --release -p host-harness
-    python3 scripts/tracker_blur_table.py [RUNS] [OUT_DIR]     # 200 runs: about 7 minutes
+    python3 scripts/tracker_blur_table.py [RUNS] [OUT_DIR]     # 200 runs: about 10 minutes
 
 Only the standard library; the studies are the `host-harness study` command.
 """
