@@ -603,6 +603,31 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
 
     /// Tracks the template in `frame` (see the module documentation).
     pub fn track<P: Pixel>(&mut self, frame: &Frame<'_, P>) -> LkResult {
+        self.track_from(frame, None, self.config.search)
+    }
+
+    /// [`track`](Self::track) from `start` (a displacement since the reference frame; `None`:
+    /// the constant-velocity prediction) with a coarse search of `+-search` px (0: none)
+    /// instead of the configured one: what a caller that knows more than this target's own
+    /// past uses, e.g. the motion shared by several targets that move together.
+    pub fn track_from<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        start: Option<(f32, f32)>,
+        search: u16,
+    ) -> LkResult {
+        let configured = self.config.search;
+        self.config.search = search;
+        let out = self.track_inner(frame, start);
+        self.config.search = configured;
+        out
+    }
+
+    fn track_inner<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        given: Option<(f32, f32)>,
+    ) -> LkResult {
         let mut out = LkResult {
             dx: 0.0,
             dy: 0.0,
@@ -621,8 +646,18 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             0 => P::FULL,
             s => s,
         };
-        // constant-velocity prediction from the last two tracked frames (none after a loss)
-        let mut start = (self.p.0 + self.v.0, self.p.1 + self.v.1);
+        // constant-velocity prediction from the last two tracked frames (none after a loss),
+        // unless the caller gives the start
+        let mut start = match given {
+            Some((dx, dy)) if dx.is_finite() && dy.is_finite() => {
+                (dx - self.base.0, dy - self.base.1)
+            }
+            Some(_) => {
+                out.flags = Flags::DIVERGED;
+                return out;
+            }
+            None => (self.p.0 + self.v.0, self.p.1 + self.v.1),
+        };
         let mut first = self.refine(frame, start, sat, &mut out);
         if first == Err(Flags::BORDER) && start != self.p {
             // the prediction overshoots past the frame's edge: start where the target was
@@ -733,6 +768,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     ) -> Result<((f32, f32), f32, bool), Flags> {
         let mut step = f32::INFINITY;
         let mut score = 0.0;
+        let from = p;
         for _ in 0..self.config.max_iterations {
             out.iterations = out.iterations.saturating_add(1);
             let (b, s) = if self.config.interpolation == Interpolation::Spline {
@@ -751,9 +787,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             if step < self.config.tolerance {
                 break;
             }
-            // a refinement that runs away (more than the window) has lost the target
-            if fabsf(p.0 - self.p.0) > f32::from(self.config.width) + f32::from(self.config.search)
-                || fabsf(p.1 - self.p.1)
+            // a refinement that runs away from its start (more than the window) has lost the
+            // target
+            if fabsf(p.0 - from.0) > f32::from(self.config.width) + f32::from(self.config.search)
+                || fabsf(p.1 - from.1)
                     > f32::from(self.config.height) + f32::from(self.config.search)
             {
                 return Err(Flags::DIVERGED);
@@ -1336,6 +1373,24 @@ mod tests {
             }
             last = Some(my);
         }
+    }
+
+    #[test]
+    fn a_start_given_far_from_the_last_position_is_refined_there() {
+        // what a caller that knows the shared motion of several targets does: the target
+        // jumped 20.4 px, further than the refinement reaches and with no search of its own
+        let mut t = tracker(0, Interpolation::Spline);
+        let img = speckle(20.4, -12.3, 200.0);
+        assert!(t.track(&frame(&img)).displacement().is_none());
+        let r = t.track_from(&frame(&img), Some((19.0, -11.0)), 3);
+        let (x, y) = r.displacement().expect("tracked from the given start");
+        assert!((x - 20.4).abs() < 0.01 && (y + 12.3).abs() < 0.01, "{r:?}");
+        // the configured search is back
+        assert_eq!(t.config().search, 0);
+        assert!(t
+            .track_from(&frame(&img), Some((f32::NAN, 0.0)), 3)
+            .displacement()
+            .is_none());
     }
 
     #[test]

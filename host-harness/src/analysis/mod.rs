@@ -37,6 +37,7 @@ pub mod modal;
 pub mod points;
 pub mod report;
 pub mod run;
+pub mod shared_motion;
 pub mod targets;
 pub mod targets_run;
 pub mod track_run;

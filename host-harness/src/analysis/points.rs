@@ -3,7 +3,8 @@
 //! threshold. Nothing outside a window is ever looked at, so a bright wall, a phone or a hand
 //! elsewhere in a cluttered scene cannot be taken for a target.
 //!
-//! The file: header `target,x,y,w,h` and optionally `threshold`; `target` the integers 1..K,
+//! The file: header `target,x,y,w,h` and optionally `threshold` and `group` (a whole number:
+//! targets that move together, used by `--tracker lk`); `target` the integers 1..K,
 //! each once; `x, y` the target's centre in the first frame, px (origin at the centre of the
 //! top-left pixel, x right, y down; fractions allowed); `w, h` the window, px (>= 3). A window
 //! of `w` columns centred on `x` starts at column `round(x - (w - 1) / 2)`: an odd `w` is
@@ -20,6 +21,7 @@
 //! Thresholds: `--threshold T` for all, the file's `threshold` column per target, or `--threshold
 //! auto`: Otsu's threshold of each window in the first frame.
 
+use super::shared_motion::{shared_offset, BlockTemplate, Integral};
 use super::targets::{lost, Tracks};
 use crate::bad_input;
 use crate::frames::{FrameSource, GreyFrame};
@@ -37,6 +39,10 @@ pub struct Point {
     pub size: (u32, u32),
     /// The file's threshold for this target, if it has the column.
     pub threshold: Option<u16>,
+    /// The file's group for this target, if it has the column: targets of one group move
+    /// together (a storey, a beam), and `--tracker lk` catches their large jumps by the motion
+    /// they share ([`super::shared_motion`]).
+    pub group: Option<u32>,
 }
 
 /// How each window's threshold is chosen.
@@ -66,13 +72,15 @@ pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
     for c in ["target", "x", "y", "w", "h"] {
         idx.push(col(c).ok_or_else(|| {
             bad_input(format!(
-                "{name}: no column `{c}` (the header must be target,x,y,w,h[,threshold]; it is \
+                "{name}: no column `{c}` (the header must be target,x,y,w,h[,threshold][,group]; \
+                 it is \
                  {})",
                 header.join(",")
             ))
         })?);
     }
     let threshold_col = col("threshold");
+    let group_col = col("group");
     let mut points: Vec<Point> = Vec::new();
     for (i, rec) in rdr.records().enumerate() {
         let row = i + 2;
@@ -112,7 +120,12 @@ pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
                 Some(whole(threshold_col.unwrap_or(0), "threshold", 0.0)?.min(65_535.0) as u16)
             }
         };
+        let group = match group_col.map(|j| rec.get(j).unwrap_or("")) {
+            None | Some("") => None,
+            Some(_) => Some(whole(group_col.unwrap_or(0), "group", 0.0)? as u32),
+        };
         points.push(Point {
+            group,
             target,
             xy: (num(idx[1], "x")?, num(idx[2], "y")?),
             size: (
@@ -216,10 +229,7 @@ pub enum PointTracker {
     },
 }
 
-/// The host's capacities of a Lucas-Kanade window: pixels and row length.
-pub(crate) const LK_PIXELS: usize = 136 * 136;
-pub(crate) const LK_ROW: usize = 128 + 7;
-pub(crate) type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
+use crate::imaging::tracker::{HostLk, LK_PIXELS, LK_ROW};
 
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
@@ -317,6 +327,18 @@ pub fn track_points_lk(
     let mut tracks = empty_tracks(points);
     // per target: the template could not be taken (why), so every frame is lost
     let mut refused: Vec<Option<Flags>> = vec![None; k];
+    // targets that move together (two or more with one `group`), and their block templates
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (t, p) in points.iter().enumerate() {
+        if let Some(g) = p.group {
+            match groups.iter_mut().find(|m| points[m[0]].group == Some(g)) {
+                Some(m) => m.push(t),
+                None => groups.push(vec![t]),
+            }
+        }
+    }
+    groups.retain(|m| m.len() > 1);
+    let mut templates: Vec<BlockTemplate> = Vec::new();
     let mut size0: Option<(usize, usize)> = None;
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
@@ -333,15 +355,27 @@ pub fn track_points_lk(
                     Err(_) => Some(Flags::BORDER),
                 };
             }
+            if !groups.is_empty() {
+                let first = Integral::of(frame);
+                templates = points
+                    .iter()
+                    .map(|p| {
+                        let roi = first_window(p, frame.dimensions(), &label)?;
+                        Ok(BlockTemplate::new(
+                            &first,
+                            (i64::from(roi.x), i64::from(roi.y)),
+                            p.size,
+                        ))
+                    })
+                    .collect::<anyhow::Result<_>>()?;
+            }
         }
+        let results = track_frame_lk(frame, &mut trackers, &refused, &groups, &templates)?;
         for (t, p) in points.iter().enumerate() {
             let c = match refused[t] {
                 Some(why) => lost_because(why),
                 None => {
-                    let r = with_frame(frame, |f| match f {
-                        AnyFrame::U8(f) => trackers[t].track(&f),
-                        AnyFrame::U16(f) => trackers[t].track(&f),
-                    })?;
+                    let r = results[t];
                     match r.displacement() {
                         Some((dx, dy)) => Centroid {
                             cx: (p.xy.0 + f64::from(dx)) as f32,
@@ -367,6 +401,82 @@ pub fn track_points_lk(
             sizes: points.iter().map(|p| p.size).collect(),
         },
     ))
+}
+
+/// One frame of LK for every target: alone with its own prediction and search, or, in a
+/// group, first from its own prediction without a search; when a member does not settle there,
+/// the group's shared offset from where each member was ([`shared_offset`] over the members'
+/// search range) is the start of every member that did not, with a search of a quarter of its
+/// window around it (fine differences between the members' motions; well short of a
+/// neighbouring look-alike). A best mean ZNCC below 0.5 leaves those members lost.
+fn track_frame_lk(
+    frame: &GreyFrame,
+    trackers: &mut [Box<HostLk>],
+    refused: &[Option<Flags>],
+    groups: &[Vec<usize>],
+    templates: &[BlockTemplate],
+) -> anyhow::Result<Vec<firmware_core::lk::LkResult>> {
+    let k = trackers.len();
+    let in_group = |t: usize| groups.iter().any(|m| m.contains(&t));
+    let before: Vec<(f32, f32)> = trackers.iter().map(|t| t.displacement()).collect();
+    let mut results = Vec::with_capacity(k);
+    with_frame(frame, |f| {
+        for (t, tracker) in trackers.iter_mut().enumerate() {
+            let search = if in_group(t) {
+                0
+            } else {
+                tracker.config().search
+            };
+            results.push(match &f {
+                AnyFrame::U8(f) => tracker.track_from(f, None, search),
+                AnyFrame::U16(f) => tracker.track_from(f, None, search),
+            });
+        }
+    })?;
+    let mut integral: Option<Integral> = None;
+    for members in groups {
+        let failed: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&t| refused[t].is_none() && results[t].displacement().is_none())
+            .collect();
+        if failed.is_empty() {
+            continue;
+        }
+        let integral = integral.get_or_insert_with(|| Integral::of(frame));
+        let list: Vec<(&BlockTemplate, (i64, i64))> = members
+            .iter()
+            .filter(|&&t| refused[t].is_none())
+            .filter_map(|&t| {
+                let (dx, dy) = before[t];
+                templates
+                    .get(t)
+                    .map(|tp| (tp, (dx.round() as i64, dy.round() as i64)))
+            })
+            .collect();
+        let range = members
+            .iter()
+            .map(|&t| i64::from(trackers[t].config().search))
+            .max()
+            .unwrap_or(0);
+        let Some((d, score)) = shared_offset(integral, &list, range) else {
+            continue;
+        };
+        if score < 0.5 {
+            continue;
+        }
+        with_frame(frame, |f| {
+            for &t in &failed {
+                let local = trackers[t].config().width.max(trackers[t].config().height) / 4;
+                let start = Some((before[t].0 + d.0 as f32, before[t].1 + d.1 as f32));
+                results[t] = match &f {
+                    AnyFrame::U8(f) => trackers[t].track_from(f, start, local),
+                    AnyFrame::U16(f) => trackers[t].track_from(f, start, local),
+                };
+            }
+        })?;
+    }
+    Ok(results)
 }
 
 /// A lost result with the tracker's reason beside `empty` (no position).

@@ -64,12 +64,28 @@ pub struct Args {
     /// bright as the tags and a phone beside it, in colour JPEG frames, and writes points.csv
     /// (a window per target for `analyze --points`); `plain` (default): grey PNG frames of the
     /// targets on black.
-    #[arg(long, value_enum, default_value_t = SceneArg::Plain, requires = "targets")]
+    #[arg(long, value_enum, default_value_t = SceneArg::Plain, requires = "recording")]
     pub scene: SceneArg,
+    /// With --recording --scene cluttered: `release` films a model structure of 28 alike tags
+    /// on four storeys in front of a white brick wall, pulled and released (23 fps, jumps of
+    /// up to 120 px between frames), with points.csv (windows and storeys as `group`) and
+    /// truth.csv; it takes no --preset, --targets, --exposure-ms or --read-noise (its own).
+    /// `rig` (default): the preset's excitation.
+    #[arg(long, value_enum, default_value_t = MotionArg::Rig, requires = "recording")]
+    pub motion: MotionArg,
     /// With --recording: what is painted on the targets: `plain` (default) or `speckle` (dark
     /// dots on the disk: a texture for `--tracker lk`; docs/method.md §2.11).
     #[arg(long, value_enum, default_value_t = TextureArg::Plain, requires = "recording")]
     pub texture: TextureArg,
+}
+
+/// How the structure of a recording moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MotionArg {
+    /// The preset's excitation.
+    Rig,
+    /// Pulled and released by hand (with --scene cluttered).
+    Release,
 }
 
 /// What is painted on the targets of a recording.
@@ -92,6 +108,14 @@ pub enum SceneArg {
 
 /// Runs `host-harness render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.motion == MotionArg::Release {
+        return render_release(&args);
+    }
+    if args.scene == SceneArg::Cluttered && args.targets.is_none() {
+        return Err(bad_input(
+            "--scene cluttered: needs --targets K (or --motion release, its own structure)",
+        ));
+    }
     let exposure_ms = args.exposure_ms.unwrap_or(100.0);
     if !(exposure_ms.is_finite() && exposure_ms >= 0.0) {
         return Err(bad_input(format!(
@@ -163,4 +187,37 @@ fn check_recording_exposure(args: &Args, fps: f64) -> anyhow::Result<()> {
         ))),
         Some(_) => Ok(()),
     }
+}
+
+/// `render --recording DIR --scene cluttered --motion release`.
+fn render_release(args: &Args) -> anyhow::Result<()> {
+    let Some(dir) = &args.recording else {
+        return Err(bad_input("--motion release: needs --recording DIR"));
+    };
+    if args.scene != SceneArg::Cluttered {
+        return Err(bad_input(
+            "--motion release: needs --scene cluttered (the structure in front of a wall)",
+        ));
+    }
+    if args.targets.is_some()
+        || args.exposure_ms.is_some()
+        || args.read_noise != 0.0
+        || args.video
+        || args.texture != TextureArg::Plain
+    {
+        return Err(bad_input(
+            "--motion release: its scene is fixed (28 tags, 23 fps, 2 ms): no --targets, \
+             --exposure-ms, --read-noise, --video or --texture",
+        ));
+    }
+    let n = crate::recording::release::write_release_dir(dir, args.force)?;
+    super::stdout(&format!(
+        "wrote a pull-and-release recording in {}: {n} colour frames of {} x {} px at {} fps, \
+         points.csv, truth.csv; see {}\n",
+        dir.display(),
+        crate::recording::release::SIZE.0,
+        crate::recording::release::SIZE.1,
+        crate::recording::release::FPS,
+        dir.join("README.txt").display()
+    ))
 }

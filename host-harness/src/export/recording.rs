@@ -56,7 +56,7 @@ pub struct RecordingToml {
     /// Target edge sigma, px.
     pub edge_sigma_px: f64,
     /// What is painted on the target (`plain` or `speckle`).
-    pub texture: crate::model::Texture,
+    pub texture: &'static str,
     /// Threshold of the `README.txt` command.
     pub threshold: u16,
     /// Frame width and height, px.

@@ -10,21 +10,21 @@ pub enum Texture {
     /// A uniform disk (the paper's target; the default).
     #[default]
     Plain,
-    /// Painted speckle: dark Gaussian dots of sigma [`SPECKLE_DOT_SIGMA_PX`] on the disk, one
-    /// per cell of a [`SPECKLE_PITCH_PX`] grid, jittered by up to a fifth of the pitch (dots at
+    /// Painted speckle: dark Gaussian dots of sigma [`DOT_SIGMA_PX`] on the disk, one
+    /// per cell of a [`DOT_PITCH_PX`] grid, jittered by up to a fifth of the pitch (dots at
     /// least two sigmas apart, so the paint never clips to black and stays band-limited), each
-    /// darkening the paint by up to [`SPECKLE_DEPTH`] (a fixed pattern: the same physical
+    /// darkening the paint by up to [`DOT_DEPTH`] (a fixed pattern: the same physical
     /// target in every run). What a gradient tracker needs and a threshold cannot use.
     Speckle,
 }
 
 /// Sigma of a speckle dot, px: wide enough that the pattern stays band-limited (its spectrum
 /// is 1.5e-5 of the DC at the Nyquist frequency), as the renderer's phase shift needs.
-pub const SPECKLE_DOT_SIGMA_PX: f64 = 1.5;
+pub const DOT_SIGMA_PX: f64 = 1.5;
 /// Spacing of the speckle grid, px.
-pub const SPECKLE_PITCH_PX: f64 = 5.0;
+pub const DOT_PITCH_PX: f64 = 5.0;
 /// How much a dot's centre darkens the paint (fraction of the level).
-pub const SPECKLE_DEPTH: f64 = 0.7;
+pub const DOT_DEPTH: f64 = 0.7;
 
 /// A bright disk with a Gaussian-smoothed edge on a black background, optionally speckled.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,6 +37,16 @@ pub struct DiskTarget {
     pub edge_sigma_px: f64,
     /// What is painted on it.
     pub texture: Texture,
+}
+
+impl Texture {
+    /// `plain` or `speckle`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Texture::Plain => "plain",
+            Texture::Speckle => "speckle",
+        }
+    }
 }
 
 impl DiskTarget {
@@ -52,14 +62,14 @@ impl DiskTarget {
         match self.texture {
             Texture::Plain => disk,
             Texture::Speckle => {
-                let s2 = 2.0 * SPECKLE_DOT_SIGMA_PX * SPECKLE_DOT_SIGMA_PX;
-                let reach = 6.0 * SPECKLE_DOT_SIGMA_PX;
+                let s2 = 2.0 * DOT_SIGMA_PX * DOT_SIGMA_PX;
+                let reach = 6.0 * DOT_SIGMA_PX;
                 let dots: f64 = self
                     .speckle_dots()
                     .filter(|(x, y)| (x - dx).abs() < reach && (y - dy).abs() < reach)
                     .map(|(x, y)| (-((x - dx).powi(2) + (y - dy).powi(2)) / s2).exp())
                     .sum();
-                disk * (1.0 - SPECKLE_DEPTH * dots).max(0.0)
+                disk * (1.0 - DOT_DEPTH * dots).max(0.0)
             }
         }
     }
@@ -73,7 +83,7 @@ impl DiskTarget {
     /// disk, jittered by a fixed pseudo-random sequence (a hash of the cell, so the pattern
     /// does not depend on the order of evaluation).
     pub fn speckle_dots(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
-        let n = (self.radius_px / SPECKLE_PITCH_PX).ceil() as i64;
+        let n = (self.radius_px / DOT_PITCH_PX).ceil() as i64;
         (-n..=n).flat_map(move |i| {
             (-n..=n).filter_map(move |j| {
                 let jitter = |salt: u64| {
@@ -87,8 +97,8 @@ impl DiskTarget {
                     z ^= z >> 31;
                     (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
                 };
-                let x = (i as f64 + jitter(1) / 5.0) * SPECKLE_PITCH_PX;
-                let y = (j as f64 + jitter(2) / 5.0) * SPECKLE_PITCH_PX;
+                let x = (i as f64 + jitter(1) / 5.0) * DOT_PITCH_PX;
+                let y = (j as f64 + jitter(2) / 5.0) * DOT_PITCH_PX;
                 (x * x + y * y < (self.radius_px - 1.0).powi(2)).then_some((x, y))
             })
         })

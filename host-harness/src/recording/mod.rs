@@ -13,6 +13,7 @@
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
 pub mod cluttered;
+pub mod release;
 pub mod scene;
 pub mod targets;
 
@@ -288,7 +289,7 @@ impl RecordingToml {
             radius_px: spec.target.radius_px,
             level: spec.target.level,
             edge_sigma_px: spec.target.edge_sigma_px,
-            texture: spec.target.texture,
+            texture: spec.target.texture.name(),
             threshold: spec.threshold,
             frame_size: [frame_size.0, frame_size.1],
             read_noise: spec.read_noise,
