@@ -348,14 +348,14 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         "cluttered",
         "--motion",
         "release",
+        "--video",
     ]));
     let truth = truth(&rec);
-    let frames = format!("{r}/frames");
-    let track = |points: &Path, out: &Path| {
+    let track_frames = |frames: &str, points: &Path, out: &Path| {
         assert_ok(&harness(&[
             "track",
             "--frames",
-            &frames,
+            frames,
             "--fps",
             "23",
             "--points",
@@ -369,12 +369,23 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         ]));
         displacement(out)
     };
+    let frames = format!("{r}/frames");
+    let track = |points: &Path, out: &Path| track_frames(&frames, points, out);
     let rows = track(&rec.join("points.csv"), &tmp.path().join("grouped"));
     assert_eq!(rows.len(), 184 * 28);
     let (worst, lost) = worst_and_lost(&rows, &truth);
     assert_eq!(lost, 0);
     // measured 0.063 px (the JPEG, the blur, the wall in the windows' margins)
     assert!(worst < 1.0, "worst {worst} px");
+    // the colour video (lossless, before the JPEG) as the frames
+    let rows = track_frames(
+        &format!("{r}/frames.mkv"),
+        &rec.join("points.csv"),
+        &tmp.path().join("video"),
+    );
+    let (worst, lost) = worst_and_lost(&rows, &truth);
+    assert_eq!((rows.len(), lost), (184 * 28, 0));
+    assert!(worst < 1.0, "video: worst {worst} px");
     // the same windows without the storeys
     let text = std::fs::read_to_string(rec.join("points.csv")).unwrap();
     let alone: String = text

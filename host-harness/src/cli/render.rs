@@ -69,7 +69,8 @@ pub struct Args {
     /// With --recording --scene cluttered: `release` films a model structure of 28 alike tags
     /// on four storeys in front of a white brick wall, pulled and released (23 fps, jumps of
     /// up to 120 px between frames), with points.csv (windows and storeys as `group`) and
-    /// truth.csv; it takes no --preset, --targets, --exposure-ms or --read-noise (its own).
+    /// truth.csv (and with --video the colour frames in frames.mkv); it takes no --preset,
+    /// --targets, --exposure-ms, --read-noise or --texture (its own).
     /// `rig` (default): the preset's excitation.
     #[arg(long, value_enum, default_value_t = MotionArg::Rig, requires = "recording")]
     pub motion: MotionArg,
@@ -202,15 +203,14 @@ fn render_release(args: &Args) -> anyhow::Result<()> {
     if args.targets.is_some()
         || args.exposure_ms.is_some()
         || args.read_noise != 0.0
-        || args.video
         || args.texture != TextureArg::Plain
     {
         return Err(bad_input(
             "--motion release: its scene is fixed (28 tags, 23 fps, 2 ms): no --targets, \
-             --exposure-ms, --read-noise, --video or --texture",
+             --exposure-ms, --read-noise or --texture",
         ));
     }
-    let n = crate::recording::release::write_release_dir(dir, args.force)?;
+    let n = crate::recording::release::write_release_dir(dir, args.force, args.video)?;
     super::stdout(&format!(
         "wrote a pull-and-release recording in {}: {n} colour frames of {} x {} px at {} fps, \
          points.csv, truth.csv; see {}\n",

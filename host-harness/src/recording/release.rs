@@ -118,9 +118,21 @@ fn wall(w: usize, h: usize) -> Vec<[f32; 3]> {
 }
 
 /// Writes the recording into `write_to` (named `dir` in its texts): `frames/frame_NNNNN.jpg`,
-/// `points.csv`, `truth.csv` and `README.txt`. Returns the frame count.
-pub fn write_release_recording((write_to, dir): (&Path, &Path)) -> anyhow::Result<usize> {
+/// `points.csv`, `truth.csv` and `README.txt`, with `video` also the colour frames losslessly
+/// in `frames.mkv` (RGB FFV1, before the JPEG compression). Returns the frame count.
+pub fn write_release_recording(
+    (write_to, dir): (&Path, &Path),
+    video: bool,
+) -> anyhow::Result<usize> {
     let (w, h) = SIZE;
+    let mut mkv = if video {
+        Some(
+            crate::frames::video::Ffv1Writer::create_rgb(&write_to.join("frames.mkv"), w, h, FPS)
+                .map_err(|e| e.into_anyhow())?,
+        )
+    } else {
+        None
+    };
     let frames_dir = write_to.join("frames");
     std::fs::create_dir_all(&frames_dir)
         .with_context(|| format!("cannot create {}", dir.join("frames").display()))?;
@@ -206,6 +218,13 @@ pub fn write_release_recording((write_to, dir): (&Path, &Path)) -> anyhow::Resul
             *p = Rgb(v.map(|c| (c + 0.5).clamp(0.0, 255.0) as u8));
         }
         write_jpeg(&rgb, &frames_dir.join(format!("frame_{k:05}.jpg")))?;
+        if let Some(v) = &mut mkv {
+            v.write_frame_rgb(rgb.as_raw())
+                .map_err(|e| e.into_anyhow())?;
+        }
+    }
+    if let Some(v) = mkv {
+        v.finish().map_err(|e| e.into_anyhow())?;
     }
     let mut points = String::from("target,x,y,w,h,group\n");
     for (t, &(x, y)) in centres.iter().enumerate() {
@@ -232,10 +251,18 @@ pub fn write_release_recording((write_to, dir): (&Path, &Path)) -> anyhow::Resul
              points.csv: a {WINDOW} x {WINDOW} window per tag and its storey (`group`: targets that move \
              together). truth.csv: each tag's exposure-averaged centre per frame.\n\n\
              Follow every tag with:\n\n  host-harness track --frames {d}/frames --fps {FPS} \
-             --points {d}/points.csv --tracker lk --search-px 130 --out {d}/track\n",
+             --points {d}/points.csv --tracker lk --search-px 130 --out {d}/track\n{}",
             centres.len(),
             w,
-            h
+            h,
+            if video {
+                format!(
+                    "\nframes.mkv: the same colour frames before JPEG compression, losslessly \
+                     (RGB FFV1; read as its BT.601 luma): --frames {d}/frames.mkv\n"
+                )
+            } else {
+                String::new()
+            }
         ),
     )?;
     Ok(n)
@@ -243,9 +270,9 @@ pub fn write_release_recording((write_to, dir): (&Path, &Path)) -> anyhow::Resul
 
 /// Writes the recording into the new directory `dir`, staged and moved into place (`force`:
 /// replacing an earlier `render --recording` output there). Returns the frame count.
-pub fn write_release_dir(dir: &Path, force: bool) -> anyhow::Result<usize> {
+pub fn write_release_dir(dir: &Path, force: bool, video: bool) -> anyhow::Result<usize> {
     let out = crate::outdir::Staged::new(dir, force, "render --recording", &[])?;
-    let n = write_release_recording((out.dir(), dir))?;
+    let n = write_release_recording((out.dir(), dir), video)?;
     out.commit()?;
     Ok(n)
 }
