@@ -11,7 +11,7 @@
 //! better than a pixel) is no error of a displacement.
 
 use super::{DiskTarget, TrackerKind};
-use firmware_core::centroid::{centroid, CentroidConfig, Frame, FrameError, Mode, Pixel};
+use firmware_core::centroid::{centroid, CentroidConfig, Frame, FrameError, Pixel};
 use firmware_core::lk::LkConfig;
 
 /// The host's capacities of a Lucas-Kanade window: pixels and row length.
@@ -51,10 +51,7 @@ impl FrameTracker {
         saturation: u16,
     ) -> anyhow::Result<FrameTracker> {
         let config = CentroidConfig {
-            mode: match kind {
-                TrackerKind::Weighted => Mode::Weighted,
-                TrackerKind::Blob | TrackerKind::Lk => Mode::Binary,
-            },
+            mode: kind.mode(),
             ..CentroidConfig::binary(threshold)
         };
         let lk = match kind {
@@ -90,15 +87,6 @@ impl FrameTracker {
             lk.origin = None;
         }
         Ok(())
-    }
-
-    /// How far the LK window reaches beyond the target's centre along the motion, px (with
-    /// the interpolation's margin): the frame must hold this much around every position. 0
-    /// for the centroids.
-    pub fn reach_px(&self) -> f64 {
-        self.lk
-            .as_ref()
-            .map_or(0.0, |lk| f64::from(lk.half.1) + 4.0)
     }
 
     /// The target's position `(x, y)` in `data` (`w x h`, row-major), `None` when it is lost.

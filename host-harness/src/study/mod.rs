@@ -241,20 +241,17 @@ impl Filming<'_> {
         let im = self.imaging;
         // LK's template window reaches as far as the record's longest blur: each exposure's,
         // and a frame tall enough for the longest
-        let lk = im.measurement.tracker == crate::imaging::TrackerKind::Lk;
-        let blur: Vec<f64> = exposures_ms
-            .iter()
-            .map(|&exp| {
-                (0..frames * usize::from(lk))
+        let mut blur = vec![0.0f64; exposures_ms.len()];
+        if im.measurement.tracker == crate::imaging::TrackerKind::Lk {
+            for (b, &exp) in blur.iter_mut().zip(exposures_ms) {
+                *b = (0..frames)
                     .map(|k| {
                         let (a, b) = path.aligned_window(k, exp, im.alignment);
                         let (lo, hi) = renderer.path_range(a, b);
                         hi - lo
                     })
-                    .fold(0.0, f64::max)
-            })
-            .collect();
-        if lk {
+                    .fold(0.0, f64::max);
+            }
             let (lo, hi) = renderer.path_range(0.0, path.path_px.len() as f64);
             let extra = (blur.iter().fold(0.0, |m: f64, b| m.max(*b)) / 2.0).ceil() + 8.0;
             renderer = crate::imaging::BlurRenderer::new(self.target, lo - extra, hi + extra);
