@@ -17,8 +17,11 @@ readers) and the windows of REC/points.csv (31 x 31 px centred on each target in
 - scikit-image `phase_cross_correlation` (upsampled DFT registration, upsample factor 1000) of
   the window of frame 0 and the window of frame k at the last estimate's whole-pixel part.
 Ours: `host-harness track --points REC/points.csv` with `--tracker lk`, `weighted` and
-`blob` (threshold 127); its time is the process's minus that of the same command with
-`blob` on the frames (decoding and writing, which the peers do not pay), per target-frame.
+`blob` (threshold 127) for the accuracy. Time: for `lk`, the `lk_timing` example (firmware-core's
+tracker on the same windows with the CLI's settings, frames preloaded as the peers'; build it
+with `cargo build --release -p host-harness --example lk_timing`); for `weighted`, the
+process's time minus that of the same command with `blob` (decoding and writing, which the
+peers do not pay), per target-frame.
 
 RMS error as users compute it: per target, the estimated y minus the true y, its mean removed,
 over all frames; the table gives each target's and their mean. Runs in a virtual environment
@@ -81,6 +84,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("rec", type=Path)
     ap.add_argument("--harness", default="target/release/host-harness")
+    ap.add_argument("--lk-timing", default="target/release/examples/lk_timing",
+                    help="the built lk_timing example (frames preloaded)")
     ap.add_argument("--force", action="store_true", help="replace REC/peer-trackers.md")
     args = ap.parse_args()
     rec = args.rec
@@ -120,6 +125,8 @@ def main():
         for tracker in ["lk", "weighted", "blob"]:
             dt, ys = ours(tracker)
             cost = None if tracker == "blob" else max(dt - base, 0.0) / (n * k)
+            if tracker == "lk":
+                cost = lk_preloaded(args.lk_timing, rec)
             results.append((f"ours, {tracker}", rms_errors(ys, truth), cost))
 
     # pyidi LucasKanade
@@ -185,6 +192,15 @@ def main():
     text = "\n".join(lines)
     print(text)
     (rec / "peer-trackers.md").write_text(text + "\n")
+
+
+def lk_preloaded(exe, rec):
+    """Seconds per target-frame of our LK with the frames preloaded (the `lk_timing` example)."""
+    out = subprocess.run([exe, str(rec), "3"], check=True, capture_output=True, text=True).stdout
+    for line in out.splitlines():
+        if "us per target-frame" in line:
+            return float(line.split(":")[1].split("us")[0]) * 1e-6
+    raise SystemExit(f"lk_timing printed no time: {out}")
 
 
 if __name__ == "__main__":

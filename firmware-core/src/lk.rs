@@ -72,6 +72,175 @@ pub enum Interpolation {
 /// `0.268^k`, and the shift reads up to 3 coefficients past the window.
 const SPLINE_MARGIN: usize = 4;
 
+/// Offsets of the spline's taps from a whole pixel, `-2..=2`: the shift `s` of the template
+/// stays within `+-3/4` px (see `LkTracker::spline_error`), so its four taps
+/// `floor(s) - 1 ..= floor(s) + 2` are among these five.
+const LAGS: usize = 5;
+
+/// The template moments of the spline path: with `c'` the padded template's coefficients
+/// less the template's mean and `c'_o` them displaced by the lag `o = (ox, oy)` (`-2..=2`
+/// each) over the template's pixels, `s[o] = sum c'_o` and `c[o][o'] = sum c'_o c'_o'`.
+/// The shifted template is `T_s - m = sum_o w_o c'_o` with the shift's separable spline
+/// weights `w` (they sum to one; its slopes' weights sum to zero), so every sum of an
+/// iteration (the error weighted by the shifted template's slopes and the ZNCC) is a
+/// quadratic form in the weights: an iteration costs a few hundred multiply-adds instead of
+/// passes over the window.
+#[derive(Debug, Clone, Copy)]
+struct Moments {
+    s: [f32; LAGS * LAGS],
+    c: [f32; LAGS * LAGS * LAGS * LAGS],
+}
+
+impl Moments {
+    const ZERO: Moments = Moments {
+        s: [0.0; LAGS * LAGS],
+        c: [0.0; LAGS * LAGS * LAGS * LAGS],
+    };
+
+    /// The moments of the `tw x th` template whose padded coefficients (`tw + 2 margin`
+    /// wide, mean removed) are `coef`. Each row's sums are formed apart and then added
+    /// (rounding grows with the row, not the window).
+    fn of(coef: &[f32], (tw, th): (usize, usize)) -> Moments {
+        let mut out = Moments::ZERO;
+        let pw = tw + 2 * SPLINE_MARGIN;
+        let first = SPLINE_MARGIN - LAGS / 2;
+        // the template's row `j` at the vertical lag `oy`, from its horizontal lag 0
+        let row = |j: usize, oy: usize| -> &[f32] {
+            let start = (j + first + oy) * pw + first;
+            coef.get(start..start + tw + LAGS - 1).unwrap_or(&[])
+        };
+        for oy in 0..LAGS {
+            for oy2 in oy..LAGS {
+                let mut c = [[0.0f32; LAGS]; LAGS];
+                let mut s = [0.0f32; LAGS];
+                for j in 0..th {
+                    let (r1, r2) = (row(j, oy), row(j, oy2));
+                    for (ox, cx) in c.iter_mut().enumerate() {
+                        let a = r1.get(ox..ox + tw).unwrap_or(&[]);
+                        for (ox2, cxy) in cx.iter_mut().enumerate() {
+                            let b = r2.get(ox2..ox2 + tw).unwrap_or(&[]);
+                            let mut d = 0.0f32;
+                            for (u, v) in a.iter().zip(b) {
+                                d += u * v;
+                            }
+                            *cxy += d;
+                        }
+                        if oy2 == oy {
+                            s[ox] += a.iter().sum::<f32>();
+                        }
+                    }
+                }
+                for (ox, cx) in c.iter().enumerate() {
+                    for (ox2, &v) in cx.iter().enumerate() {
+                        let (i1, i2) = (oy * LAGS + ox, oy2 * LAGS + ox2);
+                        if let Some(o) = out.c.get_mut(i1 * LAGS * LAGS + i2) {
+                            *o = v;
+                        }
+                        if let Some(o) = out.c.get_mut(i2 * LAGS * LAGS + i1) {
+                            *o = v;
+                        }
+                    }
+                    if oy2 == oy {
+                        if let (Some(o), Some(&v)) = (out.s.get_mut(oy * LAGS + ox), s.get(ox)) {
+                            *o = v;
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The frame window's moments with the template (spline path): with `g'` the window less
+/// the template's mean, `a[o] = sum g' c'_o` (see [`Moments`]), `sum g'` and `sum g'^2`.
+/// The cross moments of a vertical lag are formed when an iteration first needs them.
+#[derive(Debug, Clone, Copy)]
+struct Cross {
+    a: [f32; LAGS * LAGS],
+    /// Bit `oy` set: the cross moments of the vertical lag `oy` are formed.
+    formed: u32,
+    sum: f32,
+    sq: f32,
+}
+
+impl Cross {
+    const ZERO: Cross = Cross {
+        a: [0.0; LAGS * LAGS],
+        formed: 0,
+        sum: 0.0,
+        sq: 0.0,
+    };
+
+    /// Forms the cross moments of the vertical lags `ly..ly + 4` not formed yet (all five
+    /// horizontal lags: the shift's sign may change between iterations), from the window `g`
+    /// and the padded coefficients `coef` of a `tw x th` template.
+    fn need(&mut self, ly: usize, g: &[f32], coef: &[f32], (tw, th): (usize, usize)) {
+        let pw = tw + 2 * SPLINE_MARGIN;
+        let first = SPLINE_MARGIN - LAGS / 2;
+        for oy in ly..(ly + 4).min(LAGS) {
+            if self.formed & (1 << oy) != 0 {
+                continue;
+            }
+            let mut a = [0.0f32; LAGS];
+            for j in 0..th {
+                let start = (j + first + oy) * pw + first;
+                let (Some(c), Some(g)) = (
+                    coef.get(start..start + tw + LAGS - 1),
+                    g.get(j * tw..(j + 1) * tw),
+                ) else {
+                    break;
+                };
+                let r = lag_dots(g, c);
+                for (o, v) in a.iter_mut().zip(r) {
+                    *o += v;
+                }
+            }
+            for (o, v) in self.a.iter_mut().skip(oy * LAGS).zip(a) {
+                *o = v;
+            }
+            self.formed |= 1 << oy;
+        }
+    }
+}
+
+/// `sum_i g[i] c[i + k]` for the lags `k = 0..5` (`c` four longer than `g`), four pixels at
+/// a time so that the products reuse the loaded values (one row's sums: rounding grows with
+/// the row, not the window).
+#[inline(always)]
+fn lag_dots(g: &[f32], c: &[f32]) -> [f32; LAGS] {
+    let mut r = [0.0f32; LAGS];
+    let mut i = 0;
+    let n = g.len();
+    while i + 4 <= n {
+        let (Some(gw), Some(cw)) = (g.get(i..i + 4), c.get(i..i + 8)) else {
+            break;
+        };
+        if let (&[g0, g1, g2, g3], &[c0, c1, c2, c3, c4, c5, c6, c7]) = (gw, cw) {
+            r[0] += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
+            r[1] += g0 * c1 + g1 * c2 + g2 * c3 + g3 * c4;
+            r[2] += g0 * c2 + g1 * c3 + g2 * c4 + g3 * c5;
+            r[3] += g0 * c3 + g1 * c4 + g2 * c5 + g3 * c6;
+            r[4] += g0 * c4 + g1 * c5 + g2 * c6 + g3 * c7;
+        }
+        i += 4;
+    }
+    while i < n {
+        let (Some(&gv), Some(cw)) = (g.get(i), c.get(i..i + LAGS)) else {
+            break;
+        };
+        if let &[c0, c1, c2, c3, c4] = cw {
+            r[0] += gv * c0;
+            r[1] += gv * c1;
+            r[2] += gv * c2;
+            r[3] += gv * c3;
+            r[4] += gv * c4;
+        }
+        i += 1;
+    }
+    r
+}
+
 /// Settings of an [`LkTracker`]: plain data, checked by [`LkConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -287,12 +456,17 @@ pub struct LkTracker<const N: usize, const W: usize> {
     p: (f32, f32),
     /// Its change over the last frame (the prediction's velocity; zero after a loss).
     v: (f32, f32),
-    /// The padded template's B-spline coefficients (`Interpolation::Spline`).
+    /// The padded template's B-spline coefficients less the template's mean
+    /// (`Interpolation::Spline`).
     coef: [f32; N],
-    /// The frame's window at whole pixels (`Interpolation::Spline`), and where it was read
-    /// (the whole-pixel displacement; `None`: not for this frame).
+    /// The spline path's template moments (see [`Moments`]).
+    moments: Moments,
+    /// The frame's window at whole pixels less the template's mean (`Interpolation::Spline`),
+    /// and where it was read (the whole-pixel displacement; `None`: not for this frame).
     g: [f32; N],
     g_at: Option<(i64, i64)>,
+    /// The window's cross moments with the template (see [`Cross`]), valid for `g_at`.
+    cross: Cross,
     /// Horizontally interpolated rows (a ring of eight: the most taps).
     ring: [[f32; W]; 8],
     /// One source row as floats (the window's width plus up to 7 taps).
@@ -405,6 +579,20 @@ fn newly_clipped<P: Pixel>(row: &[P], t: &[f32], size: (usize, usize), j: usize,
         .sum()
 }
 
+/// The binomial sum of `T` (1, 3 or 5) pixels (`[1]`, `[1 2 1]`, `[1 4 6 4 1]`) and the
+/// middle pixel.
+#[inline(always)]
+fn binomial_sum<P: Pixel, const T: usize>(win: &[P]) -> (u32, u16) {
+    let v = |n: usize| win.get(n).map_or(0, |&p| p.into());
+    let w = |n: usize| u32::from(v(n));
+    let sum = match T {
+        1 => w(0),
+        3 => w(0) + 2 * w(1) + w(2),
+        _ => w(0) + 4 * w(1) + 6 * w(2) + 4 * w(3) + w(4),
+    };
+    (sum, v(T / 2))
+}
+
 /// More newly clipped pixels than this in a window of `n` pixels lose the frame: two, and 2 %.
 fn clip_limit(n: usize) -> u32 {
     2 + (n / 50) as u32
@@ -444,8 +632,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             p: (0.0, 0.0),
             v: (0.0, 0.0),
             coef: [0.0; N],
+            moments: Moments::ZERO,
             g: [0.0; N],
             g_at: None,
+            cross: Cross::ZERO,
             ring: [[0.0; W]; 8],
             src: [0.0; W],
             acc: [0.0; W],
@@ -590,6 +780,13 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         self.t_mean = mean;
         self.t_norm = sqrtf(ss);
+        if spline {
+            // the spline's weights sum to one: the mean comes off the coefficients
+            for c in self.coef.iter_mut().take(pw * ph) {
+                *c -= mean;
+            }
+            self.moments = Moments::of(&self.coef, (tw, th));
+        }
         self.origin = (x0, y0);
         self.g_at = None;
         self.ready = true;
@@ -724,13 +921,25 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (rx, ry) = (floorf(self.p.0 + 0.5), floorf(self.p.1 + 0.5));
         let (x0, y0) = (self.origin.0 + rx as i32, self.origin.1 + ry as i32);
         // a refused template (flat, outside) must leave the old one whole: keep a copy
-        let saved = (self.origin, self.h_inv, self.t_mean, self.t_norm);
+        let saved = (
+            self.origin,
+            self.h_inv,
+            self.t_mean,
+            self.t_norm,
+            self.moments,
+        );
         let (t, gx, gy, coef) = (self.t, self.gx, self.gy, self.coef);
         if self.take(frame, x0, y0).is_ok() {
             self.base = (self.base.0 + rx, self.base.1 + ry);
             self.p = (self.p.0 - rx, self.p.1 - ry);
         } else {
-            (self.origin, self.h_inv, self.t_mean, self.t_norm) = saved;
+            (
+                self.origin,
+                self.h_inv,
+                self.t_mean,
+                self.t_norm,
+                self.moments,
+            ) = saved;
             (self.t, self.gx, self.gy, self.coef) = (t, gx, gy, coef);
             self.g_at = None;
             self.ready = true;
@@ -999,80 +1208,75 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             self.g_at = Some(q);
         }
         // the template's pixels shifted by s = q - p, |s| <= 3/4: taps at a - 1 .. a + 2,
-        // within the padded template's margin of 4
+        // among the lags -2 ..= 2
         let (sx, sy) = (qx - p.0, qy - p.1);
         let (ax, ay) = (floorf(sx), floorf(sy));
+        if !(-1.0..=0.0).contains(&ax) || !(-1.0..=0.0).contains(&ay) {
+            return Err(Flags::DIVERGED);
+        }
         let (wx, wy) = (bspline_weights(sx - ax), bspline_weights(sy - ay));
         let (dwx, dwy) = (bspline_slopes(sx - ax), bspline_slopes(sy - ay));
-        let (ax, ay) = (ax as i64, ay as i64);
-        let m = SPLINE_MARGIN as i64;
-        let pw = tw + 2 * SPLINE_MARGIN;
+        // the first tap's lag index: a - 1 + 2
+        let (lx, ly) = ((ax + 1.0) as usize, (ay + 1.0) as usize);
         let LkTracker {
             g,
             coef,
-            ring,
-            t_mean,
+            cross,
+            moments,
             ..
         } = self;
-        // horizontal passes of padded coefficient row `row`: the values into ring slot
-        // `r % 4`, their x slopes into slot `4 + r % 4`
-        let col0 = (ax - 1 + m).max(0) as usize;
-        let fill = |ring: &mut [[f32; W]; 8], r: usize, row: i64| {
-            let start = (row.max(0) as usize) * pw + col0;
-            let src = coef.get(start..start + tw + 3).unwrap_or(&[]);
-            let (values, slopes) = ring.split_at_mut(4);
-            let (v, d) = (&mut values[r % 4], &mut slopes[r % 4]);
-            for ((o, od), win) in v.iter_mut().zip(d.iter_mut()).zip(src.windows(4)) {
-                *o = wx[0] * win[0] + wx[1] * win[1] + wx[2] * win[2] + wx[3] * win[3];
-                *od = dwx[0] * win[0] + dwx[1] * win[1] + dwx[2] * win[2] + dwx[3] * win[3];
-            }
-        };
-        for r in 0..3 {
-            fill(ring, r, ay - 1 + m + r as i64);
-        }
-        let m_t = *t_mean;
-        let (mut bx, mut by) = (0.0f32, 0.0f32);
-        let (mut sd, mut sdd, mut sdt) = (0.0f32, 0.0f32, 0.0f32);
-        let (mut ss, mut sss) = (0.0f32, 0.0f32);
-        for j in 0..th {
-            fill(ring, j + 3, ay + 2 + m + j as i64);
-            let Some(g) = g.get(j * tw..(j + 1) * tw) else {
-                break;
-            };
-            let (v0, v1, v2, v3) = (
-                &ring[j % 4],
-                &ring[(j + 1) % 4],
-                &ring[(j + 2) % 4],
-                &ring[(j + 3) % 4],
-            );
-            let (d0, d1, d2, d3) = (
-                &ring[4 + j % 4],
-                &ring[4 + (j + 1) % 4],
-                &ring[4 + (j + 2) % 4],
-                &ring[4 + (j + 3) % 4],
-            );
-            for (i, &gv) in g.iter().enumerate() {
-                let at = |r: &[f32; W]| r.get(i).copied().unwrap_or(0.0);
-                let (a0, a1, a2, a3) = (at(v0), at(v1), at(v2), at(v3));
-                let shifted = wy[0] * a0 + wy[1] * a1 + wy[2] * a2 + wy[3] * a3;
-                // the shifted template's gradient (not the reference's): the update is then
-                // the gradient of the squared error itself, whose zero does not depend on the
-                // whole-pixel window when the frame differs from the template (blur)
-                let gxv = wy[0] * at(d0) + wy[1] * at(d1) + wy[2] * at(d2) + wy[3] * at(d3);
-                let gyv = dwy[0] * a0 + dwy[1] * a1 + dwy[2] * a2 + dwy[3] * a3;
-                let e = gv - shifted;
-                bx += gxv * e;
-                by += gyv * e;
-                // ZNCC of the frame's window and the shifted template, about the template mean
-                let (d, ds) = (gv - m_t, shifted - m_t);
-                sd += d;
-                sdd += d * d;
-                sdt += d * ds;
-                ss += ds;
-                sss += ds * ds;
+        cross.need(ly, g, coef, (tw, th));
+        // the weights of the shifted template (u), of its x and y slopes (vx, vy), at the
+        // lags `at`
+        let mut at = [0usize; 16];
+        let (mut u, mut vx, mut vy) = ([0.0f32; 16], [0.0f32; 16], [0.0f32; 16]);
+        for (l, (&wyl, &dwyl)) in wy.iter().zip(&dwy).enumerate() {
+            for (k, (&wxk, &dwxk)) in wx.iter().zip(&dwx).enumerate() {
+                let n = l * 4 + k;
+                if let (Some(a), Some(u), Some(vx), Some(vy)) =
+                    (at.get_mut(n), u.get_mut(n), vx.get_mut(n), vy.get_mut(n))
+                {
+                    *a = (ly + l) * LAGS + lx + k;
+                    *u = wxk * wyl;
+                    *vx = dwxk * wyl;
+                    *vy = wxk * dwyl;
+                }
             }
         }
+        // sums with the window: sum g' T_s', sum g' d/dx T_s, sum g' d/dy T_s, sum T_s'
+        let (mut sdt, mut gdx, mut gdy, mut ss) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        // the template's quadratic forms: sum T_s'^2, sum T_s' d/dx T_s, sum T_s' d/dy T_s
+        let (mut sss, mut tdx, mut tdy) = (0.0f32, 0.0f32, 0.0f32);
+        for (n, &i) in at.iter().enumerate() {
+            let (a, sm) = (
+                cross.a.get(i).copied().unwrap_or(0.0),
+                moments.s.get(i).copied().unwrap_or(0.0),
+            );
+            let (un, vxn, vyn) = (
+                u.get(n).copied().unwrap_or(0.0),
+                vx.get(n).copied().unwrap_or(0.0),
+                vy.get(n).copied().unwrap_or(0.0),
+            );
+            sdt += un * a;
+            gdx += vxn * a;
+            gdy += vyn * a;
+            ss += un * sm;
+            let row = moments.c.get(i * LAGS * LAGS..).unwrap_or(&[]);
+            let mut cu = 0.0f32;
+            for (&i2, &u2) in at.iter().zip(&u) {
+                cu += row.get(i2).copied().unwrap_or(0.0) * u2;
+            }
+            sss += un * cu;
+            tdx += vxn * cu;
+            tdy += vyn * cu;
+        }
+        // the error e = I(x + q) - T(x - s) weighted by the shifted template's slopes (not
+        // the reference's): the update is then the gradient of the squared error itself,
+        // whose zero does not depend on the whole-pixel window when the frame differs from
+        // the template (blur)
+        let (bx, by) = (gdx - tdx, gdy - tdy);
         let n = (tw * th) as f32;
+        let (sd, sdd) = (cross.sum, cross.sq);
         let (var_g, var_s) = (sdd - sd * sd / n, sss - ss * ss / n);
         let score = if var_g > 0.0 && var_s > 0.0 {
             (sdt - sd * ss / n) / sqrtf(var_g * var_s)
@@ -1083,8 +1287,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     }
 
     /// The frame's window at the template's origin plus `q` into `g` (smoothed as the template
-    /// was; past the frame's edge the edge pixels repeat); `Err` when the window leaves the
-    /// frame or has more clipped pixels than the template.
+    /// was; past the frame's edge the edge pixels repeat), less the template's mean, and its
+    /// own moments into `cross`; `Err` when the window leaves the frame or has more clipped
+    /// pixels than the template.
     fn load_window<P: Pixel>(
         &mut self,
         frame: &Frame<'_, P>,
@@ -1103,74 +1308,149 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         if x0 < 0 || y0 < 0 || x0 + tw as i64 > fw || y0 + th as i64 > fh {
             return Err(Flags::BORDER);
         }
-        let (kernel, taps) = self.config.smoothing.kernel();
-        let half = (taps / 2) as i64;
+        // one monomorphised pass per kernel length, so every inner loop has a constant length
+        let at = (x0, y0, sat);
+        let saturated = match self.config.smoothing {
+            Smoothing::None => self.smooth_window::<P, 1>(frame, at, [1]),
+            Smoothing::Binomial3 => self.smooth_window::<P, 3>(frame, at, [1, 2, 1]),
+            Smoothing::Binomial5 => self.smooth_window::<P, 5>(frame, at, [1, 4, 6, 4, 1]),
+        };
+        if saturated > clip_limit(tw * th) {
+            return Err(Flags::SATURATED);
+        }
+        Ok(())
+    }
+
+    /// [`load_window`](Self::load_window) with the `T`-tap integer kernel `k` (binomial: its
+    /// sum a power of two, so the smoothed values are exact in `f32`, as the template's):
+    /// rows summed along x in integers, then down the columns; returns the count of newly
+    /// clipped pixels.
+    fn smooth_window<P: Pixel, const T: usize>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        (x0, y0, sat): (i64, i64, u16),
+        k: [u32; T],
+    ) -> u32 {
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        let (fw, fh) = (frame.width() as i64, frame.height() as i64);
+        let half = (T / 2) as i64;
+        let total: u32 = k.iter().sum();
+        let scale = 1.0 / (total * total) as f32;
+        let kf: [f32; T] = k.map(|v| v as f32);
         let mut saturated = 0u32;
-        let LkTracker { g, ring, t, .. } = self;
-        // source row `r` (frame row y0 - half + r), smoothed along x, into ring slot `r % 8`
-        let fill = |ring: &mut [[f32; W]; 8], r: i64, saturated: &mut u32| {
-            let y = (y0 - half + r).min(fh - 1).max(0) as usize;
+        let LkTracker {
+            g,
+            ring,
+            t,
+            t_mean,
+            cross,
+            ..
+        } = self;
+        let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
+        // source row `r` (frame row y0 - half + r), summed along x, into ring slot `r % 8`
+        let mut fill = |ring: &mut [[f32; W]; 8], r: usize| {
+            let y = (y0 - half + r as i64).min(fh - 1).max(0) as usize;
             let row = frame.row(y).unwrap_or(&[]);
-            let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
-            let slot = &mut ring[(r as usize) % 8];
-            let in_window = (half..half + th as i64).contains(&r);
-            match row.get((x0 - half).max(0) as usize..).filter(|_| inside) {
+            let slot = &mut ring[r % 8];
+            let in_window = (T / 2..T / 2 + th).contains(&r);
+            let start = (x0 - half).max(0) as usize;
+            match row.get(start..start + tw + T - 1).filter(|_| inside) {
                 Some(seg) => {
-                    for (o, win) in slot.iter_mut().take(tw).zip(seg.windows(taps.max(1))) {
-                        let mut v = 0.0;
-                        for (w, p) in kernel.iter().zip(win) {
-                            v += w * f32::from((*p).into());
-                        }
-                        *o = v;
+                    // the brightest pixel of the window's part of the row, on the way
+                    let mut top = 0u16;
+                    for (o, win) in slot.iter_mut().zip(seg.windows(T)) {
+                        let (v, centre) = binomial_sum::<P, T>(win);
+                        top = top.max(centre);
+                        *o = v as f32;
                     }
-                    if in_window {
-                        let whole = seg.get(half as usize..half as usize + tw).unwrap_or(&[]);
-                        *saturated += newly_clipped(whole, t, (tw, th), (r - half) as usize, sat);
+                    // the common case: nothing near the saturation level in the row
+                    if in_window && top >= sat {
+                        let whole = seg.get(T / 2..T / 2 + tw).unwrap_or(&[]);
+                        saturated += newly_clipped(whole, t, (tw, th), r - T / 2, sat);
                     }
                 }
                 None => {
                     for (i, o) in slot.iter_mut().take(tw).enumerate() {
-                        let mut v = 0.0;
-                        for (k, w) in kernel.iter().take(taps).enumerate() {
-                            let x = (x0 + i as i64 + k as i64 - half).min(fw - 1).max(0) as usize;
-                            v += w * row.get(x).map_or(0.0, |p| f32::from((*p).into()));
+                        let mut v = 0u32;
+                        for (n, w) in k.iter().enumerate() {
+                            let x = (x0 + i as i64 + n as i64 - half).min(fw - 1).max(0) as usize;
+                            v += w * row.get(x).map_or(0, |p| u32::from((*p).into()));
                         }
-                        *o = v;
+                        *o = v as f32;
                         let at = (x0 + i as i64).min(fw - 1).max(0) as usize;
                         let raw: u16 = row.get(at).map_or(0, |p| (*p).into());
-                        let j = (r - half).max(0) as usize;
-                        *saturated += u32::from(
-                            in_window && raw >= sat && dark_near(t, (tw, th), (i, j), sat),
+                        saturated += u32::from(
+                            in_window && raw >= sat && dark_near(t, (tw, th), (i, r - T / 2), sat),
                         );
                     }
                 }
             }
         };
-        for r in 0..(taps - 1) as i64 {
-            fill(ring, r, &mut saturated);
+        for r in 0..T - 1 {
+            fill(ring, r);
         }
+        let m = *t_mean;
+        let (mut sum, mut sq) = (0.0f32, 0.0f32);
         for j in 0..th {
-            fill(ring, j as i64 + taps as i64 - 1, &mut saturated);
+            fill(ring, j + T - 1);
             let Some(out) = g.get_mut(j * tw..(j + 1) * tw) else {
                 break;
             };
-            for (k, w) in kernel.iter().take(taps).enumerate() {
-                let row = &ring[(j + k) % 8];
-                if k == 0 {
-                    for (o, r) in out.iter_mut().zip(row.iter()) {
-                        *o = w * r;
+            // down the columns, then scaled and less the template's mean
+            let rows: [&[f32; W]; T] = core::array::from_fn(|n| &ring[(j + n) % 8]);
+            let (mut rs, mut rq) = (0.0f32, 0.0f32);
+            let mut put = |o: &mut f32, v: f32| {
+                let v = v * scale - m;
+                *o = v;
+                rs += v;
+                rq += v * v;
+            };
+            match rows.as_slice() {
+                [a] => {
+                    for (o, a) in out.iter_mut().zip(a.iter()) {
+                        put(o, *a);
                     }
-                } else {
-                    for (o, r) in out.iter_mut().zip(row.iter()) {
-                        *o += w * r;
+                }
+                [a, b, c] => {
+                    for (((o, a), b), c) in out.iter_mut().zip(a.iter()).zip(b.iter()).zip(c.iter())
+                    {
+                        put(o, a + 2.0 * b + c);
+                    }
+                }
+                [a, b, c, d, e] => {
+                    for (((((o, a), b), c), d), e) in out
+                        .iter_mut()
+                        .zip(a.iter())
+                        .zip(b.iter())
+                        .zip(c.iter())
+                        .zip(d.iter())
+                        .zip(e.iter())
+                    {
+                        put(o, a + 4.0 * b + 6.0 * c + 4.0 * d + e);
+                    }
+                }
+                _ => {
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let mut v = 0.0f32;
+                        for (w, row) in kf.iter().zip(rows.iter()) {
+                            v += w * row.get(i).copied().unwrap_or(0.0);
+                        }
+                        put(o, v);
                     }
                 }
             }
+            sum += rs;
+            sq += rq;
         }
-        if saturated > clip_limit(tw * th) {
-            return Err(Flags::SATURATED);
-        }
-        Ok(())
+        *cross = Cross {
+            sum,
+            sq,
+            ..Cross::ZERO
+        };
+        saturated
     }
 
     /// The coarse integer search around `p` (see the module documentation): the best integer
@@ -1372,6 +1652,71 @@ mod tests {
                 assert!((0.03..0.07).contains(&step), "{dy}: step {step}");
             }
             last = Some(my);
+        }
+    }
+
+    #[test]
+    fn the_spline_moments_equal_the_sums_over_the_pixels() {
+        // every iteration's sums come from moments formed once per template and per window:
+        // check them against the sums over the shifted template's pixels, in f64
+        let mut t = tracker(0, Interpolation::Spline);
+        let img = speckle(0.37, -0.61, 190.0);
+        let f = frame(&img);
+        let (tw, th) = (31usize, 31usize);
+        let pw = tw + 2 * SPLINE_MARGIN;
+        let m = SPLINE_MARGIN as i64;
+        for &(px, py) in &[(0.3f32, -0.7f32), (0.74, 0.1), (-0.2, -0.74), (0.0, 0.5)] {
+            let (b, score) = t.spline_error(&f, (px, py), u16::MAX).unwrap();
+            let (qx, qy) = t.g_at.unwrap();
+            let (sx, sy) = (qx as f64 - f64::from(px), qy as f64 - f64::from(py));
+            let (ax, ay) = (sx.floor(), sy.floor());
+            let wts = |f: f64| bspline_weights(f as f32).map(f64::from);
+            let slopes = |f: f64| bspline_slopes(f as f32).map(f64::from);
+            let (wx, wy, dwx, dwy) = (wts(sx - ax), wts(sy - ay), slopes(sx - ax), slopes(sy - ay));
+            let c = |i: i64, j: i64| f64::from(t.coef[((j + m) * pw as i64 + i + m) as usize]);
+            let (mut bx, mut by) = (0.0f64, 0.0f64);
+            let (mut g1, mut g2, mut s1, mut s2, mut gs) = (0.0f64, 0.0, 0.0, 0.0, 0.0);
+            for j in 0..th as i64 {
+                for i in 0..tw as i64 {
+                    let (mut v, mut dx, mut dy) = (0.0, 0.0, 0.0);
+                    for l in 0..4 {
+                        for k in 0..4 {
+                            let cv = c(i + ax as i64 - 1 + k, j + ay as i64 - 1 + l);
+                            let (k, l) = (k as usize, l as usize);
+                            v += wx[k] * wy[l] * cv;
+                            dx += dwx[k] * wy[l] * cv;
+                            dy += wx[k] * dwy[l] * cv;
+                        }
+                    }
+                    let g = f64::from(t.g[j as usize * tw + i as usize]);
+                    bx += dx * (g - v);
+                    by += dy * (g - v);
+                    g1 += g;
+                    g2 += g * g;
+                    s1 += v;
+                    s2 += v * v;
+                    gs += g * v;
+                }
+            }
+            let n = (tw * th) as f64;
+            let zncc = (gs - g1 * s1 / n) / ((g2 - g1 * g1 / n) * (s2 - s1 * s1 / n)).sqrt();
+            // relative to the terms' scale (sum of |slope| |g|): f32 moments against f64 sums
+            let scale = t.h_inv[0].abs().recip() as f64;
+            assert!(
+                (f64::from(b.0) - bx).abs() < 1e-4 * scale,
+                "{px},{py}: {} {bx}",
+                b.0
+            );
+            assert!(
+                (f64::from(b.1) - by).abs() < 1e-4 * scale,
+                "{px},{py}: {} {by}",
+                b.1
+            );
+            assert!((f64::from(score) - zncc).abs() < 1e-5, "{score} {zncc}");
+            assert!(
+                bx.abs() > 1e-3 * scale,
+                "a shift away from the optimum has an error"
+            );
         }
     }
 

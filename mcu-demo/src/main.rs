@@ -413,7 +413,9 @@ fn check_h1(rep: &mut Report) {
     rep.check("Welch push", ok && welch.accumulator().segments() == 31);
     let df = welch.accumulator().df_hz();
     let band = (100.0, 300.0);
-    let got = peaks::pick_with(welch.accumulator().bins(), df, band, false, |k| welch.accumulator().h1(k));
+    let got = peaks::pick_with(welch.accumulator().bins(), df, band, false, |k| {
+        welch.accumulator().h1(k)
+    });
     let want = peaks::pick_with(welch.accumulator().bins(), df, band, false, |k| {
         Some(res.response(k as f32 * df))
     });
@@ -999,6 +1001,20 @@ fn bench_lk() {
         let r = measured(label, || t.track(black_box(&f)));
         black_box(r);
     }
+    // taking a template (the spline's prefilter and moments): once per target, or per refresh
+    let cfg = LkConfig::new(31, 31);
+    let Ok(mut t) = Lk::try_new(cfg) else {
+        return;
+    };
+    speckle(&mut scene, 0.0, 0.0);
+    let Ok(f) = Frame::new(&scene[..], SW, SH, SW) else {
+        return;
+    };
+    let r = measured(
+        "lk template 31 x 31, spline + [1 2 1] (once per target)",
+        || t.set_template(black_box(&f), 29, 25),
+    );
+    black_box(r.is_ok());
     // the coarse search: a jump the refinement alone does not catch
     let mut cfg = LkConfig::new(31, 31);
     cfg.search = 8;
