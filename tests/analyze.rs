@@ -134,7 +134,7 @@ fn read_modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr"
+        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method"
     );
     lines
         .map(|l| {
@@ -219,13 +219,13 @@ fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
             .unwrap_or(0);
         assert!(len > 1000, "{plot}: {len} bytes");
     }
-    // e2pr = exposure x frequency
+    // e2pr = exposure x frequency, then the method
     let m = std::fs::read_to_string(out.join("modes.csv")).unwrap();
     assert!(
         m.lines()
             .nth(1)
             .unwrap()
-            .ends_with(&format!(",{}", 0.002 * 8.0)),
+            .ends_with(&format!(",{},h1", 0.002 * 8.0)),
         "{m}"
     );
 }

@@ -13,7 +13,7 @@ fn modes(dir: &Path) -> Vec<(String, usize, usize, f64, f64)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr"
+        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method"
     );
     lines
         .map(|l| {

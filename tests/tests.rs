@@ -8,6 +8,7 @@ mod adversarial;
 mod analyze;
 mod centroid;
 mod formats;
+mod modal;
 mod plan;
 mod robustness;
 mod signal;
@@ -30,7 +31,16 @@ fn help_lists_every_subcommand() {
         .filter_map(|l| l.split_whitespace().next())
         .collect();
     for cmd in [
-        "study", "merge", "centroid", "frf", "upsample", "analyze", "render", "plan",
+        "study",
+        "merge",
+        "centroid",
+        "frf",
+        "upsample",
+        "analyze",
+        "render",
+        "plan",
+        "modal",
+        "simulate-field",
     ] {
         assert!(
             listed.contains(&cmd),

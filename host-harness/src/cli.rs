@@ -9,8 +9,10 @@ pub mod calibrate;
 pub mod centroid;
 pub mod frf;
 pub mod merge;
+pub mod modal;
 pub mod plan;
 pub mod render;
+pub mod simulate;
 pub mod study;
 pub mod track;
 pub mod upsample;
@@ -47,6 +49,12 @@ enum Command {
     /// Follow targets through frames (chosen points, or the blobs of the first frame):
     /// displacement.csv, a report and a plot; no accelerometer needed.
     Track(Box<track::Args>),
+    /// Output-only modal analysis (FDD, EFDD, SSI-cov) of a displacement file: frequencies,
+    /// damping and shapes without an accelerometer.
+    Modal(Box<modal::Args>),
+    /// Write a synthetic field record: displacements of a structure under ambient excitation
+    /// and its true modes.
+    SimulateField(simulate::Args),
     /// Write PNG frames of the simulated target, sharp and blurred.
     Render(render::Args),
     /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
@@ -67,6 +75,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Upsample(a) => upsample::run(a),
         Command::Analyze(a) => analyze::run(*a),
         Command::Track(a) => track::run(*a),
+        Command::Modal(a) => modal::run(*a),
+        Command::SimulateField(a) => simulate::run(a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),
         Command::Calibrate(a) => calibrate::run(a),

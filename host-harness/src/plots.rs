@@ -794,3 +794,149 @@ where
     root.present()?;
     Ok(())
 }
+
+/// The singular values of an output-only analysis: one curve per singular value in dB
+/// (`10 log10 s`) over `freq_hz`, the picked lines `(f_hz, s1, label)` marked and labelled,
+/// written as `path_stem.png` and `path_stem.svg`.
+pub fn write_svd_plot(
+    path_stem: &Path,
+    title: &str,
+    freq_hz: &[f64],
+    s: &[Vec<f64>],
+    picks: &[(f64, f64, String)],
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let (dir, name) = split_stem(path_stem)?;
+    let k = s.first().map_or(0, Vec::len);
+    let curves: Vec<Curve> = (0..k)
+        .map(|i| {
+            (
+                format!("s{}", i + 1),
+                exposure_colour(i, k),
+                freq_hz
+                    .iter()
+                    .zip(s)
+                    .skip(1)
+                    .map(|(&f, sv)| (f, decibels(sv[i])))
+                    .collect(),
+            )
+        })
+        .collect();
+    let xr = finite_range(freq_hz.iter().copied()).unwrap_or((0.0, 1.0));
+    figure!(dir, name, |r| draw_svd(r, title, xr, &curves, picks))
+}
+
+fn decibels(v: f64) -> f64 {
+    10.0 * v.max(f64::MIN_POSITIVE).log10()
+}
+
+fn draw_svd<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    xr: (f64, f64),
+    curves: &[Curve],
+    picks: &[(f64, f64, String)],
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (lo, hi) =
+        finite_range(curves.iter().flat_map(|c| c.2.iter().map(|p| p.1))).unwrap_or((-1.0, 1.0));
+    let mut chart = build_chart(
+        &root,
+        SINGLE,
+        title,
+        xr.0..xr.1,
+        lo - 3.0..hi + 6.0,
+        "frequency (Hz)",
+        "singular value (dB)",
+    )?;
+    for (label, colour, points) in curves {
+        draw_line(
+            &mut chart,
+            points.iter().copied(),
+            *colour,
+            1,
+            label.clone(),
+        )?;
+    }
+    for (f, v, label) in picks {
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((*f, decibels(*v)))
+                + Circle::new((0, 0), 5, TRANSDUCER.stroke_width(2))
+                + Text::new(label.clone(), (6, -16), (FONT, 13)),
+        ))?;
+    }
+    draw_legend(&mut chart, SINGLE)?;
+    root.present()?;
+    Ok(())
+}
+
+/// A stabilisation diagram: every pole `(f_hz, order, stable)` as a dot (grey) or a cross
+/// (stable), the modes' frequencies as vertical lines, written as `path_stem.png` and
+/// `path_stem.svg`.
+pub fn write_stabilisation_plot(
+    path_stem: &Path,
+    title: &str,
+    poles: &[(f64, usize, bool)],
+    modes_hz: &[f64],
+    f_max_hz: f64,
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let (dir, name) = split_stem(path_stem)?;
+    figure!(dir, name, |r| draw_stabilisation(
+        r, title, poles, modes_hz, f_max_hz
+    ))
+}
+
+fn draw_stabilisation<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    poles: &[(f64, usize, bool)],
+    modes_hz: &[f64],
+    f_max_hz: f64,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let top = poles.iter().map(|p| p.1).max().unwrap_or(2) as f64 + 2.0;
+    root.fill(&WHITE)?;
+    let mut chart = build_chart(
+        &root,
+        SINGLE,
+        title,
+        0.0..f_max_hz,
+        0.0..top,
+        "frequency (Hz)",
+        "model order",
+    )?;
+    for &f in modes_hz {
+        chart.draw_series(LineSeries::new(
+            [(f, 0.0), (f, top)],
+            RGBColor(200, 60, 40).stroke_width(1),
+        ))?;
+    }
+    let grey = RGBColor(170, 170, 170);
+    chart
+        .draw_series(
+            poles
+                .iter()
+                .filter(|p| !p.2)
+                .map(|p| Circle::new((p.0, p.1 as f64), 2, grey.filled())),
+        )?
+        .label("pole")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 3, grey.filled()));
+    chart
+        .draw_series(
+            poles
+                .iter()
+                .filter(|p| p.2)
+                .map(|p| Cross::new((p.0, p.1 as f64), 4, TRANSDUCER.stroke_width(1))),
+        )?
+        .label("stable (f, damping, MAC)")
+        .legend(|(x, y)| Cross::new((x + 10, y), 4, TRANSDUCER.stroke_width(1)));
+    draw_legend(&mut chart, SINGLE)?;
+    root.present()?;
+    Ok(())
+}

@@ -34,6 +34,7 @@
 pub mod columns;
 pub mod compensate;
 pub mod modal;
+pub mod oma;
 pub mod points;
 pub mod report;
 pub mod run;

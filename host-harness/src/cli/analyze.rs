@@ -39,12 +39,13 @@ pub struct Args {
     pub retime: bool,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
     /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
-    /// vision acceleration is computed in.
+    /// vision acceleration is computed in. Without it: output-only modal analysis of the
+    /// targets' displacements (FDD, EFDD, SSI-cov; as `modal`, docs/method.md §3.12).
     #[arg(long, value_name = "FILE.csv")]
-    pub accel: PathBuf,
-    /// Accelerometer sample rate, Hz. `N * fs / fps` must be an integer.
-    #[arg(long, value_name = "HZ")]
-    pub fs: f64,
+    pub accel: Option<PathBuf>,
+    /// Accelerometer sample rate, Hz (with --accel). `N * fs / fps` must be an integer.
+    #[arg(long, value_name = "HZ", requires = "accel")]
+    pub fs: Option<f64>,
     /// Column of the input (base) acceleration, the FRF input of both systems.
     #[arg(long, value_name = "NAME", default_value = "base_acc")]
     pub input_col: String,
@@ -77,9 +78,10 @@ pub struct Args {
     /// Centroid settings.
     #[command(flatten)]
     pub centroid: CentroidArgs,
-    /// Scale, millimetres per pixel.
+    /// Scale, millimetres per pixel (needed with --accel; without it the output-only analysis
+    /// stays in pixels).
     #[arg(long, value_name = "MM")]
-    pub mm_per_px: f64,
+    pub mm_per_px: Option<f64>,
     /// Image axis of the motion (`y`: positive up in the image; `x`: positive right).
     #[arg(long, value_enum, default_value_t = AxisArg::Y)]
     pub axis: AxisArg,
@@ -98,9 +100,10 @@ pub struct Args {
     /// Welch estimator settings (default: the rig's single whole-record Hann segment).
     #[command(flatten)]
     pub welch: WelchArgs,
-    /// Frequency bands of the modes, Hz: LO-HI,LO-HI,...
-    #[arg(long, value_name = "LO-HI,...", default_value = "5-15,25-45", value_parser = parse_bands)]
-    pub bands: Bands,
+    /// Frequency bands of the modes, Hz: LO-HI,LO-HI,... [default with --accel: 5-15,25-45;
+    /// without: peaks picked automatically]
+    #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
+    pub bands: Option<Bands>,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
@@ -170,13 +173,26 @@ pub enum AxisArg {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (fps, exposure_ms, notes) =
         analysis::run::resolve_rates(&args.frames, args.fps, args.exposure_ms, args.retime)?;
+    let Some(accel) = args.accel.clone() else {
+        return output_only(&args, fps, notes);
+    };
+    let fs = args
+        .fs
+        .ok_or_else(|| bad_input("--accel needs --fs (its sample rate, Hz)"))?;
+    let mm_per_px = args
+        .mm_per_px
+        .ok_or_else(|| bad_input("--accel needs --mm-per-px (the scale, mm per pixel)"))?;
+    let bands = match &args.bands {
+        Some(b) => b.pairs(),
+        None => parse_bands("5-15,25-45").map_err(bad_input)?.pairs(),
+    };
     if args.compensate_exposure && exposure_ms.is_none() {
         return Err(bad_input(
             "--compensate-exposure needs the exposure: give --exposure-ms (the frames do not \
              state it)",
         ));
     }
-    for (name, v) in [("--fps", fps), ("--mm-per-px", args.mm_per_px)] {
+    for (name, v) in [("--fps", fps), ("--mm-per-px", mm_per_px)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(bad_input(format!("{name} must be positive, got {v}")));
         }
@@ -200,7 +216,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("warning: {why}");
         }
     }
-    for &(lo, hi) in &args.bands.pairs() {
+    for &(lo, hi) in &bands {
         if hi > fps / 2.0 {
             return Err(bad_input(format!(
                 "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz at {} \
@@ -219,24 +235,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         frames: args.frames.clone(),
         retime: args.retime,
         accel: AccelInput {
-            path: args.accel.clone(),
-            fs: args.fs,
+            path: accel,
+            fs,
             input_col: args.input_col.clone(),
             output_col: args.output_col.clone(),
             time_col: args.time_col.clone(),
         },
         settings: Settings {
             frame_rate_hz: fps,
-            accel_rate_hz: args.fs,
+            accel_rate_hz: fs,
             time_offset_s,
             welch: args.welch.settings(),
-            bands: args.bands.pairs(),
+            bands,
             exposure_s: exposure_ms.map(|e| e / 1000.0),
             end_match: !args.no_end_match,
         },
         displacement: DisplacementSettings {
             lost_frames: args.lost_frames,
-            mm_per_px: args.mm_per_px,
+            mm_per_px,
             axis: match args.axis {
                 AxisArg::X => Axis::X,
                 AxisArg::Y => Axis::Y,
@@ -254,6 +270,67 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         force: args.force,
     };
     let outcome = analysis::run::run(&request)?;
+    super::stdout(&outcome.report)?;
+    outcome.result
+}
+
+/// `analyze` without `--accel`: the targets tracked, their displacements analysed output-only.
+fn output_only(args: &Args, fps: f64, notes: Vec<String>) -> anyhow::Result<()> {
+    let needs_accel = [
+        ("--compensate-exposure", args.compensate_exposure),
+        ("--accel-target", args.accel_target.is_some()),
+        ("--shape-reference", args.shape_reference.is_some()),
+        (
+            "--time-offset-s/--tick-offset",
+            args.time_offset_s.is_some() || args.tick_offset.is_some(),
+        ),
+    ];
+    if let Some((flag, _)) = needs_accel.iter().find(|(_, given)| *given) {
+        return Err(bad_input(format!(
+            "{flag} needs --accel (without it the analysis is output-only)"
+        )));
+    }
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(bad_input(format!("--fps must be positive, got {fps}")));
+    }
+    if let Some(s) = args.mm_per_px {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(bad_input(format!("--mm-per-px must be positive, got {s}")));
+        }
+    }
+    let bands = args.bands.as_ref().map(Bands::pairs).unwrap_or_default();
+    for &(lo, hi) in &bands {
+        if hi > fps / 2.0 {
+            return Err(bad_input(format!(
+                "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz)",
+                fps / 2.0
+            )));
+        }
+    }
+    let request = crate::analysis::oma::frames::FramesRequest {
+        frames: args.frames.clone(),
+        retime: args.retime,
+        fps,
+        centroid: args.centroid.config_with(None, args.points.is_some())?,
+        displacement: DisplacementSettings {
+            lost_frames: args.lost_frames,
+            mm_per_px: args.mm_per_px.unwrap_or(1.0),
+            axis: match args.axis {
+                AxisArg::X => Axis::X,
+                AxisArg::Y => Axis::Y,
+            },
+            invert: args.invert,
+        },
+        scaled: args.mm_per_px.is_some(),
+        targets: targets_request(args)?,
+        points_file: args.points.clone(),
+        welch: args.welch.settings(),
+        bands,
+        out: args.out.clone(),
+        force: args.force,
+        notes,
+    };
+    let outcome = crate::analysis::oma::frames::run(&request)?;
     super::stdout(&outcome.report)?;
     outcome.result
 }

@@ -61,14 +61,16 @@ pub struct ModeRow {
     pub e2pr: Option<f64>,
 }
 
-/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr` (`damping` and
-/// `e2pr` empty where absent; the E2PR rounded by [`round_e2pr`]).
+/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method`
+/// (`damping` and `e2pr` empty where absent; the E2PR rounded by [`round_e2pr`]; `method` `h1`:
+/// the modes of the FRFs).
 pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
-    let mut s = String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
+    let mut s =
+        String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method\n");
     for m in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},h1",
             m.system,
             m.mode,
             m.band_hz.0,

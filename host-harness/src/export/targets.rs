@@ -79,11 +79,11 @@ pub struct ModeRow {
     pub e2pr: Option<f64>,
 }
 
-/// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr`
-/// (`system` `accelerometer` for target 0, else `vision`; empty cells where absent).
+/// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method`
+/// (`system` `accelerometer` for target 0, else `vision`; empty cells where absent; `method`
+/// `h1`: the modes of the FRFs; output-only analysis writes the same columns).
 pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
-    let mut s =
-        String::from("system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr\n");
+    let mut s = String::from(MODES_HEADER);
     for m in rows {
         let system = if m.target == 0 {
             "accelerometer"
@@ -92,7 +92,7 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
         };
         let _ = writeln!(
             s,
-            "{system},{},{},{},{},{},{},{},{}",
+            "{system},{},{},{},{},{},{},{},{},h1",
             m.target,
             m.mode,
             m.band_hz.0,
@@ -119,15 +119,23 @@ pub struct ShapeRow {
     pub value: Complex64,
 }
 
-/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs`.
+/// The header of the multi-target `modes.csv`.
+pub const MODES_HEADER: &str =
+    "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method\n";
+
+/// The header of `shapes.csv`.
+pub const SHAPES_HEADER: &str = "mode,target,x_px,y_px,re,im,abs,method\n";
+
+/// `shapes.csv`: `mode,target,x_px,y_px,re,im,abs,method` (`method` `h1`: the shapes of the
+/// FRFs' fitted residues).
 pub fn shapes_csv(rows: &[ShapeRow]) -> Vec<u8> {
-    let mut s = String::from("mode,target,x_px,y_px,re,im,abs\n");
+    let mut s = String::from(SHAPES_HEADER);
     for r in rows {
         let (x, y) = r.xy_px;
         let c = r.value;
         let _ = writeln!(
             s,
-            "{},{},{x},{y},{},{},{}",
+            "{},{},{x},{y},{},{},{},h1",
             r.mode,
             r.target,
             c.re,

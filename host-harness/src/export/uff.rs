@@ -252,6 +252,82 @@ pub fn write_dataset58(d: &Dataset58<'_>) -> Result<Vec<u8>, UffError> {
     Ok(o.into_bytes())
 }
 
+/// One mode shape as a dataset 55, "data at nodes" (complex eigenvalue, first order):
+/// record 6 model type 1 (structural), analysis type 3 (complex eigenvalue), data
+/// characteristic 2 (three translations per node), specific data type 8 (displacement), data
+/// type 5 (complex), 3 values per node; record 7 load case and mode number; record 8 the
+/// eigenvalue `-zeta w + i w sqrt(1 - zeta^2)` (rad/s) and modal A and B (0); then per node its
+/// number and the complex x, y, z components (`6E13.5`). Read by pyuff (`read_sets`: `eig`,
+/// `node_nums`, `r1`, `r2`, `r3`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape55<'a> {
+    /// ID lines 1-5 (at most 80 characters each).
+    pub id_lines: [&'a str; 5],
+    /// Load case (record 7).
+    pub load_case: u32,
+    /// Mode number (record 7).
+    pub mode: u32,
+    /// Natural frequency, Hz.
+    pub f_hz: f64,
+    /// Damping ratio (0 when not identified).
+    pub damping: f64,
+    /// Per node: its number and the x, y, z components.
+    pub nodes: &'a [(u32, [Complex64; 3])],
+}
+
+/// One dataset 55 (see [`Shape55`]). Refuses non-finite values and over-long ID lines.
+pub fn write_dataset55(d: &Shape55<'_>) -> Result<Vec<u8>, UffError> {
+    let id = d.mode;
+    if d.nodes.is_empty() {
+        return Err(UffError::Empty { function_id: id });
+    }
+    let finite = |c: &Complex64| c.re.is_finite() && c.im.is_finite();
+    if let Some(index) = d.nodes.iter().position(|(_, v)| !v.iter().all(finite)) {
+        return Err(UffError::NotFinite {
+            function_id: id,
+            index,
+        });
+    }
+    let w = 2.0 * std::f64::consts::PI * d.f_hz;
+    let z = if d.damping.is_finite() {
+        d.damping
+    } else {
+        0.0
+    };
+    // `+ 0.0`: no negative zero for an undamped mode
+    let eig = Complex64::new(-z * w + 0.0, w * (1.0 - z * z).max(0.0).sqrt());
+    if !finite(&eig) {
+        return Err(UffError::NotFinite {
+            function_id: id,
+            index: 0,
+        });
+    }
+    let e = |x: f64| fortran_e(x, 13, 5);
+    let mut o = format!("{:>6}\n{:>6}{:74}\n", -1, 55, "");
+    push_id_lines(&mut o, id, &d.id_lines)?;
+    o += &format!("{:>10}{:>10}{:>10}{:>10}{:>10}{:>10}\n", 1, 3, 2, 8, 5, 3);
+    o += &format!("{:>10}{:>10}{:>10}{:>10}\n", 2, 6, d.load_case, d.mode);
+    o += &format!(
+        "{}{}{}{}{}{}\n",
+        e(eig.re),
+        e(eig.im),
+        e(0.0),
+        e(0.0),
+        e(0.0),
+        e(0.0)
+    );
+    for (node, v) in d.nodes {
+        o += &format!("{node:>10}\n");
+        for c in v {
+            o += &e(c.re);
+            o += &e(c.im);
+        }
+        o.push('\n');
+    }
+    o += &format!("{:>6}\n", -1);
+    Ok(o.into_bytes())
+}
+
 /// Refuses a dataset that cannot be written: no values, a non-finite value, a bad abscissa or a
 /// direction outside -6..=6.
 fn validate(d: &Dataset58<'_>) -> Result<(), UffError> {
@@ -310,8 +386,8 @@ fn record_text(
     })
 }
 
-/// Records 1-7: the five ID lines, the DOF identification and the data form.
-fn push_header_records(o: &mut String, d: &Dataset58<'_>) -> Result<(), UffError> {
+/// The five ID lines of dataset `id`, 80 columns each.
+fn push_id_lines<S: AsRef<str>>(o: &mut String, id: u32, lines: &[S; 5]) -> Result<(), UffError> {
     const ID_FIELDS: [&str; 5] = [
         "ID line 1",
         "ID line 2",
@@ -319,10 +395,16 @@ fn push_header_records(o: &mut String, d: &Dataset58<'_>) -> Result<(), UffError
         "ID line 4",
         "ID line 5",
     ];
-    let id = d.function_id;
-    for (line, field) in d.id_lines.iter().zip(ID_FIELDS) {
-        *o += &format!("{:<80}\n", record_text(id, field, line, 80)?);
+    for (line, field) in lines.iter().zip(ID_FIELDS) {
+        *o += &format!("{:<80}\n", record_text(id, field, line.as_ref(), 80)?);
     }
+    Ok(())
+}
+
+/// Records 1-7: the five ID lines, the DOF identification and the data form.
+fn push_header_records(o: &mut String, d: &Dataset58<'_>) -> Result<(), UffError> {
+    let id = d.function_id;
+    push_id_lines(o, id, &d.id_lines)?;
     *o += &format!(
         "{:>5}{:>10}{:>5}{:>10} {:<10}{:>10}{:>4} {:<10}{:>10}{:>4}\n",
         FUNCTION_TYPE_FRF,

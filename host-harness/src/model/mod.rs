@@ -11,6 +11,7 @@
 //!   [`grandstand::simulate`]).
 
 pub mod cantilever;
+pub mod field;
 pub mod grandstand;
 pub mod target;
 

@@ -1,0 +1,223 @@
+//! The Welch cross-spectral density matrix of K channels (docs/method.md §3.12): per frequency
+//! line the K x K Hermitian matrix `G[i][j] = E[conj(X_i) X_j]`, one-sided, as
+//! `scipy.signal.csd(x_i, x_j)` with the same window, segments, overlap, transform length and
+//! per-segment detrending (density scaling: `1 / (fs sum w^2)`, doubled except at 0 and at the
+//! Nyquist line of an even transform).
+
+use crate::bad_input;
+use firmware_core::spectrum::{Detrend, Window};
+use num_complex::Complex64;
+use realfft::RealFftPlanner;
+
+/// Welch settings of the cross-spectral matrix (resolved: every length known).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CsdConfig {
+    /// Window of each segment (periodic).
+    pub window: Window,
+    /// Samples per segment.
+    pub nperseg: usize,
+    /// Samples shared by consecutive segments (< nperseg).
+    pub noverlap: usize,
+    /// Transform length (>= nperseg).
+    pub nfft: usize,
+    /// Per-segment detrending.
+    pub detrend: Detrend,
+}
+
+/// The cross-spectral density matrices of K channels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Csd {
+    /// Line frequencies, Hz (`k fs / nfft`, `k = 0..=nfft/2`).
+    pub freq_hz: Vec<f64>,
+    /// Channels.
+    pub k: usize,
+    /// Per line, the K x K matrix row-major (`g[line][i * k + j] = G_ij`).
+    pub g: Vec<Vec<Complex64>>,
+    /// Segments averaged.
+    pub segments: usize,
+}
+
+impl Csd {
+    /// Line spacing, Hz.
+    pub fn df_hz(&self) -> f64 {
+        self.freq_hz.get(1).copied().unwrap_or(0.0)
+    }
+}
+
+/// The cross-spectral matrix of `channels` (equal lengths, sampled at `fs_hz`). Errors when
+/// the record is shorter than one segment or a sample is not finite (naming the channel).
+pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Result<Csd> {
+    let k = channels.len();
+    let n = channels.first().map_or(0, Vec::len);
+    if k == 0 {
+        return Err(bad_input("no channel to analyse"));
+    }
+    if channels.iter().any(|ch| ch.len() != n) {
+        return Err(bad_input("the channels have different lengths"));
+    }
+    for (i, ch) in channels.iter().enumerate() {
+        if let Some(at) = ch.iter().position(|v| !v.is_finite()) {
+            return Err(bad_input(format!(
+                "channel {}: sample {at} is not a finite number",
+                i + 1
+            )));
+        }
+    }
+    if c.nperseg == 0 || c.noverlap >= c.nperseg || c.nfft < c.nperseg {
+        return Err(bad_input(format!(
+            "invalid Welch settings: nperseg {}, noverlap {}, nfft {}",
+            c.nperseg, c.noverlap, c.nfft
+        )));
+    }
+    if n < c.nperseg {
+        return Err(bad_input(format!(
+            "the record has {n} samples, fewer than one segment (--nperseg {}): record longer \
+             or choose a shorter segment",
+            c.nperseg
+        )));
+    }
+    let step = c.nperseg - c.noverlap;
+    let segments = (n - c.nperseg) / step + 1;
+    let w: Vec<f64> = (0..c.nperseg)
+        .map(|i| f64::from(c.window.value(i, c.nperseg)))
+        .collect();
+    let s2: f64 = w.iter().map(|v| v * v).sum();
+    let lines = c.nfft / 2 + 1;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(c.nfft);
+    let mut input = fft.make_input_vec();
+    let mut spectra = vec![vec![Complex64::new(0.0, 0.0); lines]; k];
+    let mut g = vec![vec![Complex64::new(0.0, 0.0); k * k]; lines];
+    for s in 0..segments {
+        let start = s * step;
+        for (ch, out) in channels.iter().zip(spectra.iter_mut()) {
+            let seg = &ch[start..start + c.nperseg];
+            let mean = match c.detrend {
+                Detrend::Constant => seg.iter().sum::<f64>() / c.nperseg as f64,
+                _ => 0.0,
+            };
+            input.iter_mut().for_each(|v| *v = 0.0);
+            for ((o, v), wv) in input.iter_mut().zip(seg).zip(&w) {
+                *o = (v - mean) * wv;
+            }
+            fft.process(&mut input, out)
+                .map_err(|e| anyhow::anyhow!("internal: {e}"))?;
+        }
+        for (line, m) in g.iter_mut().enumerate() {
+            for i in 0..k {
+                let xi = spectra[i][line].conj();
+                for j in i..k {
+                    m[i * k + j] += xi * spectra[j][line];
+                }
+            }
+        }
+    }
+    let scale = 1.0 / (fs_hz * s2 * segments as f64);
+    for (line, m) in g.iter_mut().enumerate() {
+        let one_sided = if line == 0 || (c.nfft.is_multiple_of(2) && line == lines - 1) {
+            1.0
+        } else {
+            2.0
+        };
+        for i in 0..k {
+            for j in i..k {
+                let v = m[i * k + j] * (scale * one_sided);
+                m[i * k + j] = v;
+                m[j * k + i] = v.conj();
+            }
+            // the diagonal is real (a power spectral density)
+            m[i * k + i].im = 0.0;
+        }
+    }
+    Ok(Csd {
+        freq_hz: (0..lines)
+            .map(|l| l as f64 * fs_hz / c.nfft as f64)
+            .collect(),
+        k,
+        g,
+        segments,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The naive DFT of one windowed segment.
+    fn dft(seg: &[f64], nfft: usize) -> Vec<Complex64> {
+        (0..=nfft / 2)
+            .map(|l| {
+                seg.iter()
+                    .enumerate()
+                    .map(|(t, v)| {
+                        let a = -2.0 * std::f64::consts::PI * (l * t) as f64 / nfft as f64;
+                        Complex64::new(a.cos(), a.sin()) * v
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_matrix_equals_naive_sums_over_the_segments() {
+        let n = 300;
+        let x: Vec<f64> = (0..n)
+            .map(|i| (i as f64 * 0.37).sin() + 0.1 * i as f64)
+            .collect();
+        let y: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos() * 2.0).collect();
+        let c = CsdConfig {
+            window: Window::Hann,
+            nperseg: 64,
+            noverlap: 32,
+            nfft: 80,
+            detrend: Detrend::Constant,
+        };
+        let fs = 50.0;
+        let got = csd_matrix(&[x.clone(), y.clone()], fs, c).unwrap();
+        assert_eq!(got.segments, (n - 64) / 32 + 1);
+        let w: Vec<f64> = (0..64)
+            .map(|i| f64::from(Window::Hann.value(i, 64)))
+            .collect();
+        let s2: f64 = w.iter().map(|v| v * v).sum();
+        let mut want = vec![Complex64::new(0.0, 0.0); 41];
+        for s in 0..got.segments {
+            let seg = |v: &[f64]| -> Vec<f64> {
+                let part = &v[s * 32..s * 32 + 64];
+                let m = part.iter().sum::<f64>() / 64.0;
+                part.iter().zip(&w).map(|(a, b)| (a - m) * b).collect()
+            };
+            let (fx, fy) = (dft(&seg(&x), 80), dft(&seg(&y), 80));
+            for ((w, a), b) in want.iter_mut().zip(&fx).zip(&fy) {
+                *w += a.conj() * b;
+            }
+        }
+        for (l, want) in want.iter().enumerate() {
+            let d = if l == 0 || l == 40 { 1.0 } else { 2.0 };
+            let w = want * d / (fs * s2 * got.segments as f64);
+            let g = got.g[l][1];
+            assert!((g - w).norm() <= 1e-9 * (1.0 + w.norm()), "{l}: {g} {w}");
+            assert!((got.g[l][2] - w.conj()).norm() <= 1e-9 * (1.0 + w.norm()));
+        }
+    }
+
+    #[test]
+    fn short_records_and_bad_samples_are_refused() {
+        let c = CsdConfig {
+            window: Window::Hann,
+            nperseg: 64,
+            noverlap: 32,
+            nfft: 64,
+            detrend: Detrend::Constant,
+        };
+        let e = csd_matrix(&[vec![0.0; 10]], 10.0, c)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("fewer than one segment"), "{e}");
+        let mut v = vec![0.0; 100];
+        v[7] = f64::NAN;
+        let e = csd_matrix(&[vec![0.0; 100], v], 10.0, c)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("channel 2: sample 7"), "{e}");
+    }
+}

@@ -1,0 +1,194 @@
+//! `analyze` without an accelerometer: the frames' targets tracked as `analyze` tracks them
+//! (`--targets K`, `--points`, or one target), their displacements (mm with a scale, else
+//! pixels) analysed output-only ([`super::run`]), `displacement.csv` written beside the modes.
+
+use super::input::Records;
+use super::run::Output;
+use super::OmaSettings;
+use crate::analysis::run::{Outcome, TargetsRequest};
+use crate::analysis::targets::{self, Tracks};
+use crate::chain::displacement::{displacement_mm, DisplacementSettings};
+use crate::export::targets as export;
+use crate::frames::{centroid_source, discover_frames};
+use firmware_core::centroid::CentroidConfig;
+use std::path::PathBuf;
+
+/// What `analyze` without `--accel` asks for.
+#[derive(Debug, Clone)]
+pub struct FramesRequest {
+    /// The frames (as `--frames`).
+    pub frames: String,
+    /// `--retime`.
+    pub retime: bool,
+    /// Frame rate, Hz.
+    pub fps: f64,
+    /// Centroid settings.
+    pub centroid: CentroidConfig,
+    /// Sign, axis, lost frames; `mm_per_px` 1 when no scale was given (pixels).
+    pub displacement: DisplacementSettings,
+    /// Whether a scale was given (`mm`), else the values are pixels.
+    pub scaled: bool,
+    /// Several targets, or one.
+    pub targets: Option<TargetsRequest>,
+    /// The points file (an input).
+    pub points_file: Option<PathBuf>,
+    /// The Welch flags, resolved against the record when it is read.
+    pub welch: crate::chain::frf::WelchSettings,
+    /// Bands, Hz (empty: automatic peaks).
+    pub bands: Vec<(f64, f64)>,
+    /// Output directory and `--force`.
+    pub out: PathBuf,
+    /// `--force`.
+    pub force: bool,
+    /// Notes on the frames' rate.
+    pub notes: Vec<String>,
+}
+
+/// Tracks the targets and runs the output-only analysis.
+pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
+    let found = discover_frames(&req.frames)?;
+    let source = found.source.clone().retimed(req.retime)?;
+    let tracks: Tracks = match &req.targets {
+        Some(t) => match &t.points {
+            Some((points, rule)) => {
+                crate::analysis::points::track_points(
+                    &source,
+                    req.fps,
+                    points,
+                    &req.centroid,
+                    *rule,
+                )?
+                .0
+            }
+            None => targets::track(&source, req.fps, &req.centroid, t.k, t.gate_px)?,
+        },
+        None => {
+            let (c, depth) = centroid_source(&source, req.fps, &req.centroid)?;
+            let first = c
+                .iter()
+                .find_map(|c| c.position())
+                .map(|(x, y)| (f64::from(x), f64::from(y)))
+                .unwrap_or((f64::NAN, f64::NAN));
+            Tracks {
+                centroids: vec![c],
+                first: vec![first],
+                refused: vec![0],
+                depth,
+            }
+        }
+    };
+    let mut records = Records {
+        fs_hz: req.fps,
+        unit: if req.scaled { "mm" } else { "px" }.to_string(),
+        targets: Vec::new(),
+        channels: Vec::new(),
+        filled: Vec::new(),
+        left_out: Vec::new(),
+    };
+    let mut mm: Vec<Option<Vec<f64>>> = Vec::new();
+    let mut lost: Vec<Vec<bool>> = Vec::new();
+    for (t, c) in tracks.centroids.iter().enumerate() {
+        let d = match displacement_mm(c, &req.displacement) {
+            Ok(d) => d,
+            Err(e) => {
+                records.left_out.push((t + 1, format!("{e:#}")));
+                mm.push(None);
+                lost.push(c.iter().map(|c| c.position().is_none()).collect());
+                continue;
+            }
+        };
+        lost.push(d.lost.clone());
+        if d.failed() {
+            records.left_out.push((
+                t + 1,
+                format!(
+                    "{} of {} frames lost (more than {:.0} %)",
+                    d.lost_count,
+                    d.mm.len(),
+                    100.0 * crate::analysis::MAX_LOST_FRACTION
+                ),
+            ));
+            mm.push(None);
+            continue;
+        }
+        mm.push(Some(d.mm.clone()));
+        records.targets.push((t + 1, tracks.first.get(t).copied()));
+        records.channels.push(d.mm);
+        records.filled.push(d.lost_count);
+    }
+    if records.channels.is_empty() {
+        let why: Vec<String> = records
+            .left_out
+            .iter()
+            .map(|(t, w)| format!("target {t}: {w}"))
+            .collect();
+        return Err(crate::bad_input(format!(
+            "no target could be analysed ({})",
+            why.join("; ")
+        )));
+    }
+    let n = records.channels[0].len();
+    let settings = settings(req, n)?;
+    let rows: Vec<export::Track<'_>> = tracks
+        .centroids
+        .iter()
+        .zip(&mm)
+        .zip(&lost)
+        .map(|((c, m), l)| export::Track {
+            centroids: c,
+            mm: m.as_deref().filter(|_| req.scaled),
+            lost: Some(l),
+        })
+        .collect();
+    let displacement = export::displacement_csv(&rows, req.fps, 0.0);
+    let mut inputs = vec![PathBuf::from(&req.frames)];
+    inputs.extend(req.points_file.clone());
+    let mut preamble = format!(
+        "frames: {} ({} frames at {} fps), no accelerometer: output-only analysis\n",
+        req.frames, n, req.fps
+    );
+    for note in &req.notes {
+        preamble.push_str(&format!("note: {note}\n"));
+    }
+    super::run::run(
+        &records,
+        &settings,
+        &Output {
+            out: &req.out,
+            force: req.force,
+            command: "analyze",
+            inputs,
+            plots: true,
+            along_x: req.displacement.axis == crate::analysis::Axis::X,
+            preamble,
+            extra: vec![("displacement.csv".to_string(), displacement)],
+        },
+    )
+}
+
+/// The analysis settings of a record of `n` frames.
+fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
+    let w = &req.welch;
+    let mut s = OmaSettings::new(req.fps, n, w.nperseg);
+    s.csd.window = w.window;
+    s.csd.detrend = w.detrend;
+    s.csd.noverlap = w.noverlap.unwrap_or(s.csd.nperseg / 2);
+    s.csd.nfft = w.nfft.unwrap_or(s.csd.nperseg);
+    if s.csd.nperseg > n || n < 64 {
+        return Err(crate::bad_input(format!(
+            "the record has {n} frames, fewer than one segment ({} frames, 64 at least)",
+            s.csd.nperseg
+        )));
+    }
+    if s.csd.noverlap >= s.csd.nperseg || s.csd.nfft < s.csd.nperseg {
+        return Err(crate::bad_input(format!(
+            "--noverlap {} must be below --nperseg {} and --nfft {} at least --nperseg",
+            s.csd.noverlap, s.csd.nperseg, s.csd.nfft
+        )));
+    }
+    s.bands = req.bands.clone();
+    if n < 4 * s.ssi.block_rows {
+        s.ssi.block_rows = (n / 4).max(2);
+    }
+    Ok(s)
+}

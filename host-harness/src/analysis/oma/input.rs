@@ -1,0 +1,295 @@
+//! Displacement records for output-only analysis, read from a CSV file: `track`'s and
+//! `analyze`'s `displacement.csv` (`frame,t_s,target,cx,cy,...,disp_mm,lost`, one row per frame
+//! and target), or a wide file from any other tool (a time column `t_s`, `time` or `t`, then one
+//! column per target; an empty cell is a lost sample).
+
+use crate::analysis::MAX_LOST_FRACTION;
+use crate::bad_input;
+use crate::lost_frames::fill_lost_frames;
+use std::path::Path;
+
+/// Which coordinate of `displacement.csv` is the motion when it has no `disp_mm`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PixelAxis {
+    /// `-cy` (positive up in the image).
+    Y,
+    /// `cx` (positive right).
+    X,
+}
+
+/// The records read: one per target kept, and why the others were left out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Records {
+    /// Sample rate, Hz.
+    pub fs_hz: f64,
+    /// Unit of the values (`mm` or `px`; a wide file's are its own).
+    pub unit: String,
+    /// Targets kept: their number (as in the file) and first position (px, when known).
+    pub targets: Vec<(usize, Option<(f64, f64)>)>,
+    /// One record per kept target, lost samples filled by linear interpolation.
+    pub channels: Vec<Vec<f64>>,
+    /// Lost samples filled, per kept target.
+    pub filled: Vec<usize>,
+    /// Targets left out, with the reason.
+    pub left_out: Vec<(usize, String)>,
+}
+
+/// Per target (its number) the samples (`None`: lost).
+type Columns = Vec<(usize, Vec<Option<f64>>)>;
+
+/// One row of `displacement.csv`: frame, target, millimetres, pixels along the axis, `(cx, cy)`.
+type Cell = (usize, usize, Option<f64>, Option<f64>, Option<(f64, f64)>);
+
+/// What a file gives: times, columns, unit, first positions.
+type Parsed = (Vec<f64>, Columns, String, Vec<Option<(f64, f64)>>);
+
+/// Reads `path` (see the module documentation). `fps`: the sample rate when given, else from
+/// the time column (which must then be regular within 1 % of a period). Targets with more than
+/// [`MAX_LOST_FRACTION`] lost samples, or constant, are left out and named; a cell that is not
+/// a number is an error naming the row and column.
+pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Records> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| bad_input(format!("{}: cannot read: {e}", path.display())))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?
+        .iter()
+        .map(|h| h.trim().to_string())
+        .collect();
+    let rows: Vec<csv::StringRecord> = reader
+        .records()
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let at = |name: &str| header.iter().position(|h| h == name);
+    let num = |row: usize, col: usize, r: &csv::StringRecord| -> anyhow::Result<Option<f64>> {
+        let cell = r.get(col).unwrap_or("").trim();
+        if cell.is_empty() {
+            return Ok(None);
+        }
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => Err(bad_input(format!(
+                "{}: row {}: column {}: {cell:?} is not a finite number",
+                path.display(),
+                row + 2,
+                header[col]
+            ))),
+        }
+    };
+    let (times, columns, unit, firsts): Parsed =
+        if let (Some(frame), Some(target)) = (at("frame"), at("target")) {
+            // displacement.csv: one row per frame and target
+            let t_col = at("t_s");
+            let (cx, cy, mm, lost) = (at("cx"), at("cy"), at("disp_mm"), at("lost"));
+            let mut ids: Vec<usize> = Vec::new();
+            let mut cells: Vec<Cell> = Vec::new();
+            let mut frames = 0usize;
+            let mut t_of: Vec<Option<f64>> = Vec::new();
+            for (i, r) in rows.iter().enumerate() {
+                let f = num(i, frame, r)?.ok_or_else(|| {
+                    bad_input(format!(
+                        "{}: row {}: no frame number",
+                        path.display(),
+                        i + 2
+                    ))
+                })? as usize;
+                let t = num(i, target, r)?.ok_or_else(|| {
+                    bad_input(format!(
+                        "{}: row {}: no target number",
+                        path.display(),
+                        i + 2
+                    ))
+                })? as usize;
+                if !ids.contains(&t) {
+                    ids.push(t);
+                }
+                frames = frames.max(f + 1);
+                if t_of.len() < frames {
+                    t_of.resize(frames, None);
+                }
+                if let Some(c) = t_col {
+                    t_of[f] = num(i, c, r)?;
+                }
+                let is_lost = match lost {
+                    Some(c) => num(i, c, r)? == Some(1.0),
+                    None => false,
+                };
+                let xy = match (cx, cy) {
+                    (Some(a), Some(b)) => num(i, a, r)?.zip(num(i, b, r)?),
+                    _ => None,
+                };
+                let pixel = xy.map(|(x, y)| match axis {
+                    PixelAxis::Y => -y,
+                    PixelAxis::X => x,
+                });
+                let disp = match mm {
+                    Some(c) => num(i, c, r)?,
+                    None => None,
+                };
+                let (disp, pixel) = if is_lost { (None, None) } else { (disp, pixel) };
+                cells.push((f, t, disp, pixel, xy));
+            }
+            ids.sort_unstable();
+            // millimetres when every target has them wherever it is not lost
+            let use_mm = mm.is_some()
+                && cells.iter().all(|c| c.2.is_some() || c.3.is_none())
+                && cells.iter().any(|c| c.2.is_some());
+            let mut cols: Vec<(usize, Vec<Option<f64>>)> =
+                ids.iter().map(|&t| (t, vec![None; frames])).collect();
+            let mut firsts: Vec<Option<(f64, f64)>> = vec![None; ids.len()];
+            for (f, t, disp, pixel, xy) in cells {
+                let Ok(k) = ids.binary_search(&t) else {
+                    continue;
+                };
+                cols[k].1[f] = if use_mm { disp } else { pixel };
+                if firsts[k].is_none() {
+                    firsts[k] = xy;
+                }
+            }
+            let times = match t_col {
+                Some(_) if fps.is_none() => t_of
+                    .iter()
+                    .enumerate()
+                    .map(|(f, t)| {
+                        t.ok_or_else(|| {
+                            bad_input(format!(
+                                "{}: frame {f} has no time (t_s); give --fps",
+                                path.display()
+                            ))
+                        })
+                    })
+                    .collect::<anyhow::Result<_>>()?,
+                _ => Vec::new(),
+            };
+            (
+                times,
+                cols,
+                if use_mm { "mm" } else { "px" }.to_string(),
+                firsts,
+            )
+        } else {
+            // a wide file: a time column, then one column per target
+            let t_col = ["t_s", "time", "t"].iter().find_map(|n| at(n));
+            let mut cols: Vec<(usize, Vec<Option<f64>>)> = Vec::new();
+            for (c, _) in header.iter().enumerate().filter(|(c, _)| Some(*c) != t_col) {
+                let mut v = Vec::with_capacity(rows.len());
+                for (i, r) in rows.iter().enumerate() {
+                    v.push(num(i, c, r)?);
+                }
+                cols.push((cols.len() + 1, v));
+            }
+            let times = match t_col {
+                Some(c) if fps.is_none() => rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        num(i, c, r)?.ok_or_else(|| {
+                            bad_input(format!("{}: row {}: no time", path.display(), i + 2))
+                        })
+                    })
+                    .collect::<anyhow::Result<_>>()?,
+                Some(_) => Vec::new(),
+                None if fps.is_some() => Vec::new(),
+                None => {
+                    return Err(bad_input(format!(
+                        "{}: no time column (t_s, time or t) and no --fps",
+                        path.display()
+                    )))
+                }
+            };
+            let n = cols.len();
+            (times, cols, "the file's units".to_string(), vec![None; n])
+        };
+    let samples = columns.first().map_or(0, |c| c.1.len());
+    if columns.is_empty() || samples < 2 {
+        return Err(bad_input(format!(
+            "{}: no records to analyse ({} targets, {samples} samples)",
+            path.display(),
+            columns.len()
+        )));
+    }
+    let fs_hz = match fps {
+        Some(f) if f.is_finite() && f > 0.0 => f,
+        Some(f) => return Err(bad_input(format!("--fps must be positive, got {f}"))),
+        None => rate_of(&times, path)?,
+    };
+    let mut out = Records {
+        fs_hz,
+        unit,
+        targets: Vec::new(),
+        channels: Vec::new(),
+        filled: Vec::new(),
+        left_out: Vec::new(),
+    };
+    for ((t, col), first) in columns.into_iter().zip(firsts) {
+        let valid: Vec<bool> = col.iter().map(Option::is_some).collect();
+        let lost = valid.iter().filter(|v| !**v).count();
+        if lost as f64 > MAX_LOST_FRACTION * samples as f64 {
+            out.left_out.push((
+                t,
+                format!(
+                    "{lost} of {samples} samples lost (more than {:.0} %)",
+                    100.0 * MAX_LOST_FRACTION
+                ),
+            ));
+            continue;
+        }
+        let mut v: Vec<f64> = col.iter().map(|x| x.unwrap_or(0.0)).collect();
+        let filled = fill_lost_frames(&mut v, &valid);
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        if hi - lo <= 1e-12 * hi.abs().max(lo.abs()).max(1e-300) {
+            out.left_out
+                .push((t, "constant: it does not move (a dead target?)".to_string()));
+            continue;
+        }
+        out.targets.push((t, first));
+        out.channels.push(v);
+        out.filled.push(filled);
+    }
+    if out.channels.is_empty() {
+        let why: Vec<String> = out
+            .left_out
+            .iter()
+            .map(|(t, w)| format!("target {t}: {w}"))
+            .collect();
+        return Err(bad_input(format!(
+            "{}: no target left to analyse ({})",
+            path.display(),
+            why.join("; ")
+        )));
+    }
+    Ok(out)
+}
+
+/// The sample rate of a regular time column: `(n - 1) / (t_last - t_first)`, every step within
+/// 1 % of the period.
+fn rate_of(times: &[f64], path: &Path) -> anyhow::Result<f64> {
+    let n = times.len();
+    let span = times[n - 1] - times[0];
+    if span.is_nan() || span <= 0.0 {
+        return Err(bad_input(format!(
+            "{}: the time column does not increase; give --fps",
+            path.display()
+        )));
+    }
+    let period = span / (n - 1) as f64;
+    for (i, w) in times.windows(2).enumerate() {
+        if ((w[1] - w[0]) - period).abs() > 0.01 * period {
+            return Err(bad_input(format!(
+                "{}: sample {} is {} s after the one before, the record's period is {period} s: \
+                 the samples must be regular (resample first, or give --fps)",
+                path.display(),
+                i + 1,
+                w[1] - w[0]
+            )));
+        }
+    }
+    Ok(1.0 / period)
+}

@@ -1,0 +1,241 @@
+//! Covariance-driven stochastic subspace identification (SSI-cov) with a stabilisation
+//! diagram (docs/method.md §3.12): output correlations, their block Toeplitz matrix, its SVD,
+//! a state-space model per order, the model's poles and shapes, poles stable from one order
+//! to the next, and the stable poles clustered into modes.
+
+use crate::analysis::modal::{mac, normalise_shape};
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// Settings of SSI-cov.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SsiRule {
+    /// Block rows `i` of the Toeplitz matrix (correlation lags 1 .. 2i - 1).
+    pub block_rows: usize,
+    /// Highest model order (even); orders 2, 4, ... up to it.
+    pub max_order: usize,
+    /// Stable in frequency: relative change from the order below at most this.
+    pub df_max: f64,
+    /// Stable in damping: relative change at most this.
+    pub dz_max: f64,
+    /// Stable in shape: MAC with the order below's pole at least this.
+    pub mac_min: f64,
+    /// Physical poles only: damping ratio in `(0, zeta_max)`.
+    pub zeta_max: f64,
+    /// Frequency range of the poles kept, Hz.
+    pub f_range_hz: (f64, f64),
+}
+
+/// One pole of one model order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pole {
+    /// Model order.
+    pub order: usize,
+    /// Undamped natural frequency, Hz.
+    pub f_hz: f64,
+    /// Damping ratio.
+    pub damping: f64,
+    /// Shape at the channels (unnormalised).
+    pub shape: Vec<Complex64>,
+    /// Stable with a pole of the order below (frequency, damping and shape).
+    pub stable: bool,
+}
+
+/// A mode: stable poles clustered.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SsiMode {
+    /// Median frequency of the cluster's poles, Hz.
+    pub f_hz: f64,
+    /// Median damping ratio.
+    pub damping: f64,
+    /// The mean of the cluster's poles' shapes (each scaled to its largest component).
+    pub shape: Vec<Complex64>,
+    /// Stable poles in the cluster.
+    pub poles: usize,
+}
+
+/// The poles of every order of the records `channels` (mean removed here) sampled at
+/// `fs_hz`, each marked stable or not.
+pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result<Vec<Pole>> {
+    let k = channels.len();
+    let n = channels.first().map_or(0, Vec::len);
+    let i = rule.block_rows;
+    if k == 0 || i < 2 || n < 4 * i {
+        return Err(crate::bad_input(format!(
+            "SSI-cov: {n} samples are too few for {i} block rows (at least {})",
+            4 * i
+        )));
+    }
+    let y: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|c| {
+            let m = c.iter().sum::<f64>() / n as f64;
+            c.iter().map(|v| v - m).collect()
+        })
+        .collect();
+    // R_l = 1/(N - l) sum_t y(t + l) y(t)^T, l = 1 .. 2i - 1
+    let lags = 2 * i;
+    let mut r = vec![DMatrix::<f64>::zeros(k, k); lags];
+    for (l, rl) in r.iter_mut().enumerate().skip(1) {
+        for a in 0..k {
+            for b in 0..k {
+                let s: f64 = y[a][l..]
+                    .iter()
+                    .zip(&y[b][..n - l])
+                    .map(|(p, q)| p * q)
+                    .sum();
+                rl[(a, b)] = s / (n - l) as f64;
+            }
+        }
+    }
+    // block Toeplitz: block (row a, column b) = R_{i + a - b}
+    let mut t = DMatrix::<f64>::zeros(i * k, i * k);
+    for a in 0..i {
+        for b in 0..i {
+            let lag = i + a - b;
+            t.view_mut((a * k, b * k), (k, k)).copy_from(&r[lag]);
+        }
+    }
+    let svd = t.svd(true, false);
+    let (u, sv) = (
+        svd.u
+            .ok_or_else(|| anyhow::anyhow!("internal: SVD without U"))?,
+        svd.singular_values,
+    );
+    // singular values are not sorted by nalgebra: order them
+    let mut order: Vec<usize> = (0..sv.len()).collect();
+    order.sort_by(|&a, &b| sv[b].total_cmp(&sv[a]));
+    let max_order = rule.max_order.min(i * k - k) & !1;
+    let mut all: Vec<Pole> = Vec::new();
+    let mut below: Vec<Pole> = Vec::new();
+    for ord in (2..=max_order).step_by(2) {
+        let mut o = DMatrix::<f64>::zeros(i * k, ord);
+        for (c, &j) in order.iter().take(ord).enumerate() {
+            let scale = sv[j].max(0.0).sqrt();
+            o.set_column(c, &(u.column(j) * scale));
+        }
+        let up = o.rows(0, (i - 1) * k).into_owned();
+        let down = o.rows(k, (i - 1) * k).into_owned();
+        let Ok(pinv) = up.pseudo_inverse(1e-12) else {
+            continue;
+        };
+        let a = pinv * down;
+        let c = o.rows(0, k).into_owned();
+        let mut here = Vec::new();
+        for (lambda, psi) in eigenpairs(&a) {
+            if lambda.im <= 0.0 {
+                continue;
+            }
+            let s = lambda.ln() * fs_hz;
+            let wn = s.norm();
+            let (f_hz, damping) = (wn / (2.0 * PI), -s.re / wn);
+            if !(damping > 0.0 && damping < rule.zeta_max)
+                || f_hz < rule.f_range_hz.0
+                || f_hz >= rule.f_range_hz.1
+            {
+                continue;
+            }
+            let shape: Vec<Complex64> = (0..k)
+                .map(|row| (0..ord).map(|col| psi[col] * c[(row, col)]).sum())
+                .collect();
+            let stable = below.iter().any(|p: &Pole| {
+                (p.f_hz - f_hz).abs() <= rule.df_max * f_hz
+                    && (p.damping - damping).abs() <= rule.dz_max * damping
+                    && mac(&p.shape, &shape) >= rule.mac_min
+            });
+            here.push(Pole {
+                order: ord,
+                f_hz,
+                damping,
+                shape,
+                stable,
+            });
+        }
+        all.extend(here.iter().cloned());
+        below = here;
+    }
+    Ok(all)
+}
+
+/// Eigenvalues of a real square matrix with a unit eigenvector each (inverse iteration).
+fn eigenpairs(a: &DMatrix<f64>) -> Vec<(Complex64, DVector<Complex64>)> {
+    a.clone()
+        .complex_eigenvalues()
+        .iter()
+        .filter_map(|&l| eigenvector(a, l).map(|v| (l, v)))
+        .collect()
+}
+
+/// A unit eigenvector of `a` for the eigenvalue `l` by inverse iteration.
+fn eigenvector(a: &DMatrix<f64>, l: Complex64) -> Option<DVector<Complex64>> {
+    let n = a.nrows();
+    // shifted a little off the eigenvalue so that the solve is not singular
+    let shift = l + Complex64::new(1e-10 * (1.0 + l.norm()), 1e-10 * (1.0 + l.norm()));
+    let m = DMatrix::<Complex64>::from_fn(n, n, |i, j| {
+        Complex64::new(a[(i, j)], 0.0)
+            - if i == j {
+                shift
+            } else {
+                Complex64::new(0.0, 0.0)
+            }
+    });
+    let lu = m.lu();
+    let mut v = DVector::<Complex64>::from_element(n, Complex64::new(1.0, 0.0));
+    for _ in 0..3 {
+        let w = lu.solve(&v)?;
+        let norm = w.norm();
+        if !(norm.is_finite() && norm > 0.0) {
+            return None;
+        }
+        v = w / Complex64::new(norm, 0.0);
+    }
+    Some(v)
+}
+
+/// Clusters the stable poles into modes: poles taken by frequency, each joins the first
+/// cluster whose first pole is within `df_max` (relative) in frequency and `mac_min` in MAC
+/// (so two close modes with different shapes stay apart, and a chain of poles cannot merge
+/// them), else starts one; clusters with at least `min_poles` poles are modes.
+pub fn cluster(poles: &[Pole], (df_max, mac_min): (f64, f64), min_poles: usize) -> Vec<SsiMode> {
+    let mut stable: Vec<&Pole> = poles.iter().filter(|p| p.stable).collect();
+    stable.sort_by(|a, b| a.f_hz.total_cmp(&b.f_hz));
+    let mut groups: Vec<Vec<&Pole>> = Vec::new();
+    for p in stable {
+        let home = groups.iter_mut().find(|g| {
+            g.first().is_some_and(|q| {
+                (p.f_hz - q.f_hz).abs() <= df_max * q.f_hz && mac(&p.shape, &q.shape) >= mac_min
+            })
+        });
+        match home {
+            Some(g) => g.push(p),
+            None => groups.push(vec![p]),
+        }
+    }
+    groups
+        .into_iter()
+        .filter(|g| g.len() >= min_poles)
+        .map(|g| {
+            let median = |mut v: Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let f_hz = median(g.iter().map(|p| p.f_hz).collect());
+            let damping = median(g.iter().map(|p| p.damping).collect());
+            // the mean of the poles' shapes, each scaled to its largest component first
+            let k = g.first().map_or(0, |p| p.shape.len());
+            let mut shape = vec![Complex64::new(0.0, 0.0); k];
+            for p in &g {
+                for (o, v) in shape.iter_mut().zip(normalise_shape(&p.shape)) {
+                    *o += v;
+                }
+            }
+            SsiMode {
+                f_hz,
+                damping,
+                shape,
+                poles: g.len(),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,326 @@
+//! Output-only modal analysis from the command line: `simulate-field` writes a synthetic
+//! ambient record of a five-storey shear frame with its true modes, `modal` identifies them
+//! (FDD, EFDD, SSI-cov) and writes modes.csv, shapes.csv, svd.csv, shapes.uff and the figures;
+//! bad records are named.
+
+use crate::util::{assert_exit_2, assert_ok, harness};
+use std::path::Path;
+
+/// `(method, mode, f_hz, damping)` from modes.csv.
+fn modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
+    let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method"
+    );
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            assert_eq!(c[0], "vision");
+            assert_eq!(c[1], "", "a mode belongs to all targets");
+            (
+                c[9].to_string(),
+                c[2].parse().unwrap(),
+                c[5].parse().unwrap(),
+                c[7].parse().unwrap_or(f64::NAN),
+            )
+        })
+        .collect()
+}
+
+/// `(mode, f_hz, damping, shape)` from truth.csv.
+fn truth(dir: &Path) -> Vec<(f64, f64, Vec<f64>)> {
+    let text = std::fs::read_to_string(dir.join("truth.csv")).unwrap();
+    let mut out: Vec<(f64, f64, Vec<f64>)> = Vec::new();
+    for l in text.lines().skip(1) {
+        let c: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+        let m = c[0] as usize;
+        if out.len() < m {
+            out.push((c[1], c[2], Vec::new()));
+        }
+        out[m - 1].2.push(c[4]);
+    }
+    out
+}
+
+#[test]
+fn the_shear_frame_is_identified_without_an_accelerometer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (field, out) = (tmp.path().join("field"), tmp.path().join("modal"));
+    assert_ok(&harness(&[
+        "simulate-field",
+        "--minutes",
+        "60",
+        "--seed",
+        "3",
+        "--out",
+        field.to_str().unwrap(),
+    ]));
+    let o = harness(&[
+        "modal",
+        "--displacement",
+        field.join("displacement.csv").to_str().unwrap(),
+        "--nperseg",
+        "2048",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    for f in [
+        "modes.csv",
+        "shapes.csv",
+        "svd.csv",
+        "shapes.uff",
+        "svd.png",
+        "svd.svg",
+        "stabilisation.png",
+        "stabilisation.svg",
+        "report.txt",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let truth = truth(&field);
+    let found = modes(&out);
+    let df = 60.0 / 2048.0;
+    for method in ["fdd", "efdd", "ssi"] {
+        let of: Vec<_> = found.iter().filter(|m| m.0 == method).collect();
+        assert_eq!(of.len(), 5, "{method}: {of:?}");
+        for (m, (f, z, _)) in of.iter().zip(&truth) {
+            // SSI within a line; EFDD two; FDD's peak line within half the half-power band
+            let tol = match method {
+                "ssi" => df,
+                "efdd" => 2.0 * df,
+                _ => z * f,
+            };
+            assert!((m.2 - f).abs() <= tol, "{method} {}: {} vs {f}", m.1, m.2);
+            if method == "ssi" {
+                assert!(
+                    (m.3 / z - 1.0).abs() <= 0.25,
+                    "{method} {}: {} vs {z}",
+                    m.1,
+                    m.3
+                );
+            }
+        }
+    }
+    // the shapes: one row per mode, method and target, MAC >= 0.99 against the truth
+    let text = std::fs::read_to_string(out.join("shapes.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "mode,target,x_px,y_px,re,im,abs,method"
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 5 * 5);
+    for method in ["fdd", "efdd", "ssi"] {
+        for (m, (_, _, shape)) in truth.iter().enumerate() {
+            let got: Vec<f64> = rows
+                .iter()
+                .filter(|r| r[7] == method && r[0] == (m + 1).to_string())
+                .map(|r| r[4].parse().unwrap())
+                .collect();
+            let ab: f64 = got.iter().zip(shape).map(|(a, b)| a * b).sum();
+            let mac = ab * ab
+                / (got.iter().map(|a| a * a).sum::<f64>()
+                    * shape.iter().map(|b| b * b).sum::<f64>());
+            assert!(mac >= 0.99, "{method} mode {}: MAC {mac}", m + 1);
+        }
+    }
+    let svd = std::fs::read_to_string(out.join("svd.csv")).unwrap();
+    assert!(svd.starts_with("freq_hz,s1,s2,s3,s4,s5\n"));
+    assert_eq!(svd.lines().count(), 1 + 1025);
+    // the UFF: one dataset 55 per mode and method
+    let uff = std::fs::read_to_string(out.join("shapes.uff")).unwrap();
+    assert_eq!(uff.matches("\n    55").count(), 15);
+}
+
+#[test]
+fn bad_records_are_named_and_bad_targets_left_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |name: &str, rows: &dyn Fn(usize) -> String, n: usize, header: &str| {
+        let p = tmp.path().join(name);
+        let mut s = String::from(header);
+        for i in 0..n {
+            s.push_str(&rows(i));
+        }
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let run = |p: &Path, out: &str| {
+        harness(&[
+            "modal",
+            "--displacement",
+            p.to_str().unwrap(),
+            "--out",
+            tmp.path().join(out).to_str().unwrap(),
+        ])
+    };
+    let wave = |i: usize, f: f64| (2.0 * std::f64::consts::PI * f * i as f64 / 50.0).sin();
+    // fewer samples than one segment
+    let p = write(
+        "short.csv",
+        &|i| format!("{},{}\n", i as f64 / 50.0, wave(i, 3.0)),
+        10,
+        "t_s,a\n",
+    );
+    assert_exit_2(&run(&p, "o1"), "10 samples, fewer than one segment");
+    let p = write(
+        "short2.csv",
+        &|i| format!("{},{}\n", i as f64 / 50.0, wave(i, 3.0)),
+        1000,
+        "t_s,a\n",
+    );
+    let o = harness(&[
+        "modal",
+        "--displacement",
+        p.to_str().unwrap(),
+        "--nperseg",
+        "2048",
+        "--out",
+        tmp.path().join("o1b").to_str().unwrap(),
+    ]);
+    assert_exit_2(&o, "--nperseg 2048: the record has only 1000 samples");
+    // NaN in a cell
+    let p = write(
+        "nan.csv",
+        &|i| {
+            let v = if i == 7 {
+                "NaN".to_string()
+            } else {
+                wave(i, 3.0).to_string()
+            };
+            format!("{},{v},{}\n", i as f64 / 50.0, wave(i, 5.0))
+        },
+        3000,
+        "t_s,a,b\n",
+    );
+    assert_exit_2(&run(&p, "o2"), "row 9: column a");
+    // a dead (constant) target and one lost for long stretches: left out and named
+    let p = write(
+        "bad.csv",
+        &|i| {
+            let lost = if (500..1500).contains(&i) {
+                String::new()
+            } else {
+                wave(i, 4.0).to_string()
+            };
+            format!(
+                "{},{},{},1.5,{lost}\n",
+                i as f64 / 50.0,
+                wave(i, 3.0) + 0.3 * wave(i, 7.0),
+                wave(i, 3.0) - 0.2 * wave(i, 7.0),
+            )
+        },
+        6000,
+        "t_s,a,b,c,d\n",
+    );
+    let o = run(&p, "o3");
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(report.contains("target 3 left out: constant"), "{report}");
+    assert!(
+        report.contains("target 4 left out: 1000 of 6000 samples lost"),
+        "{report}"
+    );
+    assert!(
+        report.contains("output-only modal analysis: 2 targets"),
+        "{report}"
+    );
+    // an irregular time column
+    let p = write(
+        "irregular.csv",
+        &|i| {
+            format!(
+                "{},{}\n",
+                i as f64 / 50.0 + if i == 100 { 0.005 } else { 0.0 },
+                wave(i, 3.0)
+            )
+        },
+        3000,
+        "t_s,a\n",
+    );
+    assert_exit_2(&run(&p, "o4"), "sample 100");
+}
+
+#[test]
+fn the_cantilever_recording_without_its_accelerometer_gives_the_modes_of_h1() {
+    // the frames alone (`analyze` without --accel) against the same frames with the
+    // accelerometer (H1): the same two modes, within two lines of the H1 bins
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    let r = rec.to_str().unwrap();
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        r,
+        "--targets",
+        "5",
+        "--exposure-ms",
+        "2",
+        "--read-noise",
+        "2",
+    ]));
+    let frames = format!("{r}/frames");
+    let (h1, oma) = (rec.join("h1"), rec.join("oma"));
+    let accel = format!("{r}/accel.csv");
+    let base = [
+        "analyze",
+        "--frames",
+        &frames,
+        "--fps",
+        "120",
+        "--targets",
+        "5",
+        "--threshold",
+        "127",
+        "--mm-per-px",
+        "0.1",
+    ];
+    let mut with: Vec<&str> = base.to_vec();
+    with.extend([
+        "--accel",
+        &accel,
+        "--fs",
+        "2048",
+        "--time-col",
+        "t_s",
+        "--out",
+        h1.to_str().unwrap(),
+    ]);
+    assert_ok(&harness(&with));
+    let mut without: Vec<&str> = base.to_vec();
+    without.extend(["--out", oma.to_str().unwrap()]);
+    let o = harness(&without);
+    assert_ok(&o);
+    assert!(oma.join("displacement.csv").exists());
+    let h1_modes: Vec<f64> = std::fs::read_to_string(h1.join("modes.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("accelerometer"))
+        .map(|l| l.split(',').nth(5).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(h1_modes.len(), 2);
+    let found = modes(&oma);
+    let df = 120.0 / 256.0;
+    for method in ["fdd", "efdd", "ssi"] {
+        for f in &h1_modes {
+            assert!(
+                found
+                    .iter()
+                    .any(|m| m.0 == method && (m.2 - f).abs() <= 2.0 * df),
+                "{method}: no mode near {f} Hz in {found:?}"
+            );
+        }
+    }
+    // flags that need the accelerometer are refused without it
+    let mut bad = without.clone();
+    bad.push("--compensate-exposure");
+    bad.extend(["--exposure-ms", "2"]);
+    assert_exit_2(&harness(&bad), "--compensate-exposure needs --accel");
+}
