@@ -34,6 +34,7 @@ use firmware_core::centroid::{self, Centroid, CentroidConfig, Frame, FrameError,
 use firmware_core::heapless::spsc::{Consumer, Producer, Queue};
 use firmware_core::lk::{Interpolation, LkConfig, LkTracker, Smoothing};
 use firmware_core::pipeline::{PipelineConfig, VisionH1};
+use firmware_core::spectrum::cross::{pick_peaks, CrossSpectra};
 use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::sync::{SyncConfig, SyncPlan};
 use firmware_core::upsample::{self, Upsampler};
@@ -594,6 +595,116 @@ fn bench_welch<const N: usize>(x: &mut [f32; N], y: &mut [f32; N]) {
     }
 }
 
+/// Frame `i` of `K` targets at 120 fps moving in two modes (7 and 23 Hz, shapes `sin` and
+/// `cos` along the targets) plus a little noise: what the cross spectra should decompose.
+fn two_mode_frame<const K: usize>(i: usize, rng: &mut Lcg) -> [f32; K] {
+    let t = i as f32 / 120.0;
+    let (a, b) = (
+        libm::sinf(2.0 * PI * 7.0 * t),
+        0.3 * libm::sinf(2.0 * PI * 23.0 * t + 0.4),
+    );
+    core::array::from_fn(|k| {
+        let x = (k as f32 + 1.0) / K as f32;
+        a * libm::sinf(0.5 * PI * x) + b * libm::cosf(PI * x) + 0.01 * rng.next()
+    })
+}
+
+/// Output-only FDD on the camera with `K` targets at 120 fps, segments of 512: the peaks of
+/// the first singular value at the two modes' lines, their vectors the modes' shapes; the cost
+/// of 256 frames (one segment added) and of the decomposition of all 257 lines with the peaks.
+#[inline(never)]
+fn check_and_bench_cross<const K: usize, const TRI: usize>(rep: &mut Report) {
+    let Ok(mut cs) = CrossSpectra::<K, 512, 257, TRI, 0>::try_new(120.0) else {
+        rep.check("cross spectra: capacities", false);
+        return;
+    };
+    hprintln!(
+        "ram: cross spectra of {} targets, segments of 512: {} B",
+        K,
+        core::mem::size_of::<CrossSpectra<K, 512, 257, TRI, 0>>()
+    );
+    let mut rng = Lcg(K as u64);
+    for i in 0..512 * 4 {
+        cs.push(&two_mode_frame::<K>(i, &mut rng));
+    }
+    let frames = |cs: &mut CrossSpectra<K, 512, 257, TRI, 0>, rng: &mut Lcg| {
+        for i in 2048..2048 + 256 {
+            cs.push(&two_mode_frame::<K>(i, rng));
+        }
+    };
+    match K {
+        4 => measured(
+            "cross spectra 4 targets: 256 frames (one segment of 512 added)",
+            || frames(&mut cs, &mut rng),
+        ),
+        _ => measured(
+            "cross spectra 8 targets: 256 frames (one segment of 512 added)",
+            || frames(&mut cs, &mut rng),
+        ),
+    }
+    let mut s1 = [0.0f32; 257];
+    let mut sorted = [0.0f32; 257];
+    let mut peaks = [0usize; 8];
+    let decompose = |cs: &CrossSpectra<K, 512, 257, TRI, 0>,
+                     s1: &mut [f32; 257],
+                     sorted: &mut [f32; 257],
+                     peaks: &mut [usize; 8]| {
+        for (l, v) in s1.iter_mut().enumerate() {
+            *v = cs.first_singular(l, 30).0;
+        }
+        pick_peaks(
+            &s1[..],
+            (2, 255),
+            (6.0, 10.0),
+            &mut sorted[..],
+            &mut peaks[..],
+        )
+    };
+    let n = match K {
+        4 => measured(
+            "fdd 4 targets: first singular value of 257 lines, peaks",
+            || decompose(&cs, &mut s1, &mut sorted, &mut peaks),
+        ),
+        _ => measured(
+            "fdd 8 targets: first singular value of 257 lines, peaks",
+            || decompose(&cs, &mut s1, &mut sorted, &mut peaks),
+        ),
+    };
+    // 7 Hz and 23 Hz are lines 29.9 and 98.1 of 120 / 512 Hz
+    let lines = &peaks[..n.min(8)];
+    let near = |f: f32| lines.iter().any(|&l| libm::fabsf(cs.freq(l) - f) <= 0.25);
+    let mut ok = n == 2 && near(7.0) && near(23.0);
+    for (&l, f) in lines.iter().zip([7.0f32, 23.0]) {
+        let v = cs.first_singular(l, 30).1;
+        let mut dot = Complex32::new(0.0, 0.0);
+        let (mut vv, mut ss) = (0.0f32, 0.0f32);
+        for (k, c) in v.iter().enumerate() {
+            let x = (k as f32 + 1.0) / K as f32;
+            let shape = if f < 10.0 {
+                libm::sinf(0.5 * PI * x)
+            } else {
+                libm::cosf(PI * x)
+            };
+            dot += c.conj() * shape;
+            vv += c.norm_sqr();
+            ss += shape * shape;
+        }
+        let mac = dot.norm_sqr() / (vv * ss);
+        ok &= mac > 0.999;
+        hprintln!(
+            "fdd {} targets: peak at line {} ({} mHz), MAC x1e6 {}",
+            K,
+            l,
+            (cs.freq(l) * 1000.0) as u32,
+            (mac * 1e6) as u32
+        );
+    }
+    rep.check(
+        "fdd on the camera: two peaks at the modes' lines, shapes MAC > 0.999",
+        ok,
+    );
+}
+
 #[inline(never)]
 fn bench_upsample_20480() {
     const N: usize = 1200;
@@ -1084,6 +1195,8 @@ fn main() -> ! {
     // one second (120 frames, 2048 ADC samples, one block, two segments) in steady state
     bench_pipeline(p);
     bench_upsample_20480();
+    check_and_bench_cross::<4, 10>(&mut rep);
+    check_and_bench_cross::<8, 36>(&mut rep);
 
     if rep.failed == 0 {
         hprintln!("mcu-demo: all checks passed");

@@ -77,6 +77,7 @@
 
 mod accumulator;
 mod config;
+pub mod cross;
 mod streaming;
 #[cfg(test)]
 mod tests;

@@ -362,4 +362,60 @@ mod tests {
             assert!((z / want.damping - 1.0).abs() <= 0.25, "{z}");
         }
     }
+
+    #[test]
+    fn the_firmware_cross_spectra_give_the_host_fdd_lines_and_shapes() {
+        // firmware-core's streaming matrix (f32, frames pushed one at a time) against the
+        // host's FDD on the same record and segments
+        use firmware_core::spectrum::cross::{pick_peaks, CrossSpectra};
+        let model = FieldCase::ShearFrame.model();
+        let fs = 60.0;
+        let n = (fs * 600.0) as usize;
+        let rec = simulate(&model, fs, n, 0.02, 21);
+        let mut s = OmaSettings::new(fs, n, Some(512));
+        s.bands.clear();
+        let host = analyze(&rec, &s).unwrap();
+        let mut fw = Box::new(CrossSpectra::<5, 512, 257, 15, 0>::try_new(fs as f32).unwrap());
+        // millimetres, as a camera would hold them (the simulated values are tiny)
+        for i in 0..n {
+            let frame: [f32; 5] =
+                core::array::from_fn(|t| (rec[t].get(i).copied().unwrap_or(0.0) * 1e3) as f32);
+            fw.push(&frame);
+        }
+        assert_eq!(fw.segments() as usize, host.csd.segments);
+        let s1: Vec<f32> = (0..257).map(|l| fw.first_singular(l, 50).0).collect();
+        let df = fs / 512.0;
+        let lo = (s.peaks.f_min_hz / df).ceil() as usize;
+        let (mut sorted, mut out) = ([0.0f32; 257], [0usize; 16]);
+        let found = pick_peaks(&s1, (lo, 255), (6.0, 10.0), &mut sorted, &mut out);
+        assert!(found >= 4, "{found} peaks");
+        assert_eq!(
+            &out[..found],
+            &host.peaks[..],
+            "firmware lines {:?}",
+            &out[..found]
+        );
+        for &l in &out[..found] {
+            let v: Vec<Complex64> = fw
+                .first_singular(l, 50)
+                .1
+                .iter()
+                .map(|c| Complex64::new(f64::from(c.re), f64::from(c.im)))
+                .collect();
+            let m = mac(&v, &host.svd.u1[l]);
+            assert!(m >= 0.999, "line {l}: MAC {m}");
+        }
+        // the matrix itself against the host's (scaled alike), relative to the line's trace
+        for l in [10usize, 60, 200] {
+            let trace: f64 = (0..5).map(|i| host.csd.g[l][i * 5 + i].re).sum::<f64>() * 1e6;
+            for i in 0..5 {
+                for j in 0..5 {
+                    let a = fw.get(l, i, j);
+                    let b = host.csd.g[l][i * 5 + j] * 1e6;
+                    let d = (Complex64::new(f64::from(a.re), f64::from(a.im)) - b).norm();
+                    assert!(d <= 1e-4 * trace, "line {l} ({i},{j}): {a} vs {b}");
+                }
+            }
+        }
+    }
 }
