@@ -537,7 +537,8 @@ fn reference_row(
 }
 
 /// Reads a reference shape CSV with a header naming at least `mode`, `target` and `re` (and
-/// optionally `im`): the layout of `shapes.csv`, or a hand-written table. Every mode present
+/// optionally `im`): the layout of `shapes.csv`, or a hand-written table. With a `method`
+/// column, the rows of one method (`h1`, else `ssi`, `efdd`, `fdd`). Every mode present
 /// must give all `k` targets once. Errors name the file, the row and the column.
 pub fn read_shape_reference(
     path: &std::path::Path,
@@ -564,9 +565,27 @@ pub fn read_shape_reference(
         )));
     };
     let cols = [cm, ct, cr];
+    let records: Vec<csv::StringRecord> = reader
+        .records()
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad_input(format!("{name}: {e}")))?;
+    // a shapes.csv with a `method` column (an output-only analysis gives one shape per mode
+    // and method): the rows of one method, h1 first, then ssi, efdd, fdd, else the first seen
+    let method = col("method").and_then(|c| {
+        let seen: Vec<&str> = records.iter().filter_map(|r| r.get(c)).collect();
+        ["h1", "ssi", "efdd", "fdd"]
+            .into_iter()
+            .find(|m| seen.contains(m))
+            .or(seen.first().copied())
+            .map(|m| (c, m.to_string()))
+    });
     let mut raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>> = Default::default();
-    for record in reader.records() {
-        let record = record.map_err(|e| bad_input(format!("{name}: {e}")))?;
+    for record in records {
+        if let Some((c, m)) = &method {
+            if record.get(*c) != Some(m.as_str()) {
+                continue;
+            }
+        }
         let row = record.position().map_or(0, |p| p.line());
         let (mode, target, c) = reference_row(
             &record,
@@ -688,5 +707,17 @@ mod tests {
         std::fs::write(&p, "mode,target,re\n1,1,1\n1,2,x\n").unwrap();
         let e = read_shape_reference(&p, 2, 2).unwrap_err().to_string();
         assert!(e.contains("row 3, column re"), "{e}");
+        // an output-only shapes.csv: one shape per mode and method, SSI's taken
+        std::fs::write(
+            &p,
+            "mode,target,x_px,y_px,re,im,abs,method\n1,1,,,1,0,1,fdd\n1,2,,,0.2,0,0.2,fdd\n\
+             1,1,,,1,0,1,ssi\n1,2,,,0.5,0,0.5,ssi\n",
+        )
+        .unwrap();
+        let r = read_shape_reference(&p, 2, 2).unwrap();
+        assert_eq!(
+            r[&1],
+            vec![Complex64::new(1.0, 0.0), Complex64::new(0.5, 0.0)]
+        );
     }
 }
