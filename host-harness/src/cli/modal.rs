@@ -93,16 +93,7 @@ fn settings(
     args: &Args,
 ) -> anyhow::Result<OmaSettings> {
     let n = records.channels.first().map_or(0, Vec::len);
-    let w = welch.settings();
-    let mut s = OmaSettings::new(fs_hz, n, w.nperseg);
-    s.csd.window = w.window;
-    s.csd.detrend = w.detrend;
-    if let Some(o) = w.noverlap {
-        s.csd.noverlap = o;
-    } else {
-        s.csd.noverlap = s.csd.nperseg / 2;
-    }
-    s.csd.nfft = w.nfft.unwrap_or(s.csd.nperseg);
+    let mut s = OmaSettings::with_welch(fs_hz, n, &welch.settings());
     if s.csd.nperseg > n {
         return Err(bad_input(format!(
             "--nperseg {}: the record has only {n} samples, fewer than one segment",
@@ -138,9 +129,6 @@ fn settings(
         }
         s.peaks.f_min_hz = f.max(df);
         s.ssi.f_range_hz.0 = f;
-    } else {
-        s.peaks.f_min_hz = (0.5f64).max(2.0 * df);
-        s.ssi.f_range_hz.0 = s.peaks.f_min_hz;
     }
     if !(args.prominence_db.is_finite() && args.prominence_db >= 0.0) {
         return Err(bad_input(format!(

@@ -168,12 +168,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
 
 /// The analysis settings of a record of `n` frames.
 fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
-    let w = &req.welch;
-    let mut s = OmaSettings::new(req.fps, n, w.nperseg);
-    s.csd.window = w.window;
-    s.csd.detrend = w.detrend;
-    s.csd.noverlap = w.noverlap.unwrap_or(s.csd.nperseg / 2);
-    s.csd.nfft = w.nfft.unwrap_or(s.csd.nperseg);
+    let mut s = OmaSettings::with_welch(req.fps, n, &req.welch);
     if s.csd.nperseg > n || n < 64 {
         return Err(crate::bad_input(format!(
             "the record has {n} frames, fewer than one segment ({} frames, 64 at least)",

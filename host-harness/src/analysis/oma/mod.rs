@@ -112,6 +112,24 @@ impl OmaSettings {
     }
 }
 
+impl OmaSettings {
+    /// [`OmaSettings::new`] with the Welch flags applied (window, detrend, segment, overlap,
+    /// transform length; half overlap and no padding when not given), the lowest frequency
+    /// from the resulting line spacing. Not checked against the record: the callers name
+    /// their own flags in the errors.
+    pub fn with_welch(fs_hz: f64, samples: usize, w: &crate::chain::frf::WelchSettings) -> Self {
+        let mut s = OmaSettings::new(fs_hz, samples, w.nperseg);
+        s.csd.window = w.window;
+        s.csd.detrend = w.detrend;
+        s.csd.noverlap = w.noverlap.unwrap_or(s.csd.nperseg / 2);
+        s.csd.nfft = w.nfft.unwrap_or(s.csd.nperseg);
+        let df = fs_hz / s.csd.nfft as f64;
+        s.peaks.f_min_hz = (0.5f64).max(2.0 * df);
+        s.ssi.f_range_hz.0 = s.peaks.f_min_hz;
+        s
+    }
+}
+
 /// One identified mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OmaMode {

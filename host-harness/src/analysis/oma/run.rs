@@ -6,6 +6,7 @@
 use super::input::Records;
 use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
+use crate::export::opt;
 use crate::export::targets::{MODES_HEADER, SHAPES_HEADER};
 use crate::export::uff::{write_dataset55, Shape55};
 use crate::outdir::Staged;
@@ -89,10 +90,6 @@ pub fn run(records: &Records, settings: &OmaSettings, o: &Output<'_>) -> anyhow:
         report,
         result: Ok(()),
     })
-}
-
-fn opt(v: Option<f64>) -> String {
-    v.map_or(String::new(), |x| x.to_string())
 }
 
 /// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
