@@ -324,3 +324,99 @@ fn the_cantilever_recording_without_its_accelerometer_gives_the_modes_of_h1() {
     bad.extend(["--exposure-ms", "2"]);
     assert_exit_2(&harness(&bad), "--compensate-exposure needs --accel");
 }
+
+#[test]
+fn a_rendered_field_recording_gives_the_modes_through_the_whole_chain() {
+    // ambient motion of the shear frame filmed (5 disks, 60 fps, 5 ms exposure, read noise 1),
+    // tracked and analysed output-only: with a linear tracker the modes of the exact motion
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    let r = rec.to_str().unwrap();
+    let o = harness(&["simulate-field", "--render", "--minutes", "3", "--out", r]);
+    assert_ok(&o);
+    for f in ["displacement.csv", "truth.csv", "points.csv", "README.txt"] {
+        assert!(rec.join(f).exists(), "{f}");
+    }
+    assert_eq!(
+        std::fs::read_dir(rec.join("frames")).unwrap().count(),
+        10_800
+    );
+    let readme = std::fs::read_to_string(rec.join("README.txt")).unwrap();
+    assert!(readme.contains("analyze --frames"), "{readme}");
+    let exact = rec.join("exact");
+    assert_ok(&harness(&[
+        "modal",
+        "--displacement",
+        &format!("{r}/displacement.csv"),
+        "--out",
+        exact.to_str().unwrap(),
+    ]));
+    let frames = format!("{r}/frames");
+    let analyze = |tracker: &str| {
+        let out = rec.join(tracker);
+        let o = harness(&[
+            "analyze",
+            "--frames",
+            &frames,
+            "--fps",
+            "60",
+            "--targets",
+            "5",
+            "--threshold",
+            "127",
+            "--tracker",
+            tracker,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_ok(&o);
+        (out, String::from_utf8_lossy(&o.stdout).to_string())
+    };
+    let (weighted, report) = analyze("weighted");
+    assert!(!report.contains("harmonic"), "{report}");
+    let truth = truth(&rec);
+    let df = 60.0 / 2048.0;
+    let (found, reference) = (modes(&weighted), modes(&exact));
+    let ssi: Vec<_> = found.iter().filter(|m| m.0 == "ssi").collect();
+    assert_eq!(ssi.len(), 5, "{ssi:?}");
+    for (m, (f, _, _)) in ssi.iter().zip(&truth) {
+        assert!((m.2 - f).abs() <= df, "ssi {}: {} vs {f}", m.1, m.2);
+    }
+    // the chain adds little to the exact motion's analysis: the same modes per method
+    assert_eq!(found.len(), reference.len());
+    for (a, b) in found.iter().zip(&reference) {
+        assert_eq!((&a.0, a.1), (&b.0, b.1));
+        assert!((a.2 - b.2).abs() <= 0.25 * df, "{a:?} vs {b:?}");
+    }
+    // shapes: MAC >= 0.99 against the truth, >= 0.999 against the exact motion's
+    let shape_of = |dir: &Path, method: &str, mode: usize| -> Vec<f64> {
+        std::fs::read_to_string(dir.join("shapes.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>())
+            .filter(|c| c[7] == method && c[0] == mode.to_string())
+            .map(|c| c[4].parse().unwrap())
+            .collect()
+    };
+    let mac = |a: &[f64], b: &[f64]| {
+        let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+        ab * ab / (a.iter().map(|x| x * x).sum::<f64>() * b.iter().map(|y| y * y).sum::<f64>())
+    };
+    for method in ["fdd", "efdd", "ssi"] {
+        for (m, (_, _, shape)) in truth.iter().enumerate() {
+            let got = shape_of(&weighted, method, m + 1);
+            let to_truth = mac(&got, shape);
+            assert!(to_truth >= 0.99, "{method} mode {}: MAC {to_truth}", m + 1);
+            let to_exact = mac(&got, &shape_of(&exact, method, m + 1));
+            assert!(to_exact >= 0.999, "{method} mode {}: MAC {to_exact}", m + 1);
+        }
+    }
+    // the binary centroid's pixel locking makes a harmonic of mode 1 that SSI takes for a
+    // mode: it is named in the report
+    let (_, report) = analyze("blob");
+    assert!(report.contains("5 x mode 1"), "{report}");
+    // the displacement record's noise is not the camera's
+    let o = harness(&["simulate-field", "--render", "--noise", "0.1", "--out", r]);
+    assert_exit_2(&o, "--read-noise");
+}

@@ -1,7 +1,10 @@
 //! `host-harness simulate-field`: a synthetic field record ([`crate::model::field`]): the
-//! displacements of a structure's points under a broadband random force, and the true modes.
+//! displacements of a structure's points under a broadband random force, and the true modes;
+//! with `--render`, the frames a camera filming the points would record
+//! ([`crate::recording::field`]).
 
 use crate::model::field::{simulate, FieldCase};
+use crate::recording::field::{write_field_recording, FieldRecording};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness simulate-field`.
@@ -17,9 +20,28 @@ pub struct Args {
     /// Sample rate (the camera's frame rate), Hz.
     #[arg(long, value_name = "HZ", default_value_t = 60.0)]
     pub fps: f64,
-    /// Measurement noise, relative to each record's RMS.
-    #[arg(long, value_name = "REL", default_value_t = 0.02)]
-    pub noise: f64,
+    /// Measurement noise of the displacement record, relative to each record's RMS [default:
+    /// 0.02]. Not with --render (its noise is the camera's --read-noise).
+    #[arg(long, value_name = "REL")]
+    pub noise: Option<f64>,
+    /// Render the frames of the motion: one white disk per point, side by side, filmed at
+    /// --fps with --exposure-ms and --read-noise (frames/, displacement.csv with the exact
+    /// exposure-averaged motion in px, truth.csv, points.csv, README.txt with the analyze
+    /// command). Keep such records short: 5 minutes at 60 fps are 18 000 PNG frames.
+    #[arg(long)]
+    pub render: bool,
+    /// With --render: exposure, ms, centred on each frame's instant (< the frame period).
+    #[arg(long, value_name = "MS", default_value_t = 5.0, requires = "render")]
+    pub exposure_ms: f64,
+    /// With --render: read noise, grey levels (std of Gaussian noise on the 8-bit scale).
+    #[arg(long, value_name = "GREY", default_value_t = 1.0, requires = "render")]
+    pub read_noise: f64,
+    /// With --render: RMS displacement of the point that moves most, px.
+    #[arg(long, value_name = "PX", default_value_t = 0.5, requires = "render")]
+    pub rms_px: f64,
+    /// With --render: also write frames.mkv (FFV1, lossless; ffmpeg needed).
+    #[arg(long, requires = "render")]
+    pub video: bool,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -50,10 +72,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )));
         }
     }
-    if !(args.noise.is_finite() && args.noise >= 0.0) {
+    if args.render && args.noise.is_some() {
+        return Err(crate::bad_input(
+            "--noise is the displacement record's noise: a rendered recording's noise is the \
+             camera's --read-noise",
+        ));
+    }
+    let noise = args.noise.unwrap_or(0.02);
+    if !(noise.is_finite() && noise >= 0.0) {
         return Err(crate::bad_input(format!(
-            "--noise must be >= 0, got {}",
-            args.noise
+            "--noise must be >= 0, got {noise}"
         )));
     }
     let case = match args.case {
@@ -62,7 +90,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let model = case.model();
     let n = (args.minutes * 60.0 * args.fps).round() as usize;
-    let rec = simulate(&model, args.fps, n, args.noise, args.seed);
+    if args.render {
+        let rec = FieldRecording {
+            model,
+            fps: args.fps,
+            frames: n,
+            seed: args.seed,
+            exposure_ms: args.exposure_ms,
+            read_noise: args.read_noise,
+            rms_px: args.rms_px,
+            video: args.video,
+        };
+        let bar = crate::study::runner::progress_bar(n as u64, true, "frames");
+        let report = write_field_recording(&rec, &args.out, args.force, |done| {
+            bar.set_position(done as u64)
+        });
+        bar.finish_and_clear();
+        return super::stdout(&report?);
+    }
+    let rec = simulate(&model, args.fps, n, noise, args.seed);
     let report = crate::model::field::write_field(&args.out, args.force, &model, &rec, args.fps)?;
     super::stdout(&report)
 }

@@ -108,7 +108,58 @@ pub fn simulate(
     noise: f64,
     seed: u64,
 ) -> Vec<Vec<f64>> {
-    const SUB: usize = 16;
+    let k = model.points;
+    let mut out = vec![Vec::with_capacity(samples); k];
+    let mut rng = run(model, fs_hz, samples, seed, SUB, |s, disp| {
+        if s > 0 {
+            for (o, &v) in out.iter_mut().zip(disp) {
+                o.push(v);
+            }
+        }
+    });
+    if noise > 0.0 {
+        let normal = Normal::new(0.0, 1.0).expect("unit normal");
+        for o in out.iter_mut() {
+            let rms = (o.iter().map(|v| v * v).sum::<f64>() / o.len().max(1) as f64).sqrt();
+            for v in o.iter_mut() {
+                *v += noise * rms * normal.sample(&mut rng);
+            }
+        }
+    }
+    out
+}
+
+/// Simulation steps per sample: the force is held over a step of `1 / (16 fs)`.
+pub const SUB: usize = 16;
+
+/// The motion at every simulation step (`SUB` per sample), for a camera that integrates over
+/// its exposure: one record per point, `(samples + 1) * SUB + 1` steps long, where sample `k`
+/// of [`simulate`] (same model, rate and seed, no noise) is step `SUB + k * SUB`: one sample
+/// period of motion either side of the samples. The same forces as [`simulate`] up to its last
+/// sample.
+pub fn simulate_fine(model: &FieldModel, fs_hz: f64, samples: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut out = vec![Vec::with_capacity((samples + 1) * SUB + 1); model.points];
+    run(model, fs_hz, samples + 1, seed, 1, |_, disp| {
+        for (o, &v) in out.iter_mut().zip(disp) {
+            o.push(v);
+        }
+    });
+    out
+}
+
+/// Runs the model after its settling run (ten of the slowest mode's decay times, discarded)
+/// for `samples` sample periods, calling `keep(s, disp)` with the displacement at every
+/// point at every `every`-th step `s = 0 ..= samples * SUB` counted from the settling run's
+/// last sample (`s % SUB == 0` at the samples). Returns the random stream (for the
+/// measurement noise).
+fn run(
+    model: &FieldModel,
+    fs_hz: f64,
+    samples: usize,
+    seed: u64,
+    every: usize,
+    mut keep: impl FnMut(usize, &[f64]),
+) -> ChaCha8Rng {
     let dt = 1.0 / (fs_hz * SUB as f64);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let normal = Normal::new(0.0, 1.0).expect("unit normal");
@@ -137,17 +188,17 @@ pub fn simulate(
         })
         .collect();
     let mut state = vec![[0.0f64; 2]; model.modes.len()];
-    let mut out = vec![Vec::with_capacity(samples); k];
     let mut force = vec![0.0; k];
-    // a settling run of ten of the slowest mode's decay times is discarded
+    let mut disp = vec![0.0; k];
     let slowest = model
         .modes
         .iter()
         .map(|m| 1.0 / (2.0 * PI * m.f_hz * m.damping))
         .fold(0.0, f64::max);
-    let settle = (10.0 * slowest * fs_hz).ceil() as usize;
+    let settle = ((10.0 * slowest * fs_hz).ceil() as usize).max(1);
+    let start = settle * SUB;
     for n in 0..settle + samples {
-        for _ in 0..SUB {
+        for sub in 0..SUB {
             force.iter_mut().for_each(|f| *f = normal.sample(&mut rng));
             for ((x, (a, b)), m) in state.iter_mut().zip(&steps).zip(&model.modes) {
                 let u: f64 = m.shape.iter().zip(&force).map(|(p, f)| p * f).sum();
@@ -156,29 +207,21 @@ pub fn simulate(
                     a[2] * x[0] + a[3] * x[1] + b[1] * u,
                 ];
             }
-        }
-        if n >= settle {
-            for (j, o) in out.iter_mut().enumerate() {
-                o.push(
-                    model
+            let g = n * SUB + sub + 1;
+            if g >= start && (g - start).is_multiple_of(every) {
+                for (j, d) in disp.iter_mut().enumerate() {
+                    *d = model
                         .modes
                         .iter()
                         .zip(&state)
                         .map(|(m, x)| m.shape[j] * x[0])
-                        .sum(),
-                );
+                        .sum();
+                }
+                keep(g - start, &disp);
             }
         }
     }
-    if noise > 0.0 {
-        for o in out.iter_mut() {
-            let rms = (o.iter().map(|v| v * v).sum::<f64>() / o.len().max(1) as f64).sqrt();
-            for v in o.iter_mut() {
-                *v += noise * rms * normal.sample(&mut rng);
-            }
-        }
-    }
-    out
+    rng
 }
 
 /// Writes `displacement.csv` (`t_s,1,...,K`: a wide file `modal` reads) and `truth.csv`
@@ -191,8 +234,24 @@ pub fn write_field(
     rec: &[Vec<f64>],
     fs_hz: f64,
 ) -> anyhow::Result<String> {
-    use std::fmt::Write as _;
     let staged = crate::outdir::Staged::new(out, force, "simulate-field", &[])?;
+    let n = rec.first().map_or(0, Vec::len);
+    staged.write("displacement.csv", displacement_csv(rec, fs_hz))?;
+    staged.write("truth.csv", truth_csv(model))?;
+    staged.commit()?;
+    Ok(format!(
+        "{} points, {n} samples at {fs_hz} Hz ({:.1} min), {} modes: {}\nwritten to {}\n",
+        model.points,
+        n as f64 / fs_hz / 60.0,
+        model.modes.len(),
+        modes_line(model),
+        out.display()
+    ))
+}
+
+/// `displacement.csv` of records `rec` (one per point) sampled at `fs_hz`: `t_s,1,...,K`.
+pub fn displacement_csv(rec: &[Vec<f64>], fs_hz: f64) -> String {
+    use std::fmt::Write as _;
     let n = rec.first().map_or(0, Vec::len);
     let mut d = String::from("t_s");
     for t in 1..=rec.len() {
@@ -206,28 +265,29 @@ pub fn write_field(
         }
         d.push('\n');
     }
-    staged.write("displacement.csv", d)?;
+    d
+}
+
+/// `truth.csv` of `model`: `mode,f_hz,damping,target,shape`, one row per mode and point.
+pub fn truth_csv(model: &FieldModel) -> String {
+    use std::fmt::Write as _;
     let mut t = String::from("mode,f_hz,damping,target,shape\n");
     for (m, mode) in model.modes.iter().enumerate() {
         for (j, v) in mode.shape.iter().enumerate() {
             let _ = writeln!(t, "{},{},{},{},{v}", m + 1, mode.f_hz, mode.damping, j + 1);
         }
     }
-    staged.write("truth.csv", t)?;
-    staged.commit()?;
-    Ok(format!(
-        "{} points, {n} samples at {fs_hz} Hz ({:.1} min), {} modes: {}\nwritten to {}\n",
-        model.points,
-        n as f64 / fs_hz / 60.0,
-        model.modes.len(),
-        model
-            .modes
-            .iter()
-            .map(|m| format!("{:.4} Hz ({:.1} %)", m.f_hz, 100.0 * m.damping))
-            .collect::<Vec<_>>()
-            .join(", "),
-        out.display()
-    ))
+    t
+}
+
+/// One line per mode: `1.5000 Hz (1.0 %), ...`.
+pub fn modes_line(model: &FieldModel) -> String {
+    model
+        .modes
+        .iter()
+        .map(|m| format!("{:.4} Hz ({:.1} %)", m.f_hz, 100.0 * m.damping))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]
@@ -252,6 +312,21 @@ mod tests {
             }
             let norm: f64 = p.iter().map(|v| v * v).sum();
             assert!((norm - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_fine_motion_passes_through_the_samples() {
+        let model = FieldCase::CloseModes.model();
+        let coarse = simulate(&model, 30.0, 200, 0.0, 3);
+        let fine = simulate_fine(&model, 30.0, 200, 3);
+        for (c, f) in coarse.iter().zip(&fine) {
+            assert_eq!(f.len(), 201 * SUB + 1);
+            for (k, v) in c.iter().enumerate() {
+                assert_eq!(*v, f[SUB + k * SUB], "sample {k}");
+            }
+            // and moves in between (not a held copy of the samples)
+            assert_ne!(f[SUB + 1], f[SUB]);
         }
     }
 

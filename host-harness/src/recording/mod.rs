@@ -13,6 +13,7 @@
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
 pub mod cluttered;
+pub mod field;
 pub mod release;
 pub mod scene;
 pub mod targets;
@@ -130,6 +131,20 @@ impl RecordingSpec {
 /// frames are the PNGs' pixels bit for bit; a cluttered scene's JPEGs and colour video both hold
 /// the composed colour frame, the video losslessly). Read noise is added here, to the float image,
 /// before rounding to 8 bits.
+/// What a [`FrameSink`] needs to know of the camera and the recording.
+pub(crate) struct SinkCamera {
+    /// Frame rate, fps (of the video).
+    pub fps: f64,
+    /// Also write `frames.mkv`.
+    pub video: bool,
+    /// Read noise, grey levels (0 = none).
+    pub read_noise: f64,
+    /// Seed of the recording (the read noise has a stream of its own).
+    pub seed: u64,
+    /// Compose a cluttered colour scene around the frames.
+    pub cluttered: bool,
+}
+
 pub(crate) struct FrameSink {
     /// The frames directory being written (in the staging directory).
     frames_to: PathBuf,
@@ -150,17 +165,34 @@ impl FrameSink {
         (write_to, dir): (&Path, &Path),
         size: (usize, usize),
     ) -> anyhow::Result<FrameSink> {
+        let camera = SinkCamera {
+            fps: spec.acquisition.fps,
+            video: spec.video,
+            read_noise: spec.read_noise,
+            seed: spec.seed,
+            cluttered: spec.cluttered,
+        };
+        FrameSink::open(&camera, (write_to, dir), size)
+    }
+
+    /// Opens the sink for frames of `size` (width, height) of a recording by `camera`, written
+    /// into `write_to` for the directory `dir`.
+    pub fn open(
+        camera: &SinkCamera,
+        (write_to, dir): (&Path, &Path),
+        size: (usize, usize),
+    ) -> anyhow::Result<FrameSink> {
         use rand::SeedableRng as _;
         let frames_dir = dir.join("frames");
         let frames_to = write_to.join("frames");
         std::fs::create_dir_all(&frames_to)
             .with_context(|| format!("cannot create {}", frames_dir.display()))?;
-        let clutter = spec
+        let clutter = camera
             .cluttered
-            .then(|| cluttered::Clutter::new(size, spec.seed));
-        let video = if spec.video {
+            .then(|| cluttered::Clutter::new(size, camera.seed));
+        let video = if camera.video {
             use crate::frames::video::Ffv1Writer;
-            let (file, fps) = (write_to.join("frames.mkv"), spec.acquisition.fps);
+            let (file, fps) = (write_to.join("frames.mkv"), camera.fps);
             let w = match &clutter {
                 // the colour frames the JPEGs hold, losslessly
                 Some(c) => Ffv1Writer::create_rgb(&file, c.outer().0, c.outer().1, fps),
@@ -171,11 +203,11 @@ impl FrameSink {
         } else {
             None
         };
-        let noise = (spec.read_noise > 0.0).then(|| {
+        let noise = (camera.read_noise > 0.0).then(|| {
             // a stream of its own: the same seed gives the same motion with or without noise
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(spec.seed);
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(camera.seed);
             rng.set_stream(0x006e_6f69_7365);
-            (spec.read_noise, rng)
+            (camera.read_noise, rng)
         });
         Ok(FrameSink {
             frames_to,

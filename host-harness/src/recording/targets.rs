@@ -136,7 +136,12 @@ fn write_points(
 
 /// The centroid of the pixels above half the target's level in columns `x0..x0 + sw` of the
 /// float frame `img` (`w` wide): a target's position in the first frame.
-fn strip_centroid(img: &[f32], w: usize, (x0, sw): (usize, usize), half: f32) -> (f64, f64) {
+pub(super) fn strip_centroid(
+    img: &[f32],
+    w: usize,
+    (x0, sw): (usize, usize),
+    half: f32,
+) -> (f64, f64) {
     let (mut n, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
     for (y, row) in img.chunks_exact(w).enumerate() {
         for (x, &v) in row.iter().enumerate().skip(x0).take(sw) {

@@ -228,7 +228,11 @@ fn run_pending(
         .with_context(|| format!("cannot open {}", runs_path.display()))?;
     let sink = Mutex::new(file);
     let new = Mutex::new(Vec::new());
-    let bar = progress_bar(pending.len() as u64, exec.progress && !pending.is_empty());
+    let bar = progress_bar(
+        pending.len() as u64,
+        exec.progress && !pending.is_empty(),
+        "runs",
+    );
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(worker_threads(exec.threads, pending.len()))
         .stack_size(64 << 20)
@@ -349,15 +353,17 @@ fn run_up_to(
     Ok(computed)
 }
 
-fn progress_bar(len: u64, show: bool) -> indicatif::ProgressBar {
+/// A progress bar of `len` `what` on standard error when `show` and it is a terminal (hidden
+/// otherwise).
+pub fn progress_bar(len: u64, show: bool, what: &str) -> indicatif::ProgressBar {
     use std::io::IsTerminal as _;
     if !show || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(len);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs (eta {eta})",
-    ) {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {what} (eta {{eta}})"
+    )) {
         bar.set_style(style);
     }
     bar

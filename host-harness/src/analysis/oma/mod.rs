@@ -271,6 +271,7 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
         }
     }
     modes.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
+    notes.extend(harmonic_notes(&modes, csd.df_hz()));
     Ok(OmaResult {
         csd,
         svd,
@@ -281,6 +282,53 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
     })
 }
 
+/// Notes on modes that may be harmonics of a lower mode of the same method: a frequency within
+/// `max(1.5 lines, n zeta f)` of `n = 2..=7` times the lower mode's (`zeta` its damping, 1 %
+/// where the method gives none) and, with three or more targets, a shape with MAC >= 0.5 to
+/// the lower mode's. A tracker that is not linear in the motion (the binary centroid's pixel
+/// locking) turns a strong narrow-band mode into odd harmonics that SSI and FDD take for modes
+/// (docs/method.md §3.12); such modes are kept but named.
+pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64) -> Vec<String> {
+    let mut notes = Vec::new();
+    for (j, hi) in modes.iter().enumerate() {
+        let targets = hi.shape.len();
+        let of = modes[..j]
+            .iter()
+            .filter(|lo| lo.method == hi.method)
+            .find_map(|lo| {
+                let n = (hi.f_hz / lo.f_hz).round();
+                if !(2.0..=7.0).contains(&n) {
+                    return None;
+                }
+                let tol = (1.5 * df_hz).max(n * lo.damping.unwrap_or(0.01) * lo.f_hz);
+                if (hi.f_hz - n * lo.f_hz).abs() > tol {
+                    return None;
+                }
+                let m = crate::analysis::modal::mac(&lo.shape, &hi.shape);
+                (targets < 3 || m >= 0.5).then_some((lo, n as usize, m))
+            });
+        if let Some((lo, n, m)) = of {
+            let shape = if targets < 3 {
+                "too few targets to compare the shapes".to_string()
+            } else {
+                format!("its shape has MAC {m:.2} with mode {}'s", lo.mode)
+            };
+            notes.push(format!(
+                "{} mode {} ({:.4} Hz) is {n} x mode {} ({:.4} Hz) and {shape}: possibly a \
+                 harmonic made by a tracker that is not linear in the motion (the binary \
+                 centroid's pixel locking), not a mode; a linear tracker (--tracker weighted or \
+                 lk) makes none",
+                hi.method.name(),
+                hi.mode,
+                hi.f_hz,
+                lo.mode,
+                lo.f_hz
+            ));
+        }
+    }
+    notes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -289,6 +337,39 @@ mod tests {
 
     fn truth_shape(v: &[f64]) -> Vec<Complex64> {
         v.iter().map(|&x| Complex64::new(x, 0.0)).collect()
+    }
+
+    #[test]
+    fn harmonics_are_named_and_modes_at_multiples_with_their_own_shape_are_not() {
+        let mode = |n: usize, f_hz: f64, shape: &[f64]| OmaMode {
+            method: Method::Ssi,
+            mode: n,
+            band_hz: None,
+            f_hz,
+            amplitude: None,
+            damping: Some(0.01),
+            shape: truth_shape(shape),
+        };
+        let one = [0.2, 0.5, 0.7, 0.9, 1.0];
+        let modes = [
+            mode(1, 1.5, &one),
+            // 3 x 1.5 within 3 zeta f, a shape like mode 1's: a harmonic
+            mode(2, 4.53, &[0.3, 0.5, 0.8, 0.8, 1.0]),
+            // 5 x 1.5 with a shape orthogonal to mode 1's: a mode
+            mode(3, 7.5, &[1.0, 0.6, -0.2, -0.4, 0.06]),
+            // not near a multiple
+            mode(4, 5.2, &one),
+        ];
+        let notes = harmonic_notes(&modes, 0.01);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with("ssi mode 2 (4.5300 Hz) is 3 x mode 1"),
+            "{notes:?}"
+        );
+        // another method's modes are not compared
+        let mut other = modes.clone();
+        other[0].method = Method::Fdd;
+        assert!(harmonic_notes(&other, 0.01).is_empty());
     }
 
     #[test]
