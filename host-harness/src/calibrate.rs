@@ -251,10 +251,13 @@ pub enum Knob {
     /// `beam_length_m` (`[rig]`: the cantilever's length, with an upright or hanging beam the
     /// tip accelerometer's tilt reading).
     BeamLength,
+    /// `epsa_images` (an integer: the sharp images averaged per exposure; the search moves it
+    /// in whole steps).
+    EpsaImages,
 }
 
 impl Knob {
-    const NAMES: [(&'static str, Knob); 8] = [
+    const NAMES: [(&'static str, Knob); 9] = [
         ("target_radius_px", Knob::TargetRadius),
         ("target_edge_sigma_px", Knob::EdgeSigma),
         ("threshold_frac", Knob::ThresholdFrac),
@@ -263,7 +266,13 @@ impl Knob {
         ("gain", Knob::Gain),
         ("tip_rotation_lever", Knob::TipRotationLever),
         ("beam_length_m", Knob::BeamLength),
+        ("epsa_images", Knob::EpsaImages),
     ];
+
+    /// Whether the knob takes whole numbers only (the search rounds and steps by at least 1).
+    pub fn integer(self) -> bool {
+        self == Knob::EpsaImages
+    }
 
     /// The `[imaging]` (or `[rig]`) field name.
     pub fn name(self) -> &'static str {
@@ -274,6 +283,10 @@ impl Knob {
     }
 
     fn set(self, cfg: &mut StudyConfig, v: f64) {
+        if self == Knob::EpsaImages {
+            cfg.imaging.epsa_images = Some(v.round().max(2.0) as usize);
+            return;
+        }
         let o = &mut cfg.imaging;
         let field = match self {
             Knob::TargetRadius => &mut o.target_radius_px,
@@ -284,6 +297,7 @@ impl Knob {
             Knob::Gain => &mut o.gain,
             Knob::TipRotationLever => &mut o.tip_rotation_lever,
             Knob::BeamLength => &mut cfg.rig.beam_length_m,
+            Knob::EpsaImages => return,
         };
         *field = Some(v);
     }
@@ -317,6 +331,12 @@ pub fn parse_free(s: &str) -> Result<Free, String> {
         .ok_or_else(|| format!("`{range}`: expected LO:HI, two numbers"))?;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return Err(format!("`{range}`: LO must be below HI, both finite"));
+    }
+    if knob.integer() && !(lo >= 2.0 && lo.fract() == 0.0 && hi.fract() == 0.0) {
+        return Err(format!(
+            "`{range}`: {} takes whole numbers from 2 (LO and HI integers)",
+            knob.name()
+        ));
     }
     Ok(Free { knob, lo, hi })
 }
@@ -528,7 +548,8 @@ pub fn search(
         cache.insert(key, e.clone());
         Ok(e)
     };
-    let at = |f: &Free, i: usize| f.lo + (f.hi - f.lo) * i as f64 / (grid - 1) as f64;
+    let whole = |f: &Free, v: f64| if f.knob.integer() { v.round() } else { v };
+    let at = |f: &Free, i: usize| whole(f, f.lo + (f.hi - f.lo) * i as f64 / (grid - 1) as f64);
     let mut best: Option<Evaluation> = None;
     for flat in 0..grid.pow(free.len() as u32) {
         let x: Vec<f64> = (0..free.len())
@@ -542,14 +563,24 @@ pub fn search(
     let mut best = best.ok_or_else(|| bad_input("calibrate: no free parameter (--free)"))?;
     let mut step: Vec<f64> = free
         .iter()
-        .map(|f| (f.hi - f.lo) / (grid - 1) as f64 / 2.0)
+        .map(|f| {
+            let s = (f.hi - f.lo) / (grid - 1) as f64 / 2.0;
+            if f.knob.integer() {
+                s.round().max(1.0)
+            } else {
+                s
+            }
+        })
         .collect();
     for _ in 0..refine {
         let mut improved = false;
         for j in 0..free.len() {
             for sign in [-1.0, 1.0] {
                 let mut x = best.x.clone();
-                x[j] = (x[j] + sign * step[j]).clamp(free[j].lo, free[j].hi);
+                x[j] = whole(
+                    &free[j],
+                    (x[j] + sign * step[j]).clamp(free[j].lo, free[j].hi),
+                );
                 let e = eval(&x)?;
                 if e.objective < best.objective {
                     best = e;
@@ -558,7 +589,13 @@ pub fn search(
             }
         }
         if !improved {
-            step.iter_mut().for_each(|s| *s /= 2.0);
+            for (s, f) in step.iter_mut().zip(free) {
+                *s = if f.knob.integer() {
+                    (*s / 2.0).round().max(1.0)
+                } else {
+                    *s / 2.0
+                };
+            }
         }
     }
     let mut u = Vec::with_capacity(free.len());
@@ -576,7 +613,13 @@ pub fn search(
             (Some(a), Some(b)) => Some((a - 2.0 * best.objective + b) / (h * h)),
             _ => None,
         };
-        u.push(curvature.filter(|c| *c > 0.0).map(|c| (2.0 / c).sqrt()));
+        // an integer knob's curvature over whole steps is no standard uncertainty
+        let integer = free[j].knob.integer();
+        u.push(
+            curvature
+                .filter(|c| *c > 0.0 && !integer)
+                .map(|c| (2.0 / c).sqrt()),
+        );
     }
     Ok(Fit {
         best,
@@ -795,6 +838,14 @@ mod tests {
             .unwrap_err()
             .contains("LO must be below HI"));
         assert!(parse_free("gain").unwrap_err().contains("NAME=LO:HI"));
+        let f = parse_free("epsa_images=2:8").unwrap();
+        assert!(f.knob.integer() && (f.lo, f.hi) == (2.0, 8.0));
+        assert!(parse_free("epsa_images=1:8")
+            .unwrap_err()
+            .contains("whole numbers from 2"));
+        assert!(parse_free("epsa_images=2:7.5")
+            .unwrap_err()
+            .contains("whole numbers"));
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! firmware's ratio floor) nothing is corrected: [`ExposureCorrection::ratio`] is `None`.
 
 use crate::imaging::compensation::{correction_table, CompensationError, TransferSetup};
-use crate::imaging::{DiskTarget, Measurement};
+use crate::imaging::{DiskTarget, Setup};
 pub use crate::model::{equivalent_amplitude_px, MotionSegment};
 use firmware_core::exposure::{BoxTransfer, CorrectionTable, ExposureTransfer};
 
@@ -33,7 +33,7 @@ impl ExposureCorrection {
     /// centroid is measured too: with its threshold above the background it is not linear in
     /// the image either, and departs from the sinc by about 1 % at E2PR 0.3.
     pub fn for_segments(
-        measurement: &Measurement,
+        imaging: &Setup,
         target: DiskTarget,
         threshold: u16,
         segments: &[MotionSegment],
@@ -48,8 +48,10 @@ impl ExposureCorrection {
         let mut ratios = [0.0f32; TABLE_NODES];
         let mut eff = 0.0;
         for (a, w) in groups {
+            let measurement = &imaging.measurement;
             let setup = TransferSetup {
                 frame_range_frac: measurement.frame_range_frac,
+                epsa_images: imaging.epsa_images,
                 lk: measurement.tracker == crate::imaging::TrackerKind::Lk,
                 ..TransferSetup::new(target, threshold, measurement.tracker.mode(), a)
             };

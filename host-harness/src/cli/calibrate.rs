@@ -24,7 +24,8 @@ pub struct Args {
     pub preset: Preset,
     /// A free parameter and its range, NAME=LO:HI (repeat): target_radius_px,
     /// target_edge_sigma_px, threshold_frac, read_noise, optical_blur_sigma_px, gain,
-    /// tip_rotation_lever, beam_length_m (`[rig]`; the config must set beam_orientation).
+    /// tip_rotation_lever, beam_length_m (`[rig]`; the config must set beam_orientation),
+    /// epsa_images (whole numbers from 2: the sharp images averaged per exposure).
     #[arg(long = "free", value_name = "NAME=LO:HI", required = true, value_parser = calibrate::parse_free)]
     pub free: Vec<Free>,
     /// Runs per evaluation (the same runs every time: common random numbers).

@@ -45,6 +45,10 @@ pub struct TransferSetup {
     /// With a frame-range threshold rule ([`crate::imaging::ThresholdRule::FrameRange`]), the
     /// fraction of each frame's grey-level range the threshold sits at (`threshold` unused).
     pub frame_range_frac: Option<f64>,
+    /// How the camera forms an exposure ([`BlurRenderer::set_epsa_images`]): `None`
+    /// continuous, `Some(N)` the mean of `N` sharp images; the table then describes that camera
+    /// (for the weighted centroid at the background: the Dirichlet kernel, not the sinc).
+    pub epsa_images: Option<usize>,
 }
 
 impl TransferSetup {
@@ -59,6 +63,7 @@ impl TransferSetup {
             frames_per_period: 64,
             path_steps_per_period: 1024,
             frame_range_frac: None,
+            epsa_images: None,
         }
     }
 }
@@ -204,6 +209,7 @@ pub fn transfer_curve(
     } else {
         BlurRenderer::for_path(&setup.target, &path, 16)
     };
+    renderer.set_epsa_images(setup.epsa_images);
     let (w, h) = (renderer.width(), renderer.height());
     let mut frame = vec![0u8; w * h];
     let kind = match (setup.lk, setup.mode) {
@@ -295,7 +301,11 @@ pub fn correction_table<const N: usize>(
                 frames: pt.frames,
             });
         }
-        *r = pt.ratio as f32;
+        // a camera whose transfer reaches zero inside the table (N averaged images: the
+        // Dirichlet kernel's first zero at E2PR (N - 1) / N) has nodes at or below zero; they
+        // are below the firmware's ratio floor whatever their value, so nothing is corrected
+        // there, and the table takes them as 1e-6
+        *r = (pt.ratio as f32).max(1e-6);
     }
     CorrectionTable::try_new(step as f32, ratios).map_err(CompensationError::Table)
 }
@@ -354,6 +364,16 @@ mod tests {
     /// over `sub` instants of the exposure (midpoint rule), quantised, binary-centroided by a
     /// double loop, fitted over the period.
     fn brute_force_binary(setup: &TransferSetup, e2pr: f64, sub: usize) -> f64 {
+        let offsets: Vec<f64> = (0..sub)
+            .map(|s| (s as f64 + 0.5) / sub as f64 - 0.5)
+            .collect();
+        brute_force_binary_at(setup, e2pr, &offsets)
+    }
+
+    /// [`brute_force_binary`] with the images at `offsets` (fractions of the exposure from
+    /// its centre, -0.5 ..= 0.5), equally weighted.
+    fn brute_force_binary_at(setup: &TransferSetup, e2pr: f64, offsets: &[f64]) -> f64 {
+        let sub = offsets.len();
         let renderer = BlurRenderer::new(&setup.target, -setup.amplitude_px, setup.amplitude_px);
         let (w, h) = (renderer.width(), renderer.height());
         let (rx, ry) = (renderer.rest_x(), renderer.rest_y());
@@ -363,8 +383,8 @@ mod tests {
         for j in 0..k {
             let t = j as f64 / k as f64;
             img.iter_mut().for_each(|v| *v = 0.0);
-            for s in 0..sub {
-                let ti = t + e2pr * ((s as f64 + 0.5) / sub as f64 - 0.5);
+            for off in offsets {
+                let ti = t + e2pr * off;
                 let cy = ry + setup.amplitude_px * (std::f64::consts::TAU * ti).sin();
                 for y in 0..h {
                     for x in 0..w {
@@ -414,6 +434,30 @@ mod tests {
         let pt = centroid_transfer(&setup, 0.7).unwrap();
         let sinc = sinc_pi(0.7) as f64;
         assert!((pt.ratio - sinc).abs() > 0.02, "{pt:?} vs sinc {sinc}");
+    }
+
+    #[test]
+    fn discrete_epsa_transfers_match_the_dirichlet_kernel_and_a_brute_force_rendering() {
+        // the weighted centroid at the background: the Dirichlet kernel of N images
+        let n = 5;
+        let mut setup = TransferSetup::new(TARGET, 0, Mode::Weighted, 5.0);
+        setup.epsa_images = Some(n);
+        for pt in transfer_curve(&setup, &[0.2, 0.4, 0.6, 0.8]).unwrap() {
+            let x = std::f64::consts::PI * pt.e2pr / (n - 1) as f64;
+            let want = (n as f64 * x).sin() / (n as f64 * x.sin());
+            assert!((pt.ratio - want).abs() < 5e-4, "{pt:?} vs Dirichlet {want}");
+        }
+        // the binary centroid of a large motion: N analytic images at the exposure's ends and
+        // evenly between
+        let mut setup = TransferSetup::new(TARGET, 100, Mode::Binary, 12.0);
+        setup.frames_per_period = 32;
+        setup.epsa_images = Some(n);
+        let offsets: Vec<f64> = (0..n).map(|i| i as f64 / (n - 1) as f64 - 0.5).collect();
+        for e in [0.3, 0.7] {
+            let got = centroid_transfer(&setup, e).unwrap();
+            let want = brute_force_binary_at(&setup, e, &offsets);
+            assert!((got.ratio - want).abs() < 1e-4, "{got:?} vs {want}");
+        }
     }
 
     #[test]

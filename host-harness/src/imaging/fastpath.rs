@@ -617,6 +617,34 @@ mod tests {
     }
 
     #[test]
+    fn same_pixels_as_the_renderer_with_discrete_epsa_exposures() {
+        // the paper's averaging of a few sharp images: the fast path reads the renderer's ramp,
+        // so it must agree there too
+        let target = TARGET;
+        let mut rng = ChaCha8Rng::seed_from_u64(29);
+        let (mut frames, mut fast_frames, mut ties) = (0, 0, 0);
+        for case in 0..6 {
+            let amp = [2.0, 10.0, 40.0][case % 3];
+            let path = random_path(&mut rng, 3000, amp);
+            let mut renderer = BlurRenderer::for_path(&target, &path, 10);
+            renderer.set_epsa_images(Some([2, 3, 5][case % 3]));
+            let windows: Vec<(f64, f64)> = (0..150)
+                .map(|_| {
+                    let e = rng.random_range(0.0..250.0);
+                    let c = rng.random_range(e / 2.0..2999.0 - e / 2.0);
+                    (c - e / 2.0, c + e / 2.0)
+                })
+                .collect();
+            let (n, f, m, _) = compare(&target, &mut renderer, &windows);
+            frames += n;
+            fast_frames += f;
+            ties += m;
+        }
+        assert_eq!(fast_frames, frames);
+        assert!(ties * 200 <= frames, "{ties} tie pixels in {frames} frames");
+    }
+
+    #[test]
     fn frames_near_the_border_are_rendered() {
         let target = TARGET;
         let mut rng = ChaCha8Rng::seed_from_u64(7);

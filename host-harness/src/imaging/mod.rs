@@ -131,6 +131,9 @@ pub struct Setup {
     pub measurement: Measurement,
     /// When the exposure happens relative to the frame's timestamp.
     pub alignment: ExposureAlignment,
+    /// `Some(N)`: an exposure is the mean of `N` sharp images, its ends included; `None`: the
+    /// continuous integration ([`BlurRenderer::set_epsa_images`]).
+    pub epsa_images: Option<usize>,
     /// Where the camera sees the cantilever (the tip, without a lever, by default; the
     /// grandstand accepts only the default).
     pub view: crate::model::cantilever::View,
@@ -159,10 +162,19 @@ impl Setup {
                 "must be a position along the beam in (0, 1] (1 = the tip)",
             ));
         }
+        if let Some(n) = o.epsa_images {
+            if !(2..=1000).contains(&n) {
+                return Err(bad(
+                    "epsa_images",
+                    "must be between 2 and 1000 images per exposure (absent: continuous)",
+                ));
+            }
+        }
         Ok(Setup {
             effects,
             measurement: Measurement::from_options(o)?,
             alignment: o.exposure_alignment.unwrap_or_default(),
+            epsa_images: o.epsa_images,
             view,
             lost_frame_policy: o.lost_frame_policy.unwrap_or_default(),
         })
@@ -217,6 +229,10 @@ pub struct ImagingOptions {
     pub threshold_frac: Option<f64>,
     /// When the exposure happens relative to the frame's timestamp; centred when absent.
     pub exposure_alignment: Option<ExposureAlignment>,
+    /// How an exposure is formed: absent, the exact continuous integration over the path (a
+    /// real sensor); `N` (2 to 1000), the discrete EPSA averaging of `N` sharp images spread
+    /// evenly over the exposure, its ends included (the paper's simulation; method.md §2.6).
+    pub epsa_images: Option<usize>,
     /// How the threshold is set in each frame; fixed when absent.
     pub threshold_rule: Option<ThresholdRule>,
     /// Cantilever only: the beam's rotation projected on the image plane, as a lever in beam

@@ -57,6 +57,10 @@ pub struct BlurRenderer {
     blocks: Vec<Complex32>,
     /// Smallest and largest displacement of each block's samples (its `block + 1` samples).
     block_range: Vec<(f64, f64)>,
+    /// `Some(n)`: an exposure is the average of `n` sharp images spread evenly over it, first
+    /// and last at its ends ([`set_epsa_images`](Self::set_epsa_images)); `None`: the exact
+    /// continuous integration.
+    epsa_images: Option<usize>,
 }
 
 impl std::fmt::Debug for BlurRenderer {
@@ -173,6 +177,7 @@ impl BlurRenderer {
             block: 1,
             blocks: Vec::new(),
             block_range: Vec::new(),
+            epsa_images: None,
         }
     }
 
@@ -203,6 +208,17 @@ impl BlurRenderer {
     /// Column of the target centre.
     pub fn rest_x(&self) -> f64 {
         self.rest_x as f64
+    }
+
+    /// How an exposure from `a` to `b` is formed: `None` (the default), the exact average over
+    /// the path (a real sensor's continuous exposure); `Some(n)`, `n >= 2`, the discrete EPSA
+    /// averaging of `n` sharp images at `a + i (b - a) / (n - 1)`, `i = 0 .. n`, the exposure's
+    /// ends included (docs/method.md §2.6: the paper's averaging; its transfer for a linear
+    /// centroid is the Dirichlet kernel `sin(pi f N dt) / (N sin(pi f dt))`, `dt = Te / (N -
+    /// 1)`, where the continuous exposure gives `sin(pi f Te) / (pi f Te)`). `Some(0)` and
+    /// `Some(1)` are taken as `Some(2)`.
+    pub fn set_epsa_images(&mut self, images: Option<usize>) {
+        self.epsa_images = images.map(|n| n.max(2));
     }
 
     /// Sets the displacement path (px, positive down, at equally spaced instants, linear in
@@ -347,6 +363,16 @@ impl BlurRenderer {
         self.seg.clear();
         if b <= a {
             self.seg.push(1.0, at(&self.path, a), 0.0, h);
+            ramp_sum(&mut self.seg, &mut self.ramp);
+            return;
+        }
+        if let Some(n) = self.epsa_images {
+            // sharp images at n instants, the ends included, each of weight 1 / n
+            let step = (b - a) / (n - 1) as f64;
+            for i in 0..n {
+                let t = if i + 1 == n { b } else { a + i as f64 * step };
+                self.seg.push(1.0 / n as f64, at(&self.path, t), 0.0, h);
+            }
             ramp_sum(&mut self.seg, &mut self.ramp);
             return;
         }
@@ -628,5 +654,59 @@ mod tests {
             (got / want - 1.0).abs() < 0.005,
             "amplitude {got} vs sinc prediction {want}"
         );
+    }
+
+    #[test]
+    fn discrete_epsa_is_the_mean_of_sharp_images_and_follows_the_dirichlet_kernel() {
+        let (amp, f, te, n) = (5.0, 2.0, 0.18, 5usize);
+        let fine = 1000.0;
+        let path: Vec<f64> = (0..4000)
+            .map(|i| amp * (std::f64::consts::TAU * f * i as f64 / fine).sin())
+            .collect();
+        let mut r = BlurRenderer::new(&TARGET, -6.0, 6.0);
+        let (w, h) = (r.width(), r.height());
+        let rest = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), w);
+        r.set_path(&path, 10);
+        r.set_epsa_images(Some(n));
+        // the frame is the mean of n sharp frames at the exposure's ends and evenly between
+        let (a, b) = (1234.5, 1234.5 + te * fine);
+        let mut img = vec![0.0f32; w * h];
+        r.render_float(a, b, &mut img);
+        let mut mean = vec![0.0f32; w * h];
+        let mut sharp = vec![0.0f32; w * h];
+        for i in 0..n {
+            let t = a + i as f64 * (b - a) / (n - 1) as f64;
+            r.render_float(t, t, &mut sharp);
+            for (m, v) in mean.iter_mut().zip(&sharp) {
+                *m += v / n as f32;
+            }
+        }
+        let worst = img
+            .iter()
+            .zip(&mean)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 2e-3, "{worst} grey levels");
+        // and the weighted centroid of a sinusoid is scaled by the Dirichlet kernel, not the sinc
+        let (mut ss, mut sc) = (0.0, 0.0);
+        let frames = 300;
+        for i in 0..frames {
+            let centre = 500.0 + i as f64 * 10.0;
+            r.render_float(centre - te * fine / 2.0, centre + te * fine / 2.0, &mut img);
+            let y = weighted_cy(&img, w) - rest;
+            let ph = std::f64::consts::TAU * f * centre / fine;
+            ss += y * ph.sin();
+            sc += y * ph.cos();
+        }
+        let got = 2.0 * (ss * ss + sc * sc).sqrt() / frames as f64;
+        let pi = std::f64::consts::PI;
+        let dt = te / (n - 1) as f64;
+        let want = amp * (pi * f * n as f64 * dt).sin() / (n as f64 * (pi * f * dt).sin());
+        let sinc = amp * (pi * f * te).sin() / (pi * f * te);
+        assert!(
+            (got / want - 1.0).abs() < 0.005,
+            "{got} vs Dirichlet {want}"
+        );
+        assert!((got / sinc - 1.0).abs() > 0.05, "{got} vs sinc {sinc}");
     }
 }

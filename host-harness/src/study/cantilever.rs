@@ -94,7 +94,7 @@ impl Scenario for Cantilever {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            &self.imaging.measurement,
+            &self.imaging,
             self.target,
             self.threshold,
             &crate::model::cantilever::nominal_motion_segments(&ACQUISITION)?,

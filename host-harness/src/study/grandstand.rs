@@ -129,7 +129,7 @@ impl Scenario for Grandstand {
 
     fn exposure_correction(&self) -> anyhow::Result<ExposureCorrection> {
         Ok(ExposureCorrection::for_segments(
-            &self.imaging.measurement,
+            &self.imaging,
             self.target,
             self.threshold,
             &crate::model::grandstand::nominal_motion_segments(),

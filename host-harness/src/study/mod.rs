@@ -257,6 +257,7 @@ impl Filming<'_> {
             renderer = crate::imaging::BlurRenderer::new(self.target, lo - extra, hi + extra);
             renderer.set_path(&path.path_px, self.block);
         }
+        renderer.set_epsa_images(im.epsa_images);
         let (w, h) = (renderer.width(), renderer.height());
         let rest_y = renderer.rest_y();
         let mut camera = crate::imaging::Camera::new(
