@@ -1,0 +1,122 @@
+/* The C ABI from C: firmware-core's centroid and tracking window against a naive centroid
+ * computed here, on frames drawn here. Built and run by firmware-core-ffi/c/run.sh (in CI):
+ * gcc -std=c99 -Wall -Wextra -Werror -pedantic, linked against the host staticlib. */
+#include "vibcam.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define W 64
+#define H 48
+
+static uint8_t frame[W * H];
+static vc_tracker_t tracker; /* caller-owned state, in static memory */
+
+/* a disk of radius r at (cx, cy): 200 inside, 10 outside, 100 on a one-pixel ramp */
+static void draw(double cx, double cy, double r) {
+    for (int y = 0; y < H; y++) {
+        for (int x = 0; x < W; x++) {
+            double d = sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy));
+            frame[y * W + x] = d < r - 0.5 ? 200 : (d < r + 0.5 ? 100 : 10);
+        }
+    }
+}
+
+/* the reference: sums over the pixels above t, weight 1 (binary) or value - t (weighted) */
+static void naive(uint16_t t, int weighted, double *cx, double *cy, unsigned long *n) {
+    double w = 0, sx = 0, sy = 0;
+    *n = 0;
+    for (int y = 0; y < H; y++) {
+        for (int x = 0; x < W; x++) {
+            int v = frame[y * W + x];
+            if (v > t) {
+                double k = weighted ? (double)(v - t) : 1.0;
+                w += k;
+                sx += k * x;
+                sy += k * y;
+                (*n)++;
+            }
+        }
+    }
+    *cx = sx / w;
+    *cy = sy / w;
+}
+
+static int failures = 0;
+#define CHECK(cond, ...)                                                                     \
+    do {                                                                                     \
+        if (!(cond)) {                                                                       \
+            printf("FAIL %s:%d: ", __FILE__, __LINE__);                                      \
+            printf(__VA_ARGS__);                                                             \
+            printf("\n");                                                                    \
+            failures++;                                                                      \
+        }                                                                                    \
+    } while (0)
+
+int main(void) {
+    vc_centroid_config_t cfg;
+    vc_centroid_t c;
+    memset(&cfg, 0, sizeof cfg);
+
+    /* the centroid, both modes, against the naive sums */
+    draw(30.3, 20.7, 6.0);
+    for (int mode = 0; mode < 2; mode++) {
+        double rx, ry;
+        unsigned long n;
+        cfg.threshold = 50;
+        cfg.mode = mode == 0 ? VC_MODE_BINARY : VC_MODE_WEIGHTED;
+        int s = vc_centroid_u8(frame, sizeof frame, W, H, W, &cfg, &c);
+        naive(50, mode, &rx, &ry, &n);
+        CHECK(s == VC_OK, "status %d", (int)s);
+        CHECK(c.pixels == n, "pixels %lu vs %lu", (unsigned long)c.pixels, n);
+        CHECK(fabs(c.cx - rx) < 1e-4 && fabs(c.cy - ry) < 1e-4, "mode %d: (%f, %f) vs (%f, %f)",
+              mode, c.cx, c.cy, rx, ry);
+        CHECK(c.flags == 0, "flags %d", c.flags);
+        printf("centroid mode %d: (%.4f, %.4f), %lu pixels\n", mode, c.cx, c.cy,
+               (unsigned long)c.pixels);
+    }
+
+    /* errors are statuses */
+    CHECK(vc_centroid_u8(NULL, 0, W, H, W, &cfg, &c) == VC_ERR_NULL, "null pixels");
+    CHECK(vc_centroid_u8(frame, sizeof frame - 1, W, H, W, &cfg, &c) == VC_ERR_FRAME, "short");
+    cfg.mode = 9;
+    CHECK(vc_centroid_u8(frame, sizeof frame, W, H, W, &cfg, &c) == VC_ERR_CONFIG, "mode");
+    cfg.mode = VC_MODE_BINARY;
+    CHECK(vc_tracker_finish_frame(&tracker, &c) == VC_ERR_STATE, "uninitialised tracker");
+
+    /* the tracking window, fed row by row, on a disk moving 1.5 px per frame */
+    vc_track_config_t tc;
+    memset(&tc, 0, sizeof tc);
+    tc.centroid.threshold = 50;
+    tc.centroid.mode = VC_MODE_BINARY;
+    tc.width = W;
+    tc.height = H;
+    tc.margin = 4;
+    CHECK(vc_tracker_init(&tracker, &tc) == VC_OK, "init");
+    int windowed = 0;
+    for (int k = 0; k < 16; k++) {
+        double rx, ry;
+        unsigned long n;
+        vc_roi_t roi;
+        draw(15.0 + 1.5 * k, 12.0 + 1.0 * k, 5.0);
+        windowed += vc_tracker_window(&tracker, &roi) == 1;
+        for (int y = 0; y < H; y++) {
+            CHECK(vc_tracker_push_row_u8(&tracker, frame + y * W, W) == VC_OK, "row %d", y);
+        }
+        CHECK(vc_tracker_finish_frame(&tracker, &c) == VC_OK, "finish");
+        naive(50, 0, &rx, &ry, &n);
+        CHECK(fabs(c.cx - rx) < 1e-4 && fabs(c.cy - ry) < 1e-4 && c.pixels == n,
+              "frame %d: (%f, %f) vs (%f, %f)", k, c.cx, c.cy, rx, ry);
+    }
+    CHECK(windowed == 15, "%d frames read in a window", windowed);
+    printf("tracker: 16 frames, %d in a window, last (%.4f, %.4f)\n", windowed, c.cx, c.cy);
+    printf("sizeof(vc_tracker_t) = %u\n", (unsigned)sizeof(vc_tracker_t));
+
+    if (failures) {
+        printf("%d failures\n", failures);
+        return 1;
+    }
+    printf("C ABI: all checks passed\n");
+    return 0;
+}

@@ -1,0 +1,37 @@
+//! The committed C header is what cbindgen makes of the crate today: a changed ABI must come
+//! with its header (`VIBCAM_BLESS=1 cargo test -p firmware-core-ffi --test header` rewrites it).
+
+#[test]
+fn the_committed_header_is_current() {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let config = cbindgen::Config::from_file(format!("{dir}/cbindgen.toml")).unwrap();
+    let mut generated = Vec::new();
+    cbindgen::Builder::new()
+        .with_crate(dir)
+        .with_config(config)
+        .generate()
+        .expect("cbindgen reads the crate")
+        .write(&mut generated);
+    let generated = String::from_utf8(generated).unwrap();
+    let path = format!("{dir}/include/vibcam.h");
+    if std::env::var_os("VIBCAM_BLESS").is_some() {
+        std::fs::write(&path, &generated).unwrap();
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == generated,
+        "{path} is not what cbindgen generates from the crate: rerun with VIBCAM_BLESS=1"
+    );
+    // the declarations C firmware relies on
+    for name in [
+        "vc_centroid_u8",
+        "vc_centroid_u16",
+        "vc_tracker_init",
+        "vc_tracker_push_row_u8",
+        "vc_tracker_finish_frame",
+        "vc_tracker_window",
+        "VC_TRACKER_WORDS",
+    ] {
+        assert!(generated.contains(name), "{name} missing from the header");
+    }
+}
