@@ -188,9 +188,27 @@ fn centroid_of<P: centroid::Pixel>(
         .map_err(frame_error)
 }
 
-/// Shared body of the two centroid entry points once the pointers are slices.
-fn write_result(r: Result<vc_centroid_t, i32>, out: &mut vc_centroid_t) -> i32 {
-    match r {
+/// The body of the centroid entry points: null checks, the pixels as a slice, the result
+/// written on success.
+///
+/// # Safety
+/// `pixels` must point to `len` readable, aligned `P` (or be null); `config` and `out` must
+/// each be null or point to a valid value of their type.
+unsafe fn centroid_entry<P: centroid::Pixel>(
+    pixels: *const P,
+    len: usize,
+    shape: (u32, u32, u32),
+    config: *const vc_centroid_config_t,
+    out: *mut vc_centroid_t,
+) -> i32 {
+    if pixels.is_null() || config.is_null() || out.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: the caller guarantees `len` readable, aligned values at `pixels` (non-null).
+    let px = unsafe { core::slice::from_raw_parts(pixels, len) };
+    // SAFETY: non-null (checked), and the caller guarantees valid values.
+    let (config, out) = unsafe { (&*config, &mut *out) };
+    match centroid_of(px, shape, config) {
         Ok(c) => {
             *out = c;
             VC_OK
@@ -215,14 +233,8 @@ pub unsafe extern "C" fn vc_centroid_u8(
     config: *const vc_centroid_config_t,
     out: *mut vc_centroid_t,
 ) -> i32 {
-    if pixels.is_null() || config.is_null() || out.is_null() {
-        return VC_ERR_NULL;
-    }
-    // SAFETY: the caller guarantees `len` readable bytes at `pixels` (non-null, checked).
-    let px = unsafe { core::slice::from_raw_parts(pixels, len) };
-    // SAFETY: non-null (checked), and the caller guarantees a valid value.
-    let (config, out) = unsafe { (&*config, &mut *out) };
-    write_result(centroid_of(px, (width, height, stride), config), out)
+    // SAFETY: the caller's guarantees are those of `centroid_entry`.
+    unsafe { centroid_entry(pixels, len, (width, height, stride), config, out) }
 }
 
 /// [`vc_centroid_u8`] for 16-bit pixels (`len` and `stride` in pixels).
@@ -240,14 +252,8 @@ pub unsafe extern "C" fn vc_centroid_u16(
     config: *const vc_centroid_config_t,
     out: *mut vc_centroid_t,
 ) -> i32 {
-    if pixels.is_null() || config.is_null() || out.is_null() {
-        return VC_ERR_NULL;
-    }
-    // SAFETY: the caller guarantees `len` readable, aligned values at `pixels` (non-null).
-    let px = unsafe { core::slice::from_raw_parts(pixels, len) };
-    // SAFETY: non-null (checked), and the caller guarantees a valid value.
-    let (config, out) = unsafe { (&*config, &mut *out) };
-    write_result(centroid_of(px, (width, height, stride), config), out)
+    // SAFETY: the caller's guarantees are those of `centroid_entry`.
+    unsafe { centroid_entry(pixels, len, (width, height, stride), config, out) }
 }
 
 /// The tracker stored in `t`, if `t` was initialised.
