@@ -14,9 +14,9 @@ pub struct Args {
     /// 2 % apart and a third (2.00, 2.04, 5.00 Hz), five points each.
     #[arg(long, value_enum, default_value_t = CaseArg::ShearFrame)]
     pub case: CaseArg,
-    /// Record length, minutes (> 0).
-    #[arg(long, value_name = "MIN", default_value_t = 30.0)]
-    pub minutes: f64,
+    /// Record length, minutes (> 0) [default: 30; 5 with --render].
+    #[arg(long, value_name = "MIN")]
+    pub minutes: Option<f64>,
     /// Sample rate (the camera's frame rate), Hz.
     #[arg(long, value_name = "HZ", default_value_t = 60.0)]
     pub fps: f64,
@@ -65,7 +65,8 @@ pub enum CaseArg {
 
 /// Runs `host-harness simulate-field`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    for (name, v) in [("--minutes", args.minutes), ("--fps", args.fps)] {
+    let minutes = args.minutes.unwrap_or(if args.render { 5.0 } else { 30.0 });
+    for (name, v) in [("--minutes", minutes), ("--fps", args.fps)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(crate::bad_input(format!(
                 "{name} must be positive, got {v}"
@@ -89,7 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         CaseArg::CloseModes => FieldCase::CloseModes,
     };
     let model = case.model();
-    let n = (args.minutes * 60.0 * args.fps).round() as usize;
+    let n = (minutes * 60.0 * args.fps).round() as usize;
     if args.render {
         let rec = FieldRecording {
             model,
