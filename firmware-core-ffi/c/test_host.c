@@ -12,6 +12,7 @@
 
 static uint8_t frame[W * H];
 static vc_tracker_t tracker; /* caller-owned state, in static memory */
+static vc_pipeline_t pipe;
 
 /* a disk of radius r at (cx, cy): 200 inside, 10 outside, 100 on a one-pixel ramp */
 static void draw(double cx, double cy, double r) {
@@ -112,6 +113,37 @@ int main(void) {
     CHECK(windowed == 15, "%d frames read in a window", windowed);
     printf("tracker: 16 frames, %d in a window, last (%.4f, %.4f)\n", windowed, c.cx, c.cy);
     printf("sizeof(vc_tracker_t) = %u\n", (unsigned)sizeof(vc_tracker_t));
+
+    /* the vision channel: a 7 Hz motion seen by the ADC (m/s^2) and the camera (mm, its
+     * acceleration a quarter period ahead), 120 fps and 2048 Hz for 6 s: H1 = i at 7 Hz */
+    {
+        const double pi = 3.14159265358979323846, f = 7.0, w = 2.0 * pi * f;
+        vc_pipeline_config_t pc = {120, 2048, 1e-3f, 0.0f};
+        float adc[32];
+        unsigned sent = 0;
+        CHECK(vc_pipeline_init(&pipe, &pc) == VC_OK, "pipeline init");
+        for (unsigned k = 0; k < 6 * 120; k++) {
+            unsigned upto = ((k + 1) * 2048 + 119) / 120, n = 0;
+            for (; sent < upto; sent++) {
+                adc[n++] = (float)(5.0 * sin(w * sent / 2048.0));
+            }
+            CHECK(vc_pipeline_push_adc(&pipe, adc, n) == VC_OK, "adc before frame %u", k);
+            CHECK(vc_pipeline_push_frame(&pipe, (float)(-5.0 * cos(w * k / 120.0) / (w * w) * 1e3)) ==
+                      VC_OK,
+                  "frame %u", k);
+        }
+        float re = 0, im = 0, df = 0;
+        uint32_t bins = 0;
+        CHECK(vc_pipeline_h1(&pipe, 7, &re, &im, &bins, &df) == VC_OK, "h1");
+        CHECK(bins == 1025 && df == 1.0f, "%u bins of %f Hz", (unsigned)bins, df);
+        CHECK(fabs(re) < 0.02 && fabs(im - 1.0) < 0.02, "H1(7 Hz) = %f + %fi", re, im);
+        vc_peak_t pk;
+        CHECK(vc_pipeline_peak(&pipe, 6.0f, 8.0f, &pk) == VC_OK, "peak");
+        CHECK(fabs(pk.amplitude - 1.0) < 0.02 && pk.segments >= 5, "peak %f after %u segments",
+              pk.amplitude, (unsigned)pk.segments);
+        printf("pipeline: H1(7 Hz) = %.4f %+.4fi after %u segments; sizeof(vc_pipeline_t) = %u\n",
+               re, im, (unsigned)pk.segments, (unsigned)sizeof(vc_pipeline_t));
+    }
 
     if (failures) {
         printf("%d failures\n", failures);

@@ -26,6 +26,13 @@
 // The state was not initialised by its `init` function.
 #define VC_ERR_STATE -4
 
+// No room: the pipeline holds a block of frames waiting for ADC samples, or the ADC ran too
+// far ahead of the camera; nothing was consumed (push the other stream, then again).
+#define VC_ERR_FULL -5
+
+// Nothing to report yet: no Welch segment accumulated, or no bin in the band.
+#define VC_ERR_EMPTY -6
+
 // `vc_centroid_config_t::mode`: weight 1 per pixel above the threshold.
 #define VC_MODE_BINARY 0
 
@@ -43,6 +50,9 @@
 
 // 64-bit words of a [`vc_tracker_t`].
 #define VC_TRACKER_WORDS 24
+
+// 64-bit words of a [`vc_pipeline_t`].
+#define VC_PIPELINE_WORDS 7200
 
 // A region of interest in full-frame pixels: columns `x .. x + width`, rows
 // `y .. y + height`.
@@ -110,6 +120,41 @@ typedef struct {
   uint32_t margin;
 } vc_track_config_t;
 
+// The vision channel's state (frames and ADC samples in, upsampled vision acceleration,
+// streaming Welch H1 of vision over ADC), owned by the caller (`static vc_pipeline_t p;`,
+// 8-byte aligned, `8 * VC_PIPELINE_WORDS` bytes), set up by `vc_pipeline_init`.
+typedef struct {
+  // Word 0 marks an initialised state; the pipeline follows it.
+  uint64_t opaque[VC_PIPELINE_WORDS];
+} vc_pipeline_t;
+
+// Settings of the vision channel: blocks of one second (`frames_per_block` = the frame
+// rate, `samples_per_block` = the ADC rate), one-second Hann segments with half overlap.
+typedef struct {
+  // Frames per block: the camera's frame rate, fps (<= 120).
+  uint32_t frames_per_block;
+  // ADC samples per block: the ADC's rate, Hz (<= 2048).
+  uint32_t samples_per_block;
+  // Non-zero: the camera displacement becomes acceleration (`-(2 pi f)^2 * scale`, e.g.
+  // `1e-3` for mm in and m/s^2 out); 0: H1 in the camera's unit per ADC unit.
+  float acceleration_scale;
+  // Non-zero: exposure compensation for a centred exposure of this many seconds (the
+  // vision spectrum divided by `sinc(pi f te)` where `f te <= 0.8`); 0: none.
+  float exposure_s;
+} vc_pipeline_config_t;
+
+// A resonance picked from H1: the bin of the largest `|Im H1|` in a band.
+typedef struct {
+  // The bin.
+  uint32_t bin;
+  // Its frequency, Hz.
+  float f_hz;
+  // `|H1|` there (vision unit per ADC unit).
+  float amplitude;
+  // Welch segments averaged so far.
+  uint32_t segments;
+} vc_peak_t;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -168,6 +213,48 @@ int32_t vc_tracker_finish_frame(vc_tracker_t *t, vc_centroid_t *out);
 // # Safety
 // `t` and `out` must each be null or point to a valid value of their type.
 int32_t vc_tracker_window(vc_tracker_t *t, vc_roi_t *out);
+
+// Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
+// skipped). On error `*p` is left uninitialised.
+//
+// # Safety
+// `p` and `config` must each be null or point to a valid value of their type.
+int32_t vc_pipeline_init(vc_pipeline_t *p, const vc_pipeline_config_t *config);
+
+// Pushes `n` ADC samples (the reference channel, e.g. base acceleration or force).
+//
+// # Safety
+// `p` must be null or point to a `vc_pipeline_t`; `samples` must point to `n` readable
+// floats (or be null).
+int32_t vc_pipeline_push_adc(vc_pipeline_t *p, const float *samples, size_t n);
+
+// Pushes the next frame's displacement (the tracker's position along the motion, in the
+// camera's unit).
+//
+// # Safety
+// `p` must be null or point to a `vc_pipeline_t`.
+int32_t vc_pipeline_push_frame(vc_pipeline_t *p, float value);
+
+// H1 (vision over ADC) at bin `k` (`k * df_hz` Hz) into `re`, `im`, with the number of
+// bins and their spacing into `bins` and `df_hz` (each out-pointer may be null); `VC_ERR_EMPTY`
+// before the first segment or for `k` past the last bin.
+//
+// # Safety
+// `p` must be null or point to a `vc_pipeline_t`; every non-null out-pointer must point to
+// a writable value of its type.
+int32_t vc_pipeline_h1(vc_pipeline_t *p,
+                       uint32_t k,
+                       float *re,
+                       float *im,
+                       uint32_t *bins,
+                       float *df_hz);
+
+// The peak of `|Im H1|` in the band `f_lo ..= f_hi` Hz of the H1 accumulated so far
+// (`VC_ERR_EMPTY` before the first segment or without a bin in the band).
+//
+// # Safety
+// `p` and `out` must each be null or point to a valid value of their type.
+int32_t vc_pipeline_peak(vc_pipeline_t *p, float f_lo, float f_hi, vc_peak_t *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -14,8 +14,11 @@
 //!   status codes; the pixel pointers must point to `len` readable values for the duration of
 //!   the call (the one thing C must guarantee).
 //!
+//! And the whole vision channel (`vc_pipeline_t`: frames and ADC samples in, Welch H1 and its
+//! resonance peaks out) in the capacities of the 120 fps / 2048 Hz one-second pipeline.
+//!
 //! Build for an MCU with `--no-default-features` (no_std, `staticlib`); the host build links
-//! std. The vision pipeline and the cross-spectral path are not exposed yet.
+//! std. The multi-target centroid and the cross-spectral path are not exposed yet.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![allow(non_camel_case_types)]
 
@@ -23,6 +26,7 @@ use core::mem::{align_of, size_of};
 use firmware_core::centroid::{
     self, track::TrackConfig, track::Tracker, Centroid, CentroidConfig, Frame, Roi,
 };
+use firmware_core::pipeline::{PipelineConfig, PushError, VisionH1};
 
 /// Success.
 pub const VC_OK: i32 = 0;
@@ -36,6 +40,11 @@ pub const VC_ERR_CONFIG: i32 = -2;
 pub const VC_ERR_FRAME: i32 = -3;
 /// The state was not initialised by its `init` function.
 pub const VC_ERR_STATE: i32 = -4;
+/// No room: the pipeline holds a block of frames waiting for ADC samples, or the ADC ran too
+/// far ahead of the camera; nothing was consumed (push the other stream, then again).
+pub const VC_ERR_FULL: i32 = -5;
+/// Nothing to report yet: no Welch segment accumulated, or no bin in the band.
+pub const VC_ERR_EMPTY: i32 = -6;
 
 /// `vc_centroid_config_t::mode`: weight 1 per pixel above the threshold.
 pub const VC_MODE_BINARY: u8 = 0;
@@ -134,6 +143,69 @@ const TRACKER_MAGIC: u64 = 0x7663_7472_6163_6b31;
 // the tracker must fit after the magic word, at an alignment the words give
 const _: () = assert!(size_of::<Tracker>() <= 8 * (VC_TRACKER_WORDS - 1));
 const _: () = assert!(align_of::<Tracker>() <= 8);
+
+/// The capacities of [`vc_pipeline_t`]: one-second blocks of 120 frames and 2048 ADC
+/// samples, 2048-point H1 (the mcu-demo's pipeline); other settings are accepted when they
+/// fit (`frames_per_block <= 120`, `samples_per_block <= 2048`, their transforms' scratch).
+const PIPELINE_CAPACITY: PipelineConfig = PipelineConfig::one_second_blocks(120, 2048, None);
+/// ADC samples the ADC may run ahead of the camera beyond the least (as the mcu-demo).
+const PIPELINE_LATENCY: usize = 238;
+type Pipeline = VisionH1<
+    { PIPELINE_CAPACITY.camera_capacity() },
+    { PIPELINE_CAPACITY.history_capacity(PIPELINE_LATENCY) },
+    { PIPELINE_CAPACITY.work_capacity() },
+    { PIPELINE_CAPACITY.scratch_capacity() },
+>;
+
+/// 64-bit words of a [`vc_pipeline_t`].
+pub const VC_PIPELINE_WORDS: usize = 7200;
+
+/// The vision channel's state (frames and ADC samples in, upsampled vision acceleration,
+/// streaming Welch H1 of vision over ADC), owned by the caller (`static vc_pipeline_t p;`,
+/// 8-byte aligned, `8 * VC_PIPELINE_WORDS` bytes), set up by `vc_pipeline_init`.
+#[repr(C)]
+#[derive(Debug)]
+pub struct vc_pipeline_t {
+    /// Word 0 marks an initialised state; the pipeline follows it.
+    opaque: [u64; VC_PIPELINE_WORDS],
+}
+
+/// Marks an initialised `vc_pipeline_t` ("vcpipe01").
+const PIPELINE_MAGIC: u64 = 0x7663_7069_7065_3031;
+
+const _: () = assert!(size_of::<Pipeline>() <= 8 * (VC_PIPELINE_WORDS - 1));
+const _: () = assert!(align_of::<Pipeline>() <= 8);
+
+/// Settings of the vision channel: blocks of one second (`frames_per_block` = the frame
+/// rate, `samples_per_block` = the ADC rate), one-second Hann segments with half overlap.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct vc_pipeline_config_t {
+    /// Frames per block: the camera's frame rate, fps (<= 120).
+    pub frames_per_block: u32,
+    /// ADC samples per block: the ADC's rate, Hz (<= 2048).
+    pub samples_per_block: u32,
+    /// Non-zero: the camera displacement becomes acceleration (`-(2 pi f)^2 * scale`, e.g.
+    /// `1e-3` for mm in and m/s^2 out); 0: H1 in the camera's unit per ADC unit.
+    pub acceleration_scale: f32,
+    /// Non-zero: exposure compensation for a centred exposure of this many seconds (the
+    /// vision spectrum divided by `sinc(pi f te)` where `f te <= 0.8`); 0: none.
+    pub exposure_s: f32,
+}
+
+/// A resonance picked from H1: the bin of the largest `|Im H1|` in a band.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct vc_peak_t {
+    /// The bin.
+    pub bin: u32,
+    /// Its frequency, Hz.
+    pub f_hz: f32,
+    /// `|H1|` there (vision unit per ADC unit).
+    pub amplitude: f32,
+    /// Welch segments averaged so far.
+    pub segments: u32,
+}
 
 fn config_of(c: &vc_centroid_config_t) -> Result<CentroidConfig, i32> {
     let mut config = match c.mode {
@@ -256,17 +328,57 @@ pub unsafe extern "C" fn vc_centroid_u16(
     unsafe { centroid_entry(pixels, len, (width, height, stride), config, out) }
 }
 
-/// The tracker stored in `t`, if `t` was initialised.
-fn tracker_mut(t: &mut vc_tracker_t) -> Option<&mut Tracker> {
-    let (magic, rest) = t.opaque.split_first_mut()?;
-    if *magic != TRACKER_MAGIC {
+/// Caller-owned storage of a `T`: word 0 is `magic` once a valid `T` follows it.
+trait Storage<T> {
+    const MAGIC: u64;
+    fn words(&mut self) -> &mut [u64];
+}
+
+impl Storage<Tracker> for vc_tracker_t {
+    const MAGIC: u64 = TRACKER_MAGIC;
+    fn words(&mut self) -> &mut [u64] {
+        &mut self.opaque
+    }
+}
+
+impl Storage<Pipeline> for vc_pipeline_t {
+    const MAGIC: u64 = PIPELINE_MAGIC;
+    fn words(&mut self) -> &mut [u64] {
+        &mut self.opaque
+    }
+}
+
+/// The `T` stored in `s`, if it was initialised.
+fn state_mut<T, S: Storage<T>>(s: &mut S) -> Option<&mut T> {
+    let (magic, rest) = s.words().split_first_mut()?;
+    if *magic != S::MAGIC || size_of::<T>() > 8 * rest.len() || align_of::<T>() > 8 {
         return None;
     }
-    let p = rest.as_mut_ptr().cast::<Tracker>();
-    // SAFETY: `rest` is 8-aligned and large enough for a Tracker (compile-time asserts
-    // above), and the magic word is only set by `vc_tracker_init` after writing a valid
-    // Tracker there; the borrow of `t` makes the reference unique.
+    let p = rest.as_mut_ptr().cast::<T>();
+    // SAFETY: `rest` is 8-aligned and large enough for a T (checked above; the sizes are
+    // also asserted at compile time), and the magic word is only set by `state_init` after a
+    // valid T was written there; the borrow of `s` makes the reference unique.
     Some(unsafe { &mut *p })
+}
+
+/// Writes `value` into `s` and marks it initialised; the stored `T` for further set-up.
+fn state_init<T, S: Storage<T>>(s: &mut S, value: T) -> Option<&mut T> {
+    let words = s.words();
+    let (magic, rest) = words.split_first_mut()?;
+    *magic = 0;
+    if size_of::<T>() > 8 * rest.len() || align_of::<T>() > 8 {
+        return None;
+    }
+    let p = rest.as_mut_ptr().cast::<T>();
+    // SAFETY: 8-aligned room for a T (checked); `write` neither reads nor drops the bytes
+    // there (the stored types have no drop glue).
+    unsafe { p.write(value) };
+    *magic = S::MAGIC;
+    state_mut(s)
+}
+
+fn tracker_mut(t: &mut vc_tracker_t) -> Option<&mut Tracker> {
+    state_mut(t)
 }
 
 /// Sets up `*t` for frames of `config` (the first frame is searched whole). On error `*t` is
@@ -292,12 +404,10 @@ pub unsafe extern "C" fn vc_tracker_init(
         Ok(tr) => tr,
         Err(e) => return e,
     };
-    let p = t.opaque[1..].as_mut_ptr().cast::<Tracker>();
-    // SAFETY: 8-aligned room for a Tracker (compile-time asserts); `write` does not read or
-    // drop the bytes there (Tracker has no drop glue anyway).
-    unsafe { p.write(tracker) };
-    t.opaque[0] = TRACKER_MAGIC;
-    VC_OK
+    match state_init(t, tracker) {
+        Some(_) => VC_OK,
+        None => VC_ERR_STATE,
+    }
 }
 
 /// Pushes the next row of the current frame (`width` pixels, column 0 first; `width` must be
@@ -384,6 +494,172 @@ pub unsafe extern "C" fn vc_tracker_window(t: *mut vc_tracker_t, out: *mut vc_ro
         height: r.height,
     };
     found
+}
+
+/// Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
+/// skipped). On error `*p` is left uninitialised.
+///
+/// # Safety
+/// `p` and `config` must each be null or point to a valid value of their type.
+#[no_mangle]
+pub unsafe extern "C" fn vc_pipeline_init(
+    p: *mut vc_pipeline_t,
+    config: *const vc_pipeline_config_t,
+) -> i32 {
+    if p.is_null() || config.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked), and the caller guarantees valid values.
+    let (p, c) = unsafe { (&mut *p, &*config) };
+    p.opaque[0] = 0;
+    let nonzero = |v: f32| (v != 0.0).then_some(v);
+    let mut cfg = PipelineConfig::one_second_blocks(
+        c.frames_per_block as usize,
+        c.samples_per_block as usize,
+        nonzero(c.acceleration_scale),
+    );
+    cfg.exposure_compensation = nonzero(c.exposure_s);
+    // built in place: an unconfigured pipeline written into the caller's memory, then
+    // configured there
+    let Some(pipeline) = state_init(p, Pipeline::new()) else {
+        return VC_ERR_STATE;
+    };
+    if pipeline.configure(cfg).is_err() {
+        p.opaque[0] = 0;
+        return VC_ERR_CONFIG;
+    }
+    VC_OK
+}
+
+fn push_status(e: PushError) -> i32 {
+    match e {
+        PushError::NotConfigured => VC_ERR_STATE,
+        _ => VC_ERR_FULL,
+    }
+}
+
+/// Pushes `n` ADC samples (the reference channel, e.g. base acceleration or force).
+///
+/// # Safety
+/// `p` must be null or point to a `vc_pipeline_t`; `samples` must point to `n` readable
+/// floats (or be null).
+#[no_mangle]
+pub unsafe extern "C" fn vc_pipeline_push_adc(
+    p: *mut vc_pipeline_t,
+    samples: *const f32,
+    n: usize,
+) -> i32 {
+    if p.is_null() || samples.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_pipeline_t.
+    let Some(pipe) = state_mut::<Pipeline, _>(unsafe { &mut *p }) else {
+        return VC_ERR_STATE;
+    };
+    // SAFETY: the caller guarantees `n` readable floats at `samples` (non-null, checked).
+    let s = unsafe { core::slice::from_raw_parts(samples, n) };
+    match pipe.push_adc(s) {
+        Ok(()) => VC_OK,
+        Err(e) => push_status(e),
+    }
+}
+
+/// Pushes the next frame's displacement (the tracker's position along the motion, in the
+/// camera's unit).
+///
+/// # Safety
+/// `p` must be null or point to a `vc_pipeline_t`.
+#[no_mangle]
+pub unsafe extern "C" fn vc_pipeline_push_frame(p: *mut vc_pipeline_t, value: f32) -> i32 {
+    if p.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_pipeline_t.
+    let Some(pipe) = state_mut::<Pipeline, _>(unsafe { &mut *p }) else {
+        return VC_ERR_STATE;
+    };
+    match pipe.push_frame(value) {
+        Ok(()) => VC_OK,
+        Err(e) => push_status(e),
+    }
+}
+
+/// H1 (vision over ADC) at bin `k` (`k * df_hz` Hz) into `re`, `im`, with the number of
+/// bins and their spacing into `bins` and `df_hz` (each out-pointer may be null); `VC_ERR_EMPTY`
+/// before the first segment or for `k` past the last bin.
+///
+/// # Safety
+/// `p` must be null or point to a `vc_pipeline_t`; every non-null out-pointer must point to
+/// a writable value of its type.
+#[no_mangle]
+pub unsafe extern "C" fn vc_pipeline_h1(
+    p: *mut vc_pipeline_t,
+    k: u32,
+    re: *mut f32,
+    im: *mut f32,
+    bins: *mut u32,
+    df_hz: *mut f32,
+) -> i32 {
+    if p.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_pipeline_t.
+    let Some(pipe) = state_mut::<Pipeline, _>(unsafe { &mut *p }) else {
+        return VC_ERR_STATE;
+    };
+    let w = pipe.welch();
+    let Some(h) = w.h1(k as usize) else {
+        return VC_ERR_EMPTY;
+    };
+    for (ptr, v) in [(re, h.re), (im, h.im), (df_hz, w.df_hz())] {
+        if !ptr.is_null() {
+            // SAFETY: non-null; the caller guarantees a writable float.
+            unsafe { *ptr = v };
+        }
+    }
+    if !bins.is_null() {
+        // SAFETY: non-null; the caller guarantees a writable uint32_t.
+        unsafe { *bins = w.bins() as u32 };
+    }
+    VC_OK
+}
+
+/// The peak of `|Im H1|` in the band `f_lo ..= f_hi` Hz of the H1 accumulated so far
+/// (`VC_ERR_EMPTY` before the first segment or without a bin in the band).
+///
+/// # Safety
+/// `p` and `out` must each be null or point to a valid value of their type.
+#[no_mangle]
+pub unsafe extern "C" fn vc_pipeline_peak(
+    p: *mut vc_pipeline_t,
+    f_lo: f32,
+    f_hi: f32,
+    out: *mut vc_peak_t,
+) -> i32 {
+    if p.is_null() || out.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees valid values.
+    let (p, out) = unsafe { (&mut *p, &mut *out) };
+    let Some(pipe) = state_mut::<Pipeline, _>(p) else {
+        return VC_ERR_STATE;
+    };
+    let w = pipe.welch();
+    if w.segments() == 0 {
+        return VC_ERR_EMPTY;
+    }
+    match firmware_core::peaks::pick_with(w.bins(), w.df_hz(), (f_lo, f_hi), false, |k| w.h1(k)) {
+        Some(pk) => {
+            *out = vc_peak_t {
+                bin: pk.bin as u32,
+                f_hz: pk.f_hz,
+                amplitude: pk.amplitude,
+                segments: w.segments(),
+            };
+            VC_OK
+        }
+        None => VC_ERR_EMPTY,
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -552,6 +828,104 @@ mod tests {
         assert_eq!(
             unsafe { vc_tracker_push_row_u8(&mut t, frame.as_ptr(), 10) },
             VC_ERR_FRAME
+        );
+    }
+
+    #[test]
+    fn the_c_pipeline_is_firmware_cores_and_finds_the_resonance() {
+        println!(
+            "Pipeline {} B, Tracker {} B",
+            size_of::<Pipeline>(),
+            size_of::<Tracker>()
+        );
+        // a 7 Hz motion seen by the ADC (m/s^2) and the camera (mm)
+        let (fps, fs, f) = (120u32, 2048u32, 7.0f32);
+        let w = 2.0 * core::f32::consts::PI * f;
+        let c = vc_pipeline_config_t {
+            frames_per_block: fps,
+            samples_per_block: fs,
+            acceleration_scale: 1e-3,
+            exposure_s: 0.0,
+        };
+        let mut p = Box::new(vc_pipeline_t {
+            opaque: [0; VC_PIPELINE_WORDS],
+        });
+        let mut out = vc_peak_t {
+            bin: 0,
+            f_hz: 0.0,
+            amplitude: 0.0,
+            segments: 0,
+        };
+        assert_eq!(
+            unsafe { vc_pipeline_peak(&mut *p, 1.0, 20.0, &mut out) },
+            VC_ERR_STATE
+        );
+        assert_eq!(unsafe { vc_pipeline_init(&mut *p, &c) }, VC_OK);
+        let mut reference = Box::new(Pipeline::new());
+        reference
+            .configure(PipelineConfig::one_second_blocks(120, 2048, Some(1e-3)))
+            .unwrap();
+        assert_eq!(
+            unsafe { vc_pipeline_peak(&mut *p, 1.0, 20.0, &mut out) },
+            VC_ERR_EMPTY
+        );
+        // the ADC keeps a frame's worth ahead of the camera, as a driver interleaves them
+        let (frames, mut sent) = (6 * fps as usize, 0usize);
+        for k in 0..frames {
+            let upto = ((k + 1) * fs as usize).div_ceil(fps as usize);
+            let adc: Vec<f32> = (sent..upto)
+                .map(|i| 5.0 * (w * (i as f64 / fs as f64) as f32).sin())
+                .collect();
+            sent = upto;
+            assert_eq!(
+                unsafe { vc_pipeline_push_adc(&mut *p, adc.as_ptr(), adc.len()) },
+                VC_OK
+            );
+            reference.push_adc(&adc).unwrap();
+            let t = (k as f64 / fps as f64) as f32;
+            // the vision acceleration leads the ADC's by a quarter period: H1 = i at 7 Hz,
+            // a resonance's phase, so |Im H1| peaks there
+            let mm = -5.0 * (w * t).cos() / (w * w) * 1e3;
+            assert_eq!(unsafe { vc_pipeline_push_frame(&mut *p, mm) }, VC_OK);
+            reference.push_frame(mm).unwrap();
+        }
+        assert_eq!(
+            unsafe { vc_pipeline_peak(&mut *p, 6.0, 8.0, &mut out) },
+            VC_OK
+        );
+        let rw = reference.welch();
+        let want =
+            firmware_core::peaks::pick_with(rw.bins(), rw.df_hz(), (6.0, 8.0), false, |k| rw.h1(k))
+                .unwrap();
+        assert_eq!(
+            (out.bin as usize, out.f_hz, out.amplitude),
+            (want.bin, want.f_hz, want.amplitude)
+        );
+        // a pure tone: the Hann main lobe's bins 6 to 8 all carry H1 = i, so the pick is any
+        // of them with |H1| = 1
+        assert!((6.0..=8.0).contains(&out.f_hz), "{out:?}");
+        assert!((out.amplitude - 1.0).abs() < 0.02, "{out:?}");
+        assert!(out.segments >= 5, "{out:?}");
+        let (mut re, mut im, mut bins, mut df) = (0.0f32, 0.0f32, 0u32, 0.0f32);
+        assert_eq!(
+            unsafe { vc_pipeline_h1(&mut *p, 7, &mut re, &mut im, &mut bins, &mut df) },
+            VC_OK
+        );
+        assert_eq!((bins, df), (1025, 1.0));
+        assert!(re.abs() < 0.02 && (im - 1.0).abs() < 0.02, "{re} {im}");
+        assert_eq!(
+            unsafe { vc_pipeline_h1(&mut *p, 1025, &mut re, &mut im, &mut bins, &mut df) },
+            VC_ERR_EMPTY
+        );
+        // settings beyond the capacities are refused, and leave the state uninitialised
+        let big = vc_pipeline_config_t {
+            frames_per_block: 240,
+            ..c
+        };
+        assert_eq!(unsafe { vc_pipeline_init(&mut *p, &big) }, VC_ERR_CONFIG);
+        assert_eq!(
+            unsafe { vc_pipeline_push_frame(&mut *p, 0.0) },
+            VC_ERR_STATE
         );
     }
 }

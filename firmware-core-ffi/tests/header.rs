@@ -30,7 +30,13 @@ fn the_committed_header_is_current() {
         "vc_tracker_push_row_u8",
         "vc_tracker_finish_frame",
         "vc_tracker_window",
+        "vc_pipeline_init",
+        "vc_pipeline_push_adc",
+        "vc_pipeline_push_frame",
+        "vc_pipeline_h1",
+        "vc_pipeline_peak",
         "VC_TRACKER_WORDS",
+        "VC_PIPELINE_WORDS",
     ] {
         assert!(generated.contains(name), "{name} missing from the header");
     }
