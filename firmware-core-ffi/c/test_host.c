@@ -13,6 +13,7 @@
 static uint8_t frame[W * H];
 static vc_tracker_t tracker; /* caller-owned state, in static memory */
 static vc_pipeline_t pipe;
+static vc_multi_t multi;
 
 /* a disk of radius r at (cx, cy): 200 inside, 10 outside, 100 on a one-pixel ramp */
 static void draw(double cx, double cy, double r) {
@@ -113,6 +114,36 @@ int main(void) {
     CHECK(windowed == 15, "%d frames read in a window", windowed);
     printf("tracker: 16 frames, %d in a window, last (%.4f, %.4f)\n", windowed, c.cx, c.cy);
     printf("sizeof(vc_tracker_t) = %u\n", (unsigned)sizeof(vc_tracker_t));
+
+    /* several targets: two squares, their centroids exact, in either order */
+    {
+        vc_target_t t[4];
+        uint32_t count = 0;
+        uint8_t flags = 0;
+        for (int i = 0; i < W * H; i++) frame[i] = 10;
+        for (int y = 5; y <= 9; y++)
+            for (int x = 5; x <= 9; x++) frame[y * W + x] = 200;
+        for (int y = 30; y <= 36; y++)
+            for (int x = 40; x <= 46; x++) frame[y * W + x] = 200;
+        cfg.threshold = 50;
+        cfg.mode = VC_MODE_BINARY;
+        CHECK(vc_multi_init(&multi, &cfg) == VC_OK, "multi init");
+        for (int y = 0; y < H; y++) vc_multi_push_row_u8(&multi, frame + y * W, W);
+        CHECK(vc_multi_targets(&multi, t, 4, &count, &flags) == VC_OK, "targets");
+        CHECK(count == 2 && flags == 0, "%u targets, flags %d", (unsigned)count, flags);
+        int a = t[0].centroid.cx < t[1].centroid.cx ? 0 : 1;
+        CHECK(t[a].centroid.cx == 7.0f && t[a].centroid.cy == 7.0f && t[a].centroid.pixels == 25,
+              "first square (%f, %f)", t[a].centroid.cx, t[a].centroid.cy);
+        CHECK(t[1 - a].centroid.cx == 43.0f && t[1 - a].centroid.cy == 33.0f &&
+                  t[1 - a].x_min == 40 && t[1 - a].y_max == 36,
+              "second square (%f, %f)", t[1 - a].centroid.cx, t[1 - a].centroid.cy);
+        CHECK(vc_multi_next_frame(&multi) == VC_OK, "next frame");
+        CHECK(vc_multi_targets(&multi, NULL, 0, &count, &flags) == VC_OK && count == 0 &&
+                  (flags & VC_FLAG_EMPTY),
+              "empty after next frame");
+        printf("multi: 2 targets at (%.1f, %.1f) and (%.1f, %.1f)\n", t[a].centroid.cx,
+               t[a].centroid.cy, t[1 - a].centroid.cx, t[1 - a].centroid.cy);
+    }
 
     /* the vision channel: a 7 Hz motion seen by the ADC (m/s^2) and the camera (mm, its
      * acceleration a quarter period ahead), 120 fps and 2048 Hz for 6 s: H1 = i at 7 Hz */

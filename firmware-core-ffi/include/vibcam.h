@@ -51,6 +51,23 @@
 // 64-bit words of a [`vc_tracker_t`].
 #define VC_TRACKER_WORDS 24
 
+// Widest row (of the region searched) a [`vc_multi_t`] labels, pixels.
+#define VC_MULTI_MAX_WIDTH 1024
+
+// Most targets a [`vc_multi_t`] holds per frame (more are dropped and flagged
+// `VC_FLAG_CAPACITY`).
+#define VC_MULTI_MAX_TARGETS 32
+
+// `vc_target_t::centroid.flags` and the frame flags: more components than
+// `VC_MULTI_MAX_TARGETS`; some were dropped.
+#define VC_FLAG_CAPACITY 8
+
+// Columns past `VC_MULTI_MAX_WIDTH` were ignored.
+#define VC_FLAG_CLIPPED 16
+
+// 64-bit words of a [`vc_multi_t`].
+#define VC_MULTI_WORDS 500
+
 // 64-bit words of a [`vc_pipeline_t`].
 #define VC_PIPELINE_WORDS 7200
 
@@ -119,6 +136,28 @@ typedef struct {
   // between two frames.
   uint32_t margin;
 } vc_track_config_t;
+
+// Several targets per frame (streaming connected components, 8-connectivity), owned by the
+// caller (`static vc_multi_t m;`, 8-byte aligned, `8 * VC_MULTI_WORDS` bytes), set up by
+// `vc_multi_init`.
+typedef struct {
+  // Word 0 marks an initialised state; the centroider follows it.
+  uint64_t opaque[VC_MULTI_WORDS];
+} vc_multi_t;
+
+// One target of a frame: its centroid and bounding box (inclusive, full-frame pixels).
+typedef struct {
+  // Position, moments, flags.
+  vc_centroid_t centroid;
+  // Leftmost column.
+  uint32_t x_min;
+  // Topmost row.
+  uint32_t y_min;
+  // Rightmost column.
+  uint32_t x_max;
+  // Bottom row.
+  uint32_t y_max;
+} vc_target_t;
 
 // The vision channel's state (frames and ADC samples in, upsampled vision acceleration,
 // streaming Welch H1 of vision over ADC), owned by the caller (`static vc_pipeline_t p;`,
@@ -213,6 +252,41 @@ int32_t vc_tracker_finish_frame(vc_tracker_t *t, vc_centroid_t *out);
 // # Safety
 // `t` and `out` must each be null or point to a valid value of their type.
 int32_t vc_tracker_window(vc_tracker_t *t, vc_roi_t *out);
+
+// Sets up `*m` for frames searched with `config` (its ROI, if used, is the region labelled);
+// the first row pushed is row 0 of a frame. On error `*m` is left uninitialised.
+//
+// # Safety
+// `m` and `config` must each be null or point to a valid value of their type.
+int32_t vc_multi_init(vc_multi_t *m, const vc_centroid_config_t *config);
+
+// Pushes the next row of the current frame (`width` pixels, column 0 first).
+//
+// # Safety
+// `m` must be null or point to a `vc_multi_t`; `row` must point to `width` readable bytes
+// (or be null).
+int32_t vc_multi_push_row_u8(vc_multi_t *m, const uint8_t *row, uint32_t width);
+
+// The frame's targets so far: up to `capacity` of them into `out` (in no particular order),
+// their number into `*count` (all of them, even beyond `capacity`) and the frame's flags
+// (`VC_FLAG_EMPTY`, `VC_FLAG_CAPACITY`, `VC_FLAG_CLIPPED` and the targets' own) into
+// `*flags`. Call `vc_multi_next_frame` before the next frame's first row.
+//
+// # Safety
+// `m` must be null or point to a `vc_multi_t`; `out` must point to `capacity` writable
+// `vc_target_t` (or be null with `capacity` 0); `count` and `flags` must each be null or
+// point to a writable value of their type.
+int32_t vc_multi_targets(vc_multi_t *m,
+                         vc_target_t *out,
+                         size_t capacity,
+                         uint32_t *count,
+                         uint8_t *flags);
+
+// Forgets the current frame: the next row pushed is row 0 of the next frame.
+//
+// # Safety
+// `m` must be null or point to a `vc_multi_t`.
+int32_t vc_multi_next_frame(vc_multi_t *m);
 
 // Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
 // skipped). On error `*p` is left uninitialised.

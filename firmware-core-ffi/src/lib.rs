@@ -14,17 +14,18 @@
 //!   status codes; the pixel pointers must point to `len` readable values for the duration of
 //!   the call (the one thing C must guarantee).
 //!
-//! And the whole vision channel (`vc_pipeline_t`: frames and ADC samples in, Welch H1 and its
+//! Several targets per frame (`vc_multi_t`: connected components, row by row). And the whole
+//! vision channel (`vc_pipeline_t`: frames and ADC samples in, Welch H1 and its
 //! resonance peaks out) in the capacities of the 120 fps / 2048 Hz one-second pipeline.
 //!
 //! Build for an MCU with `--no-default-features` (no_std, `staticlib`); the host build links
-//! std. The multi-target centroid and the cross-spectral path are not exposed yet.
+//! std. The output-only cross-spectral path is not exposed yet.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![allow(non_camel_case_types)]
 
 use core::mem::{align_of, size_of};
 use firmware_core::centroid::{
-    self, track::TrackConfig, track::Tracker, Centroid, CentroidConfig, Frame, Roi,
+    self, track::TrackConfig, track::Tracker, Centroid, CentroidConfig, Frame, MultiCentroider, Roi,
 };
 use firmware_core::pipeline::{PipelineConfig, PushError, VisionH1};
 
@@ -143,6 +144,54 @@ const TRACKER_MAGIC: u64 = 0x7663_7472_6163_6b31;
 // the tracker must fit after the magic word, at an alignment the words give
 const _: () = assert!(size_of::<Tracker>() <= 8 * (VC_TRACKER_WORDS - 1));
 const _: () = assert!(align_of::<Tracker>() <= 8);
+
+/// Widest row (of the region searched) a [`vc_multi_t`] labels, pixels.
+pub const VC_MULTI_MAX_WIDTH: usize = 1024;
+/// Most targets a [`vc_multi_t`] holds per frame (more are dropped and flagged
+/// `VC_FLAG_CAPACITY`).
+pub const VC_MULTI_MAX_TARGETS: usize = 32;
+/// `vc_target_t::centroid.flags` and the frame flags: more components than
+/// `VC_MULTI_MAX_TARGETS`; some were dropped.
+pub const VC_FLAG_CAPACITY: u8 = 8;
+/// Columns past `VC_MULTI_MAX_WIDTH` were ignored.
+pub const VC_FLAG_CLIPPED: u8 = 16;
+
+type Multi = MultiCentroider<VC_MULTI_MAX_WIDTH, VC_MULTI_MAX_TARGETS>;
+
+/// 64-bit words of a [`vc_multi_t`].
+pub const VC_MULTI_WORDS: usize = 500;
+
+/// Several targets per frame (streaming connected components, 8-connectivity), owned by the
+/// caller (`static vc_multi_t m;`, 8-byte aligned, `8 * VC_MULTI_WORDS` bytes), set up by
+/// `vc_multi_init`.
+#[repr(C)]
+#[derive(Debug)]
+pub struct vc_multi_t {
+    /// Word 0 marks an initialised state; the centroider follows it.
+    opaque: [u64; VC_MULTI_WORDS],
+}
+
+/// Marks an initialised `vc_multi_t` ("vcmulti1").
+const MULTI_MAGIC: u64 = 0x7663_6d75_6c74_6931;
+
+const _: () = assert!(size_of::<Multi>() <= 8 * (VC_MULTI_WORDS - 1));
+const _: () = assert!(align_of::<Multi>() <= 8);
+
+/// One target of a frame: its centroid and bounding box (inclusive, full-frame pixels).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct vc_target_t {
+    /// Position, moments, flags.
+    pub centroid: vc_centroid_t,
+    /// Leftmost column.
+    pub x_min: u32,
+    /// Topmost row.
+    pub y_min: u32,
+    /// Rightmost column.
+    pub x_max: u32,
+    /// Bottom row.
+    pub y_max: u32,
+}
 
 /// The capacities of [`vc_pipeline_t`]: one-second blocks of 120 frames and 2048 ADC
 /// samples, 2048-point H1 (the mcu-demo's pipeline); other settings are accepted when they
@@ -341,6 +390,13 @@ impl Storage<Tracker> for vc_tracker_t {
     }
 }
 
+impl Storage<Multi> for vc_multi_t {
+    const MAGIC: u64 = MULTI_MAGIC;
+    fn words(&mut self) -> &mut [u64] {
+        &mut self.opaque
+    }
+}
+
 impl Storage<Pipeline> for vc_pipeline_t {
     const MAGIC: u64 = PIPELINE_MAGIC;
     fn words(&mut self) -> &mut [u64] {
@@ -494,6 +550,120 @@ pub unsafe extern "C" fn vc_tracker_window(t: *mut vc_tracker_t, out: *mut vc_ro
         height: r.height,
     };
     found
+}
+
+/// Sets up `*m` for frames searched with `config` (its ROI, if used, is the region labelled);
+/// the first row pushed is row 0 of a frame. On error `*m` is left uninitialised.
+///
+/// # Safety
+/// `m` and `config` must each be null or point to a valid value of their type.
+#[no_mangle]
+pub unsafe extern "C" fn vc_multi_init(
+    m: *mut vc_multi_t,
+    config: *const vc_centroid_config_t,
+) -> i32 {
+    if m.is_null() || config.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked), and the caller guarantees valid values.
+    let (m, c) = unsafe { (&mut *m, &*config) };
+    m.opaque[0] = 0;
+    let Ok(cfg) = config_of(c) else {
+        return VC_ERR_CONFIG;
+    };
+    let Some(multi) = state_init(m, Multi::new()) else {
+        return VC_ERR_STATE;
+    };
+    if multi.configure(cfg).is_err() {
+        m.opaque[0] = 0;
+        return VC_ERR_CONFIG;
+    }
+    VC_OK
+}
+
+/// Pushes the next row of the current frame (`width` pixels, column 0 first).
+///
+/// # Safety
+/// `m` must be null or point to a `vc_multi_t`; `row` must point to `width` readable bytes
+/// (or be null).
+#[no_mangle]
+pub unsafe extern "C" fn vc_multi_push_row_u8(
+    m: *mut vc_multi_t,
+    row: *const u8,
+    width: u32,
+) -> i32 {
+    if m.is_null() || row.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_multi_t.
+    let Some(multi) = state_mut::<Multi, _>(unsafe { &mut *m }) else {
+        return VC_ERR_STATE;
+    };
+    // SAFETY: the caller guarantees `width` readable bytes at `row` (non-null, checked).
+    let row = unsafe { core::slice::from_raw_parts(row, width as usize) };
+    multi.push_row(row);
+    VC_OK
+}
+
+/// The frame's targets so far: up to `capacity` of them into `out` (in no particular order),
+/// their number into `*count` (all of them, even beyond `capacity`) and the frame's flags
+/// (`VC_FLAG_EMPTY`, `VC_FLAG_CAPACITY`, `VC_FLAG_CLIPPED` and the targets' own) into
+/// `*flags`. Call `vc_multi_next_frame` before the next frame's first row.
+///
+/// # Safety
+/// `m` must be null or point to a `vc_multi_t`; `out` must point to `capacity` writable
+/// `vc_target_t` (or be null with `capacity` 0); `count` and `flags` must each be null or
+/// point to a writable value of their type.
+#[no_mangle]
+pub unsafe extern "C" fn vc_multi_targets(
+    m: *mut vc_multi_t,
+    out: *mut vc_target_t,
+    capacity: usize,
+    count: *mut u32,
+    flags: *mut u8,
+) -> i32 {
+    if m.is_null() || count.is_null() || flags.is_null() || (out.is_null() && capacity > 0) {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees valid values.
+    let (m, count, flags) = unsafe { (&mut *m, &mut *count, &mut *flags) };
+    let Some(multi) = state_mut::<Multi, _>(m) else {
+        return VC_ERR_STATE;
+    };
+    let targets = multi.targets();
+    if capacity > 0 {
+        // SAFETY: the caller guarantees `capacity` writable targets at `out` (non-null).
+        let out = unsafe { core::slice::from_raw_parts_mut(out, capacity) };
+        for (o, t) in out.iter_mut().zip(&targets) {
+            *o = vc_target_t {
+                centroid: result_of(&t.centroid),
+                x_min: t.bbox.x_min,
+                y_min: t.bbox.y_min,
+                x_max: t.bbox.x_max,
+                y_max: t.bbox.y_max,
+            };
+        }
+    }
+    *count = targets.len() as u32;
+    *flags = multi.flags().bits();
+    VC_OK
+}
+
+/// Forgets the current frame: the next row pushed is row 0 of the next frame.
+///
+/// # Safety
+/// `m` must be null or point to a `vc_multi_t`.
+#[no_mangle]
+pub unsafe extern "C" fn vc_multi_next_frame(m: *mut vc_multi_t) -> i32 {
+    if m.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_multi_t.
+    let Some(multi) = state_mut::<Multi, _>(unsafe { &mut *m }) else {
+        return VC_ERR_STATE;
+    };
+    multi.reset();
+    VC_OK
 }
 
 /// Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
@@ -927,5 +1097,65 @@ mod tests {
             unsafe { vc_pipeline_push_frame(&mut *p, 0.0) },
             VC_ERR_STATE
         );
+    }
+
+    #[test]
+    fn the_c_multi_centroider_is_firmware_cores() {
+        println!("Multi {} B", size_of::<Multi>());
+        let (w, h) = (80usize, 40usize);
+        let mut px = vec![5u8; w * h];
+        // three rectangles
+        for (x0, y0, x1, y1) in [(5, 5, 12, 10), (30, 20, 33, 35), (50, 3, 70, 6)] {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    px[y * w + x] = 180;
+                }
+            }
+        }
+        let c = config(VC_MODE_BINARY, 100);
+        let mut m = Box::new(vc_multi_t {
+            opaque: [0; VC_MULTI_WORDS],
+        });
+        assert_eq!(unsafe { vc_multi_init(&mut *m, &c) }, VC_OK);
+        for row in px.chunks_exact(w) {
+            assert_eq!(
+                unsafe { vc_multi_push_row_u8(&mut *m, row.as_ptr(), w as u32) },
+                VC_OK
+            );
+        }
+        let mut out = [vc_target_t {
+            centroid: result_of(&Centroid::default()),
+            x_min: 0,
+            y_min: 0,
+            x_max: 0,
+            y_max: 0,
+        }; 2];
+        let (mut count, mut flags) = (0u32, 0u8);
+        assert_eq!(
+            unsafe { vc_multi_targets(&mut *m, out.as_mut_ptr(), 2, &mut count, &mut flags) },
+            VC_OK
+        );
+        let mut reference = Multi::new();
+        reference.configure(CentroidConfig::binary(100)).unwrap();
+        reference
+            .process(&Frame::new(&px[..], w, h, w).unwrap())
+            .unwrap();
+        let want = reference.targets();
+        assert_eq!(count, 3);
+        assert_eq!(flags, reference.flags().bits());
+        for (o, t) in out.iter().zip(&want) {
+            assert_eq!(o.centroid, result_of(&t.centroid));
+            assert_eq!(
+                (o.x_min, o.y_min, o.x_max, o.y_max),
+                (t.bbox.x_min, t.bbox.y_min, t.bbox.x_max, t.bbox.y_max)
+            );
+        }
+        // the next frame starts empty
+        assert_eq!(unsafe { vc_multi_next_frame(&mut *m) }, VC_OK);
+        assert_eq!(
+            unsafe { vc_multi_targets(&mut *m, core::ptr::null_mut(), 0, &mut count, &mut flags) },
+            VC_OK
+        );
+        assert_eq!((count, flags & VC_FLAG_EMPTY), (0, VC_FLAG_EMPTY));
     }
 }

@@ -50,19 +50,20 @@ for spec in "${cores[@]}"; do
     FNR==NR { if ($1=="bench:") { sub(/^bench: /, ""); label[++n]=$0 } next }
     $1=="marks:" && $2=="segment" { seg[$3+0]=$4 }
     END {
-      over = seg[1]; c = "-"; t = "-"; p = "-"
+      over = seg[1]; c = "-"; t = "-"; m = "-"; p = "-"
       for (k = 2; k <= n; k++) {
         v = seg[2*k-1] - over
         if (label[k] ~ /^centroid/) c = sprintf("%d (%.2f per pixel)", v, v / 3072)
         else if (label[k] ~ /^tracker/) t = v
+        else if (label[k] ~ /^multi/) m = v
         else if (label[k] ~ /^pipeline/) p = v
       }
-      printf "%s | %s | %s", c, t, p
+      printf "%s | %s | %s | %s", c, t, m, p
     }' "$tmp/$machine.out" "$tmp/$machine.log")
   read -r text data bss <<<"$(arm-none-eabi-size "$tmp/$machine.elf" | awk 'NR==2{print $1, $2, $3}')"
   [ -n "$defs" ] && counts="${counts% | -} | does not fit (${rl}iB of RAM)"
   rows+=("| $name (QEMU \`$machine\`, \`$target\`) | $counts | $text | $((data + bss)) |")
 done
-echo "| core | centroid, 64 x 48 frame | tracker frame (windowed) | pipeline, one second (120 frames, 2048 samples) | flash, B | RAM, B |"
-echo "|---|---:|---:|---:|---:|---:|"
+echo "| core | centroid, 64 x 48 frame | tracker frame (windowed) | multi-target frame (2 targets) | pipeline, one second (120 frames, 2048 samples) | flash, B | RAM, B |"
+echo "|---|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"

@@ -131,6 +131,7 @@ static void bench_begin(const char *label) {
 #define H 48
 static uint8_t frame[W * H];
 static vc_tracker_t tracker;
+static vc_multi_t multi;
 #ifndef VC_NO_PIPELINE
 static vc_pipeline_t pipe;
 #endif
@@ -182,6 +183,30 @@ int main(void) {
     put("tracker: 16 frames, ");
     put_int(windowed);
     put(" in a window\n");
+
+    /* several targets: two squares, their centroids exact */
+    {
+        vc_target_t t[4];
+        uint32_t count = 0;
+        uint8_t flags = 0;
+        for (int i = 0; i < W * H; i++) frame[i] = 10;
+        for (int y = 5; y <= 9; y++)
+            for (int x = 5; x <= 9; x++) frame[y * W + x] = 200;
+        for (int y = 30; y <= 36; y++)
+            for (int x = 40; x <= 46; x++) frame[y * W + x] = 200;
+        check(vc_multi_init(&multi, &cfg) == VC_OK, "multi init");
+        bench_begin("multi-target, 64 x 48 frame, 2 targets");
+        for (int y = 0; y < H; y++) vc_multi_push_row_u8(&multi, frame + y * W, W);
+        status = vc_multi_targets(&multi, t, 4, &count, &flags);
+        bench_mark();
+        check(status == VC_OK && count == 2 && flags == 0, "multi targets");
+        int a = t[0].centroid.cx < t[1].centroid.cx ? 0 : 1;
+        check(t[a].centroid.cx == 7.0f && t[a].centroid.cy == 7.0f, "first square");
+        check(t[1 - a].centroid.cx == 43.0f && t[1 - a].centroid.cy == 33.0f, "second square");
+        put("multi: ");
+        put_int((long)count);
+        put(" targets\n");
+    }
 
 #ifndef VC_NO_PIPELINE
     /* a 7 Hz motion: ADC acceleration 5 sin(wt) m/s^2, camera displacement whose acceleration

@@ -88,6 +88,8 @@ pub struct MultiCentroider<const W: usize, const N: usize> {
     /// Frame-level flags (CAPACITY, CLIPPED).
     flags: Flags,
     dropped: u64,
+    /// Labels `filled..W` are all 0 (the longest row since the last reset was shorter).
+    filled: usize,
 }
 
 impl<const W: usize, const N: usize> MultiCentroider<W, N> {
@@ -124,6 +126,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
             last_y: None,
             flags: Flags::NONE,
             dropped: 0,
+            filled: 0,
         }
     }
 
@@ -161,6 +164,7 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
         self.last_y = None;
         self.flags = Flags::NONE;
         self.dropped = 0;
+        self.filled = 0;
     }
 
     /// Pixels above the threshold that were dropped because the capacity was exceeded.
@@ -320,14 +324,17 @@ impl<const W: usize, const N: usize> MultiCentroider<W, N> {
             up_left = up;
             left = label;
         }
-        // End of row: labels to roots, stale labels past this row cleared, merged slots freed.
-        for i in 0..W {
+        // End of row: labels to roots, stale labels past this row (a longer row before) cleared,
+        // merged slots freed. Only the labels a row has written are visited: a narrow frame in
+        // a wide capacity costs its own width, not `W`.
+        for i in 0..len.max(self.filled) {
             let l = self.labels.get(i).copied().unwrap_or(0);
             let r = if i < len { self.find(l) } else { 0 };
             if let Some(d) = self.labels.get_mut(i) {
                 *d = r;
             }
         }
+        self.filled = len;
         for (label, s) in (1u16..).zip(self.slots.iter_mut()) {
             if s.used && s.parent != label {
                 *s = Slot::FREE;

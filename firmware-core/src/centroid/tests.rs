@@ -853,6 +853,27 @@ fn multi_target_merges_components_that_join_lower_down() {
 }
 
 #[test]
+fn multi_target_forgets_labels_past_a_shorter_row() {
+    // rows pushed one by one, the middle one shorter: the pixel below the short row's end
+    // must not join the one above it (the labels past a row are cleared), and a narrow frame
+    // in a wide capacity visits only its own columns
+    let mut m = MultiCentroider::<64, 4>::try_new(CentroidConfig::binary(100)).unwrap();
+    let mut long = [0u8; 10];
+    long[8] = 200;
+    m.push_row(&long[..]);
+    m.push_row(&[0u8; 5][..]);
+    m.push_row(&long[..]);
+    let t = m.targets();
+    assert_eq!(t.len(), 2, "{t:?}");
+    assert!(t.iter().all(|t| t.centroid.moments.pixels == 1));
+    // two adjacent rows of full width do join
+    m.reset();
+    m.push_row(&long[..]);
+    m.push_row(&long[..]);
+    assert_eq!(m.targets().len(), 1);
+}
+
+#[test]
 fn multi_target_capacity_exceeded_is_flagged_and_goes_on() {
     // Four separate dots, capacity 2: two are kept, the others are dropped and counted.
     let f = frame_with(
