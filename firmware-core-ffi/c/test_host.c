@@ -14,6 +14,7 @@ static uint8_t frame[W * H];
 static vc_tracker_t tracker; /* caller-owned state, in static memory */
 static vc_pipeline_t pipe;
 static vc_multi_t multi;
+static vc_fdd4_t fdd;
 
 /* a disk of radius r at (cx, cy): 200 inside, 10 outside, 100 on a one-pixel ramp */
 static void draw(double cx, double cy, double r) {
@@ -143,6 +144,51 @@ int main(void) {
               "empty after next frame");
         printf("multi: 2 targets at (%.1f, %.1f) and (%.1f, %.1f)\n", t[a].centroid.cx,
                t[a].centroid.cy, t[1 - a].centroid.cx, t[1 - a].centroid.cy);
+    }
+
+    /* output-only: four targets moving in two modes (7 Hz, shape sin; 23 Hz, shape cos),
+     * slowly modulated, with a little noise: two peaks, shapes with MAC > 0.999 */
+    {
+        const double pi = 3.14159265358979323846;
+        double sh1[4], sh2[4];
+        uint64_t seed = 1;
+        for (int k = 0; k < 4; k++) {
+            sh1[k] = sin(0.5 * pi * (k + 1) / 4.0);
+            sh2[k] = cos(pi * (k + 1) / 4.0);
+        }
+        CHECK(vc_fdd4_init(&fdd, 120.0f) == VC_OK, "fdd init");
+        for (int i = 0; i < 512 * 8; i++) {
+            double t = i / 120.0;
+            double a = sin(2 * pi * 7.0 * t) * (1.0 + 0.3 * sin(0.37 * t));
+            double b = 0.5 * sin(2 * pi * 23.0 * t) * (1.0 + 0.3 * cos(0.23 * t));
+            float x[4];
+            for (int k = 0; k < 4; k++) {
+                seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+                double noise = (double)(seed >> 33) / 2147483648.0 - 0.5;
+                x[k] = (float)(a * sh1[k] + b * sh2[k] + 0.01 * noise);
+            }
+            vc_fdd4_push(&fdd, x);
+        }
+        uint32_t lines[8], count = 0;
+        CHECK(vc_fdd4_peaks(&fdd, 1.0f, 59.0f, 6.0f, 10.0f, lines, 8, &count) == VC_OK, "peaks");
+        CHECK(count == 2, "%u peaks", (unsigned)count);
+        for (uint32_t p = 0; p < count && p < 2; p++) {
+            float hz = 0, s1 = 0;
+            vc_complex_t v[4];
+            const double *sh = p == 0 ? sh1 : sh2;
+            CHECK(vc_fdd4_line(&fdd, lines[p], &hz, &s1, v) == VC_OK, "line");
+            double dre = 0, dim = 0, vv = 0, ss = 0;
+            for (int k = 0; k < 4; k++) {
+                dre += v[k].re * sh[k];
+                dim += v[k].im * sh[k];
+                vv += v[k].re * v[k].re + v[k].im * v[k].im;
+                ss += sh[k] * sh[k];
+            }
+            double mac = (dre * dre + dim * dim) / (vv * ss);
+            CHECK(fabs(hz - (p == 0 ? 7.0 : 23.0)) <= 120.0 / 512.0 && mac > 0.999,
+                  "peak %u at %f Hz, MAC %f", (unsigned)p, hz, mac);
+            printf("fdd: peak at %.3f Hz, MAC %.6f\n", hz, mac);
+        }
     }
 
     /* the vision channel: a 7 Hz motion seen by the ADC (m/s^2) and the camera (mm, its

@@ -68,6 +68,18 @@
 // 64-bit words of a [`vc_multi_t`].
 #define VC_MULTI_WORDS 500
 
+// Targets (channels) of a [`vc_fdd4_t`].
+#define VC_FDD4_TARGETS 4
+
+// Samples per Welch segment of a [`vc_fdd4_t`] (Hann, half overlap).
+#define VC_FDD4_SEGMENT 512
+
+// Spectral lines of a [`vc_fdd4_t`]: `VC_FDD4_SEGMENT / 2 + 1`.
+#define VC_FDD4_LINES 257
+
+// 64-bit words of a [`vc_fdd4_t`].
+#define VC_FDD4_WORDS 5664
+
 // 64-bit words of a [`vc_pipeline_t`].
 #define VC_PIPELINE_WORDS 7200
 
@@ -158,6 +170,23 @@ typedef struct {
   // Bottom row.
   uint32_t y_max;
 } vc_target_t;
+
+// Output-only modal analysis of four targets on the camera (frequency domain decomposition):
+// the streaming cross-spectral matrix of their displacements, the first singular value and
+// vector per line, peak picking. Owned by the caller (`static vc_fdd4_t f;`, 8-byte aligned,
+// `8 * VC_FDD4_WORDS` bytes), set up by `vc_fdd4_init`.
+typedef struct {
+  // Word 0 marks an initialised state; the analysis follows it.
+  uint64_t opaque[VC_FDD4_WORDS];
+} vc_fdd4_t;
+
+// A complex number (a mode-shape component).
+typedef struct {
+  // Real part.
+  float re;
+  // Imaginary part.
+  float im;
+} vc_complex_t;
 
 // The vision channel's state (frames and ADC samples in, upsampled vision acceleration,
 // streaming Welch H1 of vision over ADC), owned by the caller (`static vc_pipeline_t p;`,
@@ -287,6 +316,45 @@ int32_t vc_multi_targets(vc_multi_t *m,
 // # Safety
 // `m` must be null or point to a `vc_multi_t`.
 int32_t vc_multi_next_frame(vc_multi_t *m);
+
+// Sets up `*f` for frames at `fs_hz` (no segment yet). On error `*f` is left uninitialised.
+//
+// # Safety
+// `f` must be null or point to a `vc_fdd4_t`.
+int32_t vc_fdd4_init(vc_fdd4_t *f, float fs_hz);
+
+// Pushes one frame: the displacements of the four targets (`VC_FDD4_TARGETS` floats).
+//
+// # Safety
+// `f` must be null or point to a `vc_fdd4_t`; `frame` must point to `VC_FDD4_TARGETS`
+// readable floats (or be null).
+int32_t vc_fdd4_push(vc_fdd4_t *f, const float *frame);
+
+// Line `line` of the estimate: its frequency, the first singular value of its cross-spectral
+// matrix and the first singular vector (the mode shape there, `VC_FDD4_TARGETS` values) into
+// the non-null out-pointers; `VC_ERR_EMPTY` before the first segment or past the last line.
+//
+// # Safety
+// `f` must be null or point to a `vc_fdd4_t`; `f_hz` and `s1` must be null or writable;
+// `shape` must be null or point to `VC_FDD4_TARGETS` writable `vc_complex_t`.
+int32_t vc_fdd4_line(vc_fdd4_t *f, uint32_t line, float *f_hz, float *s1, vc_complex_t *shape);
+
+// The peaks of the first singular value between `f_lo` and `f_hi` Hz (`f_lo <= f_hi`): local maxima with
+// `prominence_db` of prominence and `floor_db` over the median of the range (the host's rule:
+// 6 and 10 dB), their lines (ascending) into `lines` (up to `capacity`), their number into
+// `*count`; `VC_ERR_EMPTY` before the first segment.
+//
+// # Safety
+// `f` must be null or point to a `vc_fdd4_t`; `lines` must point to `capacity` writable
+// `uint32_t` (or be null with `capacity` 0); `count` must be null or writable.
+int32_t vc_fdd4_peaks(vc_fdd4_t *f,
+                      float f_lo,
+                      float f_hi,
+                      float prominence_db,
+                      float floor_db,
+                      uint32_t *lines,
+                      size_t capacity,
+                      uint32_t *count);
 
 // Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
 // skipped). On error `*p` is left uninitialised.

@@ -19,7 +19,8 @@
 //! resonance peaks out) in the capacities of the 120 fps / 2048 Hz one-second pipeline.
 //!
 //! Build for an MCU with `--no-default-features` (no_std, `staticlib`); the host build links
-//! std. The output-only cross-spectral path is not exposed yet.
+//! std. Output-only modal analysis of four targets (`vc_fdd4_t`: the cross-spectral matrix,
+//! first singular values and vectors, peaks) too.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![allow(non_camel_case_types)]
 
@@ -28,6 +29,7 @@ use firmware_core::centroid::{
     self, track::TrackConfig, track::Tracker, Centroid, CentroidConfig, Frame, MultiCentroider, Roi,
 };
 use firmware_core::pipeline::{PipelineConfig, PushError, VisionH1};
+use firmware_core::spectrum::cross::{pick_peaks, CrossSpectra};
 
 /// Success.
 pub const VC_OK: i32 = 0;
@@ -191,6 +193,55 @@ pub struct vc_target_t {
     pub x_max: u32,
     /// Bottom row.
     pub y_max: u32,
+}
+
+/// Targets (channels) of a [`vc_fdd4_t`].
+pub const VC_FDD4_TARGETS: usize = 4;
+/// Samples per Welch segment of a [`vc_fdd4_t`] (Hann, half overlap).
+pub const VC_FDD4_SEGMENT: usize = 512;
+/// Spectral lines of a [`vc_fdd4_t`]: `VC_FDD4_SEGMENT / 2 + 1`.
+pub const VC_FDD4_LINES: usize = 257;
+/// Power iterations per line for the first singular value and vector.
+const FDD_ITERATIONS: u32 = 30;
+
+/// The output-only state of four targets: the cross-spectral matrix and the buffers of its
+/// peak picking.
+#[derive(Clone)]
+struct Fdd4 {
+    cs: CrossSpectra<VC_FDD4_TARGETS, VC_FDD4_SEGMENT, VC_FDD4_LINES, 10, 0>,
+    s1: [f32; VC_FDD4_LINES],
+    sorted: [f32; VC_FDD4_LINES],
+    peaks: [usize; VC_FDD4_LINES],
+}
+
+/// 64-bit words of a [`vc_fdd4_t`].
+pub const VC_FDD4_WORDS: usize = 5664;
+
+/// Output-only modal analysis of four targets on the camera (frequency domain decomposition):
+/// the streaming cross-spectral matrix of their displacements, the first singular value and
+/// vector per line, peak picking. Owned by the caller (`static vc_fdd4_t f;`, 8-byte aligned,
+/// `8 * VC_FDD4_WORDS` bytes), set up by `vc_fdd4_init`.
+#[repr(C)]
+#[derive(Debug)]
+pub struct vc_fdd4_t {
+    /// Word 0 marks an initialised state; the analysis follows it.
+    opaque: [u64; VC_FDD4_WORDS],
+}
+
+/// Marks an initialised `vc_fdd4_t` ("vcfdd4_1").
+const FDD4_MAGIC: u64 = 0x7663_6664_6434_5f31;
+
+const _: () = assert!(size_of::<Fdd4>() <= 8 * (VC_FDD4_WORDS - 1));
+const _: () = assert!(align_of::<Fdd4>() <= 8);
+
+/// A complex number (a mode-shape component).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct vc_complex_t {
+    /// Real part.
+    pub re: f32,
+    /// Imaginary part.
+    pub im: f32,
 }
 
 /// The capacities of [`vc_pipeline_t`]: one-second blocks of 120 frames and 2048 ADC
@@ -392,6 +443,13 @@ impl Storage<Tracker> for vc_tracker_t {
 
 impl Storage<Multi> for vc_multi_t {
     const MAGIC: u64 = MULTI_MAGIC;
+    fn words(&mut self) -> &mut [u64] {
+        &mut self.opaque
+    }
+}
+
+impl Storage<Fdd4> for vc_fdd4_t {
+    const MAGIC: u64 = FDD4_MAGIC;
     fn words(&mut self) -> &mut [u64] {
         &mut self.opaque
     }
@@ -666,6 +724,175 @@ pub unsafe extern "C" fn vc_multi_next_frame(m: *mut vc_multi_t) -> i32 {
     VC_OK
 }
 
+/// Sets up `*f` for frames at `fs_hz` (no segment yet). On error `*f` is left uninitialised.
+///
+/// # Safety
+/// `f` must be null or point to a `vc_fdd4_t`.
+#[no_mangle]
+pub unsafe extern "C" fn vc_fdd4_init(f: *mut vc_fdd4_t, fs_hz: f32) -> i32 {
+    if f.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_fdd4_t.
+    let f = unsafe { &mut *f };
+    f.opaque[0] = 0;
+    if !(fs_hz.is_finite() && fs_hz > 0.0) {
+        return VC_ERR_CONFIG;
+    }
+    let Ok(cs) = CrossSpectra::try_new(fs_hz) else {
+        return VC_ERR_CONFIG;
+    };
+    let fdd = Fdd4 {
+        cs,
+        s1: [0.0; VC_FDD4_LINES],
+        sorted: [0.0; VC_FDD4_LINES],
+        peaks: [0; VC_FDD4_LINES],
+    };
+    match state_init(f, fdd) {
+        Some(_) => VC_OK,
+        None => VC_ERR_STATE,
+    }
+}
+
+/// Pushes one frame: the displacements of the four targets (`VC_FDD4_TARGETS` floats).
+///
+/// # Safety
+/// `f` must be null or point to a `vc_fdd4_t`; `frame` must point to `VC_FDD4_TARGETS`
+/// readable floats (or be null).
+#[no_mangle]
+pub unsafe extern "C" fn vc_fdd4_push(f: *mut vc_fdd4_t, frame: *const f32) -> i32 {
+    if f.is_null() || frame.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_fdd4_t.
+    let Some(fdd) = state_mut::<Fdd4, _>(unsafe { &mut *f }) else {
+        return VC_ERR_STATE;
+    };
+    // SAFETY: the caller guarantees VC_FDD4_TARGETS readable floats (non-null, checked).
+    let v = unsafe { core::slice::from_raw_parts(frame, VC_FDD4_TARGETS) };
+    let mut x = [0.0f32; VC_FDD4_TARGETS];
+    x.copy_from_slice(v);
+    fdd.cs.push(&x);
+    VC_OK
+}
+
+/// Line `line` of the estimate: its frequency, the first singular value of its cross-spectral
+/// matrix and the first singular vector (the mode shape there, `VC_FDD4_TARGETS` values) into
+/// the non-null out-pointers; `VC_ERR_EMPTY` before the first segment or past the last line.
+///
+/// # Safety
+/// `f` must be null or point to a `vc_fdd4_t`; `f_hz` and `s1` must be null or writable;
+/// `shape` must be null or point to `VC_FDD4_TARGETS` writable `vc_complex_t`.
+#[no_mangle]
+pub unsafe extern "C" fn vc_fdd4_line(
+    f: *mut vc_fdd4_t,
+    line: u32,
+    f_hz: *mut f32,
+    s1: *mut f32,
+    shape: *mut vc_complex_t,
+) -> i32 {
+    if f.is_null() {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees a vc_fdd4_t.
+    let Some(fdd) = state_mut::<Fdd4, _>(unsafe { &mut *f }) else {
+        return VC_ERR_STATE;
+    };
+    let l = line as usize;
+    if fdd.cs.segments() == 0 || l >= VC_FDD4_LINES {
+        return VC_ERR_EMPTY;
+    }
+    let (value, vector) = fdd.cs.first_singular(l, FDD_ITERATIONS);
+    if !f_hz.is_null() {
+        // SAFETY: non-null; the caller guarantees a writable float.
+        unsafe { *f_hz = fdd.cs.freq(l) };
+    }
+    if !s1.is_null() {
+        // SAFETY: non-null; the caller guarantees a writable float.
+        unsafe { *s1 = value };
+    }
+    if !shape.is_null() {
+        // SAFETY: non-null; the caller guarantees VC_FDD4_TARGETS writable values.
+        let out = unsafe { core::slice::from_raw_parts_mut(shape, VC_FDD4_TARGETS) };
+        for (o, c) in out.iter_mut().zip(vector) {
+            *o = vc_complex_t { re: c.re, im: c.im };
+        }
+    }
+    VC_OK
+}
+
+/// The peaks of the first singular value between `f_lo` and `f_hi` Hz (`f_lo <= f_hi`): local maxima with
+/// `prominence_db` of prominence and `floor_db` over the median of the range (the host's rule:
+/// 6 and 10 dB), their lines (ascending) into `lines` (up to `capacity`), their number into
+/// `*count`; `VC_ERR_EMPTY` before the first segment.
+///
+/// # Safety
+/// `f` must be null or point to a `vc_fdd4_t`; `lines` must point to `capacity` writable
+/// `uint32_t` (or be null with `capacity` 0); `count` must be null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vc_fdd4_peaks(
+    f: *mut vc_fdd4_t,
+    f_lo: f32,
+    f_hi: f32,
+    prominence_db: f32,
+    floor_db: f32,
+    lines: *mut u32,
+    capacity: usize,
+    count: *mut u32,
+) -> i32 {
+    if f.is_null() || count.is_null() || (lines.is_null() && capacity > 0) {
+        return VC_ERR_NULL;
+    }
+    // SAFETY: non-null (checked); the caller guarantees valid values.
+    let (f, count) = unsafe { (&mut *f, &mut *count) };
+    let Some(fdd) = state_mut::<Fdd4, _>(f) else {
+        return VC_ERR_STATE;
+    };
+    if fdd.cs.segments() == 0 {
+        return VC_ERR_EMPTY;
+    }
+    let df = fdd.cs.freq(1);
+    let (lo, hi) = (f_lo, f_hi);
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi && df > 0.0) {
+        return VC_ERR_CONFIG;
+    }
+    let lo = libm_ceil(lo / df).max(0.0) as usize;
+    let hi = ((hi / df) as usize).min(VC_FDD4_LINES - 1);
+    for (l, v) in fdd.s1.iter_mut().enumerate() {
+        *v = if (lo..=hi).contains(&l) {
+            fdd.cs.first_singular(l, FDD_ITERATIONS).0
+        } else {
+            0.0
+        };
+    }
+    let n = pick_peaks(
+        &fdd.s1,
+        (lo, hi),
+        (prominence_db, floor_db),
+        &mut fdd.sorted,
+        &mut fdd.peaks,
+    );
+    if capacity > 0 {
+        // SAFETY: the caller guarantees `capacity` writable values at `lines` (non-null).
+        let out = unsafe { core::slice::from_raw_parts_mut(lines, capacity) };
+        for (o, &l) in out.iter_mut().zip(fdd.peaks.iter().take(n)) {
+            *o = l as u32;
+        }
+    }
+    *count = n as u32;
+    VC_OK
+}
+
+/// `ceil` without libm for the non-negative band edges (the float-to-int `as` saturates).
+fn libm_ceil(x: f32) -> f32 {
+    let t = x as i64 as f32;
+    if t < x {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
 /// Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is
 /// skipped). On error `*p` is left uninitialised.
 ///
@@ -846,6 +1073,7 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 #[allow(clippy::undocumented_unsafe_blocks)]
 mod tests {
     use super::*;
+    use firmware_core::Complex32;
 
     fn config(mode: u8, threshold: u16) -> vc_centroid_config_t {
         vc_centroid_config_t {
@@ -1157,5 +1385,83 @@ mod tests {
             VC_OK
         );
         assert_eq!((count, flags & VC_FLAG_EMPTY), (0, VC_FLAG_EMPTY));
+    }
+
+    #[test]
+    fn the_c_fdd_finds_two_modes_and_their_shapes() {
+        println!("Fdd4 {} B", size_of::<Fdd4>());
+        let fs = 120.0f32;
+        let mut f = Box::new(vc_fdd4_t {
+            opaque: [0; VC_FDD4_WORDS],
+        });
+        assert_eq!(unsafe { vc_fdd4_init(&mut *f, fs) }, VC_OK);
+        // two damped-free modes as slowly modulated sinusoids: 7 Hz with shape sin, 23 Hz
+        // with shape cos over the four targets, and a little noise
+        let shape1 = |k: usize| (0.5 * core::f32::consts::PI * (k as f32 + 1.0) / 4.0).sin();
+        let shape2 = |k: usize| (core::f32::consts::PI * (k as f32 + 1.0) / 4.0).cos();
+        let mut seed = 1u64;
+        let mut noise = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as f32 / (1u64 << 31) as f32) - 0.5
+        };
+        let mut reference =
+            CrossSpectra::<VC_FDD4_TARGETS, VC_FDD4_SEGMENT, VC_FDD4_LINES, 10, 0>::try_new(fs)
+                .unwrap();
+        for i in 0..512 * 8 {
+            let t = i as f32 / fs;
+            let (a, b) = (
+                (2.0 * core::f32::consts::PI * 7.0 * t).sin() * (1.0 + 0.3 * (0.37 * t).sin()),
+                0.5 * (2.0 * core::f32::consts::PI * 23.0 * t).sin()
+                    * (1.0 + 0.3 * (0.23 * t).cos()),
+            );
+            let frame: [f32; 4] =
+                core::array::from_fn(|k| a * shape1(k) + b * shape2(k) + 0.01 * noise());
+            assert_eq!(unsafe { vc_fdd4_push(&mut *f, frame.as_ptr()) }, VC_OK);
+            reference.push(&frame);
+        }
+        let mut lines = [0u32; 8];
+        let mut count = 0u32;
+        assert_eq!(
+            unsafe {
+                vc_fdd4_peaks(
+                    &mut *f,
+                    1.0,
+                    59.0,
+                    6.0,
+                    10.0,
+                    lines.as_mut_ptr(),
+                    8,
+                    &mut count,
+                )
+            },
+            VC_OK
+        );
+        assert_eq!(count, 2, "{lines:?}");
+        for (&l, (want_hz, shape)) in lines
+            .iter()
+            .zip([(7.0f32, &shape1 as &dyn Fn(usize) -> f32), (23.0, &shape2)])
+        {
+            let (mut hz, mut s1) = (0.0f32, 0.0f32);
+            let mut v = [vc_complex_t { re: 0.0, im: 0.0 }; 4];
+            assert_eq!(
+                unsafe { vc_fdd4_line(&mut *f, l, &mut hz, &mut s1, v.as_mut_ptr()) },
+                VC_OK
+            );
+            assert!((hz - want_hz).abs() <= fs / 512.0, "{hz} vs {want_hz}");
+            let (rs, rv) = reference.first_singular(l as usize, FDD_ITERATIONS);
+            assert_eq!(s1, rs);
+            let dot: Complex32 = v
+                .iter()
+                .enumerate()
+                .map(|(k, c)| Complex32::new(c.re, -c.im) * shape(k))
+                .sum();
+            let vv: f32 = v.iter().map(|c| c.re * c.re + c.im * c.im).sum();
+            let ss: f32 = (0..4).map(|k| shape(k) * shape(k)).sum();
+            let mac = dot.norm_sqr() / (vv * ss);
+            assert!(mac > 0.999, "line {l}: MAC {mac}");
+            assert_eq!(v[0].re, rv[0].re);
+        }
     }
 }

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The C demo (mcu-demo/c/main.c) on four Cortex-M cores under QEMU: exact instruction counts of
-# the centroid, one tracker frame and one second of the vision pipeline, with flash and RAM, as
+# the centroid, one tracker frame, one multi-target frame, the output-only FDD of four targets
+# and one second of the vision pipeline, with flash and RAM, as
 # a Markdown table (docs/mcu.md). Each core gets the staticlib built for its own Rust target and
 # CPU, the demo compiled for it, and its board's memory map. The Cortex-M0 board (micro:bit,
-# 16 KiB of RAM) cannot hold the pipeline's 57 600 bytes: it runs the centroid and the tracker.
+# 16 KiB of RAM) cannot hold the pipeline's 57 600 bytes or the FDD's 45 KiB: it runs the
+# centroids and the tracker.
 # Needs: gcc-arm-none-eabi, qemu-system-arm, gcc, rustup targets thumbv6m-none-eabi,
 # thumbv7em-none-eabihf, thumbv8m.main-none-eabihf; ../shared/tools/qemu-icount.
 set -euo pipefail
@@ -50,20 +52,22 @@ for spec in "${cores[@]}"; do
     FNR==NR { if ($1=="bench:") { sub(/^bench: /, ""); label[++n]=$0 } next }
     $1=="marks:" && $2=="segment" { seg[$3+0]=$4 }
     END {
-      over = seg[1]; c = "-"; t = "-"; m = "-"; p = "-"
+      over = seg[1]; c = "-"; t = "-"; m = "-"; p = "-"; f = "-"; q = "-"
       for (k = 2; k <= n; k++) {
         v = seg[2*k-1] - over
         if (label[k] ~ /^centroid/) c = sprintf("%d (%.2f per pixel)", v, v / 3072)
         else if (label[k] ~ /^tracker/) t = v
         else if (label[k] ~ /^multi/) m = v
+        else if (label[k] ~ /^fdd.*frames/) f = v
+        else if (label[k] ~ /^fdd.*peaks/) q = v
         else if (label[k] ~ /^pipeline/) p = v
       }
-      printf "%s | %s | %s | %s", c, t, m, p
+      printf "%s | %s | %s | %s / %s | %s", c, t, m, f, q, p
     }' "$tmp/$machine.out" "$tmp/$machine.log")
   read -r text data bss <<<"$(arm-none-eabi-size "$tmp/$machine.elf" | awk 'NR==2{print $1, $2, $3}')"
-  [ -n "$defs" ] && counts="${counts% | -} | does not fit (${rl}iB of RAM)"
+  [ -n "$defs" ] && counts="${counts% | - / - | -} | does not fit | does not fit (${rl}iB of RAM)"
   rows+=("| $name (QEMU \`$machine\`, \`$target\`) | $counts | $text | $((data + bss)) |")
 done
-echo "| core | centroid, 64 x 48 frame | tracker frame (windowed) | multi-target frame (2 targets) | pipeline, one second (120 frames, 2048 samples) | flash, B | RAM, B |"
-echo "|---|---:|---:|---:|---:|---:|---:|"
+echo "| core | centroid, 64 x 48 frame | tracker frame (windowed) | multi-target frame (2 targets) | FDD, 4 targets: 256 frames / peaks of 257 lines | pipeline, one second (120 frames, 2048 samples) | flash, B | RAM, B |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"

@@ -134,6 +134,9 @@ static vc_tracker_t tracker;
 static vc_multi_t multi;
 #ifndef VC_NO_PIPELINE
 static vc_pipeline_t pipe;
+static vc_fdd4_t fdd;
+static float adc_second[2048], cam_second[120];
+static float fdd_frames[256][4];
 #endif
 
 /* a square target of side 2r+1 (integer geometry: its centroid is exact) */
@@ -209,27 +212,96 @@ int main(void) {
     }
 
 #ifndef VC_NO_PIPELINE
+    /* output-only: four targets in two modes (7 Hz, shape sin; 23 Hz, shape cos), slowly
+     * modulated, a little noise: two peaks, each with its shape (MAC > 0.999) */
+    {
+        const double pi = 3.14159265358979323846;
+        /* sin(pi/2 (k+1)/4) and cos(pi (k+1)/4) */
+        const double sh1[4] = {0.38268343236508984, 0.7071067811865476, 0.9238795325112867, 1.0};
+        const double sh2[4] = {0.7071067811865476, 0.0, -0.7071067811865476, -1.0};
+        rotor m1 = rotor_new(2 * pi * 7.0 / 120.0), m2 = rotor_new(2 * pi * 23.0 / 120.0);
+        rotor a1 = rotor_new(0.37 / 120.0), a2 = rotor_new(0.23 / 120.0);
+        uint64_t seed = 1;
+        check(vc_fdd4_init(&fdd, 120.0f) == VC_OK, "fdd init");
+        for (int i = 0; i < 512 * 8; i++) {
+            double a = m1.s * (1.0 + 0.3 * a1.s), b = 0.5 * m2.s * (1.0 + 0.3 * a2.c);
+            float *x = fdd_frames[i % 256];
+            for (int k = 0; k < 4; k++) {
+                seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+                double noise = (double)(seed >> 33) / 2147483648.0 - 0.5;
+                x[k] = (float)(a * sh1[k] + b * sh2[k] + 0.01 * noise);
+            }
+            rotor_step(&m1);
+            rotor_step(&m2);
+            rotor_step(&a1);
+            rotor_step(&a2);
+            /* every 256 frames made, pushed: the 15th batch is measured (the library alone) */
+            if (i % 256 == 255) {
+                int measured = i / 256 == 14;
+                if (measured) bench_begin("fdd, 4 targets: 256 frames (one segment of 512 added)");
+                for (int j = 0; j < 256; j++) vc_fdd4_push(&fdd, fdd_frames[j]);
+                if (measured) bench_mark();
+            }
+        }
+        uint32_t lines[8], count = 0;
+        bench_begin("fdd, 4 targets: peaks over 257 lines");
+        status = vc_fdd4_peaks(&fdd, 1.0f, 59.0f, 6.0f, 10.0f, lines, 8, &count);
+        bench_mark();
+        check(status == VC_OK && count == 2, "fdd peaks");
+        for (uint32_t p = 0; p < count && p < 2; p++) {
+            float hz = 0, s1 = 0;
+            vc_complex_t v[4];
+            const double *sh = p == 0 ? sh1 : sh2;
+            check(vc_fdd4_line(&fdd, lines[p], &hz, &s1, v) == VC_OK, "fdd line");
+            double dre = 0, dim = 0, vv = 0, ss = 0;
+            for (int k = 0; k < 4; k++) {
+                dre += v[k].re * sh[k];
+                dim += v[k].im * sh[k];
+                vv += v[k].re * v[k].re + v[k].im * v[k].im;
+                ss += sh[k] * sh[k];
+            }
+            double mac = (dre * dre + dim * dim) / (vv * ss);
+            check(fabsf_(hz - (p == 0 ? 7.0f : 23.0f)) <= 120.0f / 512.0f && mac > 0.999,
+                  "fdd peak and shape");
+            put("fdd: peak at ");
+            put_fixed(hz);
+            put(" Hz, MAC ");
+            put_fixed((float)mac);
+            put("\n");
+        }
+    }
+
     /* a 7 Hz motion: ADC acceleration 5 sin(wt) m/s^2, camera displacement whose acceleration
      * leads it by a quarter period (mm): H1 = i at 7 Hz */
     const double pi = 3.14159265358979323846, w = 2.0 * pi * 7.0;
     vc_pipeline_config_t pc = {120, 2048, 1e-3f, 0.0f};
     check(vc_pipeline_init(&pipe, &pc) == VC_OK, "pipeline init");
     rotor adc_r = rotor_new(w / 2048.0), cam_r = rotor_new(w / 120.0);
-    float adc[32];
+    /* each second's inputs are made before it is pushed, so that the measured second is the
+     * library's work alone (the test signal's double arithmetic is software on an M4F) */
     unsigned sent = 0;
-    for (unsigned k = 0; k < 6 * 120; k++) {
-        if (k == 5 * 120) bench_begin("pipeline, one second: 120 frames and 2048 ADC samples in, H1 updated");
-        unsigned upto = ((k + 1) * 2048 + 119) / 120, n = 0;
-        for (; sent < upto; sent++) {
-            adc[n++] = (float)(5.0 * adc_r.s);
+    int pushed_ok = 1;
+    for (unsigned second = 0; second < 6; second++) {
+        for (unsigned i = 0; i < 2048; i++) {
+            adc_second[i] = (float)(5.0 * adc_r.s);
             rotor_step(&adc_r);
         }
-        check(vc_pipeline_push_adc(&pipe, adc, n) == VC_OK, "push adc");
-        check(vc_pipeline_push_frame(&pipe, (float)(-5.0 * cam_r.c / (w * w) * 1e3)) == VC_OK,
-              "push frame");
-        rotor_step(&cam_r);
-        if (k == 6 * 120 - 1) bench_mark();
+        for (unsigned k = 0; k < 120; k++) {
+            cam_second[k] = (float)(-5.0 * cam_r.c / (w * w) * 1e3);
+            rotor_step(&cam_r);
+        }
+        if (second == 5) bench_begin("pipeline, one second: 120 frames and 2048 ADC samples in, H1 updated");
+        unsigned done = 0;
+        for (unsigned k = 0; k < 120; k++) {
+            unsigned upto = ((120 * second + k + 1) * 2048 + 119) / 120 - 2048 * second;
+            pushed_ok &= vc_pipeline_push_adc(&pipe, adc_second + done, upto - done) == VC_OK;
+            pushed_ok &= vc_pipeline_push_frame(&pipe, cam_second[k]) == VC_OK;
+            done = upto;
+        }
+        if (second == 5) bench_mark();
+        sent += done;
     }
+    check(pushed_ok && sent == 6 * 2048, "every push taken");
     float re = 0, im = 0, df = 0;
     uint32_t bins = 0;
     vc_peak_t pk;
