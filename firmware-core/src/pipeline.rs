@@ -440,8 +440,12 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// Errors: [`ConfigError::Upsample`], [`ConfigError::Welch`],
     /// [`ConfigError::BlockShape`], [`ConfigError::Capacity`].
     pub const fn try_new(config: PipelineConfig) -> Result<Self, ConfigError> {
-        let (plan, welch) = const_try!(Self::check(&config));
-        Ok(Self::empty(config, plan, welch))
+        let (plan, dft) = const_try!(Self::check(&config));
+        Ok(Self::empty(
+            config,
+            plan,
+            WelchAccumulator::from_checked(config.welch, dft),
+        ))
     }
 
     /// A pipeline with checked settings and no samples (the first quarter block of ADC samples
@@ -473,20 +477,18 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
     /// Replaces the settings in place (checked as in [`try_new`](Self::try_new)) and forgets
     /// all samples and the estimate. On error nothing changes.
     pub fn configure(&mut self, config: PipelineConfig) -> Result<(), ConfigError> {
-        let (plan, welch) = Self::check(&config)?;
+        let (plan, dft) = Self::check(&config)?;
         self.acceleration_scale = config.acceleration_scale;
         self.exposure_s = config.exposure_compensation;
         self.plan = plan;
-        self.welch = welch;
+        self.welch.configure_checked(config.welch, dft);
         self.reset();
         Ok(())
     }
 
     /// The settings checked against the capacities: the upsampling plan and an empty Welch
     /// accumulator.
-    const fn check(
-        config: &PipelineConfig,
-    ) -> Result<(UpsamplePlan, WelchAccumulator<WORK>), ConfigError> {
+    const fn check(config: &PipelineConfig) -> Result<(UpsamplePlan, dft::Dft), ConfigError> {
         let (frames, samples) = (config.frames_per_block, config.samples_per_block);
         let plan = match UpsamplePlan::try_new(frames, samples) {
             Ok(p) => p,
@@ -500,15 +502,17 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
                 return Err(ConfigError::Exposure);
             }
         }
-        let welch = match WelchAccumulator::<WORK>::try_new(config.welch) {
-            Ok(w) => w,
+        // the Welch settings are checked without building the estimate (its spectra would be
+        // a temporary of 8 WORK bytes on the stack)
+        let dft = match WelchAccumulator::<WORK>::check(&config.welch) {
+            Ok(d) => d,
             Err(e) => return Err(ConfigError::Welch(e)),
         };
         let (n, m) = (plan.input_len(), plan.output_len());
-        let scratch = if plan.scratch_len() > welch.scratch_len() {
+        let scratch = if plan.scratch_len() > dft.scratch_len() {
             plan.scratch_len()
         } else {
-            welch.scratch_len()
+            dft.scratch_len()
         };
         let hist = config.min_history();
         let checks = [
@@ -529,7 +533,7 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
             }
             i += 1;
         }
-        Ok((plan, welch))
+        Ok((plan, dft))
     }
 
     /// The settings (those of [`new`](Self::new)'s unconfigured pipeline are all zero).

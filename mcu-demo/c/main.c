@@ -114,6 +114,28 @@ static void rotor_step(rotor *r) {
 }
 #endif
 
+/* ---- stack use ------------------------------------------------------------------------ */
+
+/* The 120 KiB below the caller's stack pointer painted; stack_used(lo) after a call: the
+ * deepest word it changed (how much stack the call used, to 4 bytes). */
+#ifndef VC_NO_PIPELINE
+#define PAINT 0xC0FFEE11u
+#define PAINT_BYTES (120 * 1024)
+__attribute__((noinline)) static uint32_t *stack_paint(void) {
+    uint32_t here;
+    uintptr_t top = (uintptr_t)&here - 256;
+    uint32_t *lo = (uint32_t *)((uintptr_t)&here - PAINT_BYTES);
+    for (volatile uint32_t *q = lo; (uintptr_t)q < top; q++) *q = PAINT;
+    return lo;
+}
+__attribute__((noinline)) static long stack_used(uint32_t *lo) {
+    uint32_t here;
+    volatile uint32_t *q = lo;
+    while ((uintptr_t)q < (uintptr_t)&here && *q == PAINT) q++;
+    return (long)((uintptr_t)&here - (uintptr_t)q);
+}
+#endif
+
 /* ---- the checks ---------------------------------------------------------------------- */
 
 /* Instruction counts (bench.sh): QEMU's marks plugin counts the guest instructions between
@@ -222,7 +244,11 @@ int main(void) {
         rotor m1 = rotor_new(2 * pi * 7.0 / 120.0), m2 = rotor_new(2 * pi * 23.0 / 120.0);
         rotor a1 = rotor_new(0.37 / 120.0), a2 = rotor_new(0.23 / 120.0);
         uint64_t seed = 1;
+        uint32_t *lo = stack_paint();
         check(vc_fdd4_init(&fdd, 120.0f) == VC_OK, "fdd init");
+        put("stack: vc_fdd4_init used ");
+        put_int(stack_used(lo));
+        put(" bytes\n");
         for (int i = 0; i < 512 * 8; i++) {
             double a = m1.s * (1.0 + 0.3 * a1.s), b = 0.5 * m2.s * (1.0 + 0.3 * a2.c);
             float *x = fdd_frames[i % 256];
@@ -275,7 +301,13 @@ int main(void) {
      * leads it by a quarter period (mm): H1 = i at 7 Hz */
     const double pi = 3.14159265358979323846, w = 2.0 * pi * 7.0;
     vc_pipeline_config_t pc = {120, 2048, 1e-3f, 0.0f};
-    check(vc_pipeline_init(&pipe, &pc) == VC_OK, "pipeline init");
+    {
+        uint32_t *lo = stack_paint();
+        check(vc_pipeline_init(&pipe, &pc) == VC_OK, "pipeline init");
+        put("stack: vc_pipeline_init used ");
+        put_int(stack_used(lo));
+        put(" bytes\n");
+    }
     rotor adc_r = rotor_new(w / 2048.0), cam_r = rotor_new(w / 120.0);
     /* each second's inputs are made before it is pushed, so that the measured second is the
      * library's work alone (the test signal's double arithmetic is software on an M4F) */

@@ -184,8 +184,21 @@ impl<const NFFT: usize> WelchAccumulator<NFFT> {
         self.skipped = 0;
     }
 
-    pub(super) const fn check(c: &WelchConfig) -> Result<Dft, ConfigError> {
+    pub(crate) const fn check(c: &WelchConfig) -> Result<Dft, ConfigError> {
         c.check_within(NFFT)
+    }
+
+    /// An empty estimate for settings [`check`](Self::check) accepted (`dft` its result).
+    pub(crate) const fn from_checked(config: WelchConfig, dft: Dft) -> Self {
+        Self::empty(config, dft)
+    }
+
+    /// [`configure`](Self::configure) for settings [`check`](Self::check) accepted, in place:
+    /// no estimate is built on the stack (its spectra are `8 NFFT` bytes).
+    pub(crate) fn configure_checked(&mut self, config: WelchConfig, dft: Dft) {
+        self.dft = dft;
+        self.config = config;
+        self.reset();
     }
 
     /// The settings in force.
