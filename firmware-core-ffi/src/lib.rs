@@ -140,12 +140,7 @@ pub struct vc_tracker_t {
     opaque: [u64; VC_TRACKER_WORDS],
 }
 
-/// Marks an initialised `vc_tracker_t` ("vctrack1").
-const TRACKER_MAGIC: u64 = 0x7663_7472_6163_6b31;
-
 // the tracker must fit after the magic word, at an alignment the words give
-const _: () = assert!(size_of::<Tracker>() <= 8 * (VC_TRACKER_WORDS - 1));
-const _: () = assert!(align_of::<Tracker>() <= 8);
 
 /// Widest row (of the region searched) a [`vc_multi_t`] labels, pixels.
 pub const VC_MULTI_MAX_WIDTH: usize = 1024;
@@ -172,12 +167,6 @@ pub struct vc_multi_t {
     /// Word 0 marks an initialised state; the centroider follows it.
     opaque: [u64; VC_MULTI_WORDS],
 }
-
-/// Marks an initialised `vc_multi_t` ("vcmulti1").
-const MULTI_MAGIC: u64 = 0x7663_6d75_6c74_6931;
-
-const _: () = assert!(size_of::<Multi>() <= 8 * (VC_MULTI_WORDS - 1));
-const _: () = assert!(align_of::<Multi>() <= 8);
 
 /// One target of a frame: its centroid and bounding box (inclusive, full-frame pixels).
 #[repr(C)]
@@ -228,12 +217,6 @@ pub struct vc_fdd4_t {
     opaque: [u64; VC_FDD4_WORDS],
 }
 
-/// Marks an initialised `vc_fdd4_t` ("vcfdd4_1").
-const FDD4_MAGIC: u64 = 0x7663_6664_6434_5f31;
-
-const _: () = assert!(size_of::<Fdd4>() <= 8 * (VC_FDD4_WORDS - 1));
-const _: () = assert!(align_of::<Fdd4>() <= 8);
-
 /// A complex number (a mode-shape component).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -269,12 +252,6 @@ pub struct vc_pipeline_t {
     /// Word 0 marks an initialised state; the pipeline follows it.
     opaque: [u64; VC_PIPELINE_WORDS],
 }
-
-/// Marks an initialised `vc_pipeline_t` ("vcpipe01").
-const PIPELINE_MAGIC: u64 = 0x7663_7069_7065_3031;
-
-const _: () = assert!(size_of::<Pipeline>() <= 8 * (VC_PIPELINE_WORDS - 1));
-const _: () = assert!(align_of::<Pipeline>() <= 8);
 
 /// Settings of the vision channel: blocks of one second (`frames_per_block` = the frame
 /// rate, `samples_per_block` = the ADC rate), one-second Hann segments with half overlap.
@@ -434,33 +411,25 @@ trait Storage<T> {
     fn words(&mut self) -> &mut [u64];
 }
 
-impl Storage<Tracker> for vc_tracker_t {
-    const MAGIC: u64 = TRACKER_MAGIC;
-    fn words(&mut self) -> &mut [u64] {
-        &mut self.opaque
-    }
+/// `$state` stores a `$t` after its magic word (`$magic`, eight ASCII bytes): the trait, and
+/// compile-time checks that the `$t` fits after the word at an alignment the words give.
+macro_rules! storage {
+    ($state:ty, $t:ty, $magic:expr) => {
+        impl Storage<$t> for $state {
+            const MAGIC: u64 = $magic;
+            fn words(&mut self) -> &mut [u64] {
+                &mut self.opaque
+            }
+        }
+        const _: () = assert!(size_of::<$t>() + 8 <= size_of::<$state>());
+        const _: () = assert!(align_of::<$t>() <= 8);
+    };
 }
 
-impl Storage<Multi> for vc_multi_t {
-    const MAGIC: u64 = MULTI_MAGIC;
-    fn words(&mut self) -> &mut [u64] {
-        &mut self.opaque
-    }
-}
-
-impl Storage<Fdd4> for vc_fdd4_t {
-    const MAGIC: u64 = FDD4_MAGIC;
-    fn words(&mut self) -> &mut [u64] {
-        &mut self.opaque
-    }
-}
-
-impl Storage<Pipeline> for vc_pipeline_t {
-    const MAGIC: u64 = PIPELINE_MAGIC;
-    fn words(&mut self) -> &mut [u64] {
-        &mut self.opaque
-    }
-}
+storage!(vc_tracker_t, Tracker, 0x7663_7472_6163_6b31); // "vctrack1"
+storage!(vc_multi_t, Multi, 0x7663_6d75_6c74_6931); // "vcmulti1"
+storage!(vc_fdd4_t, Fdd4, 0x7663_6664_6434_5f31); // "vcfdd4_1"
+storage!(vc_pipeline_t, Pipeline, 0x7663_7069_7065_3031); // "vcpipe01"
 
 /// The `T` stored in `s`, if it was initialised.
 fn state_mut<T, S: Storage<T>>(s: &mut S) -> Option<&mut T> {
@@ -860,7 +829,7 @@ pub unsafe extern "C" fn vc_fdd4_peaks(
     if !(lo.is_finite() && hi.is_finite() && lo <= hi && df > 0.0) {
         return VC_ERR_CONFIG;
     }
-    let lo = libm_ceil(lo / df).max(0.0) as usize;
+    let lo = libm::ceilf(lo / df).max(0.0) as usize;
     let hi = ((hi / df) as usize).min(VC_FDD4_LINES - 1);
     for (l, v) in fdd.s1.iter_mut().enumerate() {
         *v = if (lo..=hi).contains(&l) {
@@ -885,16 +854,6 @@ pub unsafe extern "C" fn vc_fdd4_peaks(
     }
     *count = n as u32;
     VC_OK
-}
-
-/// `ceil` without libm for the non-negative band edges (the float-to-int `as` saturates).
-fn libm_ceil(x: f32) -> f32 {
-    let t = x as i64 as f32;
-    if t < x {
-        t + 1.0
-    } else {
-        t
-    }
 }
 
 /// Sets up `*p` for `config` (no samples yet; the first quarter block of ADC samples is

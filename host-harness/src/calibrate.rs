@@ -283,10 +283,6 @@ impl Knob {
     }
 
     fn set(self, cfg: &mut StudyConfig, v: f64) {
-        if self == Knob::EpsaImages {
-            cfg.imaging.epsa_images = Some(v.round().max(2.0) as usize);
-            return;
-        }
         let o = &mut cfg.imaging;
         let field = match self {
             Knob::TargetRadius => &mut o.target_radius_px,
@@ -297,7 +293,10 @@ impl Knob {
             Knob::Gain => &mut o.gain,
             Knob::TipRotationLever => &mut o.tip_rotation_lever,
             Knob::BeamLength => &mut cfg.rig.beam_length_m,
-            Knob::EpsaImages => return,
+            Knob::EpsaImages => {
+                o.epsa_images = Some(v.round().max(2.0) as usize);
+                return;
+            }
         };
         *field = Some(v);
     }

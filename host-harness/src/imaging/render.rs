@@ -623,20 +623,23 @@ mod tests {
         }
     }
 
-    #[test]
-    fn blur_of_a_sinusoid_scales_the_weighted_centroid_by_sinc() {
-        // 1 kHz path, sinusoid of amplitude 5 px at f Hz; exposure Te centred on the frames
-        let (amp, f, te) = (5.0, 3.0, 0.1);
-        let fine = 1000.0;
+    /// A renderer on a 1 kHz path of 4 s: a sinusoid of `amp` px at `f` Hz; and the weighted
+    /// centroid of the target at rest.
+    fn sinusoid_renderer(amp: f64, f: f64) -> (BlurRenderer, f64) {
         let path: Vec<f64> = (0..4000)
-            .map(|i| amp * (std::f64::consts::TAU * f * i as f64 / fine).sin())
+            .map(|i| amp * (std::f64::consts::TAU * f * i as f64 / 1000.0).sin())
             .collect();
         let mut r = BlurRenderer::new(&TARGET, -6.0, 6.0);
-        let (w, h) = (r.width(), r.height());
-        let mut img = vec![0.0f32; w * h];
-        let rest = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), w);
+        let rest = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), r.width());
         r.set_path(&path, 10);
-        // least-squares amplitude of the centroid sinusoid over whole periods
+        (r, rest)
+    }
+
+    /// The least-squares amplitude at `f` Hz of the weighted centroid over 300 frames 10 ms
+    /// apart (whole periods), each exposed `te` s centred on its instant.
+    fn weighted_amplitude(r: &mut BlurRenderer, rest: f64, f: f64, te: f64) -> f64 {
+        let (w, fine) = (r.width(), 1000.0);
+        let mut img = vec![0.0f32; w * r.height()];
         let (mut ss, mut sc) = (0.0, 0.0);
         let frames = 300;
         for i in 0..frames {
@@ -647,7 +650,15 @@ mod tests {
             ss += y * ph.sin();
             sc += y * ph.cos();
         }
-        let got = 2.0 * (ss * ss + sc * sc).sqrt() / frames as f64;
+        2.0 * (ss * ss + sc * sc).sqrt() / frames as f64
+    }
+
+    #[test]
+    fn blur_of_a_sinusoid_scales_the_weighted_centroid_by_sinc() {
+        // 1 kHz path, sinusoid of amplitude 5 px at f Hz; exposure Te centred on the frames
+        let (amp, f, te) = (5.0, 3.0, 0.1);
+        let (mut r, rest) = sinusoid_renderer(amp, f);
+        let got = weighted_amplitude(&mut r, rest, f, te);
         let x = std::f64::consts::PI * f * te;
         let want = amp * x.sin() / x;
         assert!(
@@ -660,13 +671,8 @@ mod tests {
     fn discrete_epsa_is_the_mean_of_sharp_images_and_follows_the_dirichlet_kernel() {
         let (amp, f, te, n) = (5.0, 2.0, 0.18, 5usize);
         let fine = 1000.0;
-        let path: Vec<f64> = (0..4000)
-            .map(|i| amp * (std::f64::consts::TAU * f * i as f64 / fine).sin())
-            .collect();
-        let mut r = BlurRenderer::new(&TARGET, -6.0, 6.0);
+        let (mut r, rest) = sinusoid_renderer(amp, f);
         let (w, h) = (r.width(), r.height());
-        let rest = weighted_cy(&frame(&mut r, &[0.0], 1, 0.0, 0.0), w);
-        r.set_path(&path, 10);
         r.set_epsa_images(Some(n));
         // the frame is the mean of n sharp frames at the exposure's ends and evenly between
         let (a, b) = (1234.5, 1234.5 + te * fine);
@@ -688,17 +694,7 @@ mod tests {
             .fold(0.0f32, f32::max);
         assert!(worst < 2e-3, "{worst} grey levels");
         // and the weighted centroid of a sinusoid is scaled by the Dirichlet kernel, not the sinc
-        let (mut ss, mut sc) = (0.0, 0.0);
-        let frames = 300;
-        for i in 0..frames {
-            let centre = 500.0 + i as f64 * 10.0;
-            r.render_float(centre - te * fine / 2.0, centre + te * fine / 2.0, &mut img);
-            let y = weighted_cy(&img, w) - rest;
-            let ph = std::f64::consts::TAU * f * centre / fine;
-            ss += y * ph.sin();
-            sc += y * ph.cos();
-        }
-        let got = 2.0 * (ss * ss + sc * sc).sqrt() / frames as f64;
+        let got = weighted_amplitude(&mut r, rest, f, te);
         let pi = std::f64::consts::PI;
         let dt = te / (n - 1) as f64;
         let want = amp * (pi * f * n as f64 * dt).sin() / (n as f64 * (pi * f * dt).sin());

@@ -198,6 +198,11 @@ mod tests {
     use crate::model::grandstand::simulate;
     use rand::SeedableRng;
 
+    /// Run `run` of `s` with the tests' seed (the same runs for every configuration).
+    fn run_at(s: &Grandstand, run: u64) -> RunRecord {
+        s.run(run, &mut crate::study::run_rng(7, run)).unwrap()
+    }
+
     #[test]
     fn fast_imaging_path_gives_the_rendered_frames_records() {
         // The fast path selects the renderer's pixels, so a run's records (every centroid, the
@@ -209,11 +214,7 @@ mod tests {
         cfg.imaging.fast_path = Some(false);
         let reference = Grandstand::new(&cfg).unwrap();
         for run in 0..2 {
-            let got = fast.run(run, &mut crate::study::run_rng(7, run)).unwrap();
-            let want = reference
-                .run(run, &mut crate::study::run_rng(7, run))
-                .unwrap();
-            assert_eq!(got, want, "run {run}");
+            assert_eq!(run_at(&fast, run), run_at(&reference, run), "run {run}");
         }
     }
 
@@ -231,14 +232,9 @@ mod tests {
         let reference = Grandstand::new(&cfg).unwrap();
         let amp = |r: &RunRecord, e: usize| r.vision[e].system.peaks[0].unwrap().a;
         for run in 0..2 {
-            let got = fast.run(run, &mut crate::study::run_rng(7, run)).unwrap();
-            let want = reference
-                .run(run, &mut crate::study::run_rng(7, run))
-                .unwrap();
-            assert_eq!(got, want, "run {run}");
-            let c = continuous
-                .run(run, &mut crate::study::run_rng(7, run))
-                .unwrap();
+            let got = run_at(&fast, run);
+            assert_eq!(got, run_at(&reference, run), "run {run}");
+            let c = run_at(&continuous, run);
             let (rd, rc) = (amp(&got, 1) / amp(&got, 0), amp(&c, 1) / amp(&c, 0));
             // Dirichlet (N = 5) 0.719 against the sinc's 0.809 for a linear centroid
             assert!(rd < rc - 0.05, "run {run}: discrete {rd}, continuous {rc}");
