@@ -309,6 +309,7 @@ fn describe_inputs(
         FrameSource::Video { path: p, .. } => format!("{} (video, decoded by FFmpeg)", p.display()),
         FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
         FrameSource::Cine(p) => format!("{} (Phantom cine recording)", p.display()),
+        FrameSource::Memory(f) => format!("{} frames in memory", f.len()),
     };
     let (fps, a, d, c) = (
         req.settings.frame_rate_hz,

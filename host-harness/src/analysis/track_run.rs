@@ -7,7 +7,7 @@ use super::points::{Point, PointsInfo};
 use super::targets::Tracks;
 use super::DisplacementSettings;
 use crate::export::targets::{displacement_csv, Track};
-use crate::frames::discover_frames;
+use crate::frames::{discover_frames, FrameSource};
 use crate::outdir::Staged;
 use firmware_core::centroid::CentroidConfig;
 use std::fmt::Write as _;
@@ -49,20 +49,30 @@ pub struct Request {
     pub inputs: Vec<PathBuf>,
 }
 
-/// Runs `track`; returns the report (also written to `report.txt`).
-pub fn run(req: &Request) -> anyhow::Result<String> {
-    let source = discover_frames(&req.frames)?.source.retimed(req.retime)?;
-    let (tracks, windows) = match &req.targets {
+/// Follows `targets` through `source` (as `track` and `analyze` do): the tracks, and with
+/// chosen points what their windows used.
+pub fn track_targets(
+    source: &FrameSource,
+    fps: f64,
+    centroid: &CentroidConfig,
+    targets: &Targets,
+) -> anyhow::Result<(Tracks, Option<PointsInfo>)> {
+    Ok(match targets {
         Targets::Points(points, rule) => {
-            let (t, w) =
-                super::points::track_points(&source, req.fps, points, &req.centroid, *rule)?;
+            let (t, w) = super::points::track_points(source, fps, points, centroid, *rule)?;
             (t, Some(w))
         }
         Targets::Blobs(k, gate) => (
-            super::targets::track(&source, req.fps, &req.centroid, *k, *gate)?,
+            super::targets::track(source, fps, centroid, *k, *gate)?,
             None,
         ),
-    };
+    })
+}
+
+/// Runs `track`; returns the report (also written to `report.txt`).
+pub fn run(req: &Request) -> anyhow::Result<String> {
+    let source = discover_frames(&req.frames)?.source.retimed(req.retime)?;
+    let (tracks, windows) = track_targets(&source, req.fps, &req.centroid, &req.targets)?;
     let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));
     let out = Staged::new(&req.out, req.force, "track", &inputs)?;

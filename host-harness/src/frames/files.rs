@@ -32,6 +32,9 @@ pub enum FrameSource {
     Photron(PathBuf),
     /// A Phantom `.cine` recording ([`crate::frames::phantom`]).
     Cine(PathBuf),
+    /// Frames already in memory (an array handed over by the Python package), in order;
+    /// labelled `frames[K]` (0-based, as the array is indexed).
+    Memory(std::sync::Arc<[GreyFrame]>),
 }
 
 /// Extensions read as video files.
@@ -498,6 +501,7 @@ impl FrameSource {
     pub fn count(&self, fps: f64) -> anyhow::Result<Option<usize>> {
         match self {
             FrameSource::Files(f) => Ok(Some(f.len())),
+            FrameSource::Memory(f) => Ok(Some(f.len())),
             FrameSource::MultiPageTiff(_) => Ok(None),
             FrameSource::Photron(p) => Ok(Some(super::photron::read_header(p)?.frames)),
             FrameSource::Cine(p) => Ok(Some(super::phantom::read_header(p)?.offsets.len())),
@@ -564,6 +568,12 @@ impl FrameSource {
                 Ok(())
             }
             FrameSource::MultiPageTiff(p) => for_each_tiff_page(p, |label, frame| f(label, &frame)),
+            FrameSource::Memory(frames) => {
+                for (k, frame) in frames.iter().enumerate() {
+                    f(format!("frames[{k}]"), frame)?;
+                }
+                Ok(())
+            }
             FrameSource::Photron(p) => {
                 let mut r = super::photron::MrawFrames::open(p)?;
                 let n = r.header().frames;
@@ -741,5 +751,38 @@ mod tests {
             split_number("cam2_frame_0012.tif"),
             Some(("cam2_frame_", 12, ".tif"))
         );
+    }
+
+    #[test]
+    fn frames_in_memory_are_a_source_like_files() {
+        let frames: Vec<GreyFrame> = (0..3u8)
+            .map(|k| GreyFrame::U8 {
+                width: 4,
+                height: 2,
+                data: vec![k; 8],
+            })
+            .collect();
+        let source = FrameSource::Memory(frames.clone().into());
+        assert_eq!(source.count(1.0).unwrap(), Some(3));
+        assert_eq!(source.recorded_rate().unwrap(), None);
+        assert!(source.clone().retimed(true).is_err());
+        let mut seen = Vec::new();
+        source
+            .for_each(1.0, |label, f| {
+                seen.push((label, f.clone()));
+                Ok(())
+            })
+            .unwrap();
+        let labels: Vec<&str> = seen.iter().map(|(l, _)| l.as_str()).collect();
+        assert_eq!(labels, ["frames[0]", "frames[1]", "frames[2]"]);
+        assert!(seen.iter().map(|(_, f)| f).eq(frames.iter()));
+        // an error of the callback stops the iteration and is returned
+        let mut calls = 0;
+        let e = source.for_each(1.0, |label, _| {
+            calls += 1;
+            Err(crate::bad_input(format!("{label}: refused")))
+        });
+        assert_eq!(calls, 1);
+        assert_eq!(e.unwrap_err().to_string(), "frames[0]: refused");
     }
 }

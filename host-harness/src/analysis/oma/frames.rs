@@ -4,12 +4,12 @@
 
 use super::input::Records;
 use super::run::Output;
-use super::OmaSettings;
+use super::{OmaResult, OmaSettings};
 use crate::analysis::run::{Outcome, TargetsRequest};
 use crate::analysis::targets::{self, Tracks};
 use crate::chain::displacement::{displacement_mm, DisplacementSettings};
 use crate::export::targets as export;
-use crate::frames::{centroid_source, discover_frames};
+use crate::frames::{centroid_source, discover_frames, FrameSource};
 use firmware_core::centroid::CentroidConfig;
 use std::path::PathBuf;
 
@@ -44,15 +44,31 @@ pub struct FramesRequest {
     pub notes: Vec<String>,
 }
 
-/// Tracks the targets and runs the output-only analysis.
-pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
-    let found = discover_frames(&req.frames)?;
-    let source = found.source.clone().retimed(req.retime)?;
-    let tracks: Tracks = match &req.targets {
+/// What the output-only analysis of frames found, before anything is written.
+#[derive(Debug, Clone)]
+pub struct Computed {
+    /// Each target's centroid per frame.
+    pub tracks: Tracks,
+    /// The displacement records analysed (the targets kept) and why others were left out.
+    pub records: Records,
+    /// The analysis settings, resolved against the record.
+    pub settings: OmaSettings,
+    /// Modes, shapes, singular values, poles.
+    pub result: OmaResult,
+    /// Per target: its displacement (`None` when it was left out).
+    pub displacement: Vec<Option<Vec<f64>>>,
+    /// Per target and frame: lost (no position; filled in its displacement).
+    pub lost: Vec<Vec<bool>>,
+}
+
+/// Follows the targets of `req` (several, chosen points, or the one of the whole frame or ROI)
+/// through `source`.
+pub fn track(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Tracks> {
+    Ok(match &req.targets {
         Some(t) => match &t.points {
             Some((points, rule)) => {
                 crate::analysis::points::track_points(
-                    &source,
+                    source,
                     req.fps,
                     points,
                     &req.centroid,
@@ -60,10 +76,10 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
                 )?
                 .0
             }
-            None => targets::track(&source, req.fps, &req.centroid, t.k, t.gate_px)?,
+            None => targets::track(source, req.fps, &req.centroid, t.k, t.gate_px)?,
         },
         None => {
-            let (c, depth) = centroid_source(&source, req.fps, &req.centroid)?;
+            let (c, depth) = centroid_source(source, req.fps, &req.centroid)?;
             let first = c
                 .iter()
                 .find_map(|c| c.position())
@@ -76,7 +92,13 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
                 depth,
             }
         }
-    };
+    })
+}
+
+/// Tracks the targets of `req` in `source` and analyses their displacements output-only;
+/// `req.out` and `req.force` play no part.
+pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Computed> {
+    let tracks = track(req, source)?;
     let mut records = Records {
         fs_hz: req.fps,
         unit: if req.scaled { "mm" } else { "px" }.to_string(),
@@ -129,11 +151,29 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     }
     let n = records.channels[0].len();
     let settings = settings(req, n)?;
-    let rows: Vec<export::Track<'_>> = tracks
+    let result = super::analyze(&records.channels, &settings)?;
+    Ok(Computed {
+        tracks,
+        records,
+        settings,
+        result,
+        displacement: mm,
+        lost,
+    })
+}
+
+/// Tracks the targets and runs the output-only analysis; writes its outputs.
+pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
+    let found = discover_frames(&req.frames)?;
+    let source = found.source.clone().retimed(req.retime)?;
+    let c = compute(req, &source)?;
+    let n = c.records.channels[0].len();
+    let rows: Vec<export::Track<'_>> = c
+        .tracks
         .centroids
         .iter()
-        .zip(&mm)
-        .zip(&lost)
+        .zip(&c.displacement)
+        .zip(&c.lost)
         .map(|((c, m), l)| export::Track {
             centroids: c,
             mm: m.as_deref().filter(|_| req.scaled),
@@ -150,9 +190,10 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     for note in &req.notes {
         preamble.push_str(&format!("note: {note}\n"));
     }
-    super::run::run(
-        &records,
-        &settings,
+    super::run::write(
+        &c.records,
+        &c.settings,
+        &c.result,
         &Output {
             out: &req.out,
             force: req.force,

@@ -38,15 +38,26 @@ pub struct Output<'a> {
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
 pub fn run(records: &Records, settings: &OmaSettings, o: &Output<'_>) -> anyhow::Result<Outcome> {
     let r = analyze(&records.channels, settings)?;
+    write(records, settings, &r, o)
+}
+
+/// Writes the outputs of an analysis `r` of `records` (what [`run`] computed); the report is
+/// returned.
+pub fn write(
+    records: &Records,
+    settings: &OmaSettings,
+    r: &OmaResult,
+    o: &Output<'_>,
+) -> anyhow::Result<Outcome> {
     let inputs: Vec<&Path> = o.inputs.iter().map(PathBuf::as_path).collect();
     let out = Staged::new(o.out, o.force, o.command, &inputs)?;
-    out.write("modes.csv", modes_csv(&r))?;
-    out.write("shapes.csv", shapes_csv(&r, records))?;
-    out.write("svd.csv", svd_csv(&r))?;
+    out.write("modes.csv", modes_csv(r))?;
+    out.write("shapes.csv", shapes_csv(r, records))?;
+    out.write("svd.csv", svd_csv(r))?;
     for (name, bytes) in &o.extra {
         out.write(name, bytes)?;
     }
-    out.write("shapes.uff", shapes_uff(&r, records, o.along_x)?)?;
+    out.write("shapes.uff", shapes_uff(r, records, o.along_x)?)?;
     if o.plots {
         let picks: Vec<(f64, f64, String)> = r
             .modes
@@ -83,7 +94,7 @@ pub fn run(records: &Records, settings: &OmaSettings, o: &Output<'_>) -> anyhow:
             settings.fs_hz / 2.0,
         )?;
     }
-    let report = report(&r, records, settings, &o.preamble);
+    let report = report(r, records, settings, &o.preamble);
     out.write("report.txt", &report)?;
     out.commit()?;
     Ok(Outcome {
