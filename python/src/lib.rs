@@ -1,0 +1,959 @@
+//! `vibcam._vibcam`: the native half of the `vibcam` Python package (docs/python.md). Each
+//! function is a library call of host-harness or firmware-core with numpy arrays in and out;
+//! the Python half (`python/vibcam/__init__.py`) gives them their documented signatures and
+//! result types. Every function releases the GIL while it works; errors are Python exceptions
+//! carrying the command line's messages: [`InputError`] (a `ValueError`) for the user's input,
+//! [`VibcamError`] (a `RuntimeError`) for anything else.
+
+use firmware_core::centroid::{Centroid, Flags};
+use host_harness::analysis::oma::frames::{self as oma_frames, FramesRequest};
+use host_harness::analysis::points::Point;
+use host_harness::analysis::run::TargetsRequest;
+use host_harness::analysis::{Axis, DisplacementSettings, WelchSettings};
+use host_harness::cli::args::{CentroidArgs, ModeArg, ThresholdArg};
+use host_harness::frames::files::{luma, LumaLevel};
+use host_harness::frames::{discover_frames, FrameSource, GreyFrame};
+use host_harness::lost_frames::LostFramePolicy;
+use numpy::ndarray::{Array2, Array3, ArrayViewD, Axis as NdAxis};
+use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::{Arc, Mutex};
+
+create_exception!(
+    _vibcam,
+    InputError,
+    PyValueError,
+    "The input was refused (a file, an array, an argument): the message names what and why, \
+     as the command line's does."
+);
+create_exception!(
+    _vibcam,
+    VibcamError,
+    PyRuntimeError,
+    "A failure that is not the input's fault (an output that cannot be written, a decoder \
+     that failed)."
+);
+
+/// An error of the library as the Python exception the command line's exit code stands for.
+fn py_err(e: anyhow::Error) -> PyErr {
+    let msg = format!("{e:#}");
+    if e.chain().any(|c| c.is::<host_harness::BadInput>()) {
+        InputError::new_err(msg)
+    } else {
+        VibcamError::new_err(msg)
+    }
+}
+
+/// An [`InputError`] with `msg`.
+fn bad(msg: impl Into<String>) -> PyErr {
+    InputError::new_err(msg.into())
+}
+
+/// The frames of a numpy array: `(H, W)` one frame, `(N, H, W)` grey frames, `(N, H, W, 3|4)`
+/// colour frames (their BT.601 luma, alpha ignored, as the files' reader does); `uint8` or
+/// `uint16`.
+fn frames_of_array(obj: &Bound<'_, PyAny>) -> PyResult<Vec<GreyFrame>> {
+    if let Ok(a) = obj.downcast::<PyArrayDyn<u8>>() {
+        let ro = a.readonly();
+        return grey_frames(ro.as_array(), |width, height, data| GreyFrame::U8 {
+            width,
+            height,
+            data,
+        });
+    }
+    if let Ok(a) = obj.downcast::<PyArrayDyn<u16>>() {
+        let ro = a.readonly();
+        return grey_frames(ro.as_array(), |width, height, data| GreyFrame::U16 {
+            width,
+            height,
+            data,
+        });
+    }
+    let dtype = obj
+        .getattr("dtype")
+        .map(|d| d.to_string())
+        .unwrap_or_else(|_| obj.get_type().to_string());
+    Err(bad(format!(
+        "frames: an array of uint8 or uint16 pixels is needed, got {dtype} (scale and convert \
+         it: a float image's levels are not a camera's)"
+    )))
+}
+
+/// Splits `a` into frames (see [`frames_of_array`]).
+fn grey_frames<T: Copy + Into<f64> + LumaLevel>(
+    a: ArrayViewD<'_, T>,
+    make: impl Fn(usize, usize, Vec<T>) -> GreyFrame,
+) -> PyResult<Vec<GreyFrame>> {
+    let shape = a.shape().to_vec();
+    let (n, h, w, channels) = match shape.as_slice() {
+        [h, w] => (1, *h, *w, 1),
+        [n, h, w] => (*n, *h, *w, 1),
+        [n, h, w, c] if *c == 3 || *c == 4 => (*n, *h, *w, *c),
+        _ => {
+            return Err(bad(format!(
+                "frames: an array of shape (H, W), (N, H, W) or (N, H, W, 3|4) is needed, got \
+                 {shape:?}"
+            )))
+        }
+    };
+    if n == 0 || h == 0 || w == 0 {
+        return Err(bad(format!(
+            "frames: the array of shape {shape:?} is empty"
+        )));
+    }
+    let standard = a.as_standard_layout();
+    let flat = standard
+        .as_slice()
+        .ok_or_else(|| VibcamError::new_err("internal: a standard-layout array has no slice"))?;
+    let per_frame = h * w * channels;
+    Ok(flat
+        .chunks_exact(per_frame)
+        .map(|f| {
+            let data = if channels == 1 {
+                f.to_vec()
+            } else {
+                luma(f, channels)
+            };
+            make(w, h, data)
+        })
+        .collect())
+}
+
+/// Where frames come from: a path as `--frames` takes it, or an array.
+#[derive(Debug)]
+enum Frames {
+    /// `--frames`.
+    Path(String),
+    /// In memory.
+    Array(Arc<[GreyFrame]>),
+}
+
+/// `frames` as given to a function: a `str` (the Python half turns path-like objects into
+/// one) or an array.
+fn frames_arg(obj: &Bound<'_, PyAny>) -> PyResult<Frames> {
+    if let Ok(s) = obj.extract::<String>() {
+        return Ok(Frames::Path(s));
+    }
+    Ok(Frames::Array(frames_of_array(obj)?.into()))
+}
+
+impl Frames {
+    /// The source and its frame rate: `fps`, else the rate a camera file states; with `needed`
+    /// a rate is required (an error as the command line's when none is known), else a source
+    /// that states none is read without one (only a video needs it, to check its timestamps).
+    fn resolve(
+        self,
+        fps: Option<f64>,
+        retime: bool,
+        needed: bool,
+    ) -> anyhow::Result<(FrameSource, f64, Vec<String>)> {
+        match self {
+            Frames::Array(a) => {
+                if retime {
+                    return Err(host_harness::bad_input(
+                        "retime applies to a video file, not to frames in an array",
+                    ));
+                }
+                match fps {
+                    Some(f) if f.is_finite() && f > 0.0 => Ok((FrameSource::Memory(a), f, vec![])),
+                    Some(f) => Err(host_harness::bad_input(format!(
+                        "fps must be a positive rate, got {f}"
+                    ))),
+                    None if needed => Err(host_harness::bad_input(
+                        "fps is needed: frames in an array state no rate",
+                    )),
+                    None => Ok((FrameSource::Memory(a), 1.0, vec![])),
+                }
+            }
+            Frames::Path(p) => {
+                let source = discover_frames(&p)?.source.retimed(retime)?;
+                let unknown = fps.is_none() && source.recorded_rate()?.is_none();
+                if unknown && !needed && !matches!(source, FrameSource::Video { .. }) {
+                    return Ok((source, 1.0, vec![]));
+                }
+                let (fps, _, notes) =
+                    host_harness::analysis::run::resolve_rates(&p, fps, None, retime)?;
+                Ok((source, fps, notes))
+            }
+        }
+    }
+}
+
+/// The centroid's settings as the command line's `--threshold`, `--tracker`, `--roi`.
+fn centroid_args(
+    threshold: Option<u16>,
+    auto: bool,
+    tracker: &str,
+    roi: Option<(u32, u32, u32, u32)>,
+) -> PyResult<CentroidArgs> {
+    use clap::ValueEnum as _;
+    let mode = ModeArg::from_str(tracker, true).map_err(|_| {
+        bad(format!(
+            "tracker `{tracker}`: one of binary (alias blob), weighted, lk"
+        ))
+    })?;
+    let roi = match roi {
+        Some((x, y, width, height)) => Some(
+            host_harness::cli::args::parse_roi(&format!("{x},{y},{width},{height}"))
+                .map_err(|e| bad(format!("roi: {e}")))?,
+        ),
+        None => None,
+    };
+    Ok(CentroidArgs {
+        threshold: match (auto, threshold) {
+            (true, _) => Some(ThresholdArg::Auto),
+            (false, Some(t)) => Some(ThresholdArg::Level(t)),
+            (false, None) => None,
+        },
+        mode,
+        roi,
+    })
+}
+
+/// A point given as `(x, y, w, h, threshold, group)` (the Python half fills the optional ones
+/// with `None`).
+type PointTuple = (f64, f64, u32, u32, Option<u16>, Option<u32>);
+
+/// Points given in Python, checked as a points file's rows are (target `k` is the `k`-th).
+fn points_of(list: Vec<PointTuple>) -> PyResult<Vec<Point>> {
+    if list.is_empty() {
+        return Err(bad("points: no points given"));
+    }
+    list.into_iter()
+        .enumerate()
+        .map(|(i, (x, y, w, h, threshold, group))| {
+            if !(x.is_finite() && y.is_finite()) {
+                return Err(bad(format!(
+                    "points[{i}]: the centre ({x}, {y}) is not finite"
+                )));
+            }
+            if w < 3 || h < 3 {
+                return Err(bad(format!(
+                    "points[{i}]: the window {w} x {h} px is smaller than 3 x 3"
+                )));
+            }
+            Ok(Point {
+                target: i + 1,
+                xy: (x, y),
+                size: (w, h),
+                threshold,
+                group,
+            })
+        })
+        .collect()
+}
+
+/// The targets asked for: chosen points (a list, or a points file), the `K` blobs of the first
+/// frame, or neither (the one target of the whole frame or ROI).
+fn targets_request(
+    points: Option<Vec<PointTuple>>,
+    points_file: Option<String>,
+    targets: Option<usize>,
+    gate_px: f64,
+    search_px: Option<u16>,
+    args: &CentroidArgs,
+) -> PyResult<Option<TargetsRequest>> {
+    let points = match (points, points_file) {
+        (Some(p), None) => Some(points_of(p)?),
+        (None, Some(f)) => Some(
+            host_harness::analysis::points::read_points(std::path::Path::new(&f))
+                .map_err(py_err)?,
+        ),
+        (None, None) => None,
+        (Some(_), Some(_)) => return Err(bad("give points or a points file, not both")),
+    };
+    if points.is_some() && targets.is_some() {
+        return Err(bad(
+            "give points (chosen windows) or targets=K (the K blobs of the first frame), not both",
+        ));
+    }
+    if points.is_some() && args.roi.is_some() {
+        return Err(bad(
+            "roi with points: each point's window is its region; leave roi out",
+        ));
+    }
+    if !(gate_px.is_finite() && gate_px > 0.0) {
+        return Err(bad(format!(
+            "gate_px {gate_px}: must be a positive number of pixels"
+        )));
+    }
+    if let Some(k) = targets {
+        if !(1..=32).contains(&k) {
+            return Err(bad(format!("targets={k}: 1 to 32 targets")));
+        }
+    }
+    let Some(k) = targets.or(points.as_ref().map(Vec::len)) else {
+        if search_px.is_some() {
+            return Err(bad("search_px: for tracker lk with points"));
+        }
+        return Ok(None);
+    };
+    let points = match points {
+        Some(p) => Some((p, args.point_tracker(search_px).map_err(py_err)?)),
+        None if search_px.is_some() => {
+            return Err(bad("search_px: for tracker lk with points"));
+        }
+        None => None,
+    };
+    Ok(Some(TargetsRequest {
+        k,
+        gate_px,
+        accel_target: k,
+        shape_reference: None,
+        points,
+    }))
+}
+
+/// The Welch settings as the command line's flags name them.
+fn welch_settings(
+    window: &str,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    nfft: Option<usize>,
+    detrend: &str,
+) -> PyResult<WelchSettings> {
+    use firmware_core::spectrum::{Detrend, Window};
+    Ok(WelchSettings {
+        window: match window.to_ascii_lowercase().as_str() {
+            "hann" => Window::Hann,
+            "hamming" => Window::Hamming,
+            "rect" | "boxcar" => Window::Rect,
+            w => {
+                return Err(bad(format!(
+                    "window `{w}`: one of hann, hamming, rect (boxcar)"
+                )))
+            }
+        },
+        nperseg,
+        noverlap,
+        nfft,
+        detrend: match detrend.to_ascii_lowercase().as_str() {
+            "constant" => Detrend::Constant,
+            "none" | "false" => Detrend::None,
+            d => return Err(bad(format!("detrend `{d}`: one of constant, none"))),
+        },
+    })
+}
+
+/// The names of the flags set in `f`.
+fn flag_names(f: Flags) -> Vec<&'static str> {
+    Flags::NAMES
+        .iter()
+        .filter(|(g, _)| f.contains(*g))
+        .map(|(_, n)| *n)
+        .collect()
+}
+
+/// `centroid(frame, threshold, mode, roi)`: one frame's centroid by firmware-core; returns
+/// `(x, y, pixels, flags)`, `x` and `y` NaN when no pixel passed the threshold.
+#[pyfunction]
+#[pyo3(signature = (frame, threshold, mode="binary", roi=None))]
+fn centroid(
+    py: Python<'_>,
+    frame: &Bound<'_, PyAny>,
+    threshold: u16,
+    mode: &str,
+    roi: Option<(u32, u32, u32, u32)>,
+) -> PyResult<(f64, f64, u64, Vec<&'static str>)> {
+    let frames = frames_of_array(frame)?;
+    let [frame] = frames.as_slice() else {
+        return Err(bad(format!(
+            "frame: one frame (H, W) or (H, W, 3|4) is needed, got {} frames",
+            frames.len()
+        )));
+    };
+    let args = centroid_args(Some(threshold), false, mode, roi)?;
+    if args.mode == ModeArg::Lk {
+        return Err(bad(
+            "mode lk: Lucas-Kanade follows a window through frames (track with points)",
+        ));
+    }
+    let config = args.config(None).map_err(py_err)?;
+    let c: Centroid = py
+        .allow_threads(|| frame.centroid(&config, "frame"))
+        .map_err(py_err)?;
+    let (x, y) = c
+        .position()
+        .map_or((f64::NAN, f64::NAN), |(x, y)| (f64::from(x), f64::from(y)));
+    Ok((x, y, c.moments.pixels, flag_names(c.flags)))
+}
+
+/// How the targets are found and followed, as `track` and `analyze` take it (the Python half
+/// builds this dict; every key present).
+#[derive(Debug, FromPyObject)]
+#[pyo3(from_item_all)]
+struct Tracking {
+    /// Frame rate, Hz (else the file's).
+    fps: Option<f64>,
+    /// A video's container rate retimed to `fps`.
+    retime: bool,
+    /// Chosen windows.
+    points: Option<Vec<PointTuple>>,
+    /// A points CSV file.
+    points_file: Option<String>,
+    /// The K blobs of the first frame.
+    targets: Option<usize>,
+    /// With `targets`: the gate, px.
+    gate_px: f64,
+    /// A grey level.
+    threshold: Option<u16>,
+    /// Otsu's threshold per window.
+    auto_threshold: bool,
+    /// binary, weighted or lk.
+    tracker: String,
+    /// With lk: the coarse search range, px.
+    search_px: Option<u16>,
+    /// `(x, y, w, h)`.
+    roi: Option<(u32, u32, u32, u32)>,
+}
+
+impl Tracking {
+    /// The targets asked for and the centroid's settings (checked when the work starts, as the
+    /// command line checks them after the frames).
+    fn targets(
+        self,
+    ) -> PyResult<(
+        Option<TargetsRequest>,
+        anyhow::Result<firmware_core::centroid::CentroidConfig>,
+    )> {
+        let args = centroid_args(self.threshold, self.auto_threshold, &self.tracker, self.roi)?;
+        let req = targets_request(
+            self.points,
+            self.points_file,
+            self.targets,
+            self.gate_px,
+            self.search_px,
+            &args,
+        )?;
+        let config = args.config_with(None, req.as_ref().is_some_and(|t| t.points.is_some()));
+        Ok((req, config))
+    }
+}
+
+/// `track(frames, tracking)`: every target's position per frame, `(N, K, 2)` pixels (NaN where
+/// lost), and the firmware's flags `(N, K)`; also the frame rate used.
+#[pyfunction]
+fn track<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    tracking: Tracking,
+) -> PyResult<Bound<'py, PyDict>> {
+    let frames = frames_arg(frames)?;
+    let (fps, retime) = (tracking.fps, tracking.retime);
+    let (req, config) = tracking.targets()?;
+    let (positions, flags, fps) = py
+        .allow_threads(|| -> anyhow::Result<_> {
+            let config = config?;
+            let (source, fps, _) = frames.resolve(fps, retime, false)?;
+            let r = frames_request(fps, config, req, DisplacementSettings::default_px());
+            let tracks = oma_frames::track(&r, &source)?;
+            let n = tracks.centroids.first().map_or(0, Vec::len);
+            let k = tracks.centroids.len();
+            let mut pos = Array3::<f64>::from_elem((n, k, 2), f64::NAN);
+            let mut flags = Array2::<u8>::zeros((n, k));
+            for (t, cs) in tracks.centroids.iter().enumerate() {
+                for (i, c) in cs.iter().enumerate() {
+                    if let Some((x, y)) = c.position() {
+                        pos[[i, t, 0]] = f64::from(x);
+                        pos[[i, t, 1]] = f64::from(y);
+                    }
+                    flags[[i, t]] = c.flags.bits();
+                }
+            }
+            Ok((pos, flags, fps))
+        })
+        .map_err(py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("positions", positions.into_pyarray(py))?;
+    d.set_item("flags", flags.into_pyarray(py))?;
+    d.set_item("fps", fps)?;
+    Ok(d)
+}
+
+/// Extends the displacement settings with the pixel default the Python functions start from.
+trait PxDefault {
+    /// Pixels, the image's `y` axis positive up, lost frames interpolated.
+    fn default_px() -> Self;
+}
+
+impl PxDefault for DisplacementSettings {
+    fn default_px() -> Self {
+        DisplacementSettings {
+            lost_frames: LostFramePolicy::Interpolate,
+            mm_per_px: 1.0,
+            axis: Axis::Y,
+            invert: false,
+        }
+    }
+}
+
+/// A [`FramesRequest`] for frames read from a source already resolved (no output directory).
+fn frames_request(
+    fps: f64,
+    centroid: firmware_core::centroid::CentroidConfig,
+    targets: Option<TargetsRequest>,
+    displacement: DisplacementSettings,
+) -> FramesRequest {
+    FramesRequest {
+        frames: String::new(),
+        retime: false,
+        fps,
+        centroid,
+        displacement,
+        scaled: false,
+        targets,
+        points_file: None,
+        welch: WelchSettings::default(),
+        bands: Vec::new(),
+        out: std::path::PathBuf::new(),
+        force: false,
+        notes: Vec::new(),
+    }
+}
+
+/// `frf(x, y, fs, ...)`: H1 and coherence by firmware-core's Welch estimator; returns
+/// `(freq_hz, h1, coherence, segments)`.
+#[pyfunction]
+#[pyo3(signature = (x, y, fs, window="hann", nperseg=None, noverlap=None, nfft=None,
+    detrend="constant"))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn frf<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+    window: &str,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    nfft: Option<usize>,
+    detrend: &str,
+) -> PyResult<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<Complex64>>,
+    Bound<'py, PyArray1<f64>>,
+    u32,
+)> {
+    use host_harness::analysis::Defaults;
+    let welch = welch_settings(window, nperseg, noverlap, nfft, detrend)?;
+    let (x, y) = (x.as_array().to_vec(), y.as_array().to_vec());
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(bad(format!("fs must be a positive rate, got {fs}")));
+    }
+    if x.len() != y.len() {
+        return Err(bad(format!(
+            "x has {} samples and y {}: the two channels must have one length",
+            x.len(),
+            y.len()
+        )));
+    }
+    for (name, v) in [("x", &x), ("y", &y)] {
+        if let Some((i, v)) = v.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(bad(format!("{name}[{i}] is {v}, not a finite number")));
+        }
+    }
+    let frf = py
+        .allow_threads(|| -> anyhow::Result<_> {
+            host_harness::analysis::check_channel(&x, "x")?;
+            host_harness::analysis::check_channel(&y, "y")?;
+            let config = welch.resolve(x.len(), fs, Defaults::Scipy)?;
+            host_harness::chain::frf::estimate(&x, &y, config)
+        })
+        .map_err(py_err)?;
+    Ok((
+        frf.freq_hz.into_pyarray(py),
+        frf.h1.into_pyarray(py),
+        frf.coherence.into_pyarray(py),
+        frf.segments,
+    ))
+}
+
+/// `upsample(x, from_hz, to_hz)`: firmware-core's Fourier upsampler (`len(x) * to / from`
+/// samples, periodic record).
+#[pyfunction]
+fn upsample<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    from_hz: f64,
+    to_hz: f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    for (name, hz) in [("from_hz", from_hz), ("to_hz", to_hz)] {
+        if !(hz.is_finite() && hz > 0.0) {
+            return Err(bad(format!(
+                "{name}: must be a positive sample rate in Hz, got {hz}"
+            )));
+        }
+    }
+    let x = x.as_array().to_vec();
+    if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(bad(format!("x[{i}] is {v}, not a finite number")));
+    }
+    let up = py
+        .allow_threads(|| host_harness::chain::resample::upsample_column(&x, from_hz, to_hz))
+        .map_err(py_err)?;
+    let v: Vec<f64> = up.values.iter().map(|v| f64::from(*v) * up.scale).collect();
+    Ok(v.into_pyarray(py))
+}
+
+/// `analyze(...)`: the frames' targets tracked and analysed output-only (FDD, EFDD, SSI-cov)
+/// as `analyze` without `--accel`; returns a dict of arrays (the Python half's
+/// `AnalysisResult`).
+#[pyfunction]
+#[pyo3(signature = (frames, tracking, mm_per_px=None, axis="y", invert=false,
+    lost_frames="interpolate", window="hann", nperseg=None, noverlap=None, nfft=None,
+    detrend="constant", bands=None))]
+#[allow(clippy::too_many_arguments)]
+fn analyze<'py>(
+    py: Python<'py>,
+    frames: &Bound<'py, PyAny>,
+    tracking: Tracking,
+    mm_per_px: Option<f64>,
+    axis: &str,
+    invert: bool,
+    lost_frames: &str,
+    window: &str,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    nfft: Option<usize>,
+    detrend: &str,
+    bands: Option<Vec<(f64, f64)>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let frames = frames_arg(frames)?;
+    let (fps, retime) = (tracking.fps, tracking.retime);
+    let (targets, config) = tracking.targets()?;
+    let displacement = DisplacementSettings {
+        lost_frames: match lost_frames {
+            "interpolate" => LostFramePolicy::Interpolate,
+            "hold" => LostFramePolicy::Hold,
+            p => return Err(bad(format!("lost_frames `{p}`: interpolate or hold"))),
+        },
+        mm_per_px: match mm_per_px {
+            Some(s) if !(s.is_finite() && s > 0.0) => {
+                return Err(bad(format!("mm_per_px must be positive, got {s}")))
+            }
+            Some(s) => s,
+            None => 1.0,
+        },
+        axis: match axis {
+            "x" => Axis::X,
+            "y" => Axis::Y,
+            a => return Err(bad(format!("axis `{a}`: x or y"))),
+        },
+        invert,
+    };
+    let welch = welch_settings(window, nperseg, noverlap, nfft, detrend)?;
+    let bands = bands.unwrap_or_default();
+    if let Some((lo, hi)) = bands
+        .iter()
+        .find(|(lo, hi)| !(lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo < hi))
+    {
+        return Err(bad(format!("band ({lo}, {hi}): need 0 <= lo < hi")));
+    }
+    let computed = py
+        .allow_threads(|| -> anyhow::Result<_> {
+            let config = config?;
+            let (source, fps, notes) = frames.resolve(fps, retime, true)?;
+            if let Some((lo, hi)) = bands.iter().find(|b| b.1 > fps / 2.0) {
+                return Err(host_harness::bad_input(format!(
+                    "band {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz)",
+                    fps / 2.0
+                )));
+            }
+            let mut req = frames_request(fps, config, targets, displacement);
+            req.scaled = mm_per_px.is_some();
+            req.welch = welch;
+            req.bands = bands;
+            req.notes = notes;
+            let c = oma_frames::compute(&req, &source)?;
+            let report =
+                host_harness::analysis::oma::run::report(&c.result, &c.records, &c.settings, "");
+            Ok((c, report, fps))
+        })
+        .map_err(py_err)?;
+    analysis_dict(py, computed)
+}
+
+/// The dict `analyze` returns.
+fn analysis_dict<'py>(
+    py: Python<'py>,
+    (c, report, fps): (oma_frames::Computed, String, f64),
+) -> PyResult<Bound<'py, PyDict>> {
+    let r = &c.result;
+    let d = PyDict::new(py);
+    let modes = PyDict::new(py);
+    let col = |f: &dyn Fn(&host_harness::analysis::oma::OmaMode) -> f64| -> Vec<f64> {
+        r.modes.iter().map(f).collect()
+    };
+    modes.set_item(
+        "method",
+        r.modes.iter().map(|m| m.method.name()).collect::<Vec<_>>(),
+    )?;
+    modes.set_item(
+        "mode",
+        r.modes
+            .iter()
+            .map(|m| m.mode as i64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let nan = f64::NAN;
+    for (name, v) in [
+        ("band_lo_hz", col(&|m| m.band_hz.map_or(nan, |b| b.0))),
+        ("band_hi_hz", col(&|m| m.band_hz.map_or(nan, |b| b.1))),
+        ("f_hz", col(&|m| m.f_hz)),
+        ("amplitude", col(&|m| m.amplitude.unwrap_or(nan))),
+        ("damping", col(&|m| m.damping.unwrap_or(nan))),
+    ] {
+        modes.set_item(name, v.into_pyarray(py))?;
+    }
+    d.set_item("modes", modes)?;
+    let k = c.records.targets.len();
+    let mut shapes = Array2::<Complex64>::zeros((r.modes.len(), k));
+    for (i, m) in r.modes.iter().enumerate() {
+        for (j, s) in m.shape.iter().enumerate().take(k) {
+            shapes[[i, j]] = *s;
+        }
+    }
+    d.set_item("shapes", shapes.into_pyarray(py))?;
+    d.set_item(
+        "targets",
+        c.records
+            .targets
+            .iter()
+            .map(|(t, _)| *t as i64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let mut xy = Array2::<f64>::from_elem((k, 2), nan);
+    for (j, (_, p)) in c.records.targets.iter().enumerate() {
+        if let Some((x, y)) = p {
+            xy[[j, 0]] = *x;
+            xy[[j, 1]] = *y;
+        }
+    }
+    d.set_item("first_xy", xy.into_pyarray(py))?;
+    let lines = r.svd.freq_hz.len();
+    let kk = r.svd.s.first().map_or(0, Vec::len);
+    let mut s = Array2::<f64>::zeros((lines, kk));
+    for (i, row) in r.svd.s.iter().enumerate() {
+        for (j, v) in row.iter().enumerate().take(kk) {
+            s[[i, j]] = *v;
+        }
+    }
+    d.set_item("svd_freq_hz", r.svd.freq_hz.clone().into_pyarray(py))?;
+    d.set_item("svd", s.into_pyarray(py))?;
+    let n = c.lost.first().map_or(0, Vec::len);
+    let all = c.displacement.len();
+    let mut disp = Array2::<f64>::from_elem((n, all), nan);
+    let mut lost = Array2::<bool>::from_elem((n, all), false);
+    for (t, (dv, l)) in c.displacement.iter().zip(&c.lost).enumerate() {
+        if let Some(dv) = dv {
+            disp.index_axis_mut(NdAxis(1), t)
+                .iter_mut()
+                .zip(dv)
+                .for_each(|(o, v)| *o = *v);
+        }
+        lost.index_axis_mut(NdAxis(1), t)
+            .iter_mut()
+            .zip(l)
+            .for_each(|(o, v)| *o = *v);
+    }
+    d.set_item("displacement", disp.into_pyarray(py))?;
+    d.set_item("lost", lost.into_pyarray(py))?;
+    d.set_item("unit", c.records.unit.clone())?;
+    d.set_item("left_out", c.records.left_out.clone())?;
+    d.set_item("notes", r.notes.clone())?;
+    d.set_item("report", report)?;
+    d.set_item("fps", fps)?;
+    Ok(d)
+}
+
+/// `study(...)`: a Monte Carlo study run (or resumed) in `out`; returns the printed table and
+/// `summary.csv`'s text.
+#[pyfunction]
+#[pyo3(signature = (out, config=None, preset=None, runs=None, exposures_ms=None, seed=None,
+    threads=0, progress=true, plots=false))]
+#[allow(clippy::too_many_arguments)]
+fn study(
+    py: Python<'_>,
+    out: String,
+    config: Option<String>,
+    preset: Option<String>,
+    runs: Option<u64>,
+    exposures_ms: Option<Vec<f64>>,
+    seed: Option<u64>,
+    threads: usize,
+    progress: bool,
+    plots: bool,
+) -> PyResult<(String, String)> {
+    use host_harness::study::{self as st, Execution, Preset, Shard, StudyConfig};
+    if config.is_some() && preset.is_some() {
+        return Err(bad("give a config file or a preset, not both"));
+    }
+    let preset = match preset.as_deref() {
+        None | Some("grandstand") => Preset::Grandstand,
+        Some("cantilever") => Preset::Cantilever,
+        Some(p) => return Err(bad(format!("preset `{p}`: grandstand or cantilever"))),
+    };
+    py.allow_threads(|| -> anyhow::Result<(String, String)> {
+        let mut cfg = match &config {
+            Some(p) => StudyConfig::from_toml_file(std::path::Path::new(p))?,
+            None => StudyConfig::preset(preset),
+        };
+        if let Some(r) = runs {
+            cfg.runs = r;
+        }
+        if let Some(e) = exposures_ms {
+            cfg.exposures_ms = e;
+        }
+        if let Some(s) = seed {
+            cfg.seed = s;
+        }
+        cfg.validate()?;
+        let scenario = st::scenario_for(&cfg)?;
+        let out = std::path::PathBuf::from(out);
+        let exec = Execution {
+            out: out.clone(),
+            resume: true,
+            threads,
+            shard: Shard::ALL,
+            progress,
+        };
+        let done = st::execute(&cfg, scenario.as_ref(), &exec)?;
+        let table = st::finish(&cfg, scenario.as_ref(), &done.records, &out, plots)?;
+        let summary = std::fs::read_to_string(out.join(st::files::SUMMARY))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(st::files::SUMMARY).display()))?;
+        Ok((table, summary))
+    })
+    .map_err(py_err)
+}
+
+/// What the decoder thread of a [`FrameReader`] sends: a labelled frame, or its error (whether
+/// it is the input's fault, and the message).
+type Decoded = Receiver<Result<(String, GreyFrame), (bool, String)>>;
+
+/// Frames of a recording one at a time (`open_frames`): decoded on a thread of their own, two
+/// frames ahead, handed over as numpy arrays without a copy.
+#[pyclass(module = "vibcam._vibcam")]
+#[derive(Debug)]
+struct FrameReader {
+    /// The decoder's frames, or its error (`None` once done or closed).
+    rx: Mutex<Option<Decoded>>,
+    /// The frame rate (`fps`, or the file's), Hz; `None` when neither states one.
+    #[pyo3(get)]
+    fps: Option<f64>,
+    /// Frames in the recording when known before decoding.
+    #[pyo3(get)]
+    count: Option<usize>,
+    /// The label of the frame last returned (file, page or frame number).
+    #[pyo3(get)]
+    label: Option<String>,
+}
+
+#[pymethods]
+impl FrameReader {
+    #[new]
+    #[pyo3(signature = (path, fps=None, retime=false))]
+    fn new(py: Python<'_>, path: String, fps: Option<f64>, retime: bool) -> PyResult<Self> {
+        let (source, rate, count) = py
+            .allow_threads(|| -> anyhow::Result<_> {
+                let (source, rate, _) = Frames::Path(path).resolve(fps, retime, false)?;
+                let stated = fps.is_some() || source.recorded_rate()?.is_some();
+                let count = source.count(rate)?;
+                Ok((source, stated.then_some(rate), count))
+            })
+            .map_err(py_err)?;
+        let (tx, rx) = sync_channel(2);
+        std::thread::spawn(move || {
+            let r = source.for_each(rate.unwrap_or(1.0), |label, frame| {
+                tx.send(Ok((label, frame.clone())))
+                    .map_err(|_| anyhow::anyhow!("the reader was closed"))
+            });
+            if let Err(e) = r {
+                let bad = e.chain().any(|c| c.is::<host_harness::BadInput>());
+                let _ = tx.send(Err((bad, format!("{e:#}"))));
+            }
+        });
+        Ok(FrameReader {
+            rx: Mutex::new(Some(rx)),
+            fps: rate,
+            count,
+            label: None,
+        })
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&mut self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let taken = self.rx.lock().ok().and_then(|mut r| r.take());
+        let Some(rx) = taken else {
+            return Ok(None);
+        };
+        let (rx, got) = py.allow_threads(move || {
+            let got = rx.recv();
+            (rx, got)
+        });
+        let (label, frame) = match got {
+            Err(_) => return Ok(None),
+            Ok(Err((bad_input, msg))) => {
+                return Err(if bad_input {
+                    InputError::new_err(msg)
+                } else {
+                    VibcamError::new_err(msg)
+                });
+            }
+            Ok(Ok(f)) => f,
+        };
+        if let Ok(mut r) = self.rx.lock() {
+            *r = Some(rx);
+        }
+        self.label = Some(label);
+        let a = match frame {
+            GreyFrame::U8 {
+                width,
+                height,
+                data,
+            } => data.into_pyarray(py).reshape([height, width])?.into_any(),
+            GreyFrame::U16 {
+                width,
+                height,
+                data,
+            } => data.into_pyarray(py).reshape([height, width])?.into_any(),
+        };
+        Ok(Some(a))
+    }
+
+    /// Stops decoding (the decoder thread ends at its next frame).
+    fn close(&mut self) {
+        if let Ok(mut r) = self.rx.lock() {
+            *r = None;
+        }
+    }
+}
+
+/// Flag bits and names, as the `flags` column of the command line's outputs names them.
+fn flag_table() -> Vec<(u8, &'static str)> {
+    Flags::NAMES.iter().map(|(f, n)| (f.bits(), *n)).collect()
+}
+
+/// The native module.
+#[pymodule]
+fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("InputError", m.py().get_type::<InputError>())?;
+    m.add("VibcamError", m.py().get_type::<VibcamError>())?;
+    m.add("FLAGS", flag_table())?;
+    m.add("MODEL_REVISION", host_harness::study::MODEL_REVISION)?;
+    m.add_function(wrap_pyfunction!(centroid, m)?)?;
+    m.add_function(wrap_pyfunction!(track, m)?)?;
+    m.add_function(wrap_pyfunction!(frf, m)?)?;
+    m.add_function(wrap_pyfunction!(upsample, m)?)?;
+    m.add_function(wrap_pyfunction!(analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(study, m)?)?;
+    m.add_class::<FrameReader>()?;
+    Ok(())
+}

@@ -1,0 +1,99 @@
+"""open_frames and the array inputs: frames read as an independent decoder (PIL) reads them,
+arrays taken as the files are, bad arrays refused, and the GIL released while working."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import vibcam
+
+
+def test_open_frames_reads_what_pil_reads(recording):
+    reader = vibcam.open_frames(recording / "frames")
+    assert reader.count == 1200 and reader.fps is None
+    for i, frame in enumerate(reader):
+        if i in (0, 1, 599, 1199):
+            want = np.asarray(Image.open(recording / "frames" / f"frame_{i:05d}.png"))
+            np.testing.assert_array_equal(frame, want)
+            assert reader.label.endswith(f"frame_{i:05d}.png")
+    assert i == 1199
+
+
+def test_open_frames_of_a_multipage_tiff_and_16_bit(tmp_path):
+    rng = np.random.default_rng(5)
+    pages = [rng.integers(0, 65535, (12, 17), dtype=np.uint16) for _ in range(3)]
+    path = tmp_path / "stack.tif"
+    Image.fromarray(pages[0]).save(path, save_all=True,
+                                   append_images=[Image.fromarray(p) for p in pages[1:]])
+    got = list(vibcam.open_frames(path))
+    assert len(got) == 3
+    for g, p in zip(got, pages):
+        assert g.dtype == np.uint16
+        np.testing.assert_array_equal(g, p)
+
+
+def test_colour_frames_are_their_luma(tmp_path):
+    rng = np.random.default_rng(8)
+    rgb = rng.integers(0, 256, (2, 9, 13, 3), dtype=np.uint8)
+    for k, f in enumerate(rgb):
+        Image.fromarray(f).save(tmp_path / f"c_{k}.png")
+    from_files = np.stack(list(vibcam.open_frames(tmp_path)))
+    want = np.rint(rgb @ np.array([0.299, 0.587, 0.114])).astype(np.uint8)
+    np.testing.assert_array_equal(from_files, want)
+    # an array of colour frames is taken the same way
+    c1 = vibcam.centroid(rgb[0], 100, "weighted")
+    c2 = vibcam.centroid(want[0], 100, "weighted")
+    assert (c1.x, c1.y, c1.pixels) == (c2.x, c2.y, c2.pixels)
+
+
+def test_centroid_of_an_array_is_the_closed_form():
+    f = np.zeros((20, 30), np.uint8)
+    f[5:9, 10:14] = 200
+    f[7, 20] = 255
+    c = vibcam.centroid(f, 100)
+    w = (f > 100).astype(float)
+    ys, xs = np.indices(f.shape)
+    # the firmware divides exact integer moments in f32
+    assert c.x == np.float32((w * xs).sum() / w.sum())
+    assert c.y == np.float32((w * ys).sum() / w.sum())
+    assert c.pixels == 17 and "saturated" in c.flags
+    c = vibcam.centroid(f, 100, "weighted", roi=(8, 3, 8, 8))
+    w = np.where(f > 100, f.astype(float) - 100, 0)[3:11, 8:16]
+    ys, xs = np.indices(w.shape)
+    assert abs(c.x - ((w * xs).sum() / w.sum() + 8)) < 1e-5
+    assert abs(c.y - ((w * ys).sum() / w.sum() + 3)) < 1e-5
+    empty = vibcam.centroid(np.zeros((4, 4), np.uint8), 10)
+    assert not empty.found and "empty" in empty.flags
+
+
+def test_bad_arrays_are_refused():
+    with pytest.raises(vibcam.InputError, match="uint8 or uint16"):
+        vibcam.centroid(np.zeros((4, 4)), 1)
+    with pytest.raises(vibcam.InputError, match="shape"):
+        vibcam.track(np.zeros((2, 3, 4, 5, 6), np.uint8), targets=1, threshold=1)
+    with pytest.raises(vibcam.InputError, match="fps is needed"):
+        vibcam.analyze(np.zeros((100, 8, 8), np.uint8), targets=1, threshold=1)
+    with pytest.raises(vibcam.InputError, match="lk"):
+        vibcam.track(np.zeros((3, 8, 8), np.uint8), targets=1, tracker="lk")
+
+
+def test_the_gil_is_released_while_analysing(recording):
+    frames = np.stack(list(vibcam.open_frames(recording / "frames")))
+    t0 = time.perf_counter()
+    vibcam.analyze(frames, fps=120, threshold=127, targets=5)
+    alone = time.perf_counter() - t0
+    worker = threading.Thread(
+        target=vibcam.analyze, args=(frames,),
+        kwargs=dict(fps=120, threshold=127, targets=5),
+    )
+    gaps, last = [], time.perf_counter()
+    worker.start()
+    while worker.is_alive():
+        now = time.perf_counter()
+        gaps.append(now - last)
+        last = now
+    # holding the GIL, the call would stop this loop for its whole duration
+    assert max(gaps) < 0.5 * alone, (max(gaps), alone)

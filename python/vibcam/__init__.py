@@ -1,0 +1,514 @@
+"""vibcam: vision-based vibration and modal measurement, from numpy.
+
+The library behind the ``host-harness`` command line, as Python functions: the same code
+(firmware-core's centroid, Lucas-Kanade tracker, Welch H1 and Fourier upsampler; host-harness's
+frame readers, multi-target tracking, output-only modal analysis and Monte Carlo studies), numpy
+arrays in and out. See docs/python.md.
+
+Errors are exceptions carrying the command line's messages: :class:`InputError` (a
+``ValueError``) when the input is refused, :class:`VibcamError` (a ``RuntimeError``) otherwise.
+Every function releases the GIL while it works.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import tempfile
+from dataclasses import dataclass, field
+from typing import Any, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _vibcam
+from ._vibcam import InputError, VibcamError, FrameReader
+
+__all__ = [
+    "InputError",
+    "VibcamError",
+    "FrameReader",
+    "Centroid",
+    "Tracks",
+    "AnalysisResult",
+    "StudyResult",
+    "FLAGS",
+    "MODEL_REVISION",
+    "centroid",
+    "track",
+    "frf",
+    "upsample",
+    "analyze",
+    "study",
+    "open_frames",
+]
+
+#: ``(bit, name)`` of the firmware's result flags (``Tracks.flags``, ``Centroid.flags``).
+FLAGS = tuple(_vibcam.FLAGS)
+#: The revision of the simulation models (a study's numbers belong to it).
+MODEL_REVISION = _vibcam.MODEL_REVISION
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _frames(frames: Any) -> Any:
+    """A path as a ``str`` (what the native module takes); arrays pass through."""
+    if isinstance(frames, (str, os.PathLike)):
+        return os.fspath(frames)
+    if isinstance(frames, np.ndarray):
+        return frames
+    if isinstance(frames, (list, tuple)):
+        return np.stack([np.asarray(f) for f in frames])
+    return np.asarray(frames)
+
+
+def _threshold(threshold: Union[int, str, None]) -> tuple:
+    if threshold is None:
+        return None, False
+    if isinstance(threshold, str):
+        if threshold.strip().lower() == "auto":
+            return None, True
+        raise InputError(f"threshold `{threshold}`: a grey level 0-65535, or 'auto' (with points)")
+    t = int(threshold)
+    if t != threshold or not 0 <= t <= 65535:
+        raise InputError(f"threshold {threshold}: a grey level 0-65535")
+    return t, False
+
+
+def _points(points: Any) -> tuple:
+    """``(points, points_file)`` for the native module."""
+    if points is None:
+        return None, None
+    if isinstance(points, (str, os.PathLike)):
+        return None, os.fspath(points)
+    out = []
+    for i, p in enumerate(points):
+        if isinstance(p, dict):
+            get = p.get
+            row = (get("x"), get("y"), get("w"), get("h"), get("threshold"), get("group"))
+        else:
+            p = tuple(p)
+            if not 4 <= len(p) <= 6:
+                raise InputError(
+                    f"points[{i}]: (x, y, w, h[, threshold[, group]]) expected, got {len(p)} values"
+                )
+            row = p + (None,) * (6 - len(p))
+        if any(v is None for v in row[:4]):
+            raise InputError(f"points[{i}]: x, y, w and h are needed")
+        x, y, w, h, thr, group = row
+        if int(w) != w or int(h) != h:
+            raise InputError(f"points[{i}]: the window {w} x {h} must be whole pixels")
+        out.append(
+            (
+                float(x),
+                float(y),
+                int(w),
+                int(h),
+                None if thr is None else int(thr),
+                None if group is None else int(group),
+            )
+        )
+    return out, None
+
+
+def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi) -> dict:
+    """The targets and how to follow them, as the native ``track`` and ``analyze`` take them."""
+    t, auto = _threshold(threshold)
+    pts, pfile = _points(points)
+    return {
+        "fps": None if fps is None else float(fps),
+        "retime": bool(retime),
+        "points": pts,
+        "points_file": pfile,
+        "targets": targets,
+        "gate_px": float(gate_px),
+        "threshold": t,
+        "auto_threshold": auto,
+        "tracker": tracker,
+        "search_px": search_px,
+        "roi": None if roi is None else tuple(roi),
+    }
+
+
+@dataclass(frozen=True)
+class Centroid:
+    """One frame's centroid: position (px; NaN when no pixel passed the threshold), the pixels
+    above it, and the firmware's flags by name (``EMPTY``, ``SATURATED``, ``BORDER``, ...)."""
+
+    x: float
+    y: float
+    pixels: int
+    flags: tuple
+
+    @property
+    def found(self) -> bool:
+        """Whether there is a position."""
+        return not (np.isnan(self.x) or np.isnan(self.y))
+
+
+def centroid(
+    frame: np.ndarray,
+    threshold: int,
+    mode: str = "binary",
+    roi: Optional[Sequence[int]] = None,
+) -> Centroid:
+    """The centroid of one frame by firmware-core (as ``host-harness centroid``).
+
+    ``frame``: ``uint8``/``uint16`` array ``(H, W)`` (or ``(H, W, 3|4)`` colour: its BT.601
+    luma); ``threshold``: grey level (pixels above it count); ``mode``: ``"binary"`` (alias
+    ``"blob"``: every pixel above weighs 1) or ``"weighted"`` (weights ``pixel - threshold``);
+    ``roi``: ``(x, y, w, h)``.
+    """
+    a = np.asarray(frame)
+    if a.ndim == 3 and a.shape[-1] in (3, 4):
+        a = a[np.newaxis]  # one colour frame
+    x, y, pixels, flags = _vibcam.centroid(a, int(threshold), mode, None if roi is None else tuple(roi))
+    return Centroid(x, y, pixels, tuple(flags))
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """Each target's position per frame.
+
+    ``positions``: ``(N, K, 2)`` pixels ``(x, y)``, NaN where the target was lost;
+    ``flags``: ``(N, K)`` bits of :data:`FLAGS` (why a frame was lost, or a warning);
+    ``fps``: the frame rate used (1.0 when none was known nor needed).
+    """
+
+    positions: np.ndarray
+    flags: np.ndarray
+    fps: float
+
+    @property
+    def lost(self) -> np.ndarray:
+        """``(N, K)``: frames without a position."""
+        return np.isnan(self.positions[..., 0])
+
+
+def track(
+    frames: Any,
+    points: Any = None,
+    *,
+    targets: Optional[int] = None,
+    tracker: str = "binary",
+    threshold: Union[int, str, None] = None,
+    fps: Optional[float] = None,
+    retime: bool = False,
+    search_px: Optional[int] = None,
+    gate_px: float = 10.0,
+    roi: Optional[Sequence[int]] = None,
+    return_flags: bool = False,
+) -> Union[np.ndarray, Tracks]:
+    """Each target's position in every frame, ``(N, K, 2)`` pixels (NaN where lost), as
+    ``host-harness track`` follows them.
+
+    ``frames``: a path as ``--frames`` takes it (directory, pattern, multi-page TIFF, Photron
+    ``.cih``/``.cihx``, Phantom ``.cine``, video) or an ``uint8``/``uint16`` array ``(N, H, W)``
+    (``(N, H, W, 3|4)``: colour). Targets: ``points`` (a list of ``(x, y, w, h[, threshold[,
+    group]])`` windows, or a points CSV file ``target,x,y,w,h[,threshold][,group]``), or
+    ``targets=K`` (the K blobs of the first frame, numbered left to right), or neither (the one
+    target of the frame or ``roi``). ``tracker``: ``"binary"``/``"blob"``, ``"weighted"``, or
+    ``"lk"`` (Lucas-Kanade; with points, no threshold). ``threshold``: a grey level, or
+    ``"auto"`` with points (Otsu's of each window). ``search_px``: with ``lk``, the largest
+    motion between frames to catch. With ``return_flags``: a :class:`Tracks`.
+    """
+    d = _vibcam.track(
+        _frames(frames),
+        _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
+    )
+    if return_flags:
+        return Tracks(d["positions"], d["flags"], d["fps"])
+    return d["positions"]
+
+
+def frf(
+    x: Any,
+    y: Any,
+    fs: float,
+    window: str = "hann",
+    nperseg: Optional[int] = None,
+    noverlap: Optional[int] = None,
+    nfft: Optional[int] = None,
+    detrend: Union[str, bool] = "constant",
+) -> tuple:
+    """H1 = Pxy / Pxx and coherence by firmware-core's streaming Welch estimator (f32 inside,
+    as on the MCU), with scipy.signal.csd's conventions and defaults (``nperseg`` 256 or the
+    record, ``noverlap`` half of it, ``nfft`` = ``nperseg``); only whole segments are used.
+
+    Returns ``(freq_hz, h1, coherence)``: ``freq_hz`` the bins ``0 .. nfft/2`` at
+    ``k fs / nfft``, ``h1`` complex (y units per x unit; 0 where x has no energy), coherence in
+    ``[0, 1]``.
+    """
+    if detrend is False:
+        detrend = "none"
+    f, h, c, _segments = _vibcam.frf(
+        np.ascontiguousarray(x, dtype=np.float64),
+        np.ascontiguousarray(y, dtype=np.float64),
+        float(fs),
+        window=window,
+        nperseg=nperseg,
+        noverlap=noverlap,
+        nfft=nfft,
+        detrend=str(detrend),
+    )
+    return f, h, c
+
+
+def upsample(x: Any, from_hz: float, to_hz: float) -> np.ndarray:
+    """``x`` sampled at ``from_hz`` Fourier-upsampled to ``to_hz`` by firmware-core (``len(x) *
+    to_hz / from_hz`` samples, which must be whole; the record is taken as periodic, as
+    ``scipy.signal.resample``)."""
+    return _vibcam.upsample(np.ascontiguousarray(x, dtype=np.float64), float(from_hz), float(to_hz))
+
+
+_MODES_COLUMNS = (
+    "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method".split(",")
+)
+_SHAPES_COLUMNS = "mode,target,x_px,y_px,re,im,abs,method".split(",")
+
+
+@dataclass
+class AnalysisResult:
+    """What an output-only analysis found (``host-harness analyze`` without ``--accel``).
+
+    ``modes``: dict of arrays, one entry per mode and method (``method``: ``fdd``, ``efdd``,
+    ``ssi``; ``mode``, ``band_lo_hz``, ``band_hi_hz``, ``f_hz``, ``amplitude``, ``damping``,
+    NaN where a method gives none); ``shapes``: complex ``(modes, K)``, the row of each mode,
+    normalised (largest component 1); ``targets``: the target numbers of the columns (targets
+    left out are named in ``left_out``); ``first_xy``: each target's position in the first
+    frame; ``svd_freq_hz``, ``svd``: the singular values of the cross-spectral matrix per line;
+    ``displacement``: ``(N, all targets)`` in ``unit`` (mm with ``mm_per_px``, else px; lost
+    frames filled, NaN for a target left out); ``lost``: which frames were filled; ``report``:
+    the text of ``report.txt``.
+    """
+
+    modes: dict
+    shapes: np.ndarray
+    targets: np.ndarray
+    first_xy: np.ndarray
+    svd_freq_hz: np.ndarray
+    svd: np.ndarray
+    displacement: np.ndarray
+    lost: np.ndarray
+    unit: str
+    fps: float
+    report: str
+    left_out: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    def modes_rows(self) -> list:
+        """The rows of ``modes.csv`` (dicts; ``None`` for an empty cell)."""
+        rows = []
+        m = self.modes
+        for i in range(len(m["method"])):
+            def opt(v: float) -> Optional[float]:
+                return None if np.isnan(v) else float(v)
+
+            rows.append(
+                {
+                    "system": "vision",
+                    "target": None,
+                    "mode": int(m["mode"][i]),
+                    "band_lo_hz": opt(m["band_lo_hz"][i]),
+                    "band_hi_hz": opt(m["band_hi_hz"][i]),
+                    "f_hz": float(m["f_hz"][i]),
+                    "amplitude": opt(m["amplitude"][i]),
+                    "damping": opt(m["damping"][i]),
+                    "e2pr": None,
+                    "method": m["method"][i],
+                }
+            )
+        return rows
+
+    def shapes_rows(self) -> list:
+        """The rows of ``shapes.csv`` (dicts)."""
+        rows = []
+        for i, method in enumerate(self.modes["method"]):
+            for j, t in enumerate(self.targets):
+                c = self.shapes[i, j]
+                x, y = self.first_xy[j]
+                rows.append(
+                    {
+                        "mode": int(self.modes["mode"][i]),
+                        "target": int(t),
+                        "x_px": None if np.isnan(x) else float(x),
+                        "y_px": None if np.isnan(y) else float(y),
+                        "re": float(c.real),
+                        "im": float(c.imag),
+                        "abs": float(abs(c)),
+                        "method": method,
+                    }
+                )
+        return rows
+
+    def to_pandas(self) -> tuple:
+        """``(modes, shapes)`` as pandas DataFrames with the columns of ``modes.csv`` and
+        ``shapes.csv`` (pandas must be installed)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_pandas needs pandas: pip install pandas") from e
+        return (
+            pd.DataFrame(self.modes_rows(), columns=_MODES_COLUMNS),
+            pd.DataFrame(self.shapes_rows(), columns=_SHAPES_COLUMNS),
+        )
+
+    def shape(self, mode: int, method: str = "ssi") -> np.ndarray:
+        """The complex shape of mode ``mode`` (1-based) by ``method``."""
+        for i, (m, n) in enumerate(zip(self.modes["method"], self.modes["mode"])):
+            if m == method and n == mode:
+                return self.shapes[i]
+        raise KeyError(f"no mode {mode} by {method}")
+
+
+def analyze(
+    frames: Any,
+    points: Any = None,
+    *,
+    targets: Optional[int] = None,
+    fps: Optional[float] = None,
+    tracker: str = "binary",
+    threshold: Union[int, str, None] = None,
+    retime: bool = False,
+    search_px: Optional[int] = None,
+    gate_px: float = 10.0,
+    roi: Optional[Sequence[int]] = None,
+    mm_per_px: Optional[float] = None,
+    axis: str = "y",
+    invert: bool = False,
+    lost_frames: str = "interpolate",
+    window: str = "hann",
+    nperseg: Optional[int] = None,
+    noverlap: Optional[int] = None,
+    nfft: Optional[int] = None,
+    detrend: str = "constant",
+    bands: Optional[Sequence[Sequence[float]]] = None,
+) -> AnalysisResult:
+    """Output-only modal analysis of the targets in ``frames`` (FDD, EFDD and SSI-cov on their
+    displacements), exactly as ``host-harness analyze`` without ``--accel`` (the same numbers as
+    its ``modes.csv`` and ``shapes.csv``).
+
+    Frames and targets as :func:`track`; ``fps`` is needed unless a camera file states it.
+    ``mm_per_px`` scales the displacement (else pixels); ``axis`` ``"y"`` (positive up) or
+    ``"x"``; ``invert`` flips the sign; ``lost_frames`` ``"interpolate"`` or ``"hold"``; the
+    Welch settings of the cross-spectral matrix as :func:`frf` (default: the command line's);
+    ``bands``: ``[(lo, hi), ...]`` Hz, one mode per band (default: peaks picked).
+    """
+    d = _vibcam.analyze(
+        _frames(frames),
+        _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
+        mm_per_px=mm_per_px,
+        axis=axis,
+        invert=invert,
+        lost_frames=lost_frames,
+        window=window,
+        nperseg=nperseg,
+        noverlap=noverlap,
+        nfft=nfft,
+        detrend=detrend,
+        bands=None if bands is None else [(float(lo), float(hi)) for lo, hi in bands],
+    )
+    return AnalysisResult(
+        modes=d["modes"],
+        shapes=d["shapes"],
+        targets=d["targets"],
+        first_xy=d["first_xy"],
+        svd_freq_hz=d["svd_freq_hz"],
+        svd=d["svd"],
+        displacement=d["displacement"],
+        lost=d["lost"],
+        unit=d["unit"],
+        fps=d["fps"],
+        report=d["report"],
+        left_out=list(d["left_out"]),
+        notes=list(d["notes"]),
+    )
+
+
+@dataclass
+class StudyResult:
+    """A Monte Carlo study's summary: ``table`` (what ``host-harness study`` prints),
+    ``summary`` (the columns of ``summary.csv`` as arrays: numbers as float arrays, NaN for an
+    empty cell; text columns as lists), ``summary_csv`` (its text) and ``out`` (the directory
+    holding every output, or ``None`` when it was a temporary one)."""
+
+    table: str
+    summary: dict
+    summary_csv: str
+    out: Optional[str]
+
+    def to_pandas(self) -> Any:
+        """``summary.csv`` as a pandas DataFrame."""
+        import pandas as pd
+
+        return pd.read_csv(io.StringIO(self.summary_csv))
+
+
+def _columns(text: str) -> dict:
+    rows = list(csv.reader(io.StringIO(text)))
+    header, body = rows[0], rows[1:]
+    out = {}
+    for j, name in enumerate(header):
+        cells = [r[j] if j < len(r) else "" for r in body]
+        try:
+            out[name] = np.array([float(c) if c != "" else np.nan for c in cells])
+        except ValueError:
+            out[name] = cells
+    return out
+
+
+def study(
+    config: Optional[PathLike] = None,
+    preset: Optional[str] = None,
+    *,
+    runs: Optional[int] = None,
+    exposures_ms: Optional[Sequence[float]] = None,
+    seed: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    threads: int = 0,
+    progress: bool = True,
+    plots: bool = False,
+) -> StudyResult:
+    """Runs a Monte Carlo study (as ``host-harness study``) and returns its summary.
+
+    ``config``: a study TOML file, or ``preset``: ``"grandstand"`` (default) or
+    ``"cantilever"``; ``runs``, ``exposures_ms``, ``seed`` override it. ``out``: the directory
+    of its outputs (resumed when it holds the same study's checkpoint); default: a temporary
+    directory, removed afterwards. ``progress``: a progress bar on a terminal's stderr.
+    """
+    def run(directory: str) -> tuple:
+        return _vibcam.study(
+            directory,
+            config=None if config is None else os.fspath(config),
+            preset=preset,
+            runs=runs,
+            exposures_ms=None if exposures_ms is None else [float(e) for e in exposures_ms],
+            seed=seed,
+            threads=threads,
+            progress=progress,
+            plots=plots,
+        )
+
+    if out is None:
+        with tempfile.TemporaryDirectory(prefix="vibcam-study-") as tmp:
+            where = os.path.join(tmp, "study")
+            table, summary = run(where)
+        # the directory is gone: the line naming the files written in it goes with it
+        table = "".join(ln for ln in table.splitlines(True) if not ln.rstrip().endswith(where))
+        return StudyResult(table, _columns(summary), summary, None)
+    table, summary = run(os.fspath(out))
+    return StudyResult(table, _columns(summary), summary, os.fspath(out))
+
+
+def open_frames(path: PathLike, fps: Optional[float] = None, retime: bool = False) -> FrameReader:
+    """The frames of a recording one at a time, as ``uint8``/``uint16`` arrays ``(H, W)``:
+    every format the command line reads (image directories and patterns, multi-page TIFF,
+    Photron ``.cih``/``.cihx`` + ``.mraw``, Phantom ``.cine``, videos through ffmpeg; colour
+    as BT.601 luma). ``fps`` is needed for a video (its timestamps are checked against it).
+    The reader's ``fps`` and ``count`` are known before decoding; its ``label`` names the file
+    or frame last returned.
+
+    >>> for frame in vibcam.open_frames("rec/frames"):  # doctest: +SKIP
+    ...     print(frame.shape, frame.dtype)
+    """
+    return FrameReader(os.fspath(path), fps=fps, retime=retime)
