@@ -63,24 +63,49 @@ static void put_int(long v) {
     put(&b[i]);
 }
 
-/* v with 4 decimals */
+/* v with 6 decimals, rounded half away from zero: the Rust demo's `Fx` format, so that lines
+ * the two demos share compare as text */
 static void put_fixed(float v) {
-    long scaled = (long)(v * 10000.0f + (v < 0 ? -0.5f : 0.5f));
-    if (scaled < 0) {
-        put("-");
-        scaled = -scaled;
+    if (v != v) {
+        put("NaN");
+        return;
     }
-    put_int(scaled / 10000);
+    double a = v < 0 ? -(double)v : (double)v;
+    if (a >= 1.8e13) {
+        put("out-of-range");
+        return;
+    }
+    uint64_t scaled = (uint64_t)(a * 1e6 + 0.5);
+    if (v < 0) put("-");
+    put_int((long)(scaled / 1000000u));
     put(".");
-    char d[5];
-    long f = scaled % 10000;
-    for (int i = 3; i >= 0; i--) {
+    char d[7];
+    uint32_t f = (uint32_t)(scaled % 1000000u);
+    for (int i = 5; i >= 0; i--) {
         d[i] = (char)('0' + f % 10);
         f /= 10;
     }
-    d[4] = 0;
+    d[6] = 0;
     put(d);
 }
+
+#ifndef VC_NO_PIPELINE
+/* the bits of v, 8 hex digits (the lines compared with the Rust demo's to the last bit) */
+static void put_bits(float v) {
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    char d[9];
+    b.f = v;
+    for (int i = 7; i >= 0; i--) {
+        d[i] = "0123456789abcdef"[b.u & 0xF];
+        b.u >>= 4;
+    }
+    d[8] = 0;
+    put(d);
+}
+#endif
 
 static int failures;
 static void check(int ok, const char *what) {
@@ -208,6 +233,41 @@ int main(void) {
     put("tracker: 16 frames, ");
     put_int(windowed);
     put(" in a window\n");
+
+    /* the Rust demo's frame (mcu-demo/src/main.rs): 320 x 240, a disk of radius 20 px centred
+     * at (171.5, 97) at level 200 on 10, threshold 100; its rows made one at a time and
+     * streamed into a tracker, whose first frame is searched whole. The lines printed are the
+     * Rust demo's, character for character (mcu-demo/c/same_figures.sh compares them). */
+    {
+        static uint8_t row[320];
+        static const char *names[2] = {"Binary", "Weighted"};
+        for (int mode = 0; mode < 2; mode++) {
+            vc_centroid_config_t dc = {100, mode == 0 ? VC_MODE_BINARY : VC_MODE_WEIGHTED, 0, 0,
+                                       {0, 0, 0, 0}};
+            vc_track_config_t dt = {dc, 320, 240, 8};
+            uint64_t naive = 0;
+            check(vc_tracker_init(&tracker, &dt) == VC_OK, "disk tracker init");
+            for (int y = 0; y < 240; y++) {
+                for (int x = 0; x < 320; x++) {
+                    int dx = 2 * x - 343, dy = 2 * y - 194;
+                    row[x] = dx * dx + dy * dy <= 4 * 20 * 20 ? 200 : 10;
+                    if (row[x] > 100) naive += mode == 0 ? 1u : (uint64_t)(row[x] - 100);
+                }
+                vc_tracker_push_row_u8(&tracker, row, 320);
+            }
+            check(vc_tracker_finish_frame(&tracker, &c) == VC_OK, "disk frame");
+            check(c.cx == 171.5f && c.cy == 97.0f && c.flags == 0, "disk centre");
+            put("centroid u8  ");
+            put(names[mode]);
+            put(": (");
+            put_fixed(c.cx);
+            put(", ");
+            put_fixed(c.cy);
+            put(") (naive weight ");
+            put_int((long)naive);
+            put(")\n");
+        }
+    }
 
     /* several targets: two squares, their centroids exact */
     {
@@ -340,8 +400,9 @@ int main(void) {
     check(vc_pipeline_h1(&pipe, 7, &re, &im, &bins, &df) == VC_OK, "h1");
     check(bins == 1025 && df == 1.0f, "bins");
     check(fabsf_(re) < 0.02f && fabsf_(im - 1.0f) < 0.02f, "H1 at 7 Hz");
-    check(vc_pipeline_peak(&pipe, 6.0f, 8.0f, &pk) == VC_OK, "peak");
+    check(vc_pipeline_peak(&pipe, 6.5f, 7.5f, &pk) == VC_OK, "peak");
     check(fabsf_(pk.amplitude - 1.0f) < 0.02f, "peak amplitude");
+    /* the line the Rust demo prints for the same scenario (check_pipeline_as_c) */
     put("pipeline: H1(7 Hz) = ");
     put_fixed(re);
     put(" + ");
@@ -352,6 +413,12 @@ int main(void) {
     put_fixed(pk.f_hz);
     put(" Hz, |H1| ");
     put_fixed(pk.amplitude);
+    put("\npipeline: H1(7 Hz) bits ");
+    put_bits(re);
+    put(" ");
+    put_bits(im);
+    put(", |H1| bits ");
+    put_bits(pk.amplitude);
     put("\n");
 #else
     put("pipeline: not built (VC_NO_PIPELINE: its 57 600 bytes do not fit this RAM)\n");

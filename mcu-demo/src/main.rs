@@ -532,6 +532,100 @@ fn check_pipeline(rep: &mut Report, p: &mut Pipeline) {
     }
 }
 
+/// `cos` and `sin` of a growing angle by a rotation recurrence in `f64`, started by the
+/// series of a small step: mcu-demo/c/main.c's `rotor`, expression for expression, so that both
+/// demos make the same test signal to the last bit (IEEE arithmetic, no fused operations).
+struct Rotor {
+    c: f64,
+    s: f64,
+    dc: f64,
+    ds: f64,
+}
+
+impl Rotor {
+    fn new(step: f64) -> Rotor {
+        let x2 = step * step;
+        let dc =
+            1.0 - x2 / 2.0 + x2 * x2 / 24.0 - x2 * x2 * x2 / 720.0 + x2 * x2 * x2 * x2 / 40320.0;
+        let ds = step
+            * (1.0 - x2 / 6.0 + x2 * x2 / 120.0 - x2 * x2 * x2 / 5040.0
+                + x2 * x2 * x2 * x2 / 362880.0);
+        Rotor {
+            c: 1.0,
+            s: 0.0,
+            dc,
+            ds,
+        }
+    }
+
+    fn step(&mut self) {
+        let c = self.c * self.dc - self.s * self.ds;
+        self.s = self.s * self.dc + self.c * self.ds;
+        self.c = c;
+    }
+}
+
+/// The C demo's pipeline scenario (mcu-demo/c/main.c), made and pushed alike: a 7 Hz motion,
+/// ADC acceleration `5 sin(wt)` m/s^2 and camera displacement `-5 cos(wt) / w^2` in mm, whose
+/// acceleration it is: H1 = 1 at 7 Hz. Six seconds, each second's ADC samples up to a frame's
+/// end pushed before the frame. Both demos print the same line (mcu-demo/c/same_figures.sh
+/// compares them): firmware-core from Rust and through the C ABI, bit for bit.
+#[inline(never)]
+fn check_pipeline_as_c(rep: &mut Report, p: &mut Pipeline) {
+    p.reset();
+    let w = 2.0 * core::f64::consts::PI * 7.0;
+    let (mut adc_r, mut cam_r) = (Rotor::new(w / 2048.0), Rotor::new(w / 120.0));
+    let mut adc = [0.0f32; NSEG];
+    let mut cam = [0.0f32; CAM_N];
+    let (mut ok, mut sent) = (true, 0usize);
+    for second in 0..6usize {
+        for v in adc.iter_mut() {
+            *v = (5.0 * adc_r.s) as f32;
+            adc_r.step();
+        }
+        for v in cam.iter_mut() {
+            *v = (-5.0 * cam_r.c / (w * w) * 1e3) as f32;
+            cam_r.step();
+        }
+        let mut done = 0;
+        for (k, v) in cam.iter().enumerate() {
+            let upto = ((120 * second + k + 1) * 2048).div_ceil(120) - 2048 * second;
+            ok &= p.push_adc(adc.get(done..upto).unwrap_or(&[])).is_ok();
+            ok &= p.push_frame(*v).is_ok();
+            done = upto;
+        }
+        sent += done;
+    }
+    let wl = p.welch();
+    let h = wl.h1(7).unwrap_or_default();
+    let pk = peaks::pick_with(wl.bins(), wl.df_hz(), (6.5, 7.5), false, |k| wl.h1(k));
+    match pk {
+        Some(pk) => hprintln!(
+            "pipeline: H1(7 Hz) = {} + {}i after {} segments; peak {} Hz, |H1| {}",
+            Fx(h.re),
+            Fx(h.im),
+            wl.segments(),
+            Fx(pk.f_hz),
+            Fx(pk.amplitude)
+        ),
+        None => hprintln!("pipeline: no peak in 6.5-7.5 Hz"),
+    }
+    // the same values as bits: the comparison with the C demo is exact, not to six decimals
+    hprintln!(
+        "pipeline: H1(7 Hz) bits {:08x} {:08x}, |H1| bits {:08x}",
+        h.re.to_bits(),
+        h.im.to_bits(),
+        pk.map_or(0, |pk| pk.amplitude.to_bits())
+    );
+    rep.check(
+        "pipeline, the C demo's 7 Hz motion: H1 = i within 0.02, its peak |H1| = 1 within 0.02",
+        ok && sent == 6 * NSEG
+            && libm::fabsf(h.re) < 0.02
+            && libm::fabsf(h.im - 1.0) < 0.02
+            && pk.is_some_and(|pk| libm::fabsf(pk.amplitude - 1.0) < 0.02),
+    );
+}
+
 fn check_sync(rep: &mut Report) {
     let ok = SyncPlan::try_new(SyncConfig::new(2048, 120, 1_000_000).with_exposure_ticks(61))
         .is_ok_and(|p| (p.tick_hz(), p.adc_div(), p.camera_div()) == (30_720, 15, 256));
@@ -1184,6 +1278,7 @@ fn main() -> ! {
     check_h1(&mut rep);
     check_upsampling(&mut rep);
     check_pipeline(&mut rep, p);
+    check_pipeline_as_c(&mut rep, p);
     check_sync(&mut rep);
     check_tracking(&mut rep);
     check_lk(&mut rep);
