@@ -250,3 +250,38 @@ fn the_cli_writes_no_file_itself() {
         bad.join("\n")
     );
 }
+
+/// The Python extension is built (by `pip install ./python`) with the features the workspace's
+/// tests resolve for every package they share, so that CI's wheel reuses the host-harness the
+/// test step compiled. A dev-dependency that turns on a new feature of a shared crate (serde,
+/// syn, either, ...) would make the wheel build host-harness and its dependencies once more,
+/// minutes on two cores: python/Cargo.toml then names that feature too.
+#[test]
+fn the_python_wheel_reuses_the_workspace_build() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let tree = |args: &[&str]| -> std::collections::BTreeSet<String> {
+        let out = std::process::Command::new(env!("CARGO"))
+            .current_dir(&root)
+            .args(["tree", "--locked", "--prefix", "none", "-f", "{p} [{f}]"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "cargo tree {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .map(|l| l.trim_end_matches(" (*)").to_string())
+            .collect()
+    };
+    let workspace = tree(&["--workspace"]);
+    let wheel = tree(&["-p", "vibcam-python", "-e", "normal,build"]);
+    assert!(wheel.len() > 50, "{} packages in the wheel", wheel.len());
+    let other: Vec<_> = wheel.difference(&workspace).collect();
+    assert!(
+        other.is_empty(),
+        "the wheel builds these with features the tests do not: {other:?}"
+    );
+}
