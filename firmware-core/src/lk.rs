@@ -153,15 +153,29 @@ impl Moments {
 }
 
 /// The frame window's moments with the template (spline path): with `g'` the window less
-/// the template's mean, `a[o] = sum g' c'_o` (see [`Moments`]), `sum g'` and `sum g'^2`.
-/// The cross moments of a vertical lag are formed when an iteration first needs them.
+/// the template's mean, `a[o] = sum g' c'_o` (see [`Moments`]), `sum g'` and the sum of the
+/// squares about its mean.
+/// A cross moment is formed when an iteration first needs it: the 4 x 4 lags of the shift's
+/// taps (3 x 3 at a whole-pixel shift, where the fourth tap's weights are zero), and one more
+/// column or row of lags when the shift's sign changes.
 #[derive(Debug, Clone, Copy)]
 struct Cross {
     a: [f32; LAGS * LAGS],
-    /// Bit `oy` set: the cross moments of the vertical lag `oy` are formed.
+    /// Bit `oy * LAGS + ox` set: the cross moment of the lag `(ox, oy)` is formed.
     formed: u32,
+    /// `sum g'` and `sum (g' - mean g')^2` over the window.
     sum: f32,
-    sq: f32,
+    var: f32,
+    /// The window is stored as integers `G` with `g' = scale G + offset` (see
+    /// `LkTracker::smooth_window`): `a[o] = scale sum G c'_o + offset s[o]`.
+    scale: f32,
+    offset: f32,
+}
+
+/// The window's row stride in `LkTracker::g`: its width rounded up to four pixels (the pad is
+/// zero), so that the cross moments' kernel runs over whole groups of four.
+const fn window_stride(tw: usize) -> usize {
+    (tw + 3) & !3
 }
 
 impl Cross {
@@ -169,74 +183,212 @@ impl Cross {
         a: [0.0; LAGS * LAGS],
         formed: 0,
         sum: 0.0,
-        sq: 0.0,
+        var: 0.0,
+        scale: 1.0,
+        offset: 0.0,
     };
 
-    /// Forms the cross moments of the vertical lags `ly..ly + 4` not formed yet (all five
-    /// horizontal lags: the shift's sign may change between iterations), from the window `g`
-    /// and the padded coefficients `coef` of a `tw x th` template.
-    fn need(&mut self, ly: usize, g: &[f32], coef: &[f32], (tw, th): (usize, usize)) {
-        let pw = tw + 2 * SPLINE_MARGIN;
-        let first = SPLINE_MARGIN - LAGS / 2;
-        for oy in ly..(ly + 4).min(LAGS) {
-            if self.formed & (1 << oy) != 0 {
+    /// A window of `n` integers `G = v - mean` (`v` the smoothed pixels on the integer scale,
+    /// `scale` back to the template's) whose sum is `sum` and sum of squares `sq` (exact), and
+    /// `t_mean` the template's mean: no cross moment formed yet.
+    fn window(sum: i64, sq: i128, mean: i32, scale: f32, t_mean: f32, n: f32) -> Cross {
+        // sum (G - mean G)^2 in f64 (relative rounding 1e-16)
+        let (s1, s2) = (sum as f64, sq as f64);
+        let var = (s2 - s1 * s1 / f64::from(n)) * f64::from(scale) * f64::from(scale);
+        let offset = mean as f32 * scale - t_mean;
+        Cross {
+            sum: scale * s1 as f32 + n * offset,
+            var: var.max(0.0) as f32,
+            scale,
+            offset,
+            ..Cross::ZERO
+        }
+    }
+
+    /// Forms the cross moments of the lags `xs x ys` (indices `0..LAGS`, at most four each)
+    /// not formed yet, from the window `g` (rows [`window_stride`] apart) and the padded
+    /// coefficients `coef` of a `tw x th` template: per vertical lag, each run of missing
+    /// horizontal lags in one pass over the window.
+    fn need(
+        &mut self,
+        xs: core::ops::Range<usize>,
+        ys: core::ops::Range<usize>,
+        (g, coef, s): (&[f32], &[f32], &[f32; LAGS * LAGS]),
+        (tw, th): (usize, usize),
+    ) {
+        let all = ((1u32 << xs.len()) - 1) << xs.start;
+        let missing = |formed: u32, oy: usize| !(formed >> (oy * LAGS)) & all;
+        let mut oy = ys.start;
+        while oy < ys.end {
+            let m = missing(self.formed, oy);
+            let mut end = oy + 1;
+            while end < ys.end && missing(self.formed, end) == m {
+                end += 1;
+            }
+            let (data, size) = ((g, coef, s), (tw, th));
+            if m.count_ones() == 1 && end - oy > 1 {
+                // one horizontal lag missing from several vertical lags (the shift's sign
+                // changed along x): that column in one pass over the window
+                let at = (m.trailing_zeros() as usize, oy);
+                match end - oy {
+                    2 => self.column::<2>(at, data, size),
+                    3 => self.column::<3>(at, data, size),
+                    _ => self.column::<4>(at, data, size),
+                }
+                oy = end;
                 continue;
             }
-            let mut a = [0.0f32; LAGS];
-            for j in 0..th {
-                let start = (j + first + oy) * pw + first;
-                let (Some(c), Some(g)) = (
-                    coef.get(start..start + tw + LAGS - 1),
-                    g.get(j * tw..(j + 1) * tw),
-                ) else {
-                    break;
-                };
-                let r = lag_dots(g, c);
-                for (o, v) in a.iter_mut().zip(r) {
-                    *o += v;
+            for oy in oy..end {
+                // each run of missing horizontal lags of this vertical lag in one pass
+                let mut bits = m;
+                while bits != 0 {
+                    let lo = bits.trailing_zeros() as usize;
+                    let len = (!(bits >> lo)).trailing_zeros() as usize;
+                    let at = (lo, oy);
+                    match len {
+                        1 => self.row::<1>(at, data, size),
+                        2 => self.row::<2>(at, data, size),
+                        3 => self.row::<3>(at, data, size),
+                        _ => self.row::<4>(at, data, size),
+                    }
+                    bits &= !(((1u32 << len) - 1) << lo);
                 }
             }
-            for (o, v) in self.a.iter_mut().skip(oy * LAGS).zip(a) {
-                *o = v;
-            }
-            self.formed |= 1 << oy;
+            oy = end;
         }
+    }
+
+    /// Forms the cross moments of the horizontal lag `lx` at the `V` vertical lags from `ly`
+    /// (at most four) in one pass over the window: per window row, [`column_dots`] with the
+    /// coefficients' rows of the `V` vertical lags.
+    #[inline(never)]
+    fn column<const V: usize>(
+        &mut self,
+        (lx, ly): (usize, usize),
+        (g, coef, s): (&[f32], &[f32], &[f32; LAGS * LAGS]),
+        (tw, th): (usize, usize),
+    ) {
+        let pw = tw + 2 * SPLINE_MARGIN;
+        let first = SPLINE_MARGIN - LAGS / 2;
+        let gs = window_stride(tw);
+        let mut a = [0.0f32; V];
+        // the coefficients' rows from the lag, the V of window row j slid down one per row
+        let start = (first + ly) * pw + first + lx;
+        let mut rows = coef.get(start..).unwrap_or(&[]).chunks(pw);
+        let mut c: [&[f32]; V] = [&[]; V];
+        for cv in c.iter_mut().skip(1) {
+            *cv = rows.next().unwrap_or(&[]);
+        }
+        for row in g.chunks_exact(gs.max(4)).take(th) {
+            c.rotate_left(1);
+            if let Some(last) = c.last_mut() {
+                *last = rows.next().unwrap_or(&[]);
+            }
+            for (o, v) in a.iter_mut().zip(column_dots::<V>(row, &c)) {
+                *o += v;
+            }
+        }
+        let (scale, offset) = (self.scale, self.offset);
+        for (v, av) in a.iter().enumerate() {
+            let at = (ly + v) * LAGS + lx;
+            if let (Some(o), Some(s)) = (self.a.get_mut(at), s.get(at)) {
+                *o = scale * av + offset * s;
+            }
+            self.formed |= 1 << at;
+        }
+    }
+
+    /// Forms the cross moments of the `L` horizontal lags from `lx` at the vertical lag `oy`
+    /// in one pass over the window: per window row, [`lag_dots`] with the coefficients' row
+    /// from the lag (over the row's zero pad too: the padded template reaches that far).
+    #[inline(never)]
+    fn row<const L: usize>(
+        &mut self,
+        (lx, oy): (usize, usize),
+        (g, coef, s): (&[f32], &[f32], &[f32; LAGS * LAGS]),
+        (tw, th): (usize, usize),
+    ) {
+        let pw = tw + 2 * SPLINE_MARGIN;
+        let first = SPLINE_MARGIN - LAGS / 2;
+        let gs = window_stride(tw);
+        let start = (first + oy) * pw + first + lx;
+        let rows = coef.get(start..).unwrap_or(&[]).chunks(pw);
+        let mut a = [0.0f32; L];
+        for (g, c) in g.chunks_exact(gs.max(4)).take(th).zip(rows) {
+            let r = lag_dots::<L>(g, c);
+            for (o, v) in a.iter_mut().zip(r) {
+                *o += v;
+            }
+        }
+        let at = oy * LAGS + lx;
+        let (scale, offset) = (self.scale, self.offset);
+        if let (Some(out), Some(s)) = (self.a.get_mut(at..at + L), s.get(at..at + L)) {
+            for ((o, v), s) in out.iter_mut().zip(a).zip(s) {
+                *o = scale * v + offset * s;
+            }
+        }
+        self.formed |= ((1u32 << L) - 1) << at;
     }
 }
 
-/// `sum_i g[i] c[i + k]` for the lags `k = 0..5` (`c` four longer than `g`), four pixels at
-/// a time so that the products reuse the loaded values (one row's sums: rounding grows with
-/// the row, not the window).
+/// `r[v] = sum_i g[i] c[v][i]` for `V` rows of coefficients as long as `g` (a whole number
+/// of groups of four), eight pixels at a time (one row's sums: rounding grows with the row,
+/// not the window). A shorter `c[v]` (never, for the rows [`Cross::column`] passes) ends its
+/// sum.
 #[inline(always)]
-fn lag_dots(g: &[f32], c: &[f32]) -> [f32; LAGS] {
-    let mut r = [0.0f32; LAGS];
-    let mut i = 0;
-    let n = g.len();
-    while i + 4 <= n {
-        let (Some(gw), Some(cw)) = (g.get(i..i + 4), c.get(i..i + 8)) else {
-            break;
+fn column_dots<const V: usize>(g: &[f32], c: &[&[f32]; V]) -> [f32; V] {
+    let mut r = [0.0f32; V];
+    let mut eights = g.chunks_exact(8);
+    for (n, gw) in (&mut eights).enumerate() {
+        let &[g0, g1, g2, g3, g4, g5, g6, g7] = gw else {
+            return r;
         };
-        if let (&[g0, g1, g2, g3], &[c0, c1, c2, c3, c4, c5, c6, c7]) = (gw, cw) {
-            r[0] += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
-            r[1] += g0 * c1 + g1 * c2 + g2 * c3 + g3 * c4;
-            r[2] += g0 * c2 + g1 * c3 + g2 * c4 + g3 * c5;
-            r[3] += g0 * c3 + g1 * c4 + g2 * c5 + g3 * c6;
-            r[4] += g0 * c4 + g1 * c5 + g2 * c6 + g3 * c7;
+        for (rv, cv) in r.iter_mut().zip(c) {
+            if let Some(&[c0, c1, c2, c3, c4, c5, c6, c7]) = cv.get(8 * n..8 * n + 8) {
+                *rv += (g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3)
+                    + (g4 * c4 + g5 * c5 + g6 * c6 + g7 * c7);
+            }
         }
-        i += 4;
     }
-    while i < n {
-        let (Some(&gv), Some(cw)) = (g.get(i), c.get(i..i + LAGS)) else {
-            break;
-        };
-        if let &[c0, c1, c2, c3, c4] = cw {
-            r[0] += gv * c0;
-            r[1] += gv * c1;
-            r[2] += gv * c2;
-            r[3] += gv * c3;
-            r[4] += gv * c4;
+    let i = g.len() - eights.remainder().len();
+    if let &[g0, g1, g2, g3] = eights.remainder() {
+        for (rv, cv) in r.iter_mut().zip(c) {
+            if let Some(&[c0, c1, c2, c3]) = cv.get(i..i + 4) {
+                *rv += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
+            }
         }
-        i += 1;
+    }
+    r
+}
+
+/// `sum_i g[i] c[i + k]` for the lags `k = 0..L` (`L <= 4`; `g` a whole number of groups of
+/// four, `c` at least `L - 1` longer), eight pixels at a time so that the products reuse the
+/// loaded values (one row's sums: rounding grows with the row, not the window). A shorter
+/// `c` (never, for the rows [`Cross::row`] passes) ends the sums.
+#[inline(always)]
+fn lag_dots<const L: usize>(g: &[f32], c: &[f32]) -> [f32; L] {
+    let mut r = [0.0f32; L];
+    let mut eights = g.chunks_exact(8);
+    for (n, gw) in (&mut eights).enumerate() {
+        let (&[g0, g1, g2, g3, g4, g5, g6, g7], Some(cw)) = (gw, c.get(8 * n..8 * n + 7 + L))
+        else {
+            return r;
+        };
+        for (k, rk) in r.iter_mut().enumerate() {
+            if let Some(&[c0, c1, c2, c3, c4, c5, c6, c7]) = cw.get(k..k + 8) {
+                *rk += (g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3)
+                    + (g4 * c4 + g5 * c5 + g6 * c6 + g7 * c7);
+            }
+        }
+    }
+    // a last group of four
+    let i = g.len() - eights.remainder().len();
+    if let (&[g0, g1, g2, g3], Some(cw)) = (eights.remainder(), c.get(i..i + 3 + L)) {
+        for (k, rk) in r.iter_mut().enumerate() {
+            if let Some(&[c0, c1, c2, c3]) = cw.get(k..k + 4) {
+                *rk += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
+            }
+        }
     }
     r
 }
@@ -433,8 +585,9 @@ impl LkResult {
 }
 
 /// A Lucas-Kanade tracker of one window of up to `N` pixels and rows of up to `W` pixels.
-/// RAM: `12 N + 40 W` bytes and a few words (a 31 x 31 window in `LkTracker<961, 38>`:
-/// about 13 KiB).
+/// RAM: `20 N + 40 W` bytes and 2.7 KiB (the spline's template moments) and a few words;
+/// `N` holds the spline's padded template, `(width + 8) (height + 8)` (a 31 x 31 window in
+/// `LkTracker<1521, 38>`: 34 776 B).
 #[derive(Debug, Clone)]
 pub struct LkTracker<const N: usize, const W: usize> {
     config: LkConfig,
@@ -579,18 +732,61 @@ fn newly_clipped<P: Pixel>(row: &[P], t: &[f32], size: (usize, usize), j: usize,
         .sum()
 }
 
-/// The binomial sum of `T` (1, 3 or 5) pixels (`[1]`, `[1 2 1]`, `[1 4 6 4 1]`) and the
-/// middle pixel.
+/// Stores the smoothed values `v` (integers) as `v - mean` into `out`; returns their sum and
+/// sum of squares, exact (a value is below 2^24 in magnitude: the sum is formed in `i32` over
+/// at most 127 values at a time, the squares in `i64`, which holds a row of up to 2^15).
 #[inline(always)]
-fn binomial_sum<P: Pixel, const T: usize>(win: &[P]) -> (u32, u16) {
-    let v = |n: usize| win.get(n).map_or(0, |&p| p.into());
-    let w = |n: usize| u32::from(v(n));
-    let sum = match T {
-        1 => w(0),
-        3 => w(0) + 2 * w(1) + w(2),
-        _ => w(0) + 4 * w(1) + 6 * w(2) + 4 * w(3) + w(4),
+fn emit(out: &mut [f32], mut v: impl Iterator<Item = u32>, mean: i32) -> (i64, i64) {
+    let (mut sum, mut sq) = (0i64, 0i64);
+    for seg in out.chunks_mut(127) {
+        let mut rs = 0i32;
+        for (o, v) in seg.iter_mut().zip(&mut v) {
+            let d = v as i32 - mean;
+            *o = d as f32;
+            rs += d;
+            sq += i64::from(d) * i64::from(d);
+        }
+        sum += i64::from(rs);
+    }
+    (sum, sq)
+}
+
+/// One window row smoothed by `[1 2 1]` down the columns of the source rows `a`, `b`, `c`
+/// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean` (see
+/// [`emit`]); returns the row's sum and sum of squares of the stored values and the largest
+/// pixel of `b`, or `None` (and nothing stored) when the rows are not that long or the row is
+/// longer than 2047 pixels (its sum then might not fit the `i32` kept here: values are below
+/// 2^20).
+#[inline(always)]
+fn smooth_row3<P: Pixel>(
+    a: &[P],
+    b: &[P],
+    c: &[P],
+    out: &mut [f32],
+    mean: i32,
+) -> Option<(i64, i64, u16)> {
+    let n = out.len();
+    if n > 2047 || a.len() != n + 2 || b.len() != n + 2 || c.len() != n + 2 {
+        return None;
+    }
+    let mut top = 0u16;
+    let mut cols = a.iter().zip(b).zip(c).map(|((&a, &b), &c)| {
+        let b = b.into();
+        top = top.max(b);
+        u32::from(a.into()) + 2 * u32::from(b) + u32::from(c.into())
+    });
+    let (Some(mut p0), Some(mut p1)) = (cols.next(), cols.next()) else {
+        return None;
     };
-    (sum, v(T / 2))
+    let (mut rs, mut sq) = (0i32, 0i64);
+    for (o, c2) in out.iter_mut().zip(cols) {
+        let d = (p0 + 2 * p1 + c2) as i32 - mean;
+        *o = d as f32;
+        rs += d;
+        sq += i64::from(d) * i64::from(d);
+        (p0, p1) = (p1, c2);
+    }
+    Some((i64::from(rs), sq, top))
 }
 
 /// More newly clipped pixels than this in a window of `n` pixels lose the frame: two, and 2 %.
@@ -1225,7 +1421,13 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             moments,
             ..
         } = self;
-        cross.need(ly, g, coef, (tw, th));
+        // the lags of the taps with a weight: at a whole-pixel shift the fourth tap's weights
+        // (the spline's and its slope's) are zero, and its lags are not formed
+        let used = |l: usize, w: &[f32; 4], dw: &[f32; 4]| {
+            l..l + if w[3] == 0.0 && dw[3] == 0.0 { 3 } else { 4 }
+        };
+        let data = (&g[..], &coef[..], &moments.s);
+        cross.need(used(lx, &wx, &dwx), used(ly, &wy, &dwy), data, (tw, th));
         // the weights of the shifted template (u), of its x and y slopes (vx, vy), at the
         // lags `at`
         let mut at = [0usize; 16];
@@ -1261,10 +1463,16 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             gdx += vxn * a;
             gdy += vyn * a;
             ss += un * sm;
+            // sum over the taps of c[i][tap] u[tap], u separable: the four lags of a
+            // vertical tap are neighbours in the row of c
             let row = moments.c.get(i * LAGS * LAGS..).unwrap_or(&[]);
             let mut cu = 0.0f32;
-            for (&i2, &u2) in at.iter().zip(&u) {
-                cu += row.get(i2).copied().unwrap_or(0.0) * u2;
+            for (l, &wyl) in wy.iter().enumerate() {
+                let at = (ly + l) * LAGS + lx;
+                if let Some(&[c0, c1, c2, c3]) = row.get(at..at + 4) {
+                    let [w0, w1, w2, w3] = wx;
+                    cu += wyl * (c0 * w0 + c1 * w1 + c2 * w2 + c3 * w3);
+                }
             }
             sss += un * cu;
             tdx += vxn * cu;
@@ -1276,8 +1484,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         // the template (blur)
         let (bx, by) = (gdx - tdx, gdy - tdy);
         let n = (tw * th) as f32;
-        let (sd, sdd) = (cross.sum, cross.sq);
-        let (var_g, var_s) = (sdd - sd * sd / n, sss - ss * ss / n);
+        let (sd, var_g) = (cross.sum, cross.var);
+        let var_s = sss - ss * ss / n;
         let score = if var_g > 0.0 && var_s > 0.0 {
             (sdt - sd * ss / n) / sqrtf(var_g * var_s)
         } else {
@@ -1321,10 +1529,12 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         Ok(())
     }
 
-    /// [`load_window`](Self::load_window) with the `T`-tap integer kernel `k` (binomial: its
-    /// sum a power of two, so the smoothed values are exact in `f32`, as the template's):
-    /// rows summed along x in integers, then down the columns; returns the count of newly
-    /// clipped pixels.
+    /// [`load_window`](Self::load_window) with the `T`-tap binomial kernel `k` (its sum a
+    /// power of two), in integers: per window row, the `T` source rows summed down each
+    /// column, then along the row; the smoothed value `v` (the template's scale times the
+    /// kernel's total squared) is stored as `v - M`, `M` the nearest integer to the template's
+    /// mean on that scale, exact in `f32` (the cross moments and the window's sums are formed
+    /// from these, see [`Cross::finish`]). Returns the count of newly clipped pixels.
     fn smooth_window<P: Pixel, const T: usize>(
         &mut self,
         frame: &Frame<'_, P>,
@@ -1339,117 +1549,124 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let half = (T / 2) as i64;
         let total: u32 = k.iter().sum();
         let scale = 1.0 / (total * total) as f32;
-        let kf: [f32; T] = k.map(|v| v as f32);
-        let mut saturated = 0u32;
+        // the template's mean on the integer scale (at most 2^24: a u16 pixel times 256)
+        let mean = (self.t_mean / scale + 0.5).max(0.0) as i32;
+        let gs = window_stride(tw);
+        let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
         let LkTracker {
             g,
-            ring,
             t,
             t_mean,
             cross,
             ..
         } = self;
-        let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
-        // source row `r` (frame row y0 - half + r), summed along x, into ring slot `r % 8`
-        let mut fill = |ring: &mut [[f32; W]; 8], r: usize| {
+        // the window's sum and sum of squares: rows' sums in i64, the total of the squares in
+        // i128 (any window size)
+        let (mut sum, mut sq) = (0i64, 0i128);
+        let mut saturated = 0u32;
+        // source row `r` (frame row y0 - half + r), repeated at the frame's top and bottom
+        let source = |r: usize| {
             let y = (y0 - half + r as i64).min(fh - 1).max(0) as usize;
-            let row = frame.row(y).unwrap_or(&[]);
-            let slot = &mut ring[r % 8];
-            let in_window = (T / 2..T / 2 + th).contains(&r);
-            let start = (x0 - half).max(0) as usize;
-            match row.get(start..start + tw + T - 1).filter(|_| inside) {
-                Some(seg) => {
-                    // the brightest pixel of the window's part of the row, on the way
-                    let mut top = 0u16;
-                    for (o, win) in slot.iter_mut().zip(seg.windows(T)) {
-                        let (v, centre) = binomial_sum::<P, T>(win);
-                        top = top.max(centre);
-                        *o = v as f32;
-                    }
-                    // the common case: nothing near the saturation level in the row
-                    if in_window && top >= sat {
-                        let whole = seg.get(T / 2..T / 2 + tw).unwrap_or(&[]);
-                        saturated += newly_clipped(whole, t, (tw, th), r - T / 2, sat);
-                    }
-                }
-                None => {
-                    for (i, o) in slot.iter_mut().take(tw).enumerate() {
-                        let mut v = 0u32;
-                        for (n, w) in k.iter().enumerate() {
-                            let x = (x0 + i as i64 + n as i64 - half).min(fw - 1).max(0) as usize;
-                            v += w * row.get(x).map_or(0, |p| u32::from((*p).into()));
-                        }
-                        *o = v as f32;
-                        let at = (x0 + i as i64).min(fw - 1).max(0) as usize;
-                        let raw: u16 = row.get(at).map_or(0, |p| (*p).into());
-                        saturated += u32::from(
-                            in_window && raw >= sat && dark_near(t, (tw, th), (i, r - T / 2), sat),
-                        );
-                    }
-                }
-            }
+            frame.row(y).unwrap_or(&[])
         };
-        for r in 0..T - 1 {
-            fill(ring, r);
+        // the T source rows of window row j, slid down one row per window row
+        let mut rows: [&[P]; T] = [&[]; T];
+        for (n, r) in rows.iter_mut().enumerate().skip(1) {
+            *r = source(n - 1);
         }
-        let m = *t_mean;
-        let (mut sum, mut sq) = (0.0f32, 0.0f32);
-        for j in 0..th {
-            fill(ring, j + T - 1);
-            let Some(out) = g.get_mut(j * tw..(j + 1) * tw) else {
-                break;
-            };
-            // down the columns, then scaled and less the template's mean
-            let rows: [&[f32; W]; T] = core::array::from_fn(|n| &ring[(j + n) % 8]);
-            let (mut rs, mut rq) = (0.0f32, 0.0f32);
-            let mut put = |o: &mut f32, v: f32| {
-                let v = v * scale - m;
-                *o = v;
-                rs += v;
-                rq += v * v;
-            };
-            match rows.as_slice() {
-                [a] => {
-                    for (o, a) in out.iter_mut().zip(a.iter()) {
-                        put(o, *a);
-                    }
+        let start = (x0 - half).max(0) as usize;
+        for (j, row) in g.chunks_exact_mut(gs.max(4)).take(th).enumerate() {
+            rows.rotate_left(1);
+            if let Some(last) = rows.last_mut() {
+                *last = source(j + T - 1);
+            }
+            let (out, pad) = row.split_at_mut(tw.min(row.len()));
+            pad.fill(0.0);
+            let segs = rows.map(|r| r.get(start..start + tw + T - 1).filter(|_| inside));
+            // the brightest pixel of the centre row (the window's row and its margin), on the way
+            let mut top = 0u16;
+            let fast = match (T, segs.as_slice()) {
+                (1, [Some(a)]) => {
+                    let v = a.iter().map(|&a| {
+                        let a = a.into();
+                        top = top.max(a);
+                        u32::from(a)
+                    });
+                    let (rs, rq) = emit(out, v, mean);
+                    sum += rs;
+                    sq += i128::from(rq);
+                    true
                 }
-                [a, b, c] => {
-                    for (((o, a), b), c) in out.iter_mut().zip(a.iter()).zip(b.iter()).zip(c.iter())
-                    {
-                        put(o, a + 2.0 * b + c);
+                (3, [Some(a), Some(b), Some(c)]) => match smooth_row3(a, b, c, out, mean) {
+                    Some((rs, rq, rt)) => {
+                        top = rt;
+                        sum += rs;
+                        sq += i128::from(rq);
+                        true
                     }
-                }
-                [a, b, c, d, e] => {
-                    for (((((o, a), b), c), d), e) in out
-                        .iter_mut()
-                        .zip(a.iter())
+                    None => false,
+                },
+                (5, [Some(a), Some(b), Some(c), Some(d), Some(e)]) => {
+                    let mut cols = a
+                        .iter()
                         .zip(b.iter())
                         .zip(c.iter())
                         .zip(d.iter())
                         .zip(e.iter())
-                    {
-                        put(o, a + 4.0 * b + 6.0 * c + 4.0 * d + e);
+                        .map(|((((&a, &b), &c), &d), &e)| {
+                            let w = |p: P| u32::from(p.into());
+                            let c = c.into();
+                            top = top.max(c);
+                            w(a) + 4 * w(b) + 6 * u32::from(c) + 4 * w(d) + w(e)
+                        });
+                    let mut p = [0u32; 4];
+                    for v in p.iter_mut() {
+                        *v = cols.next().unwrap_or(0);
                     }
+                    let v = cols.map(|c4| {
+                        let [p0, p1, p2, p3] = p;
+                        p = [p1, p2, p3, c4];
+                        p0 + 4 * p1 + 6 * p2 + 4 * p3 + c4
+                    });
+                    let (rs, rq) = emit(out, v, mean);
+                    sum += rs;
+                    sq += i128::from(rq);
+                    true
                 }
-                _ => {
-                    for (i, o) in out.iter_mut().enumerate() {
-                        let mut v = 0.0f32;
-                        for (w, row) in kf.iter().zip(rows.iter()) {
-                            v += w * row.get(i).copied().unwrap_or(0.0);
-                        }
-                        put(o, v);
-                    }
+                _ => false,
+            };
+            if fast {
+                // the common case: nothing at the saturation level in the row
+                if top >= sat {
+                    let centre = match segs.get(T / 2) {
+                        Some(Some(c)) => c.get(T / 2..T / 2 + tw).unwrap_or(&[]),
+                        _ => &[],
+                    };
+                    saturated += newly_clipped(centre, t, (tw, th), j, sat);
                 }
+                continue;
             }
-            sum += rs;
-            sq += rq;
+            // at the frame's left or right edge: the edge pixels repeat
+            let px = |r: &[P], x: i64| -> u32 {
+                let x = x.min(fw - 1).max(0) as usize;
+                r.get(x).map_or(0, |p| u32::from((*p).into()))
+            };
+            for (i, o) in out.iter_mut().enumerate() {
+                let x = x0 + i as i64;
+                let mut v = 0u32;
+                for (kx, dx) in k.iter().zip(-half..) {
+                    for (ky, r) in k.iter().zip(&rows) {
+                        v += kx * ky * px(r, x + dx);
+                    }
+                }
+                let (rs, rq) = emit(core::slice::from_mut(o), [v].into_iter(), mean);
+                sum += rs;
+                sq += i128::from(rq);
+                let raw = rows.get(T / 2).map_or(0, |r| px(r, x)) as u16;
+                saturated += u32::from(raw >= sat && dark_near(t, (tw, th), (i, j), sat));
+            }
         }
-        *cross = Cross {
-            sum,
-            sq,
-            ..Cross::ZERO
-        };
+        *cross = Cross::window(sum, sq, mean, scale, *t_mean, (tw * th) as f32);
         saturated
     }
 
@@ -1655,6 +1872,82 @@ mod tests {
         }
     }
 
+    /// The window read, smoothed and stored in integers equals the smoothing done in f64 at
+    /// every kernel, for 8- and 16-bit frames, inside the frame and at its left edge (the
+    /// edge pixels repeat), and its sums are the sums over those values.
+    fn window_matches_f64<P: Pixel>(px: &[P], smoothing: Smoothing, q: (i64, i64)) {
+        let f = Frame::new(px, FW, FH, FW).unwrap();
+        let mut cfg = LkConfig::new(31, 31);
+        cfg.smoothing = smoothing;
+        let mut t = Lk::try_new(cfg).unwrap();
+        t.set_template(&f, 29, 25).unwrap();
+        t.load_window(&f, q, u16::MAX).unwrap();
+        let (k, half): (&[f64], i64) = match smoothing {
+            Smoothing::None => (&[1.0], 0),
+            Smoothing::Binomial3 => (&[1.0, 2.0, 1.0], 1),
+            Smoothing::Binomial5 => (&[1.0, 4.0, 6.0, 4.0, 1.0], 2),
+        };
+        let total: f64 = k.iter().sum();
+        let at = |x: i64, y: i64| {
+            let (x, y) = (x.clamp(0, FW as i64 - 1), y.clamp(0, FH as i64 - 1));
+            f64::from(px[y as usize * FW + x as usize].into())
+        };
+        let (x0, y0) = (29 + q.0, 25 + q.1);
+        let (mut sum, mut sq, mut worst) = (0.0f64, 0.0f64, 0.0f64);
+        let mut values = Vec::new();
+        for j in 0..31i64 {
+            for i in 0..31i64 {
+                let mut v = 0.0;
+                for (dy, ky) in (-half..).zip(k) {
+                    for (dx, kx) in (-half..).zip(k) {
+                        v += ky * kx * at(x0 + i + dx, y0 + j + dy);
+                    }
+                }
+                let g = v / (total * total) - f64::from(t.t_mean);
+                let stored = f64::from(t.g[j as usize * window_stride(31) + i as usize]);
+                let back = f64::from(t.cross.scale) * stored + f64::from(t.cross.offset);
+                worst = worst.max((back - g).abs());
+                sum += g;
+                values.push(g);
+            }
+        }
+        let mean = sum / values.len() as f64;
+        for g in &values {
+            sq += (g - mean) * (g - mean);
+        }
+        let level = f64::from(P::FULL);
+        assert!(worst < 1e-6 * level, "{smoothing:?} at {q:?}: {worst}");
+        assert!(
+            (f64::from(t.cross.sum) - sum).abs() < 1e-6 * level * 961.0,
+            "{smoothing:?} at {q:?}: sum {} {sum}",
+            t.cross.sum
+        );
+        assert!(
+            (f64::from(t.cross.var) - sq).abs() < 1e-6 * sq,
+            "{smoothing:?} at {q:?}: var {} {sq}",
+            t.cross.var
+        );
+        // the row pad the cross moments' kernels run over is zero
+        for j in 0..31 {
+            assert_eq!(t.g[j * window_stride(31) + 31], 0.0);
+        }
+    }
+
+    #[test]
+    fn the_window_is_smoothed_exactly_for_every_kernel_and_at_the_frame_edge() {
+        let px8 = speckle(0.3, -0.2, 200.0);
+        // 16-bit: the same scene on the whole range, and a level near the top
+        let px16: Vec<u16> = px8.iter().map(|&v| u16::from(v) * 257).collect();
+        for smoothing in [Smoothing::None, Smoothing::Binomial3, Smoothing::Binomial5] {
+            // inside; the window's left column on the frame's first column (the kernel's
+            // margin repeats it); its top row on the frame's first row
+            for q in [(2, -1), (-29, 0), (0, -25)] {
+                window_matches_f64(&px8, smoothing, q);
+                window_matches_f64(&px16, smoothing, q);
+            }
+        }
+    }
+
     #[test]
     fn the_spline_moments_equal_the_sums_over_the_pixels() {
         // every iteration's sums come from moments formed once per template and per window:
@@ -1688,7 +1981,10 @@ mod tests {
                             dy += wx[k] * dwy[l] * cv;
                         }
                     }
-                    let g = f64::from(t.g[j as usize * tw + i as usize]);
+                    // the window as stored (integers, rows padded to the stride) back on the
+                    // template's scale
+                    let stored = f64::from(t.g[j as usize * window_stride(tw) + i as usize]);
+                    let g = f64::from(t.cross.scale) * stored + f64::from(t.cross.offset);
                     bx += dx * (g - v);
                     by += dy * (g - v);
                     g1 += g;

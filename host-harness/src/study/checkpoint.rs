@@ -22,8 +22,12 @@ use std::path::Path;
 /// 5 = the grandstand's rest padding a whole number of ramp blocks (every exposure window sums
 /// whole precomputed blocks: other `f32` roundings of the averaged ramp) and the fast path's
 /// row sums in `f32` (default study, mode 1 at 40 ms: 4.39004554 -> 4.39004738 mm/kN, sigma
-/// 0.37510864 -> 0.37510850; cantilever unchanged).
-pub const MODEL_REVISION: u32 = 5;
+/// 0.37510864 -> 0.37510850; cantilever unchanged); 6 = firmware-core's Lucas-Kanade window
+/// smoothed in integers and its cross moments formed per lag in another order (the same step
+/// to the `f32` rounding: studies with `tracker = "lk"` move in the 6th-7th significant digit,
+/// e.g. grandstand, read noise 1, 4 runs, mode 1 at 40 ms 4.4749754667 -> 4.4749758244 mm/kN;
+/// the other trackers unchanged).
+pub const MODEL_REVISION: u32 = 6;
 
 /// The revision recorded in study directory `dir` (1 when the file is absent: directories
 /// written before revisions were recorded).
