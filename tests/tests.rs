@@ -253,9 +253,10 @@ fn the_cli_writes_no_file_itself() {
 
 /// The Python extension is built (by `pip install ./python`) with the features the workspace's
 /// tests resolve for every package they share, so that CI's wheel reuses the host-harness the
-/// test step compiled. A dev-dependency that turns on a new feature of a shared crate (serde,
-/// syn, either, ...) would make the wheel build host-harness and its dependencies once more,
-/// minutes on two cores: python/Cargo.toml then names that feature too.
+/// test step compiled (the other half: the same profile settings, the build scripts' debug info
+/// in the workspace's Cargo.toml). A dev-dependency that turns on a new feature of a shared
+/// crate (serde, syn, either, ...) would make the wheel build host-harness and its
+/// dependencies once more, minutes on two cores: python/Cargo.toml then names that feature too.
 #[test]
 fn the_python_wheel_reuses_the_workspace_build() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
