@@ -52,6 +52,18 @@
 use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
 
+// The cross moments' kernels: a tree of products per row on 32-bit ARM (the M4's scalar FPU),
+// eight lanes across the window elsewhere (SIMD registers); both in the host's tests.
+#[cfg(any(test, not(target_arch = "arm")))]
+mod lanes;
+#[cfg(any(test, target_arch = "arm"))]
+mod m4;
+
+#[cfg(not(target_arch = "arm"))]
+use lanes as kernels;
+#[cfg(target_arch = "arm")]
+use m4 as kernels;
+
 /// How the frame is sampled between pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -259,8 +271,7 @@ impl Cross {
     }
 
     /// Forms the cross moments of the horizontal lag `lx` at the `V` vertical lags from `ly`
-    /// (at most four) in one pass over the window: per window row, [`column_dots`] with the
-    /// coefficients' rows of the `V` vertical lags.
+    /// (at most four) in one pass over the window (the backend's `column_sums`).
     #[inline(never)]
     fn column<const V: usize>(
         &mut self,
@@ -270,24 +281,9 @@ impl Cross {
     ) {
         let pw = tw + 2 * SPLINE_MARGIN;
         let first = SPLINE_MARGIN - LAGS / 2;
-        let gs = window_stride(tw);
-        let mut a = [0.0f32; V];
-        // the coefficients' rows from the lag, the V of window row j slid down one per row
         let start = (first + ly) * pw + first + lx;
-        let mut rows = coef.get(start..).unwrap_or(&[]).chunks(pw);
-        let mut c: [&[f32]; V] = [&[]; V];
-        for cv in c.iter_mut().skip(1) {
-            *cv = rows.next().unwrap_or(&[]);
-        }
-        for row in g.chunks_exact(gs.max(4)).take(th) {
-            c.rotate_left(1);
-            if let Some(last) = c.last_mut() {
-                *last = rows.next().unwrap_or(&[]);
-            }
-            for (o, v) in a.iter_mut().zip(column_dots::<V>(row, &c)) {
-                *o += v;
-            }
-        }
+        let c = coef.get(start..).unwrap_or(&[]);
+        let a = kernels::column_sums::<V>(g, window_stride(tw), c, pw, th);
         let (scale, offset) = (self.scale, self.offset);
         for (v, av) in a.iter().enumerate() {
             let at = (ly + v) * LAGS + lx;
@@ -299,8 +295,7 @@ impl Cross {
     }
 
     /// Forms the cross moments of the `L` horizontal lags from `lx` at the vertical lag `oy`
-    /// in one pass over the window: per window row, [`lag_dots`] with the coefficients' row
-    /// from the lag (over the row's zero pad too: the padded template reaches that far).
+    /// in one pass over the window (the backend's `lag_sums`).
     #[inline(never)]
     fn row<const L: usize>(
         &mut self,
@@ -310,16 +305,9 @@ impl Cross {
     ) {
         let pw = tw + 2 * SPLINE_MARGIN;
         let first = SPLINE_MARGIN - LAGS / 2;
-        let gs = window_stride(tw);
         let start = (first + oy) * pw + first + lx;
-        let rows = coef.get(start..).unwrap_or(&[]).chunks(pw);
-        let mut a = [0.0f32; L];
-        for (g, c) in g.chunks_exact(gs.max(4)).take(th).zip(rows) {
-            let r = lag_dots::<L>(g, c);
-            for (o, v) in a.iter_mut().zip(r) {
-                *o += v;
-            }
-        }
+        let c = coef.get(start..).unwrap_or(&[]);
+        let a = kernels::lag_sums::<L>(g, window_stride(tw), c, pw, th);
         let at = oy * LAGS + lx;
         let (scale, offset) = (self.scale, self.offset);
         if let (Some(out), Some(s)) = (self.a.get_mut(at..at + L), s.get(at..at + L)) {
@@ -329,68 +317,6 @@ impl Cross {
         }
         self.formed |= ((1u32 << L) - 1) << at;
     }
-}
-
-/// `r[v] = sum_i g[i] c[v][i]` for `V` rows of coefficients as long as `g` (a whole number
-/// of groups of four), eight pixels at a time (one row's sums: rounding grows with the row,
-/// not the window). A shorter `c[v]` (never, for the rows [`Cross::column`] passes) ends its
-/// sum.
-#[inline(always)]
-fn column_dots<const V: usize>(g: &[f32], c: &[&[f32]; V]) -> [f32; V] {
-    let mut r = [0.0f32; V];
-    let mut eights = g.chunks_exact(8);
-    for (n, gw) in (&mut eights).enumerate() {
-        let &[g0, g1, g2, g3, g4, g5, g6, g7] = gw else {
-            return r;
-        };
-        for (rv, cv) in r.iter_mut().zip(c) {
-            if let Some(&[c0, c1, c2, c3, c4, c5, c6, c7]) = cv.get(8 * n..8 * n + 8) {
-                *rv += (g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3)
-                    + (g4 * c4 + g5 * c5 + g6 * c6 + g7 * c7);
-            }
-        }
-    }
-    let i = g.len() - eights.remainder().len();
-    if let &[g0, g1, g2, g3] = eights.remainder() {
-        for (rv, cv) in r.iter_mut().zip(c) {
-            if let Some(&[c0, c1, c2, c3]) = cv.get(i..i + 4) {
-                *rv += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
-            }
-        }
-    }
-    r
-}
-
-/// `sum_i g[i] c[i + k]` for the lags `k = 0..L` (`L <= 4`; `g` a whole number of groups of
-/// four, `c` at least `L - 1` longer), eight pixels at a time so that the products reuse the
-/// loaded values (one row's sums: rounding grows with the row, not the window). A shorter
-/// `c` (never, for the rows [`Cross::row`] passes) ends the sums.
-#[inline(always)]
-fn lag_dots<const L: usize>(g: &[f32], c: &[f32]) -> [f32; L] {
-    let mut r = [0.0f32; L];
-    let mut eights = g.chunks_exact(8);
-    for (n, gw) in (&mut eights).enumerate() {
-        let (&[g0, g1, g2, g3, g4, g5, g6, g7], Some(cw)) = (gw, c.get(8 * n..8 * n + 7 + L))
-        else {
-            return r;
-        };
-        for (k, rk) in r.iter_mut().enumerate() {
-            if let Some(&[c0, c1, c2, c3, c4, c5, c6, c7]) = cw.get(k..k + 8) {
-                *rk += (g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3)
-                    + (g4 * c4 + g5 * c5 + g6 * c6 + g7 * c7);
-            }
-        }
-    }
-    // a last group of four
-    let i = g.len() - eights.remainder().len();
-    if let (&[g0, g1, g2, g3], Some(cw)) = (eights.remainder(), c.get(i..i + 3 + L)) {
-        for (k, rk) in r.iter_mut().enumerate() {
-            if let Some(&[c0, c1, c2, c3]) = cw.get(k..k + 4) {
-                *rk += g0 * c0 + g1 * c1 + g2 * c2 + g3 * c3;
-            }
-        }
-    }
-    r
 }
 
 /// Settings of an [`LkTracker`]: plain data, checked by [`LkConfig::validate`].
@@ -599,6 +525,10 @@ pub struct LkTracker<const N: usize, const W: usize> {
     /// Mean and root sum of squares about it of the template.
     t_mean: f32,
     t_norm: f32,
+    /// Per template pixel: the template is dark around it ([`dark_near`]) for the
+    /// saturation level `dark_sat` (a frame pixel clipped there is a change, not the target).
+    dark: [bool; N],
+    dark_sat: u16,
     /// Inverse Hessian `[a, b, c]` of `[[a, b], [b, c]]`.
     h_inv: [f32; 3],
     /// Top-left pixel of the template in the frame it was taken from.
@@ -723,15 +653,6 @@ fn dark_near(t: &[f32], (tw, th): (usize, usize), (i, j): (usize, usize), sat: u
     true
 }
 
-/// Pixels of window row `j` (`row`) at or above `sat` where the template is dark around them
-/// ([`dark_near`]).
-fn newly_clipped<P: Pixel>(row: &[P], t: &[f32], size: (usize, usize), j: usize, sat: u16) -> u32 {
-    row.iter()
-        .enumerate()
-        .map(|(i, &v)| u32::from(v.into() >= sat && dark_near(t, size, (i, j), sat)))
-        .sum()
-}
-
 /// Stores the smoothed values `v` (integers) as `v - mean` into `out`; returns their sum and
 /// sum of squares, exact (a value is below 2^24 in magnitude: the sum is formed in `i32` over
 /// at most 127 values at a time, the squares in `i64`, which holds a row of up to 2^15).
@@ -749,44 +670,6 @@ fn emit(out: &mut [f32], mut v: impl Iterator<Item = u32>, mean: i32) -> (i64, i
         sum += i64::from(rs);
     }
     (sum, sq)
-}
-
-/// One window row smoothed by `[1 2 1]` down the columns of the source rows `a`, `b`, `c`
-/// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean` (see
-/// [`emit`]); returns the row's sum and sum of squares of the stored values and the largest
-/// pixel of `b`, or `None` (and nothing stored) when the rows are not that long or the row is
-/// longer than 2047 pixels (its sum then might not fit the `i32` kept here: values are below
-/// 2^20).
-#[inline(always)]
-fn smooth_row3<P: Pixel>(
-    a: &[P],
-    b: &[P],
-    c: &[P],
-    out: &mut [f32],
-    mean: i32,
-) -> Option<(i64, i64, u16)> {
-    let n = out.len();
-    if n > 2047 || a.len() != n + 2 || b.len() != n + 2 || c.len() != n + 2 {
-        return None;
-    }
-    let mut top = 0u16;
-    let mut cols = a.iter().zip(b).zip(c).map(|((&a, &b), &c)| {
-        let b = b.into();
-        top = top.max(b);
-        u32::from(a.into()) + 2 * u32::from(b) + u32::from(c.into())
-    });
-    let (Some(mut p0), Some(mut p1)) = (cols.next(), cols.next()) else {
-        return None;
-    };
-    let (mut rs, mut sq) = (0i32, 0i64);
-    for (o, c2) in out.iter_mut().zip(cols) {
-        let d = (p0 + 2 * p1 + c2) as i32 - mean;
-        *o = d as f32;
-        rs += d;
-        sq += i64::from(d) * i64::from(d);
-        (p0, p1) = (p1, c2);
-    }
-    Some((i64::from(rs), sq, top))
 }
 
 /// More newly clipped pixels than this in a window of `n` pixels lose the frame: two, and 2 %.
@@ -822,6 +705,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             gy: [0.0; N],
             t_mean: 0.0,
             t_norm: 0.0,
+            dark: [false; N],
+            dark_sat: 0,
             h_inv: [0.0; 3],
             origin: (0, 0),
             base: (0.0, 0.0),
@@ -837,6 +722,24 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             acc: [0.0; W],
             ready: false,
         })
+    }
+
+    /// The template's dark pixels ([`LkTracker::dark`]) for the saturation level `sat`,
+    /// unless marked for it already.
+    fn mark_dark(&mut self, sat: u16) {
+        if self.dark_sat == sat {
+            return;
+        }
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        for (j, row) in self.dark.chunks_mut(tw.max(1)).take(th).enumerate() {
+            for (i, d) in row.iter_mut().enumerate() {
+                *d = dark_near(&self.t, (tw, th), (i, j), sat);
+            }
+        }
+        self.dark_sat = sat;
     }
 
     /// The settings.
@@ -976,6 +879,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         self.t_mean = mean;
         self.t_norm = sqrtf(ss);
+        self.mark_dark(match self.config.saturation {
+            0 => P::FULL,
+            s => s,
+        });
         if spline {
             // the spline's weights sum to one: the mean comes off the coefficients
             for c in self.coef.iter_mut().take(pw * ph) {
@@ -1039,6 +946,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             0 => P::FULL,
             s => s,
         };
+        // (a template taken from frames of another pixel type)
+        self.mark_dark(sat);
         // constant-velocity prediction from the last two tracked frames (none after a loss),
         // unless the caller gives the start
         let mut start = match given {
@@ -1259,6 +1168,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (bx, by, sd, sdd, sdt) = {
             let LkTracker {
                 t,
+                dark,
                 gx,
                 gy,
                 ring,
@@ -1284,7 +1194,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         }
                         if (lead..lead + th).contains(&r) {
                             let whole = seg.get(lead..lead + tw).unwrap_or(&[]);
-                            saturated += newly_clipped(whole, t, (tw, th), r - lead, sat);
+                            let j = (r - lead) * tw;
+                            let dark = dark.get(j..j + tw).unwrap_or(&[]);
+                            saturated += kernels::newly_clipped(whole, dark, sat);
                         }
                     }
                     None => {
@@ -1297,7 +1209,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                             saturated += u32::from(
                                 in_window
                                     && v >= sat
-                                    && dark_near(t, (tw, th), (c - lead, r - lead), sat),
+                                    && dark.get((r - lead) * tw + c - lead).is_some_and(|&d| d),
                             );
                         }
                     }
@@ -1555,7 +1467,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let inside = x0 - half >= 0 && x0 + tw as i64 + half <= fw;
         let LkTracker {
             g,
-            t,
+            dark,
             t_mean,
             cross,
             ..
@@ -1597,15 +1509,17 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     sq += i128::from(rq);
                     true
                 }
-                (3, [Some(a), Some(b), Some(c)]) => match smooth_row3(a, b, c, out, mean) {
-                    Some((rs, rq, rt)) => {
-                        top = rt;
-                        sum += rs;
-                        sq += i128::from(rq);
-                        true
+                (3, [Some(a), Some(b), Some(c)]) => {
+                    match kernels::smooth_row3(a, b, c, out, mean) {
+                        Some((rs, rq, rt)) => {
+                            top = rt;
+                            sum += rs;
+                            sq += i128::from(rq);
+                            true
+                        }
+                        None => false,
                     }
-                    None => false,
-                },
+                }
                 (5, [Some(a), Some(b), Some(c), Some(d), Some(e)]) => {
                     let mut cols = a
                         .iter()
@@ -1642,7 +1556,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         Some(Some(c)) => c.get(T / 2..T / 2 + tw).unwrap_or(&[]),
                         _ => &[],
                     };
-                    saturated += newly_clipped(centre, t, (tw, th), j, sat);
+                    let dark = dark.get(j * tw..j * tw + tw).unwrap_or(&[]);
+                    saturated += kernels::newly_clipped(centre, dark, sat);
                 }
                 continue;
             }
@@ -1663,7 +1578,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 sum += rs;
                 sq += i128::from(rq);
                 let raw = rows.get(T / 2).map_or(0, |r| px(r, x)) as u16;
-                saturated += u32::from(raw >= sat && dark_near(t, (tw, th), (i, j), sat));
+                let dark = dark.get(j * tw + i).is_some_and(|&d| d);
+                saturated += u32::from(raw >= sat && dark);
             }
         }
         *cross = Cross::window(sum, sq, mean, scale, *t_mean, (tw * th) as f32);
@@ -2138,6 +2054,127 @@ mod tests {
             (a.0 - b.0).abs() < 1e-3 && (a.1 - b.1).abs() < 1e-3,
             "{a:?} {b:?}"
         );
+    }
+
+    /// Both backends' cross-moment kernels against the sums in f64, for every lag count, on
+    /// a window whose rows are padded with zeros (as `LkTracker::g` is).
+    #[test]
+    fn both_backends_form_the_cross_moments_of_every_lag_count() {
+        fn check<const K: usize>(tw: usize, th: usize) {
+            let (gs, pw) = (window_stride(tw), tw + 2 * SPLINE_MARGIN);
+            let mut g = std::vec![0.0f32; gs * th];
+            for (k, v) in g.iter_mut().enumerate() {
+                if k % gs < tw {
+                    *v = ((k * 7919) % 513) as f32 - 256.0;
+                }
+            }
+            let c: Vec<f32> = (0..pw * (th + 4))
+                .map(|k| (((k * 104729) % 1001) as f32 - 500.0) / 37.0)
+                .collect();
+            let (mut lag, mut col, mut scale) = ([0.0f64; K], [0.0f64; K], [0.0f64; K]);
+            for j in 0..th {
+                for i in 0..gs {
+                    let gv = f64::from(g[j * gs + i]);
+                    for k in 0..K {
+                        let (a, b) = (f64::from(c[j * pw + i + k]), f64::from(c[(j + k) * pw + i]));
+                        lag[k] += gv * a;
+                        col[k] += gv * b;
+                        scale[k] += (gv * a).abs() + (gv * b).abs();
+                    }
+                }
+            }
+            let got = [
+                (m4::lag_sums::<K>(&g, gs, &c, pw, th), lag),
+                (lanes::lag_sums::<K>(&g, gs, &c, pw, th), lag),
+                (m4::column_sums::<K>(&g, gs, &c, pw, th), col),
+                (lanes::column_sums::<K>(&g, gs, &c, pw, th), col),
+            ];
+            for (n, (sums, want)) in got.iter().enumerate() {
+                for k in 0..K {
+                    let err = (f64::from(sums[k]) - want[k]).abs();
+                    assert!(
+                        err <= 1e-6 * scale[k],
+                        "kernel {n}, {K} lags, {tw} x {th}, lag {k}: {} against {}",
+                        sums[k],
+                        want[k]
+                    );
+                }
+            }
+        }
+        for (tw, th) in [(3, 3), (4, 5), (9, 7), (31, 31), (37, 12), (64, 3)] {
+            check::<1>(tw, th);
+            check::<2>(tw, th);
+            check::<3>(tw, th);
+            check::<4>(tw, th);
+        }
+    }
+
+    /// Both backends' `[1 2 1]` row smoothing against the integer sums, exactly (8- and
+    /// 16-bit pixels, rows shorter and longer than a block, the longest row), and their
+    /// refusals; both backends' count of newly clipped pixels against the mask read per pixel.
+    #[test]
+    fn both_backends_smooth_a_row_exactly_and_count_clipped_pixels_alike() {
+        fn check<P: Pixel + Copy>(px: &[P], n: usize, mean: i32) {
+            let v = |k: usize| i64::from(px[k].into());
+            let rows = [
+                &px[..n + 2],
+                &px[n + 2..2 * n + 4],
+                &px[2 * n + 4..3 * n + 6],
+            ];
+            let (mut sum, mut sq, mut top) = (0i64, 0i64, 0u16);
+            let mut want = std::vec![0.0f32; n];
+            let col = |i: usize| v(i) + 2 * v(n + 2 + i) + v(2 * n + 4 + i);
+            for (i, w) in want.iter_mut().enumerate() {
+                let d = col(i) + 2 * col(i + 1) + col(i + 2) - i64::from(mean);
+                *w = d as f32;
+                sum += d;
+                sq += d * d;
+            }
+            for &b in rows[1] {
+                top = top.max(b.into());
+            }
+            for backend in 0..2 {
+                let mut out = std::vec![f32::NAN; n];
+                let r = match backend {
+                    0 => m4::smooth_row3(rows[0], rows[1], rows[2], &mut out, mean),
+                    _ => lanes::smooth_row3(rows[0], rows[1], rows[2], &mut out, mean),
+                };
+                assert_eq!(r, Some((sum, sq, top)), "backend {backend}, {n} pixels");
+                assert_eq!(out, want, "backend {backend}, {n} pixels");
+                // rows of the wrong length, or too long a row: refused, nothing stored
+                let mut short = std::vec![f32::NAN; n + 1];
+                let r = match backend {
+                    0 => m4::smooth_row3(rows[0], rows[1], rows[2], &mut short, mean),
+                    _ => lanes::smooth_row3(rows[0], rows[1], rows[2], &mut short, mean),
+                };
+                assert_eq!(r, None);
+                assert!(short.iter().all(|v| v.is_nan()));
+            }
+        }
+        let noise = |k: usize, top: u64| ((k as u64 * 2654435761) % (top + 1)) as u32;
+        for n in [1, 3, 4, 31, 63, 64, 65, 130, 2047] {
+            let p8: Vec<u8> = (0..3 * n + 6).map(|k| noise(k, 255) as u8).collect();
+            check(&p8, n, 2040);
+            check(&p8, n, 0);
+            let p16: Vec<u16> = (0..3 * n + 6).map(|k| noise(k, 65535) as u16).collect();
+            check(&p16, n, 1 << 19);
+        }
+        // longer than 2047 pixels: refused by both
+        let long = std::vec![7u8; 2050];
+        let mut out = std::vec![0.0f32; 2048];
+        assert_eq!(m4::smooth_row3(&long, &long, &long, &mut out, 0), None);
+        assert_eq!(lanes::smooth_row3(&long, &long, &long, &mut out, 0), None);
+
+        let row: Vec<u16> = (0..70).map(|k| [65535, 3, 65000, 65535][k % 4]).collect();
+        let dark: Vec<bool> = (0..70).map(|k| k % 3 != 0).collect();
+        let want = (0..70).filter(|&k| row[k] >= 65000 && dark[k]).count() as u32;
+        assert!(want > 0);
+        assert_eq!(m4::newly_clipped(&row, &dark, 65000), want);
+        assert_eq!(lanes::newly_clipped(&row, &dark, 65000), want);
+        // a mask shorter than the row: the pixels past it are not counted
+        let want = (0..10).filter(|&k| row[k] >= 65000 && dark[k]).count() as u32;
+        assert_eq!(m4::newly_clipped(&row, &dark[..10], 65000), want);
+        assert_eq!(lanes::newly_clipped(&row, &dark[..10], 65000), want);
     }
 
     proptest::proptest! {

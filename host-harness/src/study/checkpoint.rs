@@ -26,8 +26,12 @@ use std::path::Path;
 /// smoothed in integers and its cross moments formed per lag in another order (the same step
 /// to the `f32` rounding: studies with `tracker = "lk"` move in the 6th-7th significant digit,
 /// e.g. grandstand, read noise 1, 4 runs, mode 1 at 40 ms 4.4749754667 -> 4.4749758244 mm/kN;
-/// the other trackers unchanged).
-pub const MODEL_REVISION: u32 = 6;
+/// the other trackers unchanged); 7 = the Lucas-Kanade cross moments on hosts (x86-64,
+/// AArch64) accumulated in eight lanes across the window, and the window's `[1 2 1]` smoothing
+/// in two passes there (the smoothing exact as before; the moments' `f32` sums in another
+/// order; the M4 keeps revision 6's): studies with `tracker = "lk"` move in the 7th
+/// significant digit (the same study 4.4749758244 -> 4.4749749899 mm/kN).
+pub const MODEL_REVISION: u32 = 7;
 
 /// The revision recorded in study directory `dir` (1 when the file is absent: directories
 /// written before revisions were recorded).
