@@ -2,8 +2,8 @@
 //! products accumulated in eight lanes across the whole window (two SSE or one AVX register
 //! per lag, which the compiler vectorises), the lanes added once at the end. The same sums as
 //! the M4's kernels, in another order (f32 rounding differs in the last bits).
-//! The window's `[1 2 1]` smoothing likewise in two vectorisable passes over blocks of 64
-//! pixels (columns, then along the row) instead of the M4's one rolling pass.
+//! The window's `[1 2 1]` smoothing likewise in one vectorisable loop instead of the M4's
+//! rolling pass.
 //! Only slices come in; this backend knows nothing of its caller.
 
 use crate::centroid::Pixel;
@@ -111,8 +111,11 @@ pub(super) fn lag_sums<const L: usize>(
 /// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean`; returns the
 /// row's sum and sum of squares of the stored values and the largest pixel of `b`, or `None`
 /// (and nothing stored) when the rows are not that long or the row is longer than 2047
-/// pixels. Exact: a value is below 2^20 in magnitude, so its square below 2^40 and a row's
-/// sum of squares below 2^51, exact in the `f64` lanes; the sum in `i32`.
+/// pixels. Each value from the nine source pixels around it, in one loop the compiler
+/// vectorises (a buffer of column sums between two passes measured slower), then the squares
+/// of the stored values in four `f64` lanes. Exact: a value is below 2^20
+/// in magnitude, so its square below 2^40 and a row's sum of squares below 2^51, exact in
+/// `f64`; the sum in `i32`.
 #[inline(always)]
 pub(super) fn smooth_row3<P: Pixel>(
     a: &[P],
@@ -121,59 +124,43 @@ pub(super) fn smooth_row3<P: Pixel>(
     out: &mut [f32],
     mean: i32,
 ) -> Option<(i64, i64, u16)> {
-    const BLOCK: usize = 64;
     let n = out.len();
     if n > 2047 || a.len() != n + 2 || b.len() != n + 2 || c.len() != n + 2 {
         return None;
     }
-    let mut top = 0u16;
+    let top = b.iter().fold(0u16, |m, &v| m.max(v.into()));
+    // the column sums a + 2 b + c from the offsets 0, 1, 2, each n long
+    fn from<P>(r: &[P], s: usize, n: usize) -> &[P] {
+        r.get(s..s + n).unwrap_or(&[])
+    }
+    let cols = |s: usize| {
+        from(a, s, n)
+            .iter()
+            .zip(from(b, s, n))
+            .zip(from(c, s, n))
+            .map(|((&a, &b), &c)| {
+                i32::from(a.into()) + 2 * i32::from(b.into()) + i32::from(c.into())
+            })
+    };
     let mut rs = 0i32;
-    let mut sq = [0.0f64; 4];
-    let mut cols = [0i32; BLOCK + 2];
-    for (k, out) in out.chunks_mut(BLOCK).enumerate() {
-        let span = k * BLOCK..k * BLOCK + out.len() + 2;
-        let (Some(a), Some(b), Some(c)) = (a.get(span.clone()), b.get(span.clone()), c.get(span))
-        else {
-            return None;
-        };
-        for (((o, &a), &b), &c) in cols.iter_mut().zip(a).zip(b).zip(c) {
-            let b = b.into();
-            top = top.max(b);
-            *o = i32::from(a.into()) + 2 * i32::from(b) + i32::from(c.into());
-        }
-        // along the row, four values a step
-        let mut i = 0;
-        let mut quads = out.chunks_exact_mut(4);
-        for o4 in &mut quads {
-            let Some(&[c0, c1, c2, c3, c4, c5]) = cols.get(i..i + 6) else {
-                return None;
-            };
-            let d = [
-                c0 + 2 * c1 + c2 - mean,
-                c1 + 2 * c2 + c3 - mean,
-                c2 + 2 * c3 + c4 - mean,
-                c3 + 2 * c4 + c5 - mean,
-            ];
-            for ((o, &d), q) in o4.iter_mut().zip(&d).zip(sq.iter_mut()) {
-                *o = d as f32;
-                rs += d;
-                *q += f64::from(d) * f64::from(d);
-            }
-            i += 4;
-        }
-        for ((o, w), q) in quads
-            .into_remainder()
-            .iter_mut()
-            .zip(cols.get(i..).unwrap_or(&[]).windows(3))
-            .zip(sq.iter_mut())
-        {
-            let d = w.iter().zip([1, 2, 1]).map(|(v, k)| v * k).sum::<i32>() - mean;
-            *o = d as f32;
-            rs += d;
-            *q += f64::from(d) * f64::from(d);
+    for (((o, x0), x1), x2) in out.iter_mut().zip(cols(0)).zip(cols(1)).zip(cols(2)) {
+        let d = x0 + 2 * x1 + x2 - mean;
+        *o = d as f32;
+        rs += d;
+    }
+    let (mut q0, mut q1, mut q2, mut q3) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut quads = out.chunks_exact(4);
+    for o4 in &mut quads {
+        if let &[d0, d1, d2, d3] = o4 {
+            q0 += f64::from(d0) * f64::from(d0);
+            q1 += f64::from(d1) * f64::from(d1);
+            q2 += f64::from(d2) * f64::from(d2);
+            q3 += f64::from(d3) * f64::from(d3);
         }
     }
-    let [q0, q1, q2, q3] = sq;
+    for &d in quads.remainder() {
+        q0 += f64::from(d) * f64::from(d);
+    }
     Some((i64::from(rs), ((q0 + q1) + (q2 + q3)) as i64, top))
 }
 
