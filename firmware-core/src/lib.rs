@@ -13,7 +13,7 @@
 //! | module | stage | state (RAM) |
 //! |---|---|---|
 //! | [`centroid`] | thresholded centre of gravity of the target(s) in each frame, row-streaming; [`centroid::track`]: the tracking window | `Centroider`, `Tracker`: about 100 B; `MultiCentroider<W, N>`: `2 W + 64 N` B |
-//! | [`lk`] | Lucas-Kanade (inverse-compositional) sub-pixel translation of a textured window, with a coarse integer search | `LkTracker<N, W>`: `20 N + 40 W` B + 2.7 KiB |
+//! | [`lk`] | Lucas-Kanade (inverse-compositional) sub-pixel translation of a textured window, with a coarse integer search | `LkTracker<N, W>`: `21 N + 40 W` B + 2.7 KiB |
 //! | [`dft`] | exact DFT of any length on top of power-of-two `microfft` (mixed radix + Bluestein) | caller buffers |
 //! | [`upsample`] | Fourier (zero-padding) resampling of camera-rate displacement to the ADC rate | `Upsampler<M, S>`: `8 M + 8 S` B |
 //! | [`exposure`] | exposure (box) transfer, E2PR, and its compensation (sinc or a binary-centroid table) | none (a `CorrectionTable<N>`: `4 N` B) |

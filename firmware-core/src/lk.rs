@@ -46,8 +46,9 @@
 //! the match is poor (ZNCC below [`LkConfig::min_score`]), the refinement does not settle
 //! (last step above 0.1 px), or the coarse search's best offset is on the edge of its range
 //! (the motion may exceed it): [`Flags::DIVERGED`]. A lost frame keeps the last displacement
-//! as the next start. Nothing here panics; memory is the tracker's three `N`-pixel arrays
-//! and `10 W` values of row buffers (capacities as const generics).
+//! as the next start. Nothing here panics; memory is the tracker's five `N`-value arrays,
+//! its `N`-pixel mask of dark template pixels and `10 W` values of row buffers (capacities as
+//! const generics).
 
 use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
@@ -511,9 +512,9 @@ impl LkResult {
 }
 
 /// A Lucas-Kanade tracker of one window of up to `N` pixels and rows of up to `W` pixels.
-/// RAM: `20 N + 40 W` bytes and 2.7 KiB (the spline's template moments) and a few words;
+/// RAM: `21 N + 40 W` bytes and 2.7 KiB (the spline's template moments) and a few words;
 /// `N` holds the spline's padded template, `(width + 8) (height + 8)` (a 31 x 31 window in
-/// `LkTracker<1521, 38>`: 34 776 B).
+/// `LkTracker<1521, 38>`: 36 296 B).
 #[derive(Debug, Clone)]
 pub struct LkTracker<const N: usize, const W: usize> {
     config: LkConfig,
