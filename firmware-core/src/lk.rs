@@ -880,6 +880,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         self.t_mean = mean;
         self.t_norm = sqrtf(ss);
+        // a new template: its own mask
+        self.dark_sat = 0;
         self.mark_dark(match self.config.saturation {
             0 => P::FULL,
             s => s,
@@ -2010,6 +2012,26 @@ mod tests {
         let r = t.track(&frame(&img));
         assert!(r.flags.contains(Flags::SATURATED), "{r:?}");
         assert_eq!(r.displacement(), None);
+        // the same clipped frame against a template taken again, from a dim frame, after one
+        // taken from a clipped frame (where those pixels were bright): the new template's
+        // mask decides, on both paths
+        for interpolation in [Interpolation::Bicubic, Interpolation::Spline] {
+            let mut t = tracker(4, interpolation);
+            let bright = speckle(0.0, 0.0, 400.0);
+            t.set_template(&frame(&bright), 29, 25).unwrap();
+            let r = t.track(&frame(&speckle(0.2, 0.1, 400.0)));
+            assert!(
+                !r.flags.contains(Flags::SATURATED),
+                "{interpolation:?} {r:?}"
+            );
+            let dim = speckle(0.0, 0.0, 100.0);
+            t.set_template(&frame(&dim), 29, 25).unwrap();
+            let r = t.track(&frame(&speckle(0.2, 0.1, 400.0)));
+            assert!(
+                r.flags.contains(Flags::SATURATED),
+                "{interpolation:?} {r:?}"
+            );
+        }
         // a tracker without a template reports no displacement
         let mut t = Lk::try_new(LkConfig::new(31, 31)).unwrap();
         assert_eq!(t.track(&frame(&img)).displacement(), None);
