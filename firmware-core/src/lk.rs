@@ -39,10 +39,12 @@
 //! [`Flags`] when: the window (with the interpolation's support) leaves the frame
 //! ([`Flags::BORDER`]); the template has too little texture in some direction (the smaller
 //! eigenvalue of `H` per pixel below [`LkConfig::min_texture`]: [`Flags::FLAT`], a uniform
-//! window or a straight edge moving along itself); the window has more pixels at or above the
-//! saturation level than the template (by a quarter and two pixels: [`Flags::SATURATED`], the
-//! target brighter than in the reference frame, or a neighbour's clipped pixels: brightness
-//! constancy fails; a clipped plateau that moves with the template is tracked);
+//! window or a straight edge moving along itself); more than `2 + n / 50` of the window's `n`
+//! pixels are at or above the saturation level where the template is dark (below 3/4 of that
+//! level at the pixel and its eight neighbours: a mask made once per template):
+//! [`Flags::SATURATED`], the target brighter than in the reference frame, or a neighbour's
+//! clipped pixels: brightness constancy fails (a clipped plateau that moves with the template
+//! is tracked);
 //! the match is poor (ZNCC below [`LkConfig::min_score`]), the refinement does not settle
 //! (last step above 0.1 px), or the coarse search's best offset is on the edge of its range
 //! (the motion may exceed it): [`Flags::DIVERGED`]. A lost frame keeps the last displacement
