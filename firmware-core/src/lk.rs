@@ -55,8 +55,9 @@
 use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
 
-// The cross moments' kernels: a tree of products per row on 32-bit ARM (the M4's scalar FPU),
-// eight lanes across the window elsewhere (SIMD registers); both in the host's tests.
+// The per-pixel kernels (cross moments, `[1 2 1]` row smoothing, clip count): the M4's on
+// 32-bit ARM (a scalar FPU: trees of products per row, one rolling pass), eight lanes the
+// compiler vectorises elsewhere; both in the host's tests.
 #[cfg(any(test, not(target_arch = "arm")))]
 mod lanes;
 #[cfg(any(test, target_arch = "arm"))]
