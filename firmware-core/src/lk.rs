@@ -1452,7 +1452,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     /// column, then along the row; the smoothed value `v` (the template's scale times the
     /// kernel's total squared) is stored as `v - M`, `M` the nearest integer to the template's
     /// mean on that scale, exact in `f32` (the cross moments and the window's sums are formed
-    /// from these, see [`Cross::finish`]). Returns the count of newly clipped pixels.
+    /// from these, see [`Cross::window`]). Returns the count of newly clipped pixels.
     fn smooth_window<P: Pixel, const T: usize>(
         &mut self,
         frame: &Frame<'_, P>,

@@ -1,4 +1,4 @@
-//! The cross moments' kernels for targets with SIMD registers (x86-64, AArch64): each lag's
+//! The LK kernels for targets with SIMD registers (x86-64, AArch64). Cross moments: each lag's
 //! products accumulated in eight lanes across the whole window (two SSE or one AVX register
 //! per lag, which the compiler vectorises), the lanes added once at the end. The same sums as
 //! the M4's kernels, in another order (f32 rounding differs in the last bits).
@@ -113,9 +113,8 @@ pub(super) fn lag_sums<const L: usize>(
 /// (and nothing stored) when the rows are not that long or the row is longer than 2047
 /// pixels. Each value from the nine source pixels around it, in one loop the compiler
 /// vectorises (a buffer of column sums between two passes measured slower), then the squares
-/// of the stored values in four `f64` lanes. Exact: a value is below 2^20
-/// in magnitude, so its square below 2^40 and a row's sum of squares below 2^51, exact in
-/// `f64`; the sum in `i32`.
+/// of the stored values in four `f64` lanes. Exact: a value is below 2^20 in magnitude, so its
+/// square below 2^40 and a row's sum of squares below 2^51, exact in `f64`; the sum in `i32`.
 #[inline(always)]
 pub(super) fn smooth_row3<P: Pixel>(
     a: &[P],

@@ -1,8 +1,9 @@
-//! The cross moments' kernels for the Cortex-M4 (and the host's tests): per window row, a
+//! The LK kernels for the Cortex-M4 (and the host's tests). Cross moments: per window row, a
 //! tree of eight products per lag added to the row's sum, the window's sum of the rows' sums.
 //! The M4's FPU is scalar: eight pixels a step reuse each loaded value for every lag, which
-//! costs fewer instructions there than lanes would (3.7 instructions per multiply-add).
-//! Only slices come in; this backend knows nothing of its caller.
+//! costs fewer instructions there than lanes would (3.7 instructions per multiply-add). The
+//! `[1 2 1]` smoothing in one rolling pass; the clip count reads the mask only at clipped
+//! pixels. Only slices come in; this backend knows nothing of its caller.
 
 use crate::centroid::Pixel;
 
@@ -60,7 +61,7 @@ pub(super) fn lag_sums<const L: usize>(
 
 /// `r[v] = sum_i g[i] c[v][i]` for `V` rows of coefficients as long as `g` (a whole number
 /// of groups of four), eight pixels at a time (one row's sums: rounding grows with the row,
-/// not the window). A shorter `c[v]` (never, for the rows [`Cross::column`] passes) ends its
+/// not the window). A shorter `c[v]` (never, for the rows [`column_sums`] passes) ends its
 /// sum.
 #[inline(always)]
 fn column_dots<const V: usize>(g: &[f32], c: &[&[f32]; V]) -> [f32; V] {
@@ -91,7 +92,7 @@ fn column_dots<const V: usize>(g: &[f32], c: &[&[f32]; V]) -> [f32; V] {
 /// `sum_i g[i] c[i + k]` for the lags `k = 0..L` (`L <= 4`; `g` a whole number of groups of
 /// four, `c` at least `L - 1` longer), eight pixels at a time so that the products reuse the
 /// loaded values (one row's sums: rounding grows with the row, not the window). A shorter
-/// `c` (never, for the rows [`Cross::row`] passes) ends the sums.
+/// `c` (never, for the rows [`lag_sums`] passes) ends the sums.
 #[inline(always)]
 fn lag_dots<const L: usize>(g: &[f32], c: &[f32]) -> [f32; L] {
     let mut r = [0.0f32; L];
@@ -121,11 +122,10 @@ fn lag_dots<const L: usize>(g: &[f32], c: &[f32]) -> [f32; L] {
 }
 
 /// One window row smoothed by `[1 2 1]` down the columns of the source rows `a`, `b`, `c`
-/// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean` (see
-/// `emit`); returns the row's sum and sum of squares of the stored values and the largest
-/// pixel of `b`, or `None` (and nothing stored) when the rows are not that long or the row is
-/// longer than 2047 pixels (its sum then might not fit the `i32` kept here: values are below
-/// 2^20).
+/// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean`; returns the
+/// row's sum and sum of squares of the stored values and the largest pixel of `b`, or `None`
+/// (and nothing stored) when the rows are not that long or the row is longer than 2047
+/// pixels (its sum then might not fit the `i32` kept here: values are below 2^20).
 #[inline(always)]
 pub(super) fn smooth_row3<P: Pixel>(
     a: &[P],
