@@ -89,9 +89,16 @@ pub enum Interpolation {
 const SPLINE_MARGIN: usize = 4;
 
 /// Offsets of the spline's taps from a whole pixel, `-2..=2`: the shift `s` of the template
-/// stays within `+-3/4` px (see `LkTracker::spline_error`), so its four taps
+/// stays below one pixel ([`KEEP`], see `LkTracker::spline_error`), so its four taps
 /// `floor(s) - 1 ..= floor(s) + 2` are among these five.
 const LAGS: usize = 5;
+
+/// How far, px per axis, `p` may move from the whole pixel of the window already read before
+/// the window is read again at the new nearest pixel (see `LkTracker::spline_error`): any
+/// shift below one pixel keeps the spline's taps among the [`LAGS`], so the window is kept as
+/// long as it can be; 0.95 leaves the taps' floor clear of rounding. (It was 3/4: a third of
+/// the frames of a broadband motion then read, smoothed and correlated a second window.)
+const KEEP: f32 = 0.95;
 
 /// The template moments of the spline path: with `c'` the padded template's coefficients
 /// less the template's mean and `c'_o` them displaced by the lag `o = (ox, oy)` (`-2..=2`
@@ -1293,7 +1300,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     /// returns `sum [gx e, gy e]` with `e = I(x + q) - T(x - (p - q))` and the ZNCC.
     ///
     /// `q` is the nearest whole pixel, except that within a frame the window already read is
-    /// kept while `p` stays within 3/4 px of it (hysteresis): when the template does not match
+    /// kept while `p` stays within [`KEEP`] px of it (hysteresis): when the template does not match
     /// the frame exactly (a blur that changes from frame to frame), the error measured on two
     /// neighbouring windows differs slightly, and with the plain nearest pixel an optimum near
     /// a half pixel made the iteration jump between the two windows without settling.
@@ -1304,7 +1311,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         sat: u16,
     ) -> Result<((f32, f32), f32), Flags> {
         let (qx, qy) = match self.g_at {
-            Some((x, y)) if fabsf(p.0 - x as f32) <= 0.75 && fabsf(p.1 - y as f32) <= 0.75 => {
+            Some((x, y)) if fabsf(p.0 - x as f32) <= KEEP && fabsf(p.1 - y as f32) <= KEEP => {
                 (x as f32, y as f32)
             }
             _ => (floorf(p.0 + 0.5), floorf(p.1 + 0.5)),
@@ -1321,7 +1328,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             self.load_window(frame, q, sat)?;
             self.g_at = Some(q);
         }
-        // the template's pixels shifted by s = q - p, |s| <= 3/4: taps at a - 1 .. a + 2,
+        // the template's pixels shifted by s = q - p, |s| <= KEEP < 1: taps at a - 1 .. a + 2,
         // among the lags -2 ..= 2
         let (sx, sy) = (qx - p.0, qy - p.1);
         let (ax, ay) = (floorf(sx), floorf(sy));
@@ -1740,7 +1747,15 @@ mod tests {
             Interpolation::Bilinear,
         ] {
             let mut worst = 0.0f32;
-            for &(dx, dy) in &[(0.3, -0.7), (-0.45, 0.25), (0.5, 0.5), (1.2, -0.9)] {
+            // (0.93, -0.93): refined on the first window, kept up to `KEEP` px
+            let shifts = [
+                (0.3, -0.7),
+                (-0.45, 0.25),
+                (0.5, 0.5),
+                (1.2, -0.9),
+                (0.93, -0.93),
+            ];
+            for &(dx, dy) in &shifts {
                 let mut t = tracker(0, interpolation);
                 let img = speckle(dx, dy, 200.0);
                 let r = t.track(&frame(&img));

@@ -30,8 +30,12 @@ use std::path::Path;
 /// AArch64) accumulated in eight lanes across the window, and the window's `[1 2 1]` smoothing
 /// in two passes there (the smoothing exact as before; the moments' `f32` sums in another
 /// order; the M4 keeps revision 6's): studies with `tracker = "lk"` move in the 7th
-/// significant digit (the same study 4.4749758244 -> 4.4749749899 mm/kN).
-pub const MODEL_REVISION: u32 = 7;
+/// significant digit (the same study 4.4749758244 -> 4.4749749899 mm/kN); 8 = the Lucas-Kanade
+/// window kept while the position stays within 0.95 px of it (was 3/4 px; fewer windows read
+/// again, the same least-squares step on a window one pixel off): studies with
+/// `tracker = "lk"` move in the 7th significant digit (the same study 4.4749749899 ->
+/// 4.4749757051 mm/kN, mode 2 2.8392920494 -> 2.8392913342; at 180 ms unchanged).
+pub const MODEL_REVISION: u32 = 8;
 
 /// The revision recorded in study directory `dir` (1 when the file is absent: directories
 /// written before revisions were recorded).
