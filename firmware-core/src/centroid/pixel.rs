@@ -29,6 +29,13 @@ pub(crate) mod sealed {
         /// The threshold `t` for this pixel type (8-bit: `t >= 255` selects nothing).
         fn threshold(t: u16) -> Self;
 
+        /// The pixels as bytes when they are 8-bit (the kernels that pack them 16 to a
+        /// register).
+        #[inline(always)]
+        fn bytes(_row: &[Self]) -> Option<&[u8]> {
+            None
+        }
+
         /// The row kernel of this type and mode.
         fn row_sums(row: &[Self], t: Self, binary: bool) -> RowSums;
 
@@ -72,6 +79,11 @@ impl Pixel for u16 {
 }
 
 impl sealed::Kernels for u8 {
+    #[inline(always)]
+    fn bytes(row: &[u8]) -> Option<&[u8]> {
+        Some(row)
+    }
+
     #[inline(always)]
     fn threshold(t: u16) -> Self {
         if t > 255 {

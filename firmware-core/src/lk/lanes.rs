@@ -1,12 +1,14 @@
-//! The LK kernels for targets with SIMD registers (x86-64, AArch64). Cross moments: each lag's
-//! products accumulated in eight lanes across the whole window (two SSE or one AVX register
-//! per lag, which the compiler vectorises), the lanes added once at the end. The same sums as
-//! the M4's kernels, in another order (f32 rounding differs in the last bits).
-//! The window's `[1 2 1]` smoothing likewise in one vectorisable loop instead of the M4's
-//! rolling pass.
+//! The LK kernels for targets with SIMD registers (x86-64, AArch64), written with the `wide`
+//! crate's safe vector types so that the compiler's choices do not decide the layout. Cross
+//! moments: each lag's products accumulated in eight lanes (two registers of four) across the
+//! whole window, the lanes added once at the end; the same sums as the M4's kernels, in
+//! another order (f32 rounding differs in the last bits). The window's `[1 2 1]` smoothing in
+//! one pass from the nine source pixels, eight 8-bit pixels at a time in 16-bit lanes (other
+//! pixel types in a loop the compiler vectorises), instead of the M4's rolling pass.
 //! Only slices come in; this backend knows nothing of its caller.
 
 use crate::centroid::Pixel;
+use wide::f32x4;
 
 /// The eight lanes of an accumulator added, pairwise.
 #[inline(always)]
@@ -14,26 +16,22 @@ fn total([a0, a1, a2, a3, a4, a5, a6, a7]: [f32; 8]) -> f32 {
     ((a0 + a4) + (a2 + a6)) + ((a1 + a5) + (a3 + a7))
 }
 
-/// `acc[lane] += g[lane] c[lane]` for the eight lanes.
+/// The four values of `s` from `at` in one register, if there are that many.
 #[inline(always)]
-fn madd(acc: &mut [f32; 8], g: &[f32; 8], c: &[f32; 8]) {
-    for ((a, g), c) in acc.iter_mut().zip(g).zip(c) {
-        *a += g * c;
-    }
+fn four(s: &[f32], at: usize) -> Option<f32x4> {
+    s.get(at..at + 4)
+        .and_then(|s| <[f32; 4]>::try_from(s).ok())
+        .map(f32x4::from)
 }
 
-/// [`madd`] for the first four lanes (a row's last group of four).
+/// [`total`] of the eight lanes held as two registers.
 #[inline(always)]
-fn madd4(acc: &mut [f32; 8], g: &[f32; 4], c: &[f32; 4]) {
-    for ((a, g), c) in acc.iter_mut().zip(g).zip(c) {
-        *a += g * c;
-    }
-}
-
-/// The `N` values of `s` from `at`, if there are that many.
-#[inline(always)]
-fn at<const N: usize>(s: &[f32], at: usize) -> Option<&[f32; N]> {
-    s.get(at..at + N).and_then(|s| s.try_into().ok())
+fn lanes(lo: Option<&f32x4>, hi: Option<&f32x4>) -> f32 {
+    let ([a0, a1, a2, a3], [a4, a5, a6, a7]) = (
+        lo.map_or([0.0; 4], |v| v.to_array()),
+        hi.map_or([0.0; 4], |v| v.to_array()),
+    );
+    total([a0, a1, a2, a3, a4, a5, a6, a7])
 }
 
 /// `sum_j sum_i g[j gs + i] c[(j + v) pw + i]` over the `th` rows of the window `g` (rows
@@ -47,25 +45,29 @@ pub(super) fn column_sums<const V: usize>(
     pw: usize,
     th: usize,
 ) -> [f32; V] {
-    let mut acc = [[0.0f32; 8]; V];
+    // lanes 0..4 and 4..8 of each lag's accumulator
+    let (mut lo, mut hi) = ([f32x4::ZERO; V], [f32x4::ZERO; V]);
     let gs = gs.max(4);
     for (j, row) in g.chunks_exact(gs).take(th).enumerate() {
-        for (v, av) in acc.iter_mut().enumerate() {
+        for (v, (lo, hi)) in lo.iter_mut().zip(hi.iter_mut()).enumerate() {
             let start = (j + v) * pw;
             let Some(cr) = c.get(start..start + gs) else {
                 continue;
             };
             let mut n = 0;
-            while let (Some(gw), Some(cw)) = (at::<8>(row, n), at::<8>(cr, n)) {
-                madd(av, gw, cw);
+            while let (Some(g0), Some(g1), Some(c0), Some(c1)) =
+                (four(row, n), four(row, n + 4), four(cr, n), four(cr, n + 4))
+            {
+                *lo += g0 * c0;
+                *hi += g1 * c1;
                 n += 8;
             }
-            if let (Some(gw), Some(cw)) = (at::<4>(row, n), at::<4>(cr, n)) {
-                madd4(av, gw, cw);
+            if let (Some(g0), Some(c0)) = (four(row, n), four(cr, n)) {
+                *lo += g0 * c0;
             }
         }
     }
-    acc.map(total)
+    core::array::from_fn(|v| lanes(lo.get(v), hi.get(v)))
 }
 
 /// `sum_j sum_i g[j gs + i] c[j pw + i + k]` over the `th` rows of the window `g` (rows `gs`
@@ -80,7 +82,8 @@ pub(super) fn lag_sums<const L: usize>(
     pw: usize,
     th: usize,
 ) -> [f32; L] {
-    let mut acc = [[0.0f32; 8]; L];
+    // lanes 0..4 and 4..8 of each lag's accumulator
+    let (mut lo, mut hi) = ([f32x4::ZERO; L], [f32x4::ZERO; L]);
     let gs = gs.max(4);
     for (j, row) in g.chunks_exact(gs).take(th).enumerate() {
         let start = j * pw;
@@ -88,31 +91,37 @@ pub(super) fn lag_sums<const L: usize>(
             break;
         };
         let mut n = 0;
-        while let Some(gw) = at::<8>(row, n) {
-            for (k, ak) in acc.iter_mut().enumerate() {
-                if let Some(cw) = at::<8>(cr, n + k) {
-                    madd(ak, gw, cw);
+        // the step's coefficients for all the lags in one slice of a known length: one bound
+        // check per step
+        while let (Some(g0), Some(g1), Some(cs)) =
+            (four(row, n), four(row, n + 4), cr.get(n..n + 7 + L))
+        {
+            for (k, (lo, hi)) in lo.iter_mut().zip(hi.iter_mut()).enumerate() {
+                if let (Some(c0), Some(c1)) = (four(cs, k), four(cs, k + 4)) {
+                    *lo += g0 * c0;
+                    *hi += g1 * c1;
                 }
             }
             n += 8;
         }
-        if let Some(gw) = at::<4>(row, n) {
-            for (k, ak) in acc.iter_mut().enumerate() {
-                if let Some(cw) = at::<4>(cr, n + k) {
-                    madd4(ak, gw, cw);
+        if let Some(g0) = four(row, n) {
+            for (k, lo) in lo.iter_mut().enumerate() {
+                if let Some(c0) = four(cr, n + k) {
+                    *lo += g0 * c0;
                 }
             }
         }
     }
-    acc.map(total)
+    core::array::from_fn(|k| lanes(lo.get(k), hi.get(k)))
 }
 
 /// One window row smoothed by `[1 2 1]` down the columns of the source rows `a`, `b`, `c`
 /// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean`; returns the
 /// row's sum and sum of squares of the stored values and the largest pixel of `b`, or `None`
 /// (and nothing stored) when the rows are not that long or the row is longer than 2047
-/// pixels. Each value from the nine source pixels around it, in one loop the compiler
-/// vectorises (a buffer of column sums between two passes measured slower), then the squares
+/// pixels. Each value from the nine source pixels around it, in one pass (eight at a time in
+/// 16-bit lanes for 8-bit pixels, see [`smooth_bytes`]; a buffer of column sums between two
+/// passes measured slower), then the squares
 /// of the stored values in four `f64` lanes. Exact: a value is below 2^20 in magnitude, so its
 /// square below 2^40 and a row's sum of squares below 2^51, exact in `f64`; the sum in `i32`.
 #[inline(always)]
@@ -141,12 +150,18 @@ pub(super) fn smooth_row3<P: Pixel>(
                 i32::from(a.into()) + 2 * i32::from(b.into()) + i32::from(c.into())
             })
     };
-    let mut rs = 0i32;
-    for (((o, x0), x1), x2) in out.iter_mut().zip(cols(0)).zip(cols(1)).zip(cols(2)) {
-        let d = x0 + 2 * x1 + x2 - mean;
-        *o = d as f32;
-        rs += d;
-    }
+    let rs = match (P::bytes(a), P::bytes(b), P::bytes(c)) {
+        (Some(a), Some(b), Some(c)) if n >= 8 => smooth_bytes(a, b, c, out, mean),
+        _ => {
+            let mut rs = 0i32;
+            for (((o, x0), x1), x2) in out.iter_mut().zip(cols(0)).zip(cols(1)).zip(cols(2)) {
+                let d = x0 + 2 * x1 + x2 - mean;
+                *o = d as f32;
+                rs += d;
+            }
+            rs
+        }
+    };
     let (mut q0, mut q1, mut q2, mut q3) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut quads = out.chunks_exact(4);
     for o4 in &mut quads {
@@ -161,6 +176,47 @@ pub(super) fn smooth_row3<P: Pixel>(
         q0 += f64::from(d) * f64::from(d);
     }
     Some((i64::from(rs), ((q0 + q1) + (q2 + q3)) as i64, top))
+}
+
+/// [`smooth_row3`]'s values for 8-bit rows (`n = out.len() >= 8`, the rows `n + 2` long),
+/// eight at a time in 16-bit lanes (a value is at most 16 x 255); when `n` is not a multiple
+/// of eight the last eight overlap the ones before (the same values written again, counted
+/// once in the returned sum of the stored values).
+#[inline(always)]
+fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> i32 {
+    use wide::{i16x8, i32x8, u8x16};
+    let n = out.len();
+    // the eight pixels of `r` from `at` as 16-bit lanes
+    let px = |r: &[u8], at: usize| -> i16x8 {
+        let mut v = [0u8; 16];
+        if let (Some(d), Some(s)) = (v.get_mut(..8), r.get(at..at + 8)) {
+            d.copy_from_slice(s);
+        }
+        i16x8::from_u8x16_low(u8x16::from(v))
+    };
+    let row = |r: &[u8], at: usize| px(r, at) + (px(r, at + 1) << 1) + px(r, at + 2);
+    let m = i32x8::splat(mean);
+    let block = |at: usize, out: &mut [f32]| -> i32x8 {
+        let v = row(a, at) + (row(b, at) << 1) + row(c, at);
+        let d = i32x8::from_i16x8(v) - m;
+        if let Some(o) = out.get_mut(at..at + 8) {
+            o.copy_from_slice(&d.round_float().to_array());
+        }
+        d
+    };
+    let mut sum = i32x8::splat(0);
+    let mut at = 0;
+    while at + 8 <= n {
+        sum += block(at, out);
+        at += 8;
+    }
+    let mut rs = sum.to_array().iter().sum::<i32>();
+    if at < n {
+        // the last n - at values from a block ending at n
+        let d = block(n - 8, out).to_array();
+        rs += d.get(8 - (n - at)..).unwrap_or(&[]).iter().sum::<i32>();
+    }
+    rs
 }
 
 /// Pixels of a window row (`row`) at or above `sat` where the template is dark around them
