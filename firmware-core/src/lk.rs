@@ -2197,6 +2197,12 @@ mod tests {
             let p8: Vec<u8> = (0..3 * n + 6).map(|k| noise(k, 255) as u8).collect();
             check(&p8, n, 2040);
             check(&p8, n, 0);
+            // the extremes of 8-bit values against the mean (the largest squares: the 16-bit
+            // lanes' sums must not overflow), and a mean beyond 8-bit values (a template
+            // taken from 16-bit frames)
+            check(&std::vec![255u8; 3 * n + 6], n, 0);
+            check(&std::vec![0u8; 3 * n + 6], n, 16 * 255);
+            check(&p8, n, 1 << 19);
             let p16: Vec<u16> = (0..3 * n + 6).map(|k| noise(k, 65535) as u16).collect();
             check(&p16, n, 1 << 19);
         }

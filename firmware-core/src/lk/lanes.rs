@@ -150,18 +150,19 @@ pub(super) fn smooth_row3<P: Pixel>(
                 i32::from(a.into()) + 2 * i32::from(b.into()) + i32::from(c.into())
             })
     };
-    let rs = match (P::bytes(a), P::bytes(b), P::bytes(c)) {
-        (Some(a), Some(b), Some(c)) if n >= 8 => smooth_bytes(a, b, c, out, mean),
-        _ => {
-            let mut rs = 0i32;
-            for (((o, x0), x1), x2) in out.iter_mut().zip(cols(0)).zip(cols(1)).zip(cols(2)) {
-                let d = x0 + 2 * x1 + x2 - mean;
-                *o = d as f32;
-                rs += d;
-            }
-            rs
+    if let (Some(a), Some(b), Some(c)) = (P::bytes(a), P::bytes(b), P::bytes(c)) {
+        // 8-bit pixels and a mean on their scale (16 x 255): 16-bit lanes hold every value
+        if n >= 8 && (0..=BYTE_MAX).contains(&mean) {
+            let (rs, sq) = smooth_bytes(a, b, c, out, mean);
+            return Some((rs, sq, top));
         }
-    };
+    }
+    let mut rs = 0i32;
+    for (((o, x0), x1), x2) in out.iter_mut().zip(cols(0)).zip(cols(1)).zip(cols(2)) {
+        let d = x0 + 2 * x1 + x2 - mean;
+        *o = d as f32;
+        rs += d;
+    }
     let (mut q0, mut q1, mut q2, mut q3) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut quads = out.chunks_exact(4);
     for o4 in &mut quads {
@@ -178,13 +179,19 @@ pub(super) fn smooth_row3<P: Pixel>(
     Some((i64::from(rs), ((q0 + q1) + (q2 + q3)) as i64, top))
 }
 
-/// [`smooth_row3`]'s values for 8-bit rows (`n = out.len() >= 8`, the rows `n + 2` long),
-/// eight at a time in 16-bit lanes (a value is at most 16 x 255); when `n` is not a multiple
-/// of eight the last eight overlap the ones before (the same values written again, counted
-/// once in the returned sum of the stored values).
+/// The largest `[1 2 1]`-smoothed 8-bit value, 16 x 255.
+const BYTE_MAX: i32 = 16 * 255;
+
+/// [`smooth_row3`]'s values for 8-bit rows (`n = out.len() >= 8`, the rows `n + 2` long,
+/// `0 <= mean <= 16 x 255`), eight at a time in 16-bit lanes (a value and its difference from
+/// the mean are at most 16 x 255 in magnitude); returns the sum and the sum of squares of the
+/// stored values, in integers (the squares in pairs of 32-bit lanes, `pmaddwd`, moved to `i64`
+/// every 32 steps: a lane then holds at most 64 x 4080^2 < 2^31). When `n` is not a multiple
+/// of eight the last eight overlap the ones before: the same values written again, counted
+/// once.
 #[inline(always)]
-fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> i32 {
-    use wide::{i16x8, i32x8, u8x16};
+fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> (i64, i64) {
+    use wide::{i16x8, i32x4, i32x8, u8x16};
     let n = out.len();
     // the eight pixels of `r` from `at` as 16-bit lanes
     let px = |r: &[u8], at: usize| -> i16x8 {
@@ -195,28 +202,47 @@ fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> i32
         i16x8::from_u8x16_low(u8x16::from(v))
     };
     let row = |r: &[u8], at: usize| px(r, at) + (px(r, at + 1) << 1) + px(r, at + 2);
-    let m = i32x8::splat(mean);
-    let block = |at: usize, out: &mut [f32]| -> i32x8 {
-        let v = row(a, at) + (row(b, at) << 1) + row(c, at);
-        let d = i32x8::from_i16x8(v) - m;
+    let m = i16x8::splat(mean as i16);
+    // the eight values from `at`, stored; returned as differences from the mean, in 16 and in
+    // 32-bit lanes
+    let block = |at: usize, out: &mut [f32]| -> (i16x8, i32x8) {
+        let d = row(a, at) + (row(b, at) << 1) + row(c, at) - m;
+        let wide = i32x8::from_i16x8(d);
         if let Some(o) = out.get_mut(at..at + 8) {
-            o.copy_from_slice(&d.round_float().to_array());
+            o.copy_from_slice(&wide.round_float().to_array());
         }
-        d
+        (d, wide)
     };
-    let mut sum = i32x8::splat(0);
+    // the sum in 32-bit lanes (at most 256 x 4080 each), the squares as above
+    let (mut sum, mut sq, mut total) = (i32x8::splat(0), i32x4::splat(0), 0i64);
+    let flush = |sq: &mut i32x4, total: &mut i64| {
+        *total += sq.to_array().iter().map(|&v| i64::from(v)).sum::<i64>();
+        *sq = i32x4::splat(0);
+    };
     let mut at = 0;
+    let mut steps = 0u32;
     while at + 8 <= n {
-        sum += block(at, out);
+        let (d, wide) = block(at, out);
+        sum += wide;
+        sq += d.dot(d);
         at += 8;
+        steps += 1;
+        if steps % 32 == 0 {
+            flush(&mut sq, &mut total);
+        }
     }
-    let mut rs = sum.to_array().iter().sum::<i32>();
     if at < n {
-        // the last n - at values from a block ending at n
-        let d = block(n - 8, out).to_array();
-        rs += d.get(8 - (n - at)..).unwrap_or(&[]).iter().sum::<i32>();
+        // the last n - at values from a block ending at n: its first 8 - (n - at) lanes were
+        // counted already
+        let skip = 8 - (n - at);
+        let keep = core::array::from_fn::<i16, 8, _>(|i| if i < skip { 0 } else { -1 });
+        let (d, _) = block(n - 8, out);
+        let d = d & i16x8::from(keep);
+        sum += i32x8::from_i16x8(d);
+        sq += d.dot(d);
     }
-    rs
+    flush(&mut sq, &mut total);
+    (i64::from(sum.reduce_add()), total)
 }
 
 /// Pixels of a window row (`row`) at or above `sat` where the template is dark around them
