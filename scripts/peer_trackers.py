@@ -20,8 +20,8 @@ Ours: `host-harness track --points REC/points.csv` with `--tracker lk`, `weighte
 `blob` (threshold 127) for the accuracy. Time: for `lk`, the `lk_timing` example (firmware-core's
 tracker on the same windows with the CLI's settings, frames preloaded as the peers'; build it
 with `cargo build --release -p host-harness --example lk_timing`), run right before and right
-after pyidi and the slower of the two kept (the machine's speed may change within a run); for `weighted`, the
-process's time minus that of the same command with `blob` (decoding and writing, which the
+after pyidi and the slower of the two kept (the machine's speed may change within a run); for
+`weighted`, the process's time minus that of the same command with `blob` (decoding and writing, which the
 peers do not pay), per target-frame.
 
 RMS error as users compute it: per target, the estimated y minus the true y, its mean removed,
@@ -125,9 +125,8 @@ def main():
         base, _ = ours("blob")
         for tracker in ["lk", "weighted", "blob"]:
             dt, ys = ours(tracker)
-            cost = None if tracker == "blob" else max(dt - base, 0.0) / (n * k)
-            if tracker == "lk":
-                cost = None  # timed beside pyidi below
+            # lk: timed beside pyidi below
+            cost = None if tracker in ("lk", "blob") else max(dt - base, 0.0) / (n * k)
             results.append((f"ours, {tracker}", rms_errors(ys, truth), cost))
 
     # pyidi LucasKanade
@@ -145,8 +144,8 @@ def main():
         dt = time.perf_counter() - t0
         after = lk_preloaded(args.lk_timing, rec)
         print(f"ours, lk: {before * 1e6:.2f} us before pyidi, {after * 1e6:.2f} after")
-        name, rms, _ = results[0]
-        results[0] = (name, rms, max(before, after))
+        results = [(name, rms, max(before, after) if name == "ours, lk" else cost)
+                   for name, rms, cost in results]
         d = np.asarray(lk.displacements)  # (points, frames, 2): (y, x)
         ys = [[round(y) + d[t, f, 0] for f in range(n)] for t, (x, y) in enumerate(pts)]
         results.append(("pyidi 1.4 LucasKanade", rms_errors(ys, truth), dt / (n * k)))

@@ -56,8 +56,8 @@ use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
 
 // The per-pixel kernels (cross moments, `[1 2 1]` row smoothing, clip count): the M4's on
-// 32-bit ARM (a scalar FPU: trees of products per row, one rolling pass), eight lanes the
-// compiler vectorises elsewhere; both in the host's tests.
+// 32-bit ARM (a scalar FPU: trees of products per row, one rolling pass), vector registers
+// (the `wide` crate's types) elsewhere; both in the host's tests.
 #[cfg(any(test, not(target_arch = "arm")))]
 mod lanes;
 #[cfg(any(test, target_arch = "arm"))]
@@ -1300,10 +1300,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     /// returns `sum [gx e, gy e]` with `e = I(x + q) - T(x - (p - q))` and the ZNCC.
     ///
     /// `q` is the nearest whole pixel, except that within a frame the window already read is
-    /// kept while `p` stays within [`KEEP`] px of it (hysteresis): when the template does not match
-    /// the frame exactly (a blur that changes from frame to frame), the error measured on two
-    /// neighbouring windows differs slightly, and with the plain nearest pixel an optimum near
-    /// a half pixel made the iteration jump between the two windows without settling.
+    /// kept while `p` stays within [`KEEP`] px of it (hysteresis): when the template does not
+    /// match the frame exactly (a blur that changes from frame to frame), the error measured on
+    /// two neighbouring windows differs slightly, and with the plain nearest pixel an optimum
+    /// near a half pixel made the iteration jump between the two windows without settling.
     fn spline_error<P: Pixel>(
         &mut self,
         frame: &Frame<'_, P>,

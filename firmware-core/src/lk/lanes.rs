@@ -24,14 +24,15 @@ fn four(s: &[f32], at: usize) -> Option<f32x4> {
         .map(f32x4::from)
 }
 
-/// [`total`] of the eight lanes held as two registers.
+/// [`total`] of each accumulator's eight lanes, held as two registers (`lo`, `hi`).
 #[inline(always)]
-fn lanes(lo: Option<&f32x4>, hi: Option<&f32x4>) -> f32 {
-    let ([a0, a1, a2, a3], [a4, a5, a6, a7]) = (
-        lo.map_or([0.0; 4], |v| v.to_array()),
-        hi.map_or([0.0; 4], |v| v.to_array()),
-    );
-    total([a0, a1, a2, a3, a4, a5, a6, a7])
+fn totals<const K: usize>(lo: [f32x4; K], hi: [f32x4; K]) -> [f32; K] {
+    let mut out = [0.0; K];
+    for ((o, lo), hi) in out.iter_mut().zip(lo).zip(hi) {
+        let ([a0, a1, a2, a3], [a4, a5, a6, a7]) = (lo.to_array(), hi.to_array());
+        *o = total([a0, a1, a2, a3, a4, a5, a6, a7]);
+    }
+    out
 }
 
 /// `sum_j sum_i g[j gs + i] c[(j + v) pw + i]` over the `th` rows of the window `g` (rows
@@ -67,7 +68,7 @@ pub(super) fn column_sums<const V: usize>(
             }
         }
     }
-    core::array::from_fn(|v| lanes(lo.get(v), hi.get(v)))
+    totals(lo, hi)
 }
 
 /// `sum_j sum_i g[j gs + i] c[j pw + i + k]` over the `th` rows of the window `g` (rows `gs`
@@ -112,18 +113,18 @@ pub(super) fn lag_sums<const L: usize>(
             }
         }
     }
-    core::array::from_fn(|k| lanes(lo.get(k), hi.get(k)))
+    totals(lo, hi)
 }
 
 /// One window row smoothed by `[1 2 1]` down the columns of the source rows `a`, `b`, `c`
 /// (each `out.len() + 2` pixels) and then along the row, stored as `v - mean`; returns the
 /// row's sum and sum of squares of the stored values and the largest pixel of `b`, or `None`
 /// (and nothing stored) when the rows are not that long or the row is longer than 2047
-/// pixels. Each value from the nine source pixels around it, in one pass (eight at a time in
-/// 16-bit lanes for 8-bit pixels, see [`smooth_bytes`]; a buffer of column sums between two
-/// passes measured slower), then the squares
-/// of the stored values in four `f64` lanes. Exact: a value is below 2^20 in magnitude, so its
-/// square below 2^40 and a row's sum of squares below 2^51, exact in `f64`; the sum in `i32`.
+/// pixels. Each value from the nine source pixels around it, in one pass (a buffer of column
+/// sums between two passes measured slower). 8-bit pixels: see [`smooth_bytes`]; others: a
+/// loop the compiler vectorises, then the squares of the stored values in four `f64` lanes.
+/// Exact: a value is below 2^20 in magnitude, so its square below 2^40 and a row's sum of
+/// squares below 2^51, exact in `f64`; the sum in `i32`.
 #[inline(always)]
 pub(super) fn smooth_row3<P: Pixel>(
     a: &[P],
@@ -207,11 +208,11 @@ fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> (i6
     // 32-bit lanes
     let block = |at: usize, out: &mut [f32]| -> (i16x8, i32x8) {
         let d = row(a, at) + (row(b, at) << 1) + row(c, at) - m;
-        let wide = i32x8::from_i16x8(d);
+        let d32 = i32x8::from_i16x8(d);
         if let Some(o) = out.get_mut(at..at + 8) {
-            o.copy_from_slice(&wide.round_float().to_array());
+            o.copy_from_slice(&d32.round_float().to_array());
         }
-        (d, wide)
+        (d, d32)
     };
     // the sum in 32-bit lanes (at most 256 x 4080 each), the squares as above
     let (mut sum, mut sq, mut total) = (i32x8::splat(0), i32x4::splat(0), 0i64);
@@ -222,8 +223,8 @@ fn smooth_bytes(a: &[u8], b: &[u8], c: &[u8], out: &mut [f32], mean: i32) -> (i6
     let mut at = 0;
     let mut steps = 0u32;
     while at + 8 <= n {
-        let (d, wide) = block(at, out);
-        sum += wide;
+        let (d, d32) = block(at, out);
+        sum += d32;
         sq += d.dot(d);
         at += 8;
         steps += 1;
