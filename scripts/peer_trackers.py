@@ -21,8 +21,8 @@ Ours: `host-harness track --points REC/points.csv` with `--tracker lk`, `weighte
 tracker on the same windows with the CLI's settings, frames preloaded as the peers'; build it
 with `cargo build --release -p host-harness --example lk_timing`), run right before and right
 after pyidi and the slower of the two kept (the machine's speed may change within a run); for
-`weighted`, the process's time minus that of the same command with `blob` (decoding and writing, which the
-peers do not pay), per target-frame.
+`weighted`, the process's time minus that of the same command with `blob` (decoding and
+writing, which the peers do not pay), per target-frame.
 
 RMS error as users compute it: per target, the estimated y minus the true y, its mean removed,
 over all frames; the table gives each target's and their mean. Runs in a virtual environment
