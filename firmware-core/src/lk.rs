@@ -1374,6 +1374,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let (mut sdt, mut gdx, mut gdy, mut ss) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
         // the template's quadratic forms: sum T_s'^2, sum T_s' d/dx T_s, sum T_s' d/dy T_s
         let (mut sss, mut tdx, mut tdy) = (0.0f32, 0.0f32, 0.0f32);
+        #[cfg(not(target_arch = "arm"))]
+        let forms = kernels::tap_forms(&moments.c, LAGS, (lx, ly), wx, wy);
         for (n, &i) in at.iter().enumerate() {
             let (a, sm) = (
                 cross.a.get(i).copied().unwrap_or(0.0),
@@ -1389,16 +1391,23 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             gdy += vyn * a;
             ss += un * sm;
             // sum over the taps of c[i][tap] u[tap], u separable: the four lags of a
-            // vertical tap are neighbours in the row of c
-            let row = moments.c.get(i * LAGS * LAGS..).unwrap_or(&[]);
-            let mut cu = 0.0f32;
-            for (l, &wyl) in wy.iter().enumerate() {
-                let at = (ly + l) * LAGS + lx;
-                if let Some(&[c0, c1, c2, c3]) = row.get(at..at + 4) {
-                    let [w0, w1, w2, w3] = wx;
-                    cu += wyl * (c0 * w0 + c1 * w1 + c2 * w2 + c3 * w3);
+            // vertical tap are neighbours in the row of c (on hosts formed above, four lags
+            // at a time, the same operations in each lane)
+            #[cfg(not(target_arch = "arm"))]
+            let cu = forms.get(n).copied().unwrap_or(0.0);
+            #[cfg(target_arch = "arm")]
+            let cu = {
+                let row = moments.c.get(i * LAGS * LAGS..).unwrap_or(&[]);
+                let mut cu = 0.0f32;
+                for (l, &wyl) in wy.iter().enumerate() {
+                    let at = (ly + l) * LAGS + lx;
+                    if let Some(&[c0, c1, c2, c3]) = row.get(at..at + 4) {
+                        let [w0, w1, w2, w3] = wx;
+                        cu += wyl * (c0 * w0 + c1 * w1 + c2 * w2 + c3 * w3);
+                    }
                 }
-            }
+                cu
+            };
             sss += un * cu;
             tdx += vxn * cu;
             tdy += vyn * cu;
@@ -1485,6 +1494,36 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             cross,
             ..
         } = self;
+        let n = (tw * th) as f32;
+        // 8-bit frames with the whole source inside: the backend's whole-window pass, if it
+        // has one (the same exact integers as the rows below)
+        let stride = frame.stride();
+        let whole = (T == 3 && inside && y0 >= half && y0 + th as i64 + half <= fh)
+            .then(|| P::bytes(frame.pixels()))
+            .flatten()
+            .and_then(|px| {
+                let at = (y0 - half) as usize * stride + (x0 - half) as usize;
+                let src = px.get(at..)?;
+                let (s, q, top) =
+                    kernels::smooth_window3_bytes(src, stride, (tw, th), (&mut g[..], gs), mean)?;
+                Some((s, q, top, src.get(stride + 1..).unwrap_or(&[])))
+            });
+        if let Some((s, q, top, win)) = whole {
+            let mut saturated = 0;
+            if top >= sat {
+                saturated = match kernels::clipped_window_bytes(win, stride, (tw, th), dark, sat) {
+                    Some(c) => c,
+                    None => (0..th)
+                        .map(|j| {
+                            let row = win.get(j * stride..j * stride + tw).unwrap_or(&[]);
+                            kernels::newly_clipped(row, dark.get(j * tw..).unwrap_or(&[]), sat)
+                        })
+                        .sum(),
+                };
+            }
+            *cross = Cross::window(s, i128::from(q), mean, scale, *t_mean, n);
+            return saturated;
+        }
         // the window's sum and sum of squares: rows' sums in i64, the total of the squares in
         // i128 (any window size)
         let (mut sum, mut sq) = (0i64, 0i128);
@@ -1595,7 +1634,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 saturated += u32::from(raw >= sat && dark);
             }
         }
-        *cross = Cross::window(sum, sq, mean, scale, *t_mean, (tw * th) as f32);
+        *cross = Cross::window(sum, sq, mean, scale, *t_mean, n);
         saturated
     }
 
@@ -2222,6 +2261,139 @@ mod tests {
         let want = (0..10).filter(|&k| row[k] >= 65000 && dark[k]).count() as u32;
         assert_eq!(m4::newly_clipped(&row, &dark[..10], 65000), want);
         assert_eq!(lanes::newly_clipped(&row, &dark[..10], 65000), want);
+    }
+
+    #[test]
+    fn the_hosts_whole_window_pass_equals_the_rows_and_counts_clipped_pixels_alike() {
+        let noise = |k: usize, top: u64| ((k as u64 * 2654435761 + 12345) % (top + 1)) as u8;
+        for (tw, th) in [
+            (8, 1),
+            (9, 3),
+            (15, 7),
+            (16, 16),
+            (31, 31),
+            (33, 40),
+            (40, 100),
+        ] {
+            let stride = tw + 2 + 5;
+            for (mean, px) in [
+                (
+                    2040,
+                    (0..(th + 2) * stride)
+                        .map(|k| noise(k, 255))
+                        .collect::<Vec<u8>>(),
+                ),
+                (0, std::vec![255u8; (th + 2) * stride]),
+                (16 * 255, std::vec![0u8; (th + 2) * stride]),
+            ] {
+                // the rows' smoothing (the M4's, tested above against the sums themselves)
+                let gs = window_stride(tw) + 4;
+                let mut want = std::vec![0.0f32; th * gs];
+                let (mut sum, mut sq, mut top) = (0i64, 0i64, 0u16);
+                for j in 0..th {
+                    let row = |r: usize| &px[r * stride..r * stride + tw + 2];
+                    let out = &mut want[j * gs..j * gs + tw];
+                    let (s, q, _) = m4::smooth_row3(row(j), row(j + 1), row(j + 2), out, mean)
+                        .expect("rows of the right length");
+                    (sum, sq) = (sum + s, sq + q);
+                    let window_row = &row(j + 1)[1..tw + 1];
+                    top = top.max(window_row.iter().map(|&v| u16::from(v)).max().unwrap_or(0));
+                }
+                let mut g = std::vec![f32::NAN; th * gs];
+                let r = lanes::smooth_window3_bytes(&px, stride, (tw, th), (&mut g, gs), mean);
+                assert_eq!(r, Some((sum, sq, top)), "{tw} x {th}, mean {mean}");
+                assert_eq!(g, want, "{tw} x {th}, mean {mean}");
+                // the whole window's clip count, against the rows' (masks and levels varied)
+                let dark: Vec<bool> = (0..tw * th).map(|k| (k * 7) % 5 != 0).collect();
+                let win = &px[stride + 1..];
+                for sat in [0u16, 1, 128, 255, 256] {
+                    let rows: u32 = (0..th)
+                        .map(|j| {
+                            let row = &win[j * stride..j * stride + tw];
+                            m4::newly_clipped(row, &dark[j * tw..j * tw + tw], sat)
+                        })
+                        .sum();
+                    let whole = lanes::clipped_window_bytes(win, stride, (tw, th), &dark, sat);
+                    assert_eq!(whole, (tw >= 16).then_some(rows), "{tw} x {th}, sat {sat}");
+                }
+            }
+        }
+        // refused, nothing stored: too narrow a window, a mean off the 8-bit scale, too short
+        // a source or buffer
+        let px = std::vec![9u8; 40 * 40];
+        let mut g = std::vec![f32::NAN; 40 * 40];
+        assert_eq!(
+            lanes::smooth_window3_bytes(&px, 40, (7, 5), (&mut g, 8), 0),
+            None
+        );
+        assert_eq!(
+            lanes::smooth_window3_bytes(&px, 40, (8, 5), (&mut g, 8), -1),
+            None
+        );
+        assert_eq!(
+            lanes::smooth_window3_bytes(&px, 40, (8, 5), (&mut g, 8), 4081),
+            None
+        );
+        assert_eq!(
+            lanes::smooth_window3_bytes(&px[..200], 40, (8, 5), (&mut g, 8), 0),
+            None
+        );
+        assert_eq!(
+            lanes::smooth_window3_bytes(&px, 40, (8, 5), (&mut g[..39], 8), 0),
+            None
+        );
+        assert!(g.iter().all(|v| v.is_nan()));
+        assert_eq!(
+            m4::smooth_window3_bytes(&px, 40, (8, 5), (&mut g, 8), 0),
+            None
+        );
+        let dark = std::vec![true; 40 * 40];
+        assert_eq!(
+            lanes::clipped_window_bytes(&px, 40, (16, 40), &dark[..100], 0),
+            None
+        );
+        assert_eq!(
+            lanes::clipped_window_bytes(&px[..100], 40, (16, 40), &dark, 0),
+            None
+        );
+        assert_eq!(
+            lanes::clipped_window_bytes(&px, 40, (16, 40), &dark, 0),
+            Some(16 * 40)
+        );
+        assert_eq!(m4::clipped_window_bytes(&px, 40, (16, 40), &dark, 0), None);
+    }
+
+    #[test]
+    fn the_hosts_tap_forms_equal_the_scalar_forms() {
+        // a symmetric matrix of moments (as `Moments::of` makes them) with values of many
+        // magnitudes, and weights of a spline's shifts
+        let n = LAGS * LAGS;
+        let mut c = std::vec![0.0f32; n * n];
+        for i in 0..n {
+            for j in i..n {
+                let v = ((i * 31 + j * 17) % 23) as f32 * 1.37e3 - 9.1e3 + (i * j) as f32 * 0.013;
+                c[i * n + j] = v;
+                c[j * n + i] = v;
+            }
+        }
+        for (fx, fy) in [(0.0, 0.0), (0.3, 0.9), (0.999, 0.5), (0.125, 0.0)] {
+            let (wx, wy) = (bspline_weights(fx), bspline_weights(fy));
+            for (lx, ly) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let forms = lanes::tap_forms(&c, LAGS, (lx, ly), wx, wy);
+                for (m, &got) in forms.iter().enumerate() {
+                    let (l, k) = (m / 4, m % 4);
+                    let i = (ly + l) * LAGS + lx + k;
+                    let mut cu = 0.0f32;
+                    for (l2, &wyl) in wy.iter().enumerate() {
+                        let at = i * n + (ly + l2) * LAGS + lx;
+                        let [c0, c1, c2, c3] = [c[at], c[at + 1], c[at + 2], c[at + 3]];
+                        let [w0, w1, w2, w3] = wx;
+                        cu += wyl * (c0 * w0 + c1 * w1 + c2 * w2 + c3 * w3);
+                    }
+                    assert_eq!(got.to_bits(), cu.to_bits(), "lag {i} at ({lx}, {ly})");
+                }
+            }
+        }
     }
 
     proptest::proptest! {

@@ -255,3 +255,205 @@ pub(super) fn newly_clipped<P: Pixel>(row: &[P], dark: &[bool], sat: u16) -> u32
         .map(|(&v, &d)| u32::from(v.into() >= sat && d))
         .sum()
 }
+
+/// The `tw x th` window smoothed by `[1 2 1]` down and along (as [`smooth_row3`], the same
+/// exact integers), from 8-bit pixels: `src` from the top-left of the source (one pixel up and
+/// left of the window), rows `stride` apart. Each strip of eight columns is walked down the
+/// window, the two source rows' horizontal sums before it kept in registers, so a source
+/// row's pixels are read three times (not nine) and nothing is set up per row. Values are
+/// stored as `v - mean` in `g` (rows `gs` apart, the pad beyond `tw` zeroed). Returns the
+/// sum and the sum of squares of the stored values and the largest window pixel (margins
+/// aside), or `None` (nothing stored) when `tw < 8`, the mean is off the 8-bit scale or a
+/// slice is too short.
+pub(super) fn smooth_window3_bytes(
+    src: &[u8],
+    stride: usize,
+    (tw, th): (usize, usize),
+    (g, gs): (&mut [f32], usize),
+    mean: i32,
+) -> Option<(i64, i64, u16)> {
+    use wide::{i16x8, i32x4, i32x8, u8x16};
+    let rows_needed = (th + 1).checked_mul(stride)?.checked_add(tw + 2)?;
+    if tw < 8
+        || th == 0
+        || gs < tw
+        || !(0..=BYTE_MAX).contains(&mean)
+        || src.len() < rows_needed
+        || g.len() < th.checked_mul(gs)?
+    {
+        return None;
+    }
+    // the horizontal [1 2 1] of the ten pixels from `at` of row `r`, and their middle eight
+    let hrow = |r: &[u8]| -> (i16x8, i16x8) {
+        let s = r.get(..10).unwrap_or(&[]);
+        let px = |k: usize| {
+            let mut v = [0u8; 16];
+            if let (Some(d), Some(s)) = (v.get_mut(..8), s.get(k..k + 8)) {
+                d.copy_from_slice(s);
+            }
+            i16x8::from_u8x16_low(u8x16::from(v))
+        };
+        let (p0, p1, p2) = (px(0), px(1), px(2));
+        (p0 + (p1 << 1) + p2, p1)
+    };
+    let m = i16x8::splat(mean as i16);
+    let ones = i16x8::splat(1);
+    let (mut total, mut total_sq) = (0i64, 0i64);
+    let mut top = i16x8::splat(0);
+    let last = tw - 8;
+    let mut at = 0;
+    loop {
+        let at0 = at.min(last);
+        // lanes already counted by the strip before (the last strip overlaps it); opaque, so
+        // the mask is made once per strip, not per row
+        let skip = at - at0;
+        let keep = core::hint::black_box(i16x8::from(core::array::from_fn::<i16, 8, _>(|i| {
+            if i < skip {
+                0
+            } else {
+                -1
+            }
+        })));
+        let col = src.get(at0..).unwrap_or(&[]);
+        let mut rows = col.chunks(stride);
+        let (mut h0, _) = hrow(rows.next().unwrap_or(&[]));
+        let (mut h1, mut c1) = hrow(rows.next().unwrap_or(&[]));
+        let (mut sum, mut sq) = (i32x4::splat(0), i32x4::splat(0));
+        for (j, (r, out)) in rows.zip(g.chunks_exact_mut(gs)).take(th).enumerate() {
+            let (h2, c2) = hrow(r);
+            let d = h0 + (h1 << 1) + h2 - m;
+            if let Some(o) = out.get_mut(at0..at0 + 8) {
+                o.copy_from_slice(&i32x8::from_i16x8(d).round_float().to_array());
+            }
+            let d = d & keep;
+            top = top.max(c1 & keep);
+            sum += d.dot(ones);
+            sq += d.dot(d);
+            // a lane holds at most 32 x 2 x 4080^2 < 2^31
+            if j % 32 == 31 {
+                total_sq += sq.to_array().iter().map(|&v| i64::from(v)).sum::<i64>();
+                sq = i32x4::splat(0);
+            }
+            (h0, h1, c1) = (h1, h2, c2);
+        }
+        total += sum.to_array().iter().map(|&v| i64::from(v)).sum::<i64>();
+        total_sq += sq.to_array().iter().map(|&v| i64::from(v)).sum::<i64>();
+        if at0 == last {
+            break;
+        }
+        at += 8;
+    }
+    for row in g.chunks_exact_mut(gs).take(th) {
+        if let Some(pad) = row.get_mut(tw..) {
+            pad.fill(0.0);
+        }
+    }
+    Some((total, total_sq, top.reduce_max().max(0) as u16))
+}
+
+/// [`newly_clipped`] over a whole `tw x th` window of 8-bit pixels (`src` from the window's
+/// top-left, rows `stride` apart; `dark` the template's mask, rows `tw` apart), sixteen
+/// pixels at a time; `None` when a slice is too short or `tw < 16`.
+pub(super) fn clipped_window_bytes(
+    src: &[u8],
+    stride: usize,
+    (tw, th): (usize, usize),
+    dark: &[bool],
+    sat: u16,
+) -> Option<u32> {
+    use wide::u8x16;
+    if !(16..=4080).contains(&tw)
+        || th == 0
+        || src.len() < (th - 1).checked_mul(stride)?.checked_add(tw)?
+    {
+        return None;
+    }
+    if dark.len() < th.checked_mul(tw)? {
+        return None;
+    }
+    if sat > 255 {
+        return Some(0);
+    }
+    let s = u8x16::splat(sat as u8);
+    let sixteen = |r: &[u8], at: usize| -> u8x16 {
+        let mut v = [0u8; 16];
+        if let Some(x) = r.get(at..at + 16) {
+            v.copy_from_slice(x);
+        }
+        u8x16::from(v)
+    };
+    let marks = |d: &[bool], at: usize| -> u8x16 {
+        let mut v = [0u8; 16];
+        if let Some(x) = d.get(at..at + 16) {
+            for (o, &b) in v.iter_mut().zip(x) {
+                *o = u8::from(b);
+            }
+        }
+        u8x16::from(v)
+    };
+    let last = tw - 16;
+    let skip = (tw % 16) as u8;
+    // the last block overlaps the one before by 16 - tw % 16 lanes: those are not counted
+    let tail = u8x16::from(core::array::from_fn::<u8, 16, _>(|i| {
+        if skip != 0 && (i as u8) < 16 - skip {
+            0
+        } else {
+            1
+        }
+    }));
+    let (mut acc, mut total, mut steps) = (u8x16::splat(0), 0u32, 0u32);
+    let blocks = tw.div_ceil(16) as u32;
+    for j in 0..th {
+        // a byte lane holds at most one count per block: flushed before it could pass 255
+        if steps + blocks > 255 {
+            total += acc.to_array().iter().map(|&v| u32::from(v)).sum::<u32>();
+            acc = u8x16::splat(0);
+            steps = 0;
+        }
+        steps += blocks;
+        let (r, d) = (
+            src.get(j * stride..j * stride + tw)?,
+            dark.get(j * tw..j * tw + tw)?,
+        );
+        let mut at = 0;
+        while at < last {
+            let v = sixteen(r, at);
+            acc += v.max(s).cmp_eq(v) & marks(d, at);
+            at += 16;
+        }
+        let v = sixteen(r, last);
+        acc += v.max(s).cmp_eq(v) & marks(d, last) & tail;
+    }
+    Some(total + acc.to_array().iter().map(|&v| u32::from(v)).sum::<u32>())
+}
+
+/// The template's quadratic forms of one iteration, four lags at a time: for the 16 lags
+/// `i = (ly + l) lags + lx + k` (`n = 4 l + k`), `sum_l' wy[l'] (c[i][j0] wx[0] + c[i][j1]
+/// wx[1] + c[i][j2] wx[2] + c[i][j3] wx[3])` with `j_m = (ly + l') lags + lx + m`, `c` the
+/// `lags^2 x lags^2` moments (row-major). `c` is symmetric (exactly: its mirrored halves are
+/// copies and its diagonal blocks the same products in the same order), so `c[i][j] =
+/// c[j][i]` and the four lags `k` of one `l` are neighbours in row `j`: one register, each
+/// lane doing the scalar form's operations in its order (the same `f32` results).
+#[inline(always)]
+pub(super) fn tap_forms(
+    c: &[f32],
+    lags: usize,
+    (lx, ly): (usize, usize),
+    wx: [f32; 4],
+    wy: [f32; 4],
+) -> [f32; 16] {
+    let mut out = [0.0f32; 16];
+    let w = wx.map(f32x4::splat);
+    for (l, o) in out.chunks_exact_mut(4).enumerate() {
+        let i0 = (ly + l) * lags + lx;
+        let mut cu = f32x4::ZERO;
+        for (l2, &wyl) in wy.iter().enumerate() {
+            let j0 = (ly + l2) * lags + lx;
+            let col = |m: usize| four(c, (j0 + m) * lags * lags + i0).unwrap_or(f32x4::ZERO);
+            let [w0, w1, w2, w3] = w;
+            cu += f32x4::splat(wyl) * (col(0) * w0 + col(1) * w1 + col(2) * w2 + col(3) * w3);
+        }
+        o.copy_from_slice(&cu.to_array());
+    }
+    out
+}

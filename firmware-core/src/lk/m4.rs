@@ -171,3 +171,28 @@ pub(super) fn newly_clipped<P: Pixel>(row: &[P], dark: &[bool], sat: u16) -> u32
     }
     n
 }
+
+/// No whole-window smoothing here: the M4 smooths row by row ([`smooth_row3`]), which costs
+/// it fewer instructions (no vector lanes to fill). Always `None`.
+#[inline(always)]
+pub(super) fn smooth_window3_bytes(
+    _src: &[u8],
+    _stride: usize,
+    _size: (usize, usize),
+    _g: (&mut [f32], usize),
+    _mean: i32,
+) -> Option<(i64, i64, u16)> {
+    None
+}
+
+/// No whole-window clip count here (see [`smooth_window3_bytes`]). Always `None`.
+#[inline(always)]
+pub(super) fn clipped_window_bytes(
+    _src: &[u8],
+    _stride: usize,
+    _size: (usize, usize),
+    _dark: &[bool],
+    _sat: u16,
+) -> Option<u32> {
+    None
+}
