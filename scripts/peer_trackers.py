@@ -10,7 +10,9 @@ go to docs/performance.md.
 Peers, each given the frames preloaded as one numpy array (so the trackers are timed, not the
 readers) and the windows of REC/points.csv (31 x 31 px centred on each target in frame 0):
 - pyidi 1.4 `LucasKanade` (roi_size = the window, its defaults otherwise: cubic spline of the
-  reference, up to 20 iterations, one process);
+  reference, up to 20 iterations, one process; with numba installed, as pip installs it, its
+  compiled kernel, which runs the points in parallel threads), after a warm-up on the first
+  10 frames so that numba's compilation is not timed;
 - OpenCV `calcOpticalFlowPyrLK` (winSize = the window, 3 pyramid levels, up to 30 iterations
   or a step of 0.001 px), every frame against frame 0 starting from the last estimate (no
   frame-to-frame drift, as ours);
@@ -28,7 +30,8 @@ RMS error as users compute it: per target, the estimated y minus the true y, its
 over all frames; the table gives each target's and their mean. Runs in a virtual environment
 with pinned packages: $PEER_VENV, else .venv-peer-trackers at the repository root (created
 with pip when missing). Writes REC/peer-trackers.md (an existing one is replaced only with
---force).
+--force), with the versions of the packages that pip resolved (the peers' times depend on
+them).
 """
 import argparse
 import os
@@ -132,6 +135,14 @@ def main():
     # pyidi LucasKanade
     import pyidi
     with tempfile.TemporaryDirectory() as tmp:
+        # a warm-up on the first frames: pyidi 1.4 compiles its numba kernel on first use (or
+        # loads it from numba's cache), which is not tracking time (ours is compiled before
+        # the run too)
+        warm = pyidi.LucasKanade(pyidi.VideoReader(frames[:10], root=tmp, fps=120))
+        warm.set_points(np.array([[round(y), round(x)] for x, y in pts]))
+        warm.configure(roi_size=(win, win), verbose=0, show_pbar=False, processes=1)
+        warm.get_displacements()
+    with tempfile.TemporaryDirectory() as tmp:
         video = pyidi.VideoReader(frames, root=tmp, fps=120)
         lk = pyidi.LucasKanade(video)
         lk.set_points(np.array([[round(y), round(x)] for x, y in pts]))
@@ -196,9 +207,24 @@ def main():
         c = "" if cost is None else f"{cost * 1e6:.1f}"
         lines.append(f"| {name} | {' '.join(f'{v:.4f}' for v in rms)} | "
                      f"{np.nanmean(rms):.4f} | {c} |")
+    from importlib.metadata import version
+    lines.append("")
+    lines.append("Versions: " + ", ".join(
+        f"{p} {version(p)}" for p in ["pyidi", "numpy", "scipy", "numba", "opencv-python-headless",
+                                      "scikit-image"] if have_dist(p)) + ".")
     text = "\n".join(lines)
     print(text)
     (rec / "peer-trackers.md").write_text(text + "\n")
+
+
+def have_dist(name):
+    """Whether the distribution `name` is installed (numba is optional for pyidi)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        version(name)
+        return True
+    except PackageNotFoundError:
+        return False
 
 
 def lk_preloaded(exe, rec):
