@@ -55,9 +55,10 @@
 use crate::centroid::{Flags, Frame, Pixel};
 use libm::{fabsf, floorf, sqrtf};
 
-// The per-pixel kernels (cross moments, `[1 2 1]` row smoothing, clip count): the M4's on
-// 32-bit ARM (a scalar FPU: trees of products per row, one rolling pass), vector registers
-// (the `wide` crate's types) elsewhere; both in the host's tests.
+// The per-pixel kernels (cross moments, `[1 2 1]` row smoothing, clip count; on hosts also a
+// whole-window smoothing pass and the template forms in vectors): the M4's on 32-bit ARM (a
+// scalar FPU: trees of products per row, one rolling pass), vector registers (the `wide`
+// crate's types) elsewhere; both in the host's tests.
 #[cfg(any(test, not(target_arch = "arm")))]
 mod lanes;
 #[cfg(any(test, target_arch = "arm"))]

@@ -2,9 +2,13 @@
 //! crate's safe vector types so that the compiler's choices do not decide the layout. Cross
 //! moments: each lag's products accumulated in eight lanes (two registers of four) across the
 //! whole window, the lanes added once at the end; the same sums as the M4's kernels, in
-//! another order (f32 rounding differs in the last bits). The window's `[1 2 1]` smoothing in
-//! one pass from the nine source pixels, eight 8-bit pixels at a time in 16-bit lanes (other
-//! pixel types in a loop the compiler vectorises), instead of the M4's rolling pass.
+//! another order (f32 rounding differs in the last bits). The window's `[1 2 1]` smoothing:
+//! an 8-bit window inside the frame in one pass of eight-column strips walked down it
+//! ([`smooth_window3_bytes`]), with its clip count sixteen pixels at a time; other windows
+//! row by row from the nine source pixels, eight 8-bit pixels at a time in 16-bit lanes (other
+//! pixel types in a loop the compiler vectorises), instead of the M4's rolling pass. The
+//! iterations' template forms four lags per vector ([`tap_forms`]), exactly as the M4's scalar
+//! forms.
 //! Only slices come in; this backend knows nothing of its caller.
 
 use crate::centroid::Pixel;
