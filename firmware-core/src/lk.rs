@@ -2343,6 +2343,11 @@ mod tests {
             lanes::smooth_window3_bytes(&px, 40, (8, 5), (&mut g[..39], 8), 0),
             None
         );
+        // rows closer than the source is wide (a stride of 0 among them)
+        for stride in [0, 9] {
+            let r = lanes::smooth_window3_bytes(&px, stride, (8, 5), (&mut g, 8), 0);
+            assert_eq!(r, None);
+        }
         assert!(g.iter().all(|v| v.is_nan()));
         assert_eq!(
             m4::smooth_window3_bytes(&px, 40, (8, 5), (&mut g, 8), 0),

@@ -267,8 +267,8 @@ pub(super) fn newly_clipped<P: Pixel>(row: &[P], dark: &[bool], sat: u16) -> u32
 /// row's pixels are read three times (not nine) and nothing is set up per row. Values are
 /// stored as `v - mean` in `g` (rows `gs` apart, the pad beyond `tw` zeroed). Returns the
 /// sum and the sum of squares of the stored values and the largest window pixel (margins
-/// aside), or `None` (nothing stored) when `tw < 8`, the mean is off the 8-bit scale or a
-/// slice is too short.
+/// aside), or `None` (nothing stored) when `tw < 8`, the rows are closer than the source is
+/// wide, the mean is off the 8-bit scale or a slice is too short.
 pub(super) fn smooth_window3_bytes(
     src: &[u8],
     stride: usize,
@@ -280,6 +280,7 @@ pub(super) fn smooth_window3_bytes(
     let rows_needed = (th + 1).checked_mul(stride)?.checked_add(tw + 2)?;
     if tw < 8
         || th == 0
+        || stride < tw + 2
         || gs < tw
         || !(0..=BYTE_MAX).contains(&mean)
         || src.len() < rows_needed
