@@ -209,9 +209,11 @@ def main():
                      f"{np.nanmean(rms):.4f} | {c} |")
     from importlib.metadata import version
     lines.append("")
+    # OpenCV as imported: pyidi pulls in opencv-contrib-python, whose cv2 may shadow the
+    # headless package's
     lines.append("Versions: " + ", ".join(
-        f"{p} {version(p)}" for p in ["pyidi", "numpy", "scipy", "numba", "opencv-python-headless",
-                                      "scikit-image"] if have_dist(p)) + ".")
+        [f"{p} {version(p)}" for p in ["pyidi", "numpy", "scipy", "numba"] if have_dist(p)]
+        + [f"OpenCV (cv2) {cv2.__version__}", f"scikit-image {version('scikit-image')}"]) + ".")
     text = "\n".join(lines)
     print(text)
     (rec / "peer-trackers.md").write_text(text + "\n")
