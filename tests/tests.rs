@@ -8,6 +8,7 @@ mod adversarial;
 mod analyze;
 mod centroid;
 mod formats;
+mod hostile;
 mod modal;
 mod plan;
 mod robustness;

@@ -12,7 +12,7 @@ use host_harness::analysis::run::TargetsRequest;
 use host_harness::analysis::{Axis, DisplacementSettings, WelchSettings};
 use host_harness::cli::args::{CentroidArgs, ModeArg, ThresholdArg};
 use host_harness::frames::files::{luma, LumaLevel};
-use host_harness::frames::{discover_frames, FrameSource, GreyFrame};
+use host_harness::frames::{open_frames, FrameRange, FrameSource, GreyFrame};
 use host_harness::lost_frames::LostFramePolicy;
 use numpy::ndarray::{Array2, Array3, ArrayViewD, Axis as NdAxis};
 use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
@@ -150,9 +150,14 @@ impl Frames {
         fps: Option<f64>,
         retime: bool,
         needed: bool,
+        range: Option<FrameRange>,
     ) -> anyhow::Result<(FrameSource, f64, Vec<String>)> {
         match self {
             Frames::Array(a) => {
+                let a = match FrameSource::Memory(a).ranged(range)? {
+                    FrameSource::Memory(a) => a,
+                    _ => unreachable!("a range of frames in memory is frames in memory"),
+                };
                 if retime {
                     return Err(host_harness::bad_input(
                         "retime applies to a video file, not to frames in an array",
@@ -170,13 +175,13 @@ impl Frames {
                 }
             }
             Frames::Path(p) => {
-                let source = discover_frames(&p)?.source.retimed(retime)?;
+                let source = open_frames(&p, retime, range)?.source;
                 let unknown = fps.is_none() && source.recorded_rate()?.is_none();
-                if unknown && !needed && !matches!(source, FrameSource::Video { .. }) {
+                if unknown && !needed && !matches!(source.inner(), FrameSource::Video { .. }) {
                     return Ok((source, 1.0, vec![]));
                 }
                 let (fps, _, notes) =
-                    host_harness::analysis::run::resolve_rates(&p, fps, None, retime)?;
+                    host_harness::analysis::run::resolve_rates(&p, fps, None, retime, range)?;
                 Ok((source, fps, notes))
             }
         }
@@ -448,7 +453,7 @@ fn track<'py>(
     let (positions, flags, fps) = py
         .allow_threads(|| -> anyhow::Result<_> {
             let config = config?;
-            let (source, fps, _) = frames.resolve(fps, retime, false)?;
+            let (source, fps, _) = frames.resolve(fps, retime, false, None)?;
             let r = frames_request(fps, config, req, DisplacementSettings::default_px());
             let tracks = oma_frames::track(&r, &source)?;
             let n = tracks.centroids.first().map_or(0, Vec::len);
@@ -655,7 +660,7 @@ fn analyze<'py>(
     let computed = py
         .allow_threads(|| -> anyhow::Result<_> {
             let config = config?;
-            let (source, fps, notes) = frames.resolve(fps, retime, true)?;
+            let (source, fps, notes) = frames.resolve(fps, retime, true, None)?;
             if let Some((lo, hi)) = bands.iter().find(|b| b.1 > fps / 2.0) {
                 return Err(host_harness::bad_input(format!(
                     "band {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz)",
@@ -856,11 +861,20 @@ struct FrameReader {
 #[pymethods]
 impl FrameReader {
     #[new]
-    #[pyo3(signature = (path, fps=None, retime=false))]
-    fn new(py: Python<'_>, path: String, fps: Option<f64>, retime: bool) -> PyResult<Self> {
+    #[pyo3(signature = (path, fps=None, retime=false, frame_range=None))]
+    fn new(
+        py: Python<'_>,
+        path: String,
+        fps: Option<f64>,
+        retime: bool,
+        frame_range: Option<String>,
+    ) -> PyResult<Self> {
+        let range = frame_range
+            .map(|r| FrameRange::parse(&r).map_err(|e| bad(format!("frame_range {e}"))))
+            .transpose()?;
         let (source, rate, count) = py
             .allow_threads(|| -> anyhow::Result<_> {
-                let (source, rate, _) = Frames::Path(path).resolve(fps, retime, false)?;
+                let (source, rate, _) = Frames::Path(path).resolve(fps, retime, false, range)?;
                 let stated = fps.is_some() || source.recorded_rate()?.is_some();
                 let count = source.count(rate)?;
                 Ok((source, stated.then_some(rate), count))

@@ -500,15 +500,21 @@ def study(
     return StudyResult(table, _columns(summary), summary, os.fspath(out))
 
 
-def open_frames(path: PathLike, fps: Optional[float] = None, retime: bool = False) -> FrameReader:
+def open_frames(
+    path: PathLike,
+    fps: Optional[float] = None,
+    retime: bool = False,
+    frame_range: Optional[str] = None,
+) -> FrameReader:
     """The frames of a recording one at a time, as ``uint8``/``uint16`` arrays ``(H, W)``:
     every format the command line reads (image directories and patterns, multi-page TIFF,
     Photron ``.cih``/``.cihx`` + ``.mraw``, Phantom ``.cine``, videos through ffmpeg; colour
     as BT.601 luma). ``fps`` is needed for a video (its timestamps are checked against it).
     The reader's ``fps`` and ``count`` are known before decoding; its ``label`` names the file
-    or frame last returned.
+    or frame last returned. ``frame_range="A..B"`` reads frames A to B only (1-based,
+    inclusive; ``"A.."`` to the end): a camera file with a damaged time stamp at one end.
 
     >>> for frame in vibcam.open_frames("rec/frames"):  # doctest: +SKIP
     ...     print(frame.shape, frame.dtype)
     """
-    return FrameReader(os.fspath(path), fps=fps, retime=retime)
+    return FrameReader(os.fspath(path), fps=fps, retime=retime, frame_range=frame_range)

@@ -6,7 +6,7 @@
 use super::compensate::{compensate, Compensated};
 use super::{Axis, DisplacementSettings, Settings};
 use crate::export::analysis as export;
-use crate::frames::{centroid_source, discover_frames, FrameSource};
+use crate::frames::{centroid_source, FrameSource};
 use crate::outdir::Staged;
 use firmware_core::centroid::CentroidConfig;
 use std::path::{Path, PathBuf};
@@ -49,6 +49,8 @@ pub struct Request {
     pub frames: String,
     /// `--retime`: the frame rate retimes a video's container rate (slow motion).
     pub retime: bool,
+    /// Frames A..B only (`--frame-range`).
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// The accelerometer record.
     pub accel: AccelInput,
     /// The chain's settings (rates, alignment, Welch, bands, exposure, end matching).
@@ -111,8 +113,8 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
         &a.output_col,
         a.time_col.as_deref(),
     )?;
-    let found = discover_frames(&req.frames)?;
-    let source = found.source.clone().retimed(req.retime)?;
+    let found = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?;
+    let source = found.source.clone();
     let ignored = ignored_note(&found.ignored);
     if let Some(n) = &ignored {
         eprintln!("warning: {n}");
@@ -305,11 +307,7 @@ fn describe_inputs(
                 .map(|p| p.display().to_string())
                 .unwrap_or_default()
         ),
-        FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
-        FrameSource::Video { path: p, .. } => format!("{} (video, decoded by FFmpeg)", p.display()),
-        FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
-        FrameSource::Cine(p) => format!("{} (Phantom cine recording)", p.display()),
-        FrameSource::Memory(f) => format!("{} frames in memory", f.len()),
+        other => other.describe(),
     };
     let (fps, a, d, c) = (
         req.settings.frame_rate_hz,
@@ -380,8 +378,9 @@ pub fn resolve_rates(
     fps: Option<f64>,
     exposure_ms: Option<f64>,
     retime: bool,
+    range: Option<crate::frames::FrameRange>,
 ) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
-    let source = discover_frames(frames)?.source.retimed(retime)?;
+    let source = crate::frames::open_frames(frames, retime, range)?.source;
     let recorded = source.recorded_rate()?;
     let mut notes = Vec::new();
     let fps = match (fps, recorded) {
@@ -406,7 +405,7 @@ pub fn resolve_rates(
             )))
         }
     };
-    if let crate::frames::FrameSource::Video { path, .. } = &source {
+    if let crate::frames::FrameSource::Video { path, .. } = source.inner() {
         if let Some(rate) =
             crate::frames::video::check_rate(path, fps, retime).map_err(|e| e.into_anyhow())?
         {

@@ -7,7 +7,7 @@ use super::points::{Point, PointsInfo};
 use super::targets::Tracks;
 use super::DisplacementSettings;
 use crate::export::targets::{displacement_csv, Track};
-use crate::frames::{discover_frames, FrameSource};
+use crate::frames::FrameSource;
 use crate::outdir::Staged;
 use firmware_core::centroid::CentroidConfig;
 use std::fmt::Write as _;
@@ -29,6 +29,8 @@ pub struct Request {
     pub frames: String,
     /// `--retime`: the frame rate retimes a video's container rate (slow motion).
     pub retime: bool,
+    /// Frames A..B only (`--frame-range`).
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Frame rate, Hz.
     pub fps: f64,
     /// The targets.
@@ -71,7 +73,7 @@ pub fn track_targets(
 
 /// Runs `track`; returns the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
-    let source = discover_frames(&req.frames)?.source.retimed(req.retime)?;
+    let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
     let (tracks, windows) = track_targets(&source, req.fps, &req.centroid, &req.targets)?;
     let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));

@@ -37,6 +37,11 @@ pub struct Args {
     /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
     #[arg(long, requires = "fps")]
     pub retime: bool,
+    /// Frames A..B of the recording only, 1-based and inclusive (as `FILE#N` and the labels
+    /// `frame K of N` count them; `A..` to the end, `..B` from the start): a camera file with a
+    /// damaged time stamp or a bad frame at one end, or one part of a long recording.
+    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Accelerometer CSV with a header row: the input column (base acceleration in m/s^2, or
     /// any input such as a force) and the output (tip) acceleration in m/s^2, the unit the
     /// vision acceleration is computed in. Without it: output-only modal analysis of the
@@ -171,8 +176,13 @@ pub enum AxisArg {
 
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, exposure_ms, notes) =
-        analysis::run::resolve_rates(&args.frames, args.fps, args.exposure_ms, args.retime)?;
+    let (fps, exposure_ms, notes) = analysis::run::resolve_rates(
+        &args.frames,
+        args.fps,
+        args.exposure_ms,
+        args.retime,
+        args.frame_range,
+    )?;
     let Some(accel) = args.accel.clone() else {
         return output_only(&args, fps, notes);
     };
@@ -234,6 +244,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let request = Request {
         frames: args.frames.clone(),
         retime: args.retime,
+        frame_range: args.frame_range,
         accel: AccelInput {
             path: accel,
             fs,
@@ -310,6 +321,7 @@ fn output_only(args: &Args, fps: f64, notes: Vec<String>) -> anyhow::Result<()> 
     let request = crate::analysis::oma::frames::FramesRequest {
         frames: args.frames.clone(),
         retime: args.retime,
+        frame_range: args.frame_range,
         fps,
         centroid: args.centroid.config_with(None, args.points.is_some())?,
         displacement: DisplacementSettings {

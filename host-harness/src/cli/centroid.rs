@@ -14,6 +14,7 @@
 use super::args::CentroidArgs;
 use crate::bad_input;
 use crate::export::signals;
+use crate::frames::FrameRange;
 use crate::frames::{for_each_tiff_page, load_frame};
 use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::io::Write;
@@ -36,6 +37,11 @@ pub struct Args {
     /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
     #[arg(long, requires = "fps")]
     pub retime: bool,
+    /// Frames A..B of each recording only (a camera file, a video or a multi-page TIFF),
+    /// 1-based and inclusive, as the rows' `FILE#N` count them (`A..` to the end, `..B` from
+    /// the start).
+    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Grey level at or above which a pixel counts as saturated (default: 255 for 8-bit, 65535
     /// for 16-bit frames); must be above T.
     #[arg(long, value_name = "LEVEL")]
@@ -76,17 +82,23 @@ fn centroid_pages(
     path: &Path,
     fps: Option<f64>,
     retime: bool,
+    range: Option<FrameRange>,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let name = path.to_string_lossy().into_owned();
+    let is_tiff = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
     if crate::frames::photron::is_header(path)
         || crate::frames::photron::is_mraw(path)
         || crate::frames::phantom::is_cine(path)
+        || (is_tiff && range.is_some())
     {
-        return recording_frames(config, &name, 1.0, retime);
+        return recording_frames(config, &name, 1.0, retime, range);
     }
     if crate::frames::files::is_video(path) {
         return match fps {
-            Some(fps) => recording_frames(config, &name, fps, retime),
+            Some(fps) => recording_frames(config, &name, fps, retime, range),
             None => (
                 Vec::new(),
                 Some(bad_input(format!(
@@ -95,10 +107,16 @@ fn centroid_pages(
             ),
         };
     }
-    let is_tiff = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
+    if let (false, Some(r)) = (is_tiff, range) {
+        return (
+            Vec::new(),
+            Some(bad_input(format!(
+                "--frame-range {}: {name} is one image (a range applies to a camera file, a \
+                 video or a multi-page TIFF)",
+                r.describe()
+            ))),
+        );
+    }
     if !is_tiff {
         return match centroid_file(config, path) {
             Ok(c) => (vec![(name, c)], None),
@@ -129,12 +147,14 @@ fn recording_frames(
     name: &str,
     fps: f64,
     retime: bool,
+    range: Option<FrameRange>,
 ) -> (Vec<(String, Centroid)>, Option<anyhow::Error>) {
     let mut rows = Vec::new();
-    let result = crate::frames::discover_frames(name).and_then(|found| {
-        found.source.retimed(retime)?.for_each(fps, |label, frame| {
+    let first = range.map_or(1, |r| r.first);
+    let result = crate::frames::open_frames(name, retime, range).and_then(|found| {
+        found.source.for_each(fps, |label, frame| {
             rows.push((
-                format!("{name}#{}", rows.len() + 1),
+                format!("{name}#{}", first + rows.len()),
                 frame.centroid(config, &label)?,
             ));
             Ok(())
@@ -162,7 +182,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (mut empty, mut flagged) = (0usize, 0usize);
     let mut frames = 0usize;
     for path in &args.files {
-        let (rows, error) = centroid_pages(&config, path, args.fps, args.retime);
+        let (rows, error) = centroid_pages(&config, path, args.fps, args.retime, args.frame_range);
         for (label, c) in &rows {
             print(signals::centroid_row(label, c))?;
             empty += usize::from(c.position().is_none());

@@ -26,6 +26,11 @@ pub struct Args {
     /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
     #[arg(long, requires = "fps")]
     pub retime: bool,
+    /// Frames A..B of the recording only, 1-based and inclusive (as `FILE#N` and the labels
+    /// `frame K of N` count them; `A..` to the end, `..B` from the start): a camera file with a
+    /// damaged time stamp or a bad frame at one end, or one part of a long recording.
+    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Chosen points: CSV `target,x,y,w,h[,threshold]` (as `analyze --points`).
     #[arg(
         long,
@@ -71,8 +76,13 @@ pub struct Args {
 
 /// Runs `host-harness track`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, _, notes) =
-        crate::analysis::run::resolve_rates(&args.frames, args.fps, None, args.retime)?;
+    let (fps, _, notes) = crate::analysis::run::resolve_rates(
+        &args.frames,
+        args.fps,
+        None,
+        args.retime,
+        args.frame_range,
+    )?;
     if args.points.is_some() && args.centroid.roi.is_some() {
         return Err(bad_input(
             "--roi with --points: each point's window is its region; leave --roi out",
@@ -104,6 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let req = Request {
         frames: args.frames.clone(),
         retime: args.retime,
+        frame_range: args.frame_range,
         fps,
         centroid: args.centroid.config_with(None, args.points.is_some())?,
         targets,

@@ -35,6 +35,80 @@ pub enum FrameSource {
     /// Frames already in memory (an array handed over by the Python package), in order;
     /// labelled `frames[K]` (0-based, as the array is indexed).
     Memory(std::sync::Arc<[GreyFrame]>),
+    /// Frames `first..=last` (1-based) of a camera file, a multi-page TIFF or a video
+    /// (`--frame-range`, [`FrameSource::ranged`]); labels as the whole recording's.
+    Range(Box<FrameSource>, FrameRange),
+}
+
+/// `--frame-range A..B`: frames A to B of a recording, 1-based and inclusive (as `FILE#N` and
+/// the labels `frame K of N` count them); `A..` to the last frame, `..B` from the first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameRange {
+    /// The first frame, 1-based.
+    pub first: usize,
+    /// The last frame, 1-based, inclusive; `None`: the recording's last.
+    pub last: Option<usize>,
+}
+
+impl FrameRange {
+    /// Parses `A..B`, `A..` or `..B` (whole numbers, `1 <= A <= B`).
+    pub fn parse(s: &str) -> Result<FrameRange, String> {
+        let t = s.trim();
+        let Some((a, b)) = t.split_once("..") else {
+            return Err(format!(
+                "`{s}`: expected A..B (frames A to B, 1-based and inclusive; A.. or ..B)"
+            ));
+        };
+        let num = |v: &str, what: &str| -> Result<Option<usize>, String> {
+            let v = v.trim().trim_start_matches('=');
+            if v.is_empty() {
+                return Ok(None);
+            }
+            match v.parse::<usize>() {
+                Ok(n) if n >= 1 => Ok(Some(n)),
+                _ => Err(format!(
+                    "`{s}`: the {what} frame `{v}` is not a whole number of at least 1 (frames \
+                     count from 1)"
+                )),
+            }
+        };
+        let first = num(a, "first")?.unwrap_or(1);
+        let last = num(b, "last")?;
+        if let Some(l) = last {
+            if l < first {
+                return Err(format!(
+                    "`{s}`: the last frame {l} comes before the first {first}"
+                ));
+            }
+        }
+        Ok(FrameRange { first, last })
+    }
+
+    /// `A..B` as the user writes it.
+    pub fn describe(&self) -> String {
+        match self.last {
+            Some(l) => format!("{}..{l}", self.first),
+            None => format!("{}..", self.first),
+        }
+    }
+
+    /// Whether 0-based frame `k` is in the range.
+    fn holds(&self, k: usize) -> bool {
+        k + 1 >= self.first && self.last.is_none_or(|l| k < l)
+    }
+
+    /// The frames of a recording of `n` that the range takes; an error naming `what` when it
+    /// reaches past the end (or takes none).
+    fn of(&self, n: usize, what: &str) -> anyhow::Result<std::ops::Range<usize>> {
+        let last = self.last.unwrap_or(n);
+        if self.first > n || last > n {
+            return Err(bad_input(format!(
+                "--frame-range {}: {what} has {n} frames (1..{n})",
+                self.describe()
+            )));
+        }
+        Ok(self.first - 1..last)
+    }
 }
 
 /// Extensions read as video files.
@@ -237,6 +311,21 @@ fn numbered_sequence(
         .into_iter()
         .partition(|p| key(p).as_ref() == Some(&chosen));
     Ok((frames, ignored))
+}
+
+/// [`discover_frames`], a video retimed (`--retime`, [`FrameSource::retimed`]) and frames
+/// `range` taken (`--frame-range`, [`FrameSource::ranged`]): what every command that reads a
+/// recording reads.
+pub fn open_frames(
+    spec: &str,
+    retime: bool,
+    range: Option<FrameRange>,
+) -> anyhow::Result<Discovered> {
+    let found = discover_frames(spec)?;
+    Ok(Discovered {
+        source: found.source.retimed(retime)?.ranged(range)?,
+        ignored: found.ignored,
+    })
 }
 
 /// Resolves `--frames`: a directory, a file-name pattern, or a multi-page TIFF.
@@ -494,7 +583,93 @@ pub fn for_each_tiff_page(
     }
 }
 
+/// What stops [`FrameSource::for_each`] of a range after its last frame.
+#[derive(Debug)]
+struct PastTheRange;
+
+impl std::fmt::Display for PastTheRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("past the frame range")
+    }
+}
+
+impl std::error::Error for PastTheRange {}
+
 impl FrameSource {
+    /// Frames `range` of this source (`--frame-range`): files and frames in memory are cut at
+    /// once, a camera file's range is checked against its header's count; a multi-page TIFF's
+    /// or a video's when its frames are read. Errors name the recording's frame count.
+    pub fn ranged(self, range: Option<FrameRange>) -> anyhow::Result<Self> {
+        let Some(range) = range else {
+            return Ok(self);
+        };
+        match self {
+            FrameSource::Files(files) => {
+                let r = range.of(files.len(), "the sequence")?;
+                Ok(FrameSource::Files(files[r].to_vec()))
+            }
+            FrameSource::Memory(frames) => {
+                let r = range.of(frames.len(), "the array")?;
+                Ok(FrameSource::Memory(frames[r].iter().cloned().collect()))
+            }
+            FrameSource::Photron(ref p) => {
+                let n = super::photron::read_header(p)?.frames;
+                range.of(n, &p.display().to_string())?;
+                Ok(FrameSource::Range(Box::new(self), range))
+            }
+            FrameSource::Cine(ref p) => {
+                let n = super::phantom::read_header(p)?.offsets.len();
+                range.of(n, &p.display().to_string())?;
+                Ok(FrameSource::Range(Box::new(self), range))
+            }
+            FrameSource::Range(inner, _) => Err(bad_input(format!(
+                "--frame-range {}: {} is already a range",
+                range.describe(),
+                inner.describe()
+            ))),
+            other => Ok(FrameSource::Range(Box::new(other), range)),
+        }
+    }
+
+    /// The source a range was cut from (this source itself when it is not a range).
+    pub fn inner(&self) -> &FrameSource {
+        match self {
+            FrameSource::Range(inner, _) => inner,
+            other => other,
+        }
+    }
+
+    /// The range of frames taken, if one was ([`FrameSource::ranged`]).
+    pub fn range(&self) -> Option<FrameRange> {
+        match self {
+            FrameSource::Range(_, r) => Some(*r),
+            _ => None,
+        }
+    }
+
+    /// How a report names the frames.
+    pub fn describe(&self) -> String {
+        match self {
+            FrameSource::Files(f) => match (f.first(), f.last()) {
+                (Some(a), Some(b)) if f.len() > 1 => {
+                    format!("{} files, {} .. {}", f.len(), a.display(), b.display())
+                }
+                (Some(a), _) => a.display().to_string(),
+                _ => "no files".to_string(),
+            },
+            FrameSource::MultiPageTiff(p) => format!("{} (multi-page TIFF)", p.display()),
+            FrameSource::Video { path: p, .. } => {
+                format!("{} (video, decoded by FFmpeg)", p.display())
+            }
+            FrameSource::Photron(p) => format!("{} (Photron MRAW recording)", p.display()),
+            FrameSource::Cine(p) => format!("{} (Phantom cine recording)", p.display()),
+            FrameSource::Memory(f) => format!("{} frames in memory", f.len()),
+            FrameSource::Range(inner, r) => {
+                format!("frames {} of {}", r.describe(), inner.describe())
+            }
+        }
+    }
+
     /// The number of frames when it is known before decoding (files, and a video from its
     /// container's timestamps, checked against `fps` by opening it); `None` for a multi-page
     /// TIFF.
@@ -509,6 +684,10 @@ impl FrameSource {
                 let v = open_video(path, fps, *retime)?;
                 Ok(Some(v.info().frames))
             }
+            FrameSource::Range(inner, r) => match inner.count(fps)? {
+                Some(n) => Ok(Some(r.of(n, &inner.describe())?.len())),
+                None => Ok(None),
+            },
         }
     }
 
@@ -523,8 +702,17 @@ impl FrameSource {
             }
             FrameSource::Cine(p) => {
                 let h = super::phantom::read_header(p)?;
+                super::phantom::check_times(&h, 0..h.offsets.len())?;
                 Ok(h.fps.map(|fps| (fps, h.shutter_s)))
             }
+            FrameSource::Range(inner, r) => match &**inner {
+                FrameSource::Cine(p) => {
+                    let h = super::phantom::read_header(p)?;
+                    super::phantom::check_times(&h, r.of(h.offsets.len(), &inner.describe())?)?;
+                    Ok(h.fps.map(|fps| (fps, h.shutter_s)))
+                }
+                other => other.recorded_rate(),
+            },
             _ => Ok(None),
         }
     }
@@ -536,6 +724,7 @@ impl FrameSource {
         match self {
             _ if !on => Ok(self),
             FrameSource::Video { path, .. } => Ok(FrameSource::Video { path, retime: true }),
+            FrameSource::Range(inner, r) => Ok(FrameSource::Range(Box::new(inner.retimed(on)?), r)),
             _ => Err(bad_input(
                 "--retime applies to a video file (its container's rate), not to image files \
                  or camera files: give their capture rate as --fps",
@@ -548,6 +737,7 @@ impl FrameSource {
         match self {
             FrameSource::Photron(p) => Ok(super::photron::read_header(p)?.note()),
             FrameSource::Cine(p) => Ok(super::phantom::read_header(p)?.note()),
+            FrameSource::Range(inner, _) => inner.note(),
             _ => Ok(None),
         }
     }
@@ -559,6 +749,15 @@ impl FrameSource {
         &self,
         fps: f64,
         mut f: impl FnMut(String, &GreyFrame) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        self.each_frame(fps, &mut f)
+    }
+
+    /// [`for_each`](Self::for_each) through a trait object (a range calls its source's).
+    fn each_frame(
+        &self,
+        fps: f64,
+        f: &mut dyn FnMut(String, &GreyFrame) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
         match self {
             FrameSource::Files(files) => {
@@ -577,12 +776,12 @@ impl FrameSource {
             FrameSource::Photron(p) => {
                 let mut r = super::photron::MrawFrames::open(p)?;
                 let n = r.header().frames;
-                each_recorded_frame(p, n, |frame| r.next_frame(frame), &mut f)
+                each_recorded_frame(p, n, |frame| r.next_frame(frame), f)
             }
             FrameSource::Cine(p) => {
                 let mut r = super::phantom::CineFrames::open(p)?;
                 let n = r.header().offsets.len();
-                each_recorded_frame(p, n, |frame| r.next_frame(frame), &mut f)
+                each_recorded_frame(p, n, |frame| r.next_frame(frame), f)
             }
             FrameSource::Video { path: p, retime } => {
                 let mut v = open_video(p, fps, *retime)?;
@@ -598,6 +797,24 @@ impl FrameSource {
                     )?;
                 }
                 Ok(())
+            }
+            FrameSource::Range(inner, r) => {
+                let mut k = 0usize;
+                let all = inner.each_frame(fps, &mut |label, frame| {
+                    k += 1;
+                    if r.last.is_some_and(|l| k > l) {
+                        return Err(anyhow::Error::new(PastTheRange));
+                    }
+                    if r.holds(k - 1) {
+                        f(label, frame)?;
+                    }
+                    Ok(())
+                });
+                match all {
+                    Err(e) if e.is::<PastTheRange>() => Ok(()),
+                    Err(e) => Err(e),
+                    Ok(()) => r.of(k, &inner.describe()).map(|_| ()),
+                }
             }
         }
     }
@@ -623,7 +840,7 @@ fn each_recorded_frame(
     path: &Path,
     n: usize,
     mut next: impl FnMut(&mut GreyFrame) -> anyhow::Result<Option<usize>>,
-    f: &mut impl FnMut(String, &GreyFrame) -> anyhow::Result<()>,
+    f: &mut dyn FnMut(String, &GreyFrame) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let mut frame = GreyFrame::U8 {
         width: 0,

@@ -9,12 +9,49 @@ pub mod photron;
 pub mod video;
 
 pub use files::{
-    centroid_source, discover_frames, for_each_tiff_page, load_frame, Discovered, FrameDepth,
-    FrameSource,
+    centroid_source, discover_frames, for_each_tiff_page, load_frame, open_frames, Discovered,
+    FrameDepth, FrameRange, FrameSource,
 };
 
 use crate::bad_input;
 use firmware_core::centroid::{self, Centroid, CentroidConfig};
+
+/// The most bytes one stored or decoded frame may take (a 16-bit frame of 16 384 x 16 384
+/// pixels): a header that states a larger frame is refused before anything is allocated.
+pub const MAX_FRAME_BYTES: u64 = 1 << 29;
+
+/// The most frames a camera file's header may state (a Phantom's offset table is 8 bytes a
+/// frame, read whole): a larger count is refused before anything is allocated.
+pub const MAX_FRAMES: u64 = 50_000_000;
+
+/// The bytes of one frame of `width x height` pixels at `bits` bits per pixel, as a header
+/// states them: refused (naming `name`, the file) when the product overflows or exceeds
+/// [`MAX_FRAME_BYTES`], so that no size taken from a header allocates more than that.
+pub fn checked_frame_bytes(name: &str, width: u64, height: u64, bits: u64) -> anyhow::Result<u64> {
+    let bytes = width
+        .checked_mul(height)
+        .and_then(|p| p.checked_mul(bits))
+        .map(|b| b.div_ceil(8));
+    match bytes {
+        Some(b) if b <= MAX_FRAME_BYTES => Ok(b),
+        _ => Err(bad_input(format!(
+            "{name}: its header states frames of {width} x {height} pixels at {bits} bits, \
+             more than {} MiB a frame: a damaged header, or a frame too large to read",
+            MAX_FRAME_BYTES >> 20
+        ))),
+    }
+}
+
+/// Refuses a frame count taken from a header (of `name`) above [`MAX_FRAMES`].
+pub fn checked_frame_count(name: &str, frames: u64) -> anyhow::Result<usize> {
+    if frames > MAX_FRAMES {
+        return Err(bad_input(format!(
+            "{name}: its header states {frames} frames, more than {MAX_FRAMES}: a damaged \
+             header, or a recording too long to read whole (split it)"
+        )));
+    }
+    usize::try_from(frames).map_err(|_| bad_input(format!("{name}: {frames} frames")))
+}
 
 /// A grey frame in memory, 8 or 16 bits per pixel, row-major without padding.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -134,8 +134,18 @@ pub fn read_header(path: &Path) -> anyhow::Result<CineHeader> {
             "{name}: not a Phantom cine file (it does not start with \"CI\")"
         )));
     }
-    let count = u32_at(&fh, 20) as usize;
+    let label = name.to_string();
+    let count = super::checked_frame_count(&label, u64::from(u32_at(&fh, 20)))?;
     let (off_bmi, off_setup, off_offsets) = (u32_at(&fh, 24), u32_at(&fh, 28), u32_at(&fh, 32));
+    // the offset table (8 bytes a frame) must lie inside the file before it is read
+    if u64::from(off_offsets) + 8 * count as u64 > len {
+        return Err(bad_input(format!(
+            "{name}: its header states {count} frames, whose offset table ({} bytes at byte \
+             {off_offsets}) reaches beyond the end of the file ({len} bytes): a damaged header \
+             or a truncated file",
+            8 * count as u64
+        )));
+    }
     let bmi = read_at(u64::from(off_bmi), 40, "bitmap header")?;
     let (width, raw_height) = (i32_at(&bmi, 4), i32_at(&bmi, 8));
     let (bits, compression) = (u32::from(u16_at(&bmi, 14)), u32_at(&bmi, 16));
@@ -144,6 +154,19 @@ pub fn read_header(path: &Path) -> anyhow::Result<CineHeader> {
     if width == 0 || height == 0 || count == 0 {
         return Err(bad_input(format!(
             "{name}: {width} x {height} pixels, {count} frames: an empty recording"
+        )));
+    }
+    let stored_bits = match compression {
+        P10 => 10,
+        P12L => 12,
+        _ => u64::from(bits).max(8),
+    };
+    let frame_bytes = super::checked_frame_bytes(&label, width as u64, height as u64, stored_bits)?;
+    if frame_bytes > len {
+        return Err(bad_input(format!(
+            "{name}: its header states frames of {width} x {height} pixels ({frame_bytes} \
+             bytes), more than the whole file ({len} bytes): a damaged header or a truncated \
+             file"
         )));
     }
     let colour = u32_at(&setup, SETUP_ENABLE_COLOR) != 0;
@@ -216,11 +239,12 @@ fn read_times(
     Ok(Vec::new())
 }
 
-/// Every frame inside the file, and the time stamps one frame period apart.
+/// Every frame inside the file (the time stamps are checked where the rate matters,
+/// [`check_times`]: a centroid of each frame needs none).
 fn check_layout(h: &CineHeader, len: u64) -> anyhow::Result<()> {
     let name = h.path.display();
     for (k, &o) in h.offsets.iter().enumerate() {
-        if o + 8 + h.image_bytes() as u64 > len {
+        if o.saturating_add(8 + h.image_bytes() as u64) > len {
             return Err(bad_input(format!(
                 "{name}: frame {} of {} lies beyond the end of the file ({len} bytes): \
                  truncated",
@@ -229,22 +253,51 @@ fn check_layout(h: &CineHeader, len: u64) -> anyhow::Result<()> {
             )));
         }
     }
-    if let (Some(fps), true) = (h.fps, h.times.len() > 1) {
-        for (k, w) in h.times.windows(2).enumerate() {
-            let dt = w[1] - w[0];
-            if (dt - 1.0 / fps).abs() > 1e-6 {
-                return Err(bad_input(format!(
-                    "{name}: frame {} comes {:.3} ms after frame {}, not one frame period \
-                     ({:.3} ms at {fps} fps): a dropped frame or an irregular recording",
-                    k + 2,
-                    dt * 1e3,
-                    k + 1,
-                    1e3 / fps
-                )));
+    Ok(())
+}
+
+/// The time stamps of frames `range` (0-based) one frame period apart (to 1 µs), when the file
+/// has them; an irregular interval is an error naming the frames, and the longest run of
+/// regular frames as a `--frame-range` to analyse instead (a junk stamp on one frame of a
+/// real camera's file would otherwise refuse the whole recording).
+pub fn check_times(h: &CineHeader, range: std::ops::Range<usize>) -> anyhow::Result<()> {
+    let Some(fps) = h.fps else {
+        return Ok(());
+    };
+    let Some(times) = h.times.get(range.clone()) else {
+        return Ok(());
+    };
+    let regular = |w: &[f64]| ((w[1] - w[0]) - 1.0 / fps).abs() <= 1e-6;
+    let Some(bad) = times.windows(2).position(|w| !regular(w)) else {
+        return Ok(());
+    };
+    // the longest run of frames (1-based, whole file) whose intervals are all regular
+    let (mut best, mut start) = ((1usize, 1usize), 0usize);
+    for (k, w) in h.times.windows(2).enumerate() {
+        if regular(w) {
+            if k + 2 - start > best.1 + 1 - best.0 {
+                best = (start + 1, k + 2);
             }
+        } else {
+            start = k + 1;
         }
     }
-    Ok(())
+    let k = range.start + bad;
+    let dt = times[bad + 1] - times[bad];
+    Err(bad_input(format!(
+        "{}: frame {} comes {:.3} ms after frame {}, not one frame period ({:.3} ms at {fps} \
+         fps): a dropped frame, a damaged time stamp or an irregular recording; frames {}..{} \
+         are regular: analyse them with --frame-range {}..{}",
+        h.path.display(),
+        k + 2,
+        dt * 1e3,
+        k + 1,
+        1e3 / fps,
+        best.0,
+        best.1,
+        best.0,
+        best.1
+    )))
 }
 
 /// The frames of a cine file, read one at a time into the caller's buffer.

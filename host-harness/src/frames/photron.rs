@@ -212,6 +212,9 @@ fn header_of(path: &Path, f: &Fields) -> anyhow::Result<PhotronHeader> {
             path.display()
         )));
     }
+    let name = path.display().to_string();
+    let frames = super::checked_frame_count(&name, frames as u64)?;
+    super::checked_frame_bytes(&name, width as u64, height as u64, u64::from(bits))?;
     if bits == 12 && (width * height) % 2 != 0 {
         return Err(bad_input(format!(
             "{}: 12-bit packed frames of {width} x {height} (an odd number of pixels) do not \

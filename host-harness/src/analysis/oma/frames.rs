@@ -9,7 +9,7 @@ use crate::analysis::run::{Outcome, TargetsRequest};
 use crate::analysis::targets::{self, Tracks};
 use crate::chain::displacement::{displacement_mm, DisplacementSettings};
 use crate::export::targets as export;
-use crate::frames::{centroid_source, discover_frames, FrameSource};
+use crate::frames::{centroid_source, FrameSource};
 use firmware_core::centroid::CentroidConfig;
 use std::path::PathBuf;
 
@@ -20,6 +20,8 @@ pub struct FramesRequest {
     pub frames: String,
     /// `--retime`.
     pub retime: bool,
+    /// Frames A..B only (`--frame-range`).
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Frame rate, Hz.
     pub fps: f64,
     /// Centroid settings.
@@ -164,8 +166,8 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
 
 /// Tracks the targets and runs the output-only analysis; writes its outputs.
 pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
-    let found = discover_frames(&req.frames)?;
-    let source = found.source.clone().retimed(req.retime)?;
+    let found = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?;
+    let source = found.source.clone();
     let c = compute(req, &source)?;
     let n = c.records.channels[0].len();
     let rows: Vec<export::Track<'_>> = c

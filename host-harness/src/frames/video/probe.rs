@@ -81,6 +81,17 @@ pub(super) fn probe_stream(path: &Path, ffprobe: &str) -> Result<StreamProps, Vi
     };
     let width = count(&stream["width"]).ok_or_else(|| missing("no frame width"))?;
     let height = count(&stream["height"]).ok_or_else(|| missing("no frame height"))?;
+    // a decoded frame is at most 16 bits a pixel: its buffer is allocated from these sizes
+    if (width as u64)
+        .saturating_mul(height as u64)
+        .saturating_mul(2)
+        > crate::frames::MAX_FRAME_BYTES
+    {
+        return Err(missing(&format!(
+            "frames of {width} x {height} pixels, more than {} MiB a frame",
+            crate::frames::MAX_FRAME_BYTES >> 20
+        )));
+    }
     let pix_fmt = text_of(&stream["pix_fmt"]).ok_or_else(|| missing("no pixel format"))?;
     let time_base_s = text_of(&stream["time_base"])
         .as_deref()
