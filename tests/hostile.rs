@@ -134,3 +134,99 @@ fn a_junk_time_stamp_refuses_only_the_rate_and_a_frame_range_reads_the_rest() {
     assert_exit_2(&track(&["--frame-range", "5..2"]), "comes before");
     assert_exit_2(&track(&["--frame-range", "0..2"]), "at least 1");
 }
+
+#[test]
+fn simulate_field_names_its_bounds_and_the_modes_it_cannot_sample() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("field");
+    let o = out.to_str().unwrap();
+    let sim = |extra: &[&str]| {
+        let mut args = vec!["simulate-field", "--out", o, "--force"];
+        args.extend_from_slice(extra);
+        harness(&args)
+    };
+    // each of these aborted the process (a record's allocation) or ran for hours
+    for (flags, needle) in [
+        (&["--minutes", "1e9"][..], "20000000 sample periods"),
+        (&["--fps", "1e9"][..], "20000000 sample periods"),
+        (&["--minutes", "100000"][..], "20000000 sample periods"),
+        (&["--render", "--minutes", "1e6"][..], "sample periods"),
+        (&["--render", "--minutes", "60"][..], "200000 frames"),
+        // a header-only record
+        (&["--minutes", "0.00001"][..], "at least 20 periods"),
+        (&["--minutes", "nan"][..], "positive number"),
+    ] {
+        assert_exit_2(&sim(flags), needle);
+        let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
+        assert!(left.is_empty(), "{flags:?} left {left:?}");
+    }
+    // every mode above the Nyquist frequency is named, with where it aliases
+    let o = sim(&["--fps", "1", "--minutes", "5"]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout).into_owned();
+    let named = report.matches("above the Nyquist frequency").count();
+    assert_eq!(named, 5, "{report}");
+    assert!(report.contains("mode 2 (4.3785 Hz)") && report.contains("aliases to 0.3785 Hz"));
+    let o = sim(&["--fps", "60", "--minutes", "1"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("Nyquist"));
+}
+
+#[test]
+fn negative_numbers_are_values_refused_by_their_range_and_dot_is_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = disk_frames(3, (32, 24), (16.0, 12.0));
+    let p = cine(tmp.path(), "ok.cine", &frames);
+    let name = p.to_str().unwrap();
+    let out = tmp.path().join("o");
+    for flags in [["--fps", "-60"], ["--fps=-60", "--force"]] {
+        let mut args = vec![
+            "track",
+            "--frames",
+            name,
+            "--targets",
+            "1",
+            "--threshold",
+            "9",
+        ];
+        args.extend_from_slice(&flags);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = harness(&args);
+        assert_exit_2(&o, "positive rate");
+        assert!(
+            !stderr(&o).contains("unexpected argument"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    // `--out .` is the user's mistake: exit 2, as every other refused flag
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"))
+        .current_dir(tmp.path())
+        .args([
+            "track",
+            "--frames",
+            name,
+            "--targets",
+            "1",
+            "--threshold",
+            "100",
+        ])
+        .args(["--out", "."])
+        .output()
+        .unwrap();
+    assert_exit_2(&o, "needs a name");
+    // a camera file stating a rate of 0 is named as such
+    let zero = cine(tmp.path(), "zero.cine", &frames);
+    patch_u32(&zero, 84 + 768, 0);
+    let o = harness(&[
+        "track",
+        "--frames",
+        zero.to_str().unwrap(),
+        "--targets",
+        "1",
+        "--threshold",
+        "100",
+        "--out",
+        tmp.path().join("z").to_str().unwrap(),
+    ]);
+    assert_exit_2(&o, "no usable frame rate (none, or 0 fps)");
+}

@@ -109,9 +109,40 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     })
 }
 
+/// The arguments with a negative number after a long flag joined to it (`--fps -60` ->
+/// `--fps=-60`), so that the flag's own check refuses it by its range, rather than the parser
+/// taking `-60` for short flags ("unexpected argument '-6'"). Nothing after `--` is touched.
+pub fn negative_values_joined(
+    args: impl IntoIterator<Item = std::ffi::OsString>,
+) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    let mut rest = false;
+    for a in args {
+        let text = a.to_str().unwrap_or("");
+        let negative = text.starts_with('-') && text.parse::<f64>().is_ok();
+        let flag = out
+            .last()
+            .and_then(|l| l.to_str())
+            .filter(|l| l.starts_with("--") && l.len() > 2 && !l.contains('='));
+        match flag {
+            Some(f) if negative && !rest => {
+                let joined = format!("{f}={text}");
+                if let Some(last) = out.last_mut() {
+                    *last = joined.into();
+                }
+            }
+            _ => {
+                rest |= text == "--";
+                out.push(a);
+            }
+        }
+    }
+    out
+}
+
 /// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(negative_values_joined(std::env::args_os()));
     let result =
         run(cli).and_then(|()| std::io::Write::flush(&mut std::io::stdout()).map_err(stdout_error));
     match result {

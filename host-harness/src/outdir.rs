@@ -59,11 +59,11 @@ impl Staged {
             .file_name()
             .and_then(|n| n.to_str())
             .filter(|n| *n != "." && *n != "..")
-            .with_context(|| {
-                format!(
+            .ok_or_else(|| {
+                crate::bad_input(format!(
                     "{}: an output directory needs a name (not . or ..)",
                     target.display()
-                )
+                ))
             })?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),

@@ -506,6 +506,7 @@ fn frames_request(
     FramesRequest {
         frames: String::new(),
         retime: false,
+        frame_range: None,
         fps,
         centroid,
         displacement,

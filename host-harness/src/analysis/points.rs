@@ -103,7 +103,8 @@ pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
             let v = num(j, c)?;
             if v.fract() != 0.0 || v < min || v > 65_536.0 {
                 return Err(bad_input(format!(
-                    "{name}: row {row}: `{c}` is {v}: a whole number of at least {min} is needed"
+                    "{name}: row {row}: `{c}` is {v}: a whole number from {min} to 65536 is \
+                     needed"
                 )));
             }
             Ok(v)

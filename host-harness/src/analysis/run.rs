@@ -397,6 +397,12 @@ pub fn resolve_rates(
             notes.push(format!("frame rate {r} fps, as {frames} states"));
             r
         }
+        (None, None) if source.inner().is_camera_file() => {
+            return Err(crate::bad_input(format!(
+                "--fps is needed: the header of {frames} states no usable frame rate (none, \
+                 or 0 fps)"
+            )))
+        }
         (None, None) => {
             return Err(crate::bad_input(format!(
                 "--fps is needed: {frames} does not state the rate the camera recorded at \

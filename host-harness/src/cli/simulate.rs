@@ -66,13 +66,6 @@ pub enum CaseArg {
 /// Runs `host-harness simulate-field`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let minutes = args.minutes.unwrap_or(if args.render { 5.0 } else { 30.0 });
-    for (name, v) in [("--minutes", minutes), ("--fps", args.fps)] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(crate::bad_input(format!(
-                "{name} must be positive, got {v}"
-            )));
-        }
-    }
     if args.render && args.noise.is_some() {
         return Err(crate::bad_input(
             "--noise is the displacement record's noise: a rendered recording's noise is the \
@@ -90,7 +83,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         CaseArg::CloseModes => FieldCase::CloseModes,
     };
     let model = case.model();
-    let n = (minutes * 60.0 * args.fps).round() as usize;
+    let (n, warnings) = crate::model::field::record_length(&model, minutes, args.fps, args.render)?;
     if args.render {
         let rec = FieldRecording {
             model,
@@ -107,9 +100,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.set_position(done as u64)
         });
         bar.finish_and_clear();
-        return super::stdout(&report?);
+        return super::stdout(&with_warnings(report?, &warnings));
     }
     let rec = simulate(&model, args.fps, n, noise, args.seed);
     let report = crate::model::field::write_field(&args.out, args.force, &model, &rec, args.fps)?;
-    super::stdout(&report)
+    super::stdout(&with_warnings(report, &warnings))
+}
+
+/// The report with the warnings after it.
+fn with_warnings(mut report: String, warnings: &[String]) -> String {
+    for w in warnings {
+        report.push_str(&format!("warning: {w}\n"));
+    }
+    report
 }

@@ -631,6 +631,11 @@ impl FrameSource {
         }
     }
 
+    /// A camera's own file (Photron, Phantom), whose header states the recording's rate.
+    pub fn is_camera_file(&self) -> bool {
+        matches!(self, FrameSource::Photron(_) | FrameSource::Cine(_))
+    }
+
     /// The source a range was cut from (this source itself when it is not a range).
     pub fn inner(&self) -> &FrameSource {
         match self {

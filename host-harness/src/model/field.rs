@@ -98,6 +98,98 @@ pub fn shear_frame(n: usize, f1_hz: f64, damping: &[f64]) -> FieldModel {
     FieldModel { modes, points: n }
 }
 
+/// The most sample periods a record and its settling run may take together (the simulation
+/// steps 16 times per sample period): about 3 minutes of computing on one core.
+pub const MAX_SIMULATED_PERIODS: u64 = 20_000_000;
+/// The most frames a rendered record may have (each one a PNG file written).
+pub const MAX_RENDERED_FRAMES: u64 = 200_000;
+/// The fewest periods of the structure's lowest mode a record must span (a modal analysis of
+/// fewer has no spectral line or correlation lag to resolve the mode).
+pub const MIN_PERIODS: f64 = 20.0;
+
+/// A record of the model's points `minutes` long at `fs_hz`, checked: its sample count, with
+/// warnings for modes at or above the Nyquist frequency (they alias); a record shorter than
+/// [`MIN_PERIODS`] of the lowest mode, or longer than the simulation's or the renderer's
+/// bound (with `render`), is an error naming the flag and the bound.
+pub fn record_length(
+    model: &FieldModel,
+    minutes: f64,
+    fs_hz: f64,
+    render: bool,
+) -> anyhow::Result<(usize, Vec<String>)> {
+    for (name, v) in [("--minutes", minutes), ("--fps", fs_hz)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(crate::bad_input(format!(
+                "{name} must be a positive number, got {v}"
+            )));
+        }
+    }
+    let f1 = model
+        .modes
+        .iter()
+        .map(|m| m.f_hz)
+        .fold(f64::INFINITY, f64::min);
+    let seconds = minutes * 60.0;
+    let samples = (seconds * fs_hz).round();
+    let shortest = MIN_PERIODS / f1;
+    if seconds < shortest || samples < 2.0 {
+        return Err(crate::bad_input(format!(
+            "--minutes {minutes} at --fps {fs_hz}: {samples} samples over {seconds:.3} s; the \
+             record must span at least {MIN_PERIODS} periods of the lowest mode ({f1} Hz): \
+             --minutes {:.3} or more",
+            shortest / 60.0
+        )));
+    }
+    let settle = settling_periods(model, fs_hz);
+    if samples + settle > MAX_SIMULATED_PERIODS as f64 {
+        return Err(crate::bad_input(format!(
+            "--minutes {minutes} at --fps {fs_hz}: {samples} samples and {settle} of settling \
+             (ten decay times of the slowest mode) exceed the {MAX_SIMULATED_PERIODS} sample \
+             periods simulated at most; shorten the record or lower the rate"
+        )));
+    }
+    if render && samples > MAX_RENDERED_FRAMES as f64 {
+        return Err(crate::bad_input(format!(
+            "--render --minutes {minutes} at --fps {fs_hz}: {samples} frames, more than the \
+             {MAX_RENDERED_FRAMES} frames (PNG files) rendered at most"
+        )));
+    }
+    let nyquist = fs_hz / 2.0;
+    let warnings = model
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.f_hz >= nyquist)
+        .map(|(i, m)| {
+            format!(
+                "mode {} ({:.4} Hz) is at or above the Nyquist frequency ({nyquist} Hz at \
+                 --fps {fs_hz}): it aliases to {:.4} Hz in the record, and no analysis of it \
+                 can find it where it is",
+                i + 1,
+                m.f_hz,
+                alias_hz(m.f_hz, fs_hz)
+            )
+        })
+        .collect();
+    Ok((samples as usize, warnings))
+}
+
+/// Where a frequency `f_hz` appears in a record sampled at `fs_hz` (folded into 0..fs/2).
+pub fn alias_hz(f_hz: f64, fs_hz: f64) -> f64 {
+    let r = f_hz.rem_euclid(fs_hz);
+    r.min(fs_hz - r)
+}
+
+/// Sample periods of the settling run at `fs_hz` (ten of the slowest mode's decay times).
+fn settling_periods(model: &FieldModel, fs_hz: f64) -> f64 {
+    let slowest = model
+        .modes
+        .iter()
+        .map(|m| 1.0 / (2.0 * PI * m.f_hz * m.damping))
+        .fold(0.0, f64::max);
+    (10.0 * slowest * fs_hz).ceil().max(1.0)
+}
+
 /// Simulates `samples` samples at `fs_hz` of the model's points under unit-variance white
 /// forces (per simulation step) at every point, plus measurement noise of standard deviation
 /// `noise` relative to the record's RMS, seeded. Returns one record per point.
@@ -190,12 +282,7 @@ fn run(
     let mut state = vec![[0.0f64; 2]; model.modes.len()];
     let mut force = vec![0.0; k];
     let mut disp = vec![0.0; k];
-    let slowest = model
-        .modes
-        .iter()
-        .map(|m| 1.0 / (2.0 * PI * m.f_hz * m.damping))
-        .fold(0.0, f64::max);
-    let settle = ((10.0 * slowest * fs_hz).ceil() as usize).max(1);
+    let settle = settling_periods(model, fs_hz) as usize;
     let start = settle * SUB;
     for n in 0..settle + samples {
         for sub in 0..SUB {

@@ -164,9 +164,11 @@ pub fn write_field_recording(
         points.push_str(&format!("{},{x},{y},{pw},{ph}\n", t + 1));
     }
     staged.write("points.csv", points)?;
+    // the weighted centroid: linear in the motion, so no harmonics of pixel locking (the binary
+    // centroid's staircase turns the strong first mode into modes at 3 and 5 times it)
     let command = format!(
-        "host-harness analyze --frames {d}/frames --fps {} --targets {k} --threshold {} --out \
-         {d}/analysis",
+        "host-harness analyze --frames {d}/frames --fps {} --targets {k} --threshold {} \
+         --tracker weighted --out {d}/analysis",
         rec.fps,
         cantilever::THRESHOLD,
         d = out.display()

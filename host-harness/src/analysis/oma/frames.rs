@@ -210,11 +210,19 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
 }
 
 /// The analysis settings of a record of `n` frames.
+/// The fewest frames an output-only analysis of frames takes.
+const MIN_FRAMES: usize = 64;
+
 fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
     let mut s = OmaSettings::with_welch(req.fps, n, &req.welch);
-    if s.csd.nperseg > n || n < 64 {
+    if n < MIN_FRAMES {
         return Err(crate::bad_input(format!(
-            "the record has {n} frames, fewer than one segment ({} frames, 64 at least)",
+            "the record has {n} frames: an output-only analysis needs at least {MIN_FRAMES}"
+        )));
+    }
+    if s.csd.nperseg > n {
+        return Err(crate::bad_input(format!(
+            "the record has {n} frames, fewer than one segment of --nperseg {}",
             s.csd.nperseg
         )));
     }
@@ -225,6 +233,19 @@ fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
         )));
     }
     s.bands = req.bands.clone();
+    let lk = req.targets.as_ref().is_some_and(|t| {
+        matches!(
+            t.points,
+            Some((_, crate::analysis::points::PointTracker::Lk { .. }))
+        )
+    });
+    s.source = match (lk, req.centroid.mode) {
+        (true, _) => super::RecordSource::Linear("Lucas-Kanade"),
+        (false, firmware_core::centroid::Mode::Weighted) => {
+            super::RecordSource::Linear("weighted centroid")
+        }
+        (false, firmware_core::centroid::Mode::Binary) => super::RecordSource::Blob,
+    };
     if n < 4 * s.ssi.block_rows {
         s.ssi.block_rows = (n / 4).max(2);
     }

@@ -45,6 +45,19 @@ impl Method {
     }
 }
 
+/// What measured the records, for the notes on modes that may be a tracker's harmonics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RecordSource {
+    /// A displacement file: how it was measured is not known.
+    #[default]
+    File,
+    /// The binary centroid (blob): its pixel locking is a staircase in the motion, which makes
+    /// odd harmonics and intermodulation products of strong modes.
+    Blob,
+    /// A tracker linear in the motion (the weighted centroid, Lucas-Kanade), named.
+    Linear(&'static str),
+}
+
 /// Settings of an output-only analysis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OmaSettings {
@@ -62,6 +75,8 @@ pub struct OmaSettings {
     pub ssi: SsiRule,
     /// Least stable poles of a cluster to make an SSI mode.
     pub ssi_min_poles: usize,
+    /// What measured the records (the notes on harmonics).
+    pub source: RecordSource,
 }
 
 impl OmaSettings {
@@ -108,6 +123,7 @@ impl OmaSettings {
                 f_range_hz: ((0.5f64).max(2.0 * df), fs_hz / 2.0),
             },
             ssi_min_poles: 5,
+            source: RecordSource::File,
         }
     }
 }
@@ -271,7 +287,7 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
         }
     }
     modes.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
-    notes.extend(harmonic_notes(&modes, csd.df_hz()));
+    notes.extend(harmonic_notes(&modes, csd.df_hz(), s.source));
     Ok(OmaResult {
         csd,
         svd,
@@ -287,27 +303,45 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
 /// where the method gives none) and, with three or more targets, a shape with MAC >= 0.5 to
 /// the lower mode's. A tracker that is not linear in the motion (the binary centroid's pixel
 /// locking) turns a strong narrow-band mode into odd harmonics that SSI and FDD take for modes
-/// (docs/method.md §3.12); such modes are kept but named.
-pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64) -> Vec<String> {
+/// (docs/method.md §3.12); such modes are kept but named. With the binary centroid
+/// (`source`), its intermodulation products are named too: a frequency at `|a fa + b fb|` of
+/// two lower modes, `|a| + |b|` odd and at most 5 (`2 f1 + f2`, `2 f2 - f1`, ...), whatever
+/// the shape (a staircase applied to the sum of the modes makes them at every target).
+pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64, source: RecordSource) -> Vec<String> {
     let mut notes = Vec::new();
+    let why = match source {
+        RecordSource::Blob => {
+            "made by the binary centroid's pixel locking (a staircase in the motion), not a \
+             mode: --tracker weighted or lk makes none"
+                .to_string()
+        }
+        RecordSource::Linear(name) => format!(
+            "made by a non-linearity (of the structure, or of the {name} tracker on a target \
+             that is not rigid or uniformly lit), or a mode of its own: check it against a \
+             model or a second measurement"
+        ),
+        RecordSource::File => "made by a tracker or a structure that is not linear in the \
+             motion (the binary centroid's pixel locking makes them; --tracker weighted or lk \
+             makes none), not a mode"
+            .to_string(),
+    };
     for (j, hi) in modes.iter().enumerate() {
         let targets = hi.shape.len();
-        let of = modes[..j]
+        let lower: Vec<&OmaMode> = modes[..j]
             .iter()
-            .filter(|lo| lo.method == hi.method)
-            .find_map(|lo| {
-                let n = (hi.f_hz / lo.f_hz).round();
-                if !(2.0..=7.0).contains(&n) {
-                    return None;
-                }
-                let tol = (1.5 * df_hz).max(n * lo.damping.unwrap_or(0.01) * lo.f_hz);
-                if (hi.f_hz - n * lo.f_hz).abs() > tol {
-                    return None;
-                }
-                let m = crate::analysis::modal::mac(&lo.shape, &hi.shape);
-                (targets < 3 || m >= 0.5).then_some((lo, n as usize, m))
-            });
-        if let Some((lo, n, m)) = of {
+            .filter(|lo| lo.method == hi.method && lo.f_hz < hi.f_hz)
+            .collect();
+        let tol =
+            |n: f64, lo: &OmaMode| (1.5 * df_hz).max(n * lo.damping.unwrap_or(0.01) * lo.f_hz);
+        let harmonic = lower.iter().find_map(|lo| {
+            let n = (hi.f_hz / lo.f_hz).round();
+            if !(2.0..=7.0).contains(&n) || (hi.f_hz - n * lo.f_hz).abs() > tol(n, lo) {
+                return None;
+            }
+            let m = crate::analysis::modal::mac(&lo.shape, &hi.shape);
+            (targets < 3 || m >= 0.5).then_some((*lo, n as usize, m))
+        });
+        if let Some((lo, n, m)) = harmonic {
             let shape = if targets < 3 {
                 "too few targets to compare the shapes".to_string()
             } else {
@@ -315,14 +349,56 @@ pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64) -> Vec<String> {
             };
             notes.push(format!(
                 "{} mode {} ({:.4} Hz) is {n} x mode {} ({:.4} Hz) and {shape}: possibly a \
-                 harmonic made by a tracker that is not linear in the motion (the binary \
-                 centroid's pixel locking), not a mode; a linear tracker (--tracker weighted or \
-                 lk) makes none",
+                 harmonic {why}",
                 hi.method.name(),
                 hi.mode,
                 hi.f_hz,
                 lo.mode,
                 lo.f_hz
+            ));
+            continue;
+        }
+        if source != RecordSource::Blob {
+            continue;
+        }
+        // the nearest product of two lower modes within its tolerance
+        let mut product: Option<(&OmaMode, &OmaMode, i32, i32, f64)> = None;
+        for (i, fa) in lower.iter().enumerate() {
+            for fb in &lower[i + 1..] {
+                for (a, b) in (-5i32..=5).flat_map(|a| (-5i32..=5).map(move |b| (a, b))) {
+                    let order = a.abs() + b.abs();
+                    if a == 0 || b == 0 || order % 2 == 0 || order > 5 {
+                        continue;
+                    }
+                    let f = f64::from(a) * fa.f_hz + f64::from(b) * fb.f_hz;
+                    let t = tol(f64::from(a.abs()), fa).max(tol(f64::from(b.abs()), fb));
+                    let nearer =
+                        product.is_none_or(|p| (hi.f_hz - f).abs() < (hi.f_hz - p.4).abs());
+                    if f > 0.0 && (hi.f_hz - f).abs() <= t && nearer {
+                        product = Some((fa, fb, a, b, f));
+                    }
+                }
+            }
+        }
+        if let Some((fa, fb, a, b, f)) = product {
+            let term = |c: i32, m: &OmaMode| match c {
+                1 => format!("f{}", m.mode),
+                -1 => format!("- f{}", m.mode),
+                c if c < 0 => format!("- {} f{}", -c, m.mode),
+                c => format!("{c} f{}", m.mode),
+            };
+            let (first, second) = (term(a, fa), term(b, fb));
+            let second = if b > 0 { format!("+ {second}") } else { second };
+            notes.push(format!(
+                "{} mode {} ({:.4} Hz) is at {first} {second} = {f:.4} Hz of modes {} and {} \
+                 ({:.4} and {:.4} Hz): possibly an intermodulation product {why}",
+                hi.method.name(),
+                hi.mode,
+                hi.f_hz,
+                fa.mode,
+                fb.mode,
+                fa.f_hz,
+                fb.f_hz
             ));
         }
     }
@@ -360,7 +436,7 @@ mod tests {
             // not near a multiple
             mode(4, 5.2, &one),
         ];
-        let notes = harmonic_notes(&modes, 0.01);
+        let notes = harmonic_notes(&modes, 0.01, RecordSource::File);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(
             notes[0].starts_with("ssi mode 2 (4.5300 Hz) is 3 x mode 1"),
@@ -369,7 +445,50 @@ mod tests {
         // another method's modes are not compared
         let mut other = modes.clone();
         other[0].method = Method::Fdd;
-        assert!(harmonic_notes(&other, 0.01).is_empty());
+        assert!(harmonic_notes(&other, 0.01, RecordSource::File).is_empty());
+    }
+
+    #[test]
+    fn the_blob_trackers_intermodulation_products_are_named_and_no_tracker_is_told_to_use_itself() {
+        let mode = |n: usize, f_hz: f64, shape: &[f64]| OmaMode {
+            method: Method::Ssi,
+            mode: n,
+            band_hz: None,
+            f_hz,
+            amplitude: None,
+            damping: Some(0.012),
+            shape: truth_shape(shape),
+        };
+        // the shear frame's first two modes and a column of poles at 7.3564 Hz, near
+        // 2 f1 + f2 = 7.3785 Hz (within 1.5 lines of a 2048-sample spectrum at 60 fps), as
+        // the binary centroid made it on a rendered field record
+        let modes = [
+            mode(1, 1.5, &[0.28, 0.55, 0.77, 0.92, 1.0]),
+            mode(2, 4.3785, &[0.77, 1.0, 0.45, -0.28, -0.87]),
+            mode(3, 7.3564, &[0.5, 0.8, 0.7, 0.5, 1.0]),
+        ];
+        let df = 60.0 / 2048.0;
+        let blob = harmonic_notes(&modes, df, RecordSource::Blob);
+        assert_eq!(blob.len(), 1, "{blob:?}");
+        assert!(
+            blob[0].contains("2 f1 + f2 = 7.3785 Hz") && blob[0].contains("intermodulation"),
+            "{blob:?}"
+        );
+        // a linear tracker makes no intermodulation product: nothing is named
+        assert!(harmonic_notes(&modes, df, RecordSource::Linear("Lucas-Kanade")).is_empty());
+        // a harmonic found on a Lucas-Kanade record does not advise Lucas-Kanade
+        let third = [
+            mode(1, 1.5, &[0.28, 0.55, 0.77, 0.92, 1.0]),
+            mode(2, 4.5, &[0.3, 0.5, 0.8, 0.9, 1.0]),
+        ];
+        let lk = harmonic_notes(&third, df, RecordSource::Linear("Lucas-Kanade"));
+        assert_eq!(lk.len(), 1, "{lk:?}");
+        assert!(
+            lk[0].contains("3 x mode 1") && !lk[0].contains("--tracker"),
+            "{lk:?}"
+        );
+        let blob = harmonic_notes(&third, df, RecordSource::Blob);
+        assert!(blob[0].contains("--tracker weighted or lk"), "{blob:?}");
     }
 
     #[test]
