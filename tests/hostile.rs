@@ -230,3 +230,175 @@ fn negative_numbers_are_values_refused_by_their_range_and_dot_is_bad_input() {
     ]);
     assert_exit_2(&o, "no usable frame rate (none, or 0 fps)");
 }
+
+/// `modes.csv` of a `modal` output as `(method, mode, f_hz, damping)`.
+fn modal_modes(dir: &Path) -> Vec<(String, usize, f64, Option<f64>)> {
+    std::fs::read_to_string(dir.join("modes.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (
+                c[9].to_string(),
+                c[2].parse().unwrap(),
+                c[5].parse().unwrap(),
+                c[7].parse().ok(),
+            )
+        })
+        .collect()
+}
+
+/// A ten-minute shear-frame record (`simulate-field`), and `modal` run on `file` with `extra`.
+fn field(dir: &Path) -> PathBuf {
+    let out = dir.join("field");
+    assert_ok(&harness(&[
+        "simulate-field",
+        "--minutes",
+        "10",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    out.join("displacement.csv")
+}
+
+fn modal(file: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "modal",
+        "--displacement",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+/// `file`'s rows with every value column multiplied by `scale` (the time column kept).
+fn scaled_copy(file: &Path, to: &Path, scale: f64) {
+    let text = std::fs::read_to_string(file).unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().unwrap());
+    for l in lines {
+        let c: Vec<String> = l
+            .split(',')
+            .enumerate()
+            .map(|(i, v)| match i {
+                0 => v.to_string(),
+                _ => format!("{:e}", v.parse::<f64>().unwrap() * scale),
+            })
+            .collect();
+        out.push_str(&c.join(","));
+        out.push('\n');
+    }
+    std::fs::write(to, out).unwrap();
+}
+
+#[test]
+fn modal_gives_the_same_modes_in_any_unit() {
+    // scaled by 1e-11 the SSI's eigenvalue iteration ran for more than 300 s, by 1e-9 SSI lost
+    // modes, by 1e150 it found none, all with exit 0
+    let tmp = tempfile::tempdir().unwrap();
+    let file = field(tmp.path());
+    let base = tmp.path().join("base");
+    assert_ok(&modal(&file, &base, &[]));
+    let want = modal_modes(&base);
+    assert_eq!(want.iter().filter(|m| m.0 == "ssi").count(), 5, "{want:?}");
+    for scale in [1e-11, 1e-9, 1e150] {
+        let f = tmp.path().join(format!("scaled_{scale:e}.csv"));
+        scaled_copy(&file, &f, scale);
+        let out = tmp.path().join(format!("m_{scale:e}"));
+        assert_ok(&modal(&f, &out, &[]));
+        let got = modal_modes(&out);
+        assert_eq!(got.len(), want.len(), "x{scale}: {got:?}");
+        for (a, b) in got.iter().zip(&want) {
+            // the scaled file differs from the original by the rounding of each value (1e-16):
+            // FDD and EFDD do not move beyond it, but a pole on the edge of SSI's stability
+            // criteria can flip with it and move a cluster's median by 1e-5 (seen here), far
+            // below the estimates' scatter (1e-3 in frequency, 10 % in damping)
+            assert_eq!((&a.0, a.1), (&b.0, b.1), "x{scale}");
+            let (df, dz) = if a.0 == "ssi" {
+                (1e-4, 1e-2)
+            } else {
+                (1e-9, 1e-6)
+            };
+            assert!((a.2 / b.2 - 1.0).abs() < df, "x{scale}: {a:?} vs {b:?}");
+            if let (Some(x), Some(y)) = (a.3, b.3) {
+                assert!((x / y - 1.0).abs() < dz, "x{scale}: {a:?} vs {b:?}");
+            }
+        }
+    }
+    // a record that does not move, or whose squares overflow, is named
+    let f = tmp.path().join("huge.csv");
+    scaled_copy(&file, &f, 1e300);
+    assert_exit_2(&modal(&f, &tmp.path().join("h"), &[]), "RMS");
+}
+
+#[test]
+fn modal_refuses_a_rate_against_its_time_column_duplicates_and_short_segments() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = field(tmp.path());
+    let out = tmp.path().join("m");
+    // the file's time column is 60 Hz: --fps 30 would halve every frequency
+    assert_exit_2(
+        &modal(&file, &out, &["--fps", "30"]),
+        "contradicts the time column",
+    );
+    assert_ok(&modal(&file, &out, &["--fps", "60"]));
+    // a 0.5 s gap in the time column stays an error, and its message does not advise --fps
+    let text = std::fs::read_to_string(&file).unwrap();
+    let gap: String = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !(1000..1030).contains(i))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let gapped = tmp.path().join("gap.csv");
+    std::fs::write(&gapped, gap).unwrap();
+    for extra in [&[][..], &["--fps", "60"][..]] {
+        let o = modal(&gapped, &out, extra);
+        assert_exit_2(&o, "must be regular");
+        assert!(!stderr(&o).contains("give --fps"), "{}", stderr(&o));
+    }
+    // --nperseg below the shortest segment is refused; a mode the line rule leaves out is named
+    assert_exit_2(&modal(&file, &out, &["--nperseg", "2"]), "at least 64");
+    assert_exit_2(&modal(&file, &out, &["--nperseg", "63"]), "at least 64");
+    let o = modal(&file, &out, &["--nperseg", "64"]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        report.contains("a stable mode at 1.4") && report.contains("below the lowest frequency"),
+        "{report}"
+    );
+    // duplicate (frame, target) rows of a long file: the same values are one row, different
+    // ones are refused naming both rows
+    let long = tmp.path().join("long.csv");
+    let mut rows = String::from("frame,t_s,target,cx,cy\n");
+    for (f, l) in text.lines().skip(1).take(2000).enumerate() {
+        let c: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+        for t in 1..=5 {
+            rows.push_str(&format!("{f},{},{t},10,{}\n", c[0], c[t]));
+        }
+    }
+    std::fs::write(&long, &rows).unwrap();
+    assert_ok(&modal(&long, &out, &[]));
+    let mut lines: Vec<&str> = rows.lines().collect();
+    let copy = lines[7].to_string();
+    lines.push(&copy);
+    std::fs::write(&long, lines.join("\n")).unwrap();
+    assert_ok(&modal(&long, &out, &[]));
+    let changed = copy.replace(",10,", ",11,");
+    lines.pop();
+    lines.push(&changed);
+    std::fs::write(&long, lines.join("\n")).unwrap();
+    let o = modal(&long, &out, &[]);
+    assert_exit_2(&o, "rows 8 and 10002 both give frame 1 of target 2");
+    // a frame number no file of this size can have (an allocation of that many frames)
+    lines.pop();
+    lines.push("99999999999,0,1,10,1");
+    std::fs::write(&long, lines.join("\n")).unwrap();
+    assert_exit_2(&modal(&long, &out, &[]), "a whole number from 0 to");
+}

@@ -94,6 +94,12 @@ fn settings(
 ) -> anyhow::Result<OmaSettings> {
     let n = records.channels.first().map_or(0, Vec::len);
     let mut s = OmaSettings::with_welch(fs_hz, n, &welch.settings());
+    if s.csd.nperseg < MIN_SEGMENT {
+        return Err(bad_input(format!(
+            "--nperseg {}: a segment of at least {MIN_SEGMENT} samples is needed",
+            s.csd.nperseg
+        )));
+    }
     if s.csd.nperseg > n {
         return Err(bad_input(format!(
             "--nperseg {}: the record has only {n} samples, fewer than one segment",

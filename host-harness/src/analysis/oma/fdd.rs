@@ -22,13 +22,21 @@ pub struct Svd {
 
 /// The decomposition of every line of `csd` (a Hermitian positive semi-definite matrix: its
 /// singular values are its eigenvalues).
-pub fn decompose(csd: &Csd) -> Svd {
+pub fn decompose(csd: &Csd) -> anyhow::Result<Svd> {
     let k = csd.k;
     let mut s = Vec::with_capacity(csd.g.len());
     let mut u1 = Vec::with_capacity(csd.g.len());
-    for m in &csd.g {
+    for (l, m) in csd.g.iter().enumerate() {
         let a = DMatrix::from_fn(k, k, |i, j| m[i * k + j]);
-        let e = SymmetricEigen::new(a);
+        let e =
+            SymmetricEigen::try_new(a, f64::EPSILON, super::MAX_ITERATIONS).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "FDD: the cross-spectral matrix at {:.4} Hz did not decompose in {} \
+                 iterations (degenerate or non-finite values)",
+                    csd.freq_hz.get(l).copied().unwrap_or(f64::NAN),
+                    super::MAX_ITERATIONS
+                )
+            })?;
         let mut order: Vec<usize> = (0..k).collect();
         order.sort_by(|&a, &b| e.eigenvalues[b].total_cmp(&e.eigenvalues[a]));
         // rounding can leave a tiny negative eigenvalue of a semi-definite matrix
@@ -36,11 +44,11 @@ pub fn decompose(csd: &Csd) -> Svd {
         let first = order.first().copied().unwrap_or(0);
         u1.push(e.eigenvectors.column(first).iter().copied().collect());
     }
-    Svd {
+    Ok(Svd {
         freq_hz: csd.freq_hz.clone(),
         s,
         u1,
-    }
+    })
 }
 
 /// How peaks are picked without bands.

@@ -88,21 +88,44 @@ pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Re
             let mut cells: Vec<Cell> = Vec::new();
             let mut frames = 0usize;
             let mut t_of: Vec<Option<f64>> = Vec::new();
+            // the row (0-based) of each (frame, target) seen, for duplicates
+            let mut seen: std::collections::HashMap<(usize, usize), usize> =
+                std::collections::HashMap::new();
+            let whole = |i: usize, col: usize, r: &csv::StringRecord, what: &str| {
+                let v = num(i, col, r)?.ok_or_else(|| {
+                    bad_input(format!("{}: row {}: no {what}", path.display(), i + 2))
+                })?;
+                // a frame number beyond the row count would stand for more missing frames
+                // than the file has rows (and its allocation)
+                if v.fract() != 0.0 || v < 0.0 || v > rows.len() as f64 {
+                    return Err(bad_input(format!(
+                        "{}: row {}: the {what} is {v}: a whole number from 0 to {} (the \
+                         file's row count) is needed",
+                        path.display(),
+                        i + 2,
+                        rows.len()
+                    )));
+                }
+                Ok(v as usize)
+            };
             for (i, r) in rows.iter().enumerate() {
-                let f = num(i, frame, r)?.ok_or_else(|| {
-                    bad_input(format!(
-                        "{}: row {}: no frame number",
-                        path.display(),
-                        i + 2
-                    ))
-                })? as usize;
-                let t = num(i, target, r)?.ok_or_else(|| {
-                    bad_input(format!(
-                        "{}: row {}: no target number",
-                        path.display(),
-                        i + 2
-                    ))
-                })? as usize;
+                let f = whole(i, frame, r, "frame number")?;
+                let t = whole(i, target, r, "target number")?;
+                if let Some(&j) = seen.get(&(f, t)) {
+                    let same = rows[j].iter().map(str::trim).eq(r.iter().map(str::trim));
+                    if !same {
+                        return Err(bad_input(format!(
+                            "{}: rows {} and {} both give frame {f} of target {t}, with \
+                             different values: which one is the measurement is not known \
+                             (remove one)",
+                            path.display(),
+                            j + 2,
+                            i + 2
+                        )));
+                    }
+                    continue;
+                }
+                seen.insert((f, t), i);
                 if !ids.contains(&t) {
                     ids.push(t);
                 }
@@ -150,6 +173,10 @@ pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Re
                 }
             }
             let times = match t_col {
+                // every frame's time, to check --fps against when it is given
+                Some(_) if fps.is_some() && t_of.iter().all(Option::is_some) => {
+                    t_of.iter().flatten().copied().collect()
+                }
                 Some(_) if fps.is_none() => t_of
                     .iter()
                     .enumerate()
@@ -182,7 +209,7 @@ pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Re
                 cols.push((cols.len() + 1, v));
             }
             let times = match t_col {
-                Some(c) if fps.is_none() => rows
+                Some(c) => rows
                     .iter()
                     .enumerate()
                     .map(|(i, r)| {
@@ -191,7 +218,6 @@ pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Re
                         })
                     })
                     .collect::<anyhow::Result<_>>()?,
-                Some(_) => Vec::new(),
                 None if fps.is_some() => Vec::new(),
                 None => {
                     return Err(bad_input(format!(
@@ -212,8 +238,25 @@ pub fn read(path: &Path, axis: PixelAxis, fps: Option<f64>) -> anyhow::Result<Re
         )));
     }
     let fs_hz = match fps {
-        Some(f) if f.is_finite() && f > 0.0 => f,
-        Some(f) => return Err(bad_input(format!("--fps must be positive, got {f}"))),
+        Some(f) if !(f.is_finite() && f > 0.0) => {
+            return Err(bad_input(format!("--fps must be positive, got {f}")))
+        }
+        // a time column and --fps must agree: the column's rate within half a sample over
+        // the record (a 30 given for a 60 Hz column would halve every frequency)
+        Some(f) if times.len() > 1 => {
+            let rate = rate_of(&times, path)?;
+            let drift = (times.len() - 1) as f64 * (1.0 / f - 1.0 / rate).abs() * rate;
+            if drift > 0.5 {
+                return Err(bad_input(format!(
+                    "--fps {f} contradicts the time column of {}, whose samples are {} s \
+                     apart ({rate:.6} Hz): leave --fps out, or correct the file",
+                    path.display(),
+                    1.0 / rate
+                )));
+            }
+            f
+        }
+        Some(f) => f,
         None => rate_of(&times, path)?,
     };
     let mut out = Records {
@@ -275,7 +318,7 @@ fn rate_of(times: &[f64], path: &Path) -> anyhow::Result<f64> {
     let span = times[n - 1] - times[0];
     if span.is_nan() || span <= 0.0 {
         return Err(bad_input(format!(
-            "{}: the time column does not increase; give --fps",
+            "{}: the time column does not increase (correct it, or remove it and give --fps)",
             path.display()
         )));
     }
@@ -284,7 +327,8 @@ fn rate_of(times: &[f64], path: &Path) -> anyhow::Result<f64> {
         if ((w[1] - w[0]) - period).abs() > 0.01 * period {
             return Err(bad_input(format!(
                 "{}: sample {} is {} s after the one before, the record's period is {period} s: \
-                 the samples must be regular (resample first, or give --fps)",
+                 the samples must be regular (a gap or a dropped sample: resample the record \
+                 first, or analyse the regular part)",
                 path.display(),
                 i + 1,
                 w[1] - w[0]

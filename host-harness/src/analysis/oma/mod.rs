@@ -182,10 +182,73 @@ pub struct OmaResult {
     pub notes: Vec<String>,
 }
 
-/// Output-only analysis of `channels` (one record per target, equal lengths).
+/// The most iterations an eigenvalue or singular value decomposition may take (nalgebra's
+/// own default is none: a matrix it cannot reduce, of non-finite or degenerate values, would
+/// be iterated for ever).
+pub const MAX_ITERATIONS: usize = 100_000;
+
+/// The power of two nearest the RMS of `channels` (means removed): the records are divided by
+/// it before any numerics (exactly: a power of two), so that the analysis of a record in
+/// metres, micrometres or pixels is the same. A record without motion, or whose spectra (its
+/// square) would not be finite, is an error.
+fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for c in channels {
+        let m = c.iter().sum::<f64>() / c.len().max(1) as f64;
+        // summed as (v - m) / 2^500 ... is not needed: a finite record's squares are summed
+        // relative to its largest value, so that 1e200 and 1e-200 do not overflow or vanish
+        let peak = c.iter().map(|v| (v - m).abs()).fold(0.0, f64::max);
+        if peak > 0.0 && peak.is_finite() {
+            let s: f64 = c.iter().map(|v| ((v - m) / peak).powi(2)).sum();
+            sum += s * peak * peak;
+        } else if !peak.is_finite() {
+            sum = f64::INFINITY;
+        }
+        count += c.len();
+    }
+    let rms = (sum / count.max(1) as f64).sqrt();
+    let scale = 2f64.powi(rms.log2().round() as i32);
+    if !(rms > 0.0 && rms.is_finite() && (scale * scale).is_finite() && scale * scale > 0.0) {
+        return Err(crate::bad_input(format!(
+            "the records' RMS is {rms:e}: an output-only analysis needs records that move, \
+             with values whose squares are finite (between about 1e-150 and 1e150; rescale \
+             the record)"
+        )));
+    }
+    Ok(scale)
+}
+
+/// Output-only analysis of `channels` (one record per target, equal lengths). The records are
+/// scaled by a power of two before the numerics ([`record_scale`]) and the spectra and
+/// amplitudes scaled back: the same modes whatever the record's unit.
 pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResult> {
+    let scale = record_scale(channels)?;
+    let scaled: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|c| c.iter().map(|v| v / scale).collect())
+        .collect();
+    let mut r = analyze_scaled(&scaled, s)?;
+    let power = scale * scale;
+    for line in &mut r.csd.g {
+        for v in line.iter_mut() {
+            *v *= power;
+        }
+    }
+    for line in &mut r.svd.s {
+        for v in line.iter_mut() {
+            *v *= power;
+        }
+    }
+    for m in &mut r.modes {
+        m.amplitude = m.amplitude.map(|a| a * power);
+    }
+    Ok(r)
+}
+
+/// [`analyze`] of records of RMS near 1.
+fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResult> {
     let csd = csd::csd_matrix(channels, s.fs_hz, s.csd)?;
-    let svd = fdd::decompose(&csd);
+    let svd = fdd::decompose(&csd)?;
     let mut notes = Vec::new();
     let peaks: Vec<(usize, Option<usize>)> = if s.bands.is_empty() {
         fdd::pick_peaks(&svd, s.peaks)
@@ -248,8 +311,18 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
             )),
         }
     }
-    let poles = ssi::poles(channels, s.fs_hz, s.ssi)?;
+    let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
     let clusters = ssi::cluster(&poles, (s.ssi.df_max, s.ssi.mac_min), s.ssi_min_poles);
+    // what the lower end of the range left out: a mode there is named, never dropped in silence
+    for c in ssi::cluster(&cut, (s.ssi.df_max, s.ssi.mac_min), s.ssi_min_poles) {
+        notes.push(format!(
+            "SSI-cov: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
+             lowest frequency analysed, {:.4} Hz (0.5 Hz, or two spectral lines of {} samples, \
+             whichever is higher; or --f-min-hz): not reported; a longer --nperseg or a lower \
+             --f-min-hz takes it in",
+            c.f_hz, c.damping, c.poles, s.ssi.f_range_hz.0, s.csd.nfft
+        ));
+    }
     if s.bands.is_empty() {
         for (n, c) in clusters.iter().enumerate() {
             modes.push(OmaMode {

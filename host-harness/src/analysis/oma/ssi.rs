@@ -56,8 +56,14 @@ pub struct SsiMode {
 }
 
 /// The poles of every order of the records `channels` (mean removed here) sampled at
-/// `fs_hz`, each marked stable or not.
-pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result<Vec<Pole>> {
+/// `fs_hz`, each marked stable or not; then the poles that only the lower end of
+/// `rule.f_range_hz` left out (physical, below it), marked stable among themselves: what the
+/// range cut, for the report.
+pub fn poles(
+    channels: &[Vec<f64>],
+    fs_hz: f64,
+    rule: SsiRule,
+) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
     let k = channels.len();
     let n = channels.first().map_or(0, Vec::len);
     let i = rule.block_rows;
@@ -97,7 +103,8 @@ pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result
             t.view_mut((a * k, b * k), (k, k)).copy_from(&r[lag]);
         }
     }
-    let svd = t.svd(true, false);
+    let svd = nalgebra::SVD::try_new(t, true, false, f64::EPSILON, super::MAX_ITERATIONS)
+        .ok_or_else(|| not_converged("the block Toeplitz matrix's SVD", 0))?;
     let (u, sv) = (
         svd.u
             .ok_or_else(|| anyhow::anyhow!("internal: SVD without U"))?,
@@ -109,6 +116,7 @@ pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result
     let max_order = rule.max_order.min(i * k - k) & !1;
     let mut all: Vec<Pole> = Vec::new();
     let mut below: Vec<Pole> = Vec::new();
+    let (mut cut, mut cut_below): (Vec<Pole>, Vec<Pole>) = (Vec::new(), Vec::new());
     for ord in (2..=max_order).step_by(2) {
         let mut o = DMatrix::<f64>::zeros(i * k, ord);
         for (c, &j) in order.iter().take(ord).enumerate() {
@@ -117,34 +125,38 @@ pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result
         }
         let up = o.rows(0, (i - 1) * k).into_owned();
         let down = o.rows(k, (i - 1) * k).into_owned();
-        let Ok(pinv) = up.pseudo_inverse(1e-12) else {
+        let pinv = nalgebra::SVD::try_new(up, true, true, f64::EPSILON, super::MAX_ITERATIONS)
+            .ok_or_else(|| not_converged("the observability matrix's SVD", ord))?;
+        let Ok(pinv) = pinv.pseudo_inverse(1e-12) else {
             continue;
         };
         let a = pinv * down;
         let c = o.rows(0, k).into_owned();
-        let mut here = Vec::new();
-        for (lambda, psi) in eigenpairs(&a) {
+        let (mut here, mut here_cut) = (Vec::new(), Vec::new());
+        for (lambda, psi) in eigenpairs(&a).ok_or_else(|| not_converged("the eigenvalues", ord))? {
             if lambda.im <= 0.0 {
                 continue;
             }
             let s = lambda.ln() * fs_hz;
             let wn = s.norm();
             let (f_hz, damping) = (wn / (2.0 * PI), -s.re / wn);
-            if !(damping > 0.0 && damping < rule.zeta_max)
-                || f_hz < rule.f_range_hz.0
-                || f_hz >= rule.f_range_hz.1
-            {
+            if !(damping > 0.0 && damping < rule.zeta_max) || f_hz >= rule.f_range_hz.1 {
                 continue;
             }
             let shape: Vec<Complex64> = (0..k)
                 .map(|row| (0..ord).map(|col| psi[col] * c[(row, col)]).sum())
                 .collect();
-            let stable = below.iter().any(|p: &Pole| {
+            let (list, previous) = if f_hz < rule.f_range_hz.0 {
+                (&mut here_cut, &cut_below)
+            } else {
+                (&mut here, &below)
+            };
+            let stable = previous.iter().any(|p: &Pole| {
                 (p.f_hz - f_hz).abs() <= rule.df_max * f_hz
                     && (p.damping - damping).abs() <= rule.dz_max * damping
                     && mac(&p.shape, &shape) >= rule.mac_min
             });
-            here.push(Pole {
+            list.push(Pole {
                 order: ord,
                 f_hz,
                 damping,
@@ -154,17 +166,38 @@ pub fn poles(channels: &[Vec<f64>], fs_hz: f64, rule: SsiRule) -> anyhow::Result
         }
         all.extend(here.iter().cloned());
         below = here;
+        cut.extend(here_cut.iter().cloned());
+        cut_below = here_cut;
     }
-    Ok(all)
+    Ok((all, cut))
 }
 
-/// Eigenvalues of a real square matrix with a unit eigenvector each (inverse iteration).
-fn eigenpairs(a: &DMatrix<f64>) -> Vec<(Complex64, DVector<Complex64>)> {
-    a.clone()
-        .complex_eigenvalues()
-        .iter()
-        .filter_map(|&l| eigenvector(a, l).map(|v| (l, v)))
-        .collect()
+/// The error of a decomposition that did not converge within [`super::MAX_ITERATIONS`]
+/// (`order` 0: before the model orders).
+fn not_converged(what: &str, order: usize) -> anyhow::Error {
+    let at = if order > 0 {
+        format!(" of the order-{order} model")
+    } else {
+        String::new()
+    };
+    anyhow::anyhow!(
+        "SSI-cov: {what}{at} did not converge in {} iterations (degenerate or non-finite \
+         values)",
+        super::MAX_ITERATIONS
+    )
+}
+
+/// Eigenvalues of a real square matrix with a unit eigenvector each (inverse iteration);
+/// `None` when the Schur decomposition does not converge within [`super::MAX_ITERATIONS`].
+fn eigenpairs(a: &DMatrix<f64>) -> Option<Vec<(Complex64, DVector<Complex64>)>> {
+    let schur = nalgebra::Schur::try_new(a.clone(), f64::EPSILON, super::MAX_ITERATIONS)?;
+    Some(
+        schur
+            .complex_eigenvalues()
+            .iter()
+            .filter_map(|&l| eigenvector(a, l).map(|v| (l, v)))
+            .collect(),
+    )
 }
 
 /// A unit eigenvector of `a` for the eigenvalue `l` by inverse iteration.
