@@ -402,3 +402,151 @@ fn modal_refuses_a_rate_against_its_time_column_duplicates_and_short_segments() 
     std::fs::write(&long, lines.join("\n")).unwrap();
     assert_exit_2(&modal(&long, &out, &[]), "a whole number from 0 to");
 }
+
+/// Writes `frames` (8-bit, `w x h`) as `dir/f_NNN.EXT`.
+fn write_frames(dir: &Path, frames: &[Vec<u16>], (w, h): (u32, u32), ext: &str) {
+    std::fs::create_dir_all(dir).unwrap();
+    for (k, f) in frames.iter().enumerate() {
+        let img = image::GrayImage::from_raw(w, h, f.iter().map(|&v| v as u8).collect()).unwrap();
+        img.save(dir.join(format!("f_{k:03}.{ext}"))).unwrap();
+    }
+}
+
+fn track_into(frames: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "track",
+        "--frames",
+        frames.to_str().unwrap(),
+        "--fps",
+        "60",
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+#[test]
+fn a_truncated_jpeg_or_a_frame_of_another_depth_is_named_not_measured() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = disk_frames(6, (64, 48), (32.0, 24.0));
+    let dir = tmp.path().join("jpg");
+    write_frames(&dir, &frames, (64, 48), "jpg");
+    let out = tmp.path().join("t");
+    let flags = ["--targets", "1", "--threshold", "100"];
+    assert_ok(&track_into(&dir, &out, &flags));
+    // frame 3 cut short: the decoder filled it with grey and gave a centroid 6 px off, flag 0
+    let cut = dir.join("f_003.jpg");
+    let bytes = std::fs::read(&cut).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
+    let o = track_into(&dir, &out, &flags);
+    assert_exit_2(&o, "f_003.jpg: a JPEG frame that is not whole");
+    let o = harness(&["centroid", "--threshold", "100", cut.to_str().unwrap()]);
+    assert_exit_2(&o, "truncated");
+    // a 16-bit PNG among 8-bit ones was a silent lost frame, and the report called the
+    // sequence 16-bit
+    let png = tmp.path().join("png");
+    write_frames(&png, &frames, (64, 48), "png");
+    let wide: Vec<u16> = frames[4].iter().map(|&v| v * 257).collect();
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(64, 48, wide)
+        .unwrap()
+        .save(png.join("f_004.png"))
+        .unwrap();
+    let o = track_into(&png, &out, &flags);
+    assert_exit_2(&o, "f_004.png: a 16-bit frame, but");
+}
+
+#[test]
+fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = disk_frames(30, (64, 48), (32.0, 24.0));
+    let dir = tmp.path().join("png");
+    write_frames(&dir, &frames, (64, 48), "png");
+    let out = tmp.path().join("t");
+    let points = tmp.path().join("p.csv");
+    std::fs::write(&points, "target,x,y,w,h\n1,32,24,15,15\n").unwrap();
+    let p = points.to_str().unwrap();
+    // a threshold below the background fills the window: the target is "at its edge", as
+    // `centroid` says, not "no pixel above the threshold"; and nothing measured is exit 2,
+    // for `track` as for `analyze`
+    let o = track_into(&dir, &out, &["--points", p, "--threshold", "10"]);
+    assert_exit_2(&o, "at the edge of its window");
+    assert!(!stderr(&o).contains("no pixel above"), "{}", stderr(&o));
+    let a = harness(&[
+        "analyze",
+        "--frames",
+        dir.to_str().unwrap(),
+        "--fps",
+        "60",
+        "--points",
+        p,
+        "--threshold",
+        "10",
+        "--out",
+        tmp.path().join("a").to_str().unwrap(),
+    ]);
+    assert_exit_2(&a, "at the edge of its window");
+    let c = harness(&[
+        "centroid",
+        "--threshold",
+        "10",
+        "--roi",
+        "25,17,15,15",
+        dir.join("f_000.png").to_str().unwrap(),
+    ]);
+    assert_ok(&c);
+    assert!(String::from_utf8_lossy(&c.stdout).ends_with(",2\n"));
+    // the file's threshold column is each window's threshold: no --threshold needed
+    std::fs::write(&points, "target,x,y,w,h,threshold\n1,32,24,15,15,100\n").unwrap();
+    assert_ok(&track_into(&dir, &out, &["--points", p]));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("threshold 100, 0 of 30 frames lost"),
+        "{report}"
+    );
+    // a row without one, and no flag: named
+    std::fs::write(
+        &points,
+        "target,x,y,w,h,threshold\n1,32,24,15,15,100\n2,10,10,7,7,\n",
+    )
+    .unwrap();
+    assert_exit_2(
+        &track_into(&dir, &out, &["--points", p]),
+        "target 2: no threshold",
+    );
+    // Lucas-Kanade has no threshold, and a window does not take a blob's gate
+    std::fs::write(&points, "target,x,y,w,h\n1,32,24,15,15\n").unwrap();
+    let o = track_into(
+        &dir,
+        &out,
+        &["--points", p, "--tracker", "lk", "--threshold", "9"],
+    );
+    assert_exit_2(&o, "uses no threshold");
+    let o = track_into(&dir, &out, &["--points", p, "--tracker", "lk"]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(report.contains("Lucas-Kanade, 0 of 30") && !report.contains("threshold 0"));
+    let o = track_into(
+        &dir,
+        &out,
+        &["--points", p, "--tracker", "lk", "--gate-px", "5"],
+    );
+    assert_exit_2(&o, "leave --gate-px out");
+    let a = harness(&[
+        "analyze",
+        "--frames",
+        dir.to_str().unwrap(),
+        "--fps",
+        "60",
+        "--points",
+        p,
+        "--tracker",
+        "lk",
+        "--gate-px",
+        "5",
+        "--out",
+        tmp.path().join("a").to_str().unwrap(),
+    ]);
+    assert_exit_2(&a, "leave --gate-px out");
+}

@@ -52,6 +52,8 @@ pub enum ThresholdRule {
     Level(u16),
     /// Otsu's threshold of each window in the first frame (the file's column overrides it).
     Auto,
+    /// Each window's own, from the file's `threshold` column, which every row must then have.
+    FromFile,
 }
 
 /// Reads and checks a points file; errors name the file and row (the header is row 1).
@@ -235,7 +237,7 @@ use crate::imaging::tracker::{HostLk, LK_PIXELS, LK_ROW};
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointsInfo {
-    /// Each target's threshold, as used.
+    /// Each target's threshold, as used (empty with Lucas-Kanade, which has none).
     pub thresholds: Vec<u16>,
     /// Each target's window size, px.
     pub sizes: Vec<(u32, u32)>,
@@ -294,7 +296,7 @@ pub fn track_points(
 /// [`track_points`] with Lucas-Kanade: each window of the first frame is its target's template
 /// (firmware-core's [`firmware_core::lk::LkTracker`]); a frame where a target is lost (a flat
 /// template, the window at the frame's edge, saturation, no match within the search range) is a
-/// lost frame of that target with the reason in its flags. `thresholds` are reported as 0.
+/// lost frame of that target with the reason in its flags. It has no threshold: `thresholds` is empty.
 pub fn track_points_lk(
     source: &FrameSource,
     fps: f64,
@@ -398,7 +400,7 @@ pub fn track_points_lk(
     Ok((
         tracks,
         PointsInfo {
-            thresholds: vec![0; k],
+            thresholds: Vec::new(),
             sizes: points.iter().map(|p| p.size).collect(),
         },
     ))
@@ -562,6 +564,13 @@ fn first_windows(
                 (Some(t), _) => t,
                 (None, ThresholdRule::Level(t)) => t,
                 (None, ThresholdRule::Auto) => otsu(frame, roi),
+                (None, ThresholdRule::FromFile) => {
+                    return Err(bad_input(format!(
+                        "target {}: no threshold: give --threshold T (or auto), or a \
+                         `threshold` for every row of the points file",
+                        p.target
+                    )))
+                }
             })
         })
         .collect()
@@ -579,8 +588,9 @@ fn follow(
     let dims = frame.dimensions();
     let mut at = last;
     for _ in 0..2 {
+        // a window that would leave the frame: the target is at its edge
         let Some(roi) = window(at, size, dims) else {
-            return Ok(lost());
+            return Ok(lost_because(Flags::BORDER));
         };
         let c = frame.centroid(
             &CentroidConfig {
@@ -597,7 +607,8 @@ fn follow(
         }
         at = (f64::from(c.cx), f64::from(c.cy));
     }
-    Ok(lost())
+    // still at the edge after re-centring: too large for its window, or filling it
+    Ok(lost_because(Flags::BORDER))
 }
 
 #[cfg(test)]

@@ -142,17 +142,15 @@ fn write_tables(
 /// The `--points` windows: per target its window, threshold and lost frames.
 pub fn windows_report(w: &super::points::PointsInfo, tracks: &Tracks) -> String {
     let mut s = String::from("\npoints (each target in its own window):\n");
-    for (t, ((size, th), c)) in w
-        .sizes
-        .iter()
-        .zip(&w.thresholds)
-        .zip(&tracks.centroids)
-        .enumerate()
-    {
+    for (t, (size, c)) in w.sizes.iter().zip(&tracks.centroids).enumerate() {
         let lost = c.iter().filter(|c| c.position().is_none()).count();
+        let how = match w.thresholds.get(t) {
+            Some(th) => format!("threshold {th}"),
+            None => "Lucas-Kanade".to_string(),
+        };
         let _ = writeln!(
             s,
-            "  target {}: window {}x{} px, threshold {th}, {lost} of {} frames lost",
+            "  target {}: window {}x{} px, {how}, {lost} of {} frames lost",
             t + 1,
             size.0,
             size.1,

@@ -75,6 +75,29 @@ pub fn track_targets(
 pub fn run(req: &Request) -> anyhow::Result<String> {
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
     let (tracks, windows) = track_targets(&source, req.fps, &req.centroid, &req.targets)?;
+    // nothing measured is the user's to fix, as `analyze` says it: exit 2, and why
+    if tracks
+        .centroids
+        .iter()
+        .all(|c| c.iter().all(|c| c.position().is_none()))
+    {
+        let why: Vec<String> = tracks
+            .centroids
+            .iter()
+            .enumerate()
+            .map(|(t, c)| {
+                format!(
+                    "target {}: {}",
+                    t + 1,
+                    crate::chain::displacement::why_lost(c)
+                )
+            })
+            .collect();
+        return Err(crate::bad_input(format!(
+            "no target has a position in any of the frames ({})",
+            why.join("; ")
+        )));
+    }
     let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));
     let out = Staged::new(&req.out, req.force, "track", &inputs)?;
@@ -173,6 +196,12 @@ fn report(
     }
     for f in failures {
         let _ = writeln!(s, "no displacement for {f}");
+    }
+    for (t, c) in tracks.centroids.iter().enumerate() {
+        if c.iter().any(|c| c.position().is_none()) {
+            let why = crate::chain::displacement::why_lost(c);
+            let _ = writeln!(s, "target {} lost frames: {why}", t + 1);
+        }
     }
     s
 }

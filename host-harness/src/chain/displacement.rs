@@ -112,9 +112,9 @@ pub fn displacement_mm(
     let valid_count = valid.iter().filter(|v| **v).count();
     if valid_count == 0 {
         return Err(bad_input(format!(
-            "none of the {} frames has a pixel above the threshold: no centroid at all \
-             (check --threshold and --roi)",
-            centroids.len()
+            "none of the {} frames has a centroid: {}",
+            centroids.len(),
+            why_lost(centroids)
         )));
     }
     let reference_px = coord
@@ -139,6 +139,49 @@ pub fn displacement_mm(
         reference_px,
         policy: s.lost_frames,
     })
+}
+
+/// Why frames without a centroid have none, from their flags, counted (the same words for
+/// every command): no pixel above the threshold, the target at the edge of its window or ROI
+/// (or filling it: everything above the threshold), saturated, flat, or other.
+pub fn why_lost(centroids: &[Centroid]) -> String {
+    use firmware_core::centroid::Flags;
+    let lost: Vec<&Centroid> = centroids
+        .iter()
+        .filter(|c| c.position().is_none())
+        .collect();
+    let count = |f: Flags| lost.iter().filter(|c| c.flags.contains(f)).count();
+    let mut parts = Vec::new();
+    let border = count(Flags::BORDER);
+    let empty = lost
+        .iter()
+        .filter(|c| c.flags.contains(Flags::EMPTY) && !c.flags.contains(Flags::BORDER))
+        .count();
+    if empty > 0 {
+        parts.push(format!(
+            "{empty} with no pixel above the threshold (check --threshold and the window or \
+             --roi)"
+        ));
+    }
+    if border > 0 {
+        parts.push(format!(
+            "{border} with the target at the edge of its window or ROI, or filling it (pixels \
+             above the threshold all the way to the edge: a threshold below the background, \
+             or a window smaller than the target)"
+        ));
+    }
+    let saturated = count(Flags::SATURATED);
+    if saturated > 0 {
+        parts.push(format!("{saturated} saturated"));
+    }
+    let rest = lost.len() - empty - border;
+    if rest > saturated {
+        parts.push(format!(
+            "{} lost for another reason (see the flags)",
+            rest - saturated
+        ));
+    }
+    parts.join("; ")
 }
 
 #[cfg(test)]

@@ -141,7 +141,8 @@ impl CentroidArgs {
     ) -> anyhow::Result<crate::analysis::points::PointTracker> {
         use crate::analysis::points::{PointTracker, ThresholdRule};
         match (self.mode, self.threshold, search_px) {
-            (ModeArg::Lk, _, _) => Ok(PointTracker::Lk { search_px }),
+            (ModeArg::Lk, Some(_), _) => Err(lk_has_no_threshold()),
+            (ModeArg::Lk, None, _) => Ok(PointTracker::Lk { search_px }),
             (_, _, Some(_)) => Err(crate::bad_input(
                 "--search-px: the coarse search of --tracker lk (a centroid window re-centres \
                  itself on a partial target, about half a window per frame)",
@@ -150,7 +151,8 @@ impl CentroidArgs {
                 Ok(PointTracker::Centroid(ThresholdRule::Level(t)))
             }
             (_, Some(ThresholdArg::Auto), None) => Ok(PointTracker::Centroid(ThresholdRule::Auto)),
-            (_, None, None) => Err(missing_threshold()),
+            // each window's own, from the file's `threshold` column (checked on the first frame)
+            (_, None, None) => Ok(PointTracker::Centroid(ThresholdRule::FromFile)),
         }
     }
 
@@ -174,10 +176,15 @@ impl CentroidArgs {
                  give --points FILE.csv (`centroid` and --targets K take binary or weighted)",
             ));
         }
+        if self.mode == ModeArg::Lk && self.threshold.is_some() {
+            return Err(lk_has_no_threshold());
+        }
         let threshold = match (self.threshold, points) {
             (Some(ThresholdArg::Level(t)), _) => t,
             (Some(ThresholdArg::Auto), true) => 0,
             (None, _) if self.mode == ModeArg::Lk => 0,
+            // the points file's `threshold` column (each window's own; 0 stands in here)
+            (None, true) => 0,
             (Some(ThresholdArg::Auto), false) => {
                 return Err(crate::bad_input(
                     "--threshold auto: only with --points (Otsu's threshold of each window)",
@@ -194,6 +201,14 @@ impl CentroidArgs {
         .validate()
         .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
     }
+}
+
+/// The error of `--threshold` with Lucas-Kanade.
+fn lk_has_no_threshold() -> anyhow::Error {
+    crate::bad_input(
+        "--threshold with --tracker lk: Lucas-Kanade matches each window's template and uses \
+         no threshold; leave --threshold out",
+    )
 }
 
 /// The error of a centroid without `--threshold`.

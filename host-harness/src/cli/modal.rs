@@ -94,7 +94,7 @@ fn settings(
 ) -> anyhow::Result<OmaSettings> {
     let n = records.channels.first().map_or(0, Vec::len);
     let mut s = OmaSettings::with_welch(fs_hz, n, &welch.settings());
-    if s.csd.nperseg < MIN_SEGMENT {
+    if welch.nperseg.is_some() && s.csd.nperseg < MIN_SEGMENT {
         return Err(bad_input(format!(
             "--nperseg {}: a segment of at least {MIN_SEGMENT} samples is needed",
             s.csd.nperseg

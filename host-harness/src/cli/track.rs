@@ -48,9 +48,16 @@ pub struct Args {
     /// The K blobs of the first frame (global threshold), numbered left to right.
     #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
     pub targets: Option<usize>,
-    /// With --targets: how far a target may move between frames and still be the same, px.
-    #[arg(long, value_name = "PX", default_value_t = 10.0, value_parser = super::args::parse_gate_px)]
-    pub gate_px: f64,
+    /// With --targets: how far a target may move between frames and still be the same, px
+    /// (> 0; default 10). Not with --points (each window follows its own target).
+    #[arg(
+        long,
+        value_name = "PX",
+        requires = "targets",
+        allow_negative_numbers = true,
+        value_parser = super::args::parse_gate_px
+    )]
+    pub gate_px: Option<f64>,
     /// Centroid settings (`--threshold T|auto`, `--tracker binary|blob|weighted`, `--roi`).
     #[command(flatten)]
     pub centroid: CentroidArgs,
@@ -88,12 +95,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--roi with --points: each point's window is its region; leave --roi out",
         ));
     }
+    if args.gate_px.is_some() && args.targets.is_none() {
+        return Err(bad_input(
+            "--gate-px is the blobs' gate of --targets K; each --points window follows its own \
+             target: leave --gate-px out",
+        ));
+    }
     let targets = match (&args.points, args.targets) {
         (Some(p), _) => Targets::Points(
             crate::analysis::points::read_points(p)?,
             args.centroid.point_tracker(args.search_px)?,
         ),
-        (None, Some(k)) => Targets::Blobs(k, args.gate_px),
+        (None, Some(k)) => Targets::Blobs(k, args.gate_px.unwrap_or(10.0)),
         (None, None) => return Err(bad_input("give --points FILE.csv or --targets K")),
     };
     let displacement = match args.mm_per_px {

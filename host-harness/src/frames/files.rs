@@ -426,12 +426,76 @@ fn refuse_low_bit_png(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Why a JPEG file (`bytes`, starting with its SOI marker) is not whole, if it is not: its
+/// marker segments must lie inside the file and an end-of-image marker (`FF D9`) must follow
+/// the first scan. The decoder fills what a cut file lacks with grey and reports no error (a
+/// 1686-byte frame cut to 1300 bytes gave a centroid 6.6 px off with no flag), so a truncated
+/// frame would be a wrong number. Files that do not start as a JPEG are left to the decoder.
+pub fn jpeg_truncation(bytes: &[u8]) -> Option<String> {
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return None;
+    }
+    let mut i = 2usize;
+    loop {
+        // a marker: 0xFF (fill bytes may repeat it), then its code
+        while bytes.get(i) == Some(&0xFF) && bytes.get(i + 1) == Some(&0xFF) {
+            i += 1;
+        }
+        let (Some(&0xFF), Some(&code)) = (bytes.get(i), bytes.get(i + 1)) else {
+            return Some(format!(
+                "it ends at byte {} inside its headers, before any image data (truncated)",
+                bytes.len()
+            ));
+        };
+        match code {
+            0xD9 => return None,
+            0x01 | 0xD0..=0xD7 => i += 2,
+            _ => {
+                let len = match (bytes.get(i + 2), bytes.get(i + 3)) {
+                    (Some(&a), Some(&b)) => usize::from(u16::from_be_bytes([a, b])),
+                    _ => 0,
+                };
+                if len < 2 || i + 2 + len > bytes.len() {
+                    return Some(format!(
+                        "its segment at byte {i} reaches past the end of the file ({} bytes): \
+                         truncated",
+                        bytes.len()
+                    ));
+                }
+                if code == 0xDA {
+                    // the scans: entropy-coded data never holds FF D9 (an FF there is followed
+                    // by 00 or a restart marker), so the first one is the end of the image
+                    let rest = &bytes[i + 2 + len..];
+                    return match rest.windows(2).any(|w| w == [0xFF, 0xD9]) {
+                        true => None,
+                        false => Some(format!(
+                            "its image data ends at byte {} without the end-of-image marker \
+                             (FF D9): truncated",
+                            bytes.len()
+                        )),
+                    };
+                }
+                i += 2 + len;
+            }
+        }
+    }
+}
+
 /// Loads one PNG, TIFF or JPEG frame (baseline or progressive) as grey: 8- or 16-bit grey as
-/// stored, colour as its BT.601 luma ([`luma`]; alpha ignored); errors name the file.
+/// stored, colour as its BT.601 luma ([`luma`]; alpha ignored); errors name the file. A JPEG
+/// cut short is refused ([`jpeg_truncation`]).
 pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
     refuse_low_bit_png(path)?;
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
+    let bytes = std::fs::read(path)
+        .map_err(|e| bad_input(format!("{}: cannot open the frame: {e}", path.display())))?;
+    if let Some(why) = jpeg_truncation(&bytes) {
+        return Err(bad_input(format!(
+            "{}: a JPEG frame that is not whole: {why}",
+            path.display()
+        )));
+    }
+    let img = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
         .map_err(|e| bad_input(format!("{}: cannot open the frame: {e}", path.display())))?
         .decode()
         .map_err(|e| bad_input(format!("{}: cannot decode the frame: {e}", path.display())))?;
@@ -749,13 +813,32 @@ impl FrameSource {
 
     /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time (a
     /// video's frames decoded into one reused buffer); a video is opened with its timestamps
-    /// checked against `fps`. Labels name the file (and page, or 0-based video frame).
+    /// checked against `fps`. Labels name the file (and page, or 0-based video frame). Frames
+    /// must all have the first one's bit depth: an 8-bit frame among 16-bit ones (or the
+    /// reverse) is an error naming both, never a frame measured at another threshold's scale.
     pub fn for_each(
         &self,
         fps: f64,
         mut f: impl FnMut(String, &GreyFrame) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        self.each_frame(fps, &mut f)
+        let mut first: Option<(bool, String)> = None;
+        self.each_frame(fps, &mut |label, frame| {
+            let eight = matches!(frame, GreyFrame::U8 { .. });
+            match &first {
+                None => first = Some((eight, label.clone())),
+                Some((e, l)) if *e != eight => {
+                    let bits = |e: bool| if e { 8 } else { 16 };
+                    return Err(bad_input(format!(
+                        "{label}: a {}-bit frame, but {l} is {}-bit: a recording's frames must \
+                         all have one bit depth (convert them, or leave this one out)",
+                        bits(eight),
+                        bits(*e)
+                    )));
+                }
+                Some(_) => {}
+            }
+            f(label, frame)
+        })
     }
 
     /// [`for_each`](Self::for_each) through a trait object (a range calls its source's).

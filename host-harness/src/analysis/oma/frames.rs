@@ -220,7 +220,7 @@ fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
             "the record has {n} frames: an output-only analysis needs at least {MIN_FRAMES}"
         )));
     }
-    if s.csd.nperseg < MIN_FRAMES {
+    if req.welch.nperseg.is_some() && s.csd.nperseg < MIN_FRAMES {
         return Err(crate::bad_input(format!(
             "--nperseg {}: a segment of at least {MIN_FRAMES} frames is needed",
             s.csd.nperseg
