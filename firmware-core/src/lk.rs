@@ -47,7 +47,10 @@
 //! is tracked);
 //! the match is poor (ZNCC below [`LkConfig::min_score`]), the refinement does not settle
 //! (last step above 0.1 px), or the coarse search's best offset is on the edge of its range
-//! (the motion may exceed it): [`Flags::DIVERGED`]. A lost frame keeps the last displacement
+//! (the motion may exceed it): [`Flags::DIVERGED`]; the coarse search finds a second match
+//! at least half the template's larger side from the best that scores within
+//! [`LkConfig::ambiguity`] of it (look-alike targets within the search range, the best not
+//! clearly the target): [`Flags::AMBIGUOUS`]. A lost frame keeps the last displacement
 //! as the next start. Nothing here panics; memory is the tracker's five `N`-value arrays,
 //! its `N`-pixel mask of dark template pixels and `10 W` values of row buffers (capacities as
 //! const generics).
@@ -361,6 +364,10 @@ pub struct LkConfig {
     /// Saturation level: a window pixel at or above it makes the result lost (0: the pixel
     /// type's full scale).
     pub saturation: u16,
+    /// A coarse search whose best match has a rival at least half the template's larger side
+    /// away scoring within this of it (ZNCC) is ambiguous: lost, [`Flags::AMBIGUOUS`]
+    /// (in `[0, 1]`; 0: never).
+    pub ambiguity: f32,
     /// Sampling between pixels.
     pub interpolation: Interpolation,
     /// Smoothing of the template and the frame before matching (see [`Smoothing`]).
@@ -412,6 +419,7 @@ impl LkConfig {
             refresh_below: 0.5,
             min_texture: 0.5,
             saturation: 0,
+            ambiguity: 0.05,
             interpolation: Interpolation::Spline,
             smoothing: Smoothing::Binomial3,
         }
@@ -442,7 +450,8 @@ impl LkConfig {
             && unit(self.refresh_below)
             && self.accept_score >= self.min_score
             && self.min_texture >= 0.0
-            && self.min_texture.is_finite();
+            && self.min_texture.is_finite()
+            && (0.0..=1.0).contains(&self.ambiguity);
         if ok {
             Ok(self)
         } else {
@@ -551,6 +560,9 @@ pub struct LkTracker<const N: usize, const W: usize> {
     p: (f32, f32),
     /// Its change over the last frame (the prediction's velocity; zero after a loss).
     v: (f32, f32),
+    /// The largest step between two consecutive tracked frames since the template was taken
+    /// (the larger axis), px: how far the target has been seen to move.
+    max_step: f32,
     /// The padded template's B-spline coefficients less the template's mean
     /// (`Interpolation::Spline`).
     coef: [f32; N],
@@ -724,6 +736,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             base: (0.0, 0.0),
             p: (0.0, 0.0),
             v: (0.0, 0.0),
+            max_step: 0.0,
             coef: [0.0; N],
             moments: Moments::ZERO,
             g: [0.0; N],
@@ -771,6 +784,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         self.base = (0.0, 0.0);
         self.p = (0.0, 0.0);
         self.v = (0.0, 0.0);
+        self.max_step = 0.0;
         self.ready = false;
         self.take(frame, x0, y0)
     }
@@ -996,6 +1010,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 match self.search(frame, start) {
                     Err(flags) => Err(flags),
                     Ok(q) => match self.refine(frame, q, sat, &mut out) {
+                        Ok((p, _, true)) if self.unexplained(p, start) => Err(Flags::AMBIGUOUS),
                         Ok((p, score, true)) if score >= self.config.min_score => Ok((p, score)),
                         Ok((_, score, _)) => {
                             out.score = score;
@@ -1017,6 +1032,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         match result {
             Ok((p, score)) => {
                 self.v = (p.0 - self.p.0, p.1 - self.p.1);
+                self.max_step = self.max_step.max(fabsf(self.v.0).max(fabsf(self.v.1)));
                 self.p = p;
                 out.score = score;
                 let (dx, dy) = self.displacement();
@@ -1032,6 +1048,18 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             }
         }
         out
+    }
+
+    /// Whether a match the search found at `p` lies further from where the search started
+    /// (`start`: the prediction, or the caller's start) than the motion seen so far explains:
+    /// more than [`JUMP_FACTOR`] times the largest step between two tracked frames, and more
+    /// than half the template's larger side (the default search range: a search within it is
+    /// always explained). A look-alike neighbour found by a long search is taken for a
+    /// jump of the target no more: the frame is lost ([`Flags::AMBIGUOUS`]).
+    fn unexplained(&self, p: (f32, f32), start: (f32, f32)) -> bool {
+        let jump = fabsf(p.0 - start.0).max(fabsf(p.1 - start.1));
+        let half = f32::from(self.config.width.max(self.config.height)) / 2.0;
+        jump > half && jump > JUMP_FACTOR * self.max_step
     }
 
     /// Re-takes the template at the current position (the refresh rule); a refused template
@@ -1640,22 +1668,25 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
     }
 
     /// The coarse integer search around `p` (see the module documentation): the best integer
-    /// displacement, or `Err(flags)` when no offset fits in the frame or the best one is on the
-    /// edge of the range.
+    /// displacement, or `Err(flags)` when no offset fits in the frame, the best one is on the
+    /// edge of the range, or a rival match away from it scores nearly as well (ambiguous).
     fn search<P: Pixel>(&self, frame: &Frame<'_, P>, p: (f32, f32)) -> Result<(f32, f32), Flags> {
         let (tw, th) = (i64::from(self.config.width), i64::from(self.config.height));
-        let r = i64::from(self.config.search);
+        // no window displaced further than the frame is wide lies in it: a range beyond that
+        // (65535) would only cost time
+        let side = frame.width().max(frame.height()) as i64;
+        let r = i64::from(self.config.search).min(side);
         let b = (r / 8).min(tw.min(th) / 3).max(1);
         let (cx, cy) = (floorf(p.0 + 0.5) as i64, floorf(p.1 + 0.5) as i64);
-        let mut best: Option<(f32, i64, i64)> = None;
-        let consider = |dx: i64, dy: i64, block: i64, best: &mut Option<(f32, i64, i64)>| {
+        // a rival is a match at least half the template's larger side from the best
+        let apart = (tw.max(th) / 2).max(2);
+        let mut best = Ranked::default();
+        let consider = |dx: i64, dy: i64, block: i64, best: &mut Ranked| {
             if (dx - cx).abs() > r || (dy - cy).abs() > r {
                 return;
             }
             if let Some(s) = self.zncc_at(frame, dx, dy, block) {
-                if best.is_none_or(|(bs, _, _)| s > bs) {
-                    *best = Some((s, dx, dy));
-                }
+                best.offer((s, dx, dy), apart);
             }
         };
         if b > 1 {
@@ -1666,23 +1697,30 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 }
             }
         }
-        let (fx, fy, span) = match best {
+        let (fx, fy, span) = match best.best {
             Some((_, x, y)) => (x, y, b),
             None => (cx, cy, r),
         };
-        let mut fine: Option<(f32, i64, i64)> = None;
+        let mut fine = Ranked::default();
         for dy in fy - span..=fy + span {
             for dx in fx - span..=fx + span {
                 consider(dx, dy, 1, &mut fine);
             }
         }
-        let Some((score, x, y)) = fine else {
+        let Some((score, x, y)) = fine.best else {
             return Err(Flags::BORDER);
         };
         if score < self.config.min_score {
             return Err(Flags::DIVERGED);
         }
-        if r > 0 && ((x - cx).abs() == r || (y - cy).abs() == r) {
+        // the rival of the pass that saw the whole range (block sums compared with block sums)
+        let whole = if b > 1 { &best } else { &fine };
+        if let (Some((top, ..)), Some((rival, ..))) = (whole.best, whole.rival) {
+            if self.config.ambiguity > 0.0 && rival >= top - self.config.ambiguity {
+                return Err(Flags::AMBIGUOUS);
+            }
+        }
+        if r > 0 && r < side && ((x - cx).abs() == r || (y - cy).abs() == r) {
             return Err(Flags::DIVERGED);
         }
         // saturation is judged by the refinement that follows
@@ -1724,6 +1762,45 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             Some((sft - st * sf / n) / sqrtf(vt * vf))
         } else {
             Some(0.0)
+        }
+    }
+}
+
+/// A search's match further from its start than this many times the largest step seen so
+/// far (and than half the template) is a jump the motion does not explain
+/// ([`LkTracker::track`]).
+pub const JUMP_FACTOR: f32 = 3.0;
+
+/// The best match of a search and its best rival: the best-scoring offset at least `apart`
+/// px (in either axis) from the best.
+#[derive(Debug, Clone, Copy, Default)]
+struct Ranked {
+    best: Option<(f32, i64, i64)>,
+    rival: Option<(f32, i64, i64)>,
+}
+
+impl Ranked {
+    /// Takes a scored offset into account: a new best keeps the old one as the rival if it is
+    /// apart from it (else the rival stays, if it is apart from the new best).
+    fn offer(&mut self, c: (f32, i64, i64), apart: i64) {
+        let far = |a: (f32, i64, i64), b: (f32, i64, i64)| {
+            (a.1 - b.1).abs() >= apart || (a.2 - b.2).abs() >= apart
+        };
+        match self.best {
+            None => self.best = Some(c),
+            Some(b) if c.0 > b.0 => {
+                // the old best outranks every rival
+                self.rival = match far(b, c) {
+                    true => Some(b),
+                    false => self.rival.filter(|&r| far(r, c)),
+                };
+                self.best = Some(c);
+            }
+            Some(b) => {
+                if far(c, b) && self.rival.is_none_or(|r| c.0 > r.0) {
+                    self.rival = Some(c);
+                }
+            }
         }
     }
 }
@@ -2014,19 +2091,35 @@ mod tests {
     #[test]
     fn the_coarse_search_catches_motions_of_many_pixels_and_its_edge_is_a_loss() {
         let mut t = tracker(24, Interpolation::Bicubic);
+        // from rest, a jump of 20 px is more than the motion so far explains (and than half
+        // the template): lost, whatever the search found (a look-alike or the target)
         let img = speckle(20.4, -12.3, 200.0);
         let r = t.track(&frame(&img));
         assert!(r.searched);
+        assert!(r.flags.contains(Flags::AMBIGUOUS), "{r:?}");
+        assert_eq!(t.displacement(), (0.0, 0.0));
+        // a target seen moving 7.3 px a frame: the search finds it 21.4 px from the
+        // prediction (within three of its steps)
+        for dx in [7.3, 14.6] {
+            let r = t.track(&frame(&speckle(dx, 0.0, 200.0)));
+            assert!((r.dx - dx as f32).abs() < 0.01, "{r:?}");
+        }
+        let r = t.track(&frame(&speckle(0.5, -1.0, 200.0)));
+        assert!(r.searched, "{r:?}");
         let (mx, my) = r.displacement().expect("found by the search");
-        assert!(
-            (mx - 20.4).abs() < 0.01 && (my + 12.3).abs() < 0.01,
-            "{r:?}"
-        );
-        // the next frame starts from there: a small step needs no search
-        let img = speckle(20.9, -12.0, 200.0);
+        assert!((mx - 0.5).abs() < 0.01 && (my + 1.0).abs() < 0.01, "{r:?}");
+        // and the next frame at a small step from there, its prediction 14 px off (the last
+        // step's velocity): a search within half the template, explained
+        let img = speckle(1.0, -0.7, 200.0);
         let r = t.track(&frame(&img));
-        assert!(!r.searched, "{r:?}");
-        assert!((r.dx - 20.9).abs() < 0.01, "{r:?}");
+        assert!((r.dx - 1.0).abs() < 0.01 && r.flags.is_clear(), "{r:?}");
+        // 22.5 px from the prediction of the same target: more than three of its steps
+        let mut t = tracker(24, Interpolation::Bicubic);
+        for dx in [7.3, 14.6] {
+            t.track(&frame(&speckle(dx, 0.0, 200.0)));
+        }
+        let r = t.track(&frame(&speckle(-0.6, 0.0, 200.0)));
+        assert!(r.flags.contains(Flags::AMBIGUOUS), "{r:?}");
         // a jump beyond the range (and beyond where the refinement alone converges): lost,
         // flagged, and the state kept
         let mut t = tracker(6, Interpolation::Bicubic);
@@ -2035,6 +2128,40 @@ mod tests {
         assert_eq!(r.displacement(), None, "{r:?}");
         assert!(r.flags.contains(Flags::DIVERGED), "{r:?}");
         assert_eq!(t.displacement(), (0.0, 0.0));
+    }
+
+    #[test]
+    fn a_search_that_sees_two_look_alikes_is_ambiguous_not_a_jump_onto_one() {
+        // the target gone from where it was, and two copies of it 12 px either side (within
+        // half the template of the start: a jump the search range explains): the search
+        // cannot tell which is the target (a tag among tags of a structure)
+        let (left, right) = (speckle(-12.0, 0.0, 200.0), speckle(12.0, 0.0, 200.0));
+        let img: Vec<u8> = left
+            .iter()
+            .zip(&right)
+            .map(|(&a, &b)| (u16::from(a) + u16::from(b) - 40).min(255) as u8)
+            .collect();
+        let mut t = tracker(24, Interpolation::Bicubic);
+        let r = t.track(&frame(&img));
+        assert!(r.searched, "{r:?}");
+        assert_eq!(r.displacement(), None, "{r:?}");
+        assert!(r.flags.contains(Flags::AMBIGUOUS), "{r:?}");
+        assert_eq!(t.displacement(), (0.0, 0.0));
+        // without the check the search takes one of them: the silent jump this flag prevents
+        let mut cfg = *t.config();
+        cfg.ambiguity = 0.0;
+        let mut t = Lk::try_new(cfg).unwrap();
+        t.set_template(&frame(&speckle(0.0, 0.0, 200.0)), 44 - 15, 40 - 15)
+            .unwrap();
+        let (dx, _) = t.track(&frame(&img)).displacement().expect("a jump");
+        assert!((dx.abs() - 12.0).abs() < 0.5, "{dx}");
+        // one copy alone, as far: found, not ambiguous
+        let mut t = tracker(24, Interpolation::Bicubic);
+        let r = t.track(&frame(&right));
+        assert!((r.dx - 12.0).abs() < 0.01 && r.flags.is_clear(), "{r:?}");
+        // the setting is checked
+        cfg.ambiguity = 1.5;
+        assert_eq!(cfg.validate(39 * 39, 38), Err(LkError::Setting));
     }
 
     #[test]

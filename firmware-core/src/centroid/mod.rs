@@ -254,9 +254,12 @@ impl Flags {
     /// Gradient tracker ([`crate::lk`]): no match (score below the minimum, the refinement did
     /// not settle, or the motion may exceed the search range).
     pub const DIVERGED: Flags = Flags(64);
+    /// Gradient tracker ([`crate::lk`]): the coarse search found a second match, away from the
+    /// best, nearly as good as it (a look-alike target): which one is the target is not known.
+    pub const AMBIGUOUS: Flags = Flags(128);
 
     /// Every flag with its name, in bit order.
-    pub const NAMES: [(Flags, &'static str); 7] = [
+    pub const NAMES: [(Flags, &'static str); 8] = [
         (Flags::EMPTY, "empty"),
         (Flags::BORDER, "border"),
         (Flags::SATURATED, "saturated"),
@@ -264,6 +267,7 @@ impl Flags {
         (Flags::CLIPPED, "clipped"),
         (Flags::FLAT, "flat"),
         (Flags::DIVERGED, "diverged"),
+        (Flags::AMBIGUOUS, "ambiguous"),
     ];
 
     /// The bit mask (see the table above).

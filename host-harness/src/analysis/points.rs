@@ -241,6 +241,130 @@ pub struct PointsInfo {
     pub thresholds: Vec<u16>,
     /// Each target's window size, px.
     pub sizes: Vec<(u32, u32)>,
+    /// The groups of targets that moved together (0-based target indices; Lucas-Kanade), and
+    /// how they were found.
+    pub groups: Option<Grouping>,
+    /// Warnings on how the targets were followed (look-alikes followed alone).
+    pub warnings: Vec<String>,
+}
+
+/// Pairs of targets whose windows in `frame` look alike (ZNCC of the pixels at least 0.9,
+/// windows of one size): a target followed alone can be taken for such a neighbour after a
+/// lost frame, when the neighbour passes where it was last seen. 0-based indices.
+pub fn look_alikes(frame: &GreyFrame, points: &[Point]) -> Vec<(usize, usize)> {
+    let dims = frame.dimensions();
+    let pixels = |p: &Point| -> Option<Vec<f64>> {
+        let roi = window(p.xy, p.size, dims)?;
+        let mut v = Vec::with_capacity((roi.width * roi.height) as usize);
+        for y in roi.y..roi.y + roi.height {
+            for x in roi.x..roi.x + roi.width {
+                let i = y as usize * dims.0 + x as usize;
+                v.push(match frame {
+                    GreyFrame::U8 { data, .. } => f64::from(data[i]),
+                    GreyFrame::U16 { data, .. } => f64::from(data[i]),
+                });
+            }
+        }
+        let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let norm = v.iter().map(|x| (x - m).powi(2)).sum::<f64>().sqrt();
+        (norm > 0.0).then(|| v.iter().map(|x| (x - m) / norm).collect())
+    };
+    let windows: Vec<Option<Vec<f64>>> = points.iter().map(pixels).collect();
+    let mut pairs = Vec::new();
+    for a in 0..points.len() {
+        for b in a + 1..points.len() {
+            if let (Some(wa), Some(wb), true) =
+                (&windows[a], &windows[b], points[a].size == points[b].size)
+            {
+                let zncc: f64 = wa.iter().zip(wb).map(|(x, y)| x * y).sum();
+                if zncc >= 0.9 {
+                    pairs.push((a, b));
+                }
+            }
+        }
+    }
+    pairs
+}
+
+/// The groups `--tracker lk` followed targets in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grouping {
+    /// Groups of two or more targets (0-based indices), in order of their first target.
+    pub groups: Vec<Vec<usize>>,
+    /// `None`: from the points file's `group` column; `Some(frames)`: found from the motion of
+    /// the first `frames` frames ([`motion_groups`]); `Some(0)`: the targets moved too little
+    /// for groups to be found, so none were used.
+    pub found_in: Option<usize>,
+}
+
+impl Grouping {
+    /// The report's line on the groups.
+    pub fn describe(&self, targets: &[usize]) -> String {
+        let list: Vec<String> = self
+            .groups
+            .iter()
+            .map(|g| {
+                let names: Vec<String> = g.iter().map(|&t| targets[t].to_string()).collect();
+                format!("[{}]", names.join(" "))
+            })
+            .collect();
+        let list = if list.is_empty() {
+            "none".to_string()
+        } else {
+            list.join(", ")
+        };
+        match self.found_in {
+            None => format!("groups (the points file's `group` column): {list}"),
+            Some(0) => "groups: none (the targets moved less than a quarter of their window; \
+                 no look-alike could be reached)"
+                .to_string(),
+            Some(n) => format!(
+                "groups found from the motion of the first {n} frames (targets whose tracks \
+                 differed by at most 5 % of their motion and 0.2 px; each group's shared \
+                 motion catches its members' large jumps; a `group` column in the points file \
+                 sets them instead): {list}"
+            ),
+        }
+    }
+}
+
+/// Groups of targets that moved together over the tracks so far (`history[t][f]`: target
+/// `t`'s displacement in frame `f`, `None` when lost), by complete linkage: a target joins a
+/// group when its track differs from every member's by an RMS of at most 5 % of their motion's
+/// RMS plus 0.2 px (tracking noise), over at least three frames both were tracked in. Targets
+/// of one rigid part (a storey, a beam) move alike; parts that move differently (two storeys
+/// of one mode, at 75 % of each other's amplitude) stay apart. Groups of one are left out.
+pub fn motion_groups(history: &[Vec<Option<(f32, f32)>>]) -> Vec<Vec<usize>> {
+    let close = |a: usize, b: usize| {
+        let (mut d2, mut m2, mut n) = (0.0f64, 0.0f64, 0usize);
+        for (p, q) in history[a].iter().zip(&history[b]) {
+            if let (Some(p), Some(q)) = (p, q) {
+                let (px, py, qx, qy) = (
+                    f64::from(p.0),
+                    f64::from(p.1),
+                    f64::from(q.0),
+                    f64::from(q.1),
+                );
+                d2 += (px - qx).powi(2) + (py - qy).powi(2);
+                m2 += (px * px + py * py + qx * qx + qy * qy) / 2.0;
+                n += 1;
+            }
+        }
+        if n < 3 {
+            return false;
+        }
+        let (d, m) = ((d2 / n as f64).sqrt(), (m2 / n as f64).sqrt());
+        d <= 0.05 * m + 0.2
+    };
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for t in 0..history.len() {
+        match groups.iter_mut().find(|g| g.iter().all(|&m| close(m, t))) {
+            Some(g) => g.push(t),
+            None => groups.push(vec![t]),
+        }
+    }
+    groups.retain(|g| g.len() > 1);
+    groups
 }
 
 /// Follows every point through `source` (see the module documentation). `config` gives the
@@ -289,6 +413,8 @@ pub fn track_points(
         PointsInfo {
             thresholds,
             sizes: points.iter().map(|p| p.size).collect(),
+            groups: None,
+            warnings: Vec::new(),
         },
     ))
 }
@@ -341,6 +467,17 @@ pub fn track_points_lk(
         }
     }
     groups.retain(|m| m.len() > 1);
+    // without a `group` column, groups are found from the first frames' motion: until the
+    // largest motion reaches a quarter of a window, every target is followed alone with a
+    // search of at most half its window (no look-alike reachable), then grouped
+    let explicit = points.iter().any(|p| p.group.is_some());
+    let quarter = points
+        .iter()
+        .map(|p| p.size.0.min(p.size.1) as f32 / 4.0)
+        .fold(f32::INFINITY, f32::min);
+    let mut history: Vec<Vec<Option<(f32, f32)>>> = vec![Vec::new(); k];
+    let mut found_in: Option<usize> = None;
+    let mut alike: Vec<(usize, usize)> = Vec::new();
     let mut templates: Vec<BlockTemplate> = Vec::new();
     let mut size0: Option<(usize, usize)> = None;
     source.for_each(fps, |label, frame| {
@@ -358,7 +495,8 @@ pub fn track_points_lk(
                     Err(_) => Some(Flags::BORDER),
                 };
             }
-            if !groups.is_empty() {
+            alike = look_alikes(frame, points);
+            if !groups.is_empty() || (!explicit && k > 1) {
                 let first = Integral::of(frame);
                 templates = points
                     .iter()
@@ -373,7 +511,33 @@ pub fn track_points_lk(
                     .collect::<anyhow::Result<_>>()?;
             }
         }
-        let results = track_frame_lk(frame, &mut trackers, &refused, &groups, &templates)?;
+        let deciding = !explicit && k > 1 && found_in.is_none();
+        let cap = deciding.then(|| {
+            trackers
+                .iter()
+                .map(|t| t.config().width.max(t.config().height) / 2)
+                .collect::<Vec<u16>>()
+        });
+        let results = track_frame_lk(
+            frame,
+            &mut trackers,
+            &refused,
+            (&groups, &templates),
+            cap.as_deref(),
+        )?;
+        if deciding {
+            for (h, r) in history.iter_mut().zip(&results) {
+                h.push(r.displacement());
+            }
+            let moved = history
+                .iter()
+                .flat_map(|h| h.iter().flatten())
+                .any(|d| d.0.abs().max(d.1.abs()) >= quarter);
+            if moved {
+                groups = motion_groups(&history);
+                found_in = Some(history[0].len());
+            }
+        }
         for (t, p) in points.iter().enumerate() {
             let c = match refused[t] {
                 Some(why) => lost_because(why),
@@ -397,11 +561,44 @@ pub fn track_points_lk(
         }
         Ok(())
     })?;
+    // look-alikes followed alone (not in one group): named, with what it risks
+    let grouped = |t: usize| groups.iter().any(|g| g.contains(&t));
+    let mut alone: Vec<usize> = alike
+        .iter()
+        .flat_map(|&(a, b)| [a, b])
+        .filter(|&t| !grouped(t))
+        .collect();
+    alone.sort_unstable();
+    alone.dedup();
+    let warnings = if alone.is_empty() {
+        Vec::new()
+    } else {
+        let names: Vec<String> = alone
+            .iter()
+            .map(|&t| points[t].target.to_string())
+            .collect();
+        vec![format!(
+            "targets {} look like other targets (their first windows match with a ZNCC of \
+             0.9 or more) and are followed alone, in no group: after a lost frame, one can be taken up again on a \
+             neighbour that passes where it was last seen (give the targets that move together \
+             one `group`, or leave the column out to have groups found)",
+            names.join(" ")
+        )]
+    };
+    let grouping = Grouping {
+        groups,
+        found_in: match (explicit, found_in) {
+            (true, _) => None,
+            (false, found) => Some(found.unwrap_or(0)),
+        },
+    };
     Ok((
         tracks,
         PointsInfo {
             thresholds: Vec::new(),
             sizes: points.iter().map(|p| p.size).collect(),
+            groups: (k > 1).then_some(grouping),
+            warnings,
         },
     ))
 }
@@ -411,13 +608,16 @@ pub fn track_points_lk(
 /// the group's shared offset from where each member was ([`shared_offset`] over the members'
 /// search range) is the start of every member that did not, with a search of a quarter of its
 /// window around it (fine differences between the members' motions; well short of a
-/// neighbouring look-alike). A best mean ZNCC below 0.5 leaves those members lost.
+/// neighbouring look-alike). The shared offset is sought within half the members' larger
+/// window, the range doubled while its best is below a mean ZNCC of 0.5 or on its edge, up to
+/// the frame's size (whatever `--search-px`, which is each target's own search); a best mean
+/// ZNCC below 0.5 there leaves those members lost.
 fn track_frame_lk(
     frame: &GreyFrame,
     trackers: &mut [Box<HostLk>],
     refused: &[Option<Flags>],
-    groups: &[Vec<usize>],
-    templates: &[BlockTemplate],
+    (groups, templates): (&[Vec<usize>], &[BlockTemplate]),
+    search_cap: Option<&[u16]>,
 ) -> anyhow::Result<Vec<firmware_core::lk::LkResult>> {
     let k = trackers.len();
     let in_group = |t: usize| groups.iter().any(|m| m.contains(&t));
@@ -425,10 +625,11 @@ fn track_frame_lk(
     let mut results = Vec::with_capacity(k);
     with_frame(frame, |f| {
         for (t, tracker) in trackers.iter_mut().enumerate() {
-            let search = if in_group(t) {
-                0
-            } else {
-                tracker.config().search
+            let own = tracker.config().search;
+            let search = match (in_group(t), search_cap.and_then(|c| c.get(t))) {
+                (true, _) => 0,
+                (false, Some(&cap)) => own.min(cap),
+                (false, None) => own,
             };
             results.push(match &f {
                 AnyFrame::U8(f) => tracker.track_from(f, None, search),
@@ -457,17 +658,30 @@ fn track_frame_lk(
                     .map(|tp| (tp, (dx.round() as i64, dy.round() as i64)))
             })
             .collect();
-        let range = members
+        // half the members' larger window first; a best offset below 0.5 or at the range's
+        // edge (the motion may be larger) doubles it, up to the frame's size: the nearest
+        // offset that fits the whole group wins, not a far one that puts the group on a row of
+        // look-alikes (another storey), which a search of the whole frame at once could take
+        let (fw, fh) = frame.dimensions();
+        let whole = (fw.max(fh) as i64).max(8);
+        let mut range = members
             .iter()
-            .map(|&t| i64::from(trackers[t].config().search))
+            .map(|&t| i64::from(trackers[t].config().width.max(trackers[t].config().height) / 2))
             .max()
-            .unwrap_or(0);
-        let Some((d, score)) = shared_offset(integral, &list, range) else {
+            .unwrap_or(0)
+            .clamp(8, whole);
+        let found = loop {
+            let r = shared_offset(integral, &list, range);
+            let inside = |d: (i64, i64)| d.0.abs().max(d.1.abs()) + 4 < range;
+            match r {
+                Some((d, score)) if score >= 0.5 && inside(d) => break Some(d),
+                _ if range >= whole => break r.filter(|(_, s)| *s >= 0.5).map(|(d, _)| d),
+                _ => range = (range * 2).min(whole),
+            }
+        };
+        let Some(d) = found else {
             continue;
         };
-        if score < 0.5 {
-            continue;
-        }
         with_frame(frame, |f| {
             for &t in &failed {
                 let local = trackers[t].config().width.max(trackers[t].config().height) / 4;

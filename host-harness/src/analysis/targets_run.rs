@@ -157,6 +157,16 @@ pub fn windows_report(w: &super::points::PointsInfo, tracks: &Tracks) -> String 
             c.len()
         );
     }
+    if let Some(g) = &w.groups {
+        let _ = writeln!(
+            s,
+            "  {}",
+            g.describe(&(1..=w.sizes.len()).collect::<Vec<_>>())
+        );
+    }
+    for warning in &w.warnings {
+        let _ = writeln!(s, "WARNING: {warning}");
+    }
     s
 }
 

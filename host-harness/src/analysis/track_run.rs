@@ -197,11 +197,21 @@ fn report(
     for f in failures {
         let _ = writeln!(s, "no displacement for {f}");
     }
+    let mut any = false;
     for (t, c) in tracks.centroids.iter().enumerate() {
         if c.iter().any(|c| c.position().is_none()) {
-            let why = crate::chain::displacement::why_lost(c);
+            let why = crate::chain::displacement::lost_flags(c);
             let _ = writeln!(s, "target {} lost frames: {why}", t + 1);
+            any = true;
         }
+    }
+    if any {
+        s.push_str(
+            "(border: at the edge of its window or the frame, or filling the window; flat: too \
+             little texture; ambiguous: a look-alike matched nearly as well, or a jump the \
+             motion so far does not explain; diverged: no match within the search; empty: no \
+             pixel above the threshold)\n",
+        );
     }
     s
 }

@@ -141,45 +141,91 @@ pub fn displacement_mm(
     })
 }
 
+/// The lost frames of `centroids` counted by their first reason, in the order `border`,
+/// `saturated`, `flat`, `ambiguous`, `diverged`, `empty`; and those with none of these.
+fn lost_reasons(centroids: &[Centroid]) -> ([usize; 6], usize) {
+    use firmware_core::centroid::Flags;
+    let order = [
+        Flags::BORDER,
+        Flags::SATURATED,
+        Flags::FLAT,
+        Flags::AMBIGUOUS,
+        Flags::DIVERGED,
+        Flags::EMPTY,
+    ];
+    let mut counts = [0usize; 6];
+    let mut other = 0usize;
+    for c in centroids.iter().filter(|c| c.position().is_none()) {
+        match order.iter().position(|f| c.flags.contains(*f)) {
+            Some(i) => counts[i] += 1,
+            None => other += 1,
+        }
+    }
+    (counts, other)
+}
+
+/// [`why_lost`] in the flags' names (`26 ambiguous, 4 diverged`), for a line per target.
+pub fn lost_flags(centroids: &[Centroid]) -> String {
+    let names = [
+        "border",
+        "saturated",
+        "flat",
+        "ambiguous",
+        "diverged",
+        "empty",
+    ];
+    let (counts, other) = lost_reasons(centroids);
+    let mut parts: Vec<String> = names
+        .iter()
+        .zip(counts)
+        .filter(|(_, n)| *n > 0)
+        .map(|(name, n)| format!("{n} {name}"))
+        .collect();
+    if other > 0 {
+        parts.push(format!("{other} other"));
+    }
+    parts.join(", ")
+}
+
 /// Why frames without a centroid have none, from their flags, counted (the same words for
-/// every command): no pixel above the threshold, the target at the edge of its window or ROI
-/// (or filling it: everything above the threshold), saturated, flat, or other.
+/// every command): the target at the edge of its window or ROI (or filling it: everything above
+/// the threshold), saturated, flat, without a match, ambiguous (the gradient tracker's), or no
+/// pixel above the threshold.
 pub fn why_lost(centroids: &[Centroid]) -> String {
     use firmware_core::centroid::Flags;
-    let lost: Vec<&Centroid> = centroids
+    // each lost frame counted once, under its first reason in this order
+    let reasons = [
+        (
+            Flags::BORDER,
+            "with the target at the edge of its window or ROI, or filling it (pixels above the \
+             threshold all the way to the edge: a threshold below the background, or a window \
+             smaller than the target; or the window reaching the frame's edge)",
+        ),
+        (Flags::SATURATED, "saturated"),
+        (Flags::FLAT, "with too little texture in the window (flat)"),
+        (
+            Flags::AMBIGUOUS,
+            "ambiguous (a look-alike within the search range matched nearly as well: group the \
+             targets that move together, or a smaller --search-px)",
+        ),
+        (
+            Flags::DIVERGED,
+            "without a match (diverged: the motion may exceed the search range)",
+        ),
+        (
+            Flags::EMPTY,
+            "with no pixel above the threshold (check --threshold and the window or --roi)",
+        ),
+    ];
+    let (counts, other) = lost_reasons(centroids);
+    let mut parts: Vec<String> = reasons
         .iter()
-        .filter(|c| c.position().is_none())
+        .zip(counts)
+        .filter(|(_, n)| *n > 0)
+        .map(|((_, what), n)| format!("{n} {what}"))
         .collect();
-    let count = |f: Flags| lost.iter().filter(|c| c.flags.contains(f)).count();
-    let mut parts = Vec::new();
-    let border = count(Flags::BORDER);
-    let empty = lost
-        .iter()
-        .filter(|c| c.flags.contains(Flags::EMPTY) && !c.flags.contains(Flags::BORDER))
-        .count();
-    if empty > 0 {
-        parts.push(format!(
-            "{empty} with no pixel above the threshold (check --threshold and the window or \
-             --roi)"
-        ));
-    }
-    if border > 0 {
-        parts.push(format!(
-            "{border} with the target at the edge of its window or ROI, or filling it (pixels \
-             above the threshold all the way to the edge: a threshold below the background, \
-             or a window smaller than the target)"
-        ));
-    }
-    let saturated = count(Flags::SATURATED);
-    if saturated > 0 {
-        parts.push(format!("{saturated} saturated"));
-    }
-    let rest = lost.len() - empty - border;
-    if rest > saturated {
-        parts.push(format!(
-            "{} lost for another reason (see the flags)",
-            rest - saturated
-        ));
+    if other > 0 {
+        parts.push(format!("{other} lost for another reason (see the flags)"));
     }
     parts.join("; ")
 }
