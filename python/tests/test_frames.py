@@ -97,3 +97,38 @@ def test_the_gil_is_released_while_analysing(recording):
         last = now
     # holding the GIL, the call would stop this loop for its whole duration
     assert max(gaps) < 0.5 * alone, (max(gaps), alone)
+
+
+def test_every_refused_argument_is_an_input_error_naming_it(recording):
+    # each of these raised Python's OverflowError, TypeError or ValueError from a conversion,
+    # or (a threshold of 1.7) ran silently with another value
+    f = np.zeros((8, 8), np.uint8)
+    frames = np.zeros((3, 8, 8), np.uint8)
+    cases = [
+        (lambda: vibcam.centroid(f, -1), "threshold = -1"),
+        (lambda: vibcam.centroid(f, 1.7), "threshold = 1.7"),
+        (lambda: vibcam.centroid(f, float("nan")), "threshold = nan"),
+        (lambda: vibcam.centroid(f, 10, roi=(0, 0, -2, 3)), r"roi\[2\] = -2"),
+        (lambda: vibcam.centroid(f, 10, roi=(0, 0, 2)), "roi = "),
+        (lambda: vibcam.track(frames, [(4, 4, -5, 5)], threshold=1), r"points\[0\].w = -5"),
+        (lambda: vibcam.track(frames, [(4, 4, 5.5, 5)], threshold=1), r"points\[0\].w = 5.5"),
+        (lambda: vibcam.track(frames, [(4, 4, 5, 5)], tracker="lk", search_px=2.5), "search_px = 2.5"),
+        (lambda: vibcam.track(frames, targets=1, threshold=1, fps=float("nan")), "fps = nan"),
+        (lambda: vibcam.track(frames, targets=1, threshold=1, gate_px=-1), "gate_px = -1"),
+        (lambda: vibcam.track(frames, targets=99, threshold=1), "targets = 99"),
+        (lambda: vibcam.frf(np.zeros((4, 100)), np.zeros(100), 10.0), "x: a 1-D array"),
+        (lambda: vibcam.frf(np.zeros(100), np.zeros(100), float("inf")), "fs = inf"),
+        (lambda: vibcam.frf(np.zeros(100), np.zeros(100), 10.0, nperseg=-3), "nperseg = -3"),
+        (lambda: vibcam.upsample(["a", "b"], 1.0, 2.0), "x: not an array of numbers"),
+        (lambda: vibcam.analyze(frames, targets=1, threshold=1, fps=60, bands=[(5, 2)]), r"bands\[0\]"),
+        (lambda: vibcam.open_frames(recording / "frames", frame_range="5..2"), "comes before"),
+        (lambda: vibcam.open_frames(recording / "frames", frame_range=(1, 2)), "frame_range = "),
+    ]
+    for call, needle in cases:
+        with pytest.raises(vibcam.InputError, match=needle):
+            call()
+    # a frame range of a sequence reads those frames, labelled as in the whole sequence
+    reader = vibcam.open_frames(recording / "frames", frame_range="3..5")
+    assert reader.count == 3
+    got = list(reader)
+    assert len(got) == 3 and reader.label.endswith("frame_00004.png"), reader.label

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import csv
 import io
+import math
+import numbers
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -62,6 +64,63 @@ def _frames(frames: Any) -> Any:
     return np.asarray(frames)
 
 
+# Every argument is checked here, before the native module sees it: a refused value raises
+# InputError naming the argument (never Python's OverflowError or TypeError from the
+# conversion), and nothing is truncated (a threshold of 1.7 is refused, not taken as 1).
+
+
+def _whole(name: str, v: Any, lo: int, hi: int, optional: bool = False) -> Optional[int]:
+    """``v`` as a whole number in ``lo..=hi``."""
+    if v is None and optional:
+        return None
+    ok = isinstance(v, numbers.Integral) and not isinstance(v, bool)
+    if isinstance(v, numbers.Real) and not isinstance(v, bool) and not ok:
+        ok = math.isfinite(float(v)) and float(v) == int(v)
+    if not ok:
+        raise InputError(f"{name} = {v!r}: a whole number from {lo} to {hi} is needed")
+    i = int(v)
+    if not lo <= i <= hi:
+        raise InputError(f"{name} = {i}: a whole number from {lo} to {hi} is needed")
+    return i
+
+
+def _number(name: str, v: Any, positive: bool = False, optional: bool = False) -> Optional[float]:
+    """``v`` as a finite number (``> 0`` with ``positive``)."""
+    if v is None and optional:
+        return None
+    if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(float(v)):
+        raise InputError(f"{name} = {v!r}: a finite number is needed")
+    if positive and not float(v) > 0:
+        raise InputError(f"{name} = {v!r}: a positive number is needed")
+    return float(v)
+
+
+def _vector(name: str, x: Any) -> np.ndarray:
+    """``x`` as a 1-D array of finite float64 values."""
+    try:
+        a = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"{name}: not an array of numbers ({e})") from None
+    if a.ndim != 1:
+        raise InputError(f"{name}: a 1-D array is needed, got shape {a.shape}")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        v = a[bad[0]]
+        raise InputError(f"{name}[{bad[0]}] is {'NaN' if np.isnan(v) else v}: every value must be finite")
+    return np.ascontiguousarray(a)
+
+
+def _roi(roi: Any) -> Optional[tuple]:
+    if roi is None:
+        return None
+    r = tuple(roi) if isinstance(roi, (list, tuple, np.ndarray)) else None
+    if r is None or len(r) != 4:
+        raise InputError(f"roi = {roi!r}: (x, y, w, h) is needed")
+    x, y = (_whole(f"roi[{i}]", v, 0, 65535) for i, v in enumerate(r[:2]))
+    w, h = (_whole(f"roi[{i + 2}]", v, 1, 65535) for i, v in enumerate(r[2:]))
+    return (x, y, w, h)
+
+
 def _threshold(threshold: Union[int, str, None]) -> tuple:
     if threshold is None:
         return None, False
@@ -69,10 +128,7 @@ def _threshold(threshold: Union[int, str, None]) -> tuple:
         if threshold.strip().lower() == "auto":
             return None, True
         raise InputError(f"threshold `{threshold}`: a grey level 0-65535, or 'auto' (with points)")
-    t = int(threshold)
-    if t != threshold or not 0 <= t <= 65535:
-        raise InputError(f"threshold {threshold}: a grey level 0-65535")
-    return t, False
+    return _whole("threshold", threshold, 0, 65535), False
 
 
 def _points(points: Any) -> tuple:
@@ -96,16 +152,14 @@ def _points(points: Any) -> tuple:
         if any(v is None for v in row[:4]):
             raise InputError(f"points[{i}]: x, y, w and h are needed")
         x, y, w, h, thr, group = row
-        if int(w) != w or int(h) != h:
-            raise InputError(f"points[{i}]: the window {w} x {h} must be whole pixels")
         out.append(
             (
-                float(x),
-                float(y),
-                int(w),
-                int(h),
-                None if thr is None else int(thr),
-                None if group is None else int(group),
+                _number(f"points[{i}].x", x),
+                _number(f"points[{i}].y", y),
+                _whole(f"points[{i}].w", w, 3, 65536),
+                _whole(f"points[{i}].h", h, 3, 65536),
+                _whole(f"points[{i}].threshold", thr, 0, 65535, optional=True),
+                _whole(f"points[{i}].group", group, 0, 2**32 - 1, optional=True),
             )
         )
     return out, None
@@ -115,18 +169,20 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
     """The targets and how to follow them, as the native ``track`` and ``analyze`` take them."""
     t, auto = _threshold(threshold)
     pts, pfile = _points(points)
+    if not isinstance(tracker, str):
+        raise InputError(f"tracker = {tracker!r}: one of 'binary' (alias 'blob'), 'weighted', 'lk'")
     return {
-        "fps": None if fps is None else float(fps),
+        "fps": _number("fps", fps, positive=True, optional=True),
         "retime": bool(retime),
         "points": pts,
         "points_file": pfile,
-        "targets": targets,
-        "gate_px": float(gate_px),
+        "targets": _whole("targets", targets, 1, 32, optional=True),
+        "gate_px": _number("gate_px", gate_px, positive=True),
         "threshold": t,
         "auto_threshold": auto,
         "tracker": tracker,
-        "search_px": search_px,
-        "roi": None if roi is None else tuple(roi),
+        "search_px": _whole("search_px", search_px, 0, 65535, optional=True),
+        "roi": _roi(roi),
     }
 
 
@@ -162,7 +218,10 @@ def centroid(
     a = np.asarray(frame)
     if a.ndim == 3 and a.shape[-1] in (3, 4):
         a = a[np.newaxis]  # one colour frame
-    x, y, pixels, flags = _vibcam.centroid(a, int(threshold), mode, None if roi is None else tuple(roi))
+    if not isinstance(mode, str):
+        raise InputError(f"mode = {mode!r}: 'binary' (alias 'blob') or 'weighted'")
+    level = _whole("threshold", threshold, 0, 65535)
+    x, y, pixels, flags = _vibcam.centroid(a, level, mode, _roi(roi))
     return Centroid(x, y, pixels, tuple(flags))
 
 
@@ -242,13 +301,13 @@ def frf(
     if detrend is False:
         detrend = "none"
     f, h, c, _segments = _vibcam.frf(
-        np.ascontiguousarray(x, dtype=np.float64),
-        np.ascontiguousarray(y, dtype=np.float64),
-        float(fs),
+        _vector("x", x),
+        _vector("y", y),
+        _number("fs", fs, positive=True),
         window=window,
-        nperseg=nperseg,
-        noverlap=noverlap,
-        nfft=nfft,
+        nperseg=_whole("nperseg", nperseg, 1, 65536, optional=True),
+        noverlap=_whole("noverlap", noverlap, 0, 65535, optional=True),
+        nfft=_whole("nfft", nfft, 1, 65536, optional=True),
         detrend=str(detrend),
     )
     return f, h, c
@@ -258,7 +317,9 @@ def upsample(x: Any, from_hz: float, to_hz: float) -> np.ndarray:
     """``x`` sampled at ``from_hz`` Fourier-upsampled to ``to_hz`` by firmware-core (``len(x) *
     to_hz / from_hz`` samples, which must be whole; the record is taken as periodic, as
     ``scipy.signal.resample``)."""
-    return _vibcam.upsample(np.ascontiguousarray(x, dtype=np.float64), float(from_hz), float(to_hz))
+    return _vibcam.upsample(
+        _vector("x", x), _number("from_hz", from_hz, positive=True), _number("to_hz", to_hz, positive=True)
+    )
 
 
 _MODES_COLUMNS = (
@@ -397,16 +458,16 @@ def analyze(
     d = _vibcam.analyze(
         _frames(frames),
         _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
-        mm_per_px=mm_per_px,
+        mm_per_px=_number("mm_per_px", mm_per_px, positive=True, optional=True),
         axis=axis,
         invert=invert,
         lost_frames=lost_frames,
         window=window,
-        nperseg=nperseg,
-        noverlap=noverlap,
-        nfft=nfft,
+        nperseg=_whole("nperseg", nperseg, 1, 65536, optional=True),
+        noverlap=_whole("noverlap", noverlap, 0, 65535, optional=True),
+        nfft=_whole("nfft", nfft, 1, 65536, optional=True),
         detrend=detrend,
-        bands=None if bands is None else [(float(lo), float(hi)) for lo, hi in bands],
+        bands=None if bands is None else _bands(bands),
     )
     return AnalysisResult(
         modes=d["modes"],
@@ -423,6 +484,20 @@ def analyze(
         left_out=list(d["left_out"]),
         notes=list(d["notes"]),
     )
+
+
+def _bands(bands: Any) -> list:
+    out = []
+    for i, b in enumerate(bands):
+        try:
+            lo, hi = b
+        except (TypeError, ValueError):
+            raise InputError(f"bands[{i}] = {b!r}: (lo, hi) in Hz is needed") from None
+        lo, hi = _number(f"bands[{i}][0]", lo), _number(f"bands[{i}][1]", hi)
+        if not 0 <= lo < hi:
+            raise InputError(f"bands[{i}] = ({lo}, {hi}): 0 <= lo < hi is needed")
+        out.append((lo, hi))
+    return out
 
 
 @dataclass
@@ -481,10 +556,12 @@ def study(
             directory,
             config=None if config is None else os.fspath(config),
             preset=preset,
-            runs=runs,
-            exposures_ms=None if exposures_ms is None else [float(e) for e in exposures_ms],
-            seed=seed,
-            threads=threads,
+            runs=_whole("runs", runs, 1, 1_000_000, optional=True),
+            exposures_ms=None
+            if exposures_ms is None
+            else [_number(f"exposures_ms[{i}]", e, positive=True) for i, e in enumerate(exposures_ms)],
+            seed=_whole("seed", seed, 0, 2**64 - 1, optional=True),
+            threads=_whole("threads", threads, 0, 4096),
             progress=progress,
             plots=plots,
         )
@@ -517,4 +594,11 @@ def open_frames(
     >>> for frame in vibcam.open_frames("rec/frames"):  # doctest: +SKIP
     ...     print(frame.shape, frame.dtype)
     """
-    return FrameReader(os.fspath(path), fps=fps, retime=retime, frame_range=frame_range)
+    if frame_range is not None and not isinstance(frame_range, str):
+        raise InputError(f"frame_range = {frame_range!r}: 'A..B' (frames A to B, 1-based)")
+    return FrameReader(
+        os.fspath(path),
+        fps=_number("fps", fps, positive=True, optional=True),
+        retime=retime,
+        frame_range=frame_range,
+    )
