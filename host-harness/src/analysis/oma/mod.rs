@@ -219,7 +219,7 @@ fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
 }
 
 /// Output-only analysis of `channels` (one record per target, equal lengths). The records are
-/// scaled by a power of two before the numerics ([`record_scale`]) and the spectra and
+/// scaled by a power of two before the numerics (the power of two nearest their RMS) and the spectra and
 /// amplitudes scaled back: the same modes whatever the record's unit.
 pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResult> {
     let scale = record_scale(channels)?;
