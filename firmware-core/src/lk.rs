@@ -534,7 +534,7 @@ impl LkResult {
 /// A Lucas-Kanade tracker of one window of up to `N` pixels and rows of up to `W` pixels.
 /// RAM: `21 N + 40 W` bytes and 2.7 KiB (the spline's template moments) and a few words;
 /// `N` holds the spline's padded template, `(width + 8) (height + 8)` (a 31 x 31 window in
-/// `LkTracker<1521, 38>`: 36 296 B).
+/// `LkTracker<1521, 38>`: 36 304 B).
 #[derive(Debug, Clone)]
 pub struct LkTracker<const N: usize, const W: usize> {
     config: LkConfig,
