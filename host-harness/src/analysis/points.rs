@@ -430,88 +430,29 @@ pub fn track_points_lk(
     config: &CentroidConfig,
     search_px: Option<u16>,
 ) -> anyhow::Result<(Tracks, PointsInfo)> {
-    use firmware_core::lk::{LkConfig, LkError};
     let k = points.len();
-    let mut trackers: Vec<Box<HostLk>> = Vec::with_capacity(k);
-    for p in points {
-        let (w, h) = (
-            u16::try_from(p.size.0).unwrap_or(u16::MAX),
-            u16::try_from(p.size.1).unwrap_or(u16::MAX),
-        );
-        let mut cfg = LkConfig::new(w, h);
-        if let Some(r) = search_px {
-            cfg.search = r;
-        }
-        cfg.saturation = config.saturation.unwrap_or(0);
-        let t = HostLk::try_new(cfg).map_err(|e| {
-            bad_input(format!(
-                "target {}: {e} (--tracker lk windows: at most {} pixels wide and \
-                 {LK_PIXELS} pixels in all)",
-                p.target,
-                LK_ROW - 7
-            ))
-        })?;
-        trackers.push(Box::new(t));
-    }
+    let mut trackers = lk_trackers(points, config, search_px)?;
     let mut tracks = empty_tracks(points);
     // per target: the template could not be taken (why), so every frame is lost
     let mut refused: Vec<Option<Flags>> = vec![None; k];
-    // targets that move together (two or more with one `group`), and their block templates
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (t, p) in points.iter().enumerate() {
-        if let Some(g) = p.group {
-            match groups.iter_mut().find(|m| points[m[0]].group == Some(g)) {
-                Some(m) => m.push(t),
-                None => groups.push(vec![t]),
-            }
-        }
-    }
-    groups.retain(|m| m.len() > 1);
-    // without a `group` column, groups are found from the first frames' motion: until the
-    // largest motion reaches a quarter of a window, every target is followed alone with a
-    // search of at most half its window (no look-alike reachable), then grouped
+    // targets that move together: the file's groups, or found from the first frames' motion
     let explicit = points.iter().any(|p| p.group.is_some());
-    let quarter = points
-        .iter()
-        .map(|p| p.size.0.min(p.size.1) as f32 / 4.0)
-        .fold(f32::INFINITY, f32::min);
-    let mut history: Vec<Vec<Option<(f32, f32)>>> = vec![Vec::new(); k];
-    let mut found_in: Option<usize> = None;
+    let mut groups = file_groups(points);
+    let mut finding = (!explicit && k > 1).then(|| MotionGroups::new(points));
     let mut alike: Vec<(usize, usize)> = Vec::new();
     let mut templates: Vec<BlockTemplate> = Vec::new();
     let mut size0: Option<(usize, usize)> = None;
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
         if is_first(&mut size0, frame, &label)? {
-            for (t, p) in points.iter().enumerate() {
-                let roi = first_window(p, frame.dimensions(), &label)?;
-                let r = with_frame(frame, |f| match f {
-                    AnyFrame::U8(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
-                    AnyFrame::U16(f) => trackers[t].set_template(&f, roi.x as i32, roi.y as i32),
-                })?;
-                refused[t] = match r {
-                    Ok(()) => None,
-                    Err(LkError::Flat) => Some(Flags::FLAT),
-                    Err(_) => Some(Flags::BORDER),
-                };
-            }
+            refused = set_templates(&mut trackers, points, frame, &label)?;
             alike = look_alikes(frame, points);
-            if !groups.is_empty() || (!explicit && k > 1) {
-                let first = Integral::of(frame);
-                templates = points
-                    .iter()
-                    .map(|p| {
-                        let roi = first_window(p, frame.dimensions(), &label)?;
-                        Ok(BlockTemplate::new(
-                            &first,
-                            (i64::from(roi.x), i64::from(roi.y)),
-                            p.size,
-                        ))
-                    })
-                    .collect::<anyhow::Result<_>>()?;
+            if !groups.is_empty() || finding.is_some() {
+                templates = block_templates(points, frame, &label)?;
             }
         }
-        let deciding = !explicit && k > 1 && found_in.is_none();
+        let deciding = finding.as_ref().is_some_and(|f| f.found_in.is_none());
+        // until the groups are found, no search reaches past half a window
         let cap = deciding.then(|| {
             trackers
                 .iter()
@@ -525,72 +466,23 @@ pub fn track_points_lk(
             (&groups, &templates),
             cap.as_deref(),
         )?;
-        if deciding {
-            for (h, r) in history.iter_mut().zip(&results) {
-                h.push(r.displacement());
-            }
-            let moved = history
-                .iter()
-                .flat_map(|h| h.iter().flatten())
-                .any(|d| d.0.abs().max(d.1.abs()) >= quarter);
-            if moved {
-                groups = motion_groups(&history);
-                found_in = Some(history[0].len());
+        if let (true, Some(f)) = (deciding, finding.as_mut()) {
+            if let Some(found) = f.observe(&results) {
+                groups = found;
             }
         }
         for (t, p) in points.iter().enumerate() {
-            let c = match refused[t] {
+            tracks.centroids[t].push(match refused[t] {
                 Some(why) => lost_because(why),
-                None => {
-                    let r = results[t];
-                    match r.displacement() {
-                        Some((dx, dy)) => Centroid {
-                            cx: (p.xy.0 + f64::from(dx)) as f32,
-                            cy: (p.xy.1 + f64::from(dy)) as f32,
-                            moments: firmware_core::centroid::Moments {
-                                pixels: u64::from(p.size.0) * u64::from(p.size.1),
-                                ..Default::default()
-                            },
-                            flags: Flags::NONE,
-                        },
-                        None => lost_because(r.flags),
-                    }
-                }
-            };
-            tracks.centroids[t].push(c);
+                None => lk_centroid(p, &results[t]),
+            });
         }
         Ok(())
     })?;
-    // look-alikes followed alone (not in one group): named, with what it risks
-    let grouped = |t: usize| groups.iter().any(|g| g.contains(&t));
-    let mut alone: Vec<usize> = alike
-        .iter()
-        .flat_map(|&(a, b)| [a, b])
-        .filter(|&t| !grouped(t))
-        .collect();
-    alone.sort_unstable();
-    alone.dedup();
-    let warnings = if alone.is_empty() {
-        Vec::new()
-    } else {
-        let names: Vec<String> = alone
-            .iter()
-            .map(|&t| points[t].target.to_string())
-            .collect();
-        vec![format!(
-            "targets {} look like other targets (their first windows match with a ZNCC of \
-             0.9 or more) and are followed alone, in no group: after a lost frame, one can be taken up again on a \
-             neighbour that passes where it was last seen (give the targets that move together \
-             one `group`, or leave the column out to have groups found)",
-            names.join(" ")
-        )]
-    };
+    let warnings = alone_warning(points, &alike, &groups);
     let grouping = Grouping {
         groups,
-        found_in: match (explicit, found_in) {
-            (true, _) => None,
-            (false, found) => Some(found.unwrap_or(0)),
-        },
+        found_in: finding.map(|f| f.found_in.unwrap_or(0)),
     };
     Ok((
         tracks,
@@ -601,6 +493,179 @@ pub fn track_points_lk(
             warnings,
         },
     ))
+}
+
+/// One Lucas-Kanade tracker per point, its window the point's, `search_px` its search.
+fn lk_trackers(
+    points: &[Point],
+    config: &CentroidConfig,
+    search_px: Option<u16>,
+) -> anyhow::Result<Vec<Box<HostLk>>> {
+    use firmware_core::lk::LkConfig;
+    points
+        .iter()
+        .map(|p| {
+            let (w, h) = (
+                u16::try_from(p.size.0).unwrap_or(u16::MAX),
+                u16::try_from(p.size.1).unwrap_or(u16::MAX),
+            );
+            let mut cfg = LkConfig::new(w, h);
+            if let Some(r) = search_px {
+                cfg.search = r;
+            }
+            cfg.saturation = config.saturation.unwrap_or(0);
+            let t = HostLk::try_new(cfg).map_err(|e| {
+                bad_input(format!(
+                    "target {}: {e} (--tracker lk windows: at most {} pixels wide and \
+                     {LK_PIXELS} pixels in all)",
+                    p.target,
+                    LK_ROW - 7
+                ))
+            })?;
+            Ok(Box::new(t))
+        })
+        .collect()
+}
+
+/// Each tracker's template from its point's window in the first frame; per target why it was
+/// refused (a flat window, or one at the frame's edge), if it was.
+fn set_templates(
+    trackers: &mut [Box<HostLk>],
+    points: &[Point],
+    frame: &GreyFrame,
+    label: &str,
+) -> anyhow::Result<Vec<Option<Flags>>> {
+    use firmware_core::lk::LkError;
+    let mut refused = Vec::with_capacity(points.len());
+    for (tracker, p) in trackers.iter_mut().zip(points) {
+        let roi = first_window(p, frame.dimensions(), label)?;
+        let r = with_frame(frame, |f| match f {
+            AnyFrame::U8(f) => tracker.set_template(&f, roi.x as i32, roi.y as i32),
+            AnyFrame::U16(f) => tracker.set_template(&f, roi.x as i32, roi.y as i32),
+        })?;
+        refused.push(match r {
+            Ok(()) => None,
+            Err(LkError::Flat) => Some(Flags::FLAT),
+            Err(_) => Some(Flags::BORDER),
+        });
+    }
+    Ok(refused)
+}
+
+/// The groups the points file states (two or more targets with one `group`).
+fn file_groups(points: &[Point]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (t, p) in points.iter().enumerate() {
+        if let Some(g) = p.group {
+            match groups.iter_mut().find(|m| points[m[0]].group == Some(g)) {
+                Some(m) => m.push(t),
+                None => groups.push(vec![t]),
+            }
+        }
+    }
+    groups.retain(|m| m.len() > 1);
+    groups
+}
+
+/// Every point's window in the first frame as block sums (the groups' shared search).
+fn block_templates(
+    points: &[Point],
+    frame: &GreyFrame,
+    label: &str,
+) -> anyhow::Result<Vec<BlockTemplate>> {
+    let first = Integral::of(frame);
+    points
+        .iter()
+        .map(|p| {
+            let roi = first_window(p, frame.dimensions(), label)?;
+            Ok(BlockTemplate::new(
+                &first,
+                (i64::from(roi.x), i64::from(roi.y)),
+                p.size,
+            ))
+        })
+        .collect()
+}
+
+/// The groups being found from the first frames' motion: the tracks so far, until the largest
+/// motion reaches a quarter of the smallest window ([`motion_groups`]).
+struct MotionGroups {
+    history: Vec<Vec<Option<(f32, f32)>>>,
+    quarter: f32,
+    /// The frames the groups were found in, once they are.
+    found_in: Option<usize>,
+}
+
+impl MotionGroups {
+    fn new(points: &[Point]) -> MotionGroups {
+        MotionGroups {
+            history: vec![Vec::new(); points.len()],
+            quarter: points
+                .iter()
+                .map(|p| p.size.0.min(p.size.1) as f32 / 4.0)
+                .fold(f32::INFINITY, f32::min),
+            found_in: None,
+        }
+    }
+
+    /// Takes one frame's results; the groups once the motion is large enough.
+    fn observe(&mut self, results: &[firmware_core::lk::LkResult]) -> Option<Vec<Vec<usize>>> {
+        for (h, r) in self.history.iter_mut().zip(results) {
+            h.push(r.displacement());
+        }
+        let moved = self
+            .history
+            .iter()
+            .flat_map(|h| h.iter().flatten())
+            .any(|d| d.0.abs().max(d.1.abs()) >= self.quarter);
+        if !moved {
+            return None;
+        }
+        self.found_in = Some(self.history.first().map_or(0, Vec::len));
+        Some(motion_groups(&self.history))
+    }
+}
+
+/// A target's position from its tracker's result, or the lost frame with the reason.
+fn lk_centroid(p: &Point, r: &firmware_core::lk::LkResult) -> Centroid {
+    match r.displacement() {
+        Some((dx, dy)) => Centroid {
+            cx: (p.xy.0 + f64::from(dx)) as f32,
+            cy: (p.xy.1 + f64::from(dy)) as f32,
+            moments: firmware_core::centroid::Moments {
+                pixels: u64::from(p.size.0) * u64::from(p.size.1),
+                ..Default::default()
+            },
+            flags: Flags::NONE,
+        },
+        None => lost_because(r.flags),
+    }
+}
+
+/// The warning on look-alike targets (`alike`, pairs of indices) followed in no group.
+fn alone_warning(points: &[Point], alike: &[(usize, usize)], groups: &[Vec<usize>]) -> Vec<String> {
+    let grouped = |t: usize| groups.iter().any(|g| g.contains(&t));
+    let mut alone: Vec<usize> = alike
+        .iter()
+        .flat_map(|&(a, b)| [a, b])
+        .filter(|&t| !grouped(t))
+        .collect();
+    alone.sort_unstable();
+    alone.dedup();
+    if alone.is_empty() {
+        return Vec::new();
+    }
+    let names: Vec<String> = alone
+        .iter()
+        .map(|&t| points[t].target.to_string())
+        .collect();
+    vec![format!(
+        "targets {} look like other targets (their first windows match with a ZNCC of 0.9 or \
+         more) and are followed alone, in no group: after a lost frame, one can be taken up \
+         again on a neighbour that passes where it was last seen (give the targets that move \
+         together one `group`, or leave the column out to have groups found)",
+        names.join(" ")
+    )]
 }
 
 /// One frame of LK for every target: alone with its own prediction and search, or, in a
