@@ -473,20 +473,17 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
     let o = track_into(&dir, &out, &["--points", p, "--threshold", "10"]);
     assert_exit_2(&o, "at the edge of its window");
     assert!(!stderr(&o).contains("no pixel above"), "{}", stderr(&o));
-    let a = harness(&[
-        "analyze",
-        "--frames",
-        dir.to_str().unwrap(),
-        "--fps",
-        "60",
-        "--points",
-        p,
-        "--threshold",
-        "10",
-        "--out",
-        tmp.path().join("a").to_str().unwrap(),
-    ]);
-    assert_exit_2(&a, "at the edge of its window");
+    let analyze = |extra: &[&str]| {
+        let out = tmp.path().join("a");
+        let mut args = vec!["analyze", "--frames", dir.to_str().unwrap(), "--fps", "60"];
+        args.extend(["--points", p, "--out", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        harness(&args)
+    };
+    assert_exit_2(
+        &analyze(&["--threshold", "10"]),
+        "at the edge of its window",
+    );
     let c = harness(&[
         "centroid",
         "--threshold",
@@ -533,20 +530,6 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
         &["--points", p, "--tracker", "lk", "--gate-px", "5"],
     );
     assert_exit_2(&o, "leave --gate-px out");
-    let a = harness(&[
-        "analyze",
-        "--frames",
-        dir.to_str().unwrap(),
-        "--fps",
-        "60",
-        "--points",
-        p,
-        "--tracker",
-        "lk",
-        "--gate-px",
-        "5",
-        "--out",
-        tmp.path().join("a").to_str().unwrap(),
-    ]);
+    let a = analyze(&["--tracker", "lk", "--gate-px", "5"]);
     assert_exit_2(&a, "leave --gate-px out");
 }

@@ -488,17 +488,22 @@ mod tests {
         v.iter().map(|&x| Complex64::new(x, 0.0)).collect()
     }
 
-    #[test]
-    fn harmonics_are_named_and_modes_at_multiples_with_their_own_shape_are_not() {
-        let mode = |n: usize, f_hz: f64, shape: &[f64]| OmaMode {
+    /// An SSI mode `n` at `f_hz` with `damping` and a real shape.
+    fn ssi_mode(n: usize, f_hz: f64, damping: f64, shape: &[f64]) -> OmaMode {
+        OmaMode {
             method: Method::Ssi,
             mode: n,
             band_hz: None,
             f_hz,
             amplitude: None,
-            damping: Some(0.01),
+            damping: Some(damping),
             shape: truth_shape(shape),
-        };
+        }
+    }
+
+    #[test]
+    fn harmonics_are_named_and_modes_at_multiples_with_their_own_shape_are_not() {
+        let mode = |n: usize, f_hz: f64, shape: &[f64]| ssi_mode(n, f_hz, 0.01, shape);
         let one = [0.2, 0.5, 0.7, 0.9, 1.0];
         let modes = [
             mode(1, 1.5, &one),
@@ -523,15 +528,7 @@ mod tests {
 
     #[test]
     fn the_blob_trackers_intermodulation_products_are_named_and_no_tracker_is_told_to_use_itself() {
-        let mode = |n: usize, f_hz: f64, shape: &[f64]| OmaMode {
-            method: Method::Ssi,
-            mode: n,
-            band_hz: None,
-            f_hz,
-            amplitude: None,
-            damping: Some(0.012),
-            shape: truth_shape(shape),
-        };
+        let mode = |n: usize, f_hz: f64, shape: &[f64]| ssi_mode(n, f_hz, 0.012, shape);
         // the shear frame's first two modes and a column of poles at 7.3564 Hz, near
         // 2 f1 + f2 = 7.3785 Hz (within 1.5 lines of a 2048-sample spectrum at 60 fps), as
         // the binary centroid made it on a rendered field record
