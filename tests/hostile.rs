@@ -533,3 +533,42 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
     let a = analyze(&["--tracker", "lk", "--gate-px", "5"]);
     assert_exit_2(&a, "leave --gate-px out");
 }
+
+#[test]
+fn a_frame_range_of_a_camera_file_reads_the_frames_the_whole_file_has_there() {
+    // the readers start at the range's first frame (the cine by its offset table, the .mraw
+    // by seeking): the rows must be those of the whole file at the same frame numbers
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = disk_frames(7, (32, 24), (16.0, 12.0));
+    let cih = tmp.path().join("rec.cih");
+    host_harness::frames::photron::write_recording(&cih, (32, 24), 8, 100.0, 0.001, &frames)
+        .unwrap();
+    let cine = cine(tmp.path(), "rec.cine", &frames);
+    for p in [cih, cine] {
+        let name = p.to_str().unwrap();
+        let rows = |extra: &[&str]| {
+            let mut args = vec!["centroid", "--threshold", "100"];
+            args.extend_from_slice(extra);
+            args.push(name);
+            let o = harness(&args);
+            assert_ok(&o);
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .skip(1)
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        };
+        let whole = rows(&[]);
+        assert_eq!(whole.len(), 7);
+        assert_eq!(
+            rows(&["--frame-range", "3..5"]),
+            whole[2..5].to_vec(),
+            "{name}"
+        );
+        assert_eq!(
+            rows(&["--frame-range", "6.."]),
+            whole[5..].to_vec(),
+            "{name}"
+        );
+    }
+}

@@ -154,24 +154,21 @@ impl Frames {
     ) -> anyhow::Result<(FrameSource, f64, Vec<String>)> {
         match self {
             Frames::Array(a) => {
-                let a = match FrameSource::Memory(a).ranged(range)? {
-                    FrameSource::Memory(a) => a,
-                    _ => unreachable!("a range of frames in memory is frames in memory"),
-                };
+                let source = FrameSource::Memory(a).ranged(range)?;
                 if retime {
                     return Err(host_harness::bad_input(
                         "retime applies to a video file, not to frames in an array",
                     ));
                 }
                 match fps {
-                    Some(f) if f.is_finite() && f > 0.0 => Ok((FrameSource::Memory(a), f, vec![])),
+                    Some(f) if f.is_finite() && f > 0.0 => Ok((source, f, vec![])),
                     Some(f) => Err(host_harness::bad_input(format!(
                         "fps must be a positive rate, got {f}"
                     ))),
                     None if needed => Err(host_harness::bad_input(
                         "fps is needed: frames in an array state no rate",
                     )),
-                    None => Ok((FrameSource::Memory(a), 1.0, vec![])),
+                    None => Ok((source, 1.0, vec![])),
                 }
             }
             Frames::Path(p) => {

@@ -442,6 +442,11 @@ pub fn track_points_lk(
     let mut alike: Vec<(usize, usize)> = Vec::new();
     let mut templates: Vec<BlockTemplate> = Vec::new();
     let mut size0: Option<(usize, usize)> = None;
+    // until the groups are found, no search reaches past half a window
+    let caps: Vec<u16> = trackers
+        .iter()
+        .map(|t| t.config().width.max(t.config().height) / 2)
+        .collect();
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
         if is_first(&mut size0, frame, &label)? {
@@ -452,19 +457,12 @@ pub fn track_points_lk(
             }
         }
         let deciding = finding.as_ref().is_some_and(|f| f.found_in.is_none());
-        // until the groups are found, no search reaches past half a window
-        let cap = deciding.then(|| {
-            trackers
-                .iter()
-                .map(|t| t.config().width.max(t.config().height) / 2)
-                .collect::<Vec<u16>>()
-        });
         let results = track_frame_lk(
             frame,
             &mut trackers,
             &refused,
             (&groups, &templates),
-            cap.as_deref(),
+            deciding.then_some(caps.as_slice()),
         )?;
         if let (true, Some(f)) = (deciding, finding.as_mut()) {
             if let Some(found) = f.observe(&results) {

@@ -206,12 +206,11 @@ fn report(
         }
     }
     if any {
-        s.push_str(
-            "(border: at the edge of its window or the frame, or filling the window; flat: too \
-             little texture; ambiguous: a look-alike matched nearly as well, or a jump the \
-             motion so far does not explain; diverged: no match within the search; empty: no \
-             pixel above the threshold)\n",
-        );
+        let legend: Vec<String> = crate::chain::displacement::LOST_REASONS
+            .iter()
+            .map(|(_, name, what)| format!("{name}: {what}"))
+            .collect();
+        let _ = writeln!(s, "({})", legend.join("; "));
     }
     s
 }

@@ -16,7 +16,7 @@
 //!   as failed and leaves it out, an analysis stops with an error.
 
 use crate::bad_input;
-use firmware_core::centroid::Centroid;
+use firmware_core::centroid::{Centroid, Flags};
 
 pub use crate::lost_frames::{
     fill_lost_frames, fill_lost_frames_with, too_many_lost, LostFramePolicy, MAX_LOST_FRACTION,
@@ -141,22 +141,49 @@ pub fn displacement_mm(
     })
 }
 
-/// The lost frames of `centroids` counted by their first reason, in the order `border`,
-/// `saturated`, `flat`, `ambiguous`, `diverged`, `empty`; and those with none of these.
-fn lost_reasons(centroids: &[Centroid]) -> ([usize; 6], usize) {
-    use firmware_core::centroid::Flags;
-    let order = [
+/// Why a frame has no position, by flag: the flag, its name and what it means, in the order a
+/// lost frame is counted under its first reason (the one table every command's wording of a
+/// lost frame comes from).
+pub const LOST_REASONS: [(Flags, &str, &str); 6] = [
+    (
         Flags::BORDER,
-        Flags::SATURATED,
+        "border",
+        "with the target at the edge of its window or ROI, or filling it (pixels above the \
+         threshold all the way to the edge: a threshold below the background, or a window \
+         smaller than the target; or the window reaching the frame's edge)",
+    ),
+    (Flags::SATURATED, "saturated", "saturated"),
+    (
         Flags::FLAT,
+        "flat",
+        "with too little texture in the window (flat)",
+    ),
+    (
         Flags::AMBIGUOUS,
+        "ambiguous",
+        "ambiguous (a look-alike within the search range matched nearly as well, or a jump the \
+         motion so far does not explain: group the targets that move together, or a smaller \
+         --search-px)",
+    ),
+    (
         Flags::DIVERGED,
+        "diverged",
+        "without a match (diverged: the motion may exceed the search range)",
+    ),
+    (
         Flags::EMPTY,
-    ];
+        "empty",
+        "with no pixel above the threshold (check --threshold and the window or --roi)",
+    ),
+];
+
+/// The lost frames of `centroids` counted by their first reason in [`LOST_REASONS`]; and
+/// those with none of these.
+fn lost_reasons(centroids: &[Centroid]) -> ([usize; 6], usize) {
     let mut counts = [0usize; 6];
     let mut other = 0usize;
     for c in centroids.iter().filter(|c| c.position().is_none()) {
-        match order.iter().position(|f| c.flags.contains(*f)) {
+        match LOST_REASONS.iter().position(|(f, ..)| c.flags.contains(*f)) {
             Some(i) => counts[i] += 1,
             None => other += 1,
         }
@@ -164,70 +191,34 @@ fn lost_reasons(centroids: &[Centroid]) -> ([usize; 6], usize) {
     (counts, other)
 }
 
-/// [`why_lost`] in the flags' names (`26 ambiguous, 4 diverged`), for a line per target.
-pub fn lost_flags(centroids: &[Centroid]) -> String {
-    let names = [
-        "border",
-        "saturated",
-        "flat",
-        "ambiguous",
-        "diverged",
-        "empty",
-    ];
+/// The lost frames counted by reason, each reason as `name` gives it, joined by `sep`.
+fn counted(
+    centroids: &[Centroid],
+    name: impl Fn(&(Flags, &str, &str)) -> String,
+    sep: &str,
+) -> String {
     let (counts, other) = lost_reasons(centroids);
-    let mut parts: Vec<String> = names
+    let mut parts: Vec<String> = LOST_REASONS
         .iter()
         .zip(counts)
         .filter(|(_, n)| *n > 0)
-        .map(|(name, n)| format!("{n} {name}"))
-        .collect();
-    if other > 0 {
-        parts.push(format!("{other} other"));
-    }
-    parts.join(", ")
-}
-
-/// Why frames without a centroid have none, from their flags, counted (the same words for
-/// every command): the target at the edge of its window or ROI (or filling it: everything above
-/// the threshold), saturated, flat, without a match, ambiguous (the gradient tracker's), or no
-/// pixel above the threshold.
-pub fn why_lost(centroids: &[Centroid]) -> String {
-    use firmware_core::centroid::Flags;
-    // each lost frame counted once, under its first reason in this order
-    let reasons = [
-        (
-            Flags::BORDER,
-            "with the target at the edge of its window or ROI, or filling it (pixels above the \
-             threshold all the way to the edge: a threshold below the background, or a window \
-             smaller than the target; or the window reaching the frame's edge)",
-        ),
-        (Flags::SATURATED, "saturated"),
-        (Flags::FLAT, "with too little texture in the window (flat)"),
-        (
-            Flags::AMBIGUOUS,
-            "ambiguous (a look-alike within the search range matched nearly as well: group the \
-             targets that move together, or a smaller --search-px)",
-        ),
-        (
-            Flags::DIVERGED,
-            "without a match (diverged: the motion may exceed the search range)",
-        ),
-        (
-            Flags::EMPTY,
-            "with no pixel above the threshold (check --threshold and the window or --roi)",
-        ),
-    ];
-    let (counts, other) = lost_reasons(centroids);
-    let mut parts: Vec<String> = reasons
-        .iter()
-        .zip(counts)
-        .filter(|(_, n)| *n > 0)
-        .map(|((_, what), n)| format!("{n} {what}"))
+        .map(|(reason, n)| format!("{n} {}", name(reason)))
         .collect();
     if other > 0 {
         parts.push(format!("{other} lost for another reason (see the flags)"));
     }
-    parts.join("; ")
+    parts.join(sep)
+}
+
+/// [`why_lost`] in the flags' names (`26 ambiguous, 4 diverged`), for a line per target.
+pub fn lost_flags(centroids: &[Centroid]) -> String {
+    counted(centroids, |(_, name, _)| name.to_string(), ", ")
+}
+
+/// Why frames without a centroid have none, from their flags, counted (the same words for
+/// every command, [`LOST_REASONS`]).
+pub fn why_lost(centroids: &[Centroid]) -> String {
+    counted(centroids, |(_, _, what)| what.to_string(), "; ")
 }
 
 #[cfg(test)]

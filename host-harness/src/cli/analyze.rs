@@ -349,12 +349,7 @@ fn output_only(args: &Args, fps: f64, notes: Vec<String>) -> anyhow::Result<()> 
 
 /// `--targets K` and its flags, checked.
 fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
-    if args.gate_px.is_some() && args.targets.is_none() {
-        return Err(bad_input(
-            "--gate-px is the blobs' gate of --targets K; each --points window follows its own \
-             target: leave --gate-px out",
-        ));
-    }
+    super::args::check_gate(args.gate_px, args.targets)?;
     if args.points.is_some() && args.centroid.roi.is_some() {
         return Err(bad_input(
             "--roi with --points: each point's window is its region; leave --roi out",

@@ -327,6 +327,18 @@ pub fn parse_gate_px(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--gate-px` is the `--targets` blobs' gate: refused without `--targets` (clap's `requires`
+/// does not hold beside `--points`).
+pub fn check_gate(gate_px: Option<f64>, targets: Option<usize>) -> anyhow::Result<()> {
+    if gate_px.is_some() && targets.is_none() {
+        return Err(crate::bad_input(
+            "--gate-px is the blobs' gate of --targets K; each --points window follows its own \
+             target: leave --gate-px out",
+        ));
+    }
+    Ok(())
+}
+
 /// An integer flag's range, checked by clap (the message names the flag and the range).
 pub fn int_range(
     range: std::ops::RangeInclusive<u64>,

@@ -82,8 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     outcome.result
 }
 
-/// The shortest segment (and record) analysed, samples.
-const MIN_SEGMENT: usize = 64;
+use crate::analysis::oma::MIN_SEGMENT;
 
 /// The analysis settings the flags describe, checked against the record.
 fn settings(
@@ -94,12 +93,7 @@ fn settings(
 ) -> anyhow::Result<OmaSettings> {
     let n = records.channels.first().map_or(0, Vec::len);
     let mut s = OmaSettings::with_welch(fs_hz, n, &welch.settings());
-    if welch.nperseg.is_some() && s.csd.nperseg < MIN_SEGMENT {
-        return Err(bad_input(format!(
-            "--nperseg {}: a segment of at least {MIN_SEGMENT} samples is needed",
-            s.csd.nperseg
-        )));
-    }
+    crate::analysis::oma::check_segment(welch.nperseg)?;
     if s.csd.nperseg > n {
         return Err(bad_input(format!(
             "--nperseg {}: the record has only {n} samples, fewer than one segment",

@@ -95,12 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--roi with --points: each point's window is its region; leave --roi out",
         ));
     }
-    if args.gate_px.is_some() && args.targets.is_none() {
-        return Err(bad_input(
-            "--gate-px is the blobs' gate of --targets K; each --points window follows its own \
-             target: leave --gate-px out",
-        ));
-    }
+    super::args::check_gate(args.gate_px, args.targets)?;
     let targets = match (&args.points, args.targets) {
         (Some(p), _) => Targets::Points(
             crate::analysis::points::read_points(p)?,

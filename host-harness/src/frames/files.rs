@@ -676,14 +676,11 @@ impl FrameSource {
                 let r = range.of(frames.len(), "the array")?;
                 Ok(FrameSource::Memory(frames[r].iter().cloned().collect()))
             }
-            FrameSource::Photron(ref p) => {
-                let n = super::photron::read_header(p)?.frames;
-                range.of(n, &p.display().to_string())?;
-                Ok(FrameSource::Range(Box::new(self), range))
-            }
-            FrameSource::Cine(ref p) => {
-                let n = super::phantom::read_header(p)?.offsets.len();
-                range.of(n, &p.display().to_string())?;
+            // a camera file's count is its header's (the rate plays no part)
+            FrameSource::Photron(_) | FrameSource::Cine(_) => {
+                if let Some(n) = self.count(1.0)? {
+                    range.of(n, &self.describe())?;
+                }
                 Ok(FrameSource::Range(Box::new(self), range))
             }
             FrameSource::Range(inner, _) => Err(bad_input(format!(
@@ -705,14 +702,6 @@ impl FrameSource {
         match self {
             FrameSource::Range(inner, _) => inner,
             other => other,
-        }
-    }
-
-    /// The range of frames taken, if one was ([`FrameSource::ranged`]).
-    pub fn range(&self) -> Option<FrameRange> {
-        match self {
-            FrameSource::Range(_, r) => Some(*r),
-            _ => None,
         }
     }
 
@@ -769,17 +758,9 @@ impl FrameSource {
                 let h = super::photron::read_header(p)?;
                 Ok(h.fps.map(|fps| (fps, h.shutter_s)))
             }
-            FrameSource::Cine(p) => {
-                let h = super::phantom::read_header(p)?;
-                super::phantom::check_times(&h, 0..h.offsets.len())?;
-                Ok(h.fps.map(|fps| (fps, h.shutter_s)))
-            }
+            FrameSource::Cine(p) => cine_rate(p, None),
             FrameSource::Range(inner, r) => match &**inner {
-                FrameSource::Cine(p) => {
-                    let h = super::phantom::read_header(p)?;
-                    super::phantom::check_times(&h, r.of(h.offsets.len(), &inner.describe())?)?;
-                    Ok(h.fps.map(|fps| (fps, h.shutter_s)))
-                }
+                FrameSource::Cine(p) => cine_rate(p, Some(*r)),
                 other => other.recorded_rate(),
             },
             _ => Ok(None),
@@ -861,16 +842,7 @@ impl FrameSource {
                 }
                 Ok(())
             }
-            FrameSource::Photron(p) => {
-                let mut r = super::photron::MrawFrames::open(p)?;
-                let n = r.header().frames;
-                each_recorded_frame(p, n, |frame| r.next_frame(frame), f)
-            }
-            FrameSource::Cine(p) => {
-                let mut r = super::phantom::CineFrames::open(p)?;
-                let n = r.header().offsets.len();
-                each_recorded_frame(p, n, |frame| r.next_frame(frame), f)
-            }
+            FrameSource::Photron(_) | FrameSource::Cine(_) => each_camera_frame(self, None, f),
             FrameSource::Video { path: p, retime } => {
                 let mut v = open_video(p, fps, *retime)?;
                 let mut frame = GreyFrame::U8 {
@@ -885,6 +857,11 @@ impl FrameSource {
                     )?;
                 }
                 Ok(())
+            }
+            // a camera file's reader starts at the range's first frame (no frame before it is
+            // read); a TIFF's or a video's frames before it are decoded and passed over
+            FrameSource::Range(inner, r) if inner.is_camera_file() => {
+                each_camera_frame(inner, Some(*r), f)
             }
             FrameSource::Range(inner, r) => {
                 let mut k = 0usize;
@@ -922,12 +899,25 @@ fn open_video(
     v.map_err(|e| e.into_anyhow())
 }
 
-/// Calls `f` for every frame `next` reads into one reused buffer (a camera file's reader:
-/// `Ok(None)` after its last frame), labelled `PATH frame K of N` (K from 1).
-fn each_recorded_frame(
-    path: &Path,
-    n: usize,
-    mut next: impl FnMut(&mut GreyFrame) -> anyhow::Result<Option<usize>>,
+/// The rate and exposure a cine's header states, its time stamps checked over `range` (the
+/// whole file without one).
+fn cine_rate(path: &Path, range: Option<FrameRange>) -> anyhow::Result<Option<(f64, Option<f64>)>> {
+    let h = super::phantom::read_header(path)?;
+    let n = h.offsets.len();
+    let frames = match range {
+        Some(r) => r.of(n, &path.display().to_string())?,
+        None => 0..n,
+    };
+    super::phantom::check_times(&h, frames)?;
+    Ok(h.fps.map(|fps| (fps, h.shutter_s)))
+}
+
+/// Calls `f` for every frame of a camera file (`source`: Photron or Phantom), or for the
+/// frames `range` of it, read into one reused buffer, the reader placed at the first one;
+/// labelled `PATH frame K of N` (K from 1).
+fn each_camera_frame(
+    source: &FrameSource,
+    range: Option<FrameRange>,
     f: &mut dyn FnMut(String, &GreyFrame) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let mut frame = GreyFrame::U8 {
@@ -935,10 +925,35 @@ fn each_recorded_frame(
         height: 0,
         data: Vec::new(),
     };
-    while let Some(k) = next(&mut frame)? {
-        f(format!("{} frame {} of {n}", path.display(), k + 1), &frame)?;
+    let mut each = |path: &Path,
+                    n: usize,
+                    next: &mut dyn FnMut(&mut GreyFrame) -> anyhow::Result<Option<usize>>|
+     -> anyhow::Result<()> {
+        let last = match range {
+            Some(r) => r.of(n, &path.display().to_string())?.end,
+            None => n,
+        };
+        while let Some(k) = next(&mut frame)?.filter(|&k| k < last) {
+            f(format!("{} frame {} of {n}", path.display(), k + 1), &frame)?;
+        }
+        Ok(())
+    };
+    let first = range.map_or(0, |r| r.first - 1);
+    match source {
+        FrameSource::Photron(p) => {
+            let mut r = super::photron::MrawFrames::open(p)?;
+            r.skip_to(first)?;
+            let n = r.header().frames;
+            each(p, n, &mut |frame| r.next_frame(frame))
+        }
+        FrameSource::Cine(p) => {
+            let mut r = super::phantom::CineFrames::open(p)?;
+            r.skip_to(first);
+            let n = r.header().offsets.len();
+            each(p, n, &mut |frame| r.next_frame(frame))
+        }
+        _ => Err(anyhow::anyhow!("internal: not a camera file")),
     }
-    Ok(())
 }
 
 /// Centroids every frame of `source` (one frame in memory at a time; a video's timestamps are

@@ -161,14 +161,8 @@ pub fn read_header(path: &Path) -> anyhow::Result<CineHeader> {
         P12L => 12,
         _ => u64::from(bits).max(8),
     };
-    let frame_bytes = super::checked_frame_bytes(&label, width as u64, height as u64, stored_bits)?;
-    if frame_bytes > len {
-        return Err(bad_input(format!(
-            "{name}: its header states frames of {width} x {height} pixels ({frame_bytes} \
-             bytes), more than the whole file ({len} bytes): a damaged header or a truncated \
-             file"
-        )));
-    }
+    // bounded here; that every frame lies inside the file is check_layout's
+    super::checked_frame_bytes(&label, width as u64, height as u64, stored_bits)?;
     let colour = u32_at(&setup, SETUP_ENABLE_COLOR) != 0;
     let bits = match (compression, bits) {
         (0, 8) | (0, 16) => bits,
@@ -326,6 +320,12 @@ impl CineFrames {
     /// The header.
     pub fn header(&self) -> &CineHeader {
         &self.header
+    }
+
+    /// Places the reader at frame `k` (0-based): the next one read (the offset table gives
+    /// every frame's place, so nothing before it is read).
+    pub fn skip_to(&mut self, k: usize) {
+        self.next = k;
     }
 
     /// Reads the next frame into `frame`, upright; `Ok(None)` after the last one. Returns the

@@ -313,6 +313,18 @@ impl MrawFrames {
         &self.header
     }
 
+    /// Places the reader at frame `k` (0-based): the next one read (frames are `frame_bytes`
+    /// apart in the `.mraw`, so nothing before it is read).
+    pub fn skip_to(&mut self, k: usize) -> anyhow::Result<()> {
+        use std::io::Seek as _;
+        let at = (k.min(self.header.frames) as u64) * self.header.frame_bytes() as u64;
+        self.file
+            .seek(std::io::SeekFrom::Start(at))
+            .map_err(|e| bad_input(format!("{}: cannot seek: {e}", self.header.mraw.display())))?;
+        self.next = k.min(self.header.frames);
+        Ok(())
+    }
+
     /// Reads the next frame into `frame` (its buffer reused); `Ok(None)` after the last one.
     /// Returns the frame's 0-based index.
     pub fn next_frame(&mut self, frame: &mut GreyFrame) -> anyhow::Result<Option<usize>> {

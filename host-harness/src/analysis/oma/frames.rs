@@ -210,8 +210,8 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
 }
 
 /// The analysis settings of a record of `n` frames.
-/// The fewest frames an output-only analysis of frames takes.
-const MIN_FRAMES: usize = 64;
+/// The fewest frames an output-only analysis of frames takes (one shortest segment).
+const MIN_FRAMES: usize = super::MIN_SEGMENT;
 
 fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
     let mut s = OmaSettings::with_welch(req.fps, n, &req.welch);
@@ -220,12 +220,7 @@ fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
             "the record has {n} frames: an output-only analysis needs at least {MIN_FRAMES}"
         )));
     }
-    if req.welch.nperseg.is_some() && s.csd.nperseg < MIN_FRAMES {
-        return Err(crate::bad_input(format!(
-            "--nperseg {}: a segment of at least {MIN_FRAMES} frames is needed",
-            s.csd.nperseg
-        )));
-    }
+    super::check_segment(req.welch.nperseg)?;
     if s.csd.nperseg > n {
         return Err(crate::bad_input(format!(
             "the record has {n} frames, fewer than one segment of --nperseg {}",

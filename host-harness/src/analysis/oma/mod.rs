@@ -182,6 +182,20 @@ pub struct OmaResult {
     pub notes: Vec<String>,
 }
 
+/// The shortest segment (`--nperseg`) an output-only analysis takes, samples.
+pub const MIN_SEGMENT: usize = 64;
+
+/// Refuses a segment the user gave (`given`) shorter than [`MIN_SEGMENT`]; the default is
+/// chosen for the record and never refused here.
+pub fn check_segment(given: Option<usize>) -> anyhow::Result<()> {
+    match given {
+        Some(n) if n < MIN_SEGMENT => Err(crate::bad_input(format!(
+            "--nperseg {n}: a segment of at least {MIN_SEGMENT} samples is needed"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// The most iterations an eigenvalue or singular value decomposition may take (nalgebra's
 /// own default is none: a matrix it cannot reduce, of non-finite or degenerate values, would
 /// be iterated for ever).
@@ -195,15 +209,8 @@ fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
     let (mut sum, mut count) = (0.0f64, 0usize);
     for c in channels {
         let m = c.iter().sum::<f64>() / c.len().max(1) as f64;
-        // summed as (v - m) / 2^500 ... is not needed: a finite record's squares are summed
-        // relative to its largest value, so that 1e200 and 1e-200 do not overflow or vanish
-        let peak = c.iter().map(|v| (v - m).abs()).fold(0.0, f64::max);
-        if peak > 0.0 && peak.is_finite() {
-            let s: f64 = c.iter().map(|v| ((v - m) / peak).powi(2)).sum();
-            sum += s * peak * peak;
-        } else if !peak.is_finite() {
-            sum = f64::INFINITY;
-        }
+        // squares that overflow (or vanish) are the refusal below: the spectra would too
+        sum += c.iter().map(|v| (v - m).powi(2)).sum::<f64>();
         count += c.len();
     }
     let rms = (sum / count.max(1) as f64).sqrt();
