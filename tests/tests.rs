@@ -110,7 +110,7 @@ fn the_docs_stand_on_their_own_and_the_readme_is_a_front_page() {
 
 /// host-harness's rooms in the order data flows; a module may use its own room and those
 /// before it, never one after it (`cli` calls them all). ARCHITECTURE.md explains the order.
-const ROOMS: [&[&str]; 11] = [
+const ROOMS: [&[&str]; 12] = [
     &[
         "stats",
         "uncertainty",
@@ -121,6 +121,7 @@ const ROOMS: [&[&str]; 11] = [
         "export",
         "plots",
         "lost_frames",
+        "setting",
     ],
     &["model"],
     &["imaging"],
@@ -129,6 +130,7 @@ const ROOMS: [&[&str]; 11] = [
     &["study"],
     &["recording"],
     &["analysis"],
+    &["spec"],
     &["plan"],
     &["calibrate"],
     &["cli"],

@@ -150,7 +150,7 @@ pub fn main() -> ExitCode {
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if e.chain().any(|c| c.is::<crate::BadInput>()) {
+            if crate::setting::is_bad_input(&e) {
                 ExitCode::from(2)
             } else {
                 ExitCode::FAILURE

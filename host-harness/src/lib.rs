@@ -16,6 +16,8 @@
 //! | [`study`] | Monte Carlo studies: configuration, scenarios, runner (seeds, threads, shards), checkpoint, aggregation, merge |
 //! | [`recording`] | synthetic recordings (frames + transducer CSV) written from a model through the camera |
 //! | [`analysis`] | real recordings: frame loading, alignment, the chain, modes, reports |
+//! | [`spec`] | one checked spec per job (`track`, `analyze`, `modal`): what the CLI and Python translate into |
+//! | [`setting`] | errors naming the user's settings (`--gate-px` or `gate_px`), the rules several jobs share |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`uncertainty`] | JCGM 101: coverage intervals, standard uncertainty of the mean, the adaptive Monte Carlo procedure |
 //! | [`plan`] | the exposure planner: per mode, the longest exposure meeting a tolerance, the compensated residual, the lost-frame risk |
@@ -43,6 +45,8 @@ pub mod outdir;
 pub mod plan;
 pub mod plots;
 pub mod recording;
+pub mod setting;
+pub mod spec;
 pub mod stats;
 pub mod study;
 pub mod testing;

@@ -6,14 +6,17 @@
 //! [`VibcamError`] (a `RuntimeError`) for anything else.
 
 use firmware_core::centroid::{Centroid, Flags};
-use host_harness::analysis::oma::frames::{self as oma_frames, FramesRequest};
+use host_harness::analysis::oma::frames as oma_frames;
 use host_harness::analysis::points::Point;
-use host_harness::analysis::run::TargetsRequest;
-use host_harness::analysis::{Axis, DisplacementSettings, WelchSettings};
-use host_harness::cli::args::{CentroidArgs, ModeArg, ThresholdArg};
+use host_harness::analysis::{Axis, WelchSettings};
 use host_harness::frames::files::{luma, LumaLevel};
 use host_harness::frames::{open_frames, FrameRange, FrameSource, GreyFrame};
 use host_harness::lost_frames::LostFramePolicy;
+use host_harness::setting::{Naming, SpecError};
+use host_harness::spec::{
+    AnalyzeInput, AnalyzeSpec, FramesInput, PointsInput, Rates, Threshold, Tracker, Tracking,
+    TrackingInput,
+};
 use numpy::ndarray::{Array2, Array3, ArrayViewD, Axis as NdAxis};
 use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
@@ -38,14 +41,20 @@ create_exception!(
      that failed)."
 );
 
-/// An error of the library as the Python exception the command line's exit code stands for.
+/// An error of the library as the Python exception the command line's exit code stands for;
+/// settings named as Python's arguments.
 fn py_err(e: anyhow::Error) -> PyErr {
-    let msg = format!("{e:#}");
-    if e.chain().any(|c| c.is::<host_harness::BadInput>()) {
+    let msg = host_harness::setting::message(&e, Naming::Python);
+    if host_harness::setting::is_bad_input(&e) {
         InputError::new_err(msg)
     } else {
         VibcamError::new_err(msg)
     }
+}
+
+/// A refused spec as Python's [`InputError`], naming Python's arguments.
+fn spec_err(e: SpecError) -> PyErr {
+    py_err(e.into_anyhow())
 }
 
 /// An [`InputError`] with `msg`.
@@ -151,7 +160,12 @@ impl Frames {
         retime: bool,
         needed: bool,
         range: Option<FrameRange>,
-    ) -> anyhow::Result<(FrameSource, f64, Vec<String>)> {
+    ) -> anyhow::Result<(FrameSource, Rates)> {
+        let given = |fps: f64| Rates {
+            fps,
+            exposure_ms: None,
+            notes: Vec::new(),
+        };
         match self {
             Frames::Array(a) => {
                 let source = FrameSource::Memory(a).ranged(range)?;
@@ -161,154 +175,55 @@ impl Frames {
                     ));
                 }
                 match fps {
-                    Some(f) if f.is_finite() && f > 0.0 => Ok((source, f, vec![])),
-                    Some(f) => Err(host_harness::bad_input(format!(
-                        "fps must be a positive rate, got {f}"
-                    ))),
+                    Some(f) => {
+                        host_harness::setting::positive("fps", f, "frames per second")
+                            .map_err(SpecError::into_anyhow)?;
+                        Ok((source, given(f)))
+                    }
                     None if needed => Err(host_harness::bad_input(
                         "fps is needed: frames in an array state no rate",
                     )),
-                    None => Ok((source, 1.0, vec![])),
+                    None => Ok((source, given(1.0))),
                 }
             }
             Frames::Path(p) => {
                 let source = open_frames(&p, retime, range)?.source;
                 let unknown = fps.is_none() && source.recorded_rate()?.is_none();
                 if unknown && !needed && !matches!(source.inner(), FrameSource::Video { .. }) {
-                    return Ok((source, 1.0, vec![]));
+                    return Ok((source, given(1.0)));
                 }
-                let (fps, _, notes) =
-                    host_harness::analysis::run::resolve_rates(&p, fps, None, retime, range)?;
-                Ok((source, fps, notes))
+                let rates = host_harness::frames::resolve_rates(&p, fps, None, retime, range)?;
+                Ok((source, rates))
             }
         }
     }
 }
 
-/// The centroid's settings as the command line's `--threshold`, `--tracker`, `--roi`.
-fn centroid_args(
-    threshold: Option<u16>,
-    auto: bool,
-    tracker: &str,
-    roi: Option<(u32, u32, u32, u32)>,
-) -> PyResult<CentroidArgs> {
-    use clap::ValueEnum as _;
-    let mode = ModeArg::from_str(tracker, true).map_err(|_| {
-        bad(format!(
+/// The tracker named in Python.
+fn tracker_of(tracker: &str) -> PyResult<Tracker> {
+    match tracker.to_ascii_lowercase().as_str() {
+        "binary" | "blob" => Ok(Tracker::Binary),
+        "weighted" => Ok(Tracker::Weighted),
+        "lk" => Ok(Tracker::Lk),
+        _ => Err(bad(format!(
             "tracker `{tracker}`: one of binary (alias blob), weighted, lk"
-        ))
-    })?;
-    let roi = match roi {
-        Some((x, y, width, height)) => Some(
-            host_harness::cli::args::parse_roi(&format!("{x},{y},{width},{height}"))
-                .map_err(|e| bad(format!("roi: {e}")))?,
-        ),
-        None => None,
-    };
-    Ok(CentroidArgs {
-        threshold: match (auto, threshold) {
-            (true, _) => Some(ThresholdArg::Auto),
-            (false, Some(t)) => Some(ThresholdArg::Level(t)),
-            (false, None) => None,
-        },
-        mode,
-        roi,
+        ))),
+    }
+}
+
+/// A region of interest `(x, y, w, h)`.
+fn roi_of(roi: Option<(u32, u32, u32, u32)>) -> Option<firmware_core::centroid::Roi> {
+    roi.map(|(x, y, width, height)| firmware_core::centroid::Roi {
+        x,
+        y,
+        width,
+        height,
     })
 }
 
 /// A point given as `(x, y, w, h, threshold, group)` (the Python half fills the optional ones
 /// with `None`).
 type PointTuple = (f64, f64, u32, u32, Option<u16>, Option<u32>);
-
-/// Points given in Python, checked as a points file's rows are (target `k` is the `k`-th).
-fn points_of(list: Vec<PointTuple>) -> PyResult<Vec<Point>> {
-    if list.is_empty() {
-        return Err(bad("points: no points given"));
-    }
-    list.into_iter()
-        .enumerate()
-        .map(|(i, (x, y, w, h, threshold, group))| {
-            if !(x.is_finite() && y.is_finite()) {
-                return Err(bad(format!(
-                    "points[{i}]: the centre ({x}, {y}) is not finite"
-                )));
-            }
-            if w < 3 || h < 3 {
-                return Err(bad(format!(
-                    "points[{i}]: the window {w} x {h} px is smaller than 3 x 3"
-                )));
-            }
-            Ok(Point {
-                target: i + 1,
-                xy: (x, y),
-                size: (w, h),
-                threshold,
-                group,
-            })
-        })
-        .collect()
-}
-
-/// The targets asked for: chosen points (a list, or a points file), the `K` blobs of the first
-/// frame, or neither (the one target of the whole frame or ROI).
-fn targets_request(
-    points: Option<Vec<PointTuple>>,
-    points_file: Option<String>,
-    targets: Option<usize>,
-    gate_px: f64,
-    search_px: Option<u16>,
-    args: &CentroidArgs,
-) -> PyResult<Option<TargetsRequest>> {
-    let points = match (points, points_file) {
-        (Some(p), None) => Some(points_of(p)?),
-        (None, Some(f)) => Some(
-            host_harness::analysis::points::read_points(std::path::Path::new(&f))
-                .map_err(py_err)?,
-        ),
-        (None, None) => None,
-        (Some(_), Some(_)) => return Err(bad("give points or a points file, not both")),
-    };
-    if points.is_some() && targets.is_some() {
-        return Err(bad(
-            "give points (chosen windows) or targets=K (the K blobs of the first frame), not both",
-        ));
-    }
-    if points.is_some() && args.roi.is_some() {
-        return Err(bad(
-            "roi with points: each point's window is its region; leave roi out",
-        ));
-    }
-    if !(gate_px.is_finite() && gate_px > 0.0) {
-        return Err(bad(format!(
-            "gate_px {gate_px}: must be a positive number of pixels"
-        )));
-    }
-    if let Some(k) = targets {
-        if !(1..=32).contains(&k) {
-            return Err(bad(format!("targets={k}: 1 to 32 targets")));
-        }
-    }
-    let Some(k) = targets.or(points.as_ref().map(Vec::len)) else {
-        if search_px.is_some() {
-            return Err(bad("search_px: for tracker lk with points"));
-        }
-        return Ok(None);
-    };
-    let points = match points {
-        Some(p) => Some((p, args.point_tracker(search_px).map_err(py_err)?)),
-        None if search_px.is_some() => {
-            return Err(bad("search_px: for tracker lk with points"));
-        }
-        None => None,
-    };
-    Ok(Some(TargetsRequest {
-        k,
-        gate_px,
-        accel_target: k,
-        shape_reference: None,
-        points,
-    }))
-}
 
 /// The Welch settings as the command line's flags name them.
 fn welch_settings(
@@ -368,13 +283,19 @@ fn centroid(
             frames.len()
         )));
     };
-    let args = centroid_args(Some(threshold), false, mode, roi)?;
-    if args.mode == ModeArg::Lk {
+    let tracker = tracker_of(mode)?;
+    if tracker == Tracker::Lk {
         return Err(bad(
             "mode lk: Lucas-Kanade follows a window through frames (track with points)",
         ));
     }
-    let config = args.config(None).map_err(py_err)?;
+    let config = host_harness::spec::tracking::centroid_config(
+        Some(Threshold::Level(threshold)),
+        tracker,
+        roi_of(roi),
+        false,
+    )
+    .map_err(spec_err)?;
     let c: Centroid = py
         .allow_threads(|| frame.centroid(&config, "frame"))
         .map_err(py_err)?;
@@ -388,7 +309,7 @@ fn centroid(
 /// builds this dict; every key present).
 #[derive(Debug, FromPyObject)]
 #[pyo3(from_item_all)]
-struct Tracking {
+struct TrackingArgs {
     /// Frame rate, Hz (else the file's).
     fps: Option<f64>,
     /// A video's container rate retimed to `fps`.
@@ -399,8 +320,8 @@ struct Tracking {
     points_file: Option<String>,
     /// The K blobs of the first frame.
     targets: Option<usize>,
-    /// With `targets`: the gate, px.
-    gate_px: f64,
+    /// With `targets`: the gate, px (default 10).
+    gate_px: Option<f64>,
     /// A grey level.
     threshold: Option<u16>,
     /// Otsu's threshold per window.
@@ -413,26 +334,38 @@ struct Tracking {
     roi: Option<(u32, u32, u32, u32)>,
 }
 
-impl Tracking {
-    /// The targets asked for and the centroid's settings (checked when the work starts, as the
-    /// command line checks them after the frames).
-    fn targets(
-        self,
-    ) -> PyResult<(
-        Option<TargetsRequest>,
-        anyhow::Result<firmware_core::centroid::CentroidConfig>,
-    )> {
-        let args = centroid_args(self.threshold, self.auto_threshold, &self.tracker, self.roi)?;
-        let req = targets_request(
-            self.points,
-            self.points_file,
-            self.targets,
-            self.gate_px,
-            self.search_px,
-            &args,
-        )?;
-        let config = args.config_with(None, req.as_ref().is_some_and(|t| t.points.is_some()));
-        Ok((req, config))
+impl TrackingArgs {
+    /// The tracking settings as the library takes them (checked by [`Tracking::new`]).
+    fn input(self) -> PyResult<TrackingInput> {
+        let points = match (self.points, self.points_file) {
+            (Some(p), None) => Some(PointsInput::List(
+                p.into_iter()
+                    .enumerate()
+                    .map(|(i, (x, y, w, h, threshold, group))| Point {
+                        target: i + 1,
+                        xy: (x, y),
+                        size: (w, h),
+                        threshold,
+                        group,
+                    })
+                    .collect(),
+            )),
+            (None, Some(f)) => Some(PointsInput::File(f.into())),
+            (None, None) => None,
+            (Some(_), Some(_)) => return Err(bad("give points or a points file, not both")),
+        };
+        Ok(TrackingInput {
+            threshold: match (self.auto_threshold, self.threshold) {
+                (true, _) => Some(Threshold::Auto),
+                (false, t) => t.map(Threshold::Level),
+            },
+            tracker: tracker_of(&self.tracker)?,
+            roi: roi_of(self.roi),
+            points,
+            targets: self.targets,
+            gate_px: self.gate_px,
+            search_px: self.search_px,
+        })
     }
 }
 
@@ -442,17 +375,23 @@ impl Tracking {
 fn track<'py>(
     py: Python<'py>,
     frames: &Bound<'py, PyAny>,
-    tracking: Tracking,
+    tracking: TrackingArgs,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
-    let (req, config) = tracking.targets()?;
+    let input = tracking.input()?;
     let (positions, flags, fps) = py
         .allow_threads(|| -> anyhow::Result<_> {
-            let config = config?;
-            let (source, fps, _) = frames.resolve(fps, retime, false, None)?;
-            let r = frames_request(fps, config, req, DisplacementSettings::default_px());
-            let tracks = oma_frames::track(&r, &source)?;
+            let (source, rates) = frames.resolve(fps, retime, false, None)?;
+            let t = Tracking::new(input).map_err(SpecError::into_anyhow)?;
+            let tracks = host_harness::analysis::track_run::track_targets(
+                &source,
+                rates.fps,
+                &t.centroid,
+                &t.targets,
+            )?
+            .0;
+            let fps = rates.fps;
             let n = tracks.centroids.first().map_or(0, Vec::len);
             let k = tracks.centroids.len();
             let mut pos = Array3::<f64>::from_elem((n, k, 2), f64::NAN);
@@ -474,48 +413,6 @@ fn track<'py>(
     d.set_item("flags", flags.into_pyarray(py))?;
     d.set_item("fps", fps)?;
     Ok(d)
-}
-
-/// Extends the displacement settings with the pixel default the Python functions start from.
-trait PxDefault {
-    /// Pixels, the image's `y` axis positive up, lost frames interpolated.
-    fn default_px() -> Self;
-}
-
-impl PxDefault for DisplacementSettings {
-    fn default_px() -> Self {
-        DisplacementSettings {
-            lost_frames: LostFramePolicy::Interpolate,
-            mm_per_px: 1.0,
-            axis: Axis::Y,
-            invert: false,
-        }
-    }
-}
-
-/// A [`FramesRequest`] for frames read from a source already resolved (no output directory).
-fn frames_request(
-    fps: f64,
-    centroid: firmware_core::centroid::CentroidConfig,
-    targets: Option<TargetsRequest>,
-    displacement: DisplacementSettings,
-) -> FramesRequest {
-    FramesRequest {
-        frames: String::new(),
-        retime: false,
-        frame_range: None,
-        fps,
-        centroid,
-        displacement,
-        scaled: false,
-        targets,
-        points_file: None,
-        welch: WelchSettings::default(),
-        bands: Vec::new(),
-        out: std::path::PathBuf::new(),
-        force: false,
-        notes: Vec::new(),
-    }
 }
 
 /// `frf(x, y, fs, ...)`: H1 and coherence by firmware-core's Welch estimator; returns
@@ -612,7 +509,7 @@ fn upsample<'py>(
 fn analyze<'py>(
     py: Python<'py>,
     frames: &Bound<'py, PyAny>,
-    tracking: Tracking,
+    tracking: TrackingArgs,
     mm_per_px: Option<f64>,
     axis: &str,
     invert: bool,
@@ -626,50 +523,41 @@ fn analyze<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
-    let (targets, config) = tracking.targets()?;
-    let displacement = DisplacementSettings {
-        lost_frames: match lost_frames {
-            "interpolate" => LostFramePolicy::Interpolate,
-            "hold" => LostFramePolicy::Hold,
-            p => return Err(bad(format!("lost_frames `{p}`: interpolate or hold"))),
+    let input = AnalyzeInput {
+        frames: FramesInput {
+            frames: String::new(),
+            retime: false,
+            frame_range: None,
         },
-        mm_per_px: match mm_per_px {
-            Some(s) if !(s.is_finite() && s > 0.0) => {
-                return Err(bad(format!("mm_per_px must be positive, got {s}")))
-            }
-            Some(s) => s,
-            None => 1.0,
-        },
+        tracking: tracking.input()?,
+        mm_per_px,
         axis: match axis {
             "x" => Axis::X,
             "y" => Axis::Y,
             a => return Err(bad(format!("axis `{a}`: x or y"))),
         },
         invert,
+        lost_frames: match lost_frames {
+            "interpolate" => LostFramePolicy::Interpolate,
+            "hold" => LostFramePolicy::Hold,
+            p => return Err(bad(format!("lost_frames `{p}`: interpolate or hold"))),
+        },
+        welch: welch_settings(window, nperseg, noverlap, nfft, detrend)?,
+        bands,
+        accel: None,
+        time_offset: None,
+        compensate_exposure: false,
+        end_match: true,
+        accel_target: None,
+        shape_reference: None,
+        out: std::path::PathBuf::new(),
+        force: false,
     };
-    let welch = welch_settings(window, nperseg, noverlap, nfft, detrend)?;
-    let bands = bands.unwrap_or_default();
-    if let Some((lo, hi)) = bands
-        .iter()
-        .find(|(lo, hi)| !(lo.is_finite() && hi.is_finite() && *lo >= 0.0 && lo < hi))
-    {
-        return Err(bad(format!("band ({lo}, {hi}): need 0 <= lo < hi")));
-    }
     let computed = py
         .allow_threads(|| -> anyhow::Result<_> {
-            let config = config?;
-            let (source, fps, notes) = frames.resolve(fps, retime, true, None)?;
-            if let Some((lo, hi)) = bands.iter().find(|b| b.1 > fps / 2.0) {
-                return Err(host_harness::bad_input(format!(
-                    "band {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz)",
-                    fps / 2.0
-                )));
-            }
-            let mut req = frames_request(fps, config, targets, displacement);
-            req.scaled = mm_per_px.is_some();
-            req.welch = welch;
-            req.bands = bands;
-            req.notes = notes;
+            let (source, rates) = frames.resolve(fps, retime, true, None)?;
+            let fps = rates.fps;
+            let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
             let c = oma_frames::compute(&req, &source)?;
             let report =
                 host_harness::analysis::oma::run::report(&c.result, &c.records, &c.settings, "");
@@ -872,7 +760,8 @@ impl FrameReader {
             .transpose()?;
         let (source, rate, count) = py
             .allow_threads(|| -> anyhow::Result<_> {
-                let (source, rate, _) = Frames::Path(path).resolve(fps, retime, false, range)?;
+                let (source, rates) = Frames::Path(path).resolve(fps, retime, false, range)?;
+                let rate = rates.fps;
                 let stated = fps.is_some() || source.recorded_rate()?.is_some();
                 let count = source.count(rate)?;
                 Ok((source, stated.then_some(rate), count))

@@ -127,6 +127,20 @@ def test_every_refused_argument_is_an_input_error_naming_it(recording):
     for call, needle in cases:
         with pytest.raises(vibcam.InputError, match=needle):
             call()
+    # settings that do not go together are refused by the library's checks (the command line's
+    # rules), named as Python's arguments, never as the command line's flags
+    pair_cases = [
+        (lambda: vibcam.track(frames, [(4, 4, 5, 5)], threshold=1, gate_px=3), "gate_px is the blobs' gate of targets"),
+        (lambda: vibcam.track(frames, [(4, 4, 5, 5)], tracker="lk", threshold=3), "threshold with tracker lk"),
+        (lambda: vibcam.track(frames, targets=1, threshold="auto"), "threshold auto: only with points"),
+        (lambda: vibcam.track(frames, targets=2, tracker="lk"), "tracker lk follows the windows of points"),
+        (lambda: vibcam.track(frames, [(4, 4, 5, 5)], threshold=1, roi=(0, 0, 4, 4)), "roi with points"),
+        (lambda: vibcam.analyze(frames, targets=1, threshold=1, fps=60, bands=[(5, 31)]), "bands 5-31: reaches above"),
+    ]
+    for call, needle in pair_cases:
+        with pytest.raises(vibcam.InputError, match=needle) as e:
+            call()
+        assert "--" not in str(e.value), str(e.value)
     # a frame range of a sequence reads those frames, labelled as in the whole sequence
     reader = vibcam.open_frames(recording / "frames", frame_range="3..5")
     assert reader.count == 3

@@ -139,13 +139,9 @@ pub fn align(
 
 /// Time offset (first frame minus first sample, s) from a tick offset on a common time base
 /// of `tick_hz` (method.md §2.7).
-pub fn tick_offset_to_seconds(ticks: i64, tick_hz: f64) -> anyhow::Result<f64> {
-    if !(tick_hz.is_finite() && tick_hz > 0.0) {
-        return Err(bad_input(format!(
-            "--tick-hz must be a positive rate, got {tick_hz}"
-        )));
-    }
-    Ok(ticks as f64 / tick_hz)
+pub fn tick_offset_to_seconds(ticks: i64, tick_hz: f64) -> crate::setting::SpecResult<f64> {
+    let hz = crate::setting::positive("tick_hz", tick_hz, "the time base's rate, Hz")?;
+    Ok(ticks as f64 / hz)
 }
 
 /// Checks an accelerometer time column: strictly increasing, steps of `1 / fs` (within 5 %),

@@ -4,6 +4,7 @@
 //! report text, which the caller prints.
 
 use super::compensate::{compensate, Compensated};
+use super::track_run::Targets;
 use super::{Axis, DisplacementSettings, Settings};
 use crate::export::analysis as export;
 use crate::frames::{centroid_source, FrameSource};
@@ -26,23 +27,19 @@ pub struct AccelInput {
     pub time_col: Option<String>,
 }
 
-/// Several targets (`--targets K`).
+/// Several targets (`--targets K` or `--points`) and what the accelerometer is compared with.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetsRequest {
-    /// Number of targets, 1..=32.
-    pub k: usize,
-    /// How far a target may move between frames, px (> 0).
-    pub gate_px: f64,
+    /// The targets and how they are followed (never [`Targets::Whole`]: that is no request).
+    pub targets: Targets,
     /// The target co-located with the output accelerometer, 1..=K.
     pub accel_target: usize,
     /// Reference shapes to compute the MAC against.
     pub shape_reference: Option<PathBuf>,
-    /// Chosen points and how their windows are followed (`--points`); `None`: the K blobs of
-    /// the first frame, numbered left to right.
-    pub points: Option<(Vec<super::points::Point>, super::points::PointTracker)>,
 }
 
-/// A checked `analyze` request: every value in range (the CLI's checks), nothing read yet.
+/// An `analyze` request with an accelerometer, as [`crate::spec::AnalyzeSpec`] checks it: every
+/// value in range, nothing read yet.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Request {
     /// `--frames` as the user wrote it.
@@ -367,69 +364,4 @@ fn describe_inputs(
         v.push(("exposure".into(), format!("{e} ms")));
     }
     v
-}
-
-/// The frame rate (Hz) and exposure (ms): as given, else as the recording's own header states
-/// them (a camera file); with notes for the report on where they came from, and when a given
-/// rate overrides the file's. Image files and videos state no rate: `--fps` is then needed;
-/// with `retime` (a video only) it may retime the container's constant rate, a note naming both.
-pub fn resolve_rates(
-    frames: &str,
-    fps: Option<f64>,
-    exposure_ms: Option<f64>,
-    retime: bool,
-    range: Option<crate::frames::FrameRange>,
-) -> anyhow::Result<(f64, Option<f64>, Vec<String>)> {
-    let source = crate::frames::open_frames(frames, retime, range)?.source;
-    let recorded = source.recorded_rate()?;
-    let mut notes = Vec::new();
-    let fps = match (fps, recorded) {
-        (Some(f), Some((r, _))) => {
-            if (f - r).abs() > 1e-9 * r {
-                notes.push(format!(
-                    "--fps {f} overrides the {r} fps that {frames} states"
-                ));
-            }
-            f
-        }
-        (Some(f), None) => f,
-        (None, Some((r, _))) => {
-            notes.push(format!("frame rate {r} fps, as {frames} states"));
-            r
-        }
-        (None, None) if source.inner().is_camera_file() => {
-            return Err(crate::bad_input(format!(
-                "--fps is needed: the header of {frames} states no usable frame rate (none, \
-                 or 0 fps)"
-            )))
-        }
-        (None, None) => {
-            return Err(crate::bad_input(format!(
-                "--fps is needed: {frames} does not state the rate the camera recorded at \
-                 (image files and videos; a video container's rate is often not the capture \
-                 rate)"
-            )))
-        }
-    };
-    if let crate::frames::FrameSource::Video { path, .. } = source.inner() {
-        if let Some(rate) =
-            crate::frames::video::check_rate(path, fps, retime).map_err(|e| e.into_anyhow())?
-        {
-            notes.push(format!(
-                "--fps {fps} retimes {frames}, whose container plays at {}: frames \
-                 are 1/{fps} s apart (a slow-motion or time-lapse file; the timestamps were \
-                 checked regular at the container's rate)",
-                crate::frames::video::rate_text(rate)
-            ));
-        }
-    }
-    let exposure_ms = match (exposure_ms, recorded.and_then(|r| r.1)) {
-        (Some(e), _) => Some(e),
-        (None, Some(s)) => {
-            notes.push(format!("exposure {} ms, as {frames} states", s * 1000.0));
-            Some(s * 1000.0)
-        }
-        (None, None) => None,
-    };
-    Ok((fps, exposure_ms, notes))
 }

@@ -21,29 +21,15 @@ pub fn run(
     (base, tip): (&[f64], &[f64]),
     ignored: Option<&str>,
 ) -> anyhow::Result<Outcome> {
-    let (settings, k) = (&req.settings, t.k);
+    let (settings, k) = (&req.settings, t.targets.count());
     // the reference is read before the frames: a bad file fails at once
     let reference = t
         .shape_reference
         .as_deref()
         .map(|p| targets::read_shape_reference(p, k, settings.bands.len()))
         .transpose()?;
-    let (tracks, windows) = match &t.points {
-        Some((points, rule)) => {
-            let (tracks, info) = super::points::track_points(
-                source,
-                settings.frame_rate_hz,
-                points,
-                &req.centroid,
-                *rule,
-            )?;
-            (tracks, Some(info))
-        }
-        None => (
-            targets::track(source, settings.frame_rate_hz, &req.centroid, k, t.gate_px)?,
-            None,
-        ),
-    };
+    let (tracks, windows) =
+        super::track_run::track_targets(source, settings.frame_rate_hz, &req.centroid, &t.targets)?;
     let compensate = match (req.compensate_exposure, settings.exposure_s) {
         (true, Some(exposure_s)) => Some(targets::CompensationRequest {
             exposure_s,
@@ -179,7 +165,7 @@ fn full_report(
     macs: Option<&[(usize, f64)]>,
     ignored: Option<&str>,
 ) -> String {
-    let mut report = report(a, tracks, (t.k, t.accel_target), macs);
+    let mut report = report(a, tracks, (t.targets.count(), t.accel_target), macs);
     if let Some(n) = ignored {
         report.push_str(&format!("\nnote: {n}\n"));
     }

@@ -1,10 +1,9 @@
-//! `host-harness analyze`: the flags checked into an [`analysis::run::Request`], one call to
-//! [`analysis::run::run`], its report printed.
+//! `host-harness analyze`: the flags translated into an [`AnalyzeInput`], checked by
+//! [`AnalyzeSpec::new`], the job run, its report printed.
 
-use super::args::{parse_bands, Bands, CentroidArgs, ModeArg, WelchArgs};
-use crate::analysis::run::{AccelInput, Request, TargetsRequest};
-use crate::analysis::{self, Axis, DisplacementSettings, Settings};
-use crate::bad_input;
+use super::args::{parse_bands, Bands, CentroidArgs, WelchArgs};
+use crate::analysis::Axis;
+use crate::spec::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness analyze`.
@@ -174,216 +173,71 @@ pub enum AxisArg {
     Y,
 }
 
+impl AxisArg {
+    /// The library's axis.
+    pub fn axis(self) -> Axis {
+        match self {
+            AxisArg::X => Axis::X,
+            AxisArg::Y => Axis::Y,
+        }
+    }
+}
+
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, exposure_ms, notes) = analysis::run::resolve_rates(
+    let rates = crate::frames::resolve_rates(
         &args.frames,
         args.fps,
         args.exposure_ms,
         args.retime,
         args.frame_range,
     )?;
-    let Some(accel) = args.accel.clone() else {
-        return output_only(&args, fps, notes);
-    };
-    let fs = args
-        .fs
-        .ok_or_else(|| bad_input("--accel needs --fs (its sample rate, Hz)"))?;
-    let mm_per_px = args
-        .mm_per_px
-        .ok_or_else(|| bad_input("--accel needs --mm-per-px (the scale, mm per pixel)"))?;
-    let bands = match &args.bands {
-        Some(b) => b.pairs(),
-        None => parse_bands("5-15,25-45").map_err(bad_input)?.pairs(),
-    };
-    if args.compensate_exposure && exposure_ms.is_none() {
-        return Err(bad_input(
-            "--compensate-exposure needs the exposure: give --exposure-ms (the frames do not \
-             state it)",
-        ));
+    let (spec, warnings) = AnalyzeSpec::new(input(args), rates).map_err(SpecError::into_anyhow)?;
+    for w in warnings {
+        eprintln!("warning: {}", crate::spec::SpecError::setting(w));
     }
-    for (name, v) in [("--fps", fps), ("--mm-per-px", mm_per_px)] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(bad_input(format!("{name} must be positive, got {v}")));
-        }
-    }
-    if let Some(e) = exposure_ms {
-        if !(e.is_finite() && e >= 0.0) {
-            return Err(bad_input(format!("--exposure-ms must be >= 0, got {e}")));
-        }
-        let period_ms = 1000.0 / fps;
-        if e > period_ms {
-            let why = format!(
-                "--exposure-ms {e} is longer than the frame period ({period_ms:.3} ms at {} \
-                 fps): no camera exposes longer than it records; check --exposure-ms (in ms) \
-                 and --fps",
-                fps
-            );
-            // dividing by the transfer of an impossible exposure would be a wrong number
-            if args.compensate_exposure {
-                return Err(bad_input(format!("{why}; --compensate-exposure refused")));
-            }
-            eprintln!("warning: {why}");
-        }
-    }
-    for &(lo, hi) in &bands {
-        if hi > fps / 2.0 {
-            return Err(bad_input(format!(
-                "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz at {} \
-                 fps), where the vision record has no content; keep every band below it",
-                fps / 2.0,
-                fps
-            )));
-        }
-    }
-    let time_offset_s = match (args.time_offset_s, args.tick_offset, args.tick_hz) {
-        (Some(t), _, _) => t,
-        (None, Some(k), Some(hz)) => analysis::tick_offset_to_seconds(k, hz)?,
-        _ => 0.0,
-    };
-    let request = Request {
-        frames: args.frames.clone(),
-        retime: args.retime,
-        frame_range: args.frame_range,
-        accel: AccelInput {
-            path: accel,
-            fs,
-            input_col: args.input_col.clone(),
-            output_col: args.output_col.clone(),
-            time_col: args.time_col.clone(),
-        },
-        settings: Settings {
-            frame_rate_hz: fps,
-            accel_rate_hz: fs,
-            time_offset_s,
-            welch: args.welch.settings(),
-            bands,
-            exposure_s: exposure_ms.map(|e| e / 1000.0),
-            end_match: !args.no_end_match,
-        },
-        displacement: DisplacementSettings {
-            lost_frames: args.lost_frames,
-            mm_per_px,
-            axis: match args.axis {
-                AxisArg::X => Axis::X,
-                AxisArg::Y => Axis::Y,
-            },
-            invert: args.invert,
-        },
-        centroid: args.centroid.config_with(None, args.points.is_some())?,
-        binary: args.centroid.mode == ModeArg::Binary,
-        compensate_exposure: args.compensate_exposure,
-        exposure_ms,
-        notes,
-        points_file: args.points.clone(),
-        targets: targets_request(&args)?,
-        out: args.out.clone(),
-        force: args.force,
-    };
-    let outcome = analysis::run::run(&request)?;
+    let outcome = spec.run()?;
     super::stdout(&outcome.report)?;
     outcome.result
 }
 
-/// `analyze` without `--accel`: the targets tracked, their displacements analysed output-only.
-fn output_only(args: &Args, fps: f64, notes: Vec<String>) -> anyhow::Result<()> {
-    let needs_accel = [
-        ("--compensate-exposure", args.compensate_exposure),
-        ("--accel-target", args.accel_target.is_some()),
-        ("--shape-reference", args.shape_reference.is_some()),
-        (
-            "--time-offset-s/--tick-offset",
-            args.time_offset_s.is_some() || args.tick_offset.is_some(),
+/// The flags as the library's [`AnalyzeInput`].
+fn input(args: Args) -> AnalyzeInput {
+    AnalyzeInput {
+        frames: FramesInput {
+            frames: args.frames.clone(),
+            retime: args.retime,
+            frame_range: args.frame_range,
+        },
+        tracking: args.centroid.tracking(
+            args.points.as_deref(),
+            args.targets,
+            args.gate_px,
+            args.search_px,
         ),
-    ];
-    if let Some((flag, _)) = needs_accel.iter().find(|(_, given)| *given) {
-        return Err(bad_input(format!(
-            "{flag} needs --accel (without it the analysis is output-only)"
-        )));
-    }
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(bad_input(format!("--fps must be positive, got {fps}")));
-    }
-    if let Some(s) = args.mm_per_px {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(bad_input(format!("--mm-per-px must be positive, got {s}")));
-        }
-    }
-    let bands = args.bands.as_ref().map(Bands::pairs).unwrap_or_default();
-    for &(lo, hi) in &bands {
-        if hi > fps / 2.0 {
-            return Err(bad_input(format!(
-                "--bands {lo}-{hi}: reaches above the camera's Nyquist frequency ({} Hz)",
-                fps / 2.0
-            )));
-        }
-    }
-    let request = crate::analysis::oma::frames::FramesRequest {
-        frames: args.frames.clone(),
-        retime: args.retime,
-        frame_range: args.frame_range,
-        fps,
-        centroid: args.centroid.config_with(None, args.points.is_some())?,
-        displacement: DisplacementSettings {
-            lost_frames: args.lost_frames,
-            mm_per_px: args.mm_per_px.unwrap_or(1.0),
-            axis: match args.axis {
-                AxisArg::X => Axis::X,
-                AxisArg::Y => Axis::Y,
-            },
-            invert: args.invert,
-        },
-        scaled: args.mm_per_px.is_some(),
-        targets: targets_request(args)?,
-        points_file: args.points.clone(),
+        mm_per_px: args.mm_per_px,
+        axis: args.axis.axis(),
+        invert: args.invert,
+        lost_frames: args.lost_frames,
         welch: args.welch.settings(),
-        bands,
-        out: args.out.clone(),
-        force: args.force,
-        notes,
-    };
-    let outcome = crate::analysis::oma::frames::run(&request)?;
-    super::stdout(&outcome.report)?;
-    outcome.result
-}
-
-/// `--targets K` and its flags, checked.
-fn targets_request(args: &Args) -> anyhow::Result<Option<TargetsRequest>> {
-    super::args::check_gate(args.gate_px, args.targets)?;
-    if args.points.is_some() && args.centroid.roi.is_some() {
-        return Err(bad_input(
-            "--roi with --points: each point's window is its region; leave --roi out",
-        ));
-    }
-    let points = match &args.points {
-        Some(p) => Some(crate::analysis::points::read_points(p)?),
-        None => None,
-    };
-    let Some(k) = args.targets.or(points.as_ref().map(Vec::len)) else {
-        if args.accel_target.is_some() || args.shape_reference.is_some() {
-            return Err(bad_input(
-                "--accel-target and --shape-reference need several targets: --targets K or \
-                 --points FILE.csv",
-            ));
-        }
-        return Ok(None);
-    };
-    // K in 1..=32 and a positive gate: checked by their value parsers
-    let gate_px = args.gate_px.unwrap_or(10.0);
-    let accel_target = args.accel_target.unwrap_or(k);
-    if !(1..=k).contains(&accel_target) {
-        return Err(bad_input(format!(
-            "--accel-target {accel_target}: targets are numbered 1 to {k}"
-        )));
-    }
-    Ok(Some(TargetsRequest {
-        k,
-        gate_px,
-        accel_target,
-        shape_reference: args.shape_reference.clone(),
-        points: match points {
-            Some(p) => Some((p, args.centroid.point_tracker(args.search_px)?)),
-            None => None,
+        bands: args.bands.as_ref().map(Bands::pairs),
+        accel: args.accel.map(|path| AccelSettings {
+            path,
+            fs: args.fs,
+            input_col: args.input_col,
+            output_col: args.output_col,
+            time_col: args.time_col,
+        }),
+        time_offset: match (args.time_offset_s, args.tick_offset, args.tick_hz) {
+            (Some(t), _, _) => Some(TimeOffset::Seconds(t)),
+            (None, Some(k), Some(hz)) => Some(TimeOffset::Ticks(k, hz)),
+            _ => None,
         },
-    }))
+        compensate_exposure: args.compensate_exposure,
+        end_match: !args.no_end_match,
+        accel_target: args.accel_target,
+        shape_reference: args.shape_reference,
+        out: args.out,
+        force: args.force,
+    }
 }

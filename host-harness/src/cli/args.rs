@@ -133,90 +133,44 @@ pub fn parse_threshold(s: &str) -> Result<ThresholdArg, String> {
 }
 
 impl CentroidArgs {
-    /// How `--points` windows are followed: Lucas-Kanade with `search_px`, or the centroid at
-    /// the threshold rule (`--threshold T|auto`, needed then).
-    pub fn point_tracker(
+    /// The tracking settings these flags give, with the targets' flags (checked by
+    /// [`crate::spec::Tracking::new`]).
+    pub fn tracking(
         &self,
+        points: Option<&std::path::Path>,
+        targets: Option<usize>,
+        gate_px: Option<f64>,
         search_px: Option<u16>,
-    ) -> anyhow::Result<crate::analysis::points::PointTracker> {
-        use crate::analysis::points::{PointTracker, ThresholdRule};
-        match (self.mode, self.threshold, search_px) {
-            (ModeArg::Lk, Some(_), _) => Err(lk_has_no_threshold()),
-            (ModeArg::Lk, None, _) => Ok(PointTracker::Lk { search_px }),
-            (_, _, Some(_)) => Err(crate::bad_input(
-                "--search-px: the coarse search of --tracker lk (a centroid window re-centres \
-                 itself on a partial target, about half a window per frame)",
-            )),
-            (_, Some(ThresholdArg::Level(t)), None) => {
-                Ok(PointTracker::Centroid(ThresholdRule::Level(t)))
-            }
-            (_, Some(ThresholdArg::Auto), None) => Ok(PointTracker::Centroid(ThresholdRule::Auto)),
-            // each window's own, from the file's `threshold` column (checked on the first frame)
-            (_, None, None) => Ok(PointTracker::Centroid(ThresholdRule::FromFile)),
-        }
-    }
-
-    /// The firmware configuration, with an optional saturation level; errors name the setting
-    /// (`--threshold auto` is an error here: it needs the windows of `--points`).
-    pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
-        self.config_with(saturation, false)
-    }
-
-    /// [`config`](Self::config); with `points`, `--threshold auto` is accepted (the level is
-    /// then chosen per window, and 0 stands in the configuration), and so is `--tracker lk`
-    /// without a threshold (0 stands in: the gradient tracker has none).
-    pub fn config_with(
-        &self,
-        saturation: Option<u16>,
-        points: bool,
-    ) -> anyhow::Result<CentroidConfig> {
-        if self.mode == ModeArg::Lk && !points {
-            return Err(crate::bad_input(
-                "--tracker lk follows the windows of --points (each window is its template): \
-                 give --points FILE.csv (`centroid` and --targets K take binary or weighted)",
-            ));
-        }
-        if self.mode == ModeArg::Lk && self.threshold.is_some() {
-            return Err(lk_has_no_threshold());
-        }
-        let threshold = match (self.threshold, points) {
-            (Some(ThresholdArg::Level(t)), _) => t,
-            (Some(ThresholdArg::Auto), true) => 0,
-            (None, _) if self.mode == ModeArg::Lk => 0,
-            // the points file's `threshold` column (each window's own; 0 stands in here)
-            (None, true) => 0,
-            (Some(ThresholdArg::Auto), false) => {
-                return Err(crate::bad_input(
-                    "--threshold auto: only with --points (Otsu's threshold of each window)",
-                ))
-            }
-            (None, _) => return Err(missing_threshold()),
-        };
-        CentroidConfig {
-            threshold,
-            mode: self.mode.mode(),
+    ) -> crate::spec::TrackingInput {
+        use crate::spec::{PointsInput, Threshold, Tracker, TrackingInput};
+        TrackingInput {
+            threshold: self.threshold.map(|t| match t {
+                ThresholdArg::Level(l) => Threshold::Level(l),
+                ThresholdArg::Auto => Threshold::Auto,
+            }),
+            tracker: match self.mode {
+                ModeArg::Binary => Tracker::Binary,
+                ModeArg::Weighted => Tracker::Weighted,
+                ModeArg::Lk => Tracker::Lk,
+            },
             roi: self.roi,
-            saturation,
+            points: points.map(|p| PointsInput::File(p.to_path_buf())),
+            targets,
+            gate_px,
+            search_px,
         }
-        .validate()
-        .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
     }
-}
 
-/// The error of `--threshold` with Lucas-Kanade.
-fn lk_has_no_threshold() -> anyhow::Error {
-    crate::bad_input(
-        "--threshold with --tracker lk: Lucas-Kanade matches each window's template and uses \
-         no threshold; leave --threshold out",
-    )
-}
-
-/// The error of a centroid without `--threshold`.
-fn missing_threshold() -> anyhow::Error {
-    crate::bad_input(
-        "--threshold T (a grey level, or `auto` with --points) is needed by the centroid; only \
-         --tracker lk has none",
-    )
+    /// The firmware configuration of a single target (`centroid`), with an optional
+    /// saturation level.
+    pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
+        let t = self.tracking(None, None, None, None);
+        let mut c = crate::spec::tracking::centroid_config(t.threshold, t.tracker, t.roi, false)
+            .map_err(crate::spec::SpecError::into_anyhow)?;
+        c.saturation = saturation;
+        c.validate()
+            .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
+    }
 }
 
 /// Parses `--coverage P`: a probability strictly between 0 and 1 (study and merge).
@@ -325,18 +279,6 @@ pub fn parse_gate_px(s: &str) -> Result<f64, String> {
              between two frames and still be the same)"
         )),
     }
-}
-
-/// `--gate-px` is the `--targets` blobs' gate: refused without `--targets` (clap's `requires`
-/// does not hold beside `--points`).
-pub fn check_gate(gate_px: Option<f64>, targets: Option<usize>) -> anyhow::Result<()> {
-    if gate_px.is_some() && targets.is_none() {
-        return Err(crate::bad_input(
-            "--gate-px is the blobs' gate of --targets K; each --points window follows its own \
-             target: leave --gate-px out",
-        ));
-    }
-    Ok(())
 }
 
 /// An integer flag's range, checked by clap (the message names the flag and the range).

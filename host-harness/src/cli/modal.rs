@@ -3,10 +3,8 @@
 //! tool.
 
 use super::args::{parse_bands, Bands, WelchArgs};
-use crate::analysis::oma::input::{self, PixelAxis};
-use crate::analysis::oma::run::Output;
-use crate::analysis::oma::OmaSettings;
-use crate::bad_input;
+use crate::analysis::oma::input::PixelAxis;
+use crate::spec::{ModalInput, ModalSpec, SpecError};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness modal`.
@@ -57,109 +55,25 @@ pub struct Args {
 
 /// Runs `host-harness modal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let axis = match args.axis {
-        super::analyze::AxisArg::X => PixelAxis::X,
-        super::analyze::AxisArg::Y => PixelAxis::Y,
-    };
-    let records = input::read(&args.displacement, axis, args.fps)?;
-    let settings = settings(&args.welch, records.fs_hz, &records, &args)?;
-    let preamble = format!("input: {}\n", args.displacement.display());
-    let outcome = crate::analysis::oma::run::run(
-        &records,
-        &settings,
-        &Output {
-            out: &args.out,
-            force: args.force,
-            command: "modal",
-            inputs: vec![args.displacement.clone()],
-            plots: !args.no_plots,
-            along_x: axis == PixelAxis::X,
-            preamble,
-            extra: Vec::new(),
+    let spec = ModalSpec::new(ModalInput {
+        displacement: args.displacement,
+        fps: args.fps,
+        axis: match args.axis {
+            super::analyze::AxisArg::X => PixelAxis::X,
+            super::analyze::AxisArg::Y => PixelAxis::Y,
         },
-    )?;
+        welch: args.welch.settings(),
+        bands: args.bands.as_ref().map(Bands::pairs),
+        prominence_db: args.prominence_db,
+        f_min_hz: args.f_min_hz,
+        ssi_block_rows: args.ssi_block_rows,
+        ssi_max_order: args.ssi_max_order,
+        out: args.out,
+        force: args.force,
+        plots: !args.no_plots,
+    })
+    .map_err(SpecError::into_anyhow)?;
+    let outcome = spec.run()?;
     super::stdout(&outcome.report)?;
     outcome.result
-}
-
-use crate::analysis::oma::MIN_SEGMENT;
-
-/// The analysis settings the flags describe, checked against the record.
-fn settings(
-    welch: &WelchArgs,
-    fs_hz: f64,
-    records: &input::Records,
-    args: &Args,
-) -> anyhow::Result<OmaSettings> {
-    let n = records.channels.first().map_or(0, Vec::len);
-    let mut s = OmaSettings::with_welch(fs_hz, n, &welch.settings());
-    crate::analysis::oma::check_segment(welch.nperseg)?;
-    if s.csd.nperseg > n {
-        return Err(bad_input(format!(
-            "--nperseg {}: the record has only {n} samples, fewer than one segment",
-            s.csd.nperseg
-        )));
-    }
-    if n < MIN_SEGMENT {
-        return Err(bad_input(format!(
-            "{}: the record has {n} samples, fewer than one segment of {MIN_SEGMENT} (the \
-             shortest analysed)",
-            args.displacement.display()
-        )));
-    }
-    if s.csd.noverlap >= s.csd.nperseg {
-        return Err(bad_input(format!(
-            "--noverlap {} must be smaller than --nperseg {}",
-            s.csd.noverlap, s.csd.nperseg
-        )));
-    }
-    if s.csd.nfft < s.csd.nperseg {
-        return Err(bad_input(format!(
-            "--nfft {} must be at least --nperseg {}",
-            s.csd.nfft, s.csd.nperseg
-        )));
-    }
-    let df = fs_hz / s.csd.nfft as f64;
-    if let Some(f) = args.f_min_hz {
-        if !(f.is_finite() && f >= 0.0 && f < fs_hz / 2.0) {
-            return Err(bad_input(format!(
-                "--f-min-hz {f} must be between 0 and the Nyquist frequency ({} Hz)",
-                fs_hz / 2.0
-            )));
-        }
-        s.peaks.f_min_hz = f.max(df);
-        s.ssi.f_range_hz.0 = f;
-    }
-    if !(args.prominence_db.is_finite() && args.prominence_db >= 0.0) {
-        return Err(bad_input(format!(
-            "--prominence-db must be >= 0, got {}",
-            args.prominence_db
-        )));
-    }
-    s.peaks.prominence_db = args.prominence_db;
-    if let Some(b) = &args.bands {
-        for &(lo, hi) in &b.pairs() {
-            if hi > fs_hz / 2.0 {
-                return Err(bad_input(format!(
-                    "--bands {lo}-{hi}: reaches above the Nyquist frequency ({} Hz)",
-                    fs_hz / 2.0
-                )));
-            }
-        }
-        s.bands = b.pairs();
-    }
-    if let Some(i) = args.ssi_block_rows {
-        s.ssi.block_rows = i;
-    }
-    if let Some(m) = args.ssi_max_order {
-        s.ssi.max_order = m;
-    }
-    if n < 4 * s.ssi.block_rows {
-        return Err(bad_input(format!(
-            "--ssi-block-rows {}: the record has {n} samples, at least {} are needed",
-            s.ssi.block_rows,
-            4 * s.ssi.block_rows
-        )));
-    }
-    Ok(s)
 }

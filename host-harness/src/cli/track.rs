@@ -1,11 +1,10 @@
 //! `host-harness track`: frames in, each target's position per frame out, no accelerometer
-//! needed; the library call is [`crate::analysis::track_run`].
+//! needed; the flags translated into a
+//! [`TrackSpec`], which checks them and runs the job.
 
 use super::analyze::AxisArg;
 use super::args::CentroidArgs;
-use crate::analysis::track_run::{self, Request, Targets};
-use crate::analysis::{Axis, DisplacementSettings};
-use crate::bad_input;
+use crate::spec::{FramesInput, SpecError, TrackInput, TrackSpec};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness track`.
@@ -83,56 +82,29 @@ pub struct Args {
 
 /// Runs `host-harness track`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (fps, _, notes) = crate::analysis::run::resolve_rates(
-        &args.frames,
-        args.fps,
-        None,
-        args.retime,
-        args.frame_range,
-    )?;
-    if args.points.is_some() && args.centroid.roi.is_some() {
-        return Err(bad_input(
-            "--roi with --points: each point's window is its region; leave --roi out",
-        ));
-    }
-    super::args::check_gate(args.gate_px, args.targets)?;
-    let targets = match (&args.points, args.targets) {
-        (Some(p), _) => Targets::Points(
-            crate::analysis::points::read_points(p)?,
-            args.centroid.point_tracker(args.search_px)?,
+    let rates =
+        crate::frames::resolve_rates(&args.frames, args.fps, None, args.retime, args.frame_range)?;
+    let input = TrackInput {
+        frames: FramesInput {
+            frames: args.frames.clone(),
+            retime: args.retime,
+            frame_range: args.frame_range,
+        },
+        tracking: args.centroid.tracking(
+            args.points.as_deref(),
+            args.targets,
+            args.gate_px,
+            args.search_px,
         ),
-        (None, Some(k)) => Targets::Blobs(k, args.gate_px.unwrap_or(10.0)),
-        (None, None) => return Err(bad_input("give --points FILE.csv or --targets K")),
-    };
-    let displacement = match args.mm_per_px {
-        Some(s) if !(s.is_finite() && s > 0.0) => {
-            return Err(bad_input(format!("--mm-per-px must be positive, got {s}")))
-        }
-        Some(mm_per_px) => Some(DisplacementSettings {
-            lost_frames: args.lost_frames,
-            mm_per_px,
-            axis: match args.axis {
-                AxisArg::X => Axis::X,
-                AxisArg::Y => Axis::Y,
-            },
-            invert: false,
-        }),
-        None => None,
-    };
-    let req = Request {
-        frames: args.frames.clone(),
-        retime: args.retime,
-        frame_range: args.frame_range,
-        fps,
-        centroid: args.centroid.config_with(None, args.points.is_some())?,
-        targets,
-        displacement,
+        mm_per_px: args.mm_per_px,
+        axis: args.axis.axis(),
+        lost_frames: args.lost_frames,
         plots: !args.no_plots,
-        notes,
         out: args.out.clone(),
         force: args.force,
-        inputs: args.points.iter().cloned().collect(),
     };
-    let report = track_run::run(&req)?;
+    let report = TrackSpec::new(input, rates)
+        .map_err(SpecError::into_anyhow)?
+        .run()?;
     super::stdout(&report)
 }

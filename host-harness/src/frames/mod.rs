@@ -6,12 +6,14 @@ pub mod files;
 pub mod phantom;
 pub mod phantom_lut;
 pub mod photron;
+mod rates;
 pub mod video;
 
 pub use files::{
     centroid_source, discover_frames, for_each_tiff_page, load_frame, open_frames, Discovered,
     FrameDepth, FrameRange, FrameSource,
 };
+pub use rates::{resolve_rates, Rates};
 
 use crate::bad_input;
 use firmware_core::centroid::{self, Centroid, CentroidConfig};

@@ -5,11 +5,12 @@
 use super::input::Records;
 use super::run::Output;
 use super::{OmaResult, OmaSettings};
-use crate::analysis::run::{Outcome, TargetsRequest};
-use crate::analysis::targets::{self, Tracks};
+use crate::analysis::run::Outcome;
+use crate::analysis::targets::Tracks;
+use crate::analysis::track_run::{track_targets, Targets};
 use crate::chain::displacement::{displacement_mm, DisplacementSettings};
 use crate::export::targets as export;
-use crate::frames::{centroid_source, FrameSource};
+use crate::frames::FrameSource;
 use firmware_core::centroid::CentroidConfig;
 use std::path::PathBuf;
 
@@ -30,8 +31,8 @@ pub struct FramesRequest {
     pub displacement: DisplacementSettings,
     /// Whether a scale was given (`mm`), else the values are pixels.
     pub scaled: bool,
-    /// Several targets, or one.
-    pub targets: Option<TargetsRequest>,
+    /// The targets and how they are followed.
+    pub targets: Targets,
     /// The points file (an input).
     pub points_file: Option<PathBuf>,
     /// The Welch flags, resolved against the record when it is read.
@@ -63,44 +64,10 @@ pub struct Computed {
     pub lost: Vec<Vec<bool>>,
 }
 
-/// Follows the targets of `req` (several, chosen points, or the one of the whole frame or ROI)
-/// through `source`.
-pub fn track(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Tracks> {
-    Ok(match &req.targets {
-        Some(t) => match &t.points {
-            Some((points, rule)) => {
-                crate::analysis::points::track_points(
-                    source,
-                    req.fps,
-                    points,
-                    &req.centroid,
-                    *rule,
-                )?
-                .0
-            }
-            None => targets::track(source, req.fps, &req.centroid, t.k, t.gate_px)?,
-        },
-        None => {
-            let (c, depth) = centroid_source(source, req.fps, &req.centroid)?;
-            let first = c
-                .iter()
-                .find_map(|c| c.position())
-                .map(|(x, y)| (f64::from(x), f64::from(y)))
-                .unwrap_or((f64::NAN, f64::NAN));
-            Tracks {
-                centroids: vec![c],
-                first: vec![first],
-                refused: vec![0],
-                depth,
-            }
-        }
-    })
-}
-
 /// Tracks the targets of `req` in `source` and analyses their displacements output-only;
 /// `req.out` and `req.force` play no part.
 pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Computed> {
-    let tracks = track(req, source)?;
+    let tracks = track_targets(source, req.fps, &req.centroid, &req.targets)?.0;
     let mut records = Records {
         fs_hz: req.fps,
         unit: if req.scaled { "mm" } else { "px" }.to_string(),
@@ -210,36 +177,13 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
 }
 
 /// The analysis settings of a record of `n` frames.
-/// The fewest frames an output-only analysis of frames takes (one shortest segment).
-const MIN_FRAMES: usize = super::MIN_SEGMENT;
-
 fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
-    let mut s = OmaSettings::with_welch(req.fps, n, &req.welch);
-    if n < MIN_FRAMES {
-        return Err(crate::bad_input(format!(
-            "the record has {n} frames: an output-only analysis needs at least {MIN_FRAMES}"
-        )));
-    }
-    super::check_segment(req.welch.nperseg)?;
-    if s.csd.nperseg > n {
-        return Err(crate::bad_input(format!(
-            "the record has {n} frames, fewer than one segment of --nperseg {}",
-            s.csd.nperseg
-        )));
-    }
-    if s.csd.noverlap >= s.csd.nperseg || s.csd.nfft < s.csd.nperseg {
-        return Err(crate::bad_input(format!(
-            "--noverlap {} must be below --nperseg {} and --nfft {} at least --nperseg",
-            s.csd.noverlap, s.csd.nperseg, s.csd.nfft
-        )));
-    }
+    let mut s = super::segment_settings(req.fps, n, &req.welch, "the record of the frames")?;
     s.bands = req.bands.clone();
-    let lk = req.targets.as_ref().is_some_and(|t| {
-        matches!(
-            t.points,
-            Some((_, crate::analysis::points::PointTracker::Lk { .. }))
-        )
-    });
+    let lk = matches!(
+        req.targets,
+        Targets::Points(_, crate::analysis::points::PointTracker::Lk { .. })
+    );
     s.source = match (lk, req.centroid.mode) {
         (true, _) => super::RecordSource::Linear("Lucas-Kanade"),
         (false, firmware_core::centroid::Mode::Weighted) => {

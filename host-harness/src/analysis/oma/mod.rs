@@ -185,15 +185,50 @@ pub struct OmaResult {
 /// The shortest segment (`--nperseg`) an output-only analysis takes, samples.
 pub const MIN_SEGMENT: usize = 64;
 
-/// Refuses a segment the user gave (`given`) shorter than [`MIN_SEGMENT`]; the default is
-/// chosen for the record and never refused here.
-pub fn check_segment(given: Option<usize>) -> anyhow::Result<()> {
-    match given {
-        Some(n) if n < MIN_SEGMENT => Err(crate::bad_input(format!(
-            "--nperseg {n}: a segment of at least {MIN_SEGMENT} samples is needed"
-        ))),
-        _ => Ok(()),
+/// The analysis settings of a record of `n` samples at `fs_hz` with the Welch settings as given:
+/// the one place the segment rules live (`modal` and `analyze` without an accelerometer). A
+/// record shorter than [`MIN_SEGMENT`], a segment given shorter than it or longer than the
+/// record, an overlap not below the segment, a transform shorter than it: refused, naming the
+/// setting (`record`: how the message names the record).
+pub fn segment_settings(
+    fs_hz: f64,
+    n: usize,
+    welch: &crate::chain::frf::WelchSettings,
+    record: &str,
+) -> anyhow::Result<OmaSettings> {
+    use crate::setting::SpecError;
+    let refuse = |t: String| Err(SpecError::setting(t).into_anyhow());
+    if n < MIN_SEGMENT {
+        return refuse(format!(
+            "{record} has {n} samples, fewer than one segment of {MIN_SEGMENT} (the shortest \
+             analysed)"
+        ));
     }
+    if let Some(given) = welch.nperseg.filter(|g| *g < MIN_SEGMENT) {
+        return refuse(format!(
+            "$nperseg {given}: a segment of at least {MIN_SEGMENT} samples is needed"
+        ));
+    }
+    let s = OmaSettings::with_welch(fs_hz, n, welch);
+    if s.csd.nperseg > n {
+        return refuse(format!(
+            "$nperseg {}: the record has only {n} samples, fewer than one segment",
+            s.csd.nperseg
+        ));
+    }
+    if s.csd.noverlap >= s.csd.nperseg {
+        return refuse(format!(
+            "$noverlap {} must be smaller than $nperseg {}",
+            s.csd.noverlap, s.csd.nperseg
+        ));
+    }
+    if s.csd.nfft < s.csd.nperseg {
+        return refuse(format!(
+            "$nfft {} must be at least $nperseg {}",
+            s.csd.nfft, s.csd.nperseg
+        ));
+    }
+    Ok(s)
 }
 
 /// The most iterations an eigenvalue or singular value decomposition may take (nalgebra's

@@ -1,0 +1,302 @@
+//! `analyze`: a recording's targets tracked, then FRFs against an accelerometer, or an
+//! output-only modal analysis without one.
+
+use super::{FramesInput, Rates, SpecError, SpecResult, Tracking, TrackingInput};
+use crate::analysis::oma::frames::FramesRequest;
+use crate::analysis::run::{AccelInput, Request, TargetsRequest};
+use crate::analysis::track_run::Targets;
+use crate::analysis::{Axis, DisplacementSettings, Settings, WelchSettings};
+use crate::lost_frames::LostFramePolicy;
+use std::path::PathBuf;
+
+/// The accelerometer record as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelSettings {
+    /// `$accel`: the CSV file.
+    pub path: PathBuf,
+    /// `$fs`: its sample rate, Hz (needed).
+    pub fs: Option<f64>,
+    /// Column of the FRF input (base acceleration, or a force).
+    pub input_col: String,
+    /// Column of the output (tip) acceleration.
+    pub output_col: String,
+    /// Optional time column, s.
+    pub time_col: Option<String>,
+}
+
+/// The first frame's time after the first accelerometer sample, as given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TimeOffset {
+    /// `$time_offset_s`.
+    Seconds(f64),
+    /// `$tick_offset` ticks of a `$tick_hz` time base.
+    Ticks(i64, f64),
+}
+
+/// The bands used with an accelerometer when none are given, Hz (the rigs' two modes).
+pub const DEFAULT_ACCEL_BANDS: [(f64, f64); 2] = [(5.0, 15.0), (25.0, 45.0)];
+
+/// `analyze`'s settings as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalyzeInput {
+    /// The frames.
+    pub frames: FramesInput,
+    /// The targets and the tracker.
+    pub tracking: TrackingInput,
+    /// `$mm_per_px` (needed with an accelerometer; without, the analysis stays in pixels).
+    pub mm_per_px: Option<f64>,
+    /// `$axis` of the motion.
+    pub axis: Axis,
+    /// Flip the displacement's sign.
+    pub invert: bool,
+    /// What a lost frame's value becomes.
+    pub lost_frames: LostFramePolicy,
+    /// The Welch estimator's settings (sizes resolved against the record).
+    pub welch: WelchSettings,
+    /// `$bands`, Hz (default with an accelerometer: [`DEFAULT_ACCEL_BANDS`]; without: peaks
+    /// picked automatically).
+    pub bands: Option<Vec<(f64, f64)>>,
+    /// `$accel`: with it, FRFs against the accelerometer; without, output-only.
+    pub accel: Option<AccelSettings>,
+    /// The frames' time offset (with an accelerometer).
+    pub time_offset: Option<TimeOffset>,
+    /// `$compensate_exposure` (with an accelerometer).
+    pub compensate_exposure: bool,
+    /// Subtract the line through the record's ends before the Fourier upsampling.
+    pub end_match: bool,
+    /// `$accel_target` (with an accelerometer and several targets).
+    pub accel_target: Option<usize>,
+    /// `$shape_reference` (with an accelerometer and several targets).
+    pub shape_reference: Option<PathBuf>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Replace an earlier `analyze` output there.
+    pub force: bool,
+}
+
+/// A checked `analyze` job.
+#[derive(Debug, Clone)]
+pub enum AnalyzeSpec {
+    /// FRFs against an accelerometer.
+    Reference(Box<Request>),
+    /// Output-only modal analysis of the targets' displacements.
+    OutputOnly(Box<FramesRequest>),
+}
+
+impl AnalyzeSpec {
+    /// Checks `input` at `rates` (from [`crate::frames::resolve_rates`]: `exposure_ms` the
+    /// one given, else the file's); reads a points file. Returns the spec and warnings (an
+    /// exposure longer than the frame period without compensation).
+    pub fn new(input: AnalyzeInput, rates: Rates) -> SpecResult<(Self, Vec<String>)> {
+        super::positive("fps", rates.fps, "frames per second")?;
+        if let Some(b) = &input.bands {
+            super::bands_ordered(b)?;
+        }
+        match input.accel.clone() {
+            Some(accel) => with_reference(input, accel, rates),
+            None => Self::output_only(input, rates)
+                .map(|r| (AnalyzeSpec::OutputOnly(Box::new(r)), Vec::new())),
+        }
+    }
+
+    /// The output-only request of `input` (Python's `analyze`, which computes without writing);
+    /// `input.accel` must be `None`.
+    pub fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
+        if input.accel.is_some() {
+            return Err(SpecError::setting(
+                "$accel: this call analyses output-only; the analysis with an accelerometer is \
+                 AnalyzeSpec::new",
+            ));
+        }
+        super::positive("fps", rates.fps, "frames per second")?;
+        if let Some(b) = &input.bands {
+            super::bands_ordered(b)?;
+        }
+        output_only(input, rates)
+    }
+}
+
+/// With an accelerometer.
+fn with_reference(
+    input: AnalyzeInput,
+    accel: AccelSettings,
+    rates: Rates,
+) -> SpecResult<(AnalyzeSpec, Vec<String>)> {
+    let fps = rates.fps;
+    let fs = accel
+        .fs
+        .ok_or_else(|| SpecError::setting("$accel needs $fs (its sample rate, Hz)"))?;
+    let fs = super::positive("fs", fs, "the accelerometer's sample rate, Hz")?;
+    let mm_per_px = input
+        .mm_per_px
+        .ok_or_else(|| SpecError::setting("$accel needs $mm_per_px (the scale, mm per pixel)"))?;
+    let mm_per_px = super::positive("mm_per_px", mm_per_px, "millimetres per pixel")?;
+    let bands = input.bands.unwrap_or_else(|| DEFAULT_ACCEL_BANDS.to_vec());
+    let exposure_ms = rates.exposure_ms;
+    let warnings = check_exposure(exposure_ms, fps, input.compensate_exposure)?;
+    super::bands_below_nyquist(&bands, fps, "the camera's")?;
+    let time_offset_s = match input.time_offset {
+        Some(TimeOffset::Seconds(t)) if t.is_finite() => t,
+        Some(TimeOffset::Seconds(t)) => {
+            return Err(SpecError::setting(format!(
+                "$time_offset_s {t}: not a finite time"
+            )))
+        }
+        Some(TimeOffset::Ticks(k, hz)) => crate::analysis::tick_offset_to_seconds(k, hz)?,
+        None => 0.0,
+    };
+    let tracking = Tracking::new(input.tracking)?;
+    let targets = targets_request(&tracking.targets, input.accel_target, input.shape_reference)?;
+    let request = Request {
+        frames: input.frames.frames,
+        retime: input.frames.retime,
+        frame_range: input.frames.frame_range,
+        accel: AccelInput {
+            path: accel.path,
+            fs,
+            input_col: accel.input_col,
+            output_col: accel.output_col,
+            time_col: accel.time_col,
+        },
+        settings: Settings {
+            frame_rate_hz: fps,
+            accel_rate_hz: fs,
+            time_offset_s,
+            welch: input.welch,
+            bands,
+            exposure_s: exposure_ms.map(|e| e / 1000.0),
+            end_match: input.end_match,
+        },
+        displacement: DisplacementSettings {
+            lost_frames: input.lost_frames,
+            mm_per_px,
+            axis: input.axis,
+            invert: input.invert,
+        },
+        binary: tracking.binary(),
+        centroid: tracking.centroid,
+        compensate_exposure: input.compensate_exposure,
+        exposure_ms,
+        notes: rates.notes,
+        points_file: tracking.points_file,
+        targets,
+        out: input.out,
+        force: input.force,
+    };
+    Ok((AnalyzeSpec::Reference(Box::new(request)), warnings))
+}
+
+/// The exposure against the frame period: an exposure longer than the period is a warning,
+/// and an error when the amplitudes would be divided by its transfer.
+fn check_exposure(exposure_ms: Option<f64>, fps: f64, compensate: bool) -> SpecResult<Vec<String>> {
+    let Some(e) = exposure_ms else {
+        if compensate {
+            return Err(SpecError::setting(
+                "$compensate_exposure needs the exposure: give $exposure_ms (the frames do not \
+                 state it)",
+            ));
+        }
+        return Ok(Vec::new());
+    };
+    if !(e.is_finite() && e >= 0.0) {
+        return Err(SpecError::setting(format!(
+            "$exposure_ms must be >= 0, got {e}"
+        )));
+    }
+    let period_ms = 1000.0 / fps;
+    if e <= period_ms {
+        return Ok(Vec::new());
+    }
+    let why = format!(
+        "$exposure_ms {e} is longer than the frame period ({period_ms:.3} ms at {fps} fps): no \
+         camera exposes longer than it records; check $exposure_ms (in ms) and $fps"
+    );
+    // dividing by the transfer of an impossible exposure would be a wrong number
+    if compensate {
+        return Err(SpecError::setting(format!(
+            "{why}; $compensate_exposure refused"
+        )));
+    }
+    Ok(vec![why])
+}
+
+/// Several targets and what the accelerometer is compared with.
+fn targets_request(
+    targets: &Targets,
+    accel_target: Option<usize>,
+    shape_reference: Option<PathBuf>,
+) -> SpecResult<Option<TargetsRequest>> {
+    if *targets == Targets::Whole {
+        if accel_target.is_some() || shape_reference.is_some() {
+            return Err(SpecError::setting(
+                "$accel_target and $shape_reference need several targets: $targets K or \
+                 $points",
+            ));
+        }
+        return Ok(None);
+    }
+    let k = targets.count();
+    let accel_target = accel_target.unwrap_or(k);
+    if !(1..=k).contains(&accel_target) {
+        return Err(SpecError::setting(format!(
+            "$accel_target {accel_target}: targets are numbered 1 to {k}"
+        )));
+    }
+    Ok(Some(TargetsRequest {
+        targets: targets.clone(),
+        accel_target,
+        shape_reference,
+    }))
+}
+
+/// Without an accelerometer.
+fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
+    let needs_accel = [
+        ("$compensate_exposure", input.compensate_exposure),
+        ("$accel_target", input.accel_target.is_some()),
+        ("$shape_reference", input.shape_reference.is_some()),
+        ("$time_offset_s/$tick_offset", input.time_offset.is_some()),
+    ];
+    if let Some((flag, _)) = needs_accel.iter().find(|(_, given)| *given) {
+        return Err(SpecError::setting(format!(
+            "{flag} needs $accel (without it the analysis is output-only)"
+        )));
+    }
+    if let Some(s) = input.mm_per_px {
+        super::positive("mm_per_px", s, "millimetres per pixel")?;
+    }
+    let bands = input.bands.unwrap_or_default();
+    super::bands_below_nyquist(&bands, rates.fps, "the camera's")?;
+    let tracking = Tracking::new(input.tracking)?;
+    Ok(FramesRequest {
+        frames: input.frames.frames,
+        retime: input.frames.retime,
+        frame_range: input.frames.frame_range,
+        fps: rates.fps,
+        centroid: tracking.centroid,
+        displacement: DisplacementSettings {
+            lost_frames: input.lost_frames,
+            mm_per_px: input.mm_per_px.unwrap_or(1.0),
+            axis: input.axis,
+            invert: input.invert,
+        },
+        scaled: input.mm_per_px.is_some(),
+        targets: tracking.targets,
+        points_file: tracking.points_file,
+        welch: input.welch,
+        bands,
+        out: input.out,
+        force: input.force,
+        notes: rates.notes,
+    })
+}
+
+impl AnalyzeSpec {
+    /// Runs the job: the report it printed, and whether it succeeded.
+    pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
+        match self {
+            AnalyzeSpec::Reference(r) => crate::analysis::run::run(r),
+            AnalyzeSpec::OutputOnly(r) => crate::analysis::oma::frames::run(r),
+        }
+    }
+}

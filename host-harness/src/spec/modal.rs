@@ -1,0 +1,136 @@
+//! `modal`: output-only modal analysis of a displacement file.
+
+use super::{SpecError, SpecResult};
+use crate::analysis::oma::input::{self, PixelAxis, Records};
+use crate::analysis::oma::run::Output;
+use crate::analysis::oma::OmaSettings;
+use crate::analysis::WelchSettings;
+use std::path::PathBuf;
+
+/// `modal`'s settings as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalInput {
+    /// The displacement file (`track`'s `displacement.csv`, or a wide CSV).
+    pub displacement: PathBuf,
+    /// `$fps`, when the file has no time column.
+    pub fps: Option<f64>,
+    /// The coordinate of a `displacement.csv` without `disp_mm`.
+    pub axis: PixelAxis,
+    /// The Welch settings of the cross-spectra.
+    pub welch: WelchSettings,
+    /// `$bands`, Hz (none: peaks picked automatically).
+    pub bands: Option<Vec<(f64, f64)>>,
+    /// `$prominence_db` of an automatic peak.
+    pub prominence_db: f64,
+    /// `$f_min_hz`: the lowest frequency searched.
+    pub f_min_hz: Option<f64>,
+    /// `$ssi_block_rows`.
+    pub ssi_block_rows: Option<usize>,
+    /// `$ssi_max_order`.
+    pub ssi_max_order: Option<usize>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Replace an earlier `modal` output there.
+    pub force: bool,
+    /// Draw the figures.
+    pub plots: bool,
+}
+
+/// A checked `modal` job: its records read, its settings resolved against them.
+#[derive(Debug, Clone)]
+pub struct ModalSpec {
+    input: ModalInput,
+    records: Records,
+    settings: OmaSettings,
+}
+
+impl ModalSpec {
+    /// Reads the displacement file and checks the settings against it.
+    pub fn new(input: ModalInput) -> SpecResult<Self> {
+        if let Some(b) = &input.bands {
+            super::bands_ordered(b)?;
+        }
+        let records =
+            input::read(&input.displacement, input.axis, input.fps).map_err(SpecError::Input)?;
+        let fs_hz = records.fs_hz;
+        let n = records.channels.first().map_or(0, Vec::len);
+        let record = input.displacement.display().to_string();
+        let mut s = crate::analysis::oma::segment_settings(fs_hz, n, &input.welch, &record)
+            .map_err(SpecError::Input)?;
+        let df = fs_hz / s.csd.nfft as f64;
+        if let Some(f) = input.f_min_hz {
+            if !(f.is_finite() && f >= 0.0 && f < fs_hz / 2.0) {
+                return Err(SpecError::setting(format!(
+                    "$f_min_hz {f} must be between 0 and the Nyquist frequency ({} Hz)",
+                    fs_hz / 2.0
+                )));
+            }
+            s.peaks.f_min_hz = f.max(df);
+            s.ssi.f_range_hz.0 = f;
+        }
+        let p = input.prominence_db;
+        if !(p.is_finite() && p >= 0.0) {
+            return Err(SpecError::setting(format!(
+                "$prominence_db must be >= 0, got {p}"
+            )));
+        }
+        s.peaks.prominence_db = p;
+        if let Some(b) = &input.bands {
+            super::bands_below_nyquist(b, fs_hz, "the record's")?;
+            s.bands = b.clone();
+        }
+        if let Some(i) = input.ssi_block_rows {
+            if !(2..=500).contains(&i) {
+                return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));
+            }
+            s.ssi.block_rows = i;
+        }
+        if let Some(m) = input.ssi_max_order {
+            if !(2..=400).contains(&m) {
+                return Err(SpecError::setting(format!("$ssi_max_order {m}: 2 to 400")));
+            }
+            s.ssi.max_order = m;
+        }
+        if n < 4 * s.ssi.block_rows {
+            return Err(SpecError::setting(format!(
+                "$ssi_block_rows {}: the record has {n} samples, at least {} are needed",
+                s.ssi.block_rows,
+                4 * s.ssi.block_rows
+            )));
+        }
+        Ok(ModalSpec {
+            input,
+            records,
+            settings: s,
+        })
+    }
+
+    /// The records read.
+    pub fn records(&self) -> &Records {
+        &self.records
+    }
+
+    /// The analysis settings.
+    pub fn settings(&self) -> &OmaSettings {
+        &self.settings
+    }
+
+    /// Runs the job: the report, and whether it succeeded.
+    pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
+        let i = &self.input;
+        crate::analysis::oma::run::run(
+            &self.records,
+            &self.settings,
+            &Output {
+                out: &i.out,
+                force: i.force,
+                command: "modal",
+                inputs: vec![i.displacement.clone()],
+                plots: i.plots,
+                along_x: i.axis == PixelAxis::X,
+                preamble: format!("input: {}\n", i.displacement.display()),
+                extra: Vec::new(),
+            },
+        )
+    }
+}

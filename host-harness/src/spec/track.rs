@@ -1,0 +1,77 @@
+//! `track`: frames in, each target's position per frame out.
+
+use super::{FramesInput, Rates, SpecResult, Tracking, TrackingInput};
+use crate::analysis::track_run::Request;
+use crate::analysis::{Axis, DisplacementSettings};
+use crate::lost_frames::LostFramePolicy;
+use std::path::PathBuf;
+
+/// `track`'s settings as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackInput {
+    /// The frames.
+    pub frames: FramesInput,
+    /// The targets and the tracker.
+    pub tracking: TrackingInput,
+    /// `$mm_per_px`: the displacement in mm beside the pixels.
+    pub mm_per_px: Option<f64>,
+    /// `$axis` of the displacement.
+    pub axis: Axis,
+    /// What a lost frame's displacement becomes.
+    pub lost_frames: LostFramePolicy,
+    /// Draw the tracks.
+    pub plots: bool,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Replace an earlier `track` output there.
+    pub force: bool,
+}
+
+/// A checked `track` job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackSpec {
+    request: Request,
+}
+
+impl TrackSpec {
+    /// Checks `input` at `rates` (from [`crate::frames::resolve_rates`]).
+    pub fn new(input: TrackInput, rates: Rates) -> SpecResult<Self> {
+        let tracking = Tracking::new(input.tracking)?;
+        let displacement = match input.mm_per_px {
+            Some(s) => Some(DisplacementSettings {
+                lost_frames: input.lost_frames,
+                mm_per_px: super::positive("mm_per_px", s, "millimetres per pixel")?,
+                axis: input.axis,
+                invert: false,
+            }),
+            None => None,
+        };
+        super::positive("fps", rates.fps, "frames per second")?;
+        Ok(TrackSpec {
+            request: Request {
+                frames: input.frames.frames,
+                retime: input.frames.retime,
+                frame_range: input.frames.frame_range,
+                fps: rates.fps,
+                centroid: tracking.centroid,
+                targets: tracking.targets,
+                displacement,
+                plots: input.plots,
+                notes: rates.notes,
+                out: input.out,
+                force: input.force,
+                inputs: tracking.points_file.into_iter().collect(),
+            },
+        })
+    }
+
+    /// The checked request.
+    pub fn request(&self) -> &Request {
+        &self.request
+    }
+
+    /// Runs the job; returns the report (also written to `report.txt`).
+    pub fn run(&self) -> anyhow::Result<String> {
+        crate::analysis::track_run::run(&self.request)
+    }
+}
