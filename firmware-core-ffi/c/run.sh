@@ -4,6 +4,9 @@
 # targets (the staticlib C firmware links).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+# the committed header is what cbindgen makes of the crate (its own package, outside the
+# workspace: cbindgen is not compiled by `cargo test --workspace`)
+cargo run -q --manifest-path firmware-core-ffi/header-check/Cargo.toml --target-dir target/header-check
 cargo build -q --release -p firmware-core-ffi
 out=target/ffi-c
 mkdir -p "$out"

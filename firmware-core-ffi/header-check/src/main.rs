@@ -1,9 +1,10 @@
-//! The committed C header is what cbindgen makes of the crate today: a changed ABI must come
-//! with its header (`VIBCAM_BLESS=1 cargo test -p firmware-core-ffi --test header` rewrites it).
+//! The committed C header is what cbindgen makes of firmware-core-ffi today: a changed ABI must
+//! come with its header. Run by `firmware-core-ffi/c/run.sh` (CI's C ABI step):
+//! `cargo run --manifest-path firmware-core-ffi/header-check/Cargo.toml`; with `VIBCAM_BLESS=1`
+//! it rewrites the header. Exits non-zero (a panic naming what differs) when the header is stale.
 
-#[test]
-fn the_committed_header_is_current() {
-    let dir = env!("CARGO_MANIFEST_DIR");
+fn main() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     let config = cbindgen::Config::from_file(format!("{dir}/cbindgen.toml")).unwrap();
     let mut generated = Vec::new();
     cbindgen::Builder::new()
@@ -48,4 +49,5 @@ fn the_committed_header_is_current() {
     ] {
         assert!(generated.contains(name), "{name} missing from the header");
     }
+    println!("{path}: current");
 }
