@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Compares every output of two host-harness binaries on the same inputs: the default study
 # (100 runs), the cantilever study (20 runs), a 60-run grandstand with [imaging] noise and the
-# weighted centroid, analyze (one target on PNG frames and on the FFV1 video, five targets),
+# weighted centroid, analyze (one target on PNG frames and on the FFV1 video, five targets,
+# chosen points in a cluttered scene, output-only without an accelerometer), track (chosen
+# points by Lucas-Kanade and by Otsu's threshold), modal on a simulate-field record,
 # calibrate (3 evaluations), frf, upsample, plan and centroid. Refactors that must not move a
 # number are checked with it (plots and runs.jsonl, which holds timings, are left out; paths and
 # durations in printed text are masked).
@@ -12,6 +14,9 @@ mkdir -p "$W/in"
 "$A" render --preset cantilever --recording "$W/in/r1" --exposure-ms 2 --video > /dev/null
 "$A" render --preset cantilever --recording "$W/in/r5" --exposure-ms 2 --targets 5 \
   --read-noise 1 > /dev/null
+"$A" render --preset cantilever --recording "$W/in/clutter" --targets 5 --exposure-ms 2 \
+  --read-noise 1 --scene cluttered > /dev/null
+"$A" simulate-field --minutes 3 --out "$W/in/field" > /dev/null
 cat > "$W/in/g60.toml" <<'TOML'
 preset = "grandstand"
 runs = 60
@@ -38,6 +43,17 @@ for v in a b; do
     --out "$o/anv" > /dev/null 2>&1
   $H analyze --frames "$W/in/r5/frames" --accel "$W/in/r5/accel.csv" "${common[@]}" \
     --exposure-ms 2 --targets 5 --window rect --compensate-exposure --out "$o/an5" > /dev/null 2>&1
+  $H analyze --frames "$W/in/clutter/frames" --accel "$W/in/clutter/accel.csv" "${common[@]}" \
+    --exposure-ms 2 --window rect --points "$W/in/clutter/points.csv" \
+    --out "$o/anp" > /dev/null 2>&1
+  $H analyze --frames "$W/in/r5/frames" --fps 120 --targets 5 --threshold 127 \
+    --out "$o/ano" > /dev/null 2>&1
+  $H track --frames "$W/in/clutter/frames" --fps 120 --points "$W/in/clutter/points.csv" \
+    --tracker lk --mm-per-px 0.1266 --no-plots --out "$o/tlk" > /dev/null 2>&1
+  $H track --frames "$W/in/clutter/frames" --fps 120 --points "$W/in/clutter/points.csv" \
+    --threshold auto --no-plots --out "$o/tauto" > /dev/null 2>&1
+  $H modal --displacement "$W/in/field/displacement.csv" --no-plots --out "$o/modal" \
+    > /dev/null 2>&1
   $H calibrate --observed "$W/in/obs.csv" --preset grandstand --free threshold_frac=0.3:0.6 \
     --runs 4 --grid 2 --refine 0 --out "$o/cal" > "$o/cal.stdout" 2>&1
   $H frf --input "$W/in/r1/accel.csv" --x base_acc --y tip_acc --fs 2048 --nperseg 1024 \

@@ -103,7 +103,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return super::stdout(&with_warnings(report?, &warnings));
     }
     let rec = simulate(&model, args.fps, n, noise, args.seed);
-    let report = crate::model::field::write_field(&args.out, args.force, &model, &rec, args.fps)?;
+    let report =
+        crate::recording::field::write_field(&args.out, args.force, &model, &rec, args.fps)?;
     super::stdout(&with_warnings(report, &warnings))
 }
 

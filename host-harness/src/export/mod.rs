@@ -27,6 +27,8 @@
 
 pub mod analysis;
 pub mod calibrate;
+pub mod field;
+pub mod oma;
 pub mod plan;
 pub mod recording;
 pub mod signals;

@@ -311,62 +311,6 @@ fn run(
     rng
 }
 
-/// Writes `displacement.csv` (`t_s,1,...,K`: a wide file `modal` reads) and `truth.csv`
-/// (`mode,f_hz,damping,target,shape`) into `out` (staged: complete or absent; `force`
-/// replaces an earlier output of `simulate-field`); returns a short report.
-pub fn write_field(
-    out: &std::path::Path,
-    force: bool,
-    model: &FieldModel,
-    rec: &[Vec<f64>],
-    fs_hz: f64,
-) -> anyhow::Result<String> {
-    let staged = crate::outdir::Staged::new(out, force, "simulate-field", &[])?;
-    let n = rec.first().map_or(0, Vec::len);
-    staged.write("displacement.csv", displacement_csv(rec, fs_hz))?;
-    staged.write("truth.csv", truth_csv(model))?;
-    staged.commit()?;
-    Ok(format!(
-        "{} points, {n} samples at {fs_hz} Hz ({:.1} min), {} modes: {}\nwritten to {}\n",
-        model.points,
-        n as f64 / fs_hz / 60.0,
-        model.modes.len(),
-        modes_line(model),
-        out.display()
-    ))
-}
-
-/// `displacement.csv` of records `rec` (one per point) sampled at `fs_hz`: `t_s,1,...,K`.
-pub fn displacement_csv(rec: &[Vec<f64>], fs_hz: f64) -> String {
-    use std::fmt::Write as _;
-    let n = rec.first().map_or(0, Vec::len);
-    let mut d = String::from("t_s");
-    for t in 1..=rec.len() {
-        let _ = write!(d, ",{t}");
-    }
-    d.push('\n');
-    for i in 0..n {
-        let _ = write!(d, "{}", i as f64 / fs_hz);
-        for r in rec {
-            let _ = write!(d, ",{}", r[i]);
-        }
-        d.push('\n');
-    }
-    d
-}
-
-/// `truth.csv` of `model`: `mode,f_hz,damping,target,shape`, one row per mode and point.
-pub fn truth_csv(model: &FieldModel) -> String {
-    use std::fmt::Write as _;
-    let mut t = String::from("mode,f_hz,damping,target,shape\n");
-    for (m, mode) in model.modes.iter().enumerate() {
-        for (j, v) in mode.shape.iter().enumerate() {
-            let _ = writeln!(t, "{},{},{},{},{v}", m + 1, mode.f_hz, mode.damping, j + 1);
-        }
-    }
-    t
-}
-
 /// One line per mode: `1.5000 Hz (1.0 %), ...`.
 pub fn modes_line(model: &FieldModel) -> String {
     model

@@ -16,6 +16,7 @@
 //! with the `analyze` command.
 
 use super::{FrameSink, SinkCamera};
+use crate::export::field::{self as export, TrueMode};
 use crate::imaging::{BlurRenderer, TargetPath};
 use crate::model::cantilever;
 use crate::model::field::{self, FieldModel, SUB};
@@ -156,14 +157,10 @@ pub fn write_field_recording(
         progress(n + 1);
     }
     sink.finish()?;
-    staged.write("displacement.csv", field::displacement_csv(&seen, rec.fps))?;
-    staged.write("truth.csv", field::truth_csv(&rec.model))?;
-    let mut points = String::from("target,x,y,w,h\n");
-    let (pw, ph) = ((sw - 2) | 1, (h - 2).min(31) | 1);
-    for (t, (x, y)) in first.iter().enumerate() {
-        points.push_str(&format!("{},{x},{y},{pw},{ph}\n", t + 1));
-    }
-    staged.write("points.csv", points)?;
+    staged.write("displacement.csv", export::displacement_csv(&seen, rec.fps))?;
+    staged.write("truth.csv", export::truth_csv(&true_modes(&rec.model)))?;
+    let window = ((sw - 2) | 1, (h - 2).min(31) | 1);
+    staged.write("points.csv", export::points_csv(&first, window))?;
     // the weighted centroid: linear in the motion, so no harmonics of pixel locking (the binary
     // centroid's staircase turns the strong first mode into modes at 3 and 5 times it)
     let command = format!(
@@ -198,6 +195,45 @@ pub fn write_field_recording(
         rec.fps,
         rec.frames as f64 / rec.fps / 60.0,
         field::modes_line(&rec.model),
+        out.display()
+    ))
+}
+
+/// The model's modes as `truth.csv` lists them.
+fn true_modes(model: &FieldModel) -> Vec<TrueMode<'_>> {
+    model
+        .modes
+        .iter()
+        .map(|m| TrueMode {
+            f_hz: m.f_hz,
+            damping: m.damping,
+            shape: &m.shape,
+        })
+        .collect()
+}
+
+/// Writes a field record without frames: `displacement.csv` (`t_s,1,...,K`: a wide file
+/// `modal` reads) and `truth.csv` (`mode,f_hz,damping,target,shape`) into `out` (staged:
+/// complete or absent; `force` replaces an earlier output of `simulate-field`); returns a short
+/// report.
+pub fn write_field(
+    out: &Path,
+    force: bool,
+    model: &FieldModel,
+    rec: &[Vec<f64>],
+    fs_hz: f64,
+) -> anyhow::Result<String> {
+    let staged = crate::outdir::Staged::new(out, force, "simulate-field", &[])?;
+    let n = rec.first().map_or(0, Vec::len);
+    staged.write("displacement.csv", export::displacement_csv(rec, fs_hz))?;
+    staged.write("truth.csv", export::truth_csv(&true_modes(model)))?;
+    staged.commit()?;
+    Ok(format!(
+        "{} points, {n} samples at {fs_hz} Hz ({:.1} min), {} modes: {}\nwritten to {}\n",
+        model.points,
+        n as f64 / fs_hz / 60.0,
+        model.modes.len(),
+        field::modes_line(model),
         out.display()
     ))
 }

@@ -6,9 +6,7 @@
 use super::input::Records;
 use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
-use crate::export::opt;
-use crate::export::targets::{MODES_HEADER, SHAPES_HEADER};
-use crate::export::uff::{write_dataset55, Shape55};
+use crate::export::oma::{self as export, OmaModeRow, OmaShapeRow, OmaShapeSet};
 use crate::outdir::Staged;
 use num_complex::Complex64;
 use std::fmt::Write as _;
@@ -51,13 +49,16 @@ pub fn write(
 ) -> anyhow::Result<Outcome> {
     let inputs: Vec<&Path> = o.inputs.iter().map(PathBuf::as_path).collect();
     let out = Staged::new(o.out, o.force, o.command, &inputs)?;
-    out.write("modes.csv", modes_csv(r))?;
-    out.write("shapes.csv", shapes_csv(r, records))?;
-    out.write("svd.csv", svd_csv(r))?;
+    out.write("modes.csv", export::modes_csv(&mode_rows(r)))?;
+    out.write("shapes.csv", export::shapes_csv(&shape_rows(r, records)))?;
+    out.write("svd.csv", export::svd_csv(&r.svd.freq_hz, &r.svd.s))?;
     for (name, bytes) in &o.extra {
         out.write(name, bytes)?;
     }
-    out.write("shapes.uff", shapes_uff(r, records, o.along_x)?)?;
+    out.write(
+        "shapes.uff",
+        export::shapes_uff(&shape_sets(r, records, o.along_x))?,
+    )?;
     if o.plots {
         let picks: Vec<(f64, f64, String)> = r
             .modes
@@ -103,103 +104,72 @@ pub fn write(
     })
 }
 
-/// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
-/// `target` empty.
-pub fn modes_csv(r: &OmaResult) -> Vec<u8> {
-    let mut s = String::from(MODES_HEADER);
-    for m in &r.modes {
-        let (lo, hi) = m.band_hz.map_or((None, None), |b| (Some(b.0), Some(b.1)));
-        let _ = writeln!(
-            s,
-            "vision,,{},{},{},{},{},{},,{}",
-            m.mode,
-            opt(lo),
-            opt(hi),
-            m.f_hz,
-            opt(m.amplitude),
-            opt(m.damping),
-            m.method.name()
-        );
-    }
-    s.into_bytes()
+/// The rows of `modes.csv`.
+fn mode_rows(r: &OmaResult) -> Vec<OmaModeRow> {
+    r.modes
+        .iter()
+        .map(|m| OmaModeRow {
+            mode: m.mode,
+            band_hz: m.band_hz,
+            f_hz: m.f_hz,
+            amplitude: m.amplitude,
+            damping: m.damping,
+            method: m.method.name(),
+        })
+        .collect()
 }
 
-/// `shapes.csv`: one row per mode, method and target.
-pub fn shapes_csv(r: &OmaResult, records: &Records) -> Vec<u8> {
-    let mut s = String::from(SHAPES_HEADER);
-    for m in &r.modes {
-        for ((t, xy), c) in records.targets.iter().zip(&m.shape) {
-            let (x, y) = xy.map_or((None, None), |p| (Some(p.0), Some(p.1)));
-            let _ = writeln!(
-                s,
-                "{},{t},{},{},{},{},{},{}",
-                m.mode,
-                opt(x),
-                opt(y),
-                c.re,
-                c.im,
-                c.norm(),
-                m.method.name()
-            );
-        }
-    }
-    s.into_bytes()
+/// The rows of `shapes.csv`: per mode and method, each target kept.
+fn shape_rows(r: &OmaResult, records: &Records) -> Vec<OmaShapeRow> {
+    r.modes
+        .iter()
+        .flat_map(|m| {
+            records
+                .targets
+                .iter()
+                .zip(&m.shape)
+                .map(|((t, xy), c)| OmaShapeRow {
+                    mode: m.mode,
+                    target: *t,
+                    xy_px: *xy,
+                    value: *c,
+                    method: m.method.name(),
+                })
+        })
+        .collect()
 }
 
-/// `svd.csv`: `freq_hz,s1,...,sK`.
-pub fn svd_csv(r: &OmaResult) -> Vec<u8> {
-    let k = r.svd.s.first().map_or(0, Vec::len);
-    let mut s = String::from("freq_hz");
-    for i in 1..=k {
-        let _ = write!(s, ",s{i}");
-    }
-    s.push('\n');
-    for (f, sv) in r.svd.freq_hz.iter().zip(&r.svd.s) {
-        let _ = write!(s, "{f}");
-        for v in sv {
-            let _ = write!(s, ",{v}");
-        }
-        s.push('\n');
-    }
-    s.into_bytes()
-}
-
-/// `shapes.uff`: one dataset 55 per mode and method (load case 1 FDD, 2 EFDD, 3 SSI), the
-/// targets as nodes, the shape in the motion's direction (x or y).
-pub fn shapes_uff(r: &OmaResult, records: &Records, along_x: bool) -> anyhow::Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    for m in &r.modes {
-        let nodes: Vec<(u32, [Complex64; 3])> = records
-            .targets
-            .iter()
-            .zip(&m.shape)
-            .map(|((t, _), &c)| {
-                let zero = Complex64::new(0.0, 0.0);
-                let v = if along_x {
-                    [c, zero, zero]
-                } else {
-                    [zero, c, zero]
-                };
-                (*t as u32, v)
-            })
-            .collect();
-        let title = format!("vibcam output-only modal analysis: {}", m.method.name());
-        let what = format!("mode {} at {:.6} Hz", m.mode, m.f_hz);
-        let d = Shape55 {
-            id_lines: [&title, &what, "", "", ""],
+/// The datasets of `shapes.uff`: each target a node, the shape in the motion's direction (x
+/// or y); load case 1 FDD, 2 EFDD, 3 SSI.
+fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSet> {
+    let zero = Complex64::new(0.0, 0.0);
+    r.modes
+        .iter()
+        .map(|m| OmaShapeSet {
+            method: m.method.name(),
             load_case: match m.method {
                 Method::Fdd => 1,
                 Method::Efdd => 2,
                 Method::Ssi => 3,
             },
-            mode: m.mode as u32,
+            mode: m.mode,
             f_hz: m.f_hz,
             damping: m.damping.unwrap_or(0.0),
-            nodes: &nodes,
-        };
-        bytes.extend(write_dataset55(&d)?);
-    }
-    Ok(bytes)
+            nodes: records
+                .targets
+                .iter()
+                .zip(&m.shape)
+                .map(|((t, _), &c)| {
+                    let v = if along_x {
+                        [c, zero, zero]
+                    } else {
+                        [zero, c, zero]
+                    };
+                    (*t as u32, v)
+                })
+                .collect(),
+        })
+        .collect()
 }
 
 /// The report: the records, the settings, the modes per method, the notes.

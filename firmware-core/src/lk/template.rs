@@ -1,0 +1,306 @@
+//! Taking a template: the window of the reference frame, its cubic B-spline coefficients
+//! (Unser's prefilter), gradients, Hessian and moments, and the mask of dark pixels the
+//! saturation rule reads; the interpolation weights the template and the iteration share.
+
+#[allow(unused_imports)]
+use super::*;
+
+/// Cubic B-spline interpolation coefficients of the `w x h` image in `c` (row-major), in place:
+/// the causal and anticausal recursive filters of Unser (1999) along the rows, then the
+/// columns, pole `sqrt(3) - 2`, mirror-symmetric ends (the causal start summed over the first
+/// 12 samples: `0.268^12 < 1e-6`).
+pub(super) fn prefilter(c: &mut [f32], w: usize, h: usize) {
+    fn line(c: &mut [f32], start: usize, step: usize, n: usize) {
+        const Z: f32 = -0.267_949_2; // sqrt(3) - 2
+        if n < 2 {
+            return;
+        }
+        let at = |k: usize| start + k * step;
+        for k in 0..n {
+            if let Some(v) = c.get_mut(at(k)) {
+                *v *= 6.0;
+            }
+        }
+        let get = |c: &[f32], k: usize| c.get(at(k)).copied().unwrap_or(0.0);
+        // causal: c+[0] from the mirrored start, then c+[k] = c[k] + z c+[k-1]
+        let mut zk = 1.0f32;
+        let mut first = 0.0f32;
+        for k in 0..n.min(12) {
+            first += zk * get(c, k);
+            zk *= Z;
+        }
+        if let Some(v) = c.get_mut(at(0)) {
+            *v = first;
+        }
+        for k in 1..n {
+            let prev = get(c, k - 1);
+            if let Some(v) = c.get_mut(at(k)) {
+                *v += Z * prev;
+            }
+        }
+        // anticausal: c[n-1] = z / (z^2 - 1) (c+[n-1] + z c+[n-2]), c[k] = z (c[k+1] - c+[k])
+        let last = Z / (Z * Z - 1.0) * (get(c, n - 1) + Z * get(c, n - 2));
+        if let Some(v) = c.get_mut(at(n - 1)) {
+            *v = last;
+        }
+        for k in (0..n - 1).rev() {
+            let next = get(c, k + 1);
+            if let Some(v) = c.get_mut(at(k)) {
+                *v = Z * (next - *v);
+            }
+        }
+    }
+    for j in 0..h {
+        line(c, j * w, 1, w);
+    }
+    for i in 0..w {
+        line(c, i, w, h);
+    }
+}
+
+/// The derivatives of [`bspline_weights`] with respect to `f`: the spline's slope at `f`.
+pub(super) fn bspline_slopes(f: f32) -> [f32; 4] {
+    let g = 1.0 - f;
+    [
+        -0.5 * g * g,
+        (3.0 * f * f - 4.0 * f) / 2.0,
+        (-3.0 * f * f + 2.0 * f + 1.0) / 2.0,
+        0.5 * f * f,
+    ]
+}
+
+/// Cubic B-spline weights of the four coefficients at `-1, 0, 1, 2` for a fraction `f`.
+pub(super) fn bspline_weights(f: f32) -> [f32; 4] {
+    let g = 1.0 - f;
+    [
+        g * g * g / 6.0,
+        (3.0 * f * f * f - 6.0 * f * f + 4.0) / 6.0,
+        (-3.0 * f * f * f + 3.0 * f * f + 3.0 * f + 1.0) / 6.0,
+        f * f * f / 6.0,
+    ]
+}
+
+/// A frame pixel at or above the saturation level where the template (and its neighbours) is
+/// below this fraction of it was clipped by a change (a brighter target, a neighbour's highlight), not by a plateau
+/// that moves with the template.
+pub(super) const CLIP_FRACTION: f32 = 0.75;
+
+/// Whether the template is below [`CLIP_FRACTION`] of `sat` at pixel `(i, j)` and its eight
+/// neighbours (the frame's window may sit up to a pixel off the template's grid).
+pub(super) fn dark_near(
+    t: &[f32],
+    (tw, th): (usize, usize),
+    (i, j): (usize, usize),
+    sat: u16,
+) -> bool {
+    let level = CLIP_FRACTION * f32::from(sat);
+    for y in j.saturating_sub(1)..(j + 2).min(th) {
+        for x in i.saturating_sub(1)..(i + 2).min(tw) {
+            if t.get(y * tw + x).is_some_and(|&v| v >= level) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Stores the smoothed values `v` (integers) as `v - mean` into `out`; returns their sum and
+/// sum of squares, exact (a value is below 2^24 in magnitude: the sum is formed in `i32` over
+/// at most 127 values at a time, the squares in `i64`, which holds a row of up to 2^15).
+#[inline(always)]
+pub(super) fn emit(out: &mut [f32], mut v: impl Iterator<Item = u32>, mean: i32) -> (i64, i64) {
+    let (mut sum, mut sq) = (0i64, 0i64);
+    for seg in out.chunks_mut(127) {
+        let mut rs = 0i32;
+        for (o, v) in seg.iter_mut().zip(&mut v) {
+            let d = v as i32 - mean;
+            *o = d as f32;
+            rs += d;
+            sq += i64::from(d) * i64::from(d);
+        }
+        sum += i64::from(rs);
+    }
+    (sum, sq)
+}
+
+/// More newly clipped pixels than this in a window of `n` pixels lose the frame: two, and 2 %.
+pub(super) fn clip_limit(n: usize) -> u32 {
+    2 + (n / 50) as u32
+}
+
+/// The first `T` of eight weights.
+pub(super) fn taps_of<const T: usize>(w: &[f32; 8]) -> [f32; T] {
+    let mut out = [0.0; T];
+    for (o, v) in out.iter_mut().zip(w) {
+        *o = *v;
+    }
+    out
+}
+
+/// Keys' cubic convolution weights of the four taps at `-1, 0, 1, 2` for a fraction `f`.
+pub(super) fn cubic_weights(f: f32) -> [f32; 4] {
+    const A: f32 = -0.5;
+    let near = |t: f32| ((A + 2.0) * t - (A + 3.0)) * t * t + 1.0;
+    let far = |t: f32| ((A * t - 5.0 * A) * t + 8.0 * A) * t - 4.0 * A;
+    [far(1.0 + f), near(f), near(1.0 - f), far(2.0 - f)]
+}
+
+impl<const N: usize, const W: usize> LkTracker<N, W> {
+    /// The template's dark pixels ([`LkTracker::dark`]) for the saturation level `sat`,
+    /// unless marked for it already.
+    pub(super) fn mark_dark(&mut self, sat: u16) {
+        if self.dark_sat == sat {
+            return;
+        }
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        for (j, row) in self.dark.chunks_mut(tw.max(1)).take(th).enumerate() {
+            for (i, d) in row.iter_mut().enumerate() {
+                *d = dark_near(&self.t, (tw, th), (i, j), sat);
+            }
+        }
+        self.dark_sat = sat;
+    }
+
+    /// The template at `(x0, y0)`, its gradients and inverse Hessian.
+    pub(super) fn take<P: Pixel>(
+        &mut self,
+        frame: &Frame<'_, P>,
+        x0: i32,
+        y0: i32,
+    ) -> Result<(), LkError> {
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        let (fw, fh) = (frame.width() as i64, frame.height() as i64);
+        let (x0l, y0l) = (i64::from(x0), i64::from(y0));
+        if x0l < 0 || y0l < 0 || x0l + tw as i64 > fw || y0l + th as i64 > fh {
+            return Err(LkError::Outside);
+        }
+        // the gradients read one pixel around the window, the smoothing up to two more, the
+        // spline's padding four: past the frame's edge the edge pixels repeat (coordinates
+        // offset by 8 so they stay unsigned)
+        let (x0u, y0u) = (x0 as usize + 8, y0 as usize + 8);
+        let raw = |x: usize, y: usize| -> f32 {
+            let (x, y) = (
+                (x as i64 - 8).min(fw - 1).max(0) as usize,
+                (y as i64 - 8).min(fh - 1).max(0) as usize,
+            );
+            frame
+                .row(y)
+                .and_then(|r| r.get(x))
+                .map_or(0.0, |&v| f32::from(v.into()))
+        };
+        let (kernel, taps) = self.config.smoothing.kernel();
+        let half = taps / 2;
+        let at = |x: usize, y: usize| -> f32 {
+            let row = |y: usize| -> f32 {
+                let mut v = 0.0;
+                for (k, w) in kernel.iter().take(taps).enumerate() {
+                    v += w * raw(x + k - half, y);
+                }
+                v
+            };
+            let mut v = 0.0;
+            for (k, w) in kernel.iter().take(taps).enumerate() {
+                v += w * row(y + k - half);
+            }
+            v
+        };
+        let spline = self.config.interpolation == Interpolation::Spline;
+        let (pw, ph) = (tw + 2 * SPLINE_MARGIN, th + 2 * SPLINE_MARGIN);
+        if spline {
+            for j in 0..ph {
+                for i in 0..pw {
+                    if let Some(c) = self.coef.get_mut(j * pw + i) {
+                        *c = at(x0u + i - SPLINE_MARGIN, y0u + j - SPLINE_MARGIN);
+                    }
+                }
+            }
+            prefilter(&mut self.coef, pw, ph);
+        }
+        // the interpolant's derivative at whole pixels: [1 4 1] / 6 across, [-1 0 1] / 2 along
+        let coef = &self.coef;
+        // coefficient of template pixel (i, j), which may be up to the margin outside it
+        let c = |i: i64, j: i64| {
+            let m = SPLINE_MARGIN as i64;
+            coef.get(((j + m) * pw as i64 + i + m) as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        let spline_grad = |i: i64, j: i64| -> (f32, f32) {
+            let dx = |j: i64| 0.5 * (c(i + 1, j) - c(i - 1, j));
+            let dy = |i: i64| 0.5 * (c(i, j + 1) - c(i, j - 1));
+            (
+                (dx(j - 1) + 4.0 * dx(j) + dx(j + 1)) / 6.0,
+                (dy(i - 1) + 4.0 * dy(i) + dy(i + 1)) / 6.0,
+            )
+        };
+        let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for j in 0..th {
+            for i in 0..tw {
+                let (x, y) = (x0u + i, y0u + j);
+                let (gx, gy) = if spline {
+                    spline_grad(i as i64, j as i64)
+                } else {
+                    (
+                        0.5 * (at(x + 1, y) - at(x - 1, y)),
+                        0.5 * (at(x, y + 1) - at(x, y - 1)),
+                    )
+                };
+                let v = at(x, y);
+                let k = j * tw + i;
+                if let (Some(t), Some(a), Some(b)) =
+                    (self.t.get_mut(k), self.gx.get_mut(k), self.gy.get_mut(k))
+                {
+                    *t = v;
+                    *a = gx;
+                    *b = gy;
+                }
+                sum += v;
+                sxx += gx * gx;
+                sxy += gx * gy;
+                syy += gy * gy;
+            }
+        }
+        let n = (tw * th) as f32;
+        // smaller eigenvalue of [[sxx, sxy], [sxy, syy]], per pixel
+        let half_tr = 0.5 * (sxx + syy);
+        let det = sxx * syy - sxy * sxy;
+        let disc = sqrtf((half_tr * half_tr - det).max(0.0));
+        let lambda_min = half_tr - disc;
+        // written so that a NaN (no texture at all) is flat too
+        let textured = lambda_min / n >= self.config.min_texture && det > 0.0;
+        if !textured {
+            return Err(LkError::Flat);
+        }
+        self.h_inv = [syy / det, -sxy / det, sxx / det];
+        let mean = sum / n;
+        let mut ss = 0.0f32;
+        for v in self.t.iter().take(tw * th) {
+            ss += (v - mean) * (v - mean);
+        }
+        self.t_mean = mean;
+        self.t_norm = sqrtf(ss);
+        // a new template: its own mask
+        self.dark_sat = 0;
+        self.mark_dark(match self.config.saturation {
+            0 => P::FULL,
+            s => s,
+        });
+        if spline {
+            // the spline's weights sum to one: the mean comes off the coefficients
+            for c in self.coef.iter_mut().take(pw * ph) {
+                *c -= mean;
+            }
+            self.moments = Moments::of(&self.coef, (tw, th));
+        }
+        self.origin = (x0, y0);
+        self.g_at = None;
+        self.ready = true;
+        Ok(())
+    }
+}

@@ -1,0 +1,138 @@
+//! The files of an output-only modal analysis (`modal`, `analyze` without an accelerometer):
+//! `modes.csv` and `shapes.csv` in the multi-target columns, `svd.csv`, `shapes.uff`. Typed
+//! rows in, bytes out; `analysis::oma::run` builds the rows from its results.
+
+use super::opt;
+use super::targets::{MODES_HEADER, SHAPES_HEADER};
+use super::uff::{write_dataset55, Shape55};
+use num_complex::Complex64;
+use std::fmt::Write as _;
+
+/// One mode of one method.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OmaModeRow {
+    /// Mode number, 1-based, per method.
+    pub mode: usize,
+    /// The band, Hz (with bands).
+    pub band_hz: Option<(f64, f64)>,
+    /// Natural frequency, Hz.
+    pub f_hz: f64,
+    /// First singular value at the peak (FDD and EFDD).
+    pub amplitude: Option<f64>,
+    /// Damping ratio (EFDD and SSI).
+    pub damping: Option<f64>,
+    /// `fdd`, `efdd` or `ssi`.
+    pub method: &'static str,
+}
+
+/// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
+/// `target` and `e2pr` empty.
+pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
+    let mut s = String::from(MODES_HEADER);
+    for m in rows {
+        let (lo, hi) = m.band_hz.map_or((None, None), |b| (Some(b.0), Some(b.1)));
+        let _ = writeln!(
+            s,
+            "vision,,{},{},{},{},{},{},,{}",
+            m.mode,
+            opt(lo),
+            opt(hi),
+            m.f_hz,
+            opt(m.amplitude),
+            opt(m.damping),
+            m.method
+        );
+    }
+    s.into_bytes()
+}
+
+/// One target's coefficient in one mode of one method.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OmaShapeRow {
+    /// Mode number, 1-based, per method.
+    pub mode: usize,
+    /// Target number.
+    pub target: usize,
+    /// Its position in the first frame, px, when known.
+    pub xy_px: Option<(f64, f64)>,
+    /// The normalised coefficient.
+    pub value: Complex64,
+    /// `fdd`, `efdd` or `ssi`.
+    pub method: &'static str,
+}
+
+/// `shapes.csv`: one row per mode, method and target (`x_px`, `y_px` empty when unknown).
+pub fn shapes_csv(rows: &[OmaShapeRow]) -> Vec<u8> {
+    let mut s = String::from(SHAPES_HEADER);
+    for r in rows {
+        let (x, y) = r.xy_px.map_or((None, None), |p| (Some(p.0), Some(p.1)));
+        let c = r.value;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{}",
+            r.mode,
+            r.target,
+            opt(x),
+            opt(y),
+            c.re,
+            c.im,
+            c.norm(),
+            r.method
+        );
+    }
+    s.into_bytes()
+}
+
+/// `svd.csv`: `freq_hz,s1,...,sK`, one row per line of the cross-spectral matrix.
+pub fn svd_csv(freq_hz: &[f64], s: &[Vec<f64>]) -> Vec<u8> {
+    let k = s.first().map_or(0, Vec::len);
+    let mut out = String::from("freq_hz");
+    for i in 1..=k {
+        let _ = write!(out, ",s{i}");
+    }
+    out.push('\n');
+    for (f, sv) in freq_hz.iter().zip(s) {
+        let _ = write!(out, "{f}");
+        for v in sv {
+            let _ = write!(out, ",{v}");
+        }
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+/// One mode's shape as a UFF dataset 55.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OmaShapeSet {
+    /// `fdd`, `efdd` or `ssi` (in the title).
+    pub method: &'static str,
+    /// Load case: 1 FDD, 2 EFDD, 3 SSI.
+    pub load_case: u32,
+    /// Mode number.
+    pub mode: usize,
+    /// Natural frequency, Hz.
+    pub f_hz: f64,
+    /// Damping ratio (0 when the method gives none).
+    pub damping: f64,
+    /// Each target's node number and its (x, y, z) coefficients.
+    pub nodes: Vec<(u32, [Complex64; 3])>,
+}
+
+/// `shapes.uff`: one dataset 55 per mode and method.
+pub fn shapes_uff(sets: &[OmaShapeSet]) -> anyhow::Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    for m in sets {
+        let title = format!("vibcam output-only modal analysis: {}", m.method);
+        let what = format!("mode {} at {:.6} Hz", m.mode, m.f_hz);
+        let d = Shape55 {
+            id_lines: [&title, &what, "", "", ""],
+            load_case: m.load_case,
+            mode: m.mode as u32,
+            f_hz: m.f_hz,
+            damping: m.damping,
+            nodes: &m.nodes,
+        };
+        bytes.extend(write_dataset55(&d)?);
+    }
+    Ok(bytes)
+}
