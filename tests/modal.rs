@@ -425,3 +425,91 @@ fn a_rendered_field_recording_gives_the_modes_through_the_whole_chain() {
     let o = harness(&["simulate-field", "--render", "--noise", "0.1", "--out", r]);
     assert_exit_2(&o, "--read-noise");
 }
+
+/// The host's FDD (`modal`: f64, realfft, nalgebra's SVD) and the camera's (firmware-core's
+/// `CrossSpectra` with the C ABI's `vc_fdd4_t` settings: 4 targets, Hann segments of 512, half
+/// overlap, 30 power iterations, the same peak rule) on one record: the same first singular
+/// value up to f32 rounding, the same peaks, the same shapes. The two compute the spectra
+/// separately; this is what says they agree.
+#[test]
+fn the_hosts_fdd_and_the_cameras_agree_on_one_record() {
+    use firmware_core::spectrum::cross::{pick_peaks, CrossSpectra};
+    use host_harness::analysis::modal::mac;
+    use host_harness::analysis::oma::{analyze, Method, OmaSettings};
+    use host_harness::model::field::{shear_frame, simulate};
+    use num_complex::Complex64;
+    // the C ABI's capacities (firmware-core-ffi: VC_FDD4_TARGETS, _SEGMENT, _LINES)
+    const K: usize = 4;
+    const SEG: usize = 512;
+    const LINES: usize = SEG / 2 + 1;
+    let fs = 60.0;
+    let n = 5 * 60 * 60; // five minutes
+    let model = shear_frame(K, 1.5, &[0.01, 0.012, 0.015, 0.02]);
+    let rec = simulate(&model, fs, n, 0.02, 7);
+    let host = analyze(&rec, &OmaSettings::new(fs, n, Some(SEG))).unwrap();
+
+    let mut cam = CrossSpectra::<K, SEG, LINES, { K * (K + 1) / 2 }, 0>::try_new(fs as f32)
+        .expect("the C ABI's capacities");
+    for i in 0..n {
+        let frame: [f32; K] = core::array::from_fn(|t| rec[t][i] as f32);
+        cam.push(&frame);
+    }
+    assert_eq!(cam.segments(), host.csd.segments as u32);
+    let lines: Vec<(f32, [num_complex::Complex32; K])> =
+        (0..LINES).map(|l| cam.first_singular(l, 30)).collect();
+    // the first singular value, line by line, above the record's floor: f32 and 30 power
+    // iterations against f64 and an SVD. Where one singular value dominates (s2/s1 < 0.8,
+    // every peak) they agree to f32's rounding (measured: 4e-6 at worst); where the first two
+    // are close the power iteration converges as (s2/s1)^60 and stays below the true value (a
+    // Rayleigh quotient), 0.4 % at s2/s1 = 0.92 between two modes of this record
+    let s1_host: Vec<f64> = host.svd.s.iter().map(|s| s[0]).collect();
+    let mut sorted = s1_host.clone();
+    sorted.sort_by(f64::total_cmp);
+    let floor = sorted[LINES / 2];
+    let (mut worst, mut compared) = (0.0f64, 0);
+    for (l, (s, _)) in lines.iter().enumerate().skip(2) {
+        let e = f64::from(*s) / s1_host[l] - 1.0;
+        assert!(
+            e < 1e-5,
+            "line {l}: the camera's s1 above the host's by {e:.2e}"
+        );
+        if s1_host[l] > floor && host.svd.s[l][1] / s1_host[l] < 0.8 {
+            worst = worst.max(e.abs());
+            compared += 1;
+        }
+    }
+    assert!(compared > 20, "only {compared} lines compared");
+    assert!(worst < 1e-5, "first singular values differ by {worst:.2e}");
+    // the peaks: the host's FDD modes at the camera's picked lines, the shapes alike
+    let s1: Vec<f32> = lines.iter().map(|(s, _)| *s).collect();
+    let df = fs / SEG as f64;
+    // the host's lowest frequency searched: 0.5 Hz or two lines
+    let lo = (0.5f64.max(2.0 * df) / df).ceil();
+    let (mut sorted32, mut out) = ([0.0f32; LINES], [0usize; LINES]);
+    let found = pick_peaks(
+        &s1,
+        (lo as usize, LINES - 1),
+        (6.0, 10.0),
+        &mut sorted32,
+        &mut out,
+    );
+    let cam_f: Vec<f64> = out[..found].iter().map(|&l| l as f64 * df).collect();
+    let fdd: Vec<_> = host
+        .modes
+        .iter()
+        .filter(|m| m.method == Method::Fdd)
+        .collect();
+    assert_eq!(fdd.len(), K, "the host's FDD finds the four modes: {fdd:?}");
+    let host_f: Vec<f64> = fdd.iter().map(|m| m.f_hz).collect();
+    assert_eq!(cam_f, host_f, "peaks: camera {cam_f:?}, host {host_f:?}");
+    for m in &fdd {
+        let l = (m.f_hz / df).round() as usize;
+        let v: Vec<Complex64> = lines[l]
+            .1
+            .iter()
+            .map(|c| Complex64::new(f64::from(c.re), f64::from(c.im)))
+            .collect();
+        let mac = mac(&v, &m.shape);
+        assert!(mac > 0.99999, "mode at {} Hz: MAC {mac}", m.f_hz);
+    }
+}
