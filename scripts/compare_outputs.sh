@@ -3,7 +3,8 @@
 # (100 runs), the cantilever study (20 runs), a 60-run grandstand with [imaging] noise and the
 # weighted centroid, analyze (one target on PNG frames and on the FFV1 video, five targets,
 # chosen points in a cluttered scene, output-only without an accelerometer), track (chosen
-# points by Lucas-Kanade and by Otsu's threshold), modal on a simulate-field record,
+# points by Lucas-Kanade and by Otsu's threshold), modal on a simulate-field record, the
+# rendered release scene and field record (their frames too), simulate-field's files,
 # calibrate (3 evaluations), frf, upsample, plan and centroid. Refactors that must not move a
 # number are checked with it (plots and runs.jsonl, which holds timings, are left out; paths and
 # durations in printed text are masked).
@@ -54,6 +55,9 @@ for v in a b; do
     --threshold auto --no-plots --out "$o/tauto" > /dev/null 2>&1
   $H modal --displacement "$W/in/field/displacement.csv" --no-plots --out "$o/modal" \
     > /dev/null 2>&1
+  $H render --recording "$o/release" --scene cluttered --motion release > /dev/null 2>&1
+  $H simulate-field --render --minutes 0.3 --out "$o/fieldr" > /dev/null 2>&1
+  $H simulate-field --minutes 1 --out "$o/field" > /dev/null 2>&1
   $H calibrate --observed "$W/in/obs.csv" --preset grandstand --free threshold_frac=0.3:0.6 \
     --runs 4 --grid 2 --refine 0 --out "$o/cal" > "$o/cal.stdout" 2>&1
   $H frf --input "$W/in/r1/accel.csv" --x base_acc --y tip_acc --fs 2048 --nperseg 1024 \

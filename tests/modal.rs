@@ -450,10 +450,8 @@ fn the_hosts_fdd_and_the_cameras_agree_on_one_record() {
 
     let mut cam = CrossSpectra::<K, SEG, LINES, { K * (K + 1) / 2 }, 0>::try_new(fs as f32)
         .expect("the C ABI's capacities");
-    for i in 0..n {
-        let frame: [f32; K] = core::array::from_fn(|t| rec[t][i] as f32);
-        cam.push(&frame);
-    }
+    // frame i: every target's sample i
+    (0..n).for_each(|i| cam.push(&core::array::from_fn(|t| rec[t][i] as f32)));
     assert_eq!(cam.segments(), host.csd.segments as u32);
     let lines: Vec<(f32, [num_complex::Complex32; K])> =
         (0..LINES).map(|l| cam.first_singular(l, 30)).collect();

@@ -86,28 +86,7 @@ pub fn write_field_recording(
 ) -> anyhow::Result<String> {
     rec.validate()?;
     let staged = crate::outdir::Staged::new(out, force, "simulate-field", &[])?;
-    let fine = field::simulate_fine(&rec.model, rec.fps, rec.frames, rec.seed);
-    // the scale: the largest RMS over the points at the frames' instants
-    let rms = fine
-        .iter()
-        .map(|f| {
-            let s: f64 = (0..rec.frames).map(|k| f[SUB + k * SUB].powi(2)).sum();
-            (s / rec.frames as f64).sqrt()
-        })
-        .fold(0.0, f64::max);
-    let scale = if rms > 0.0 { rec.rms_px / rms } else { 0.0 };
-    let fine_hz = rec.fps * SUB as f64;
-    // image y grows downwards: a positive displacement moves the disk up
-    let paths: Vec<TargetPath> = fine
-        .iter()
-        .map(|f| TargetPath {
-            path_px: f.iter().map(|v| -v * scale).collect(),
-            pad: SUB,
-            fine_per_frame: SUB,
-            fine_hz,
-        })
-        .collect();
-    drop(fine);
+    let paths = scaled_paths(rec);
     let (lo, hi) = paths
         .iter()
         .flat_map(|p| p.path_px.iter())
@@ -161,6 +140,50 @@ pub fn write_field_recording(
     staged.write("truth.csv", export::truth_csv(&true_modes(&rec.model)))?;
     let window = ((sw - 2) | 1, (h - 2).min(31) | 1);
     staged.write("points.csv", export::points_csv(&first, window))?;
+    let (readme, command) = readme(rec, k, out);
+    staged.write("README.txt", readme)?;
+    staged.commit()?;
+    Ok(format!(
+        "{k} targets, {} frames of {w}x{h} px at {} fps ({:.1} min), modes: {}\nwritten to \
+         {}\nanalyse with:\n  {command}\n",
+        rec.frames,
+        rec.fps,
+        rec.frames as f64 / rec.fps / 60.0,
+        field::modes_line(&rec.model),
+        out.display()
+    ))
+}
+
+/// Each point's motion at the simulation's fine steps as an image path, px: scaled so that the
+/// point moving most has an RMS of `rec.rms_px` at the frames' instants; image `y` grows
+/// downwards, so a positive displacement moves the disk up.
+fn scaled_paths(rec: &FieldRecording) -> Vec<TargetPath> {
+    let fine = field::simulate_fine(&rec.model, rec.fps, rec.frames, rec.seed);
+    // the scale: the largest RMS over the points at the frames' instants
+    let rms = fine
+        .iter()
+        .map(|f| {
+            let s: f64 = (0..rec.frames).map(|k| f[SUB + k * SUB].powi(2)).sum();
+            (s / rec.frames as f64).sqrt()
+        })
+        .fold(0.0, f64::max);
+    let scale = if rms > 0.0 { rec.rms_px / rms } else { 0.0 };
+    let fine_hz = rec.fps * SUB as f64;
+    // image y grows downwards: a positive displacement moves the disk up
+    let paths: Vec<TargetPath> = fine
+        .iter()
+        .map(|f| TargetPath {
+            path_px: f.iter().map(|v| -v * scale).collect(),
+            pad: SUB,
+            fine_per_frame: SUB,
+            fine_hz,
+        })
+        .collect();
+    paths
+}
+
+/// The recording's README and the command that analyses its frames.
+fn readme(rec: &FieldRecording, k: usize, out: &Path) -> (String, String) {
     // the weighted centroid: linear in the motion, so no harmonics of pixel locking (the binary
     // centroid's staircase turns the strong first mode into modes at 3 and 5 times it)
     let command = format!(
@@ -186,17 +209,7 @@ pub fn write_field_recording(
         rec.rms_px,
         field::modes_line(&rec.model),
     );
-    staged.write("README.txt", readme)?;
-    staged.commit()?;
-    Ok(format!(
-        "{k} targets, {} frames of {w}x{h} px at {} fps ({:.1} min), modes: {}\nwritten to \
-         {}\nanalyse with:\n  {command}\n",
-        rec.frames,
-        rec.fps,
-        rec.frames as f64 / rec.fps / 60.0,
-        field::modes_line(&rec.model),
-        out.display()
-    ))
+    (readme, command)
 }
 
 /// The model's modes as `truth.csv` lists them.

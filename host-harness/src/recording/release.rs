@@ -142,77 +142,7 @@ pub fn write_release_recording(
     let mut truth = String::from("frame,target,x_px,y_px\n");
     let mut img = vec![[0f32; 3]; w * h];
     for k in 0..n {
-        let t0 = k as f64 / FPS;
-        let instants: Vec<f64> = (0..SUBSAMPLES)
-            .map(|j| t0 + EXPOSURE_MS / 1000.0 * ((j as f64 + 0.5) / SUBSAMPLES as f64 - 0.5))
-            .collect();
-        img.copy_from_slice(&back);
-        for s in 0..STOREYS {
-            let disp: Vec<(f64, f64)> = instants.iter().map(|&t| storey_disp(s, t)).collect();
-            let tags = &centres[s * PER_STOREY..(s + 1) * PER_STOREY];
-            let (x_lo, x_hi) = (tags[0].0 - 45.0, tags[PER_STOREY - 1].0 + 45.0);
-            let y = tags[0].1;
-            // the band the storey can reach in this exposure
-            let (dmin, dmax) = disp.iter().fold((f64::MAX, f64::MIN), |(a, b), d| {
-                (a.min(d.0).min(d.1), b.max(d.0).max(d.1))
-            });
-            let rows = ((y - 20.0 + dmin.min(0.0)).floor().max(0.0) as usize)
-                ..((y + 30.0 + dmax.max(0.0)).ceil().min(h as f64) as usize);
-            let cols = ((x_lo + dmin.min(0.0)).floor().max(0.0) as usize)
-                ..((x_hi + dmax.max(0.0)).ceil().min(w as f64) as usize);
-            for py in rows {
-                for px in cols.clone() {
-                    let (fx, fy) = (px as f64, py as f64);
-                    let mut acc = [0f64; 3];
-                    let under = img[py * w + px];
-                    for &(dx, dy) in &disp {
-                        let (u, v) = (fx - dx, fy - dy);
-                        // the floor beam under the tags (dark grey-blue), then the tags on it
-                        let beam = cover(u, x_lo, x_hi) * cover(v, y + 14.0, y + 24.0);
-                        let mut c = [
-                            under[0] as f64 * (1.0 - beam) + 92.0 * beam,
-                            under[1] as f64 * (1.0 - beam) + 96.0 * beam,
-                            under[2] as f64 * (1.0 - beam) + 104.0 * beam,
-                        ];
-                        for &(tx, ty) in tags {
-                            let a = cover(u, tx - TAG_HALF, tx + TAG_HALF)
-                                * cover(v, ty - TAG_HALF, ty + TAG_HALF);
-                            if a > 0.0 {
-                                // the dot, box-filtered by a 4 x 4 supersampling of the pixel
-                                let mut dot = 0.0;
-                                for i in 0..4 {
-                                    for j in 0..4 {
-                                        let ex = u - tx + (i as f64 - 1.5) / 4.0;
-                                        let ey = v - ty + (j as f64 - 1.5) / 4.0;
-                                        if ex * ex + ey * ey <= DOT_R * DOT_R {
-                                            dot += 1.0 / 16.0;
-                                        }
-                                    }
-                                }
-                                let tag = 240.0 * (1.0 - dot) + 30.0 * dot;
-                                for ch in &mut c {
-                                    *ch = *ch * (1.0 - a) + tag * a;
-                                }
-                            }
-                        }
-                        for (o, ch) in acc.iter_mut().zip(c) {
-                            *o += ch / SUBSAMPLES as f64;
-                        }
-                    }
-                    img[py * w + px] = acc.map(|v| v as f32);
-                }
-            }
-            for (i, &(tx, ty)) in tags.iter().enumerate() {
-                let m = disp.iter().fold((0.0, 0.0), |a, d| (a.0 + d.0, a.1 + d.1));
-                let n = disp.len() as f64;
-                truth.push_str(&format!(
-                    "{k},{},{},{}\n",
-                    s * PER_STOREY + i + 1,
-                    tx + m.0 / n,
-                    ty + m.1 / n
-                ));
-            }
-        }
+        render_frame(k, (&back, &centres), &mut img, &mut truth);
         let mut rgb = RgbImage::new(w as u32, h as u32);
         for (p, v) in rgb.pixels_mut().zip(&img) {
             *p = Rgb(v.map(|c| (c + 0.5).clamp(0.0, 255.0) as u8));
@@ -240,10 +170,104 @@ pub fn write_release_recording(
     };
     write("points.csv", &points)?;
     write("truth.csv", &truth)?;
+    write("README.txt", &readme(dir, n, centres.len(), video))?;
+    Ok(n)
+}
+
+/// Frame `k`: the wall `back`, each storey's beam and tags (at `centres` at rest) averaged over
+/// the exposure's instants, into `img`; each tag's exposure-averaged centre appended to
+/// `truth`.
+fn render_frame(
+    k: usize,
+    (back, centres): (&[[f32; 3]], &[(f64, f64)]),
+    img: &mut [[f32; 3]],
+    truth: &mut String,
+) {
+    let t0 = k as f64 / FPS;
+    let instants: Vec<f64> = (0..SUBSAMPLES)
+        .map(|j| t0 + EXPOSURE_MS / 1000.0 * ((j as f64 + 0.5) / SUBSAMPLES as f64 - 0.5))
+        .collect();
+    img.copy_from_slice(back);
+    for s in 0..STOREYS {
+        let disp: Vec<(f64, f64)> = instants.iter().map(|&t| storey_disp(s, t)).collect();
+        let tags = &centres[s * PER_STOREY..(s + 1) * PER_STOREY];
+        draw_storey(img, tags, &disp);
+        for (i, &(tx, ty)) in tags.iter().enumerate() {
+            let m = disp.iter().fold((0.0, 0.0), |a, d| (a.0 + d.0, a.1 + d.1));
+            let n = disp.len() as f64;
+            truth.push_str(&format!(
+                "{k},{},{},{}\n",
+                s * PER_STOREY + i + 1,
+                tx + m.0 / n,
+                ty + m.1 / n
+            ));
+        }
+    }
+}
+
+/// One storey's floor beam and `tags` drawn over `img`, averaged over the storey's
+/// displacements `disp` at the exposure's instants (only the band the storey can reach).
+fn draw_storey(img: &mut [[f32; 3]], tags: &[(f64, f64)], disp: &[(f64, f64)]) {
+    let (w, h) = SIZE;
+    let (x_lo, x_hi) = (tags[0].0 - 45.0, tags[PER_STOREY - 1].0 + 45.0);
+    let y = tags[0].1;
+    // the band the storey can reach in this exposure
+    let (dmin, dmax) = disp.iter().fold((f64::MAX, f64::MIN), |(a, b), d| {
+        (a.min(d.0).min(d.1), b.max(d.0).max(d.1))
+    });
+    let rows = ((y - 20.0 + dmin.min(0.0)).floor().max(0.0) as usize)
+        ..((y + 30.0 + dmax.max(0.0)).ceil().min(h as f64) as usize);
+    let cols = ((x_lo + dmin.min(0.0)).floor().max(0.0) as usize)
+        ..((x_hi + dmax.max(0.0)).ceil().min(w as f64) as usize);
+    for py in rows {
+        for px in cols.clone() {
+            let (fx, fy) = (px as f64, py as f64);
+            let mut acc = [0f64; 3];
+            let under = img[py * w + px];
+            for &(dx, dy) in disp {
+                let (u, v) = (fx - dx, fy - dy);
+                // the floor beam under the tags (dark grey-blue), then the tags on it
+                let beam = cover(u, x_lo, x_hi) * cover(v, y + 14.0, y + 24.0);
+                let mut c = [
+                    under[0] as f64 * (1.0 - beam) + 92.0 * beam,
+                    under[1] as f64 * (1.0 - beam) + 96.0 * beam,
+                    under[2] as f64 * (1.0 - beam) + 104.0 * beam,
+                ];
+                for &(tx, ty) in tags {
+                    let a = cover(u, tx - TAG_HALF, tx + TAG_HALF)
+                        * cover(v, ty - TAG_HALF, ty + TAG_HALF);
+                    if a > 0.0 {
+                        // the dot, box-filtered by a 4 x 4 supersampling of the pixel
+                        let mut dot = 0.0;
+                        for i in 0..4 {
+                            for j in 0..4 {
+                                let ex = u - tx + (i as f64 - 1.5) / 4.0;
+                                let ey = v - ty + (j as f64 - 1.5) / 4.0;
+                                if ex * ex + ey * ey <= DOT_R * DOT_R {
+                                    dot += 1.0 / 16.0;
+                                }
+                            }
+                        }
+                        let tag = 240.0 * (1.0 - dot) + 30.0 * dot;
+                        for ch in &mut c {
+                            *ch = *ch * (1.0 - a) + tag * a;
+                        }
+                    }
+                }
+                for (o, ch) in acc.iter_mut().zip(c) {
+                    *o += ch / SUBSAMPLES as f64;
+                }
+            }
+            img[py * w + px] = acc.map(|v| v as f32);
+        }
+    }
+}
+
+/// The recording's README: what it shows and the command that follows every tag.
+fn readme(dir: &Path, n: usize, tags: usize, video: bool) -> String {
+    let (w, h) = SIZE;
     let d = dir.display();
-    write(
-        "README.txt",
-        &format!(
+    format!(
             "A model structure pulled and released in front of a white brick wall: {} tags \
              (all alike: white, a black dot on each) on {STOREYS} storeys, {n} colour JPEG \
              frames at {FPS} fps, {EXPOSURE_MS} ms exposure, {} x {} px. The top storey jumps by \
@@ -252,7 +276,7 @@ pub fn write_release_recording(
              together). truth.csv: each tag's exposure-averaged centre per frame.\n\n\
              Follow every tag with:\n\n  host-harness track --frames {d}/frames --fps {FPS} \
              --points {d}/points.csv --tracker lk --search-px 130 --out {d}/track\n{}",
-            centres.len(),
+            tags,
             w,
             h,
             if video {
@@ -263,9 +287,7 @@ pub fn write_release_recording(
             } else {
                 String::new()
             }
-        ),
-    )?;
-    Ok(n)
+        )
 }
 
 /// Writes the recording into the new directory `dir`, staged and moved into place (`force`:

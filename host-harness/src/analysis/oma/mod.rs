@@ -292,8 +292,32 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
     let csd = csd::csd_matrix(channels, s.fs_hz, s.csd)?;
     let svd = fdd::decompose(&csd)?;
     let mut notes = Vec::new();
-    let peaks: Vec<(usize, Option<usize>)> = if s.bands.is_empty() {
-        fdd::pick_peaks(&svd, s.peaks)
+    let peaks = fdd_peaks(&svd, csd.df_hz(), s, &mut notes);
+    let mut modes = fdd_modes(&svd, &peaks, s, &mut notes);
+    let (ssi, poles) = ssi_modes(channels, s, &mut notes)?;
+    modes.extend(ssi);
+    modes.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
+    notes.extend(harmonic_notes(&modes, csd.df_hz(), s.source));
+    Ok(OmaResult {
+        csd,
+        svd,
+        peaks: peaks.iter().map(|p| p.0).collect(),
+        modes,
+        poles,
+        notes,
+    })
+}
+
+/// The lines of the FDD's modes: the peaks of the first singular value, or with bands the
+/// highest line of each band (a band without a line is noted), with the band's index.
+fn fdd_peaks(
+    svd: &fdd::Svd,
+    df_hz: f64,
+    s: &OmaSettings,
+    notes: &mut Vec<String>,
+) -> Vec<(usize, Option<usize>)> {
+    if s.bands.is_empty() {
+        fdd::pick_peaks(svd, s.peaks)
             .into_iter()
             .map(|l| (l, None))
             .collect()
@@ -301,20 +325,28 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
         s.bands
             .iter()
             .enumerate()
-            .filter_map(|(b, &band)| match fdd::peak_in_band(&svd, band) {
+            .filter_map(|(b, &band)| match fdd::peak_in_band(svd, band) {
                 Some(l) => Some((l, Some(b))),
                 None => {
                     notes.push(format!(
                         "band {}-{} Hz has no spectral line (line spacing {:.4} Hz)",
-                        band.0,
-                        band.1,
-                        csd.df_hz()
+                        band.0, band.1, df_hz
                     ));
                     None
                 }
             })
             .collect()
-    };
+    }
+}
+
+/// The FDD mode at each peak and its EFDD refinement (frequency and damping from the bell's
+/// correlation function; a bell with too few cycles is noted).
+fn fdd_modes(
+    svd: &fdd::Svd,
+    peaks: &[(usize, Option<usize>)],
+    s: &OmaSettings,
+    notes: &mut Vec<String>,
+) -> Vec<OmaMode> {
     let mut modes = Vec::new();
     let lines = svd.freq_hz.len();
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
@@ -336,7 +368,7 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
             if n > 0 { peaks[n - 1].0 } else { 0 },
             peaks.get(n + 1).map_or(lines, |p| p.0),
         );
-        match fdd::efdd(&svd, l, fence, (s.csd.nfft, s.fs_hz), &lag, s.efdd) {
+        match fdd::efdd(svd, l, fence, (s.csd.nfft, s.fs_hz), &lag, s.efdd) {
             Some(e) => modes.push(OmaMode {
                 method: Method::Efdd,
                 mode,
@@ -353,6 +385,18 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
             )),
         }
     }
+    modes
+}
+
+/// SSI-cov's modes (the clusters of stable poles; with bands the fullest cluster of each band)
+/// and all its poles; a stable mode below the range analysed is noted, never dropped in
+/// silence.
+fn ssi_modes(
+    channels: &[Vec<f64>],
+    s: &OmaSettings,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<(Vec<OmaMode>, Vec<ssi::Pole>)> {
+    let mut modes = Vec::new();
     let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
     let clusters = ssi::cluster(&poles, (s.ssi.df_max, s.ssi.mac_min), s.ssi_min_poles);
     // what the lower end of the range left out: a mode there is named, never dropped in silence
@@ -401,16 +445,7 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
             }
         }
     }
-    modes.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
-    notes.extend(harmonic_notes(&modes, csd.df_hz(), s.source));
-    Ok(OmaResult {
-        csd,
-        svd,
-        peaks: peaks.iter().map(|p| p.0).collect(),
-        modes,
-        poles,
-        notes,
-    })
+    Ok((modes, poles))
 }
 
 /// Notes on modes that may be harmonics of a lower mode of the same method: a frequency within
