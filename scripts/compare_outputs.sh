@@ -67,7 +67,7 @@ for v in a b; do
   $H plan --preset grandstand --out "$o/misc/plan.csv" > "$o/misc/plan.stdout" 2>&1
   $H centroid --threshold 127 "$W/in/r1/frames/frame_0000"*.png > "$o/misc/centroid.stdout" 2>&1
 done
-mask() { sed "s#$W/[ab]/#OUT/#g; s/computed in .* s/T/; s/evaluations, .* s)/E/" "$1"; }
+mask() { sed "s#$W/[ab]/#OUT/#g; s/computed in .* s/T/; s/evaluations, .* s)/E/; s/ ([0-9.]* s)$/ (T)/" "$1"; }
 same=0; diff=0
 while IFS= read -r f; do
   case $f in *.png|*.svg|*runs.jsonl|*.lock) continue ;; esac

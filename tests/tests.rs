@@ -289,3 +289,135 @@ fn the_python_wheel_reuses_the_workspace_build() {
         "the wheel builds these with features the tests do not: {other:?}"
     );
 }
+
+/// No two files of host-harness use each other, directly or through others: every
+/// `crate::a::b`, `super::x` and `self::y` path (also inside `use a::{b, c::d}`, test modules and
+/// comments left out) is resolved to the file of the longest module it names, and the graph of
+/// files has no circle. (A circle makes a file impossible to read without the other.)
+#[test]
+fn no_two_files_of_host_harness_use_each_other() {
+    use std::collections::{BTreeMap, BTreeSet};
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("src")
+        .canonicalize()
+        .unwrap();
+    // module path -> file
+    let mut files: BTreeMap<Vec<String>, String> = BTreeMap::new();
+    for p in workspace_files(&[".rs"]) {
+        let p = p.canonicalize().unwrap();
+        let Ok(rel) = p.strip_prefix(&src) else {
+            continue;
+        };
+        let mut m: Vec<String> = rel
+            .with_extension("")
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect();
+        if m.last()
+            .is_some_and(|l| l == "mod" || l == "lib" || l == "main")
+        {
+            m.pop();
+        }
+        files.insert(m, rel.display().to_string());
+    }
+    assert!(files.len() > 50, "only {} files", files.len());
+    let resolve = |parts: &[String]| {
+        (1..=parts.len())
+            .rev()
+            .find_map(|k| files.get(&parts[..k]).cloned())
+    };
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (module, file) in &files {
+        let text = std::fs::read_to_string(src.join(file)).unwrap();
+        let text = text.split("#[cfg(test)]").next().unwrap_or("");
+        let is_mod = file.ends_with("mod.rs") || file == "lib.rs";
+        let mut deps = BTreeSet::new();
+        for line in text.lines() {
+            let code = line.split("//").next().unwrap_or("");
+            for head in ["crate::", "super::", "self::"] {
+                let mut rest = code;
+                while let Some(i) = rest.find(head) {
+                    // `crate::` inside a longer word (`my_crate::`) is no path of ours
+                    let before = rest[..i].chars().last();
+                    rest = &rest[i + head.len()..];
+                    if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                        continue;
+                    }
+                    let mut base: Vec<String> = match head {
+                        "crate::" => Vec::new(),
+                        // a mod.rs is its module; any other file's parent is one up
+                        "super::" if is_mod => module[..module.len().saturating_sub(1)].to_vec(),
+                        "super::" => module[..module.len().saturating_sub(1)].to_vec(),
+                        _ => module.clone(),
+                    };
+                    let path: String = rest
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                        .collect();
+                    let mut parts: Vec<String> = path
+                        .split("::")
+                        .filter(|s| !s.is_empty())
+                        .map(String::from)
+                        .collect();
+                    while parts.first().is_some_and(|p| p == "super") {
+                        parts.remove(0);
+                        base.pop();
+                    }
+                    let after = &rest[path.len()..];
+                    let group = after
+                        .strip_prefix('{')
+                        .map(|g| &g[..g.find('}').unwrap_or(g.len())]);
+                    let mut whole = base.clone();
+                    whole.extend(parts.iter().cloned());
+                    deps.extend(resolve(&whole));
+                    for item in group.into_iter().flat_map(|g| g.split(',')) {
+                        let mut p = whole.clone();
+                        p.extend(
+                            item.trim()
+                                .split("::")
+                                .map(|s| {
+                                    s.chars()
+                                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                                        .collect::<String>()
+                                })
+                                .filter(|s| !s.is_empty()),
+                        );
+                        deps.extend(resolve(&p));
+                    }
+                }
+            }
+        }
+        deps.remove(file);
+        edges.insert(file.clone(), deps);
+    }
+    // a circle: a file reached again from itself (depth-first, the path kept)
+    fn visit(
+        f: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        path: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+        circles: &mut Vec<String>,
+    ) {
+        if let Some(i) = path.iter().position(|p| p == f) {
+            circles.push(format!("{} -> {f}", path[i..].join(" -> ")));
+            return;
+        }
+        if !done.insert(f.to_string()) {
+            return;
+        }
+        path.push(f.to_string());
+        for d in edges.get(f).into_iter().flatten() {
+            visit(d, edges, path, done, circles);
+        }
+        path.pop();
+    }
+    let (mut done, mut circles) = (BTreeSet::new(), Vec::new());
+    for f in edges.keys() {
+        visit(f, &edges, &mut Vec::new(), &mut done, &mut circles);
+    }
+    assert!(
+        circles.is_empty(),
+        "files that use each other:\n{}",
+        circles.join("\n")
+    );
+}

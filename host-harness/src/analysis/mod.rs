@@ -37,6 +37,7 @@ pub mod modal;
 pub mod oma;
 pub mod points;
 pub mod report;
+pub mod request;
 pub mod run;
 pub mod shared_motion;
 pub mod targets;

@@ -888,6 +888,38 @@ fn follow(
     Ok(lost_because(Flags::BORDER))
 }
 
+/// The `--points` windows: per target its window, threshold and lost frames.
+pub fn windows_report(w: &PointsInfo, tracks: &super::targets::Tracks) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("\npoints (each target in its own window):\n");
+    for (t, (size, c)) in w.sizes.iter().zip(&tracks.centroids).enumerate() {
+        let lost = c.iter().filter(|c| c.position().is_none()).count();
+        let how = match w.thresholds.get(t) {
+            Some(th) => format!("threshold {th}"),
+            None => "Lucas-Kanade".to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "  target {}: window {}x{} px, {how}, {lost} of {} frames lost",
+            t + 1,
+            size.0,
+            size.1,
+            c.len()
+        );
+    }
+    if let Some(g) = &w.groups {
+        let _ = writeln!(
+            s,
+            "  {}",
+            g.describe(&(1..=w.sizes.len()).collect::<Vec<_>>())
+        );
+    }
+    for warning in &w.warnings {
+        let _ = writeln!(s, "WARNING: {warning}");
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,98 +4,13 @@
 //! report text, which the caller prints.
 
 use super::compensate::{compensate, Compensated};
-use super::track_run::Targets;
-use super::{Axis, DisplacementSettings, Settings};
+use super::Axis;
 use crate::export::analysis as export;
 use crate::frames::{centroid_source, FrameSource};
 use crate::outdir::Staged;
-use firmware_core::centroid::CentroidConfig;
 use std::path::{Path, PathBuf};
 
-/// The accelerometer record of a recording.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AccelInput {
-    /// The CSV file.
-    pub path: PathBuf,
-    /// Its sample rate, Hz.
-    pub fs: f64,
-    /// Column of the FRF input (base acceleration, or a force).
-    pub input_col: String,
-    /// Column of the output (tip) acceleration.
-    pub output_col: String,
-    /// Optional time column, s.
-    pub time_col: Option<String>,
-}
-
-/// Several targets (`--targets K` or `--points`) and what the accelerometer is compared with.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TargetsRequest {
-    /// The targets and how they are followed (never [`Targets::Whole`]: that is no request).
-    pub targets: Targets,
-    /// The target co-located with the output accelerometer, 1..=K.
-    pub accel_target: usize,
-    /// Reference shapes to compute the MAC against.
-    pub shape_reference: Option<PathBuf>,
-}
-
-/// An `analyze` request with an accelerometer, as [`crate::spec::AnalyzeSpec`] checks it: every
-/// value in range, nothing read yet.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Request {
-    /// `--frames` as the user wrote it.
-    pub frames: String,
-    /// `--retime`: the frame rate retimes a video's container rate (slow motion).
-    pub retime: bool,
-    /// Frames A..B only (`--frame-range`).
-    pub frame_range: Option<crate::frames::FrameRange>,
-    /// The accelerometer record.
-    pub accel: AccelInput,
-    /// The chain's settings (rates, alignment, Welch, bands, exposure, end matching).
-    pub settings: Settings,
-    /// Pixels to millimetres, axis, sign, lost-frame policy.
-    pub displacement: DisplacementSettings,
-    /// The centroid's settings.
-    pub centroid: CentroidConfig,
-    /// Whether the centroid is the binary one (the compensation's transfer is then approximate).
-    pub binary: bool,
-    /// Divide the vision H1 by the exposure's transfer.
-    pub compensate_exposure: bool,
-    /// The exposure as the user gave it, ms (`settings.exposure_s` is computed from it; this
-    /// is how the report states it).
-    pub exposure_ms: Option<f64>,
-    /// Remarks for the report (where the frame rate or exposure came from).
-    pub notes: Vec<String>,
-    /// The points file, when `--points` was given (an input: never overwritten).
-    pub points_file: Option<PathBuf>,
-    /// Several targets, or one.
-    pub targets: Option<TargetsRequest>,
-    /// Output directory, and whether an earlier analysis there may be replaced.
-    pub out: PathBuf,
-    /// `--force`.
-    pub force: bool,
-}
-
-impl Request {
-    /// The files and folders the run reads (an output directory holding one is never
-    /// replaced).
-    pub fn inputs(&self) -> Vec<&Path> {
-        let mut v = vec![Path::new(self.frames.as_str()), self.accel.path.as_path()];
-        if let Some(t) = &self.targets {
-            v.extend(t.shape_reference.as_deref());
-        }
-        v.extend(self.points_file.as_deref());
-        v
-    }
-}
-
-/// What an analysis printed, and whether it succeeded (a failure's report is printed too).
-#[derive(Debug)]
-pub struct Outcome {
-    /// The report (as written to `report.txt` when it was written).
-    pub report: String,
-    /// `Err` when the analysis failed (bad input: exit 2).
-    pub result: anyhow::Result<()>,
-}
+pub use super::request::{AccelInput, Outcome, Request, TargetsRequest};
 
 /// Runs the analysis the request describes; see the module documentation.
 pub fn run(req: &Request) -> anyhow::Result<Outcome> {

@@ -4,7 +4,7 @@
 //! `compensation.csv` (with the compensation) and `report.txt` written into the staged output
 //! directory.
 
-use super::run::{Outcome, Request, TargetsRequest};
+use super::request::{Outcome, Request, TargetsRequest};
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::Axis;
 use crate::export::targets as export;
@@ -51,7 +51,7 @@ pub fn run(
     shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
     let mut report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
     if let Some(w) = &windows {
-        report.push_str(&windows_report(w, &tracks));
+        report.push_str(&super::points::windows_report(w, &tracks));
     }
     let failed = a.failures();
     out.write("report.txt", &report)?;
@@ -123,37 +123,6 @@ fn write_tables(
         out.write("mac.csv", export::mac_csv(m))?;
     }
     Ok(())
-}
-
-/// The `--points` windows: per target its window, threshold and lost frames.
-pub fn windows_report(w: &super::points::PointsInfo, tracks: &Tracks) -> String {
-    let mut s = String::from("\npoints (each target in its own window):\n");
-    for (t, (size, c)) in w.sizes.iter().zip(&tracks.centroids).enumerate() {
-        let lost = c.iter().filter(|c| c.position().is_none()).count();
-        let how = match w.thresholds.get(t) {
-            Some(th) => format!("threshold {th}"),
-            None => "Lucas-Kanade".to_string(),
-        };
-        let _ = writeln!(
-            s,
-            "  target {}: window {}x{} px, {how}, {lost} of {} frames lost",
-            t + 1,
-            size.0,
-            size.1,
-            c.len()
-        );
-    }
-    if let Some(g) = &w.groups {
-        let _ = writeln!(
-            s,
-            "  {}",
-            g.describe(&(1..=w.sizes.len()).collect::<Vec<_>>())
-        );
-    }
-    for warning in &w.warnings {
-        let _ = writeln!(s, "WARNING: {warning}");
-    }
-    s
 }
 
 /// The whole report: [`report`], then the notes on the frames and the compensation.

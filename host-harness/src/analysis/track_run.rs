@@ -204,7 +204,7 @@ fn report(
         let _ = writeln!(s, "note: {n}");
     }
     match windows {
-        Some(w) => s.push_str(&super::targets_run::windows_report(w, tracks)),
+        Some(w) => s.push_str(&super::points::windows_report(w, tracks)),
         None => {
             for (t, c) in tracks.centroids.iter().enumerate() {
                 let lost = c.iter().filter(|c| c.position().is_none()).count();

@@ -85,19 +85,19 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
 }
 
 /// `displacement.csv` of one target: the columns of several targets
-/// ([`super::targets::displacement_csv`]), `target` 1.
+/// ([`tracks_displacement_csv`]), `target` 1.
 pub fn displacement_csv(
     centroids: &[Centroid],
     (mm, lost): (&[f64], &[bool]),
     frame_rate_hz: f64,
     time_offset_s: f64,
 ) -> Vec<u8> {
-    let track = super::targets::Track {
+    let track = Track {
         centroids,
         mm: Some(mm),
         lost: Some(lost),
     };
-    super::targets::displacement_csv(&[track], frame_rate_hz, time_offset_s)
+    tracks_displacement_csv(&[track], frame_rate_hz, time_offset_s)
 }
 
 /// A centroid's `cx`, `cy` cells (`f32` text), empty when the frame has none.
@@ -156,4 +156,48 @@ pub fn round_e2pr(e: f64) -> f64 {
     let digits = 9 - 1 - e.abs().log10().floor() as i32;
     let scale = 10f64.powi(digits);
     (e * scale).round() / scale
+}
+
+/// One target's track as `displacement.csv` shows it: its centroid per frame, and, when
+/// computed, the displacement (mm) and the lost flag per frame (else lost = no centroid).
+#[derive(Debug, Clone, Copy)]
+pub struct Track<'a> {
+    /// Centroid per frame (an empty one where the target was lost).
+    pub centroids: &'a [Centroid],
+    /// Displacement per frame, mm (`None`: no scale, or too many frames lost to fill them).
+    pub mm: Option<&'a [f64]>,
+    /// Lost per frame (`None`: the frames without a centroid).
+    pub lost: Option<&'a [bool]>,
+}
+
+/// `displacement.csv` of `analyze` (one target or several) and `track`:
+/// `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per frame and target (`tracks[t]`
+/// is target `t + 1`); `t_s = time_offset_s + frame / fps`; `cx`, `cy` in pixels of the full
+/// frame, empty where the target was lost; `flags` the firmware-core flag byte; `disp_mm` empty
+/// where it was not computed; `lost` 0 or 1.
+pub fn tracks_displacement_csv(
+    tracks: &[Track<'_>],
+    frame_rate_hz: f64,
+    time_offset_s: f64,
+) -> Vec<u8> {
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
+    let frames = tracks.first().map_or(0, |t| t.centroids.len());
+    for k in 0..frames {
+        let t_s = time_offset_s + k as f64 / frame_rate_hz;
+        for (t, tr) in tracks.iter().enumerate() {
+            let c = &tr.centroids[k];
+            let (cx, cy) = position(c);
+            let lost = tr.lost.map_or(c.position().is_none(), |l| l[k]);
+            let _ = writeln!(
+                s,
+                "{k},{t_s},{},{cx},{cy},{},{},{},{}",
+                t + 1,
+                c.pixels(),
+                c.flags.bits(),
+                opt(tr.mm.map(|m| m[k])),
+                u8::from(lost)
+            );
+        }
+    }
+    s.into_bytes()
 }

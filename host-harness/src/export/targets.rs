@@ -2,9 +2,9 @@
 //! `shapes.csv`, `mac.csv` and `compensation.csv` (the UFF is [`super::uff`]). Targets are
 //! numbered 1..=K left to right in the first frame; target 0 is the accelerometer.
 
-use super::analysis::{position, push_compensation_row, round_e2pr, CompensationRow, Spectrum};
+use super::analysis::{push_compensation_row, round_e2pr, CompensationRow, Spectrum};
+pub use super::analysis::{tracks_displacement_csv as displacement_csv, Track};
 use super::opt;
-use firmware_core::centroid::Centroid;
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
@@ -15,46 +15,6 @@ pub fn frf_csv<'a>(frfs: impl IntoIterator<Item = (usize, Spectrum<'a>)>) -> Vec
     for (t, frf) in frfs {
         for ((f, h), c) in frf.freq_hz.iter().zip(frf.h1).zip(frf.coherence) {
             let _ = writeln!(s, "{t},{f},{},{},{},{c}", h.re, h.im, h.norm());
-        }
-    }
-    s.into_bytes()
-}
-
-/// One target's track as `displacement.csv` shows it: its centroid per frame, and, when
-/// computed, the displacement (mm) and the lost flag per frame (else lost = no centroid).
-#[derive(Debug, Clone, Copy)]
-pub struct Track<'a> {
-    /// Centroid per frame (an empty one where the target was lost).
-    pub centroids: &'a [Centroid],
-    /// Displacement per frame, mm (`None`: no scale, or too many frames lost to fill them).
-    pub mm: Option<&'a [f64]>,
-    /// Lost per frame (`None`: the frames without a centroid).
-    pub lost: Option<&'a [bool]>,
-}
-
-/// `displacement.csv` of `analyze` (one target or several) and `track`:
-/// `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per frame and target (`tracks[t]`
-/// is target `t + 1`); `t_s = time_offset_s + frame / fps`; `cx`, `cy` in pixels of the full
-/// frame, empty where the target was lost; `flags` the firmware-core flag byte; `disp_mm` empty
-/// where it was not computed; `lost` 0 or 1.
-pub fn displacement_csv(tracks: &[Track<'_>], frame_rate_hz: f64, time_offset_s: f64) -> Vec<u8> {
-    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
-    let frames = tracks.first().map_or(0, |t| t.centroids.len());
-    for k in 0..frames {
-        let t_s = time_offset_s + k as f64 / frame_rate_hz;
-        for (t, tr) in tracks.iter().enumerate() {
-            let c = &tr.centroids[k];
-            let (cx, cy) = position(c);
-            let lost = tr.lost.map_or(c.position().is_none(), |l| l[k]);
-            let _ = writeln!(
-                s,
-                "{k},{t_s},{},{cx},{cy},{},{},{},{}",
-                t + 1,
-                c.pixels(),
-                c.flags.bits(),
-                opt(tr.mm.map(|m| m[k])),
-                u8::from(lost)
-            );
         }
     }
     s.into_bytes()

@@ -144,18 +144,6 @@ impl Camera {
     }
 }
 
-/// The threshold of a frame-range rule: `min + frac (max - min)` of the frame's grey levels,
-/// rounded down (a flat frame gets its one level, so nothing is above it and it is lost).
-pub fn frame_range_threshold<P: Copy + Into<u32>>(frame: &[P], frac: f64) -> u16 {
-    let (lo, hi) = frame.iter().fold((u32::MAX, 0u32), |(lo, hi), &v| {
-        let v = v.into();
-        (lo.min(v), hi.max(v))
-    });
-    let lo = lo.min(hi);
-    let threshold = lo + (frac * (hi - lo) as f64).floor() as u32;
-    threshold.min(u16::MAX as u32) as u16
-}
-
 /// How the firmware measures a frame (the `[imaging]` fields that are not an effect on the
 /// image): which centroid, whether the identity camera may take the fast path (the same
 /// pixels either way), and the threshold rule.

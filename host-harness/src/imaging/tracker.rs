@@ -100,7 +100,7 @@ impl FrameTracker {
         let config = match self.frame_range_frac {
             None => self.config,
             Some(frac) => CentroidConfig {
-                threshold: super::effects::frame_range_threshold(data, frac),
+                threshold: frame_range_threshold(data, frac),
                 ..self.config
             },
         };
@@ -146,4 +146,16 @@ fn lk_tracker((hx, hy): (i32, i32), saturation: u16) -> anyhow::Result<HostLk> {
             LK_ROW - 7
         ))
     })
+}
+
+/// The threshold of a frame-range rule: `min + frac (max - min)` of the frame's grey levels,
+/// rounded down (a flat frame gets its one level, so nothing is above it and it is lost).
+pub fn frame_range_threshold<P: Copy + Into<u32>>(frame: &[P], frac: f64) -> u16 {
+    let (lo, hi) = frame.iter().fold((u32::MAX, 0u32), |(lo, hi), &v| {
+        let v = v.into();
+        (lo.min(v), hi.max(v))
+    });
+    let lo = lo.min(hi);
+    let threshold = lo + (frac * (hi - lo) as f64).floor() as u32;
+    threshold.min(u16::MAX as u32) as u16
 }
