@@ -421,3 +421,58 @@ fn no_two_files_of_host_harness_use_each_other() {
         circles.join("\n")
     );
 }
+
+/// ARCHITECTURE.md names every module of host-harness and firmware-core (each source file's
+/// name, or its folder's for a `mod.rs`, as a word) and every crate of the workspace: a new
+/// module comes with its line in the map.
+#[test]
+fn the_architecture_names_every_module_and_crate() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let map = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let words: std::collections::BTreeSet<&str> = map
+        .split(|c: char| !(c.is_alphanumeric() || c == '_' || c == '-'))
+        .collect();
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for krate in ["host-harness", "firmware-core"] {
+        let src = root.join(krate).join("src").canonicalize().unwrap();
+        for p in workspace_files(&[".rs"]) {
+            let p = p.canonicalize().unwrap();
+            let Ok(rel) = p.strip_prefix(&src) else {
+                continue;
+            };
+            let stem = rel.file_stem().unwrap().to_string_lossy().into_owned();
+            let name = match stem.as_str() {
+                "lib" | "main" => continue,
+                "mod" => rel
+                    .parent()
+                    .and_then(|d| d.file_name())
+                    .unwrap()
+                    .to_string_lossy()
+                    .into_owned(),
+                _ => stem,
+            };
+            checked += 1;
+            if !words.contains(name.as_str()) {
+                missing.push(format!("{krate}/src/{}", rel.display()));
+            }
+        }
+    }
+    assert!(checked > 80, "only {checked} modules found");
+    for krate in [
+        "firmware-core",
+        "firmware-core-ffi",
+        "host-harness",
+        "python",
+        "mcu-demo",
+    ] {
+        if !map.contains(&format!("`{krate}/`")) {
+            missing.push(format!("crate {krate}"));
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md does not name:\n{}",
+        missing.join("\n")
+    );
+}
