@@ -261,7 +261,11 @@ mod frf {
             (&["--nperseg", "0"][..], "nperseg"),
             (&["--fs", "0"][..], "--fs"),
             (&["--bands", "1-x"][..], "--bands"),
-            (&["--bands", "8-9"][..], "contains no bin"),
+            // above the Nyquist frequency (5 Hz): the rule every band of every command passes
+            (
+                &["--bands", "8-9"][..],
+                "--bands 8-9: reaches above the record's Nyquist",
+            ),
         ] {
             let (code, err) = run_bad(ok, extra);
             assert_eq!(code, 2, "{extra:?}: {err}");

@@ -33,6 +33,7 @@
 pub mod analysis;
 pub mod calibrate;
 pub mod chain;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod csvio;
 pub mod export;

@@ -8,17 +8,8 @@
 pub const MAX_LOST_FRACTION: f64 = 0.05;
 
 /// What a lost frame's value becomes (`[imaging] lost_frame_policy`, `analyze --lost-frames`).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum LostFramePolicy {
     /// Linear interpolation between the neighbouring valid frames ([`fill_lost_frames`]).

@@ -574,6 +574,59 @@ fn analysis_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let r = &c.result;
     let d = PyDict::new(py);
+    d.set_item("modes", modes_dict(py, r)?)?;
+    let k = c.records.targets.len();
+    let mut shapes = Array2::<Complex64>::zeros((r.modes.len(), k));
+    for (i, m) in r.modes.iter().enumerate() {
+        for (j, s) in m.shape.iter().enumerate().take(k) {
+            shapes[[i, j]] = *s;
+        }
+    }
+    d.set_item("shapes", shapes.into_pyarray(py))?;
+    d.set_item(
+        "targets",
+        c.records
+            .targets
+            .iter()
+            .map(|(t, _)| *t as i64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let mut xy = Array2::<f64>::from_elem((k, 2), f64::NAN);
+    for (j, (_, p)) in c.records.targets.iter().enumerate() {
+        if let Some((x, y)) = p {
+            xy[[j, 0]] = *x;
+            xy[[j, 1]] = *y;
+        }
+    }
+    d.set_item("first_xy", xy.into_pyarray(py))?;
+    let lines = r.svd.freq_hz.len();
+    let kk = r.svd.s.first().map_or(0, Vec::len);
+    let mut s = Array2::<f64>::zeros((lines, kk));
+    for (i, row) in r.svd.s.iter().enumerate() {
+        for (j, v) in row.iter().enumerate().take(kk) {
+            s[[i, j]] = *v;
+        }
+    }
+    d.set_item("svd_freq_hz", r.svd.freq_hz.clone().into_pyarray(py))?;
+    d.set_item("svd", s.into_pyarray(py))?;
+    let (disp, lost) = displacement_arrays(&c);
+    d.set_item("displacement", disp.into_pyarray(py))?;
+    d.set_item("lost", lost.into_pyarray(py))?;
+    d.set_item("unit", c.records.unit.clone())?;
+    d.set_item("left_out", c.records.left_out.clone())?;
+    d.set_item("notes", r.notes.clone())?;
+    d.set_item("report", report)?;
+    d.set_item("fps", fps)?;
+    Ok(d)
+}
+
+/// The modes as a dict of columns (`method`, `mode`, `band_lo_hz`, `band_hi_hz`, `f_hz`,
+/// `amplitude`, `damping`; NaN where a method gives none).
+fn modes_dict<'py>(
+    py: Python<'py>,
+    r: &host_harness::analysis::oma::OmaResult,
+) -> PyResult<Bound<'py, PyDict>> {
     let modes = PyDict::new(py);
     let col = |f: &dyn Fn(&host_harness::analysis::oma::OmaMode) -> f64| -> Vec<f64> {
         r.modes.iter().map(f).collect()
@@ -600,42 +653,12 @@ fn analysis_dict<'py>(
     ] {
         modes.set_item(name, v.into_pyarray(py))?;
     }
-    d.set_item("modes", modes)?;
-    let k = c.records.targets.len();
-    let mut shapes = Array2::<Complex64>::zeros((r.modes.len(), k));
-    for (i, m) in r.modes.iter().enumerate() {
-        for (j, s) in m.shape.iter().enumerate().take(k) {
-            shapes[[i, j]] = *s;
-        }
-    }
-    d.set_item("shapes", shapes.into_pyarray(py))?;
-    d.set_item(
-        "targets",
-        c.records
-            .targets
-            .iter()
-            .map(|(t, _)| *t as i64)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    let mut xy = Array2::<f64>::from_elem((k, 2), nan);
-    for (j, (_, p)) in c.records.targets.iter().enumerate() {
-        if let Some((x, y)) = p {
-            xy[[j, 0]] = *x;
-            xy[[j, 1]] = *y;
-        }
-    }
-    d.set_item("first_xy", xy.into_pyarray(py))?;
-    let lines = r.svd.freq_hz.len();
-    let kk = r.svd.s.first().map_or(0, Vec::len);
-    let mut s = Array2::<f64>::zeros((lines, kk));
-    for (i, row) in r.svd.s.iter().enumerate() {
-        for (j, v) in row.iter().enumerate().take(kk) {
-            s[[i, j]] = *v;
-        }
-    }
-    d.set_item("svd_freq_hz", r.svd.freq_hz.clone().into_pyarray(py))?;
-    d.set_item("svd", s.into_pyarray(py))?;
+    Ok(modes)
+}
+
+/// Each target's displacement `(N, K)` (NaN for a target left out) and lost flags.
+fn displacement_arrays(c: &oma_frames::Computed) -> (Array2<f64>, Array2<bool>) {
+    let nan = f64::NAN;
     let n = c.lost.first().map_or(0, Vec::len);
     let all = c.displacement.len();
     let mut disp = Array2::<f64>::from_elem((n, all), nan);
@@ -652,14 +675,7 @@ fn analysis_dict<'py>(
             .zip(l)
             .for_each(|(o, v)| *o = *v);
     }
-    d.set_item("displacement", disp.into_pyarray(py))?;
-    d.set_item("lost", lost.into_pyarray(py))?;
-    d.set_item("unit", c.records.unit.clone())?;
-    d.set_item("left_out", c.records.left_out.clone())?;
-    d.set_item("notes", r.notes.clone())?;
-    d.set_item("report", report)?;
-    d.set_item("fps", fps)?;
-    Ok(d)
+    (disp, lost)
 }
 
 /// `study(...)`: a Monte Carlo study run (or resumed) in `out`; returns the printed table and

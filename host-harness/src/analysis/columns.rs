@@ -41,6 +41,11 @@ pub struct FrfOutcome {
 
 /// Runs `frf`; see the module documentation.
 pub fn frf(req: &FrfRequest) -> anyhow::Result<FrfOutcome> {
+    // (a rate that is not positive is refused with the Welch settings)
+    if let (Some(b), true) = (&req.bands, req.fs.is_finite() && req.fs > 0.0) {
+        crate::setting::bands_below_nyquist(b, req.fs, "the record's")
+            .map_err(crate::setting::SpecError::into_anyhow)?;
+    }
     crate::outdir::refuse_overwriting_input(&req.out, &[&req.input])?;
     let cols = read_columns(&req.input, &[req.x.as_str(), req.y.as_str()])?;
     let (x, y) = match cols.values.as_slice() {

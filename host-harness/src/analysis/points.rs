@@ -58,7 +58,7 @@ pub enum ThresholdRule {
 
 /// Reads and checks a points file; errors name the file and row (the header is row 1).
 pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
-    let name = path.display();
+    let name = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -69,24 +69,66 @@ pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
         .iter()
         .map(str::to_string)
         .collect();
-    let col = |c: &str| header.iter().position(|h| h == c);
-    let mut idx = Vec::new();
-    for c in ["target", "x", "y", "w", "h"] {
-        idx.push(col(c).ok_or_else(|| {
-            bad_input(format!(
-                "{name}: no column `{c}` (the header must be target,x,y,w,h[,threshold][,group]; \
-                 it is \
-                 {})",
-                header.join(",")
-            ))
-        })?);
-    }
-    let threshold_col = col("threshold");
-    let group_col = col("group");
+    let cols = PointColumns::of(&header, &name)?;
     let mut points: Vec<Point> = Vec::new();
     for (i, rec) in rdr.records().enumerate() {
         let row = i + 2;
         let rec = rec.map_err(|e| bad_input(format!("{name}: row {row}: {e}")))?;
+        let p = cols.point(&rec, (&name, row))?;
+        if points.iter().any(|q| q.target == p.target) {
+            return Err(bad_input(format!(
+                "{name}: row {row}: target {} is given twice",
+                p.target
+            )));
+        }
+        points.push(p);
+    }
+    if points.is_empty() {
+        return Err(bad_input(format!("{name}: no points (only a header)")));
+    }
+    points.sort_by_key(|p| p.target);
+    if let Some((k, p)) = points.iter().enumerate().find(|(k, p)| p.target != k + 1) {
+        return Err(bad_input(format!(
+            "{name}: targets must be numbered 1 to {} without gaps; target {} is missing",
+            points.len(),
+            p.target.min(k + 1)
+        )));
+    }
+    Ok(points)
+}
+
+/// The columns of a points file: `target,x,y,w,h` (needed) and the optional `threshold` and
+/// `group`.
+struct PointColumns {
+    needed: [usize; 5],
+    threshold: Option<usize>,
+    group: Option<usize>,
+}
+
+impl PointColumns {
+    /// The columns of `header`; a needed one missing is an error naming the file `name`.
+    fn of(header: &[String], name: &str) -> anyhow::Result<Self> {
+        let col = |c: &str| header.iter().position(|h| h == c);
+        let mut needed = [0; 5];
+        for (slot, c) in needed.iter_mut().zip(["target", "x", "y", "w", "h"]) {
+            *slot = col(c).ok_or_else(|| {
+                bad_input(format!(
+                    "{name}: no column `{c}` (the header must be target,x,y,w,h[,threshold][,group]; \
+                     it is \
+                     {})",
+                    header.join(",")
+                ))
+            })?;
+        }
+        Ok(PointColumns {
+            needed,
+            threshold: col("threshold"),
+            group: col("group"),
+        })
+    }
+
+    /// The point of one row (`row` its number in the file `name`, the header row 1).
+    fn point(&self, rec: &csv::StringRecord, (name, row): (&str, usize)) -> anyhow::Result<Point> {
         let cell = |j: usize, c: &str| -> anyhow::Result<&str> {
             rec.get(j)
                 .filter(|v| !v.is_empty())
@@ -111,45 +153,21 @@ pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
             }
             Ok(v)
         };
-        let target = whole(idx[0], "target", 1.0)? as usize;
-        if points.iter().any(|p| p.target == target) {
-            return Err(bad_input(format!(
-                "{name}: row {row}: target {target} is given twice"
-            )));
-        }
-        let threshold = match threshold_col.map(|j| rec.get(j).unwrap_or("")) {
-            None | Some("") => None,
-            Some(_) => {
-                Some(whole(threshold_col.unwrap_or(0), "threshold", 0.0)?.min(65_535.0) as u16)
+        let optional = |j: Option<usize>, c: &str| -> anyhow::Result<Option<f64>> {
+            match j {
+                Some(j) if !rec.get(j).unwrap_or("").is_empty() => Ok(Some(whole(j, c, 0.0)?)),
+                _ => Ok(None),
             }
         };
-        let group = match group_col.map(|j| rec.get(j).unwrap_or("")) {
-            None | Some("") => None,
-            Some(_) => Some(whole(group_col.unwrap_or(0), "group", 0.0)? as u32),
-        };
-        points.push(Point {
-            group,
-            target,
-            xy: (num(idx[1], "x")?, num(idx[2], "y")?),
-            size: (
-                whole(idx[3], "w", 3.0)? as u32,
-                whole(idx[4], "h", 3.0)? as u32,
-            ),
-            threshold,
-        });
+        let [target, x, y, w, h] = self.needed;
+        Ok(Point {
+            target: whole(target, "target", 1.0)? as usize,
+            xy: (num(x, "x")?, num(y, "y")?),
+            size: (whole(w, "w", 3.0)? as u32, whole(h, "h", 3.0)? as u32),
+            threshold: optional(self.threshold, "threshold")?.map(|t| t.min(65_535.0) as u16),
+            group: optional(self.group, "group")?.map(|g| g as u32),
+        })
     }
-    if points.is_empty() {
-        return Err(bad_input(format!("{name}: no points (only a header)")));
-    }
-    points.sort_by_key(|p| p.target);
-    if let Some((k, p)) = points.iter().enumerate().find(|(k, p)| p.target != k + 1) {
-        return Err(bad_input(format!(
-            "{name}: targets must be numbered 1 to {} without gaps; target {} is missing",
-            points.len(),
-            p.target.min(k + 1)
-        )));
-    }
-    Ok(points)
 }
 
 /// The window of `size` centred on `(x, y)`, if it lies inside a `w x h` frame.

@@ -50,7 +50,8 @@ pub enum ThresholdRule {
 }
 
 /// The centroid the camera's firmware computes (`[imaging] centroid` of a study file).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum CentroidKind {
     /// Weight 1 for every pixel above the threshold (the paper's method; the default).
@@ -80,7 +81,8 @@ impl CentroidKind {
 
 /// What the camera's firmware measures in each frame (`[imaging] tracker` of a study file;
 /// [`tracker::FrameTracker`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum TrackerKind {
     /// The binary centroid above the threshold (the paper's method; the default).
