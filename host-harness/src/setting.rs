@@ -72,7 +72,7 @@ fn render(template: &str, naming: Naming) -> String {
         let len = word
             .find(|c: char| !(c.is_ascii_lowercase() || c == '_'))
             .unwrap_or(word.len());
-        // the longest known key that starts the word (`$fps` in `$fps,`)
+        // the word (letters and `_`: `$fps` in `$fps,`), if it is a known key
         match KEYS.iter().find(|k| **k == &word[..len]) {
             Some(key) => {
                 match naming {

@@ -2,7 +2,6 @@
 //! warped window by the spline or the convolution kernels, the unexplained-jump rule and the
 //! template refresh.
 
-#[allow(unused_imports)]
 use super::*;
 
 impl<const N: usize, const W: usize> LkTracker<N, W> {

@@ -1,7 +1,6 @@
 //! The spline path's moments: the template's ([`Moments`], once per template) and the frame
 //! window's with it ([`Cross`], formed lag by lag as an iteration needs them).
 
-#[allow(unused_imports)]
 use super::*;
 
 /// The template moments of the spline path: with `c'` the padded template's coefficients

@@ -1,7 +1,6 @@
 //! The coarse integer search: block then pixel ZNCC over `+-search` px around a start, the best
 //! match and its rival (the ambiguity rule), and the jump rule's factor.
 
-#[allow(unused_imports)]
 use super::*;
 
 impl<const N: usize, const W: usize> LkTracker<N, W> {

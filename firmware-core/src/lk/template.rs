@@ -2,7 +2,6 @@
 //! (Unser's prefilter), gradients, Hessian and moments, and the mask of dark pixels the
 //! saturation rule reads; the interpolation weights the template and the iteration share.
 
-#[allow(unused_imports)]
 use super::*;
 
 /// Cubic B-spline interpolation coefficients of the `w x h` image in `c` (row-major), in place:

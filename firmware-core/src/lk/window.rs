@@ -1,7 +1,6 @@
 //! The frame's window at a whole-pixel position: loaded, smoothed like the template (exact
 //! integer arithmetic) and counted for clipped pixels.
 
-#[allow(unused_imports)]
 use super::*;
 
 impl<const N: usize, const W: usize> LkTracker<N, W> {

@@ -86,14 +86,14 @@ pub enum AnalyzeSpec {
 impl AnalyzeSpec {
     /// Checks `input` at `rates` (from [`crate::frames::resolve_rates`]: `exposure_ms` the
     /// one given, else the file's); reads a points file. Returns the spec and warnings (an
-    /// exposure longer than the frame period without compensation).
-    pub fn new(input: AnalyzeInput, rates: Rates) -> SpecResult<(Self, Vec<String>)> {
-        super::positive("fps", rates.fps, "frames per second")?;
-        if let Some(b) = &input.bands {
-            super::bands_ordered(b)?;
-        }
-        match input.accel.clone() {
-            Some(accel) => with_reference(input, accel, rates),
+    /// exposure longer than the frame period without compensation; each names settings as
+    /// `$key`, spelled for the caller by `SpecError::setting(w).message(naming)`).
+    pub fn new(mut input: AnalyzeInput, rates: Rates) -> SpecResult<(Self, Vec<String>)> {
+        match input.accel.take() {
+            Some(accel) => {
+                common(&input, &rates)?;
+                with_reference(input, accel, rates)
+            }
             None => Self::output_only(input, rates)
                 .map(|r| (AnalyzeSpec::OutputOnly(Box::new(r)), Vec::new())),
         }
@@ -108,11 +108,25 @@ impl AnalyzeSpec {
                  AnalyzeSpec::new",
             ));
         }
-        super::positive("fps", rates.fps, "frames per second")?;
-        if let Some(b) = &input.bands {
-            super::bands_ordered(b)?;
-        }
+        common(&input, &rates)?;
         output_only(input, rates)
+    }
+
+    /// Runs the job: the report it printed, and whether it succeeded.
+    pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
+        match self {
+            AnalyzeSpec::Reference(r) => crate::analysis::run::run(r),
+            AnalyzeSpec::OutputOnly(r) => crate::analysis::oma::frames::run(r),
+        }
+    }
+}
+
+/// What both analyses check first: a positive frame rate, ordered bands.
+fn common(input: &AnalyzeInput, rates: &Rates) -> SpecResult<()> {
+    super::positive("fps", rates.fps, "frames per second")?;
+    match &input.bands {
+        Some(b) => super::bands_ordered(b),
+        None => Ok(()),
     }
 }
 
@@ -289,14 +303,4 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         force: input.force,
         notes: rates.notes,
     })
-}
-
-impl AnalyzeSpec {
-    /// Runs the job: the report it printed, and whether it succeeded.
-    pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
-        match self {
-            AnalyzeSpec::Reference(r) => crate::analysis::run::run(r),
-            AnalyzeSpec::OutputOnly(r) => crate::analysis::oma::frames::run(r),
-        }
-    }
 }
