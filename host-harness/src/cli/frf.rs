@@ -31,8 +31,8 @@ pub struct Args {
     /// Welch estimator settings.
     #[command(flatten)]
     pub welch: WelchArgs,
-    /// Frequency bands LO-HI in Hz, comma separated (e.g. 1.5-2.25,2.25-2.9): prints the peak
-    /// of |Im H1| in each band on stdout.
+    /// Frequency bands LO-HI in Hz, comma separated (e.g. 1.5-2.25,2.25-2.9), each below the
+    /// Nyquist frequency --fs / 2: prints the peak of |Im H1| in each band on stdout.
     #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
     pub bands: Option<Bands>,
     /// Output CSV file.
