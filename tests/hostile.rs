@@ -316,14 +316,17 @@ fn modal_gives_the_same_modes_in_any_unit() {
         assert_eq!(got.len(), want.len(), "x{scale}: {got:?}");
         for (a, b) in got.iter().zip(&want) {
             // the scaled file differs from the original by the rounding of each value (1e-16):
-            // FDD and EFDD do not move beyond it, but a pole on the edge of SSI's stability
-            // criteria can flip with it and move a cluster's median by 1e-5 (seen here), far
-            // below the estimates' scatter (1e-3 in frequency, 10 % in damping)
+            // FDD does not move beyond it; EFDD's bell fit is a least-squares minimum whose cost
+            // is flat in the damping (a change of 3e-5 in it moves the cost by about its
+            // rounding), so its damping moves by up to 4e-5 and its frequency by 1e-8 (seen
+            // here); a pole on the edge of SSI's stability criteria can flip
+            // with it and move a cluster's median by 1e-5 (seen here); all far below the
+            // estimates' scatter (1e-3 in frequency, 10 % in damping)
             assert_eq!((&a.0, a.1), (&b.0, b.1), "x{scale}");
-            let (df, dz) = if a.0 == "ssi" {
-                (1e-4, 1e-2)
-            } else {
-                (1e-9, 1e-6)
+            let (df, dz) = match a.0.as_str() {
+                "ssi" => (1e-4, 1e-2),
+                "efdd" => (1e-7, 1e-4),
+                _ => (1e-9, 1e-6),
             };
             assert!((a.2 / b.2 - 1.0).abs() < df, "x{scale}: {a:?} vs {b:?}");
             if let (Some(x), Some(y)) = (a.3, b.3) {

@@ -873,13 +873,27 @@ where
     Ok(())
 }
 
-/// A stabilisation diagram: every pole `(f_hz, order, stable)` as a dot (grey) or a cross
-/// (stable), the modes' frequencies as vertical lines, written as `path_stem.png` and
+/// What a pole of a stabilisation diagram is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PoleKind {
+    /// Not stable from the order below.
+    Pole,
+    /// Stable, in no cluster of two or more.
+    Stable,
+    /// In a cluster reported as a mode.
+    Mode,
+    /// In a cluster rejected (its reason in the report).
+    Rejected,
+}
+
+/// A stabilisation diagram: every pole `(f_hz, order, kind)`: a grey dot, a cross (stable),
+/// a filled blue disk (in a mode's cluster) or an open orange square (in a rejected
+/// cluster); the modes' frequencies as vertical lines, written as `path_stem.png` and
 /// `path_stem.svg`.
 pub fn write_stabilisation_plot(
     path_stem: &Path,
     title: &str,
-    poles: &[(f64, usize, bool)],
+    poles: &[(f64, usize, PoleKind)],
     modes_hz: &[f64],
     f_max_hz: f64,
 ) -> anyhow::Result<Vec<PathBuf>> {
@@ -893,7 +907,7 @@ pub fn write_stabilisation_plot(
 fn draw_stabilisation<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
-    poles: &[(f64, usize, bool)],
+    poles: &[(f64, usize, PoleKind)],
     modes_hz: &[f64],
     f_max_hz: f64,
 ) -> DrawResult
@@ -917,25 +931,34 @@ where
             RGBColor(200, 60, 40).stroke_width(1),
         ))?;
     }
+    let of = |k: PoleKind| poles.iter().filter(move |p| p.2 == k);
     let grey = RGBColor(170, 170, 170);
     chart
-        .draw_series(
-            poles
-                .iter()
-                .filter(|p| !p.2)
-                .map(|p| Circle::new((p.0, p.1 as f64), 2, grey.filled())),
-        )?
+        .draw_series(of(PoleKind::Pole).map(|p| Circle::new((p.0, p.1 as f64), 2, grey.filled())))?
         .label("pole")
         .legend(move |(x, y)| Circle::new((x + 10, y), 3, grey.filled()));
     chart
         .draw_series(
-            poles
-                .iter()
-                .filter(|p| p.2)
+            of(PoleKind::Stable)
                 .map(|p| Cross::new((p.0, p.1 as f64), 4, TRANSDUCER.stroke_width(1))),
         )?
         .label("stable (f, damping, MAC)")
         .legend(|(x, y)| Cross::new((x + 10, y), 4, TRANSDUCER.stroke_width(1)));
+    let blue = RGBColor(30, 90, 200);
+    chart
+        .draw_series(of(PoleKind::Mode).map(|p| Circle::new((p.0, p.1 as f64), 4, blue.filled())))?
+        .label("cluster: a mode")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, blue.filled()));
+    let orange = RGBColor(230, 120, 20);
+    chart
+        .draw_series(of(PoleKind::Rejected).map(|p| {
+            let (x, y) = (p.0, p.1 as f64);
+            EmptyElement::at((x, y)) + Rectangle::new([(-4, -4), (4, 4)], orange.stroke_width(2))
+        }))?
+        .label("cluster: rejected (report)")
+        .legend(move |(x, y)| {
+            Rectangle::new([(x + 6, y - 4), (x + 14, y + 4)], orange.stroke_width(2))
+        });
     draw_legend(&mut chart, SINGLE)?;
     root.present()?;
     Ok(())

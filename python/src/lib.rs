@@ -616,6 +616,14 @@ fn analysis_dict<'py>(
     d.set_item("unit", c.records.unit.clone())?;
     d.set_item("left_out", c.records.left_out.clone())?;
     d.set_item("notes", r.notes.clone())?;
+    d.set_item("rejected", r.rejected.clone())?;
+    d.set_item(
+        "evidence",
+        r.modes
+            .iter()
+            .map(|m| m.evidence.clone())
+            .collect::<Vec<_>>(),
+    )?;
     d.set_item("report", report)?;
     d.set_item("fps", fps)?;
     Ok(d)

@@ -340,7 +340,10 @@ class AnalysisResult:
     frame; ``svd_freq_hz``, ``svd``: the singular values of the cross-spectral matrix per line;
     ``displacement``: ``(N, all targets)`` in ``unit`` (mm with ``mm_per_px``, else px; lost
     frames filled, NaN for a target left out); ``lost``: which frames were filled; ``report``:
-    the text of ``report.txt``.
+    the text of ``report.txt``; ``evidence``: per mode (the rows of ``modes``), how it was
+    found (a peak's prominence and bell, an SSI cluster's size, spread, MPC and MPD);
+    ``rejected``: the peaks and SSI clusters not taken for modes, each with its reason (without
+    bands).
     """
 
     modes: dict
@@ -356,6 +359,8 @@ class AnalysisResult:
     report: str
     left_out: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    evidence: list = field(default_factory=list)
+    rejected: list = field(default_factory=list)
 
     def modes_rows(self) -> list:
         """The rows of ``modes.csv`` (dicts; ``None`` for an empty cell)."""
@@ -483,6 +488,8 @@ def analyze(
         report=d["report"],
         left_out=list(d["left_out"]),
         notes=list(d["notes"]),
+        evidence=list(d["evidence"]),
+        rejected=list(d["rejected"]),
     )
 
 

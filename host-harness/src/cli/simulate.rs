@@ -10,8 +10,9 @@ use std::path::PathBuf;
 /// Arguments of `host-harness simulate-field`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The structure: a five-storey shear frame (five modes, 1.5 to 10.1 Hz) or two modes
-    /// 2 % apart and a third (2.00, 2.04, 5.00 Hz), five points each.
+    /// The structure: a five-storey shear frame (five modes, 1.5 to 10.1 Hz), two modes 2 %
+    /// apart and a third (2.00, 2.04, 5.00 Hz), five points each; or four modes at six points,
+    /// the highest weak (1.95, 5.79, 9.57, 13.08 Hz).
     #[arg(long, value_enum, default_value_t = CaseArg::ShearFrame)]
     pub case: CaseArg,
     /// Record length, minutes (> 0) [default: 30; 5 with --render].
@@ -61,6 +62,8 @@ pub enum CaseArg {
     ShearFrame,
     /// Two close modes and a third.
     CloseModes,
+    /// Four modes at six points, the highest weak.
+    WeakHighMode,
 }
 
 /// Runs `host-harness simulate-field`.
@@ -81,6 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let case = match args.case {
         CaseArg::ShearFrame => FieldCase::ShearFrame,
         CaseArg::CloseModes => FieldCase::CloseModes,
+        CaseArg::WeakHighMode => FieldCase::WeakHighMode,
     };
     let model = case.model();
     let (n, warnings) = crate::model::field::record_length(&model, minutes, args.fps, args.render)?;

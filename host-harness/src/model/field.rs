@@ -43,6 +43,11 @@ pub enum FieldCase {
     /// Two modes 2 % apart (2.00 and 2.04 Hz, 1 % damping, orthogonal shapes over five
     /// points) and a third at 5 Hz: where FDD's peak picking sees one peak and SSI two.
     CloseModes,
+    /// Four modes of a six-storey shear frame (1.95, 5.79, 9.57, 13.08 Hz; damping 1.0, 1.5,
+    /// 0.8 and 1.2 %) at six points, the fourth weak: its shape scaled by a half, so its
+    /// response is a sixteenth of the others' beside them (the displacement already falls as
+    /// `1 / f^4`), near the noise floor of a 3 % measurement noise.
+    WeakHighMode,
 }
 
 impl FieldCase {
@@ -70,6 +75,14 @@ impl FieldCase {
                     },
                 ],
             },
+            FieldCase::WeakHighMode => {
+                let mut m = shear_frame(6, 1.95, &[0.01, 0.015, 0.008, 0.012]);
+                m.modes.truncate(4);
+                for v in &mut m.modes[3].shape {
+                    *v *= 0.5;
+                }
+                m
+            }
         }
     }
 }

@@ -7,7 +7,6 @@ use super::csd::Csd;
 use crate::analysis::modal::mac;
 use nalgebra::{DMatrix, SymmetricEigen};
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 
 /// The singular values (descending) and the first singular vector of every line.
 #[derive(Debug, Clone, PartialEq)]
@@ -18,6 +17,9 @@ pub struct Svd {
     pub s: Vec<Vec<f64>>,
     /// Per line, the first singular vector (unit norm).
     pub u1: Vec<Vec<Complex64>>,
+    /// Per line, the second singular vector (unit norm; zeros with one channel): where two
+    /// modes share lines, the weaker one's shape.
+    pub u2: Vec<Vec<Complex64>>,
 }
 
 /// The decomposition of every line of `csd` (a Hermitian positive semi-definite matrix: its
@@ -26,6 +28,7 @@ pub fn decompose(csd: &Csd) -> anyhow::Result<Svd> {
     let k = csd.k;
     let mut s = Vec::with_capacity(csd.g.len());
     let mut u1 = Vec::with_capacity(csd.g.len());
+    let mut u2 = Vec::with_capacity(csd.g.len());
     for (l, m) in csd.g.iter().enumerate() {
         let a = DMatrix::from_fn(k, k, |i, j| m[i * k + j]);
         let e =
@@ -43,11 +46,16 @@ pub fn decompose(csd: &Csd) -> anyhow::Result<Svd> {
         s.push(order.iter().map(|&i| e.eigenvalues[i].max(0.0)).collect());
         let first = order.first().copied().unwrap_or(0);
         u1.push(e.eigenvectors.column(first).iter().copied().collect());
+        u2.push(match order.get(1) {
+            Some(&second) => e.eigenvectors.column(second).iter().copied().collect(),
+            None => vec![Complex64::new(0.0, 0.0); k],
+        });
     }
     Ok(Svd {
         freq_hz: csd.freq_hz.clone(),
         s,
         u1,
+        u2,
     })
 }
 
@@ -62,12 +70,14 @@ pub struct PeakRule {
     /// lowest points between it and a higher peak (or the range's end) on either side, dB.
     pub prominence_db: f64,
     /// Least height of a peak over the floor (the median of the first singular value over
-    /// the range), dB.
-    pub over_floor_db: f64,
+    /// the range), dB; none by default: a displacement spectrum falls as `1 / f^4` above its
+    /// modes, and its high modes stand below the median of the whole range.
+    pub over_floor_db: Option<f64>,
 }
 
-/// The line indices of the peaks of the first singular value (see [`PeakRule`]), ascending.
-pub fn pick_peaks(svd: &Svd, rule: PeakRule) -> Vec<usize> {
+/// The peaks of the first singular value (see [`PeakRule`]), ascending: each line and its
+/// prominence, dB.
+pub fn pick_peaks(svd: &Svd, rule: PeakRule) -> Vec<(usize, f64)> {
     let s1: Vec<f64> = svd
         .s
         .iter()
@@ -105,9 +115,11 @@ pub fn pick_peaks(svd: &Svd, rule: PeakRule) -> Vec<usize> {
         let rb = base(&mut (l + 1..=hi));
         let prominence = db(s1[l], lb.max(rb).max(f64::MIN_POSITIVE));
         if prominence >= rule.prominence_db
-            && db(s1[l], floor.max(f64::MIN_POSITIVE)) >= rule.over_floor_db
+            && rule
+                .over_floor_db
+                .is_none_or(|o| db(s1[l], floor.max(f64::MIN_POSITIVE)) >= o)
         {
-            peaks.push(l);
+            peaks.push((l, prominence));
         }
     }
     peaks
@@ -126,20 +138,16 @@ pub struct EfddRule {
     /// Lines around a peak whose first singular vector has at least this MAC with the peak's
     /// belong to its bell.
     pub mac_min: f64,
-    /// Extrema of the correlation function skipped at its start (the bell's truncation
-    /// distorts the first cycles).
-    pub skip: usize,
-    /// Most extrema used after them.
-    pub max_extrema: usize,
+    /// Fewest lines a bell must have to be fitted.
+    pub min_lines: usize,
 }
 
 impl Default for EfddRule {
-    /// MAC 0.85, skip 3, up to 20 extrema (pyOMA-2's defaults for EFDD).
+    /// MAC 0.85 (pyOMA-2's default for EFDD), at least 5 lines.
     fn default() -> Self {
         EfddRule {
             mac_min: 0.85,
-            skip: 3,
-            max_extrema: 20,
+            min_lines: 5,
         }
     }
 }
@@ -153,22 +161,25 @@ pub struct Efdd {
     pub damping: f64,
     /// Lines in the bell.
     pub lines: usize,
-    /// Extrema used.
-    pub extrema: usize,
+    /// The lines (first, last) of the bell.
+    pub range: (usize, usize),
+    /// The fitted floor under the bell, relative to the bell's peak.
+    pub floor: f64,
+    /// RMS of the fit's residuals, natural log of the singular value (about
+    /// `1 / sqrt(segments)` for a fit that describes the bell).
+    pub rms_log: f64,
 }
 
-/// The lag window of a Welch estimate with `window` segments of `nperseg`: the inverse
-/// transform of the averaged spectrum is the correlation function times
+/// The lag window of a Welch estimate with `window` segments of `nperseg` at every lag
+/// `0 .. nperseg`: the averaged spectrum is the transform of the correlation function times
 /// `w_c(t) = sum_n w[n] w[n + t] / sum_n w[n]^2` (a Hann segment's `w_c` falls to 0.5 at about
-/// a fifth of the segment), which adds an apparent damping unless divided out. Returned for
-/// the lags `0 .. nperseg / 3`, where the circular transform's negative lags (weighted by
-/// `w_c(nfft - t)`) stay small.
+/// a fifth of the segment), which broadens every peak by the window's kernel.
 pub fn lag_window(window: firmware_core::spectrum::Window, nperseg: usize) -> Vec<f64> {
     let w: Vec<f64> = (0..nperseg)
         .map(|i| f64::from(window.value(i, nperseg)))
         .collect();
     let s2: f64 = w.iter().map(|v| v * v).sum();
-    (0..nperseg / 3)
+    (0..nperseg)
         .map(|t| {
             w[..nperseg - t]
                 .iter()
@@ -180,112 +191,100 @@ pub fn lag_window(window: firmware_core::spectrum::Window, nperseg: usize) -> Ve
         .collect()
 }
 
-/// EFDD of the peak at line `peak`, its bell limited to the lines strictly between `fence.0`
-/// and `fence.1` (the neighbouring peaks); `nfft` the transform length of the spectrum,
-/// `fs_hz` the sample rate and `lag` the estimate's lag window ([`lag_window`], divided out;
-/// its length limits the lags used). `None` when the correlation function has too few
-/// extrema.
+/// A mode's bell: around `peak`, the contiguous lines strictly between `fence.0` and
+/// `fence.1` where the first or the second singular vector has a MAC of at least `mac_min`
+/// with `reference` (the mode's shape), each line's value the singular value of the vector
+/// that matches (where two modes share lines, the SVD gives each its own singular value); on
+/// a line where neither matches but the plane of the two holds the shape (their MACs add up
+/// to `mac_min`: two modes of like power, mixed by the SVD), the spectrum projected on the
+/// shape, `s1 MAC1 + s2 MAC2`. Returns the first line and the values; empty when `peak` itself does not match.
+pub fn bell(
+    svd: &Svd,
+    reference: &[Complex64],
+    peak: usize,
+    fence: (usize, usize),
+    mac_min: f64,
+) -> (usize, Vec<f64>) {
+    let lines = svd.freq_hz.len();
+    let value = |l: usize| -> Option<f64> {
+        let (m1, m2) = (mac(&svd.u1[l], reference), mac(&svd.u2[l], reference));
+        let s = |j: usize| svd.s[l].get(j).copied().unwrap_or(0.0);
+        let v = if m1 >= mac_min {
+            s(0)
+        } else if m2 >= mac_min {
+            s(1)
+        } else if m1 + m2 >= mac_min {
+            // two modes of like power on this line: the SVD mixes them, but the shape still
+            // lies in the plane of the first two vectors; the spectrum projected on it
+            s(0) * m1 + s(1) * m2
+        } else {
+            return None;
+        };
+        (v > 0.0).then_some(v)
+    };
+    if peak >= lines || value(peak).is_none() {
+        return (peak, Vec::new());
+    }
+    let mut a = peak;
+    while a > fence.0 + 1 && value(a - 1).is_some() {
+        a -= 1;
+    }
+    let mut b = peak;
+    while b + 1 < fence.1.min(lines) && value(b + 1).is_some() {
+        b += 1;
+    }
+    (a, (a..=b).filter_map(value).collect())
+}
+
+/// The largest floor under a bell, relative to its peak, with which EFDD reports a damping:
+/// over a floor of more than a tenth (the mode less than 10 dB above what lies under it) the
+/// fit trades the floor against the bell's width, and the damping came out 30-90 % low on a
+/// weak mode under 10 % measurement noise.
+pub const FLOOR_MAX: f64 = 0.1;
+
+/// EFDD of the mode of shape `reference` peaking at line `peak`: its bell ([`bell`], MAC
+/// `rule.mac_min`, between the neighbouring peaks `fence`) fitted by the spectrum a single
+/// mode makes in this estimate ([`super::bell`]): `nfft` the transform length, `fs_hz` the
+/// sample rate, `lag` the estimate's lag window ([`lag_window`]). An error saying why when the
+/// bell has fewer than `rule.min_lines` lines, the fit does not settle on a damped mode inside
+/// it, or the floor it finds under the bell is more than [`FLOOR_MAX`] of its peak.
 pub fn efdd(
     svd: &Svd,
-    peak: usize,
+    (reference, peak): (&[Complex64], usize),
     fence: (usize, usize),
     (nfft, fs_hz): (usize, f64),
     lag: &[f64],
     rule: EfddRule,
-) -> Option<Efdd> {
-    let lines = svd.freq_hz.len();
-    let up = &svd.u1[peak];
-    let mut bell = vec![Complex64::new(0.0, 0.0); lines];
-    let mut count = 0;
-    let mut take = |l: usize, bell: &mut [Complex64]| -> bool {
-        if mac(&svd.u1[l], up) < rule.mac_min {
-            return false;
-        }
-        bell[l] = Complex64::new(svd.s[l][0], 0.0);
-        count += 1;
-        true
-    };
-    take(peak, &mut bell);
-    for l in (fence.0 + 1..peak).rev() {
-        if !take(l, &mut bell) {
-            break;
-        }
+) -> Result<Efdd, String> {
+    let (a, y) = bell(svd, reference, peak, fence, rule.mac_min);
+    let count = y.len();
+    if count < rule.min_lines {
+        return Err(format!(
+            "its bell has {count} lines, fewer than {} (a longer segment, --nperseg, gives it \
+             more)",
+            rule.min_lines
+        ));
     }
-    for l in peak + 1..fence.1.min(lines) {
-        if !take(l, &mut bell) {
-            break;
-        }
+    let top = (0..count)
+        .max_by(|&i, &j| y[i].total_cmp(&y[j]))
+        .unwrap_or(0);
+    let fit = super::bell::fit(&y, (a, a + top), (nfft, fs_hz), lag).ok_or_else(|| {
+        format!("the fit of its bell ({count} lines) did not settle on a damped mode inside it")
+    })?;
+    if fit.floor > FLOOR_MAX {
+        return Err(format!(
+            "the floor under its bell is {:.0} % of its peak (more than {:.0} %: noise or other \
+             modes): the bell's width, and so the damping, is not determined",
+            100.0 * fit.floor,
+            100.0 * FLOOR_MAX
+        ));
     }
-    // no imaginary part at 0 and at the Nyquist line of an even transform
-    bell[0].im = 0.0;
-    if let Some(last) = bell.last_mut() {
-        last.im = 0.0;
-    }
-    let mut planner = RealFftPlanner::<f64>::new();
-    let inverse = planner.plan_fft_inverse(nfft);
-    let mut r = inverse.make_output_vec();
-    inverse.process(&mut bell, &mut r).ok()?;
-    let r0 = r[0];
-    if r0 <= 0.0 {
-        return None;
-    }
-    let half: Vec<f64> = r
-        .iter()
-        .zip(lag)
-        .take(nfft / 2)
-        .map(|(v, w)| v / w)
-        .collect();
-    // zero crossings (interpolated, in samples) and the extremum between consecutive ones
-    let mut crossings = Vec::new();
-    for t in 0..half.len().saturating_sub(1) {
-        let (a, b) = (half[t], half[t + 1]);
-        if a == 0.0 || a * b < 0.0 {
-            crossings.push(t as f64 + a / (a - b));
-        }
-    }
-    let mut extrema: Vec<f64> = Vec::new();
-    for w in crossings.windows(2) {
-        let (from, to) = (w[0].ceil() as usize, w[1].floor() as usize);
-        let m = (from..=to.max(from))
-            .filter_map(|t| half.get(t))
-            .map(|v| (v / r0).abs())
-            .fold(0.0, f64::max);
-        extrema.push(m);
-    }
-    let end = (rule.skip + rule.max_extrema).min(extrema.len());
-    if end < rule.skip + 3 {
-        return None;
-    }
-    let used = &extrema[rule.skip..end];
-    // stop at the noise: an extremum that is no longer decreasing on average
-    let used: Vec<f64> = used.iter().copied().take_while(|&v| v > 1e-3).collect();
-    if used.len() < 3 {
-        return None;
-    }
-    // ln|r_k| = c - k delta / 2 (extrema half a period apart)
-    let slope = |ys: &[f64]| -> f64 {
-        let n = ys.len() as f64;
-        let mx = (n - 1.0) / 2.0;
-        let my = ys.iter().sum::<f64>() / n;
-        let (mut sxy, mut sxx) = (0.0, 0.0);
-        for (i, y) in ys.iter().enumerate() {
-            sxy += (i as f64 - mx) * (y - my);
-            sxx += (i as f64 - mx) * (i as f64 - mx);
-        }
-        sxy / sxx
-    };
-    let logs: Vec<f64> = used.iter().map(|v| v.ln()).collect();
-    let delta = -2.0 * slope(&logs);
-    let damping = delta / (4.0 * std::f64::consts::PI.powi(2) + delta * delta).sqrt();
-    // the crossings that bound the extrema used: half a period apart
-    let cross = &crossings[rule.skip..rule.skip + used.len() + 1];
-    let half_period = slope(cross);
-    let fd = fs_hz / (2.0 * half_period);
-    let f_hz = fd / (1.0 - damping * damping).max(1e-12).sqrt();
-    (damping.is_finite() && f_hz.is_finite() && damping > 0.0).then_some(Efdd {
-        f_hz,
-        damping,
+    Ok(Efdd {
+        f_hz: fit.f_hz,
+        damping: fit.damping,
         lines: count,
-        extrema: used.len(),
+        range: (a, a + count - 1),
+        floor: fit.floor,
+        rms_log: fit.rms_log,
     })
 }

@@ -8,6 +8,7 @@ use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
 use crate::export::oma::{self as export, OmaModeRow, OmaShapeRow, OmaShapeSet};
 use crate::outdir::Staged;
+use crate::plots::PoleKind;
 use num_complex::Complex64;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -76,11 +77,7 @@ pub fn write(
             &r.svd.s,
             &picks,
         )?;
-        let poles: Vec<(f64, usize, bool)> = r
-            .poles
-            .iter()
-            .map(|p| (p.f_hz, p.order, p.stable))
-            .collect();
+        let poles = pole_kinds(r);
         let ssi: Vec<f64> = r
             .modes
             .iter()
@@ -102,6 +99,26 @@ pub fn write(
         report,
         result: Ok(()),
     })
+}
+
+/// Every pole of the stabilisation diagram and what it is: in a cluster reported or
+/// rejected (the clusters hold their poles' frequencies and orders), stable, or neither.
+fn pole_kinds(r: &OmaResult) -> Vec<(f64, usize, PoleKind)> {
+    r.poles
+        .iter()
+        .map(|p| {
+            let home = r.clusters.iter().find(|(c, _)| {
+                c.poles > 1 && c.members.iter().any(|&(f, o)| o == p.order && f == p.f_hz)
+            });
+            let kind = match home {
+                Some((_, true)) => PoleKind::Mode,
+                Some((_, false)) => PoleKind::Rejected,
+                None if p.stable => PoleKind::Stable,
+                None => PoleKind::Pole,
+            };
+            (p.f_hz, p.order, kind)
+        })
+        .collect()
 }
 
 /// The rows of `modes.csv`.
@@ -206,32 +223,65 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
         let _ = writeln!(
             o,
             "peaks: local maxima of the first singular value from {:.3} to {:.3} Hz with {} dB \
-             of prominence and {} dB over the median (the floor)",
-            s.peaks.f_min_hz, s.peaks.f_max_hz, s.peaks.prominence_db, s.peaks.over_floor_db
+             of prominence{}; a mode when its singular vector holds over a bell of {} lines \
+             (MAC >= {}), it is no ripple on a stronger peak's bell, and it stands {} dB or SSI-cov \
+             finds a mode in its bell (MAC >= {}); an SSI-cov mode no peak took gives its bell",
+            s.peaks.f_min_hz,
+            s.peaks.f_max_hz,
+            s.peaks.prominence_db,
+            s.peaks
+                .over_floor_db
+                .map_or(String::new(), |d| format!(" and {d} dB over the median")),
+            s.efdd.min_lines,
+            s.efdd.mac_min,
+            super::modes::STRONG_PEAK_DB,
+            super::modes::AGREE_MAC
         );
     }
     let _ = writeln!(
         o,
+        "EFDD: the bell (lines whose first or second singular vector has the mode's shape, MAC \
+         >= {}) fitted by one mode's spectrum in this estimate (its Welch lag window included)",
+        s.efdd.mac_min
+    );
+    let c = &s.cluster;
+    let _ = writeln!(
+        o,
         "SSI-cov: {} block rows, orders 2 to {}; stable: frequency within {} %, damping within \
-         {} %, MAC >= {}; a mode from {} stable poles",
+         {} %, MAC >= {}; stable poles clustered (average linkage, distance df/f + 1 - MAC up to \
+         {}, one pole per order); a mode from {} poles, median MPC >= {}, MPD <= {} deg, and \
+         no fuller cluster of its shape nearby",
         s.ssi.block_rows,
         s.ssi.max_order,
         100.0 * s.ssi.df_max,
         100.0 * s.ssi.dz_max,
         s.ssi.mac_min,
-        s.ssi_min_poles
+        c.distance_max,
+        c.min_poles,
+        c.mpc_min,
+        c.mpd_max_deg
     );
-    let _ = writeln!(o, "\nmethod  mode  f_hz        damping   amplitude");
+    let _ = writeln!(
+        o,
+        "\nmethod  mode  f_hz        damping   amplitude   evidence"
+    );
     for m in &r.modes {
         let _ = writeln!(
             o,
-            "{:<7} {:>4}  {:<10.5} {:<9} {}",
+            "{:<7} {:>4}  {:<10.5} {:<9} {:<11} {}",
             m.method.name(),
             m.mode,
             m.f_hz,
             m.damping.map_or("-".to_string(), |z| format!("{:.4}", z)),
-            m.amplitude.map_or("-".to_string(), |a| format!("{a:.4e}"))
+            m.amplitude.map_or("-".to_string(), |a| format!("{a:.4e}")),
+            m.evidence
         );
+    }
+    if !r.rejected.is_empty() {
+        let _ = writeln!(o, "\nnot modes:");
+        for why in &r.rejected {
+            let _ = writeln!(o, "  {why}");
+        }
     }
     for note in &r.notes {
         let _ = writeln!(o, "note: {note}");

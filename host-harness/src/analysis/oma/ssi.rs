@@ -1,9 +1,9 @@
 //! Covariance-driven stochastic subspace identification (SSI-cov) with a stabilisation
 //! diagram (docs/method.md §3.12): output correlations, their block Toeplitz matrix, its SVD,
-//! a state-space model per order, the model's poles and shapes, poles stable from one order
-//! to the next, and the stable poles clustered into modes.
+//! a state-space model per order, the model's poles and shapes, and poles stable from one order
+//! to the next (clustered into modes by [`super::cluster`]).
 
-use crate::analysis::modal::{mac, normalise_shape};
+use crate::analysis::modal::mac;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -40,19 +40,6 @@ pub struct Pole {
     pub shape: Vec<Complex64>,
     /// Stable with a pole of the order below (frequency, damping and shape).
     pub stable: bool,
-}
-
-/// A mode: stable poles clustered.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SsiMode {
-    /// Median frequency of the cluster's poles, Hz.
-    pub f_hz: f64,
-    /// Median damping ratio.
-    pub damping: f64,
-    /// The mean of the cluster's poles' shapes (each scaled to its largest component).
-    pub shape: Vec<Complex64>,
-    /// Stable poles in the cluster.
-    pub poles: usize,
 }
 
 /// The poles of every order of the records `channels` (mean removed here) sampled at
@@ -224,51 +211,4 @@ fn eigenvector(a: &DMatrix<f64>, l: Complex64) -> Option<DVector<Complex64>> {
         v = w / Complex64::new(norm, 0.0);
     }
     Some(v)
-}
-
-/// Clusters the stable poles into modes: poles taken by frequency, each joins the first
-/// cluster whose first pole is within `df_max` (relative) in frequency and `mac_min` in MAC
-/// (so two close modes with different shapes stay apart, and a chain of poles cannot merge
-/// them), else starts one; clusters with at least `min_poles` poles are modes.
-pub fn cluster(poles: &[Pole], (df_max, mac_min): (f64, f64), min_poles: usize) -> Vec<SsiMode> {
-    let mut stable: Vec<&Pole> = poles.iter().filter(|p| p.stable).collect();
-    stable.sort_by(|a, b| a.f_hz.total_cmp(&b.f_hz));
-    let mut groups: Vec<Vec<&Pole>> = Vec::new();
-    for p in stable {
-        let home = groups.iter_mut().find(|g| {
-            g.first().is_some_and(|q| {
-                (p.f_hz - q.f_hz).abs() <= df_max * q.f_hz && mac(&p.shape, &q.shape) >= mac_min
-            })
-        });
-        match home {
-            Some(g) => g.push(p),
-            None => groups.push(vec![p]),
-        }
-    }
-    groups
-        .into_iter()
-        .filter(|g| g.len() >= min_poles)
-        .map(|g| {
-            let median = |mut v: Vec<f64>| {
-                v.sort_by(f64::total_cmp);
-                v[v.len() / 2]
-            };
-            let f_hz = median(g.iter().map(|p| p.f_hz).collect());
-            let damping = median(g.iter().map(|p| p.damping).collect());
-            // the mean of the poles' shapes, each scaled to its largest component first
-            let k = g.first().map_or(0, |p| p.shape.len());
-            let mut shape = vec![Complex64::new(0.0, 0.0); k];
-            for p in &g {
-                for (o, v) in shape.iter_mut().zip(normalise_shape(&p.shape)) {
-                    *o += v;
-                }
-            }
-            SsiMode {
-                f_hz,
-                damping,
-                shape,
-                poles: g.len(),
-            }
-        })
-        .collect()
 }

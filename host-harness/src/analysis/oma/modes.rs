@@ -1,0 +1,397 @@
+//! Which peaks of the singular values and which clusters of SSI-cov's poles are modes
+//! (docs/method.md §3.12), with bands (one per band and method) or without (each peak and
+//! each cluster checked, the rejected ones named with their reason).
+//!
+//! Without bands a peak of the first singular value (6 dB of prominence) is a mode when it
+//! behaves like one: its singular vector holds over a bell of at least five lines (a noise
+//! peak's turns from line to line), it is not a ripple on the bell of a stronger peak with the
+//! same shape, and, unless it stands 10 dB or more above its surroundings, SSI-cov finds a mode
+//! within its bell with a like shape. An SSI-cov mode that no peak took (a mode hidden in the
+//! second singular value beside a close stronger one, or a weak mode without 6 dB of
+//! prominence) gives FDD and EFDD its bell: the lines whose first or second singular vector
+//! has its shape.
+
+use super::cluster::{self, SsiMode};
+use super::fdd::{self, Svd};
+use super::ssi::{self, Pole};
+use super::{Method, OmaMode, OmaSettings};
+use crate::analysis::modal::{mac, normalise_shape};
+use num_complex::Complex64;
+
+/// Least prominence of a peak taken without SSI-cov's support, dB.
+pub const STRONG_PEAK_DB: f64 = 10.0;
+/// Least MAC between a peak's vector and an SSI-cov mode's shape for the two to agree.
+pub const AGREE_MAC: f64 = 0.8;
+
+/// A peak taken as a mode.
+#[derive(Debug, Clone)]
+pub struct Peak {
+    /// Its line (the bell's largest value).
+    pub line: usize,
+    /// Its band (with bands).
+    pub band: Option<usize>,
+    /// The mode's shape (the peak's singular vector).
+    pub reference: Vec<Complex64>,
+    /// The bell's value at the peak (its singular value).
+    pub value: f64,
+    /// How it was found, for the report.
+    pub evidence: String,
+}
+
+/// SSI-cov's result: its modes, every pole, the clusters kept and rejected.
+#[derive(Debug)]
+pub struct SsiFound {
+    /// The modes.
+    pub modes: Vec<OmaMode>,
+    /// Every pole of every order.
+    pub poles: Vec<Pole>,
+    /// The clusters reported (as modes) and the ones rejected, for the stabilisation plot.
+    pub clusters: Vec<(SsiMode, bool)>,
+}
+
+/// SSI-cov's modes: the clusters of stable poles that pass [`cluster::cluster`]'s rules
+/// (without bands) or the fullest such cluster in each band; the rejected clusters go to
+/// `rejected` with their reason; a stable mode below the range analysed is noted, never
+/// dropped in silence.
+pub fn ssi_modes(
+    channels: &[Vec<f64>],
+    s: &OmaSettings,
+    notes: &mut Vec<String>,
+    rejected: &mut Vec<String>,
+) -> anyhow::Result<SsiFound> {
+    let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
+    let (kept, dropped) = cluster::cluster(&poles, s.cluster);
+    for c in cluster::cluster(&cut, s.cluster).0 {
+        notes.push(format!(
+            "SSI-cov: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
+             lowest frequency analysed, {:.4} Hz (0.5 Hz, or two spectral lines of {} samples, \
+             whichever is higher; or --f-min-hz): not reported; a longer --nperseg or a lower \
+             --f-min-hz takes it in",
+            c.f_hz, c.damping, c.poles, s.ssi.f_range_hz.0, s.csd.nfft
+        ));
+    }
+    let mode = |n: usize, band: Option<usize>, c: &SsiMode| OmaMode {
+        method: Method::Ssi,
+        mode: n,
+        band_hz: band.map(|b| s.bands[b]),
+        f_hz: c.f_hz,
+        amplitude: None,
+        damping: Some(c.damping),
+        shape: normalise_shape(&c.shape),
+        evidence: cluster_evidence(c),
+    };
+    let mut modes = Vec::new();
+    if s.bands.is_empty() {
+        for r in &dropped {
+            rejected.push(format!(
+                "ssi cluster at {:.4} Hz (damping {:.4}, {} poles, orders {}-{}): {}",
+                r.cluster.f_hz,
+                r.cluster.damping,
+                r.cluster.poles,
+                r.cluster.orders.0,
+                r.cluster.orders.1,
+                r.reason
+            ));
+        }
+        modes.extend(kept.iter().enumerate().map(|(n, c)| mode(n + 1, None, c)));
+    } else {
+        for (b, &band) in s.bands.iter().enumerate() {
+            match kept
+                .iter()
+                .filter(|c| c.f_hz >= band.0 && c.f_hz <= band.1)
+                .max_by_key(|c| c.poles)
+            {
+                Some(c) => modes.push(mode(b + 1, Some(b), c)),
+                None => notes.push(format!(
+                    "SSI-cov: no stable mode in band {}-{} Hz",
+                    band.0, band.1
+                )),
+            }
+        }
+    }
+    let clusters = kept
+        .into_iter()
+        .map(|c| (c, true))
+        .chain(dropped.into_iter().map(|r| (r.cluster, false)))
+        .collect();
+    Ok(SsiFound {
+        modes,
+        poles,
+        clusters,
+    })
+}
+
+/// A cluster's size and spread, for the report.
+fn cluster_evidence(c: &SsiMode) -> String {
+    format!(
+        "{} poles (orders {}-{}), spread f {:.2} % damping {:.0} %, MPC {:.3}, MPD {:.1} deg",
+        c.poles,
+        c.orders.0,
+        c.orders.1,
+        100.0 * c.f_spread,
+        100.0 * c.damping_spread,
+        c.mpc,
+        c.mpd_deg
+    )
+}
+
+/// The FDD peaks with bands: the highest line of each band (a band without a line is noted).
+pub fn banded_peaks(svd: &Svd, df_hz: f64, s: &OmaSettings, notes: &mut Vec<String>) -> Vec<Peak> {
+    s.bands
+        .iter()
+        .enumerate()
+        .filter_map(|(b, &band)| match fdd::peak_in_band(svd, band) {
+            Some(l) => Some(Peak {
+                line: l,
+                band: Some(b),
+                reference: svd.u1[l].clone(),
+                value: svd.s[l][0],
+                evidence: format!("the band's highest line, {:.4} Hz", svd.freq_hz[l]),
+            }),
+            None => {
+                notes.push(format!(
+                    "band {}-{} Hz has no spectral line (line spacing {:.4} Hz)",
+                    band.0, band.1, df_hz
+                ));
+                None
+            }
+        })
+        .collect()
+}
+
+/// A peak accepted, with its bell's lines (first, last).
+struct Taken {
+    peak: Peak,
+    bell: (usize, usize),
+}
+
+/// The FDD peaks without bands (module documentation), ascending; each peak rejected goes to
+/// `rejected` with its reason.
+pub fn automatic_peaks(
+    svd: &Svd,
+    s: &OmaSettings,
+    ssi: &[OmaMode],
+    rejected: &mut Vec<String>,
+) -> Vec<Peak> {
+    let lines = svd.freq_hz.len();
+    let f = |l: usize| svd.freq_hz[l];
+    let mut candidates = fdd::pick_peaks(svd, s.peaks);
+    candidates.sort_by(|a, b| svd.s[b.0][0].total_cmp(&svd.s[a.0][0]));
+    let mut taken: Vec<Taken> = Vec::new();
+    for (l, prominence) in candidates {
+        let reference = svd.u1[l].clone();
+        let (a, values) = fdd::bell(svd, &reference, l, (0, lines), s.efdd.mac_min);
+        let b = a + values.len().max(1) - 1;
+        let name = format!("fdd peak at {:.4} Hz ({prominence:.1} dB)", f(l));
+        if values.len() < s.efdd.min_lines {
+            rejected.push(format!(
+                "{name}: its singular vector holds (MAC >= {}) over {} lines, fewer than {} (a \
+                 mode's holds over its bell; a noise peak's turns from line to line)",
+                s.efdd.mac_min,
+                values.len(),
+                s.efdd.min_lines
+            ));
+            continue;
+        }
+        if let Some(t) = taken.iter().find(|t| {
+            (t.bell.0..=t.bell.1).contains(&l)
+                || ((a..=b).contains(&t.peak.line)
+                    && mac(&t.peak.reference, &reference) >= s.efdd.mac_min)
+        }) {
+            rejected.push(format!(
+                "{name}: on the bell of the {:.4} Hz peak, with its shape (MAC {:.3}): a \
+                 ripple of that mode",
+                f(t.peak.line),
+                mac(&t.peak.reference, &reference)
+            ));
+            continue;
+        }
+        let agree = agreeing(ssi, &reference, (f(a), f(b)));
+        if agree.is_none() && prominence < STRONG_PEAK_DB {
+            rejected.push(format!(
+                "{name}: no SSI-cov mode within its bell ({:.4}-{:.4} Hz) with a like shape \
+                 (MAC >= {AGREE_MAC}); a peak of less than {STRONG_PEAK_DB} dB is taken only \
+                 with SSI-cov's support",
+                f(a),
+                f(b)
+            ));
+            continue;
+        }
+        let evidence = match agree {
+            Some((m, c)) => format!(
+                "first singular value, {prominence:.1} dB, bell of {} lines; SSI-cov's {:.4} Hz \
+                 mode agrees (MAC {c:.3})",
+                values.len(),
+                m.f_hz
+            ),
+            None => format!(
+                "first singular value, {prominence:.1} dB, bell of {} lines; no SSI-cov mode \
+                 agrees",
+                values.len()
+            ),
+        };
+        taken.push(Taken {
+            peak: Peak {
+                line: l,
+                band: None,
+                value: svd.s[l][0],
+                reference,
+                evidence,
+            },
+            bell: (a, b),
+        });
+    }
+    rescue(svd, s, ssi, &mut taken);
+    let mut peaks: Vec<Peak> = taken.into_iter().map(|t| t.peak).collect();
+    peaks.sort_by_key(|p| p.line);
+    peaks
+}
+
+/// The SSI-cov mode within `(lo, hi)` Hz whose shape agrees best with `reference` (MAC at
+/// least [`AGREE_MAC`]), and the MAC.
+fn agreeing<'a>(
+    ssi: &'a [OmaMode],
+    reference: &[Complex64],
+    (lo, hi): (f64, f64),
+) -> Option<(&'a OmaMode, f64)> {
+    ssi.iter()
+        .filter(|m| m.f_hz >= lo && m.f_hz <= hi)
+        .map(|m| (m, mac(&m.shape, reference)))
+        .filter(|(_, c)| *c >= AGREE_MAC)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The SSI-cov modes no peak took, given their bells: near each one's frequency (two lines, or
+/// twice its half-power bandwidth) the line and singular vector (first or second) of its
+/// shape (MAC >= 0.9); its bell of at least `min_lines` lines, the peak at the bell's largest
+/// value.
+fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
+    let lines = svd.freq_hz.len();
+    let df = svd.freq_hz.get(1).copied().unwrap_or(1.0);
+    for m in ssi {
+        let covered = taken.iter().any(|t| {
+            let (lo, hi) = (svd.freq_hz[t.bell.0], svd.freq_hz[t.bell.1]);
+            m.f_hz >= lo && m.f_hz <= hi && mac(&t.peak.reference, &m.shape) >= AGREE_MAC
+        });
+        if covered {
+            continue;
+        }
+        let reach = (2.0 * df).max(2.0 * 2.0 * m.damping.unwrap_or(0.0) * m.f_hz);
+        let best = (0..lines)
+            .filter(|&l| (svd.freq_hz[l] - m.f_hz).abs() <= reach)
+            .flat_map(|l| {
+                [(l, &svd.u1[l]), (l, &svd.u2[l])]
+                    .into_iter()
+                    .map(|(l, u)| (l, u, mac(u, &m.shape)))
+            })
+            .filter(|x| x.2 >= 0.9)
+            .max_by(|a, b| a.2.total_cmp(&b.2));
+        let Some((l, u, c)) = best else {
+            continue;
+        };
+        let reference = u.clone();
+        let (a, values) = fdd::bell(svd, &reference, l, (0, lines), s.efdd.mac_min);
+        if values.len() < s.efdd.min_lines {
+            continue;
+        }
+        let Some(top) = (0..values.len()).max_by(|&i, &j| values[i].total_cmp(&values[j])) else {
+            continue;
+        };
+        let line = a + top;
+        let b = a + values.len() - 1;
+        let inside = taken.iter().any(|t| {
+            (t.bell.0..=t.bell.1).contains(&line)
+                && mac(&t.peak.reference, &reference) >= s.efdd.mac_min
+        });
+        if inside {
+            continue;
+        }
+        // the mode's shape at its peak: the singular vector there that has it
+        let (which, reference) = if mac(&svd.u2[line], &reference) > mac(&svd.u1[line], &reference)
+        {
+            ("second", svd.u2[line].clone())
+        } else {
+            ("first", svd.u1[line].clone())
+        };
+        taken.push(Taken {
+            peak: Peak {
+                line,
+                band: None,
+                reference,
+                value: values[top],
+                evidence: format!(
+                    "{which} singular value, bell of {} lines, found from SSI-cov's {:.4} Hz mode \
+                     (MAC {c:.3}): no peak of 6 dB stood for it",
+                    values.len(),
+                    m.f_hz
+                ),
+            },
+            bell: (a, b),
+        });
+    }
+}
+
+/// The FDD mode at each peak and its EFDD refinement (frequency and damping from the bell
+/// fitted; a bell too narrow or a fit that fails is noted).
+pub fn fdd_modes(
+    svd: &Svd,
+    peaks: &[Peak],
+    s: &OmaSettings,
+    notes: &mut Vec<String>,
+) -> Vec<OmaMode> {
+    let mut modes = Vec::new();
+    let lines = svd.freq_hz.len();
+    let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
+    for (n, p) in peaks.iter().enumerate() {
+        let mode = p.band.map_or(n + 1, |b| b + 1);
+        let band_hz = p.band.map(|b| s.bands[b]);
+        let shape = normalise_shape(&p.reference);
+        modes.push(OmaMode {
+            method: Method::Fdd,
+            mode,
+            band_hz,
+            f_hz: svd.freq_hz[p.line],
+            amplitude: Some(p.value),
+            damping: None,
+            shape: shape.clone(),
+            evidence: p.evidence.clone(),
+        });
+        // the bell stops at the neighbouring peaks
+        let fence = (
+            if n > 0 { peaks[n - 1].line } else { 0 },
+            peaks.get(n + 1).map_or(lines, |q| q.line),
+        );
+        match fdd::efdd(
+            svd,
+            (&p.reference, p.line),
+            fence,
+            (s.csd.nfft, s.fs_hz),
+            &lag,
+            s.efdd,
+        ) {
+            Ok(e) => modes.push(OmaMode {
+                method: Method::Efdd,
+                mode,
+                band_hz,
+                f_hz: e.f_hz,
+                amplitude: Some(p.value),
+                damping: Some(e.damping),
+                shape,
+                evidence: format!(
+                    "bell of {} lines ({:.4}-{:.4} Hz) fitted, residual {:.2} (ln), floor {:.1} % \
+                     of the peak",
+                    e.lines,
+                    svd.freq_hz[e.range.0],
+                    svd.freq_hz[e.range.1],
+                    e.rms_log,
+                    100.0 * e.floor
+                ),
+            }),
+            Err(why) => notes.push(format!(
+                "EFDD of mode {mode} ({:.4} Hz) not reported: {why}",
+                svd.freq_hz[p.line]
+            )),
+        }
+    }
+    modes
+}
