@@ -207,3 +207,101 @@ pub fn fit(
         rms_log: (c / n as f64).sqrt(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::oma::fdd::lag_window;
+    use firmware_core::spectrum::Window;
+
+    /// The Welch expectation of one mode's displacement spectrum computed the other way
+    /// round from the fit's model: the continuous spectrum `1 / ((f0^2 - f^2)^2 + (2 zeta f0
+    /// f)^2)` on a grid 64 times finer than the lines, convolved with the Hann segment's
+    /// spectral window `|W(f)|^2` (a direct transform of the window), at the lines.
+    fn welch_expectation(f0: f64, zeta: f64, fs: f64, nperseg: usize, lines: &[usize]) -> Vec<f64> {
+        let fine = 64usize;
+        let df = fs / nperseg as f64;
+        let w: Vec<f64> = (0..nperseg)
+            .map(|i| f64::from(Window::Hann.value(i, nperseg)))
+            .collect();
+        // |W(nu)|^2 for nu = k df / fine, |k| up to 8 lines (the kernel beyond is negligible
+        // against the mode's own tail at these offsets)
+        let reach = 8 * fine as i64;
+        let kernel: Vec<f64> = (-reach..=reach)
+            .map(|k| {
+                let nu = k as f64 * df / fine as f64;
+                let (mut re, mut im) = (0.0, 0.0);
+                for (n, v) in w.iter().enumerate() {
+                    let a = 2.0 * std::f64::consts::PI * nu * n as f64 / fs;
+                    re += v * a.cos();
+                    im -= v * a.sin();
+                }
+                re * re + im * im
+            })
+            .collect();
+        let s = |f: f64| 1.0 / ((f0 * f0 - f * f).powi(2) + (2.0 * zeta * f0 * f).powi(2));
+        lines
+            .iter()
+            .map(|&l| {
+                let f = l as f64 * df;
+                kernel
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| k * s(f - (i as f64 - reach as f64) * df / fine as f64))
+                    .sum::<f64>()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_fit_gives_the_damping_of_a_bell_cut_anywhere() {
+        // a mode whose half-power band is 4 lines wide, its bell cut at 3 half-power
+        // bandwidths (a tenth of its peak) or at 8: the inverse transform of the cut bell
+        // (the classic EFDD) depends on where it is cut; the fit does not
+        let (fs, nperseg) = (60.0, 1024usize);
+        let df = fs / nperseg as f64;
+        let (f0, zeta) = (6.0, 2.0 * df / 6.0);
+        let lag = lag_window(Window::Hann, nperseg);
+        let peak = (f0 / df).round() as usize;
+        for half_width in [6usize, 16] {
+            let lines: Vec<usize> = (peak - half_width..=peak + half_width).collect();
+            let y = welch_expectation(f0, zeta, fs, nperseg, &lines);
+            let got = super::fit(&y, (lines[0], peak), (nperseg, fs), &lag).unwrap();
+            assert!(
+                (got.damping / zeta - 1.0).abs() < 0.01,
+                "+-{half_width} lines: {} against {zeta}",
+                got.damping
+            );
+            assert!(
+                (got.f_hz - f0).abs() < 0.01 * df,
+                "{} against {f0}",
+                got.f_hz
+            );
+            assert!(got.floor < 1e-3, "floor {}", got.floor);
+        }
+        // a lightly damped mode, its half-power band a third of a line: the window's kernel
+        // is most of the bell
+        let zeta = df / 3.0 / (2.0 * f0);
+        let lines: Vec<usize> = (peak - 8..=peak + 8).collect();
+        let y = welch_expectation(f0, zeta, fs, nperseg, &lines);
+        let got = super::fit(&y, (lines[0], peak), (nperseg, fs), &lag).unwrap();
+        assert!(
+            (got.damping / zeta - 1.0).abs() < 0.02,
+            "{} against {zeta}",
+            got.damping
+        );
+        // and on a floor a twentieth of the peak's height the floor is found
+        let lines: Vec<usize> = (peak - 16..=peak + 16).collect();
+        let zeta = 2.0 * df / 6.0;
+        let mut y = welch_expectation(f0, zeta, fs, nperseg, &lines);
+        let top = y.iter().copied().fold(0.0, f64::max);
+        y.iter_mut().for_each(|v| *v += 0.05 * top);
+        let got = super::fit(&y, (lines[0], peak), (nperseg, fs), &lag).unwrap();
+        assert!((got.damping / zeta - 1.0).abs() < 0.01, "{}", got.damping);
+        assert!(
+            (got.floor / (0.05 / 1.05) - 1.0).abs() < 0.05,
+            "{}",
+            got.floor
+        );
+    }
+}

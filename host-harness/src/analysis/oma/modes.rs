@@ -306,9 +306,16 @@ fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
         if inside {
             continue;
         }
-        // the mode's shape at its peak: the singular vector there that has it
-        let (which, reference) = if mac(&svd.u2[line], &reference) > mac(&svd.u1[line], &reference)
-        {
+        // the mode's shape at its peak: the singular vector there that has it (MAC 0.99 with
+        // the vector found beside SSI-cov's frequency); where the SVD mixes it with a close
+        // mode of like power, the vector found
+        let (m1, m2) = (
+            mac(&svd.u1[line], &reference),
+            mac(&svd.u2[line], &reference),
+        );
+        let (which, reference) = if m1.max(m2) < 0.99 {
+            ("first and second", reference)
+        } else if m2 > m1 {
             ("second", svd.u2[line].clone())
         } else {
             ("first", svd.u1[line].clone())
