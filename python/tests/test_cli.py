@@ -62,6 +62,13 @@ def test_analyze_equals_the_command_line(recording, harness, tmp_path, flags, kw
     modes, shapes = res.to_pandas()
     assert list(modes.columns)[:3] == ["system", "target", "mode"]
     assert len(shapes) == 5 * len(modes)
+    # how each mode was found, and what was not taken with its reason, as report.txt says
+    assert len(res.evidence) == len(res.modes["method"]) and all(res.evidence)
+    report = (out / "report.txt").read_text()
+    for e in res.evidence:
+        assert e in report
+    for r in res.rejected:
+        assert ": " in r and r in report
 
 
 def test_analyze_of_an_array_equals_the_files(recording):
