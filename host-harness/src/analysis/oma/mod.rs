@@ -604,12 +604,23 @@ mod tests {
                         assert!(!got.evidence.is_empty());
                     }
                 }
-                // whatever was not taken is named with its reason
+                // whatever was not taken is named with its reason; a ripple has the shape of
+                // the peak it is on (a bell also runs where its mode is the second singular
+                // value, under another mode: a peak there is no ripple of it)
                 assert!(
                     r.rejected.iter().all(|x| x.contains(": ")),
                     "{:?}",
                     r.rejected
                 );
+                for x in r.rejected.iter().filter(|x| x.contains("ripple")) {
+                    let m: f64 = x
+                        .split("(MAC ")
+                        .nth(1)
+                        .and_then(|t| t.split(')').next())
+                        .and_then(|t| t.parse().ok())
+                        .unwrap_or(0.0);
+                    assert!(m >= 0.85, "{x}");
+                }
             }
         }
     }

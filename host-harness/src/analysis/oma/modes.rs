@@ -193,10 +193,11 @@ pub fn automatic_peaks(
             ));
             continue;
         }
+        // one bell holds the other's peak, and the two have one shape (a bell also runs
+        // through the lines where its mode is the second singular value, under another mode)
         if let Some(t) = taken.iter().find(|t| {
-            (t.bell.0..=t.bell.1).contains(&l)
-                || ((a..=b).contains(&t.peak.line)
-                    && mac(&t.peak.reference, &reference) >= s.efdd.mac_min)
+            ((t.bell.0..=t.bell.1).contains(&l) || (a..=b).contains(&t.peak.line))
+                && mac(&t.peak.reference, &reference) >= s.efdd.mac_min
         }) {
             rejected.push(format!(
                 "{name}: on the bell of the {:.4} Hz peak, with its shape (MAC {:.3}): a \
