@@ -210,7 +210,6 @@ pub fn fit(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::analysis::oma::fdd::lag_window;
     use firmware_core::spectrum::Window;
 
