@@ -47,6 +47,13 @@ impl Csd {
 /// The cross-spectral matrix of `channels` (equal lengths, sampled at `fs_hz`). Errors when
 /// the record is shorter than one segment or a sample is not finite (naming the channel).
 pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Result<Csd> {
+    let segments = check(channels, c)?;
+    let raw = raw_sum(channels, c, 0..segments)?;
+    Ok(finish(raw, channels.len(), segments, fs_hz, c))
+}
+
+/// The segments of `channels` under `c`, after the checks of [`csd_matrix`].
+pub fn check(channels: &[Vec<f64>], c: CsdConfig) -> anyhow::Result<usize> {
     let k = channels.len();
     let n = channels.first().map_or(0, Vec::len);
     if k == 0 {
@@ -76,19 +83,28 @@ pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Re
             c.nperseg
         )));
     }
+    Ok((n - c.nperseg) / (c.nperseg - c.noverlap) + 1)
+}
+
+/// The unscaled sums `sum conj(X_i) X_j` (upper triangle, `i <= j`, row-major K x K per line)
+/// over the segments `range` of checked channels.
+pub fn raw_sum(
+    channels: &[Vec<f64>],
+    c: CsdConfig,
+    range: std::ops::Range<usize>,
+) -> anyhow::Result<Vec<Vec<Complex64>>> {
+    let k = channels.len();
     let step = c.nperseg - c.noverlap;
-    let segments = (n - c.nperseg) / step + 1;
     let w: Vec<f64> = (0..c.nperseg)
         .map(|i| f64::from(c.window.value(i, c.nperseg)))
         .collect();
-    let s2: f64 = w.iter().map(|v| v * v).sum();
     let lines = c.nfft / 2 + 1;
     let mut planner = RealFftPlanner::<f64>::new();
     let fft = planner.plan_fft_forward(c.nfft);
     let mut input = fft.make_input_vec();
     let mut spectra = vec![vec![Complex64::new(0.0, 0.0); lines]; k];
     let mut g = vec![vec![Complex64::new(0.0, 0.0); k * k]; lines];
-    for s in 0..segments {
+    for s in range {
         let start = s * step;
         for (ch, out) in channels.iter().zip(spectra.iter_mut()) {
             let seg = &ch[start..start + c.nperseg];
@@ -112,6 +128,22 @@ pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Re
             }
         }
     }
+    Ok(g)
+}
+
+/// The cross-spectral matrix from the raw sums of `segments` segments ([`raw_sum`]): the
+/// one-sided density, the lower triangle the conjugate of the upper.
+pub fn finish(
+    mut g: Vec<Vec<Complex64>>,
+    k: usize,
+    segments: usize,
+    fs_hz: f64,
+    c: CsdConfig,
+) -> Csd {
+    let s2: f64 = (0..c.nperseg)
+        .map(|i| f64::from(c.window.value(i, c.nperseg)).powi(2))
+        .sum();
+    let lines = g.len();
     let scale = 1.0 / (fs_hz * s2 * segments as f64);
     for (line, m) in g.iter_mut().enumerate() {
         let one_sided = if line == 0 || (c.nfft.is_multiple_of(2) && line == lines - 1) {
@@ -129,14 +161,14 @@ pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Re
             m[i * k + i].im = 0.0;
         }
     }
-    Ok(Csd {
+    Csd {
         freq_hz: (0..lines)
             .map(|l| l as f64 * fs_hz / c.nfft as f64)
             .collect(),
         k,
         g,
         segments,
-    })
+    }
 }
 
 #[cfg(test)]

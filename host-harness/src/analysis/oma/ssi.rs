@@ -51,9 +51,58 @@ pub fn poles(
     fs_hz: f64,
     rule: SsiRule,
 ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+    let sums = correlation_sums(channels, rule.block_rows, 1)?;
+    poles_of(&sums.all(), fs_hz, rule)
+}
+
+/// The output correlations' sums `sum_t y(t + l) y(t)^T` (means removed) for the lags
+/// `0 .. 2i` of `i` block rows, per block of the record (`blocks` contiguous parts, a product
+/// counted in the block of its `t`), with the number of products: what the correlations of the
+/// whole record, or of the record without one block (the jackknife), are made of.
+#[derive(Debug, Clone)]
+pub struct CorrelationSums {
+    /// Per block, per lag, the K x K sum.
+    pub sums: Vec<Vec<DMatrix<f64>>>,
+    /// Per block, per lag, the number of products.
+    pub counts: Vec<Vec<usize>>,
+}
+
+impl CorrelationSums {
+    /// The correlations of the whole record.
+    pub fn all(&self) -> Vec<DMatrix<f64>> {
+        self.without(None)
+    }
+
+    /// The correlations of the record without block `left_out` (all with `None`).
+    pub fn without(&self, left_out: Option<usize>) -> Vec<DMatrix<f64>> {
+        let lags = self.sums.first().map_or(0, Vec::len);
+        let k = self.sums.first().and_then(|b| b.first()).map_or(0, |m| m.nrows());
+        (0..lags)
+            .map(|l| {
+                let mut m = DMatrix::<f64>::zeros(k, k);
+                let mut n = 0usize;
+                for (b, (sum, count)) in self.sums.iter().zip(&self.counts).enumerate() {
+                    if Some(b) != left_out {
+                        m += &sum[l];
+                        n += count[l];
+                    }
+                }
+                m / n.max(1) as f64
+            })
+            .collect()
+    }
+}
+
+/// The correlation sums of `channels` for `block_rows` block rows in `blocks` blocks
+/// ([`CorrelationSums`]). Errors when the record is too short for the block rows.
+pub fn correlation_sums(
+    channels: &[Vec<f64>],
+    block_rows: usize,
+    blocks: usize,
+) -> anyhow::Result<CorrelationSums> {
     let k = channels.len();
     let n = channels.first().map_or(0, Vec::len);
-    let i = rule.block_rows;
+    let i = block_rows;
     if k == 0 || i < 2 || n < 4 * i {
         return Err(crate::bad_input(format!(
             "SSI-cov: {n} samples are too few for {i} block rows (at least {})",
@@ -67,21 +116,42 @@ pub fn poles(
             c.iter().map(|v| v - m).collect()
         })
         .collect();
-    // R_l = 1/(N - l) sum_t y(t + l) y(t)^T, l = 1 .. 2i - 1
     let lags = 2 * i;
-    let mut r = vec![DMatrix::<f64>::zeros(k, k); lags];
-    for (l, rl) in r.iter_mut().enumerate().skip(1) {
-        for a in 0..k {
-            for b in 0..k {
-                let s: f64 = y[a][l..]
-                    .iter()
-                    .zip(&y[b][..n - l])
-                    .map(|(p, q)| p * q)
-                    .sum();
-                rl[(a, b)] = s / (n - l) as f64;
+    let blocks = blocks.max(1);
+    let edge = |b: usize| b * n / blocks;
+    let mut sums = vec![vec![DMatrix::<f64>::zeros(k, k); lags]; blocks];
+    let mut counts = vec![vec![0usize; lags]; blocks];
+    for (b, (sum, count)) in sums.iter_mut().zip(counts.iter_mut()).enumerate() {
+        for (l, (sl, cl)) in sum.iter_mut().zip(count.iter_mut()).enumerate().skip(1) {
+            // the products y(t + l) y(t)^T with t in the block and t + l in the record
+            let (t0, t1) = (edge(b), edge(b + 1).min(n - l));
+            if t1 <= t0 {
+                continue;
             }
+            for a in 0..k {
+                for c in 0..k {
+                    sl[(a, c)] = y[a][t0 + l..t1 + l]
+                        .iter()
+                        .zip(&y[c][t0..t1])
+                        .map(|(p, q)| p * q)
+                        .sum();
+                }
+            }
+            *cl = t1 - t0;
         }
     }
+    Ok(CorrelationSums { sums, counts })
+}
+
+/// The poles of every order from the output correlations `r` (lags `0 .. 2i`) of records
+/// sampled at `fs_hz` ([`poles`]).
+pub fn poles_of(
+    r: &[DMatrix<f64>],
+    fs_hz: f64,
+    rule: SsiRule,
+) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+    let k = r.first().map_or(0, |m| m.nrows());
+    let i = rule.block_rows;
     // block Toeplitz: block (row a, column b) = R_{i + a - b}
     let mut t = DMatrix::<f64>::zeros(i * k, i * k);
     for a in 0..i {
