@@ -7,6 +7,7 @@
 
 use firmware_core::centroid::{Centroid, Flags};
 use host_harness::analysis::oma::frames as oma_frames;
+use host_harness::analysis::oma::uncertainty::Interval;
 use host_harness::analysis::points::Point;
 use host_harness::analysis::{Axis, WelchSettings};
 use host_harness::frames::files::{luma, LumaLevel};
@@ -583,6 +584,16 @@ fn analysis_dict<'py>(
         }
     }
     d.set_item("shapes", shapes.into_pyarray(py))?;
+    // the standard uncertainty of each shape component's magnitude (NaN where not estimated)
+    let mut abs_u = Array2::<f64>::from_elem((r.modes.len(), k), f64::NAN);
+    for (i, m) in r.modes.iter().enumerate() {
+        if let Some(u) = &m.uncertainty.shape_abs {
+            for (j, v) in u.iter().enumerate().take(k) {
+                abs_u[[i, j]] = *v;
+            }
+        }
+    }
+    d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
     d.set_item(
         "targets",
         c.records
@@ -630,7 +641,8 @@ fn analysis_dict<'py>(
 }
 
 /// The modes as a dict of columns (`method`, `mode`, `band_lo_hz`, `band_hi_hz`, `f_hz`,
-/// `amplitude`, `damping`; NaN where a method gives none).
+/// `amplitude`, `damping`, and `f_hz_u`, `f_hz_lo`, `f_hz_hi` and the same of `damping` and
+/// `amplitude`; NaN where a method gives none).
 fn modes_dict<'py>(
     py: Python<'py>,
     r: &host_harness::analysis::oma::OmaResult,
@@ -660,6 +672,23 @@ fn modes_dict<'py>(
         ("damping", col(&|m| m.damping.unwrap_or(nan))),
     ] {
         modes.set_item(name, v.into_pyarray(py))?;
+    }
+    // each estimate's standard uncertainty and 95 % interval (NaN where not estimated)
+    type Pick = fn(&host_harness::analysis::oma::OmaMode) -> Option<Interval>;
+    let quantities: [(&str, Pick); 3] = [
+        ("f_hz", |m| m.uncertainty.f_hz),
+        ("damping", |m| m.uncertainty.damping),
+        ("amplitude", |m| m.uncertainty.amplitude),
+    ];
+    for (name, pick) in quantities {
+        for (suffix, part) in [
+            ("u", (|i: Interval| i.u) as fn(Interval) -> f64),
+            ("lo", |i: Interval| i.lo),
+            ("hi", |i: Interval| i.hi),
+        ] {
+            let v = col(&|m| pick(m).map_or(nan, part));
+            modes.set_item(format!("{name}_{suffix}"), v.into_pyarray(py))?;
+        }
     }
     Ok(modes)
 }

@@ -322,10 +322,14 @@ def upsample(x: Any, from_hz: float, to_hz: float) -> np.ndarray:
     )
 
 
+_INTERVAL_COLUMNS = [
+    f"{q}_{p}" for q in ("f_hz", "damping", "amplitude") for p in ("u", "lo", "hi")
+]
 _MODES_COLUMNS = (
     "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method".split(",")
+    + _INTERVAL_COLUMNS
 )
-_SHAPES_COLUMNS = "mode,target,x_px,y_px,re,im,abs,method".split(",")
+_SHAPES_COLUMNS = "mode,target,x_px,y_px,re,im,abs,method,abs_u".split(",")
 
 
 @dataclass
@@ -334,8 +338,11 @@ class AnalysisResult:
 
     ``modes``: dict of arrays, one entry per mode and method (``method``: ``fdd``, ``efdd``,
     ``ssi``; ``mode``, ``band_lo_hz``, ``band_hi_hz``, ``f_hz``, ``amplitude``, ``damping``,
-    NaN where a method gives none); ``shapes``: complex ``(modes, K)``, the row of each mode,
-    normalised (largest component 1); ``targets``: the target numbers of the columns (targets
+    NaN where a method gives none; and each estimate's standard uncertainty and 95 % interval,
+    ``f_hz_u``, ``f_hz_lo``, ``f_hz_hi`` and the same of ``damping`` and ``amplitude``, NaN
+    where not estimated); ``shapes``: complex ``(modes, K)``, the row of each mode,
+    normalised (largest component 1); ``shapes_abs_u``: the standard uncertainty of each
+    component's magnitude; ``targets``: the target numbers of the columns (targets
     left out are named in ``left_out``); ``first_xy``: each target's position in the first
     frame; ``svd_freq_hz``, ``svd``: the singular values of the cross-spectral matrix per line;
     ``displacement``: ``(N, all targets)`` in ``unit`` (mm with ``mm_per_px``, else px; lost
@@ -359,6 +366,7 @@ class AnalysisResult:
     report: str
     left_out: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    shapes_abs_u: Optional[np.ndarray] = None
     evidence: list = field(default_factory=list)
     rejected: list = field(default_factory=list)
 
@@ -382,6 +390,7 @@ class AnalysisResult:
                     "damping": opt(m["damping"][i]),
                     "e2pr": None,
                     "method": m["method"][i],
+                    **{c: opt(m[c][i]) for c in _INTERVAL_COLUMNS},
                 }
             )
         return rows
@@ -403,6 +412,8 @@ class AnalysisResult:
                         "im": float(c.imag),
                         "abs": float(abs(c)),
                         "method": method,
+                        "abs_u": None if np.isnan(self.shapes_abs_u[i, j])
+                        else float(self.shapes_abs_u[i, j]),
                     }
                 )
         return rows
@@ -488,6 +499,7 @@ def analyze(
         report=d["report"],
         left_out=list(d["left_out"]),
         notes=list(d["notes"]),
+        shapes_abs_u=d["shapes_abs_u"],
         evidence=list(d["evidence"]),
         rejected=list(d["rejected"]),
     )

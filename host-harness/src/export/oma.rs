@@ -23,15 +23,26 @@ pub struct OmaModeRow {
     pub damping: Option<f64>,
     /// `fdd`, `efdd` or `ssi`.
     pub method: &'static str,
+    /// The standard uncertainty and 95 % interval (`u`, `lo`, `hi`) of the frequency, the
+    /// damping and the amplitude, where estimated.
+    pub intervals: [Option<(f64, f64, f64)>; 3],
 }
 
+/// The columns `modes.csv` of an output-only analysis adds to the multi-target ones: each
+/// estimate's standard uncertainty and 95 % interval.
+pub const INTERVAL_COLUMNS: &str = "f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,\
+                                    amplitude_u,amplitude_lo,amplitude_hi";
+
 /// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
-/// `target` and `e2pr` empty.
+/// `target` and `e2pr` empty; then [`INTERVAL_COLUMNS`] (empty where not estimated).
 pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
-    let mut s = String::from(MODES_HEADER);
+    let mut s = String::from(MODES_HEADER.trim_end());
+    s.push(',');
+    s.push_str(INTERVAL_COLUMNS);
+    s.push('\n');
     for m in rows {
         let (lo, hi) = m.band_hz.map_or((None, None), |b| (Some(b.0), Some(b.1)));
-        let _ = writeln!(
+        let _ = write!(
             s,
             "vision,,{},{},{},{},{},{},,{}",
             m.mode,
@@ -42,6 +53,13 @@ pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
             opt(m.damping),
             m.method
         );
+        for i in &m.intervals {
+            let (u, lo, hi) = i.map_or((None, None, None), |(u, lo, hi)| {
+                (Some(u), Some(lo), Some(hi))
+            });
+            let _ = write!(s, ",{},{},{}", opt(u), opt(lo), opt(hi));
+        }
+        s.push('\n');
     }
     s.into_bytes()
 }
@@ -59,17 +77,21 @@ pub struct OmaShapeRow {
     pub value: Complex64,
     /// `fdd`, `efdd` or `ssi`.
     pub method: &'static str,
+    /// The standard uncertainty of its magnitude, where estimated.
+    pub abs_u: Option<f64>,
 }
 
-/// `shapes.csv`: one row per mode, method and target (`x_px`, `y_px` empty when unknown).
+/// `shapes.csv`: one row per mode, method and target (`x_px`, `y_px` empty when unknown),
+/// then `abs_u` (the standard uncertainty of `abs`; empty where not estimated).
 pub fn shapes_csv(rows: &[OmaShapeRow]) -> Vec<u8> {
-    let mut s = String::from(SHAPES_HEADER);
+    let mut s = String::from(SHAPES_HEADER.trim_end());
+    s.push_str(",abs_u\n");
     for r in rows {
         let (x, y) = r.xy_px.map_or((None, None), |p| (Some(p.0), Some(p.1)));
         let c = r.value;
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             r.mode,
             r.target,
             opt(x),
@@ -77,7 +99,8 @@ pub fn shapes_csv(rows: &[OmaShapeRow]) -> Vec<u8> {
             c.re,
             c.im,
             c.norm(),
-            r.method
+            r.method,
+            opt(r.abs_u)
         );
     }
     s.into_bytes()

@@ -245,7 +245,8 @@ pub const FLOOR_MAX: f64 = 0.1;
 /// EFDD of the mode of shape `reference` peaking at line `peak`: its bell ([`bell`], MAC
 /// `rule.mac_min`, between the neighbouring peaks `fence`) fitted by the spectrum a single
 /// mode makes in this estimate ([`super::bell`]): `nfft` the transform length, `fs_hz` the
-/// sample rate, `lag` the estimate's lag window ([`lag_window`]). An error saying why when the
+/// sample rate, `lag` the estimate's lag window ([`lag_window`]), `start` where the fit starts
+/// ([`super::bell::fit`]). An error saying why when the
 /// bell has fewer than `rule.min_lines` lines, the fit does not settle on a damped mode inside
 /// it, or the floor it finds under the bell is more than [`FLOOR_MAX`] of its peak.
 pub fn efdd(
@@ -253,7 +254,7 @@ pub fn efdd(
     (reference, peak): (&[Complex64], usize),
     fence: (usize, usize),
     (nfft, fs_hz): (usize, f64),
-    lag: &[f64],
+    (lag, start): (&[f64], Option<(f64, f64)>),
     rule: EfddRule,
 ) -> Result<Efdd, String> {
     let (a, y) = bell(svd, reference, peak, fence, rule.mac_min);
@@ -268,7 +269,7 @@ pub fn efdd(
     let top = (0..count)
         .max_by(|&i, &j| y[i].total_cmp(&y[j]))
         .unwrap_or(0);
-    let fit = super::bell::fit(&y, (a, a + top), (nfft, fs_hz), lag).ok_or_else(|| {
+    let fit = super::bell::fit(&y, (a, a + top), (nfft, fs_hz), lag, start).ok_or_else(|| {
         format!("the fit of its bell ({count} lines) did not settle on a damped mode inside it")
     })?;
     if fit.floor > FLOOR_MAX {

@@ -19,6 +19,7 @@ pub mod input;
 pub mod modes;
 pub mod run;
 pub mod ssi;
+pub mod uncertainty;
 
 use cluster::{ClusterRule, SsiMode};
 use csd::{Csd, CsdConfig};
@@ -78,6 +79,8 @@ pub struct OmaSettings {
     pub ssi: SsiRule,
     /// The rules that make clusters of SSI-cov's stable poles modes.
     pub cluster: ClusterRule,
+    /// Groups of the jackknife that gives each estimate its uncertainty (0: none).
+    pub groups: usize,
     /// What measured the records (the notes on harmonics).
     pub source: RecordSource,
 }
@@ -126,6 +129,7 @@ impl OmaSettings {
                 f_range_hz: ((0.5f64).max(2.0 * df), fs_hz / 2.0),
             },
             cluster: ClusterRule::default(),
+            groups: uncertainty::GROUPS,
             source: RecordSource::File,
         }
     }
@@ -169,6 +173,8 @@ pub struct OmaMode {
     /// How it was found (a peak's prominence and bell, a cluster's size and spread), for the
     /// report.
     pub evidence: String,
+    /// Its statistical uncertainty from the record (the jackknife, [`uncertainty`]).
+    pub uncertainty: uncertainty::Uncertainty,
 }
 
 /// Everything an output-only analysis found.
@@ -293,6 +299,7 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
     }
     for m in &mut r.modes {
         m.amplitude = m.amplitude.map(|a| a * power);
+        m.uncertainty.amplitude = m.uncertainty.amplitude.map(|i| i.scaled(power));
     }
     Ok(r)
 }
@@ -312,6 +319,10 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
     let mut found = modes::fdd_modes(&svd, &peaks, s, &mut notes);
     found.extend(ssi.modes);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
+    let intervals = uncertainty::of_modes(channels, s, &found, &peaks, s.groups, &mut notes)?;
+    for (m, u) in found.iter_mut().zip(intervals) {
+        m.uncertainty = u;
+    }
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
     Ok(OmaResult {
         csd,
@@ -453,6 +464,7 @@ mod tests {
             damping: Some(damping),
             shape: truth_shape(shape),
             evidence: String::new(),
+            uncertainty: Default::default(),
         }
     }
 

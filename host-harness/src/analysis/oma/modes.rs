@@ -79,6 +79,7 @@ pub fn ssi_modes(
         damping: Some(c.damping),
         shape: normalise_shape(&c.shape),
         evidence: cluster_evidence(c),
+        uncertainty: Default::default(),
     };
     let mut modes = Vec::new();
     if s.bands.is_empty() {
@@ -363,6 +364,7 @@ pub fn fdd_modes(
             damping: None,
             shape: shape.clone(),
             evidence: p.evidence.clone(),
+            uncertainty: Default::default(),
         });
         // the bell stops at the neighbouring peaks
         let fence = (
@@ -374,7 +376,7 @@ pub fn fdd_modes(
             (&p.reference, p.line),
             fence,
             (s.csd.nfft, s.fs_hz),
-            &lag,
+            (&lag, None),
             s.efdd,
         ) {
             Ok(e) => modes.push(OmaMode {
@@ -394,6 +396,7 @@ pub fn fdd_modes(
                     e.rms_log,
                     100.0 * e.floor
                 ),
+                uncertainty: Default::default(),
             }),
             Err(why) => notes.push(format!(
                 "EFDD of mode {mode} ({:.4} Hz) not reported: {why}",

@@ -4,6 +4,7 @@
 //! `report.txt`.
 
 use super::input::Records;
+use super::uncertainty::Interval;
 use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
 use crate::export::oma::{self as export, OmaModeRow, OmaShapeRow, OmaShapeSet};
@@ -123,6 +124,7 @@ fn pole_kinds(r: &OmaResult) -> Vec<(f64, usize, PoleKind)> {
 
 /// The rows of `modes.csv`.
 fn mode_rows(r: &OmaResult) -> Vec<OmaModeRow> {
+    let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
     r.modes
         .iter()
         .map(|m| OmaModeRow {
@@ -132,6 +134,11 @@ fn mode_rows(r: &OmaResult) -> Vec<OmaModeRow> {
             amplitude: m.amplitude,
             damping: m.damping,
             method: m.method.name(),
+            intervals: [
+                cells(m.uncertainty.f_hz),
+                cells(m.uncertainty.damping),
+                cells(m.uncertainty.amplitude),
+            ],
         })
         .collect()
 }
@@ -145,12 +152,19 @@ fn shape_rows(r: &OmaResult, records: &Records) -> Vec<OmaShapeRow> {
                 .targets
                 .iter()
                 .zip(&m.shape)
-                .map(|((t, xy), c)| OmaShapeRow {
+                .enumerate()
+                .map(|(j, ((t, xy), c))| OmaShapeRow {
                     mode: m.mode,
                     target: *t,
                     xy_px: *xy,
                     value: *c,
                     method: m.method.name(),
+                    abs_u: m
+                        .uncertainty
+                        .shape_abs
+                        .as_ref()
+                        .and_then(|u| u.get(j).copied())
+                        .filter(|v| v.is_finite()),
                 })
         })
         .collect()
@@ -276,6 +290,29 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
             m.amplitude.map_or("-".to_string(), |a| format!("{a:.4e}")),
             m.evidence
         );
+    }
+    let with: Vec<&super::OmaMode> = r
+        .modes
+        .iter()
+        .filter(|m| m.uncertainty.f_hz.is_some() || m.uncertainty.damping.is_some())
+        .collect();
+    if !with.is_empty() {
+        let _ = writeln!(
+            o,
+            "\n95 % intervals (statistical, from the record: the jackknife over {} groups of its \
+             segments or time; the imaging's own share is not in them):",
+            s.groups
+        );
+        for m in with {
+            let f = m.uncertainty.f_hz.map_or(String::new(), |i| {
+                format!("f = {:.4} +- {:.4} Hz", m.f_hz, i.half_width())
+            });
+            let z = match (m.damping, m.uncertainty.damping) {
+                (Some(z), Some(i)) => format!(", damping = {:.4} ({:.4} to {:.4})", z, i.lo, i.hi),
+                _ => String::new(),
+            };
+            let _ = writeln!(o, "  {} mode {}: {f}{z}", m.method.name(), m.mode);
+        }
     }
     if !r.rejected.is_empty() {
         let _ = writeln!(o, "\nnot modes:");

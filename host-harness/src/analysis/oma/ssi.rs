@@ -76,7 +76,11 @@ impl CorrelationSums {
     /// The correlations of the record without block `left_out` (all with `None`).
     pub fn without(&self, left_out: Option<usize>) -> Vec<DMatrix<f64>> {
         let lags = self.sums.first().map_or(0, Vec::len);
-        let k = self.sums.first().and_then(|b| b.first()).map_or(0, |m| m.nrows());
+        let k = self
+            .sums
+            .first()
+            .and_then(|b| b.first())
+            .map_or(0, |m| m.nrows());
         (0..lags)
             .map(|l| {
                 let mut m = DMatrix::<f64>::zeros(k, k);

@@ -1,0 +1,338 @@
+//! The statistical uncertainty of output-only results from the record itself, by the
+//! delete-one-group jackknife (docs/method.md §3.12, "Uncertainty"): the record's Welch
+//! segments (FDD, EFDD) or its time (SSI-cov) in `G` contiguous groups; each replicate is the
+//! whole analysis of the mode without one group, with the settings, peak and shape of the
+//! whole record's; the standard uncertainty `u = sqrt((G - 1) / G sum (x_g - mean)^2)` and the
+//! 95 % interval `x +- t(0.975, G - 1) u` around the whole record's estimate.
+//!
+//! A replicate holds `(G - 1) / G` of the record, so it behaves like the whole record's
+//! estimate (the jackknife's condition: a smooth function of averages, which the spectra and
+//! correlations are); the groups are long against the correlation of neighbouring segments or
+//! samples, so they are nearly independent. Where a replicate does not find the mode, no
+//! interval is given (and a note says so): an interval from the replicates that did would be
+//! too narrow.
+
+use super::cluster;
+use super::csd::{self, Csd};
+use super::fdd::{self, Svd};
+use super::modes::Peak;
+use super::ssi::{self, CorrelationSums};
+use super::{Method, OmaMode, OmaSettings};
+use crate::analysis::modal::{mac, normalise_shape};
+
+/// Groups of the jackknife by default.
+pub const GROUPS: usize = 10;
+
+/// A quantity's standard uncertainty and 95 % coverage interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// Standard uncertainty.
+    pub u: f64,
+    /// Lower end of the 95 % interval.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+}
+
+impl Interval {
+    /// The half-width of the 95 % interval.
+    pub fn half_width(&self) -> f64 {
+        (self.hi - self.lo) / 2.0
+    }
+
+    /// The interval scaled by `k > 0` (a change of unit).
+    pub fn scaled(self, k: f64) -> Interval {
+        Interval {
+            u: self.u * k,
+            lo: self.lo * k,
+            hi: self.hi * k,
+        }
+    }
+}
+
+/// What the jackknife gives one mode.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Uncertainty {
+    /// Of the frequency (EFDD, SSI-cov).
+    pub f_hz: Option<Interval>,
+    /// Of the damping ratio (EFDD, SSI-cov).
+    pub damping: Option<Interval>,
+    /// Of the amplitude (FDD, EFDD: the singular value at the peak).
+    pub amplitude: Option<Interval>,
+    /// Of each shape component's magnitude (shape normalised, largest component 1).
+    pub shape_abs: Option<Vec<f64>>,
+}
+
+/// The 97.5 % quantile of Student's t with `dof` degrees of freedom (1 to 30 tabulated, the
+/// normal's 1.96 beyond).
+pub fn t975(dof: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    match dof {
+        0 => f64::INFINITY,
+        d if d <= 30 => T[d - 1],
+        _ => 1.96,
+    }
+}
+
+/// The jackknife interval of `estimate` from its replicates (one per group left out).
+pub fn jackknife(estimate: f64, replicates: &[f64]) -> Option<Interval> {
+    let g = replicates.len();
+    if g < 2 || !replicates.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let mean = replicates.iter().sum::<f64>() / g as f64;
+    let var =
+        (g - 1) as f64 / g as f64 * replicates.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+    let u = var.sqrt();
+    let half = t975(g - 1) * u;
+    Some(Interval {
+        u,
+        lo: estimate - half,
+        hi: estimate + half,
+    })
+}
+
+/// Per mode of `modes` (in their order), its uncertainty by the jackknife over `groups`
+/// groups; `peaks` are the FDD peaks the FDD and EFDD modes came from (in mode order), the
+/// records and settings those of the analysis. Notes name the modes left without an interval.
+pub fn of_modes(
+    channels: &[Vec<f64>],
+    s: &OmaSettings,
+    modes: &[OmaMode],
+    peaks: &[Peak],
+    groups: usize,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<Vec<Uncertainty>> {
+    let mut out = vec![Uncertainty::default(); modes.len()];
+    if groups < 3 {
+        return Ok(out);
+    }
+    // each peak's EFDD estimate of the whole record: where its replicates' fits start
+    let starts: Vec<Start> = (0..peaks.len())
+        .map(|i| {
+            let number = peaks[i].band.map_or(i + 1, |b| b + 1);
+            modes
+                .iter()
+                .find(|m| m.method == Method::Efdd && m.mode == number)
+                .and_then(|m| m.damping.map(|z| (m.f_hz, z)))
+        })
+        .collect();
+    let spectral = spectral_replicates(channels, s, (peaks, &starts), groups)?;
+    let ssi = ssi_replicates(channels, s, modes, groups)?;
+    for (m, u) in modes.iter().zip(out.iter_mut()) {
+        let reps: Option<Vec<Replicate>> = match m.method {
+            Method::Fdd | Method::Efdd => {
+                // the FDD and EFDD modes are numbered by their peak (or its band)
+                let p = if peaks.iter().any(|p| p.band.is_some()) {
+                    peaks
+                        .iter()
+                        .position(|p| p.band.map(|b| b + 1) == Some(m.mode))
+                } else {
+                    m.mode.checked_sub(1).filter(|&i| i < peaks.len())
+                };
+                p.and_then(|p| {
+                    spectral
+                        .as_ref()
+                        .map(|r| r.iter().map(|g| g[p].clone()).collect())
+                })
+            }
+            Method::Ssi => ssi.as_ref().and_then(|r| {
+                let i = modes
+                    .iter()
+                    .filter(|x| x.method == Method::Ssi)
+                    .position(|x| x.mode == m.mode)?;
+                Some(r.iter().map(|g| g[i].clone()).collect())
+            }),
+        };
+        let Some(reps) = reps else {
+            continue;
+        };
+        let method_reps: Vec<&Replicate> = reps.iter().collect();
+        let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
+            method_reps.iter().map(|r| f(r)).collect()
+        };
+        let missing = |what: &str| {
+            format!(
+                "{} mode {} ({:.4} Hz): no interval of its {what}: a replicate without a tenth \
+                 of the record did not find the mode",
+                m.method.name(),
+                m.mode,
+                m.f_hz
+            )
+        };
+        match m.method {
+            Method::Fdd => {
+                u.amplitude = m
+                    .amplitude
+                    .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)));
+                u.shape_abs = shape_u(&m.shape, &method_reps);
+            }
+            Method::Efdd | Method::Ssi => {
+                match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
+                    Some(v) => u.f_hz = jackknife(m.f_hz, &v),
+                    None => notes.push(missing("frequency and damping")),
+                }
+                if let (Some(z), Some(v)) = (m.damping, pick(&|r| r.efdd_or_ssi.map(|x| x.1))) {
+                    u.damping = jackknife(z, &v).map(|i| Interval {
+                        lo: i.lo.max(0.0),
+                        ..i
+                    });
+                }
+                if m.method == Method::Efdd {
+                    u.amplitude = m
+                        .amplitude
+                        .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)));
+                }
+                u.shape_abs = shape_u(&m.shape, &method_reps);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Where a peak's EFDD fit starts in the replicates: the whole record's frequency and
+/// damping.
+type Start = Option<(f64, f64)>;
+
+/// One replicate's estimates of one mode.
+#[derive(Debug, Clone, Default)]
+struct Replicate {
+    /// Frequency and damping (EFDD, SSI).
+    efdd_or_ssi: Option<(f64, f64)>,
+    /// The singular value at the peak (FDD, EFDD).
+    amplitude: Option<f64>,
+    /// The shape (normalised).
+    shape: Option<Vec<num_complex::Complex64>>,
+}
+
+/// The jackknife uncertainty of each shape component's magnitude.
+fn shape_u(shape: &[num_complex::Complex64], reps: &[&Replicate]) -> Option<Vec<f64>> {
+    let shapes: Option<Vec<&Vec<num_complex::Complex64>>> =
+        reps.iter().map(|r| r.shape.as_ref()).collect();
+    let shapes = shapes?;
+    Some(
+        (0..shape.len())
+            .map(|j| {
+                let v: Vec<f64> = shapes
+                    .iter()
+                    .map(|s| s.get(j).map_or(0.0, |c| c.norm()))
+                    .collect();
+                jackknife(shape[j].norm(), &v).map_or(f64::NAN, |i| i.u)
+            })
+            .collect(),
+    )
+}
+
+/// Per group left out, per peak: the FDD amplitude and shape at the peak's line, and EFDD's
+/// fit of the replicate's bell (same reference, line and fences). `None` with fewer Welch
+/// segments than groups.
+fn spectral_replicates(
+    channels: &[Vec<f64>],
+    s: &OmaSettings,
+    (peaks, starts): (&[Peak], &[Start]),
+    groups: usize,
+) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
+    let segments = csd::check(channels, s.csd)?;
+    if segments < groups || peaks.is_empty() {
+        return Ok(None);
+    }
+    let k = channels.len();
+    let all = csd::raw_sum(channels, s.csd, 0..segments)?;
+    let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
+    let mut out = Vec::with_capacity(groups);
+    for g in 0..groups {
+        let range = g * segments / groups..(g + 1) * segments / groups;
+        let left = range.len();
+        let part = csd::raw_sum(channels, s.csd, range)?;
+        let raw: Vec<Vec<num_complex::Complex64>> = all
+            .iter()
+            .zip(&part)
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
+            .collect();
+        let replicate: Csd = csd::finish(raw, k, segments - left, s.fs_hz, s.csd);
+        let svd: Svd = fdd::decompose(&replicate)?;
+        let lines = svd.freq_hz.len();
+        let reps = peaks
+            .iter()
+            .enumerate()
+            .map(|(n, p)| {
+                let (_, at) = fdd::bell(
+                    &svd,
+                    &p.reference,
+                    p.line,
+                    (p.line.saturating_sub(1), p.line + 1),
+                    0.0,
+                );
+                let fence = (
+                    if n > 0 { peaks[n - 1].line } else { 0 },
+                    peaks.get(n + 1).map_or(lines, |q| q.line),
+                );
+                let e = fdd::efdd(
+                    &svd,
+                    (&p.reference, p.line),
+                    fence,
+                    (s.csd.nfft, s.fs_hz),
+                    (&lag, starts[n]),
+                    s.efdd,
+                )
+                .ok();
+                let u = if mac(&svd.u2[p.line], &p.reference) > mac(&svd.u1[p.line], &p.reference) {
+                    &svd.u2[p.line]
+                } else {
+                    &svd.u1[p.line]
+                };
+                Replicate {
+                    efdd_or_ssi: e.map(|e| (e.f_hz, e.damping)),
+                    amplitude: at.first().copied(),
+                    shape: Some(normalise_shape(u)),
+                }
+            })
+            .collect();
+        out.push(reps);
+    }
+    Ok(Some(out))
+}
+
+/// Per block of the record left out, per SSI mode of `modes` (in their order): the replicate's
+/// mode nearest it (within three half-power bandwidths or 1 %, whichever is wider, and MAC
+/// >= 0.8 with its shape), `None` fields where there is none.
+fn ssi_replicates(
+    channels: &[Vec<f64>],
+    s: &OmaSettings,
+    modes: &[OmaMode],
+    groups: usize,
+) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
+    let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
+    if ssi.is_empty() {
+        return Ok(None);
+    }
+    let sums: CorrelationSums = ssi::correlation_sums(channels, s.ssi.block_rows, groups)?;
+    let mut out = Vec::with_capacity(groups);
+    for g in 0..groups {
+        let r = sums.without(Some(g));
+        let (poles, _) = ssi::poles_of(&r, s.fs_hz, s.ssi)?;
+        let (kept, _) = cluster::cluster(&poles, s.cluster);
+        let reps = ssi
+            .iter()
+            .map(|m| {
+                let z = m.damping.unwrap_or(0.01);
+                let reach = (3.0 * 2.0 * z * m.f_hz).max(0.01 * m.f_hz);
+                let near = kept
+                    .iter()
+                    .filter(|c| (c.f_hz - m.f_hz).abs() <= reach && mac(&c.shape, &m.shape) >= 0.8)
+                    .min_by(|a, b| (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs()));
+                near.map_or_else(Replicate::default, |c| Replicate {
+                    efdd_or_ssi: Some((c.f_hz, c.damping)),
+                    amplitude: None,
+                    shape: Some(normalise_shape(&c.shape)),
+                })
+            })
+            .collect();
+        out.push(reps);
+    }
+    Ok(Some(out))
+}
