@@ -12,13 +12,26 @@ fn modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method"
+        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method,\
+         f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,amplitude_u,amplitude_lo,\
+         amplitude_hi"
     );
     lines
         .map(|l| {
             let c: Vec<&str> = l.split(',').collect();
             assert_eq!(c[0], "vision");
             assert_eq!(c[1], "", "a mode belongs to all targets");
+            // an interval, where given, is around its estimate, its u positive
+            for (est, at) in [(5, 10), (7, 13), (6, 16)] {
+                if let (Ok(x), Ok(u), Ok(lo), Ok(hi)) = (
+                    c[est].parse::<f64>(),
+                    c[at].parse::<f64>(),
+                    c[at + 1].parse::<f64>(),
+                    c[at + 2].parse::<f64>(),
+                ) {
+                    assert!(u > 0.0 && lo <= x && x <= hi, "{l}");
+                }
+            }
             (
                 c[9].to_string(),
                 c[2].parse().unwrap(),
@@ -109,7 +122,7 @@ fn the_shear_frame_is_identified_without_an_accelerometer() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "mode,target,x_px,y_px,re,im,abs,method"
+        "mode,target,x_px,y_px,re,im,abs,method,abs_u"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
