@@ -29,14 +29,8 @@ fn count(model: &FieldModel, found: &[(f64, Option<f64>)], df: f64) -> Count {
     let mut used = vec![false; found.len()];
     let mut damping = Vec::new();
     let mut missing = Vec::new();
-    for m in &model.modes {
-        let gap = model
-            .modes
-            .iter()
-            .filter(|o| o.f_hz != m.f_hz)
-            .map(|o| (o.f_hz - m.f_hz).abs() / 2.0)
-            .fold(f64::INFINITY, f64::min);
-        let tol = (3.0 * df).max(3.0 * m.damping * m.f_hz).min(gap);
+    for (i, m) in model.modes.iter().enumerate() {
+        let tol = model.match_window(i, df);
         let best = found
             .iter()
             .enumerate()

@@ -55,13 +55,7 @@ fn main() -> anyhow::Result<()> {
                     for r in &results {
                         let df = r.csd.df_hz();
                         for (i, m) in model.modes.iter().enumerate() {
-                            let gap = model
-                                .modes
-                                .iter()
-                                .filter(|o| o.f_hz != m.f_hz)
-                                .map(|o| (o.f_hz - m.f_hz).abs() / 2.0)
-                                .fold(f64::INFINITY, f64::min);
-                            let tol = (3.0 * df).max(3.0 * m.damping * m.f_hz).min(gap);
+                            let tol = model.match_window(i, df);
                             let Some(got) = r
                                 .modes
                                 .iter()

@@ -87,6 +87,22 @@ impl FieldCase {
     }
 }
 
+impl FieldModel {
+    /// How near an estimate must be to mode `i` to count as it, Hz, on a spectrum of line
+    /// spacing `df_hz`: `max(3 lines, 3 zeta f)`, and nearer than half the distance to another
+    /// mode (how the examples count a method's modes against the truth).
+    pub fn match_window(&self, i: usize, df_hz: f64) -> f64 {
+        let m = &self.modes[i];
+        let gap = self
+            .modes
+            .iter()
+            .filter(|o| o.f_hz != m.f_hz)
+            .map(|o| (o.f_hz - m.f_hz).abs() / 2.0)
+            .fold(f64::INFINITY, f64::min);
+        (3.0 * df_hz).max(3.0 * m.damping * m.f_hz).min(gap)
+    }
+}
+
 /// A shear frame of `n` storeys with equal masses and stiffnesses, its first frequency `f1_hz`,
 /// the damping ratios of its modes (the last repeated if fewer are given). Closed form: with
 /// unit masses the modes of the fixed-free chain are `w_r = 2 sqrt(k) sin((2r - 1) pi /

@@ -108,6 +108,17 @@ pub fn fit(
         return None;
     }
     let mut kernel = Kernel::new(nfft, fs_hz, lag);
+    // start: the peak line, the half-power width, the peak's height, a floor far below
+    let half = y[peak - first] / 2.0;
+    let width = y.iter().filter(|v| **v >= half).count().max(1) as f64;
+    let (f0, zeta0) = start.unwrap_or_else(|| {
+        let f0 = peak as f64 * df;
+        (f0, (width * df / (2.0 * f0)).clamp(1e-4, 0.3))
+    });
+    let k0 = kernel.values(f0, zeta0, peak, 1)?[0];
+    if !positive(k0) {
+        return None;
+    }
     let ln_y: Vec<f64> = y.iter().map(|v| v.ln()).collect();
     let (f_lo, f_hi) = (first as f64 * df, (first + n - 1) as f64 * df);
     let floor_min = (top * 1e-9).ln();
@@ -130,17 +141,6 @@ pub fn fit(
                 .collect(),
         )
     };
-    // start: the peak line, the half-power width, the peak's height, a floor far below
-    let half = y[peak - first] / 2.0;
-    let width = y.iter().filter(|v| **v >= half).count().max(1) as f64;
-    let (f0, zeta0) = start.unwrap_or_else(|| {
-        let f0 = peak as f64 * df;
-        (f0, (width * df / (2.0 * f0)).clamp(1e-4, 0.3))
-    });
-    let k0 = Kernel::new(nfft, fs_hz, lag).values(f0, zeta0, peak, 1)?[0];
-    if !positive(k0) {
-        return None;
-    }
     let mut p = clamp([
         (y[peak - first] / k0).ln(),
         f0,

@@ -146,10 +146,9 @@ fn average_linkage(poles: &[&Pole], distance_max: f64) -> Vec<Vec<usize>> {
                 }
             }
         }
-        let Some((i, j, dist)) = best.filter(|b| b.2 <= distance_max) else {
+        let Some((i, j, _)) = best.filter(|b| b.2 <= distance_max) else {
             break;
         };
-        let _ = dist;
         let (ni, nj) = (
             groups[i].as_ref().map_or(0, Vec::len) as f64,
             groups[j].as_ref().map_or(0, Vec::len) as f64,

@@ -48,8 +48,45 @@ impl Csd {
 /// the record is shorter than one segment or a sample is not finite (naming the channel).
 pub fn csd_matrix(channels: &[Vec<f64>], fs_hz: f64, c: CsdConfig) -> anyhow::Result<Csd> {
     let segments = check(channels, c)?;
-    let raw = raw_sum(channels, c, 0..segments)?;
+    of_segments(channels, fs_hz, c, 0..segments)
+}
+
+/// The cross-spectral matrix of the segments `range` of checked channels ([`check`]).
+pub fn of_segments(
+    channels: &[Vec<f64>],
+    fs_hz: f64,
+    c: CsdConfig,
+    range: std::ops::Range<usize>,
+) -> anyhow::Result<Csd> {
+    let segments = range.len();
+    let raw = raw_sum(channels, c, range)?;
     Ok(finish(raw, channels.len(), segments, fs_hz, c))
+}
+
+impl Csd {
+    /// The matrix of this one's segments without those of `part` (the matrix of some of
+    /// them, same settings): the two averages weighted by their segments, one taken from the
+    /// other.
+    pub fn without(&self, part: &Csd) -> Csd {
+        let (all, some) = (self.segments as f64, part.segments as f64);
+        let rest = (all - some).max(1.0);
+        Csd {
+            freq_hz: self.freq_hz.clone(),
+            k: self.k,
+            g: self
+                .g
+                .iter()
+                .zip(&part.g)
+                .map(|(a, b)| {
+                    a.iter()
+                        .zip(b)
+                        .map(|(x, y)| (x * all - y * some) / rest)
+                        .collect()
+                })
+                .collect(),
+            segments: self.segments.saturating_sub(part.segments),
+        }
+    }
 }
 
 /// The segments of `channels` under `c`, after the checks of [`csd_matrix`].
@@ -88,7 +125,7 @@ pub fn check(channels: &[Vec<f64>], c: CsdConfig) -> anyhow::Result<usize> {
 
 /// The unscaled sums `sum conj(X_i) X_j` (upper triangle, `i <= j`, row-major K x K per line)
 /// over the segments `range` of checked channels.
-pub fn raw_sum(
+fn raw_sum(
     channels: &[Vec<f64>],
     c: CsdConfig,
     range: std::ops::Range<usize>,
@@ -133,13 +170,7 @@ pub fn raw_sum(
 
 /// The cross-spectral matrix from the raw sums of `segments` segments ([`raw_sum`]): the
 /// one-sided density, the lower triangle the conjugate of the upper.
-pub fn finish(
-    mut g: Vec<Vec<Complex64>>,
-    k: usize,
-    segments: usize,
-    fs_hz: f64,
-    c: CsdConfig,
-) -> Csd {
+fn finish(mut g: Vec<Vec<Complex64>>, k: usize, segments: usize, fs_hz: f64, c: CsdConfig) -> Csd {
     let s2: f64 = (0..c.nperseg)
         .map(|i| f64::from(c.window.value(i, c.nperseg)).powi(2))
         .sum();

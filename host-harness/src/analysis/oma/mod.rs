@@ -319,7 +319,8 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
     let mut found = modes::fdd_modes(&svd, &peaks, s, &mut notes);
     found.extend(ssi.modes);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
-    let intervals = uncertainty::of_modes(channels, s, &found, &peaks, s.groups, &mut notes)?;
+    let intervals =
+        uncertainty::of_modes((channels, &csd), s, &found, &peaks, s.groups, &mut notes)?;
     for (m, u) in found.iter_mut().zip(intervals) {
         m.uncertainty = u;
     }

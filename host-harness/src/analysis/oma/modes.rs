@@ -38,6 +38,14 @@ pub struct Peak {
     pub evidence: String,
 }
 
+impl Peak {
+    /// The number of the FDD and EFDD modes of the peak at `index` of the peaks: its band's
+    /// with bands, else its place in frequency.
+    pub fn mode_number(&self, index: usize) -> usize {
+        self.band.map_or(index + 1, |b| b + 1)
+    }
+}
+
 /// SSI-cov's result: its modes, every pole, the clusters kept and rejected.
 #[derive(Debug)]
 pub struct SsiFound {
@@ -352,7 +360,7 @@ pub fn fdd_modes(
     let lines = svd.freq_hz.len();
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
     for (n, p) in peaks.iter().enumerate() {
-        let mode = p.band.map_or(n + 1, |b| b + 1);
+        let mode = p.mode_number(n);
         let band_hz = p.band.map(|b| s.bands[b]);
         let shape = normalise_shape(&p.reference);
         modes.push(OmaMode {

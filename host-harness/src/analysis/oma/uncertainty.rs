@@ -98,9 +98,9 @@ pub fn jackknife(estimate: f64, replicates: &[f64]) -> Option<Interval> {
 
 /// Per mode of `modes` (in their order), its uncertainty by the jackknife over `groups`
 /// groups; `peaks` are the FDD peaks the FDD and EFDD modes came from (in mode order), the
-/// records and settings those of the analysis. Notes name the modes left without an interval.
+/// records, their cross-spectral matrix (`whole`) and the settings those of the analysis. Notes name the modes left without an interval.
 pub fn of_modes(
-    channels: &[Vec<f64>],
+    (channels, whole): (&[Vec<f64>], &Csd),
     s: &OmaSettings,
     modes: &[OmaMode],
     peaks: &[Peak],
@@ -112,28 +112,25 @@ pub fn of_modes(
         return Ok(out);
     }
     // each peak's EFDD estimate of the whole record: where its replicates' fits start
-    let starts: Vec<Start> = (0..peaks.len())
-        .map(|i| {
-            let number = peaks[i].band.map_or(i + 1, |b| b + 1);
+    let starts: Vec<Start> = peaks
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
             modes
                 .iter()
-                .find(|m| m.method == Method::Efdd && m.mode == number)
+                .find(|m| m.method == Method::Efdd && m.mode == p.mode_number(i))
                 .and_then(|m| m.damping.map(|z| (m.f_hz, z)))
         })
         .collect();
-    let spectral = spectral_replicates(channels, s, (peaks, &starts), groups)?;
+    let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
     let ssi = ssi_replicates(channels, s, modes, groups)?;
     for (m, u) in modes.iter().zip(out.iter_mut()) {
         let reps: Option<Vec<Replicate>> = match m.method {
             Method::Fdd | Method::Efdd => {
-                // the FDD and EFDD modes are numbered by their peak (or its band)
-                let p = if peaks.iter().any(|p| p.band.is_some()) {
-                    peaks
-                        .iter()
-                        .position(|p| p.band.map(|b| b + 1) == Some(m.mode))
-                } else {
-                    m.mode.checked_sub(1).filter(|&i| i < peaks.len())
-                };
+                let p = peaks
+                    .iter()
+                    .enumerate()
+                    .position(|(i, p)| p.mode_number(i) == m.mode);
                 p.and_then(|p| {
                     spectral
                         .as_ref()
@@ -151,9 +148,8 @@ pub fn of_modes(
         let Some(reps) = reps else {
             continue;
         };
-        let method_reps: Vec<&Replicate> = reps.iter().collect();
         let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
-            method_reps.iter().map(|r| f(r)).collect()
+            reps.iter().map(f).collect()
         };
         let missing = |what: &str| {
             format!(
@@ -169,7 +165,7 @@ pub fn of_modes(
                 u.amplitude = m
                     .amplitude
                     .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)));
-                u.shape_abs = shape_u(&m.shape, &method_reps);
+                u.shape_abs = shape_u(&m.shape, &reps);
             }
             Method::Efdd | Method::Ssi => {
                 match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
@@ -187,7 +183,7 @@ pub fn of_modes(
                         .amplitude
                         .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)));
                 }
-                u.shape_abs = shape_u(&m.shape, &method_reps);
+                u.shape_abs = shape_u(&m.shape, &reps);
             }
         }
     }
@@ -210,7 +206,7 @@ struct Replicate {
 }
 
 /// The jackknife uncertainty of each shape component's magnitude.
-fn shape_u(shape: &[num_complex::Complex64], reps: &[&Replicate]) -> Option<Vec<f64>> {
+fn shape_u(shape: &[num_complex::Complex64], reps: &[Replicate]) -> Option<Vec<f64>> {
     let shapes: Option<Vec<&Vec<num_complex::Complex64>>> =
         reps.iter().map(|r| r.shape.as_ref()).collect();
     let shapes = shapes?;
@@ -231,32 +227,24 @@ fn shape_u(shape: &[num_complex::Complex64], reps: &[&Replicate]) -> Option<Vec<
 /// fit of the replicate's bell (same reference, line and fences). `None` with fewer Welch
 /// segments than groups.
 fn spectral_replicates(
-    channels: &[Vec<f64>],
+    (channels, whole): (&[Vec<f64>], &Csd),
     s: &OmaSettings,
     (peaks, starts): (&[Peak], &[Start]),
     groups: usize,
 ) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
     // as many groups as segments on a short record (overlapping segments share samples, so
     // a group of one is not quite independent of its neighbours), and none under four
-    let segments = csd::check(channels, s.csd)?;
+    let segments = whole.segments;
     let groups = groups.min(segments);
     if groups < 4 || peaks.is_empty() {
         return Ok(None);
     }
-    let k = channels.len();
-    let all = csd::raw_sum(channels, s.csd, 0..segments)?;
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
     let mut out = Vec::with_capacity(groups);
     for g in 0..groups {
         let range = g * segments / groups..(g + 1) * segments / groups;
-        let left = range.len();
-        let part = csd::raw_sum(channels, s.csd, range)?;
-        let raw: Vec<Vec<num_complex::Complex64>> = all
-            .iter()
-            .zip(&part)
-            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
-            .collect();
-        let replicate: Csd = csd::finish(raw, k, segments - left, s.fs_hz, s.csd);
+        let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
+        let replicate: Csd = whole.without(&part);
         let svd: Svd = fdd::decompose(&replicate)?;
         let lines = svd.freq_hz.len();
         let reps = peaks
