@@ -32,7 +32,10 @@ PINS = ["pyOMA-2==1.4.3"]
 MARK = "PEER_OMA_IN_VENV"
 
 
-def ensure_venv():
+def ensure_venv(script=__file__, env=None):
+    """Re-runs `script` (this one, or another peer script that imports this function) in the
+    virtual environment with pinned pyOMA-2, with `env` added to its environment (set before
+    numpy is imported there); returns at once when already in it."""
     if os.environ.get(MARK) == "1":
         return
     root = Path(__file__).resolve().parent.parent
@@ -44,7 +47,9 @@ def ensure_venv():
     if subprocess.run([str(py), "-c", "import pyoma2"], capture_output=True).returncode != 0:
         subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
     os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
+    os.environ.update(env or {})
+    script = str(Path(script).resolve())
+    os.execv(str(py), [str(py), script, *sys.argv[1:]])
 
 
 def mac(a, b):

@@ -19,41 +19,19 @@ half the distance to another true mode (as examples/oma_auto.rs counts).
 
 `--threads 1` sets OMP/OPENBLAS/MKL/RAYON threads to 1 on both sides (the fair comparison of
 the algorithms); `--threads default` leaves numpy's BLAS its default threads. Runs in a
-virtual environment with pinned pyOMA-2: $PEER_OMA_VENV, else .venv-peer-oma at the repository
-root (created with pip when missing). Writes DIR/peer-oma-auto.md (default
+virtual environment of scripts/peer_oma.py (pinned pyOMA-2: $PEER_OMA_VENV, else .venv-peer-oma
+at the repository root, created with pip when missing). Writes DIR/peer-oma-auto.md (default
 target/peer-oma-auto).
 """
 import argparse
 import csv
-import os
 import subprocess
-import sys
 import time
-import venv
 from pathlib import Path
 
-PINS = ["pyOMA-2==1.4.3"]
-MARK = "PEER_OMA_AUTO_IN_VENV"
+from peer_oma import ensure_venv
+
 THREADS = ["OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"]
-
-
-def ensure_venv(threads):
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("PEER_OMA_VENV", root / ".venv-peer-oma"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        print(f"creating a virtual environment in {env_dir}", flush=True)
-        venv.create(env_dir, with_pip=True)
-    if subprocess.run([str(py), "-c", "import pyoma2"], capture_output=True).returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    # the thread count must be set before numpy is imported: set it for the new process
-    if threads == "1":
-        for name in THREADS:
-            os.environ[name] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
 
 
 def exact(truth, found, df):
@@ -86,7 +64,8 @@ def main():
     ap.add_argument("--out", default="target/peer-oma-auto")
     args = ap.parse_args()
     harness = str(Path(args.harness).resolve())
-    ensure_venv(args.threads)
+    # the thread count must be set before numpy is imported: in the re-run's environment
+    ensure_venv(__file__, {name: "1" for name in THREADS} if args.threads == "1" else None)
     import logging
     import warnings
     import numpy as np

@@ -18,29 +18,10 @@ scripts/peer_oma.py ($PEER_OMA_VENV, else .venv-peer-oma). Writes DIR/peer-oma-u
 """
 import argparse
 import csv
-import os
 import subprocess
-import sys
-import venv
 from pathlib import Path
 
-PINS = ["pyOMA-2==1.4.3"]
-MARK = "PEER_OMA_UNC_IN_VENV"
-
-
-def ensure_venv():
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("PEER_OMA_VENV", root / ".venv-peer-oma"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        venv.create(env_dir, with_pip=True)
-    if subprocess.run([str(py), "-c", "import pyoma2"], capture_output=True).returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
-
+from peer_oma import ensure_venv
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -52,7 +33,7 @@ def main():
     ap.add_argument("--out", default="target/peer-oma-unc")
     args = ap.parse_args()
     harness = str(Path(args.harness).resolve())
-    ensure_venv()
+    ensure_venv(__file__)
     import logging
     import warnings
     import numpy as np
