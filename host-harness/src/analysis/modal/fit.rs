@@ -18,6 +18,9 @@ pub(super) struct Problem {
     pub(super) dw: f64,
     /// In-band bin of largest summed |H|^2.
     pub(super) peak: usize,
+    /// The Welch kernel the model is smoothed with, in scaled units: `(offset, weight)`
+    /// (`None`: the model as it is).
+    pub(super) smooth: Option<Vec<(f64, f64)>>,
 }
 
 /// The linear solve for one pole: coefficients per FRF and the stacked residual.
@@ -33,6 +36,7 @@ impl Problem {
         frfs: &[&[Complex64]],
         band: (f64, f64),
         form: FrfForm,
+        smoothing: Option<&Smoothing>,
     ) -> Result<Problem, ModalError> {
         let (lo, hi) = band;
         if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
@@ -94,6 +98,13 @@ impl Problem {
             .max_by(|&a, &b| power(a).total_cmp(&power(b)))
             .unwrap_or(0);
         let dw = (s[n - 1].im - s[0].im) / (n - 1) as f64;
+        let smooth = smoothing.map(|k| {
+            k.offsets_hz
+                .iter()
+                .zip(&k.weights)
+                .map(|(o, w)| (2.0 * PI * o / wc, *w))
+                .collect()
+        });
         Ok(Problem {
             band,
             form,
@@ -102,6 +113,7 @@ impl Problem {
             y,
             dw,
             peak,
+            smooth,
         })
     }
 
@@ -120,11 +132,23 @@ impl Problem {
         let (ea, eb) = self.form.residual_exponents();
         let i = Complex64::i();
         let mut a = vec![0.0; m * LINEAR];
-        for (k, &s) in self.s.iter().enumerate() {
+        let terms = |s: Complex64| {
             let u = 1.0 / (s - p);
             let v = 1.0 / (s - p.conj());
-            let sa = s.powi(ea);
-            let sb = s.powi(eb);
+            [u, v, s.powi(ea), s.powi(eb)]
+        };
+        for (k, &s) in self.s.iter().enumerate() {
+            let [u, v, sa, sb] = match &self.smooth {
+                None => terms(s),
+                // (K * f)(w) = sum_q K_q f(w - o_q)
+                Some(kernel) => kernel.iter().fold([Complex64::default(); 4], |mut acc, (o, w)| {
+                    let t = terms(s - Complex64::new(0.0, *o));
+                    for (a, b) in acc.iter_mut().zip(t) {
+                        *a += b * w;
+                    }
+                    acc
+                }),
+            };
             let cols = [u + v, i * (u - v), sa, i * sa, sb, i * sb];
             for (c, val) in cols.iter().enumerate() {
                 a[c * m + k] = val.re;
@@ -170,7 +194,12 @@ impl Problem {
     /// Grid start, then Levenberg-Marquardt on the projected residual. Returns the scaled pole
     /// and the iteration count.
     pub(super) fn fit_pole(&self) -> ([f64; 2], usize) {
-        let (mut theta, mut cost) = self.grid_start();
+        let (theta, cost) = self.grid_start();
+        self.refine(theta, cost)
+    }
+
+    /// Levenberg-Marquardt from the scaled pole `theta` of cost `cost`.
+    pub(super) fn refine(&self, mut theta: [f64; 2], mut cost: f64) -> ([f64; 2], usize) {
         let Some(mut eval) = self.solve(theta) else {
             return (theta, 0);
         };
