@@ -134,7 +134,8 @@ fn read_modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method"
+        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method,f_hz_u,f_hz_lo,\
+         f_hz_hi,damping_u,damping_lo,damping_hi,amplitude_u,amplitude_lo,amplitude_hi"
     );
     lines
         .map(|l| {
@@ -534,6 +535,45 @@ fn synthetic_cantilever_recording_round_trip() {
             (ratio - 1.0).abs() < tol,
             "mode {}: vision / accelerometer = {ratio}",
             i + 1
+        );
+    }
+
+    // one segment: no interval, and the report says how to get one
+    assert!(report.contains("95 % intervals: none"), "{report}");
+    assert!(
+        text.lines().skip(1).all(|l| l.ends_with(",h1,,,,,,,,,")),
+        "{text}"
+    );
+
+    // 1b. 2 s segments (9): intervals, mode 2's holding the closed form at its line; mode 1
+    // (0.16 Hz wide at 0.5 Hz lines) is not resolved and gets none, with a note
+    let (modes, report) = analyze_recording(
+        &files.analyze_args,
+        &["--nperseg", "4096"],
+        &tmp.path().join("segments"),
+    );
+    assert!(report.contains("jackknife over 9 groups"), "{report}");
+    assert!(
+        report.contains("mode 1: its half-power bandwidth"),
+        "{report}"
+    );
+    let text = std::fs::read_to_string(tmp.path().join("segments/modes.csv")).unwrap();
+    for (row, line) in text.lines().skip(1).enumerate() {
+        let c: Vec<&str> = line.split(',').collect();
+        let cell = |i: usize| c[i].parse::<f64>().ok();
+        let (f, lo, hi) = (cell(4).unwrap(), cell(10).unwrap(), cell(11).unwrap());
+        assert!(lo < f && f < hi, "{line}");
+        if row % 2 == 0 {
+            assert!(cell(13).is_none() && cell(16).is_none(), "{line}");
+            continue;
+        }
+        let truth = spec.frf(modes[row].2).norm();
+        let (a_lo, a_hi) = (cell(16).unwrap(), cell(17).unwrap());
+        assert!(a_lo < truth && truth < a_hi, "{line}: |T| {truth}");
+        let zeta = beam.modes[1].zeta;
+        assert!(
+            cell(13).unwrap() < zeta && zeta < cell(14).unwrap(),
+            "{line}"
         );
     }
 

@@ -33,6 +33,7 @@
 
 pub mod columns;
 pub mod compensate;
+pub mod frf_uncertainty;
 pub mod modal;
 pub mod oma;
 pub mod points;
@@ -222,6 +223,8 @@ pub struct Analysis {
     /// Frames analysed: all of them, or the longest leading part whose span is a whole number
     /// of accelerometer samples ([`usable_frames`]); the rest were left out.
     pub frames_used: usize,
+    /// The modes' intervals ([`frf_uncertainty::of_analysis`]), when computed.
+    pub intervals: Option<frf_uncertainty::Intervals>,
 }
 
 /// The longest record of at most `frames` frames at `fc` Hz whose span is a whole number of
@@ -313,6 +316,7 @@ pub fn analyze(
         acc_modes,
         vis_modes,
         frames_used,
+        intervals: None,
     })
 }
 

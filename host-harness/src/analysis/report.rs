@@ -1,30 +1,46 @@
 //! An analysis's results as the rows of its output files (written by [`crate::export`]) and
 //! the human report.
 
+use super::oma::uncertainty::Interval;
 use super::{Analysis, Displacement, MAX_LOST_FRACTION};
 use crate::export::analysis::{ModeRow, Spectrum};
 
 /// The rows of `modes.csv` ([`crate::export::analysis::modes_csv`]): both systems' picked
-/// modes, each with the damping of a single-mode fit to the complex FRF in its band
-/// ([`super::modal::fit_mode`]; `None` when the fit fails).
+/// modes, each with the damping of a single-mode fit to the complex FRF in its band (`None`
+/// when the fit fails): of the model smoothed by the window's kernel when the H1 has more than
+/// one segment ([`super::frf_uncertainty`]), else of the model itself
+/// ([`super::modal::fit_mode`]); and the intervals where computed.
 pub fn mode_rows(a: &Analysis) -> Vec<ModeRow> {
     use super::modal::{fit_mode, FrfForm};
+    let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
     let mut rows = Vec::new();
-    for (system, modes, frf) in [
-        ("accelerometer", &a.acc_modes, &a.acc_frf),
-        ("vision", &a.vis_modes, &a.vis_frf),
+    let none = Vec::new();
+    let (acc_u, vis_u) = a
+        .intervals
+        .as_ref()
+        .map_or((&none, &none), |i| (&i.acc, &i.vis));
+    for (system, modes, frf, unc) in [
+        ("accelerometer", &a.acc_modes, &a.acc_frf, acc_u),
+        ("vision", &a.vis_modes, &a.vis_frf, vis_u),
     ] {
         for (i, m) in modes.iter().enumerate() {
+            let u = unc.get(i).cloned().unwrap_or_default();
+            let damping = if frf.segments > 1 {
+                u.damping_fit
+            } else {
+                fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
+                    .map(|f| f.pole.damping)
+                    .ok()
+            };
             rows.push(ModeRow {
                 system,
                 mode: i + 1,
                 band_hz: m.band_hz,
                 f_hz: m.f_hz,
                 amplitude: m.amplitude,
-                damping: fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
-                    .map(|f| f.pole.damping)
-                    .ok(),
+                damping,
                 e2pr: m.e2pr,
+                intervals: [cells(u.f_hz), cells(u.damping), cells(u.amplitude)],
             });
         }
     }
@@ -128,6 +144,66 @@ pub fn report_text(
             vm.amplitude / am.amplitude,
             vm.f_hz - am.f_hz
         );
+    }
+    if let Some(i) = &a.intervals {
+        s.push_str(&intervals_text(a, i));
+    }
+    s
+}
+
+/// The report's section on the intervals ([`super::frf_uncertainty`]).
+fn intervals_text(a: &Analysis, i: &super::frf_uncertainty::Intervals) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    if i.groups == 0 {
+        let _ = writeln!(
+            s,
+            "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
+             no spread to measure them from. --nperseg (a quarter of the record or less, \
+             half-overlapped by default) gives them.",
+            i.segments,
+            super::frf_uncertainty::MIN_SEGMENTS
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\n95 % intervals (statistical, from the record: the jackknife over {} groups of \
+             its {} Welch segments; |FRF| = the FRF at the line, the window's smoothing \
+             removed by a modal fit of the smoothed model):",
+            i.groups, i.segments
+        );
+    }
+    for (system, modes, unc) in [
+        ("accelerometer", &a.acc_modes, &i.acc),
+        ("vision", &a.vis_modes, &i.vis),
+    ] {
+        for (k, (m, u)) in modes.iter().zip(unc).enumerate() {
+            let mut parts = Vec::new();
+            if let Some(f) = u.f_hz {
+                parts.push(format!("f = {:.3} +- {:.3} Hz", m.f_hz, f.half_width()));
+            }
+            if let (Some(z), Some(iz)) = (u.damping_fit, u.damping) {
+                parts.push(format!("damping = {z:.4} ({:.4} to {:.4})", iz.lo, iz.hi));
+            }
+            if let (Some(c), Some(ia)) = (u.smoothing, u.amplitude) {
+                parts.push(format!(
+                    "|FRF| at {:.3} Hz = {} ({} to {}) (|H1| {}, {:+.1} % by the window's \
+                     smoothing)",
+                    m.f_hz,
+                    significant(m.amplitude / c),
+                    significant(ia.lo),
+                    significant(ia.hi),
+                    significant(m.amplitude),
+                    100.0 * (c - 1.0)
+                ));
+            }
+            if !parts.is_empty() {
+                let _ = writeln!(s, "  {system} mode {}: {}", k + 1, parts.join(", "));
+            }
+        }
+    }
+    for n in &i.notes {
+        let _ = writeln!(s, "  note: {n}");
     }
     s
 }

@@ -143,6 +143,15 @@ fn analyze_and_compensate(
         }
         _ => None,
     };
+    if let Ok(a) = &mut result {
+        let exposure = compensation.as_ref().map(|c| c.exposure_s);
+        a.intervals = Some(super::frf_uncertainty::of_analysis(
+            a,
+            (base, tip),
+            exposure,
+            crate::analysis::oma::uncertainty::GROUPS,
+        )?);
+    }
     Ok((result, compensation))
 }
 

@@ -1,6 +1,7 @@
 //! The outputs of a one-target `analyze`: `frf.csv`, `modes.csv`, `displacement.csv` and
 //! `compensation.csv`. The columns are documented in `docs/cli.md`.
 
+use super::oma::INTERVAL_COLUMNS;
 use super::opt;
 use firmware_core::centroid::Centroid;
 use num_complex::Complex64;
@@ -59,16 +60,20 @@ pub struct ModeRow {
     pub damping: Option<f64>,
     /// The E2PR (`None` without an exposure).
     pub e2pr: Option<f64>,
+    /// The standard uncertainty and 95 % interval (`u`, `lo`, `hi`) of the frequency, the
+    /// damping and the FRF's magnitude at the line, where estimated.
+    pub intervals: [Option<(f64, f64, f64)>; 3],
 }
 
-/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method`
-/// (`damping` and `e2pr` empty where absent; the E2PR rounded by [`round_e2pr`]; `method` `h1`:
-/// the modes of the FRFs).
+/// `modes.csv`: `system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method`, then
+/// [`INTERVAL_COLUMNS`] (`damping`, `e2pr` and the intervals empty where absent; the E2PR
+/// rounded by [`round_e2pr`]; `method` `h1`: the modes of the FRFs).
 pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
-    let mut s =
-        String::from("system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method\n");
+    let mut s = format!(
+        "system,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method,{INTERVAL_COLUMNS}\n"
+    );
     for m in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{},{},{},{},{},{},{},{},h1",
             m.system,
@@ -80,6 +85,8 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
             opt(m.damping),
             opt(m.e2pr.map(round_e2pr))
         );
+        super::oma::push_intervals(&mut s, &m.intervals);
+        s.push('\n');
     }
     s.into_bytes()
 }

@@ -53,15 +53,20 @@ pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
             opt(m.damping),
             m.method
         );
-        for i in &m.intervals {
-            let (u, lo, hi) = i.map_or((None, None, None), |(u, lo, hi)| {
-                (Some(u), Some(lo), Some(hi))
-            });
-            let _ = write!(s, ",{},{},{}", opt(u), opt(lo), opt(hi));
-        }
+        push_intervals(&mut s, &m.intervals);
         s.push('\n');
     }
     s.into_bytes()
+}
+
+/// The cells of [`INTERVAL_COLUMNS`], each after a comma (empty where not estimated).
+pub(crate) fn push_intervals(s: &mut String, intervals: &[Option<(f64, f64, f64)>; 3]) {
+    for i in intervals {
+        let (u, lo, hi) = i.map_or((None, None, None), |(u, lo, hi)| {
+            (Some(u), Some(lo), Some(hi))
+        });
+        let _ = write!(s, ",{},{},{}", opt(u), opt(lo), opt(hi));
+    }
 }
 
 /// One target's coefficient in one mode of one method.

@@ -141,13 +141,15 @@ impl Problem {
             let [u, v, sa, sb] = match &self.smooth {
                 None => terms(s),
                 // (K * f)(w) = sum_q K_q f(w - o_q)
-                Some(kernel) => kernel.iter().fold([Complex64::default(); 4], |mut acc, (o, w)| {
-                    let t = terms(s - Complex64::new(0.0, *o));
-                    for (a, b) in acc.iter_mut().zip(t) {
-                        *a += b * w;
-                    }
-                    acc
-                }),
+                Some(kernel) => kernel
+                    .iter()
+                    .fold([Complex64::default(); 4], |mut acc, (o, w)| {
+                        let t = terms(s - Complex64::new(0.0, *o));
+                        for (a, b) in acc.iter_mut().zip(t) {
+                            *a += b * w;
+                        }
+                        acc
+                    }),
             };
             let cols = [u + v, i * (u - v), sa, i * sa, sb, i * sb];
             for (c, val) in cols.iter().enumerate() {

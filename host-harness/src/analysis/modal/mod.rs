@@ -724,14 +724,33 @@ mod tests {
         let fit =
             fit_mode_smoothed(&frf.freq_hz, &frf.h1, band, FrfForm::Accelerance, &kernel).unwrap();
         let err = |z: f64| z / h1 - 1.0;
-        assert!(err(plain.pole.damping) > 0.15, "plain {}", plain.pole.damping);
-        assert!(err(fit.pole.damping).abs() < 0.03, "smoothed {}", fit.pole.damping);
+        assert!(
+            err(plain.pole.damping) > 0.15,
+            "plain {}",
+            plain.pole.damping
+        );
+        assert!(
+            err(fit.pole.damping).abs() < 0.03,
+            "smoothed {}",
+            fit.pole.damping
+        );
         assert!((fit.pole.f_hz / f1 - 1.0).abs() < 1e-3, "{}", fit.pole.f_hz);
         // and the FRF at the line nearest the mode: the estimate is low, the fit's model is not
-        let k = frf.freq_hz.iter().position(|f| (f - f1).abs() < 0.05).unwrap();
+        let k = frf
+            .freq_hz
+            .iter()
+            .position(|f| (f - f1).abs() < 0.05)
+            .unwrap();
         let truth = base_excited(frf.freq_hz[k], &[RIG[0].2, 0.0]).norm();
-        let model = fit.fit.evaluate(&fit.pole, FrfForm::Accelerance, frf.freq_hz[k]).norm();
-        assert!(frf.h1[k].norm() / truth < 0.9, "{} {truth}", frf.h1[k].norm());
+        let model = fit
+            .fit
+            .evaluate(&fit.pole, FrfForm::Accelerance, frf.freq_hz[k])
+            .norm();
+        assert!(
+            frf.h1[k].norm() / truth < 0.9,
+            "{} {truth}",
+            frf.h1[k].norm()
+        );
         assert!((model / truth - 1.0).abs() < 0.03, "{model} {truth}");
     }
 
@@ -758,7 +777,11 @@ mod tests {
                 .collect();
             let fit =
                 fit_mode_smoothed(&f, &h, (5.0, 10.0), FrfForm::Accelerance, &kernel).unwrap();
-            assert!((fit.pole.damping / damping - 1.0).abs() < 1e-3, "{damping}: {:?}", fit.pole);
+            assert!(
+                (fit.pole.damping / damping - 1.0).abs() < 1e-3,
+                "{damping}: {:?}",
+                fit.pole
+            );
             assert!((fit.pole.f_hz / 7.13 - 1.0).abs() < 1e-5, "{:?}", fit.pole);
         }
     }

@@ -97,7 +97,11 @@ mod tests {
         // Parseval: the kernel integrates to 1 over all frequencies; the grid's span must hold
         // nearly all of it, else normalising over the span would distort the smoothing.
         let held = |w| table(w, 256).1.iter().sum::<f64>();
-        let (hann, hamming, rect) = (held(Window::Hann), held(Window::Hamming), held(Window::Rect));
+        let (hann, hamming, rect) = (
+            held(Window::Hann),
+            held(Window::Hamming),
+            held(Window::Rect),
+        );
         assert!((hann - 1.0).abs() < 1e-4, "Hann {hann}");
         assert!((hamming - 1.0).abs() < 2e-3, "Hamming {hamming}");
         assert!((rect - 1.0).abs() < 0.015, "rect {rect}");
@@ -110,7 +114,10 @@ mod tests {
         let l = 64;
         let (offsets, weights) = table(Window::Hann, l);
         let at = |line: f64| {
-            let q = offsets.iter().position(|o| (o - line).abs() < 1e-9).unwrap();
+            let q = offsets
+                .iter()
+                .position(|o| (o - line).abs() < 1e-9)
+                .unwrap();
             weights[q]
         };
         let step = 1.0 / STEPS_PER_LINE as f64;

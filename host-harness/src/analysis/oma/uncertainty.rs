@@ -96,6 +96,39 @@ pub fn jackknife(estimate: f64, replicates: &[f64]) -> Option<Interval> {
     })
 }
 
+/// [`jackknife`] for groups of unequal sizes (Busing, Meijer & van der Leeden, *Sociological
+/// Methodology* 29, 1999): group `g` holds `sizes[g]` of the `n = sum sizes` units and
+/// `replicates[g]` is the estimate without it; with `h_g = n / sizes[g]` the pseudo-values
+/// `h_g x - (h_g - 1) x_g`, their weighted mean `x_J`, and `u^2 = (1/G) sum (pseudo_g - x_J)^2 /
+/// (h_g - 1)`. Equal sizes give [`jackknife`]'s `u`.
+pub fn jackknife_sized(estimate: f64, replicates: &[f64], sizes: &[usize]) -> Option<Interval> {
+    let g = replicates.len();
+    let n: usize = sizes.iter().sum();
+    if g < 2 || sizes.len() != g || sizes.contains(&0) || !replicates.iter().all(|v| v.is_finite())
+    {
+        return None;
+    }
+    let h: Vec<f64> = sizes.iter().map(|&m| n as f64 / m as f64).collect();
+    let x_j: f64 = replicates
+        .iter()
+        .zip(sizes)
+        .map(|(x, &m)| (estimate - x) + m as f64 / n as f64 * x)
+        .sum();
+    let var = replicates
+        .iter()
+        .zip(&h)
+        .map(|(x, h)| (h * estimate - (h - 1.0) * x - x_j).powi(2) / (h - 1.0))
+        .sum::<f64>()
+        / g as f64;
+    let u = var.sqrt();
+    let half = t975(g - 1) * u;
+    Some(Interval {
+        u,
+        lo: estimate - half,
+        hi: estimate + half,
+    })
+}
+
 /// Per mode of `modes` (in their order), its uncertainty by the jackknife over `groups`
 /// groups; `peaks` are the FDD peaks the FDD and EFDD modes came from (in mode order), the
 /// records, their cross-spectral matrix (`whole`) and the settings those of the analysis. Notes name the modes left without an interval.
@@ -383,6 +416,35 @@ mod tests {
         assert!(
             held as f64 >= 0.85 * counted as f64,
             "{held} of {counted} intervals hold"
+        );
+    }
+
+    #[test]
+    fn the_sized_jackknife_is_the_plain_one_for_equal_groups_and_weighs_unequal_ones() {
+        let reps = [1.0, 1.3, 0.8, 1.1, 0.95];
+        let a = jackknife(1.02, &reps).unwrap();
+        let b = jackknife_sized(1.02, &reps, &[3; 5]).unwrap();
+        assert!(
+            (a.u - b.u).abs() < 1e-12 && (a.lo - b.lo).abs() < 1e-12,
+            "{a:?} {b:?}"
+        );
+        // the mean of n values in groups of 1 and 2: the exact variance of the mean, s^2 / n
+        let x = [2.0, 5.0, 3.0, 4.0, 7.0, 1.0, 6.0];
+        let groups: [&[f64]; 4] = [&x[0..2], &x[2..3], &x[3..5], &x[5..7]];
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let reps: Vec<f64> = groups
+            .iter()
+            .map(|g| (mean * n - g.iter().sum::<f64>()) / (n - g.len() as f64))
+            .collect();
+        let sizes: Vec<usize> = groups.iter().map(|g| g.len()).collect();
+        let u = jackknife_sized(mean, &reps, &sizes).unwrap().u;
+        let s2 = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        // a grouped jackknife estimates s^2 / n from G groups: close, not equal
+        assert!(
+            (u * u / (s2 / n) - 1.0).abs() < 0.6,
+            "{u} {}",
+            (s2 / n).sqrt()
         );
     }
 }
