@@ -13,10 +13,13 @@
 //!
 //! What each interval is of:
 //! - **amplitude**: the FRF at the picked line, `|T(f_k)|`. The estimate `|H1(f_k)|` tends to the
-//!   FRF smoothed by the window's kernel (a mode a few lines wide comes out low); the fit of the
-//!   smoothed model gives the factor `|T_fit(f_k)| / |(K * T_fit)(f_k)|`, and the interval is
-//!   centred on the amplitude times it. The amplitude column stays the picked `|H1|` (the
-//!   paper's number); the report gives both.
+//!   FRF smoothed by the window's kernel (a mode a few lines wide comes out low at its peak and
+//!   high on its flanks); the interval is centred on the smoothed fit's `|T_fit(f_k)|` (the
+//!   model without the smoothing, at the line), its replicates the replicates' fits. The
+//!   amplitude column stays the picked `|H1|` (the paper's number); the report gives both and
+//!   the smoothing `|(K * T_fit)(f_k)| / |T_fit(f_k)|`. Not in the interval: the picked line
+//!   is the one the noise raised most, which the replicates (the line fixed) do not see; on the
+//!   rendered rig it adds 2-7 % at 14 segments, inside the intervals (docs/validation.md §3).
 //! - **damping**: the smoothed fit's damping ratio, which is also the damping column when the
 //!   H1 has more than one segment (one segment over a record that may be periodic, as a
 //!   synthetic one is, keeps the plain fit).
@@ -25,7 +28,9 @@
 //!   `df / sqrt(12)` (a rectangular distribution over the line) in quadrature.
 //!
 //! One segment (the rig's default) has no spread to measure: no interval, and the report says
-//! how to get one (`--nperseg`).
+//! how to get one (`--nperseg`). Nor does a mode the lines do not resolve (half-power
+//! bandwidth below [`RESOLVED`] of a segment's line by the fit, or a damping interval reaching
+//! zero): its damping is not in the estimate.
 
 use super::modal::{self, FrfForm, Smoothing};
 use super::oma::csd::{self, Csd, CsdConfig};
@@ -36,11 +41,12 @@ use num_complex::Complex64;
 /// Fewest segments the jackknife takes.
 pub const MIN_SEGMENTS: usize = 4;
 
-/// A mode is resolved when its half-power bandwidth `2 zeta f` is at least this fraction of a
-/// segment's line `fs / nperseg`: narrower, its damping is not in the estimate (the smoothed
-/// peak has the kernel's shape whatever the damping) and the intervals do not hold (rendered
-/// cantilever, mode 1 at 1 Hz lines: damping +62 %, 78 % coverage).
-pub const RESOLVED: f64 = 0.5;
+/// A mode is resolved when its half-power bandwidth `2 zeta f` (by the smoothed fit) is at least
+/// this many of a segment's lines `fs / nperseg`. Narrower, the smoothed peak has nearly the
+/// kernel's shape whatever the damping, and the fit's damping is too often confidently wrong:
+/// on the rendered rig, mode 1 (0.16 Hz wide) at 0.5 Hz lines passed a half-line rule in 6 of
+/// 50 records with its damping 80 % high and 67 % of those intervals holding.
+pub const RESOLVED: f64 = 1.0;
 
 /// What one H1 mode gets.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -49,7 +55,7 @@ pub struct FrfModeUncertainty {
     pub f_hz: Option<Interval>,
     /// Of the damping ratio of the smoothed fit.
     pub damping: Option<Interval>,
-    /// Of the FRF's magnitude at the picked line.
+    /// Of the FRF's magnitude at the picked line (centred on the smoothed fit's value).
     pub amplitude: Option<Interval>,
     /// The smoothed fit's damping ratio (more than one segment).
     pub damping_fit: Option<f64>,
@@ -98,13 +104,13 @@ pub fn of_system(
     let kernel = Smoothing::welch(c.window, c.nperseg, fs);
     let whole = csd::of_segments(&channels, fs, c, 0..segments)?;
     let h = h1_of(&whole, sys.adjust);
-    let fits: Vec<Option<(f64, f64)>> = modes
+    let fits: Vec<Option<Fitted>> = modes
         .iter()
         .map(|m| smoothed(&whole.freq_hz, &h, m, &kernel))
         .collect();
     for (o, f) in out.iter_mut().zip(&fits) {
-        o.damping_fit = f.map(|f| f.0);
-        o.smoothing = f.map(|f| f.1);
+        o.damping_fit = f.map(|f| f.damping);
+        o.smoothing = f.map(|f| f.smoothing);
     }
     let groups = groups.min(segments);
     if segments < MIN_SEGMENTS || groups < 2 {
@@ -140,9 +146,9 @@ pub fn of_system(
             let picked = frf::pick_modes(&frf_g, &[m.band_hz], None)?;
             reps[i][0].extend(picked.first().map(|p| p.f_hz));
             match smoothed(&whole.freq_hz, &hg, m, &kernel) {
-                Some((damping, smoothing)) => {
-                    reps[i][1].push(damping);
-                    reps[i][2].push(hg[m.bin].norm() / smoothing);
+                Some(f) => {
+                    reps[i][1].push(f.damping);
+                    reps[i][2].push(f.at_line);
                 }
                 None => failed[i] = true,
             }
@@ -162,10 +168,12 @@ pub fn of_system(
             }
         });
         match (fits[i], failed[i]) {
-            (Some((damping, _)), false) if 2.0 * damping * m.f_hz < RESOLVED * line_hz => {
+            (Some(Fitted { damping, .. }), false)
+                if 2.0 * damping * m.f_hz < RESOLVED * line_hz =>
+            {
                 notes.push(format!(
-                    "{} mode {}: its half-power bandwidth ({:.3} Hz by the fit) is below half \
-                     a segment's line ({line_hz:.3} Hz): not resolved, no interval of its \
+                    "{} mode {}: its half-power bandwidth ({:.3} Hz by the fit) is narrower \
+                     than a segment's line ({line_hz:.3} Hz): not resolved, no interval of its \
                      damping and amplitude (the fit's damping is then unreliable too); longer \
                      segments (--nperseg) resolve it",
                     sys.name,
@@ -173,11 +181,12 @@ pub fn of_system(
                     2.0 * damping * m.f_hz
                 ));
             }
-            (Some((damping, smoothing)), false) => {
+            (Some(f), false) => {
+                let damping = f.damping;
                 let z = jackknife_sized(damping, &reps[i][1], &sizes);
                 if z.is_some_and(|z| z.lo > 0.0) {
                     o.damping = z;
-                    o.amplitude = jackknife_sized(m.amplitude / smoothing, &reps[i][2], &sizes);
+                    o.amplitude = jackknife_sized(f.at_line, &reps[i][2], &sizes);
                 } else {
                     notes.push(format!(
                         "{} mode {}: its damping is not determined (the 95 % interval reaches \
@@ -218,18 +227,33 @@ fn h1_of(c: &Csd, adjust: &[Complex64]) -> Vec<Complex64> {
         .collect()
 }
 
-/// The smoothed fit of `m`'s band: its damping and the smoothing at `m`'s line.
+/// The smoothed fit of `m`'s band, at `m`'s line.
 fn smoothed(
     freq_hz: &[f64],
     h: &[Complex64],
     m: &PickedMode,
     kernel: &Smoothing,
-) -> Option<(f64, f64)> {
+) -> Option<Fitted> {
     let fit = modal::fit_mode_smoothed(freq_hz, h, m.band_hz, FrfForm::Accelerance, kernel).ok()?;
     let model = |f: f64| fit.fit.evaluate(&fit.pole, FrfForm::Accelerance, f);
     let f = freq_hz[m.bin];
     let t = model(f).norm();
-    (t > 0.0).then(|| (fit.pole.damping, kernel.apply(model, f).norm() / t))
+    (t > 0.0).then(|| Fitted {
+        damping: fit.pole.damping,
+        smoothing: kernel.apply(model, f).norm() / t,
+        at_line: t,
+    })
+}
+
+/// What the smoothed fit of a band gives the intervals.
+#[derive(Debug, Clone, Copy)]
+struct Fitted {
+    /// Damping ratio.
+    damping: f64,
+    /// `|(K * T)(f_k)| / |T(f_k)|` at the picked line.
+    smoothing: f64,
+    /// `|T(f_k)|`: the FRF at the picked line, by the fit.
+    at_line: f64,
 }
 
 /// The intervals of an analysis's two systems, per mode in band order.
@@ -366,7 +390,7 @@ mod tests {
 
     #[test]
     fn one_segment_or_an_unresolved_mode_gets_no_interval_and_a_note() {
-        let (x, y) = rig_record(10, 4);
+        let (x, y) = rig_record(30, 4);
         let sys = System {
             name: "accelerometer",
             x: &x,
@@ -383,7 +407,8 @@ mod tests {
             u.iter().all(|m| m == &FrfModeUncertainty::default()),
             "{u:?}"
         );
-        // 1 s segments: 1 Hz lines, mode 1 (0.16 Hz wide) is not resolved, mode 2 (0.71 Hz) is
+        // 1 s segments: 1 Hz lines, mode 1 (0.16 Hz wide) is not resolved; 0.5 Hz lines: mode 2
+        // (0.71 Hz) is
         let c = config(x.len(), Some(2048));
         let frf = frf::estimate(&x, &y, c).unwrap();
         let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
@@ -397,27 +422,31 @@ mod tests {
         assert!(notes
             .iter()
             .any(|n| n.contains("mode 1") && n.contains("not resolved")));
+        let c = config(x.len(), Some(4096));
+        let frf = frf::estimate(&x, &y, c).unwrap();
+        let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
+        let u = of_system(&sys, c, &modes, 10, &mut notes).unwrap();
         assert!(
             u[1].damping.is_some() && u[1].amplitude.is_some(),
-            "{:?}",
+            "{:?} {notes:?}",
             u[1]
         );
     }
 
     #[test]
     fn the_intervals_hold_the_rigs_frf_and_damping_over_records() {
-        // 24 records of 30 s, 4 s segments (0.25 Hz lines): the rig's modes are resolved but
-        // 0.65 and 2.8 lines wide, so the estimate's |H1| is low by the window's smoothing (mode
-        // 1 by about a quarter). Where an interval is given it must hold the closed form; a
-        // record whose mode 1 damping is not determined gets none (about one in seven).
+        // 24 records of 30 s, 8 s segments (0.125 Hz lines, 6 segments): the rig's modes are
+        // resolved but only 1.3 and 5.7 lines wide, so the estimate's |H1| is the FRF smoothed
+        // by the window. Where an interval is given it must hold the closed form.
         let rig = cantilever::Rig::nominal();
         // per mode: [given, |FRF| held, damping held]
         let mut count = [[0; 3]; 2];
-        let mut plain_held = 0;
+        // mode 1's damping by the plain and the smoothed fit, over the truth
+        let (mut plain_err, mut smoothed_err) = (Vec::new(), Vec::new());
         let records = 24;
         for seed in 0..records {
             let (x, y) = rig_record(30, 1000 + seed);
-            let c = config(x.len(), Some(8192));
+            let c = config(x.len(), Some(16384));
             let frf = frf::estimate(&x, &y, c).unwrap();
             let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
             let sys = System {
@@ -437,13 +466,13 @@ mod tests {
                 count[i][1] += usize::from(a.lo <= truth && truth <= a.hi);
                 count[i][2] += usize::from(z.lo <= zeta && zeta <= z.hi);
                 if i == 0 {
-                    // the same interval around the plain fit's damping (the smoothing not modelled)
                     let plain =
                         modal::fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
                             .unwrap()
                             .pole
                             .damping;
-                    plain_held += usize::from((plain - zeta).abs() <= z.half_width());
+                    plain_err.push(plain / zeta - 1.0);
+                    smoothed_err.push(u.damping_fit.unwrap() / zeta - 1.0);
                 }
             }
         }
@@ -456,10 +485,9 @@ mod tests {
                 count[i]
             );
         }
-        assert!(
-            plain_held <= count[0][0] / 4,
-            "{plain_held} of {}",
-            count[0][0]
-        );
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let (plain, smoothed) = (mean(&plain_err), mean(&smoothed_err));
+        // (measured: plain +58 %, smoothed +7 %: six segments leave the damping skewed)
+        assert!(plain > 0.3 && smoothed.abs() < 0.1, "{plain} {smoothed}");
     }
 }

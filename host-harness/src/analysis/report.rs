@@ -190,7 +190,7 @@ fn intervals_text(a: &Analysis, i: &super::frf_uncertainty::Intervals) -> String
                     "|FRF| at {:.3} Hz = {} ({} to {}) (|H1| {}, {:+.1} % by the window's \
                      smoothing)",
                     m.f_hz,
-                    significant(m.amplitude / c),
+                    significant((ia.lo + ia.hi) / 2.0),
                     significant(ia.lo),
                     significant(ia.hi),
                     significant(m.amplitude),
