@@ -1,8 +1,8 @@
-//! The intervals of `analyze`'s H1 modes (docs/method.md §3.10, "Intervals of the H1 modes"):
+//! The intervals of `analyze`'s H1 modes (docs/method.md §3.10.1, "Intervals of the H1 modes"):
 //! the delete-one-group jackknife over the Welch segments, with the window's resolution bias
 //! removed by a modal fit of the smoothed model ([`modal::fit_mode_smoothed`]).
 //!
-//! The segments are put in `G` contiguous groups (at most [`GROUPS`], at least
+//! The segments are put in `G` contiguous groups (at most ten, at least
 //! [`MIN_SEGMENTS`] segments); each replicate is the H1 of the record without one group (its
 //! cross- and auto-spectra, the group's taken out of the whole record's), analysed as the whole
 //! record was: the mode's line fixed (the amplitude), the peak picked again in the band (the
