@@ -294,10 +294,15 @@ pub fn fit_mode(
 ) -> Result<ModeFit, ModalError> {
     let problem = Problem::new(freq_hz, &[h], band_hz, form, None)?;
     let (theta, iterations) = problem.fit_pole();
+    mode_fit(&problem, theta, iterations)
+}
+
+/// The [`ModeFit`] of one FRF's `problem` at its fitted scaled pole `theta`.
+fn mode_fit(problem: &Problem, theta: [f64; 2], iterations: usize) -> Result<ModeFit, ModalError> {
     let eval = problem.solve(theta).ok_or(problem.singular())?;
     let pole = problem.check_pole(theta)?;
     Ok(ModeFit {
-        band_hz,
+        band_hz: problem.band,
         pole,
         fit: problem.unscale(&eval, 0),
         bins: problem.s.len(),
@@ -308,8 +313,8 @@ pub fn fit_mode(
 /// [`fit_mode`] for an FRF estimated by Welch's method with the kernel `smoothing`
 /// ([`Smoothing::welch`]): the model smoothed by the kernel is fitted, so the pole and the
 /// residue are those of the FRF itself, without the window's resolution bias (a mode a few
-/// lines wide comes out of the estimate lower and wider). The fit starts from the unsmoothed
-/// fit's grid start. [`ResidueFit::evaluate`] gives the FRF, [`Smoothing::apply`] over it the
+/// lines wide comes out of the estimate lower and wider). Levenberg-Marquardt starts from the
+/// unsmoothed fit's pole. [`ResidueFit::evaluate`] gives the FRF, [`Smoothing::apply`] over it the
 /// estimate's expectation.
 pub fn fit_mode_smoothed(
     freq_hz: &[f64],
@@ -322,15 +327,7 @@ pub fn fit_mode_smoothed(
     let problem = Problem::new(freq_hz, &[h], band_hz, form, Some(smoothing))?;
     let (start, _) = plain.fit_pole();
     let (theta, iterations) = problem.refine(start, problem.cost(start));
-    let eval = problem.solve(theta).ok_or(problem.singular())?;
-    let pole = problem.check_pole(theta)?;
-    Ok(ModeFit {
-        band_hz,
-        pole,
-        fit: problem.unscale(&eval, 0),
-        bins: problem.s.len(),
-        iterations,
-    })
+    mode_fit(&problem, theta, iterations)
 }
 
 /// Fits one resonance shared by several FRFs (e.g. the targets along a structure, and the
