@@ -220,13 +220,13 @@ fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
             .unwrap_or(0);
         assert!(len > 1000, "{plot}: {len} bytes");
     }
-    // e2pr = exposure x frequency, then the method
+    // e2pr = exposure x frequency, then the method and the (empty: one segment) intervals
     let m = std::fs::read_to_string(out.join("modes.csv")).unwrap();
     assert!(
         m.lines()
             .nth(1)
             .unwrap()
-            .ends_with(&format!(",{},h1", 0.002 * 8.0)),
+            .ends_with(&format!(",{},h1,,,,,,,,,", 0.002 * 8.0)),
         "{m}"
     );
 }

@@ -1,8 +1,7 @@
 //! The outputs of a one-target `analyze`: `frf.csv`, `modes.csv`, `displacement.csv` and
 //! `compensation.csv`. The columns are documented in `docs/cli.md`.
 
-use super::oma::INTERVAL_COLUMNS;
-use super::opt;
+use super::{opt, INTERVAL_COLUMNS};
 use firmware_core::centroid::Centroid;
 use num_complex::Complex64;
 use std::fmt::Write as _;
@@ -85,7 +84,7 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
             opt(m.damping),
             opt(m.e2pr.map(round_e2pr))
         );
-        super::oma::push_intervals(&mut s, &m.intervals);
+        super::push_intervals(&mut s, &m.intervals);
         s.push('\n');
     }
     s.into_bytes()

@@ -94,3 +94,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         anyhow::Error::new(e).context(format!("cannot write {}", path.display()))
     })
 }
+
+/// The columns `modes.csv` of `modal` and `analyze` add to their own: each
+/// estimate's standard uncertainty and 95 % interval.
+pub const INTERVAL_COLUMNS: &str = "f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,\
+                                    amplitude_u,amplitude_lo,amplitude_hi";
+
+/// The cells of [`INTERVAL_COLUMNS`], each after a comma (empty where not estimated).
+pub(crate) fn push_intervals(s: &mut String, intervals: &[Option<(f64, f64, f64)>; 3]) {
+    for i in intervals {
+        let (u, lo, hi) = i.map_or((None, None, None), |(u, lo, hi)| {
+            (Some(u), Some(lo), Some(hi))
+        });
+        s.push_str(&format!(",{},{},{}", opt(u), opt(lo), opt(hi)));
+    }
+}

@@ -2,9 +2,9 @@
 //! `modes.csv` and `shapes.csv` in the multi-target columns, `svd.csv`, `shapes.uff`. Typed
 //! rows in, bytes out; `analysis::oma::run` builds the rows from its results.
 
-use super::opt;
 use super::targets::{MODES_HEADER, SHAPES_HEADER};
 use super::uff::{write_dataset55, Shape55};
+use super::{opt, push_intervals, INTERVAL_COLUMNS};
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
@@ -27,11 +27,6 @@ pub struct OmaModeRow {
     /// damping and the amplitude, where estimated.
     pub intervals: [Option<(f64, f64, f64)>; 3],
 }
-
-/// The columns `modes.csv` of an output-only analysis adds to the multi-target ones: each
-/// estimate's standard uncertainty and 95 % interval.
-pub const INTERVAL_COLUMNS: &str = "f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,\
-                                    amplitude_u,amplitude_lo,amplitude_hi";
 
 /// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
 /// `target` and `e2pr` empty; then [`INTERVAL_COLUMNS`] (empty where not estimated).
@@ -57,16 +52,6 @@ pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
         s.push('\n');
     }
     s.into_bytes()
-}
-
-/// The cells of [`INTERVAL_COLUMNS`], each after a comma (empty where not estimated).
-pub(crate) fn push_intervals(s: &mut String, intervals: &[Option<(f64, f64, f64)>; 3]) {
-    for i in intervals {
-        let (u, lo, hi) = i.map_or((None, None, None), |(u, lo, hi)| {
-            (Some(u), Some(lo), Some(hi))
-        });
-        let _ = write!(s, ",{},{},{}", opt(u), opt(lo), opt(hi));
-    }
 }
 
 /// One target's coefficient in one mode of one method.
