@@ -52,6 +52,27 @@ def ensure_venv(script=__file__, env=None):
     os.execv(str(py), [str(py), script, *sys.argv[1:]])
 
 
+def read_wide(path):
+    """A wide displacement file (`t_s,1,...,K`) as (samples x K array, sample rate in Hz)."""
+    import numpy as np
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    names = d.dtype.names
+    t = d[names[0]]
+    return np.column_stack([d[n] for n in names[1:]]), (len(t) - 1) / (t[-1] - t[0])
+
+
+def simulate_field(harness, case, minutes, noise, seed, rec):
+    """`host-harness simulate-field` into `rec`; returns its truth, {mode: (f_hz, damping)}."""
+    import csv
+    subprocess.run([harness, "simulate-field", "--case", case, "--minutes", str(minutes),
+                    "--noise", str(noise), "--seed", str(seed), "--out", str(rec), "--force"],
+                   check=True, capture_output=True)
+    truth = {}
+    for r in csv.DictReader(open(Path(rec) / "truth.csv")):
+        truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
+    return truth
+
+
 def mac(a, b):
     import numpy as np
     a, b = np.asarray(a, complex), np.asarray(b, complex)
@@ -80,11 +101,7 @@ def main():
     out_md = field / "peer-oma.md"
     if out_md.exists() and not args.force:
         sys.exit(f"{out_md} exists: --force to replace it")
-    d = np.genfromtxt(field / "displacement.csv", delimiter=",", names=True)
-    names = d.dtype.names
-    t = d[names[0]]
-    data = np.column_stack([d[n] for n in names[1:]])
-    fs = (len(t) - 1) / (t[-1] - t[0])
+    data, fs = read_wide(field / "displacement.csv")
     df = fs / args.nperseg
 
     # ours
@@ -124,7 +141,7 @@ def main():
         for r in csv.DictReader(open(field / "truth.csv")):
             truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
 
-    lines = [f"Same file: {len(t)} samples at {fs:g} Hz, {data.shape[1]} targets; segments of "
+    lines = [f"Same file: {len(data)} samples at {fs:g} Hz, {data.shape[1]} targets; segments of "
              f"{args.nperseg} (lines {df:.4f} Hz). Wall time: ours {ours_s:.2f} s (the `modal` "
              f"process, no figures), pyOMA-2 {peer_s:.2f} s (setup, run, mpe).", "",
              "| method | mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "

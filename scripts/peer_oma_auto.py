@@ -29,7 +29,7 @@ import subprocess
 import time
 from pathlib import Path
 
-from peer_oma import ensure_venv
+from peer_oma import ensure_venv, read_wide, simulate_field
 
 THREADS = ["OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"]
 
@@ -88,19 +88,9 @@ def main():
         t_ours = t_peer = 0.0
         for seed in range(args.records):
             rec = out / f"{case}-{seed}"
-            subprocess.run([harness, "simulate-field", "--case", case, "--minutes",
-                            str(args.minutes), "--noise", str(args.noise), "--seed",
-                            str(5000 + seed), "--out", str(rec), "--force"], check=True,
-                           capture_output=True)
-            truth = {}
-            for r in csv.DictReader(open(rec / "truth.csv")):
-                truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
+            truth = simulate_field(harness, case, args.minutes, args.noise, 5000 + seed, rec)
             truth = [truth[k] for k in sorted(truth)]
-            d = np.genfromtxt(rec / "displacement.csv", delimiter=",", names=True)
-            names = d.dtype.names
-            t = d[names[0]]
-            data = np.column_stack([d[n] for n in names[1:]])
-            fs = (len(t) - 1) / (t[-1] - t[0])
+            data, fs = read_wide(rec / "displacement.csv")
             t0 = time.perf_counter()
             subprocess.run([harness, "modal", "--displacement", str(rec / "displacement.csv"),
                             "--no-plots", "--out", str(rec / "m"), "--force"], check=True,

@@ -21,7 +21,7 @@ import csv
 import subprocess
 from pathlib import Path
 
-from peer_oma import ensure_venv
+from peer_oma import ensure_venv, read_wide, simulate_field
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -47,22 +47,12 @@ def main():
     per_mode = {}
     for seed in range(args.records):
         rec = out / f"{args.case}-{seed}"
-        subprocess.run([harness, "simulate-field", "--case", args.case, "--minutes",
-                        str(args.minutes), "--noise", str(args.noise), "--seed",
-                        str(7000 + seed), "--out", str(rec), "--force"], check=True,
-                       capture_output=True)
-        truth = {}
-        for r in csv.DictReader(open(rec / "truth.csv")):
-            truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
+        truth = simulate_field(harness, args.case, args.minutes, args.noise, 7000 + seed, rec)
         subprocess.run([harness, "modal", "--displacement", str(rec / "displacement.csv"),
                         "--no-plots", "--out", str(rec / "m"), "--force"], check=True,
                        capture_output=True)
         ours = [m for m in csv.DictReader(open(rec / "m" / "modes.csv")) if m["method"] == "ssi"]
-        d = np.genfromtxt(rec / "displacement.csv", delimiter=",", names=True)
-        names = d.dtype.names
-        t = d[names[0]]
-        data = np.column_stack([d[n] for n in names[1:]])
-        fs = (len(t) - 1) / (t[-1] - t[0])
+        data, fs = read_wide(rec / "displacement.csv")
         setup = SingleSetup(data, fs=fs)
         ssi = SSI(name="SSI", br=30, ordmin=2, ordmax=40, step=2, method="cov", calc_unc=True)
         setup.add_algorithms(ssi)

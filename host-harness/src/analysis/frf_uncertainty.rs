@@ -34,7 +34,7 @@
 
 use super::modal::{self, FrfForm, Smoothing};
 use super::oma::csd::{self, Csd, CsdConfig};
-use super::oma::uncertainty::{jackknife_sized, t975, Interval};
+use super::oma::uncertainty::{group, jackknife_sized, t975, Interval};
 use crate::chain::frf::{self, Frf, PickedMode};
 use num_complex::Complex64;
 
@@ -88,13 +88,7 @@ pub fn of_system(
     notes: &mut Vec<String>,
 ) -> anyhow::Result<Vec<FrfModeUncertainty>> {
     let mut out = vec![FrfModeUncertainty::default(); modes.len()];
-    let c = CsdConfig {
-        window: config.window,
-        nperseg: config.nperseg,
-        noverlap: config.noverlap,
-        nfft: config.nfft,
-        detrend: config.detrend,
-    };
+    let c = CsdConfig::from(config);
     let fs = f64::from(config.fs_hz);
     let channels = vec![sys.x.to_vec(), sys.y.to_vec()];
     let segments = csd::check(&channels, c)?;
@@ -126,18 +120,13 @@ pub fn of_system(
     let mut failed = vec![false; modes.len()];
     let mut sizes = Vec::with_capacity(groups);
     for g in 0..groups {
-        let part = csd::of_segments(
-            &channels,
-            fs,
-            c,
-            g * segments / groups..(g + 1) * segments / groups,
-        )?;
+        let part = csd::of_segments(&channels, fs, c, group(g, groups, segments))?;
         sizes.push(part.segments);
-        let hg = h1_of(&whole.without(&part), sys.adjust);
+        let h1 = h1_of(&whole.without(&part), sys.adjust);
         let frf_g = Frf {
             freq_hz: whole.freq_hz.clone(),
-            h1: hg.clone(),
-            coherence: vec![0.0; hg.len()],
+            coherence: vec![0.0; h1.len()],
+            h1,
             config,
             segments: (segments - part.segments) as u32,
             skipped: 0,
@@ -145,7 +134,7 @@ pub fn of_system(
         for (i, m) in modes.iter().enumerate() {
             let picked = frf::pick_modes(&frf_g, &[m.band_hz], None)?;
             reps[i][0].extend(picked.first().map(|p| p.f_hz));
-            match smoothed(&whole.freq_hz, &hg, m, &kernel) {
+            match smoothed(&whole.freq_hz, &frf_g.h1, m, &kernel) {
                 Some(f) => {
                     reps[i][1].push(f.damping);
                     reps[i][2].push(f.at_line);
@@ -225,6 +214,22 @@ fn h1_of(c: &Csd, adjust: &[Complex64]) -> Vec<Complex64> {
             }
         })
         .collect()
+}
+
+/// The damping ratio of the mode `m` picked on `frf` (`None` when the fit fails): the modal fit
+/// of the model smoothed by the window's kernel when the H1 averages more than one segment, else
+/// of the model itself (one segment over a record that may be periodic, as a synthetic one is,
+/// where the smoothing does not act). [`of_system`] gives the same value as `damping_fit`.
+pub fn damping(frf: &Frf, m: &PickedMode) -> Option<f64> {
+    if frf.segments > 1 {
+        let c = frf.config;
+        let kernel = Smoothing::welch(c.window, c.nperseg, f64::from(c.fs_hz));
+        smoothed(&frf.freq_hz, &frf.h1, m, &kernel).map(|f| f.damping)
+    } else {
+        modal::fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
+            .map(|f| f.pole.damping)
+            .ok()
+    }
 }
 
 /// The smoothed fit of `m`'s band, at `m`'s line.
@@ -367,13 +372,7 @@ mod tests {
         let (x, y) = rig_record(10, 3);
         let c = config(x.len(), Some(4096));
         let frf = frf::estimate(&x, &y, c).unwrap();
-        let cc = CsdConfig {
-            window: c.window,
-            nperseg: c.nperseg,
-            noverlap: c.noverlap,
-            nfft: c.nfft,
-            detrend: c.detrend,
-        };
+        let cc = CsdConfig::from(c);
         let ch = vec![x, y];
         let n = csd::check(&ch, cc).unwrap();
         assert_eq!(n as u32, frf.segments);

@@ -6,32 +6,34 @@ use super::{Analysis, Displacement, MAX_LOST_FRACTION};
 use crate::export::analysis::{ModeRow, Spectrum};
 
 /// The rows of `modes.csv` ([`crate::export::analysis::modes_csv`]): both systems' picked
-/// modes, each with the damping of a single-mode fit to the complex FRF in its band (`None`
-/// when the fit fails): of the model smoothed by the window's kernel when the H1 has more than
-/// one segment ([`super::frf_uncertainty`]), else of the model itself
-/// ([`super::modal::fit_mode`]); and the intervals where computed.
+/// modes, each with the damping of a single-mode fit to the complex FRF in its band
+/// ([`super::frf_uncertainty::damping`]; `None` when the fit fails) and the intervals where
+/// computed.
 pub fn mode_rows(a: &Analysis) -> Vec<ModeRow> {
-    use super::modal::{fit_mode, FrfForm};
     let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
     let mut rows = Vec::new();
-    let none = Vec::new();
-    let (acc_u, vis_u) = a
-        .intervals
-        .as_ref()
-        .map_or((&none, &none), |i| (&i.acc, &i.vis));
     for (system, modes, frf, unc) in [
-        ("accelerometer", &a.acc_modes, &a.acc_frf, acc_u),
-        ("vision", &a.vis_modes, &a.vis_frf, vis_u),
+        (
+            "accelerometer",
+            &a.acc_modes,
+            &a.acc_frf,
+            a.intervals.as_ref().map(|i| &i.acc),
+        ),
+        (
+            "vision",
+            &a.vis_modes,
+            &a.vis_frf,
+            a.intervals.as_ref().map(|i| &i.vis),
+        ),
     ] {
         for (i, m) in modes.iter().enumerate() {
-            let u = unc.get(i).cloned().unwrap_or_default();
-            let damping = if frf.segments > 1 {
-                u.damping_fit
-            } else {
-                fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
-                    .map(|f| f.pole.damping)
-                    .ok()
+            let u = unc.and_then(|u| u.get(i));
+            // the intervals' smoothed fit is the damping's when there is one (not fitted again)
+            let damping = match u {
+                Some(u) if frf.segments > 1 => u.damping_fit,
+                _ => super::frf_uncertainty::damping(frf, m),
             };
+            let u = u.cloned().unwrap_or_default();
             rows.push(ModeRow {
                 system,
                 mode: i + 1,

@@ -24,6 +24,19 @@ pub struct CsdConfig {
     pub detrend: Detrend,
 }
 
+impl From<firmware_core::spectrum::WelchConfig> for CsdConfig {
+    /// The lengths, window and detrending of a resolved Welch H1 setting.
+    fn from(c: firmware_core::spectrum::WelchConfig) -> Self {
+        CsdConfig {
+            window: c.window,
+            nperseg: c.nperseg,
+            noverlap: c.noverlap,
+            nfft: c.nfft,
+            detrend: c.detrend,
+        }
+    }
+}
+
 /// The cross-spectral density matrices of K channels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Csd {

@@ -78,6 +78,12 @@ pub fn t975(dof: usize) -> f64 {
     }
 }
 
+/// The segments (or other units) of group `g` of `groups` contiguous groups of `units`: sizes
+/// differ by at most one.
+pub fn group(g: usize, groups: usize, units: usize) -> std::ops::Range<usize> {
+    g * units / groups..(g + 1) * units / groups
+}
+
 /// The jackknife interval of `estimate` from its replicates (one per group left out).
 pub fn jackknife(estimate: f64, replicates: &[f64]) -> Option<Interval> {
     let g = replicates.len();
@@ -275,7 +281,7 @@ fn spectral_replicates(
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
     let mut out = Vec::with_capacity(groups);
     for g in 0..groups {
-        let range = g * segments / groups..(g + 1) * segments / groups;
+        let range = group(g, groups, segments);
         let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
         let replicate: Csd = whole.without(&part);
         let svd: Svd = fdd::decompose(&replicate)?;
