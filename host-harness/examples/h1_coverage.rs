@@ -186,8 +186,9 @@ fn main() -> anyhow::Result<()> {
                 let truth_a = spec.frf(m.f_hz).norm() * if *blurred { sinc(m.f_hz) } else { 1.0 };
                 t[s][i][0].push(cell(m.f_hz, u.f_hz), freqs[i]);
                 t[s][i][1].push(u.damping_fit.and_then(|z| cell(z, u.damping)), damping[i]);
+                // the amplitude's interval is centred on the fit's FRF at the line
                 t[s][i][2].push(
-                    u.smoothing.and_then(|c| cell(m.amplitude / c, u.amplitude)),
+                    u.amplitude.map(|a| ((a.lo + a.hi) / 2.0, a.lo, a.hi)),
                     truth_a,
                 );
             }
