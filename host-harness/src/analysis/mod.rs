@@ -34,6 +34,7 @@
 pub mod columns;
 pub mod compensate;
 pub mod frf_uncertainty;
+pub mod imaging_share;
 pub mod modal;
 pub mod oma;
 pub mod points;

@@ -4,9 +4,10 @@
 //! report text, which the caller prints.
 
 use super::compensate::{compensate, Compensated};
+use super::imaging_share::{FrameNoise, Share};
 use super::Axis;
 use crate::export::analysis as export;
-use crate::frames::{centroid_source, FrameSource};
+use crate::frames::{centroid_source_seen, FrameSource, GreyFrame};
 use crate::outdir::Staged;
 use std::path::{Path, PathBuf};
 
@@ -56,7 +57,15 @@ fn one_target(
     ignored: Option<String>,
 ) -> anyhow::Result<Outcome> {
     let fps = req.settings.frame_rate_hz;
-    let (centroids, depth) = centroid_source(source, fps, &req.centroid)?;
+    // the frames' noise and the first frame (the imaging share) seen as they are centroided
+    let mut noise = FrameNoise::new(req.centroid.roi, FrameNoise::stride_for(source.count(fps)?));
+    let mut first: Option<GreyFrame> = None;
+    let (centroids, depth) = centroid_source_seen(source, fps, &req.centroid, &mut |f| {
+        noise.add(f);
+        if first.is_none() {
+            first = Some(f.clone());
+        }
+    })?;
     let depth_warning = depth.threshold_warning(req.centroid.threshold);
     if let Some(w) = &depth_warning {
         eprintln!("warning: {w}");
@@ -85,6 +94,14 @@ fn one_target(
     };
     let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
     append_compensation(&out, compensation.as_ref(), &mut report)?;
+    if let (Some(a), Some(first), Some(noise)) = (a, &first, noise.estimate()) {
+        let d = &req.displacement;
+        let share = Share::of(a, first, noise, &req.centroid, (d.axis, d.mm_per_px), fps)?;
+        report.push_str(&share.map_or_else(
+            || "\nimaging share: the first frame has no pixel above the threshold\n".into(),
+            |s| s.report(),
+        ));
+    }
     if let Some(a) = a {
         write_results(&out, req, a, &mut report)?;
     }

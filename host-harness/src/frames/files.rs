@@ -963,6 +963,16 @@ pub fn centroid_source(
     fps: f64,
     config: &CentroidConfig,
 ) -> anyhow::Result<(Vec<Centroid>, FrameDepth)> {
+    centroid_source_seen(source, fps, config, &mut |_| {})
+}
+
+/// [`centroid_source`], every frame also shown to `seen` (in order, after its centroid).
+pub fn centroid_source_seen(
+    source: &FrameSource,
+    fps: f64,
+    config: &CentroidConfig,
+    seen: &mut dyn FnMut(&GreyFrame),
+) -> anyhow::Result<(Vec<Centroid>, FrameDepth)> {
     let mut out = Vec::new();
     let mut first: Option<(usize, usize, String)> = None;
     let mut depth = FrameDepth::default();
@@ -980,6 +990,7 @@ pub fn centroid_source(
             Some(_) => {}
         }
         out.push(frame.centroid(config, &label)?);
+        seen(frame);
         Ok(())
     };
     source.for_each(fps, &mut one)?;

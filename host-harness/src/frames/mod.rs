@@ -10,8 +10,8 @@ mod rates;
 pub mod video;
 
 pub use files::{
-    centroid_source, discover_frames, for_each_tiff_page, load_frame, open_frames, Discovered,
-    FrameDepth, FrameRange, FrameSource,
+    centroid_source, centroid_source_seen, discover_frames, for_each_tiff_page, load_frame,
+    open_frames, Discovered, FrameDepth, FrameRange, FrameSource,
 };
 pub use rates::{resolve_rates, Rates};
 
