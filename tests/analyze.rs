@@ -599,3 +599,74 @@ fn synthetic_cantilever_recording_round_trip() {
     }
     eprintln!("round trip: {:?}", t0.elapsed());
 }
+
+/// `--twin` on a rendered recording at a long exposure (6 ms, mode 2 at E2PR 0.19): with the
+/// weighted centroid and the threshold at the background (linear in the image) the imaging's
+/// amplitude transfer is the closed form `sinc(pi f Te)`, so the twin's mean ratio per mode
+/// must be it (within 0.2 %: the runs' noise and the path's interpolation, 2e-4); its rows
+/// are written one per run and mode, the report gives the bias, and the shards' rows together
+/// are the whole's.
+#[test]
+fn the_twin_of_a_rendered_recording_finds_the_exposures_bias() {
+    use host_harness::recording::write_synthetic_recording;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("rec");
+    let files = write_synthetic_recording(
+        host_harness::study::Preset::Cantilever,
+        7,
+        6.0,
+        (&dir, &dir),
+    )
+    .unwrap();
+    let extra = [
+        "--mode",
+        "weighted",
+        "--threshold",
+        "0",
+        "--window",
+        "hann",
+        "--twin",
+        "6",
+    ];
+    let (modes, report) = analyze_recording(&files.analyze_args, &extra, &tmp.path().join("a"));
+    assert!(
+        report.contains("twin (method.md 3.10.3): 6 runs"),
+        "{report}"
+    );
+    let csv = std::fs::read_to_string(tmp.path().join("a/twin.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 12, "{csv}");
+    for mode in 1..=2 {
+        let f = modes[mode + 1].2;
+        let x = std::f64::consts::PI * f * 0.006;
+        let sinc = x.sin() / x;
+        let r: Vec<f64> = rows
+            .iter()
+            .filter(|r| r[3] == mode as f64)
+            .map(|r| r[8])
+            .collect();
+        let mean = r.iter().sum::<f64>() / r.len() as f64;
+        assert!(
+            (mean / sinc - 1.0).abs() < 0.002,
+            "mode {mode}: twin {mean}, sinc {sinc}\n{report}"
+        );
+    }
+    // two shards: their rows together are the whole's
+    let mut together = Vec::new();
+    for shard in ["1/2", "2/2"] {
+        let out = tmp.path().join(format!("s{}", &shard[..1]));
+        let mut e = extra.to_vec();
+        e.extend_from_slice(&["--twin-shard", shard]);
+        analyze_recording(&files.analyze_args, &e, &out);
+        let t = std::fs::read_to_string(out.join("twin.csv")).unwrap();
+        together.extend(t.lines().skip(1).map(String::from));
+    }
+    together.sort();
+    let mut whole: Vec<String> = csv.lines().skip(1).map(String::from).collect();
+    whole.sort();
+    assert_eq!(together, whole);
+}

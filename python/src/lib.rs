@@ -551,6 +551,7 @@ fn analyze<'py>(
         end_match: true,
         accel_target: None,
         shape_reference: None,
+        twin: None,
         out: std::path::PathBuf::new(),
         force: false,
     };

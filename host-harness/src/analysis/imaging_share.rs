@@ -69,9 +69,19 @@ pub struct NoiseEstimate {
 
 impl NoiseEstimate {
     /// Whether the estimate stands on too little: fewer than 1000 second differences, or more
-    /// than half the pixels clipped.
+    /// than half the pixels clipped (then the unclipped rest is mostly a moving edge, no still
+    /// background: on a noise-free rendered rig, 97 % clipped, it read 35 grey levels).
     pub fn weak(&self) -> bool {
         self.samples < 1000 || self.clipped > 0.5
+    }
+
+    /// The noise to use: the estimate, or 0 (the quantisation only) when it is [`weak`](Self::weak).
+    pub fn usable(&self) -> f64 {
+        if self.weak() {
+            0.0
+        } else {
+            self.sigma
+        }
     }
 }
 
@@ -217,6 +227,64 @@ fn region(w: usize, h: usize, roi: Option<Roi>) -> (usize, usize, usize, usize) 
                 (r.height as usize).min(h - y0),
             )
         }
+    }
+}
+
+/// The frame of a recording whose target moved least during it (the smallest change of the
+/// centroid along the axis between its neighbours; the first frame until there are three):
+/// the least blurred picture of the target, which the floor and the twin take.
+#[derive(Debug, Clone)]
+pub struct StillestFrame {
+    axis: crate::analysis::Axis,
+    /// Frames seen.
+    seen: usize,
+    /// The last two frames and their positions along the axis.
+    last: Vec<(GreyFrame, Option<f64>)>,
+    /// The stillest frame so far: its index, itself and its change.
+    best: Option<(usize, GreyFrame, f64)>,
+    first: Option<GreyFrame>,
+}
+
+impl StillestFrame {
+    /// Follows the motion along `axis`.
+    pub fn new(axis: crate::analysis::Axis) -> StillestFrame {
+        StillestFrame {
+            axis,
+            seen: 0,
+            last: Vec::new(),
+            best: None,
+            first: None,
+        }
+    }
+
+    /// Takes the next frame and its centroid.
+    pub fn add(&mut self, frame: &GreyFrame, c: &firmware_core::centroid::Centroid) {
+        let p = c.position().map(|(x, y)| match self.axis {
+            crate::analysis::Axis::X => f64::from(x),
+            crate::analysis::Axis::Y => f64::from(y),
+        });
+        if self.first.is_none() {
+            self.first = Some(frame.clone());
+        }
+        if self.last.len() == 2 {
+            if let (Some(a), Some(b)) = (self.last[0].1, p) {
+                let change = (b - a).abs();
+                if self.best.as_ref().is_none_or(|(_, _, v)| change < *v) {
+                    self.best = Some((self.seen - 1, self.last[1].0.clone(), change));
+                }
+            }
+            self.last.remove(0);
+        }
+        self.last.push((frame.clone(), p));
+        self.seen += 1;
+    }
+
+    /// The stillest frame and its index from 0 (the first when no frame has two neighbours
+    /// with a centroid).
+    pub fn frame(self) -> Option<(usize, GreyFrame)> {
+        self.best
+            .map(|(i, f, _)| (i, f))
+            .or(self.first.map(|f| (0, f)))
     }
 }
 
@@ -376,7 +444,7 @@ pub fn h1_share(floor_m: f64, fc: f64, f_hz: f64, gyy: f64, segments: usize) -> 
 pub struct Share {
     /// The frames' noise.
     pub noise: NoiseEstimate,
-    /// The floor of the first frame.
+    /// The floor of the stillest frame.
     pub floor: TrackerFloor,
     /// The centroid's floor along the analysed axis, px, and the Cramer-Rao bound there.
     pub along_px: (f64, f64),
@@ -404,7 +472,7 @@ pub struct ModeShare {
 impl Share {
     /// The imaging share of analysis `a` of one target along `axis` at `mm_per_px`: its
     /// vision acceleration's density at each vision mode's line against the floor of
-    /// `first` (the first frame) with the noise `noise`. `None` when the first frame has no
+    /// `first` (the stillest frame) with the noise `noise`. `None` when that frame has no
     /// pixel above the threshold.
     pub fn of(
         a: &super::Analysis,
@@ -414,7 +482,7 @@ impl Share {
         (axis, mm_per_px): (super::Axis, f64),
         fc: f64,
     ) -> anyhow::Result<Option<Share>> {
-        let Some(floor) = tracker_floor(first, config, noise.sigma) else {
+        let Some(floor) = tracker_floor(first, config, noise.usable()) else {
             return Ok(None);
         };
         let along_px = floor.along(axis);
@@ -463,7 +531,7 @@ impl Share {
         let mut s = format!(
             "\nimaging share (method.md 3.10.2):\n  noise in the frames: {:.3} grey levels per \
              pixel (second differences in time of {} still pixels over {} frame triples; {:.0} \
-             % of the pixels clipped, left out){}{}\n  tracking noise floor ({}, first frame, {} pixels above the threshold): \
+             % of the pixels clipped, left out){}{}\n  tracking noise floor ({}, stillest frame, {} pixels above the threshold): \
              {:.5} px = {:.3e} mm per frame along the axis (Cramer-Rao bound of the region: \
              {:.5} px)\n",
             self.noise.sigma,
@@ -471,12 +539,12 @@ impl Share {
             self.noise.triples,
             100.0 * self.noise.clipped,
             if self.noise.weak() {
-                "; WEAK: too few unclipped still pixels to be a fair sample (likely low), so \
-                 the floor below may be low too"
+                "; NOT USED: no fair sample (most of the region clipped, or too few still \
+                 pixels), so the floor below is the quantisation's alone"
             } else {
                 ""
             },
-            if self.noise.sigma < 0.5 {
+            if !self.noise.weak() && self.noise.sigma < 0.5 {
                 "; below half a grey level: the quantisation's 0.289 is used"
             } else {
                 ""

@@ -45,6 +45,7 @@ pub mod shared_motion;
 pub mod targets;
 pub mod targets_run;
 pub mod track_run;
+pub mod twin;
 
 pub use crate::chain::displacement::{
     displacement_mm, Axis, Displacement, DisplacementSettings, MAX_LOST_FRACTION,

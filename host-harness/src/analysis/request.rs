@@ -65,6 +65,8 @@ pub struct Request {
     pub points_file: Option<PathBuf>,
     /// Several targets, or one.
     pub targets: Option<TargetsRequest>,
+    /// `--twin`: re-render the recording (one target only).
+    pub twin: Option<super::twin::TwinSettings>,
     /// Output directory, and whether an earlier analysis there may be replaced.
     pub out: PathBuf,
     /// `--force`.

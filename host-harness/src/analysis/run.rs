@@ -4,10 +4,10 @@
 //! report text, which the caller prints.
 
 use super::compensate::{compensate, Compensated};
-use super::imaging_share::{FrameNoise, Share};
+use super::imaging_share::{FrameNoise, Share, StillestFrame};
 use super::Axis;
 use crate::export::analysis as export;
-use crate::frames::{centroid_source_seen, FrameSource, GreyFrame};
+use crate::frames::{centroid_source_seen, FrameSource};
 use crate::outdir::Staged;
 use std::path::{Path, PathBuf};
 
@@ -59,13 +59,12 @@ fn one_target(
     let fps = req.settings.frame_rate_hz;
     // the frames' noise and the first frame (the imaging share) seen as they are centroided
     let mut noise = FrameNoise::new(req.centroid.roi, FrameNoise::stride_for(source.count(fps)?));
-    let mut first: Option<GreyFrame> = None;
-    let (centroids, depth) = centroid_source_seen(source, fps, &req.centroid, &mut |f| {
+    let mut still = StillestFrame::new(req.displacement.axis);
+    let (centroids, depth) = centroid_source_seen(source, fps, &req.centroid, &mut |f, c| {
         noise.add(f);
-        if first.is_none() {
-            first = Some(f.clone());
-        }
+        still.add(f, c);
     })?;
+    let template = still.frame();
     let depth_warning = depth.threshold_warning(req.centroid.threshold);
     if let Some(w) = &depth_warning {
         eprintln!("warning: {w}");
@@ -94,13 +93,33 @@ fn one_target(
     };
     let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
     append_compensation(&out, compensation.as_ref(), &mut report)?;
-    if let (Some(a), Some(first), Some(noise)) = (a, &first, noise.estimate()) {
+    if let (Some(a), Some((index, first)), Some(noise)) = (a, &template, noise.estimate()) {
         let d = &req.displacement;
         let share = Share::of(a, first, noise, &req.centroid, (d.axis, d.mm_per_px), fps)?;
         report.push_str(&share.map_or_else(
-            || "\nimaging share: the first frame has no pixel above the threshold\n".into(),
+            || "\nimaging share: the stillest frame has no pixel above the threshold\n".into(),
             |s| s.report(),
         ));
+        if let Some(t) = req.twin {
+            let rec = super::twin::Recording {
+                analysis: a,
+                disp: &disp,
+                template: (*index, first),
+                noise,
+                accel: (base, tip),
+            };
+            let bar = crate::study::runner::progress_bar(t.mine().len() as u64, true, "twin runs");
+            let twin = super::twin::run(req, rec, t, &|| bar.inc(1))?;
+            bar.finish_and_clear();
+            let p = out.write("twin.csv", twin.csv())?;
+            report.push_str(&twin.report());
+            report.push_str(&format!("  written: {}\n", p.display()));
+        }
+    } else if req.twin.is_some() {
+        report.push_str(
+            "\ntwin: not run (the analysis failed, or the record has fewer than 3 frames to \
+             measure the noise from)\n",
+        );
     }
     if let Some(a) = a {
         write_results(&out, req, a, &mut report)?;

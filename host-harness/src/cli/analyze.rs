@@ -2,8 +2,10 @@
 //! [`AnalyzeSpec::new`], the job run, its report printed.
 
 use super::args::{parse_bands, Bands, CentroidArgs, WelchArgs};
+use crate::analysis::twin::TwinSettings;
 use crate::analysis::Axis;
 use crate::spec::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
+use crate::study::runner::Shard;
 use std::path::PathBuf;
 
 /// Arguments of `host-harness analyze`.
@@ -162,6 +164,19 @@ pub struct Args {
     /// report and mac.csv, the reference into the shape plot.
     #[arg(long, value_name = "FILE.csv")]
     pub shape_reference: Option<PathBuf>,
+    /// With --accel and one target: re-render this recording N times (its stillest frame's
+    /// region moved along the tracked motion, the stated exposure, the frames' measured noise)
+    /// through the same centroid and analysis, and report each vision mode's amplitude bias
+    /// and its 95 % interval from the runs (JCGM 101; docs/method.md §3.10.3); writes twin.csv.
+    #[arg(long, value_name = "N", requires = "accel")]
+    pub twin: Option<usize>,
+    /// With --twin: the seed of run 0 (run r is seeded SEED + r).
+    #[arg(long, value_name = "SEED", requires = "twin", default_value_t = 1)]
+    pub twin_seed: u64,
+    /// With --twin: only the runs r with r mod N = I - 1 (a shard; the shards' twin.csv rows
+    /// together are the whole's).
+    #[arg(long, value_name = "I/N", requires = "twin")]
+    pub twin_shard: Option<String>,
 }
 
 /// `--axis`.
@@ -192,7 +207,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.retime,
         args.frame_range,
     )?;
-    let (spec, warnings) = AnalyzeSpec::new(input(args), rates).map_err(SpecError::into_anyhow)?;
+    let (spec, warnings) = AnalyzeSpec::new(input(args)?, rates).map_err(SpecError::into_anyhow)?;
     for w in warnings {
         eprintln!("warning: {}", crate::spec::SpecError::setting(w));
     }
@@ -202,8 +217,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// The flags as the library's [`AnalyzeInput`].
-fn input(args: Args) -> AnalyzeInput {
-    AnalyzeInput {
+fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
+    let shard = match &args.twin_shard {
+        Some(s) => Shard::parse(s).map_err(|e| {
+            crate::bad_input(format!(
+                "--twin-shard: {}",
+                e.to_string().replace("--shard: ", "")
+            ))
+        })?,
+        None => Shard::ALL,
+    };
+    Ok(AnalyzeInput {
         frames: FramesInput {
             frames: args.frames.clone(),
             retime: args.retime,
@@ -237,7 +261,12 @@ fn input(args: Args) -> AnalyzeInput {
         end_match: !args.no_end_match,
         accel_target: args.accel_target,
         shape_reference: args.shape_reference,
+        twin: args.twin.map(|runs| TwinSettings {
+            runs,
+            seed: args.twin_seed,
+            shard,
+        }),
         out: args.out,
         force: args.force,
-    }
+    })
 }

@@ -963,15 +963,15 @@ pub fn centroid_source(
     fps: f64,
     config: &CentroidConfig,
 ) -> anyhow::Result<(Vec<Centroid>, FrameDepth)> {
-    centroid_source_seen(source, fps, config, &mut |_| {})
+    centroid_source_seen(source, fps, config, &mut |_, _| {})
 }
 
-/// [`centroid_source`], every frame also shown to `seen` (in order, after its centroid).
+/// [`centroid_source`], every frame also shown to `seen` with its centroid (in order).
 pub fn centroid_source_seen(
     source: &FrameSource,
     fps: f64,
     config: &CentroidConfig,
-    seen: &mut dyn FnMut(&GreyFrame),
+    seen: &mut dyn FnMut(&GreyFrame, &Centroid),
 ) -> anyhow::Result<(Vec<Centroid>, FrameDepth)> {
     let mut out = Vec::new();
     let mut first: Option<(usize, usize, String)> = None;
@@ -989,8 +989,9 @@ pub fn centroid_source_seen(
             }
             Some(_) => {}
         }
-        out.push(frame.centroid(config, &label)?);
-        seen(frame);
+        let c = frame.centroid(config, &label)?;
+        seen(frame, &c);
+        out.push(c);
         Ok(())
     };
     source.for_each(fps, &mut one)?;

@@ -181,6 +181,58 @@ impl BlurRenderer {
         }
     }
 
+    /// A renderer of any image: `columns` (an odd number of them, each of the same length `H`,
+    /// the frame height) at displacement 0, drawn at frame columns `2 ..` (the frame is two
+    /// columns wider on either side, left at 0). The image is translated along `y` by the
+    /// phase shift, so it is taken as periodic in `y`: its last row should blend into its
+    /// first (what a twin of a recording pads it with). `None` for an even or empty set of
+    /// columns or a height below 2.
+    pub fn from_columns(columns: &[Vec<f32>]) -> Option<BlurRenderer> {
+        let height = columns.first()?.len();
+        if columns.len().is_multiple_of(2)
+            || height < 2
+            || columns.iter().any(|c| c.len() != height)
+        {
+            return None;
+        }
+        let half_cols = columns.len() / 2;
+        let mut planner = RealFftPlanner::<f32>::new();
+        let fwd = planner.plan_fft_forward(height);
+        let ifft = planner.plan_fft_inverse(height);
+        let bins = height / 2 + 1;
+        let spectra = columns
+            .iter()
+            .map(|c| {
+                let mut s = vec![Complex32::new(0.0, 0.0); bins];
+                let mut input = c.clone();
+                fwd.process(&mut input, &mut s)
+                    .expect("buffer sizes from the same plan");
+                s
+            })
+            .collect();
+        let scratch = vec![Complex32::new(0.0, 0.0); ifft.get_scratch_len()];
+        Some(BlurRenderer {
+            width: 2 * half_cols + 5,
+            height,
+            rest_x: half_cols + 2,
+            rest_y: 0.0,
+            half_cols,
+            symmetric: false,
+            spectra,
+            ifft,
+            ramp: vec![Complex32::new(0.0, 0.0); bins],
+            spec: vec![Complex32::new(0.0, 0.0); bins],
+            column: vec![0.0; height],
+            scratch,
+            seg: Segments::default(),
+            path: Vec::new(),
+            block: 1,
+            blocks: Vec::new(),
+            block_range: Vec::new(),
+            epsa_images: None,
+        })
+    }
+
     /// A renderer sized for the displacement range of `path` (px, positive down) with `path`
     /// set (see [`set_path`](Self::set_path) for `block`): what a camera looking at a target
     /// that follows `path` needs.

@@ -68,6 +68,8 @@ pub struct AnalyzeInput {
     pub accel_target: Option<usize>,
     /// `$shape_reference` (with an accelerometer and several targets).
     pub shape_reference: Option<PathBuf>,
+    /// `$twin` (with an accelerometer and one target): re-render the recording.
+    pub twin: Option<crate::analysis::twin::TwinSettings>,
     /// Output directory.
     pub out: PathBuf,
     /// Replace an earlier `analyze` output there.
@@ -161,6 +163,9 @@ fn with_reference(
     };
     let tracking = Tracking::new(input.tracking)?;
     let targets = targets_request(&tracking.targets, input.accel_target, input.shape_reference)?;
+    if let Some(t) = &input.twin {
+        check_twin(t, targets.is_some(), tracking.points_file.is_some())?;
+    }
     let request = Request {
         frames: input.frames.frames,
         retime: input.frames.retime,
@@ -194,6 +199,7 @@ fn with_reference(
         notes: rates.notes,
         points_file: tracking.points_file,
         targets,
+        twin: input.twin,
         out: input.out,
         force: input.force,
     };
@@ -234,6 +240,28 @@ fn check_exposure(exposure_ms: Option<f64>, fps: f64, compensate: bool) -> SpecR
     Ok(vec![why])
 }
 
+/// `$twin`: runs in range, one target.
+fn check_twin(
+    t: &crate::analysis::twin::TwinSettings,
+    several: bool,
+    points: bool,
+) -> SpecResult<()> {
+    use crate::analysis::twin::MAX_RUNS;
+    if !(1..=MAX_RUNS).contains(&t.runs) {
+        return Err(SpecError::setting(format!(
+            "$twin {}: runs must be 1 to {MAX_RUNS}",
+            t.runs
+        )));
+    }
+    if several || points {
+        return Err(SpecError::setting(
+            "$twin re-renders one target (the whole frame or its ROI); with several targets \
+             it is not available yet",
+        ));
+    }
+    Ok(())
+}
+
 /// Several targets and what the accelerometer is compared with.
 fn targets_request(
     targets: &Targets,
@@ -270,6 +298,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         ("$accel_target", input.accel_target.is_some()),
         ("$shape_reference", input.shape_reference.is_some()),
         ("$time_offset_s/$tick_offset", input.time_offset.is_some()),
+        ("$twin", input.twin.is_some()),
     ];
     if let Some((flag, _)) = needs_accel.iter().find(|(_, given)| *given) {
         return Err(SpecError::setting(format!(
