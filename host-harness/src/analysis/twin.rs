@@ -11,8 +11,9 @@
 //!   with a blend from its last row back to its first, so the phase-shift translation of
 //!   [`BlurRenderer`] (exact for a band-limited image) wraps nothing abrupt in.
 //! - **The motion**: the tracked coordinate along the axis, relative to that frame's; with a
-//!   stated exposure, divided by the box transfer `sinc(pi f Te)` up to E2PR 0.8 (the motion
-//!   before the recording's own blur); Fourier-interpolated to 64 steps a frame, linear
+//!   stated exposure, divided by the box transfer `sinc(pi f Te)` up to E2PR 0.5 (the motion
+//!   before the recording's own blur; beyond, the division would raise noise more than it
+//!   restores); Fourier-interpolated to 64 steps a frame, linear
 //!   between them; the whole path shifted by a sub-pixel offset drawn per run, uniform in
 //!   +-1/2 px (where the target sits on the pixel grid is no more known than that).
 //! - **The camera**: each frame the average of the image over the stated exposure centred on
@@ -52,6 +53,12 @@ use rayon::prelude::*;
 /// Nyquist frequency with 64 steps (with 8, 0.35 % at a rig mode of 32 Hz at 120 fps, which
 /// showed as a twin 0.35 % below the study).
 const STEPS: usize = 64;
+
+/// The motion's blur is divided out up to this E2PR (a gain of at most 1.57): beyond, the
+/// division would raise the record's noise and the sawtooth of its end-to-end line (which the
+/// Fourier interpolation takes as periodic) more than it restores; those lines keep the
+/// recording's blur (the ratio of a linear tracker does not depend on it).
+const DEBLUR_E2PR: f64 = 0.5;
 
 /// `--twin N [--twin-seed S] [--twin-shard I/N]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -229,7 +236,8 @@ fn image_sign(axis: Axis, invert: bool) -> f64 {
 
 /// The motion at [`STEPS`] steps a frame (`coord.len() * STEPS` values, step `k * STEPS` at
 /// frame `k`): the line through the record's ends taken out, the rest divided by the box
-/// transfer of `exposure_s` (up to E2PR 0.8) and Fourier-interpolated, the line put back.
+/// transfer of `exposure_s` (up to [`DEBLUR_E2PR`]) and Fourier-interpolated, the line put
+/// back.
 fn motion(coord: &[f64], fc: f64, exposure_s: f64) -> anyhow::Result<Vec<f64>> {
     let n = coord.len();
     if n < 4 {
@@ -248,9 +256,11 @@ fn motion(coord: &[f64], fc: f64, exposure_s: f64) -> anyhow::Result<Vec<f64>> {
     fwd.process(&mut x, &mut spec)
         .map_err(|e| anyhow::anyhow!("internal: {e}"))?;
     for (k, s) in spec.iter_mut().enumerate() {
-        let f = k as f64 * fc / n as f64;
-        if let Some(r) = BoxTransfer.ratio((f * exposure_s) as f32) {
-            *s /= f64::from(r);
+        let e2pr = k as f64 * fc / n as f64 * exposure_s;
+        if e2pr <= DEBLUR_E2PR {
+            if let Some(r) = BoxTransfer.ratio(e2pr as f32) {
+                *s /= f64::from(r);
+            }
         }
     }
     let m = n * STEPS;
@@ -651,18 +661,18 @@ mod tests {
 
     #[test]
     fn the_motion_is_interpolated_and_its_blur_divided_out() {
-        // a sinusoid at 10 Hz sampled at 100 fps, blurred by a 20 ms box (E2PR 0.2)
+        // a cosine at 10 Hz sampled at 100 fps over whole periods, symmetric about the record's
+        // middle (its ends equal: no end-to-end line), blurred by a 20 ms box (E2PR 0.2)
         let (fc, f, te) = (100.0, 10.0, 0.02);
         let n = 200;
+        let mid = (n - 1) as f64 / 2.0;
         let blur = (std::f64::consts::PI * f * te).sin() / (std::f64::consts::PI * f * te);
-        let coord: Vec<f64> = (0..n)
-            .map(|k| 3.0 * blur * (std::f64::consts::TAU * f * k as f64 / fc).sin())
-            .collect();
+        let wave = |t: f64| 3.0 * (std::f64::consts::TAU * f * (t - mid / fc)).cos();
+        let coord: Vec<f64> = (0..n).map(|k| blur * wave(k as f64 / fc)).collect();
         let m = motion(&coord, fc, te).unwrap();
         assert_eq!(m.len(), n * STEPS);
         for (i, v) in m.iter().enumerate() {
-            let t = i as f64 / (fc * STEPS as f64);
-            let want = 3.0 * (std::f64::consts::TAU * f * t).sin();
+            let want = wave(i as f64 / (fc * STEPS as f64));
             // the transfer is firmware-core's, in f32
             assert!((v - want).abs() < 1e-6, "{i}: {v} {want}");
         }
