@@ -684,7 +684,7 @@ mod tests {
                 // Weighted: the linearisation leaves out only the pixels near T entering and
                 // leaving (a few per cent). Binary: its floor from one frame rests on the few
                 // edge pixels within a noise sd or two of T there, averaged over a shift along
-                // their gradient; the spread pooled over places differs from it by 5-14 %
+                // their gradient; the spread pooled over places differs from it by 3-16 %
                 let tol = match mode {
                     Mode::Weighted => 0.05,
                     Mode::Binary => 0.2,
