@@ -59,6 +59,11 @@ pub struct FrfModeUncertainty {
     pub amplitude: Option<Interval>,
     /// The smoothed fit's damping ratio (more than one segment).
     pub damping_fit: Option<f64>,
+    /// The smoothed fit's natural frequency, Hz (more than one segment): what several targets'
+    /// `modes.csv` reports as `f_hz`.
+    pub f_fit: Option<f64>,
+    /// Of `f_fit`, given with the damping's interval.
+    pub f_fit_interval: Option<Interval>,
     /// The window's smoothing at the picked line: `|(K * T_fit)(f_k)| / |T_fit(f_k)|`
     /// (below 1: the estimate is low).
     pub smoothing: Option<f64>,
@@ -104,6 +109,7 @@ pub fn of_system(
         .collect();
     for (o, f) in out.iter_mut().zip(&fits) {
         o.damping_fit = f.map(|f| f.damping);
+        o.f_fit = f.map(|f| f.f_hz);
         o.smoothing = f.map(|f| f.smoothing);
     }
     let groups = groups.min(segments);
@@ -116,7 +122,8 @@ pub fn of_system(
         }
         return Ok(out);
     }
-    let mut reps: Vec<[Vec<f64>; 3]> = vec![Default::default(); modes.len()];
+    // per mode: picked line, damping, |T| at the line, fitted frequency
+    let mut reps: Vec<[Vec<f64>; 4]> = vec![Default::default(); modes.len()];
     let mut failed = vec![false; modes.len()];
     let mut sizes = Vec::with_capacity(groups);
     for g in 0..groups {
@@ -138,6 +145,7 @@ pub fn of_system(
                 Some(f) => {
                     reps[i][1].push(f.damping);
                     reps[i][2].push(f.at_line);
+                    reps[i][3].push(f.f_hz);
                 }
                 None => failed[i] = true,
             }
@@ -176,6 +184,7 @@ pub fn of_system(
                 if z.is_some_and(|z| z.lo > 0.0) {
                     o.damping = z;
                     o.amplitude = jackknife_sized(f.at_line, &reps[i][2], &sizes);
+                    o.f_fit_interval = jackknife_sized(f.f_hz, &reps[i][3], &sizes);
                 } else {
                     notes.push(format!(
                         "{} mode {}: its damping is not determined (the 95 % interval reaches \
@@ -245,6 +254,7 @@ fn smoothed(
     let t = model(f).norm();
     (t > 0.0).then(|| Fitted {
         damping: fit.pole.damping,
+        f_hz: fit.pole.f_hz,
         smoothing: kernel.apply(model, f).norm() / t,
         at_line: t,
     })
@@ -255,6 +265,8 @@ fn smoothed(
 struct Fitted {
     /// Damping ratio.
     damping: f64,
+    /// Natural frequency, Hz.
+    f_hz: f64,
     /// `|(K * T)(f_k)| / |T(f_k)|` at the picked line.
     smoothing: f64,
     /// `|T(f_k)|`: the FRF at the picked line, by the fit.

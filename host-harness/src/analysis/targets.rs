@@ -9,7 +9,9 @@
 //! ([`super::modal`]): the accelerometer's and each target's pole (frequency, damping) and the
 //! shape across targets from one pole fitted to all their FRFs.
 
+use super::frf_uncertainty::FrfModeUncertainty;
 use super::modal::{self, FrfForm};
+use super::oma::uncertainty::Interval;
 use super::{Analysis, Displacement, DisplacementSettings, Settings};
 use crate::bad_input;
 use crate::export::analysis::Spectrum;
@@ -380,6 +382,14 @@ pub fn analyze_targets(
             )?),
             _ => None,
         });
+        if let Ok(an) = &mut a {
+            an.intervals = Some(super::frf_uncertainty::of_analysis(
+                an,
+                (base, tip),
+                compensate.map(|r| r.exposure_s),
+                super::oma::uncertainty::GROUPS,
+            )?);
+        }
         displacements.push(d.unwrap_or_else(|_| Displacement {
             mm: vec![0.0; c.len()],
             lost: vec![true; c.len()],
@@ -426,36 +436,79 @@ fn band_modes(
     (acc_frf, acc_modes): (&crate::chain::frf::Frf, &[crate::chain::frf::PickedMode]),
     analyses: &[Result<Analysis, String>],
 ) -> Vec<TargetMode> {
-    let fit = |f: &crate::chain::frf::Frf| {
-        modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
+    // the pole: the plain fit's, or with several segments the smoothed fit's of the intervals
+    // (the window's resolution bias removed; the intervals are of it), when the plain fit is
+    // resolvable
+    let fit = |f: &crate::chain::frf::Frf, u: Option<&FrfModeUncertainty>| {
+        let plain = modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
             .ok()
-            .filter(|m| resolvable(&m.pole, band, &f.freq_hz))
+            .filter(|m| resolvable(&m.pole, band, &f.freq_hz))?;
+        Some(match u {
+            // enough segments for intervals but none of the damping: the mode is narrower
+            // than a segment's line (or the fit failed), and no fit's damping is to be trusted
+            Some(FrfModeUncertainty {
+                f_fit: Some(fh),
+                damping: None,
+                ..
+            }) if f.segments as usize >= super::frf_uncertainty::MIN_SEGMENTS => (*fh, None),
+            Some(FrfModeUncertainty {
+                f_fit: Some(fh),
+                damping_fit: Some(z),
+                ..
+            }) if f.segments > 1 => (*fh, Some(*z)),
+            _ => (plain.pole.f_hz, Some(plain.pole.damping)),
+        })
     };
-    let a = fit(acc_frf);
+    let cells = |i: &Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
+    let row_intervals = |u: Option<&FrfModeUncertainty>| {
+        u.map_or([None; 3], |u| {
+            [
+                cells(&u.f_fit_interval),
+                cells(&u.damping),
+                cells(&u.amplitude),
+            ]
+        })
+    };
+    let first = analyses.iter().find_map(|a| a.as_ref().ok());
+    let acc_u = first
+        .and_then(|a| a.intervals.as_ref())
+        .and_then(|i| i.acc.get(b));
+    let a = fit(acc_frf, acc_u);
     let mut modes = vec![TargetMode {
         target: 0,
         mode: b + 1,
         band_hz: band,
-        f_hz: a.as_ref().map(|m| m.pole.f_hz),
+        f_hz: a.map(|m| m.0),
         amplitude: acc_modes[b].amplitude,
-        damping: a.as_ref().map(|m| m.pole.damping),
+        damping: a.and_then(|m| m.1),
         e2pr: None,
+        intervals: if a.is_some() {
+            row_intervals(acc_u)
+        } else {
+            [None; 3]
+        },
     }];
     for (t, an) in analyses.iter().enumerate() {
         let Ok(an) = an else { continue };
-        let v = fit(&an.vis_frf);
+        let vis_u = an.intervals.as_ref().and_then(|i| i.vis.get(b));
+        let v = fit(&an.vis_frf, vis_u);
         modes.push(TargetMode {
             target: t + 1,
             mode: b + 1,
             band_hz: band,
-            f_hz: v.as_ref().map(|m| m.pole.f_hz),
+            f_hz: v.map(|m| m.0),
             amplitude: an.vis_modes[b].amplitude,
-            damping: v.as_ref().map(|m| m.pole.damping),
+            damping: v.and_then(|m| m.1),
+            intervals: if v.is_some() {
+                row_intervals(vis_u)
+            } else {
+                [None; 3]
+            },
             // at the fitted frequency (the picked bin's when the fit failed)
             e2pr: an.vis_modes[b].e2pr.map(|e| {
                 let picked = an.vis_modes[b].f_hz;
-                match v.as_ref() {
-                    Some(m) if picked > 0.0 => e / picked * m.pole.f_hz,
+                match v {
+                    Some(m) if picked > 0.0 => e / picked * m.0,
                     _ => e,
                 }
             }),

@@ -306,6 +306,7 @@ fn report(
             m.target, m.mode, m.amplitude
         );
     }
+    intervals_text(&mut s, a);
     colocated(&mut s, a, accel_target);
     shapes_text(&mut s, a, tracks);
     s.push('\n');
@@ -329,6 +330,60 @@ fn report(
         );
     }
     s
+}
+
+/// The 95 % intervals of the rows (modes.csv's interval columns), or why there are none.
+fn intervals_text(s: &mut String, a: &TargetAnalysis) {
+    let first = a
+        .analyses
+        .iter()
+        .flatten()
+        .find_map(|an| an.intervals.as_ref());
+    let Some(i) = first else { return };
+    if i.groups == 0 {
+        let _ = writeln!(
+            s,
+            "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
+             no spread to measure them from. --nperseg (a quarter of the record or less, \
+             half-overlapped by default) gives them.",
+            i.segments,
+            super::frf_uncertainty::MIN_SEGMENTS
+        );
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\n95 % intervals (statistical: the jackknife over {} groups of the {} Welch segments; \
+         f_hz and damping of the modal fit of the smoothed model, |FRF| at the picked line):",
+        i.groups, i.segments
+    );
+    for m in &a.modes {
+        let [f, z, amp] = m.intervals;
+        let mut parts = Vec::new();
+        if let (Some(v), Some((_, lo, hi))) = (m.f_hz, f) {
+            parts.push(format!("f = {v:.4} Hz ({lo:.4} to {hi:.4})"));
+        }
+        if let (Some(v), Some((_, lo, hi))) = (m.damping, z) {
+            parts.push(format!("damping = {v:.4} ({lo:.4} to {hi:.4})"));
+        }
+        if let Some((_, lo, hi)) = amp {
+            parts.push(format!("|FRF| {:.4} to {:.4}", lo, hi));
+        }
+        let who = if m.target == 0 {
+            "accelerometer".to_string()
+        } else {
+            format!("target {}", m.target)
+        };
+        if parts.is_empty() {
+            let _ = writeln!(
+                s,
+                "  {who} mode {}: none (not resolved, or the fit failed)",
+                m.mode
+            );
+        } else {
+            let _ = writeln!(s, "  {who} mode {}: {}", m.mode, parts.join(", "));
+        }
+    }
 }
 
 /// Each band's shape in the report: its pole and every target's component (`-` for a failed

@@ -4,7 +4,7 @@
 
 use super::analysis::{push_compensation_row, round_e2pr, CompensationRow, Spectrum};
 pub use super::analysis::{tracks_displacement_csv as displacement_csv, Track};
-use super::opt;
+use super::{opt, push_intervals, INTERVAL_COLUMNS};
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
@@ -37,20 +37,27 @@ pub struct ModeRow {
     pub damping: Option<f64>,
     /// E2PR (`None` without an exposure).
     pub e2pr: Option<f64>,
+    /// The standard uncertainty and 95 % interval (`u`, `lo`, `hi`) of the frequency, the
+    /// damping and the amplitude, where estimated.
+    pub intervals: [Option<(f64, f64, f64)>; 3],
 }
 
 /// `modes.csv`: `system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method`
 /// (`system` `accelerometer` for target 0, else `vision`; empty cells where absent; `method`
-/// `h1`: the modes of the FRFs; output-only analysis writes the same columns).
+/// `h1`: the modes of the FRFs; output-only analysis writes the same columns), then
+/// [`INTERVAL_COLUMNS`] (empty where not estimated).
 pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
-    let mut s = String::from(MODES_HEADER);
+    let mut s = String::from(MODES_HEADER.trim_end());
+    s.push(',');
+    s.push_str(INTERVAL_COLUMNS);
+    s.push('\n');
     for m in rows {
         let system = if m.target == 0 {
             "accelerometer"
         } else {
             "vision"
         };
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{system},{},{},{},{},{},{},{},{},h1",
             m.target,
@@ -62,6 +69,8 @@ pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
             opt(m.damping),
             opt(m.e2pr.map(round_e2pr))
         );
+        push_intervals(&mut s, &m.intervals);
+        s.push('\n');
     }
     s.into_bytes()
 }
