@@ -174,16 +174,21 @@ pub fn of_modes(
     let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
     let ssi = ssi_replicates(channels, s, modes, groups)?;
     for (m, u) in modes.iter().zip(out.iter_mut()) {
-        let reps: Option<Vec<Replicate>> = match m.method {
+        // the replicates, and the sizes of the groups they leave out (SSI's blocks of samples
+        // are equal to within one sample: the plain jackknife)
+        let reps: Option<(Vec<Replicate>, Option<&[usize]>)> = match m.method {
             Method::Fdd | Method::Efdd => {
                 let p = peaks
                     .iter()
                     .enumerate()
                     .position(|(i, p)| p.mode_number(i) == m.mode);
                 p.and_then(|p| {
-                    spectral
-                        .as_ref()
-                        .map(|r| r.iter().map(|g| g[p].clone()).collect())
+                    spectral.as_ref().map(|(r, sizes)| {
+                        (
+                            r.iter().map(|g| g[p].clone()).collect(),
+                            Some(sizes.as_slice()),
+                        )
+                    })
                 })
             }
             Method::Ssi => ssi.as_ref().and_then(|r| {
@@ -191,11 +196,15 @@ pub fn of_modes(
                     .iter()
                     .filter(|x| x.method == Method::Ssi)
                     .position(|x| x.mode == m.mode)?;
-                Some(r.iter().map(|g| g[i].clone()).collect())
+                Some((r.iter().map(|g| g[i].clone()).collect(), None))
             }),
         };
-        let Some(reps) = reps else {
+        let Some((reps, sizes)) = reps else {
             continue;
+        };
+        let jackknife = |a: f64, v: &[f64]| match sizes {
+            Some(sz) => jackknife_sized(a, v, sz),
+            None => jackknife(a, v),
         };
         let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
             reps.iter().map(f).collect()
@@ -272,14 +281,15 @@ fn shape_u(shape: &[num_complex::Complex64], reps: &[Replicate]) -> Option<Vec<f
 }
 
 /// Per group left out, per peak: the FDD amplitude and shape at the peak's line, and EFDD's
-/// fit of the replicate's bell (same reference, line and fences). `None` with fewer Welch
-/// segments than groups.
+/// fit of the replicate's bell (same reference, line and fences); and the segments in each
+/// group left out (14 segments in 10 groups: four of two). `None` with fewer Welch segments
+/// than groups.
 fn spectral_replicates(
     (channels, whole): (&[Vec<f64>], &Csd),
     s: &OmaSettings,
     (peaks, starts): (&[Peak], &[Start]),
     groups: usize,
-) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
+) -> anyhow::Result<Option<(Vec<Vec<Replicate>>, Vec<usize>)>> {
     // as many groups as segments on a short record (overlapping segments share samples, so
     // a group of one is not quite independent of its neighbours), and none under four
     let segments = whole.segments;
@@ -289,8 +299,10 @@ fn spectral_replicates(
     }
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
     let mut out = Vec::with_capacity(groups);
+    let mut sizes = Vec::with_capacity(groups);
     for g in 0..groups {
         let range = group(g, groups, segments);
+        sizes.push(range.len());
         let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
         let replicate: Csd = whole.without(&part);
         let svd: Svd = fdd::decompose(&replicate)?;
@@ -333,7 +345,7 @@ fn spectral_replicates(
             .collect();
         out.push(reps);
     }
-    Ok(Some(out))
+    Ok(Some((out, sizes)))
 }
 
 /// Per block of the record left out, per SSI mode of `modes` (in their order): the replicate's
