@@ -7,6 +7,7 @@ mod util;
 mod adversarial;
 mod analyze;
 mod centroid;
+mod daq;
 mod formats;
 mod hostile;
 mod modal;
@@ -125,7 +126,7 @@ const ROOMS: [&[&str]; 12] = [
     ],
     &["model"],
     &["imaging"],
-    &["frames"],
+    &["frames", "daq"],
     &["chain"],
     &["study"],
     &["recording"],

@@ -36,6 +36,7 @@ pub mod chain;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod csvio;
+pub mod daq;
 pub mod export;
 pub mod failpoint;
 pub mod frames;

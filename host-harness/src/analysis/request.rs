@@ -5,6 +5,7 @@
 
 use super::track_run::Targets;
 use super::{DisplacementSettings, Settings};
+use crate::study::runner::Shard;
 use firmware_core::centroid::CentroidConfig;
 use std::path::{Path, PathBuf};
 
@@ -66,7 +67,7 @@ pub struct Request {
     /// Several targets, or one.
     pub targets: Option<TargetsRequest>,
     /// `--twin`: re-render the recording (one target only).
-    pub twin: Option<super::twin::TwinSettings>,
+    pub twin: Option<TwinSettings>,
     /// Output directory, and whether an earlier analysis there may be replaced.
     pub out: PathBuf,
     /// `--force`.
@@ -93,4 +94,27 @@ pub struct Outcome {
     pub report: String,
     /// `Err` when the analysis failed (bad input: exit 2).
     pub result: anyhow::Result<()>,
+}
+
+/// `--twin N [--twin-seed S] [--twin-shard I/N]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TwinSettings {
+    /// Runs in all (1 ..= [`MAX_RUNS`]).
+    pub runs: usize,
+    /// Seed of run 0; run `r` is seeded `seed + r`.
+    pub seed: u64,
+    /// This shard's runs (`Shard::ALL`: every run).
+    pub shard: Shard,
+}
+
+/// Most runs one request may ask for.
+pub const MAX_RUNS: usize = 100_000;
+
+impl TwinSettings {
+    /// The runs of this shard.
+    pub fn mine(&self) -> Vec<usize> {
+        (0..self.runs)
+            .filter(|&r| self.shard.contains(r as u64))
+            .collect()
+    }
 }

@@ -60,28 +60,7 @@ const STEPS: usize = 64;
 /// recording's blur (the ratio of a linear tracker does not depend on it).
 const DEBLUR_E2PR: f64 = 0.5;
 
-/// `--twin N [--twin-seed S] [--twin-shard I/N]`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct TwinSettings {
-    /// Runs in all (1 ..= [`MAX_RUNS`]).
-    pub runs: usize,
-    /// Seed of run 0; run `r` is seeded `seed + r`.
-    pub seed: u64,
-    /// This shard's runs (`Shard::ALL`: every run).
-    pub shard: Shard,
-}
-
-/// Most runs one request may ask for.
-pub const MAX_RUNS: usize = 100_000;
-
-impl TwinSettings {
-    /// The runs of this shard.
-    pub fn mine(&self) -> Vec<usize> {
-        (0..self.runs)
-            .filter(|&r| self.shard.contains(r as u64))
-            .collect()
-    }
-}
+pub use super::request::{TwinSettings, MAX_RUNS};
 
 /// One vision mode of one run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -139,7 +118,7 @@ pub struct Recording<'a> {
 /// Runs this shard's runs of the twin of `rec` as `req` analysed it; `tick` is called after
 /// each run (a progress bar).
 pub fn run(
-    req: &super::run::Request,
+    req: &super::request::Request,
     rec: Recording<'_>,
     settings: TwinSettings,
     tick: &(dyn Fn() + Sync),
@@ -390,7 +369,7 @@ impl Scene {
 
 /// One run: its sub-pixel offset and the vision modes of its analysis.
 fn one_run(
-    req: &super::run::Request,
+    req: &super::request::Request,
     (scene, motion, config): (&Scene, &[f64], &CentroidConfig),
     (seed, sigma, exposure_s): (u64, f64, f64),
     (base, tip): (&[f64], &[f64]),
@@ -469,7 +448,7 @@ fn one_run(
 /// The vision modes of the chain on a coordinate record (px, image axis growing, at the
 /// frames' instants), without imaging.
 fn analyse(
-    req: &super::run::Request,
+    req: &super::request::Request,
     coord: &[f64],
     compensate: bool,
     accel: (&[f64], &[f64]),
@@ -493,7 +472,7 @@ fn analyse(
 /// The vision modes of `req`'s chain on `disp`, compensated as the recording's were when
 /// `compensate`.
 fn analyse_disp(
-    req: &super::run::Request,
+    req: &super::request::Request,
     disp: &Displacement,
     compensate: bool,
     (base, tip): (&[f64], &[f64]),

@@ -280,6 +280,9 @@ fn shape_u(shape: &[num_complex::Complex64], reps: &[Replicate]) -> Option<Vec<f
     )
 }
 
+/// Per group left out its replicates (one per peak), and the segments of each group.
+type SpectralReplicates = (Vec<Vec<Replicate>>, Vec<usize>);
+
 /// Per group left out, per peak: the FDD amplitude and shape at the peak's line, and EFDD's
 /// fit of the replicate's bell (same reference, line and fences); and the segments in each
 /// group left out (14 segments in 10 groups: four of two). `None` with fewer Welch segments
@@ -289,7 +292,7 @@ fn spectral_replicates(
     s: &OmaSettings,
     (peaks, starts): (&[Peak], &[Start]),
     groups: usize,
-) -> anyhow::Result<Option<(Vec<Vec<Replicate>>, Vec<usize>)>> {
+) -> anyhow::Result<Option<SpectralReplicates>> {
     // as many groups as segments on a short record (overlapping segments share samples, so
     // a group of one is not quite independent of its neighbours), and none under four
     let segments = whole.segments;
