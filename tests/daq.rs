@@ -1,6 +1,6 @@
 //! The DAQ readers against their writers' own readings.
 
-use host_harness::daq::lvm;
+use host_harness::daq::{lvm, uff};
 use std::path::Path;
 
 /// Letters and digits only: the two readers decode a non-UTF-8 byte differently (lvm_read drops
@@ -76,4 +76,65 @@ fn labview_files_read_as_lvm_read_reads_them() {
     let f = short.channel("Excitation (Trigger)", "short.lvm").unwrap();
     assert_eq!(f.rate_hz(), Some(25_600.0));
     assert_eq!(f.unit.as_deref(), Some("Newtons"));
+}
+
+/// Every dataset 58 pyuff wrote (tests/data/uff: time records in ASCII, binary 58b and single
+/// precision, a complex FRF on an uneven abscissa; scripts/uff_fixtures.py) read by `daq::uff`
+/// gives pyuff's own reading of it, value for value (tests/data/uff/expected.json).
+#[test]
+fn universal_files_read_as_pyuff_reads_them() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/uff");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+    let files = expected["files"].as_object().unwrap();
+    assert_eq!(files.len(), 4);
+    let mut compared = 0;
+    let num = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    for (name, sets) in files {
+        let got = uff::read_complex(&dir.join(name)).unwrap();
+        let sets = sets.as_array().unwrap();
+        assert_eq!(got.len(), sets.len(), "{name}");
+        for (f, want) in got.iter().zip(sets) {
+            let int = |k: &str| want[k].as_i64().unwrap();
+            assert_eq!(f.func_type, int("func_type"), "{name}");
+            assert_eq!(f.response, (int("rsp_node"), int("rsp_dir")), "{name}");
+            assert_eq!(f.reference, (int("ref_node"), int("ref_dir")), "{name}");
+            let (x, re, im) = (num(&want["x"]), num(&want["re"]), num(&want["im"]));
+            assert_eq!(f.data.len(), re.len(), "{name}");
+            let xs: Vec<f64> = match (&f.x, f.even) {
+                (Some(x), _) => x.clone(),
+                (None, Some((x0, dx))) => (0..f.data.len()).map(|i| x0 + i as f64 * dx).collect(),
+                _ => unreachable!(),
+            };
+            assert_eq!(xs, x, "{name}: abscissa");
+            for (k, c) in f.data.iter().enumerate() {
+                assert_eq!((c.re, c.im), (re[k], im[k]), "{name} point {k}");
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(compared, 3 * 2 * 300 + 7);
+    // as channels: the time records by NODE:DIR, the force's unit and rate from the file (its
+    // increment is written to six digits, 4.88281e-4 s for 1/2048: 2048.003 Hz)
+    let r = uff::read(&dir.join("time_binary.uff")).unwrap();
+    let force = r.channel("1:3", "time_binary.uff").unwrap();
+    assert_eq!(force.unit.as_deref(), Some("N"));
+    assert!((force.rate_hz().unwrap() - 2048.0).abs() < 0.01);
+    assert_eq!(r.channel("2:3", "t").unwrap().values.len(), 300);
+    let e = format!("{:#}", uff::read(&dir.join("frf_uneven.uff")).unwrap_err());
+    assert!(
+        e.contains("`3:-2` is complex (function type 4), not a time record"),
+        "{e}"
+    );
+    // a file cut inside its data names the line
+    let text = std::fs::read_to_string(dir.join("time_ascii.uff")).unwrap();
+    let cut: String = text.lines().take(40).map(|l| format!("{l}\n")).collect();
+    let e = format!("{:#}", uff::parse(cut.as_bytes(), "cut.uff").unwrap_err());
+    assert!(e.contains("cut.uff: line 40: dataset 58 ends after"), "{e}");
 }
