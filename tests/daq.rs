@@ -1,6 +1,6 @@
 //! The DAQ readers against their writers' own readings.
 
-use host_harness::daq::{lvm, uff};
+use host_harness::daq::{lvm, tdms, uff};
 use std::path::Path;
 
 /// Letters and digits only: the two readers decode a non-UTF-8 byte differently (lvm_read drops
@@ -137,4 +137,46 @@ fn universal_files_read_as_pyuff_reads_them() {
     let cut: String = text.lines().take(40).map(|l| format!("{l}\n")).collect();
     let e = format!("{:#}", uff::parse(cut.as_bytes(), "cut.uff").unwrap_err());
     assert!(e.contains("cut.uff: line 40: dataset 58 ends after"), "{e}");
+}
+
+/// A TDMS file npTDMS wrote (tests/data/tdms/hammer.tdms: two groups, float64, float32, int16
+/// and uint8 channels over three segments, one of them without the second group;
+/// scripts/tdms_fixtures.py) read by `daq::tdms` gives npTDMS's own reading, value for value,
+/// with the sample interval and unit of its properties; a name two groups share is
+/// `group/channel`.
+#[test]
+fn tdms_files_read_as_nptdms_reads_them() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/tdms");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+    let want = expected["files"]["hammer.tdms"].as_array().unwrap();
+    let r = tdms::read(&dir.join("hammer.tdms")).unwrap();
+    let mut compared = 0;
+    for c in want {
+        let (g, ch) = (c["group"].as_str().unwrap(), c["channel"].as_str().unwrap());
+        let name = if ch == "force" {
+            format!("{g}/{ch}")
+        } else {
+            ch.to_string()
+        };
+        let got = r.channel(&name, "hammer.tdms").unwrap();
+        let values: Vec<f64> = c["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(got.values, values, "{name}");
+        compared += values.len();
+        assert_eq!(got.delta_x, c["wf_increment"].as_f64(), "{name}");
+        assert_eq!(got.unit.as_deref(), c["unit"].as_str(), "{name}");
+    }
+    assert_eq!(compared, 400 + 400 + 60 + 60);
+    let e = format!("{:#}", r.channel("force", "hammer.tdms").unwrap_err());
+    assert!(e.contains("no channel `force`"), "{e}");
+    let e = format!(
+        "{:#}",
+        tdms::parse(b"TDSm\x0e\0\0\0", "cut.tdms").unwrap_err()
+    );
+    assert!(e.contains("cut.tdms"), "{e}");
 }
