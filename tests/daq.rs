@@ -1,6 +1,6 @@
 //! The DAQ readers against their writers' own readings.
 
-use host_harness::daq::{lvm, tdms, uff};
+use host_harness::daq::{lvm, npy, tdms, uff};
 use std::path::Path;
 
 /// Letters and digits only: the two readers decode a non-UTF-8 byte differently (lvm_read drops
@@ -179,4 +179,59 @@ fn tdms_files_read_as_nptdms_reads_them() {
         tdms::parse(b"TDSm\x0e\0\0\0", "cut.tdms").unwrap_err()
     );
     assert!(e.contains("cut.tdms"), "{e}");
+}
+
+/// NumPy arrays NumPy wrote (tests/data/npy: pyidi's displacement shape (3, 40, 2) in float64, a
+/// big-endian float32 array in Fortran order, int16; scripts/npy_fixtures.py) read by
+/// `daq::npy` give NumPy's values, element for element, as the channels the shapes name.
+#[test]
+fn npy_arrays_read_as_numpy_reads_them() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/npy");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+    let mut compared = 0;
+    for (name, want) in expected.as_object().unwrap() {
+        let shape: Vec<usize> = want["shape"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as usize)
+            .collect();
+        let values: Vec<f64> = want["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let r = npy::read(&dir.join(name)).unwrap();
+        let ch = &r.segments[0];
+        // C order of the expected values: element [p][i][k] at (p * n + i) * 2 + k
+        match shape.as_slice() {
+            [n] => {
+                assert_eq!(ch[0].values.len(), *n, "{name}");
+                assert_eq!(ch[0].values, values, "{name}");
+            }
+            [p, n] => {
+                for j in 0..*p {
+                    assert_eq!(ch[j].name, format!("point {}", j + 1));
+                    assert_eq!(ch[j].values, values[j * n..(j + 1) * n], "{name}");
+                }
+            }
+            [p, n, 2] => {
+                for j in 0..*p {
+                    for (k, axis) in ["y", "x"].iter().enumerate() {
+                        let c = &ch[2 * j + k];
+                        assert_eq!(c.name, format!("point {} {axis}", j + 1));
+                        let want: Vec<f64> = (0..*n).map(|i| values[(j * n + i) * 2 + k]).collect();
+                        assert_eq!(c.values, want, "{name}");
+                    }
+                }
+            }
+            other => panic!("{other:?}"),
+        }
+        compared += values.len();
+    }
+    assert_eq!(compared, 240 + 50 + 30);
+    let e = format!("{:#}", npy::parse(b"hello world!", "x.npy").unwrap_err());
+    assert!(e.contains("x.npy: not a NumPy .npy file"), "{e}");
 }
