@@ -1,8 +1,10 @@
 //! Records of a data acquisition system (a DAQ): the force of a hammer or shaker and the
 //! accelerometers, sampled at their own rate, as channels by name. Readers of the files
 //! laboratories write: LabVIEW measurement files ([`lvm`]), NI TDMS files ([`tdms`]) and
-//! universal files' dataset 58 ([`uff`]); and NumPy arrays ([`npy`], pyidi's displacements). Errors name the file, the line and the channel.
+//! universal files' dataset 58 ([`uff`]), CSV with an optional time column ([`csv`](mod@csv));
+//! and NumPy arrays ([`npy`], pyidi's displacements). Errors name the file, the line and the channel.
 
+pub mod csv;
 pub mod lvm;
 pub mod npy;
 pub mod tdms;
