@@ -147,15 +147,17 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
                 };
                 match f[0] {
                     "Channels" => {
-                        h.channels =
-                            f.get(1)
-                                .and_then(|v| v.trim().parse().ok())
-                                .ok_or_else(|| {
-                                    bad_input(format!(
-                                        "{file}: line {}: `Channels` without a count",
-                                        i + 1
-                                    ))
-                                })?;
+                        h.channels = f
+                            .get(1)
+                            .and_then(|v| v.trim().parse().ok())
+                            // each channel takes at least a byte of the column names
+                            .filter(|n| *n <= text.len())
+                            .ok_or_else(|| {
+                                bad_input(format!(
+                                    "{file}: line {}: `Channels` without a plausible count",
+                                    i + 1
+                                ))
+                            })?;
                     }
                     "Y_Unit_Label" => {
                         h.units = (0..h.channels)
@@ -204,6 +206,14 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
                 )));
             }
             let f: Vec<&str> = names.split(sep).collect();
+            if column(xcols, h.channels - 1) >= f.len() {
+                return Err(bad_input(format!(
+                    "{file}: line {}: the header states {} channels, the column names hold \
+                     fewer",
+                    i + 1,
+                    h.channels
+                )));
+            }
             h.names = (0..h.channels)
                 .map(|k| {
                     f.get(column(xcols, k))

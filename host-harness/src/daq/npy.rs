@@ -82,8 +82,12 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
             "data type `{descr}` (floats of 4 or 8 bytes and integers are read)"
         )));
     }
-    let count: usize = shape.iter().product();
     let data = &bytes[start + len..];
+    let count = shape
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .filter(|c| c.checked_mul(size).is_some())
+        .ok_or_else(|| bad(&format!("a {shape:?} array: its size overflows")))?;
     if data.len() < count * size {
         return Err(bad(&format!(
             "holds {} bytes of data for a {shape:?} array of {size}-byte values ({} needed)",

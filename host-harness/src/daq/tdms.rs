@@ -291,10 +291,26 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                     }
                 }
             }
-            let chunk: usize = chans
+            // sizes from the file: no overflow, no more than the segment holds
+            let chunk = chans
                 .iter()
-                .map(|(_, i)| size_of(i.dtype).unwrap_or(0) * i.count as usize)
-                .sum();
+                .try_fold(0usize, |acc, (_, i)| {
+                    usize::try_from(i.count)
+                        .ok()
+                        .and_then(|n| n.checked_mul(size_of(i.dtype).unwrap_or(0)))
+                        .and_then(|b| acc.checked_add(b))
+                })
+                .ok_or_else(|| {
+                    bad_input(format!(
+                        "{file}: segment {seg}: its channels' value counts overflow"
+                    ))
+                })?;
+            if toc & TOC_INTERLEAVED != 0 && chans.windows(2).any(|w| w[0].1.count != w[1].1.count)
+            {
+                return Err(bad_input(format!(
+                    "{file}: segment {seg}: interleaved channels of different lengths"
+                )));
+            }
             if chans.iter().any(|(_, i)| i.dtype == 0x20) {
                 return Err(bad_input(format!(
                     "{file}: segment {seg} holds a string channel among its raw data; not read"

@@ -209,10 +209,14 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Vec<Function>> {
         };
         // per point: an abscissa value when uneven, then the real (and imaginary) parts
         let per_point = usize::from(!even) + 1 + usize::from(complex);
-        let count = n * per_point;
+        // the header's count drives no allocation before the values are there to read
+        let count = n
+            .checked_mul(per_point)
+            .filter(|c| *c <= bytes.len())
+            .ok_or_else(|| err(l7, format!("{n} points: more than the file can hold")))?;
         let values: Vec<f64> = if binary {
             let size = if double { 8 } else { 4 };
-            if n_bytes < count * size || lines.at + n_bytes > bytes.len() {
+            if n_bytes < count * size || lines.at.saturating_add(n_bytes) > bytes.len() {
                 return Err(err(
                     start,
                     format!(
