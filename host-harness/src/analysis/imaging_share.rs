@@ -52,6 +52,9 @@ pub struct FrameNoise {
 /// Pixels of one triple taken into the estimate (evenly spread over the region).
 const PAIRS_PER_TRIPLE: usize = 4096;
 
+/// Most differences kept (16 MB): 256 triples' worth.
+pub const MAX_PAIRS: usize = 256 * PAIRS_PER_TRIPLE;
+
 /// One noise estimate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseEstimate {
@@ -106,8 +109,12 @@ impl FrameNoise {
         frames.map_or(3, |n| (n / 128).max(3))
     }
 
-    /// Takes the next frame of the record.
+    /// Takes the next frame of the record (beyond [`MAX_PAIRS`] differences, a record of unknown
+    /// length, the rest is not looked at).
     pub fn add(&mut self, frame: &GreyFrame) {
+        if self.pairs.len() >= MAX_PAIRS {
+            return;
+        }
         let phase = self.index % self.every;
         self.index += 1;
         if phase > 2 {
@@ -238,8 +245,9 @@ pub struct StillestFrame {
     axis: crate::analysis::Axis,
     /// Frames seen.
     seen: usize,
-    /// The last two frames and their positions along the axis.
-    last: Vec<(GreyFrame, Option<f64>)>,
+    /// The last frame (its buffer reused frame after frame) and the last two positions.
+    prev: Option<GreyFrame>,
+    positions: [Option<f64>; 2],
     /// The stillest frame so far: its index, itself and its change.
     best: Option<(usize, GreyFrame, f64)>,
     first: Option<GreyFrame>,
@@ -251,7 +259,8 @@ impl StillestFrame {
         StillestFrame {
             axis,
             seen: 0,
-            last: Vec::new(),
+            prev: None,
+            positions: [None; 2],
             best: None,
             first: None,
         }
@@ -266,16 +275,24 @@ impl StillestFrame {
         if self.first.is_none() {
             self.first = Some(frame.clone());
         }
-        if self.last.len() == 2 {
-            if let (Some(a), Some(b)) = (self.last[0].1, p) {
-                let change = (b - a).abs();
-                if self.best.as_ref().is_none_or(|(_, _, v)| change < *v) {
-                    self.best = Some((self.seen - 1, self.last[1].0.clone(), change));
+        // the previous frame, between positions[0] and p
+        if let (Some(prev), Some(a), Some(b)) = (&self.prev, self.positions[0], p) {
+            let change = (b - a).abs();
+            if self.seen >= 2 && self.best.as_ref().is_none_or(|(_, _, v)| change < *v) {
+                match &mut self.best {
+                    Some((i, f, v)) => {
+                        f.clone_from(prev);
+                        (*i, *v) = (self.seen - 1, change);
+                    }
+                    None => self.best = Some((self.seen - 1, prev.clone(), change)),
                 }
             }
-            self.last.remove(0);
         }
-        self.last.push((frame.clone(), p));
+        match &mut self.prev {
+            Some(f) => f.clone_from(frame),
+            None => self.prev = Some(frame.clone()),
+        }
+        self.positions = [self.positions[1], p];
         self.seen += 1;
     }
 
