@@ -221,7 +221,7 @@ fn crop(frame: &GreyFrame, roi: Option<Roi>) -> Vec<i32> {
 }
 
 /// `(x0, y0, width, height)` of `roi` clipped to a `w x h` frame (the whole frame for `None`).
-fn region(w: usize, h: usize, roi: Option<Roi>) -> (usize, usize, usize, usize) {
+pub(crate) fn region(w: usize, h: usize, roi: Option<Roi>) -> (usize, usize, usize, usize) {
     match roi {
         None => (0, 0, w, h),
         Some(r) => {

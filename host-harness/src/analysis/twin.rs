@@ -284,19 +284,7 @@ impl Scene {
         axis: Axis,
     ) -> anyhow::Result<Scene> {
         let (w, h) = first.dimensions();
-        let (x0, y0, cw, ch) = match roi {
-            None => (0, 0, w, h),
-            Some(r) => {
-                let x0 = (r.x as usize).min(w);
-                let y0 = (r.y as usize).min(h);
-                (
-                    x0,
-                    y0,
-                    (r.width as usize).min(w - x0),
-                    (r.height as usize).min(h - y0),
-                )
-            }
-        };
+        let (x0, y0, cw, ch) = super::imaging_share::region(w, h, roi);
         let value = |x: usize, y: usize| -> f32 {
             let i = (y0 + y) * w + x0 + x;
             match first {
