@@ -33,6 +33,7 @@
 
 pub mod columns;
 pub mod compensate;
+pub mod ema;
 pub mod frf_uncertainty;
 pub mod imaging_share;
 pub mod modal;

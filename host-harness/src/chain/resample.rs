@@ -75,6 +75,66 @@ pub fn upsample_column(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
     Ok(Upsampled { values: y, scale })
 }
 
+/// The smallest number of input samples `q` (up to 4096) that makes a whole number of samples
+/// at `to_hz`: records are resampled in multiples of it.
+pub fn rate_period(from_hz: f64, to_hz: f64) -> Option<usize> {
+    (1..=4096).find(|&q| output_len(q, from_hz, to_hz).is_some())
+}
+
+/// A whole record (not periodic, of any length) upsampled from `from_hz` to `to_hz` through
+/// firmware-core's Fourier upsampler, in overlapping chunks: each chunk has the line through
+/// its first and last samples taken out (its periodic extension then has no jump to ring at),
+/// is upsampled, and the line is added back on the finer grid; of each chunk only its middle
+/// is kept (a quarter of a chunk of margin either side: the ringing of a chunk's ends decays
+/// long before). The record is first cut to a multiple of [`rate_period`] samples (at most
+/// `q - 1` samples dropped at its end); the output has `n * to / from` samples of that.
+pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Result<Vec<f64>> {
+    let q = rate_period(from_hz, to_hz).ok_or_else(|| {
+        bad_input(format!(
+            "{from_hz} Hz and {to_hz} Hz: no whole number of samples (up to 4096) at the one \
+             makes a whole number at the other; state both rates exactly"
+        ))
+    })?;
+    if to_hz < from_hz {
+        return Err(bad_input(format!(
+            "{to_hz} Hz is below {from_hz} Hz: records are only upsampled"
+        )));
+    }
+    let ratio = to_hz / from_hz;
+    let n = values.len() - values.len() % q;
+    let out_of = |k: usize| (k as f64 * ratio).round() as usize;
+    // a chunk's core: about 16384 output samples, a whole number of periods
+    let core = ((16384.0 / ratio) as usize / q).max(1) * q;
+    let margin = (core / 4 / q).max(1) * q;
+    let mut out = vec![0.0; out_of(n)];
+    let mut s = 0;
+    while s < n {
+        let e = (s + core).min(n);
+        let (a, b) = (s.saturating_sub(margin), (e + margin).min(n));
+        let chunk = &values[a..b];
+        let len = chunk.len();
+        let (first, last) = (chunk[0], chunk[len - 1]);
+        let slope = if len > 1 {
+            (last - first) / (len - 1) as f64
+        } else {
+            0.0
+        };
+        let detrended: Vec<f64> = chunk
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v - first - slope * k as f64)
+            .collect();
+        let up = upsample_column(&detrended, from_hz, to_hz)?;
+        for j in out_of(s)..out_of(e) {
+            let local = j - out_of(a);
+            let t = local as f64 / ratio;
+            out[j] = f64::from(up.values[local]) * up.scale + first + slope * t;
+        }
+        s = e;
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -85,5 +145,27 @@ mod tests {
         assert_eq!(output_len(120, 120.0, 2048.0), Some(2048));
         assert_eq!(output_len(100, 120.0, 2048.0), None);
         assert_eq!(output_len(10, 0.0, 2048.0), None);
+    }
+
+    #[test]
+    fn a_long_record_upsampled_in_chunks_matches_the_signal() {
+        // 15 kHz -> 50 kHz (10/3), 60 000 samples: 200 000 out, many chunks; a decaying
+        // sinusoid plus an offset and a drift (not periodic)
+        let (from, to) = (15_000.0, 50_000.0);
+        let x = |t: f64| {
+            3.0 + 0.5 * t
+                + (-2.0 * t).exp() * (2.0 * std::f64::consts::PI * 312.5 * t).sin()
+                + 0.3 * (2.0 * std::f64::consts::PI * 1234.0 * t + 0.4).cos()
+        };
+        let v: Vec<f64> = (0..60_001).map(|k| x(k as f64 / from)).collect();
+        assert_eq!(rate_period(from, to), Some(3));
+        let up = upsample_record(&v, from, to).unwrap();
+        assert_eq!(up.len(), 200_000);
+        let mut worst = 0.0f64;
+        // away from the record's two ends (a record is not periodic there)
+        for (j, u) in up.iter().enumerate().take(199_000).skip(1000) {
+            worst = worst.max((u - x(j as f64 / to)).abs());
+        }
+        assert!(worst < 2e-4, "largest error {worst}");
     }
 }

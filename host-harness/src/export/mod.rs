@@ -27,6 +27,7 @@
 
 pub mod analysis;
 pub mod calibrate;
+pub mod ema;
 pub mod field;
 pub mod oma;
 pub mod plan;

@@ -13,6 +13,7 @@
 pub mod cantilever;
 pub mod field;
 pub mod grandstand;
+pub mod hammer;
 pub mod target;
 
 pub use target::{DiskTarget, Texture};

@@ -1,0 +1,363 @@
+//! The hits of an impact test found in the force record, and the blocks of force and response
+//! they start (docs/method.md §3.13).
+//!
+//! * **Baseline and noise**: the force's median and `1.4826 MAD` (most samples are quiet).
+//! * **Pulses**: runs where the force leaves the baseline by more than 5 % of the record's
+//!   largest excursion (and 6 noise sd), merged across gaps shorter than the run itself, each
+//!   widened to where it falls back to 1 % of its peak (or 3 noise sd).
+//! * **Hits**: pulses grouped, a pulse starting within `double_gap_s` of the previous one's end
+//!   joining its group. A group of more than one pulse is a **double hit**, named and left out;
+//!   a pulse whose peak sample repeats three or more times in a row is **clipped** (the
+//!   transducer or the ADC saturated), named and left out.
+//! * **Blocks**: every hit's block has the same length, the shortest spacing between hits (the
+//!   last: to the record's end), starting a fiftieth of it before its pulse (at most the first
+//!   pulse's start).
+//! * **Force window**: inside a block the force is kept from half a pulse width before its
+//!   pulse to half a width after it, zero elsewhere (the noise between hits is not force).
+//! * **Exponential window** `exp(-t / tau)` from the block's start, on force and response alike:
+//!   the windowed record is exactly that of a structure whose poles are `p - 1 / tau`, so the
+//!   damping it adds is removed from each pole afterwards ([`ExpWindow::pole_shift`]).
+
+use crate::bad_input;
+
+/// The rules of hit finding.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpactRule {
+    /// A pulse starting within this time after the previous one's end belongs to its hit.
+    pub double_gap_s: f64,
+    /// Longest block, s (none: the spacing of the hits).
+    pub block_s: Option<f64>,
+}
+
+impl Default for ImpactRule {
+    /// Pulses within 50 ms are one hit (a hammer's rebound), blocks as long as the spacing.
+    fn default() -> Self {
+        ImpactRule {
+            double_gap_s: 0.05,
+            block_s: None,
+        }
+    }
+}
+
+/// One pulse of the force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pulse {
+    /// First sample above 1 % of its peak.
+    pub start: usize,
+    /// One past the last.
+    pub end: usize,
+    /// Peak excursion from the baseline (signed).
+    pub peak: f64,
+    /// Longest run of samples at the peak's value.
+    pub flat: usize,
+}
+
+/// A hit and what became of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hit {
+    /// Its pulses (more than one: a double hit).
+    pub pulses: Vec<Pulse>,
+    /// Why it is left out (`None`: used).
+    pub left_out: Option<String>,
+}
+
+impl Hit {
+    /// The first pulse.
+    pub fn pulse(&self) -> &Pulse {
+        &self.pulses[0]
+    }
+}
+
+/// The hits of a force record and their blocks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hits {
+    /// Baseline (median), in the force's unit.
+    pub baseline: f64,
+    /// Noise standard deviation (1.4826 MAD).
+    pub noise_sd: f64,
+    /// Every hit, in time order.
+    pub hits: Vec<Hit>,
+    /// Block length, samples.
+    pub block: usize,
+    /// Samples of a block before its pulse.
+    pub pre: usize,
+}
+
+impl Hits {
+    /// The used hits.
+    pub fn used(&self) -> impl Iterator<Item = &Hit> {
+        self.hits.iter().filter(|h| h.left_out.is_none())
+    }
+
+    /// The first sample of `hit`'s block.
+    pub fn block_start(&self, hit: &Hit) -> usize {
+        hit.pulse().start - self.pre
+    }
+}
+
+/// The median of `v` (a copy sorted).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// Finds the hits of `force` (sampled at `fs_hz`; `name` names it in errors). Errors when there
+/// is no pulse clearly above the noise, or no hit is left to use (each left-out hit named).
+pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::Result<Hits> {
+    let baseline = median(force);
+    let dev: Vec<f64> = force.iter().map(|v| (v - baseline).abs()).collect();
+    let noise_sd = 1.4826 * median(&dev);
+    let level = dev.iter().fold(0.0f64, |a, &b| a.max(b));
+    if !(level > 10.0 * noise_sd && level > 0.0) {
+        return Err(bad_input(format!(
+            "{name}: no impact found (the largest excursion, {level:.4}, is not 10 times the \
+             noise's standard deviation {noise_sd:.4}); is this the force channel, and was the \
+             structure hit?"
+        )));
+    }
+    let above = (0.05 * level).max(6.0 * noise_sd);
+    // runs above the threshold
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut k = 0;
+    while k < dev.len() {
+        if dev[k] > above {
+            let s = k;
+            while k < dev.len() && dev[k] > above {
+                k += 1;
+            }
+            match runs.last_mut() {
+                Some(last) if s - last.1 < (last.1 - last.0).max(2) => last.1 = k,
+                _ => runs.push((s, k)),
+            }
+        } else {
+            k += 1;
+        }
+    }
+    let pulses: Vec<Pulse> = runs
+        .iter()
+        .map(|&(s, e)| {
+            let (mut ip, mut peak) = (s, 0.0f64);
+            for (i, v) in force.iter().enumerate().take(e).skip(s) {
+                if (v - baseline).abs() > peak.abs() {
+                    peak = v - baseline;
+                    ip = i;
+                }
+            }
+            let edge = (0.01 * peak.abs()).max(3.0 * noise_sd);
+            let mut start = s;
+            while start > 0 && dev[start - 1] > edge {
+                start -= 1;
+            }
+            let mut end = e;
+            while end < dev.len() && dev[end] > edge {
+                end += 1;
+            }
+            let top = force[ip];
+            let tol = 1e-9 * peak.abs();
+            let (mut flat, mut run) = (0usize, 0usize);
+            for v in &force[start..end] {
+                run = if (v - top).abs() <= tol { run + 1 } else { 0 };
+                flat = flat.max(run);
+            }
+            Pulse {
+                start,
+                end,
+                peak,
+                flat,
+            }
+        })
+        .collect();
+    let gap = (rule.double_gap_s * fs_hz).round() as usize;
+    let mut hits: Vec<Hit> = Vec::new();
+    for p in pulses {
+        match hits.last_mut() {
+            Some(h) if p.start <= h.pulses.last().map_or(0, |q| q.end) + gap => h.pulses.push(p),
+            _ => hits.push(Hit {
+                pulses: vec![p],
+                left_out: None,
+            }),
+        }
+    }
+    let at = |i: usize| format!("{:.4} s", i as f64 / fs_hz);
+    for (i, h) in hits.iter_mut().enumerate() {
+        let first = h.pulses[0];
+        if let Some(second) = h.pulses.get(1) {
+            h.left_out = Some(format!(
+                "hit {} at {}: a double hit (a second pulse {:.1} ms after the first, {:.0} % of \
+                 its peak)",
+                i + 1,
+                at(first.start),
+                (second.start - first.start) as f64 / fs_hz * 1e3,
+                100.0 * second.peak.abs() / first.peak.abs()
+            ));
+        } else if first.flat >= 3 {
+            h.left_out = Some(format!(
+                "hit {} at {}: the force is clipped ({} samples in a row at its peak {:.4}: the \
+                 hammer's transducer or the ADC saturated)",
+                i + 1,
+                at(first.start),
+                first.flat,
+                first.peak + baseline
+            ));
+        }
+    }
+    if hits.iter().all(|h| h.left_out.is_some()) {
+        let why: Vec<&str> = hits.iter().filter_map(|h| h.left_out.as_deref()).collect();
+        return Err(bad_input(format!(
+            "{name}: no hit can be used: {}",
+            why.join("; ")
+        )));
+    }
+    // one block length for every hit: the shortest spacing, the last to the record's end
+    let starts: Vec<usize> = hits.iter().map(|h| h.pulses[0].start).collect();
+    let mut spacing = force.len() - starts[starts.len() - 1];
+    for w in starts.windows(2) {
+        spacing = spacing.min(w[1] - w[0]);
+    }
+    let pre = (spacing / 50).min(starts[0]);
+    let mut block = spacing.min(force.len() - starts[starts.len() - 1] + pre);
+    if let Some(b) = rule.block_s {
+        block = block.min((b * fs_hz).round() as usize);
+    }
+    let width = hits
+        .iter()
+        .map(|h| h.pulses[0].end - h.pulses[0].start)
+        .max()
+        .unwrap_or(1);
+    if block < 8 * width.max(4) {
+        return Err(bad_input(format!(
+            "{name}: the hits' blocks would be {block} samples, too short beside the pulses \
+             ({width} samples): hits closer than the response takes to decay"
+        )));
+    }
+    Ok(Hits {
+        baseline,
+        noise_sd,
+        hits,
+        block,
+        pre,
+    })
+}
+
+/// The force window of a block: the force from half a pulse width before the pulse to half a
+/// width after, the baseline removed; zero elsewhere. `pulse` in block samples.
+pub fn force_window(block: &[f64], baseline: f64, pulse: (usize, usize)) -> Vec<f64> {
+    let width = pulse.1 - pulse.0;
+    let lo = pulse.0.saturating_sub(width / 2);
+    let hi = (pulse.1 + width / 2).min(block.len());
+    block
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            if (lo..hi).contains(&i) {
+                v - baseline
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// An exponential window `exp(-t / tau)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExpWindow {
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+impl ExpWindow {
+    /// The window whose value at the block's end (`block_s` after its start) is `end`.
+    pub fn ending_at(end: f64, block_s: f64) -> ExpWindow {
+        ExpWindow {
+            tau_s: block_s / (1.0 / end).ln(),
+        }
+    }
+
+    /// Its value `t_s` after the block's start.
+    pub fn at(&self, t_s: f64) -> f64 {
+        (-t_s / self.tau_s).exp()
+    }
+
+    /// What it adds to the real part of every pole, rad/s (`-1 / tau`); subtract it to undo.
+    pub fn pole_shift(&self) -> f64 {
+        -1.0 / self.tau_s
+    }
+
+    /// The damping ratio it adds to a lightly damped mode at `f_hz` (`1 / (tau w)`).
+    pub fn added_damping(&self, f_hz: f64) -> f64 {
+        1.0 / (self.tau_s * 2.0 * std::f64::consts::PI * f_hz)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(pulses: &[(usize, usize, f64)], n: usize) -> Vec<f64> {
+        let mut f = vec![0.0; n];
+        for &(s, w, peak) in pulses {
+            for k in 0..=w {
+                f[s + k] += peak * (std::f64::consts::PI * k as f64 / w as f64).sin();
+            }
+        }
+        // a small deterministic noise
+        for (k, v) in f.iter_mut().enumerate() {
+            *v += 0.01 * ((k as f64 * 1.7).sin() + (k as f64 * 0.31).cos());
+        }
+        f
+    }
+
+    #[test]
+    fn three_hits_one_double_one_clipped() {
+        let fs = 10_000.0;
+        let mut f = record(
+            &[
+                (1000, 20, 100.0),
+                (11_000, 20, 80.0),
+                (11_150, 20, 30.0),
+                (21_000, 20, 120.0),
+            ],
+            40_000,
+        );
+        // clip the third hit at 90
+        for v in &mut f[21_000..21_021] {
+            *v = v.min(90.0);
+        }
+        let h = find(&f, fs, ImpactRule::default(), "force").unwrap();
+        assert_eq!(h.hits.len(), 3);
+        assert!(h.hits[0].left_out.is_none());
+        let double = h.hits[1].left_out.as_deref().unwrap();
+        assert!(double.contains("double hit"), "{double}");
+        assert!(double.contains("15.0 ms"), "{double}");
+        let clipped = h.hits[2].left_out.as_deref().unwrap();
+        assert!(clipped.contains("clipped"), "{clipped}");
+        assert_eq!(h.block, 10_000);
+        assert_eq!(h.pre, 200);
+        assert!(h.hits[0].pulse().start <= 1001 && h.hits[0].pulse().end >= 1019);
+    }
+
+    #[test]
+    fn no_pulse_and_no_usable_hit_are_errors() {
+        let quiet: Vec<f64> = (0..1000).map(|k| (k as f64 * 1.3).sin()).collect();
+        let e = find(&quiet, 1000.0, ImpactRule::default(), "ch").unwrap_err();
+        assert!(e.to_string().contains("no impact found"), "{e}");
+        let f = record(&[(1000, 20, 100.0), (1100, 20, 50.0)], 5000);
+        let e = find(&f, 10_000.0, ImpactRule::default(), "ch").unwrap_err();
+        assert!(e.to_string().contains("no hit can be used"), "{e}");
+    }
+
+    #[test]
+    fn the_exponential_window_shifts_a_pole_by_one_over_tau() {
+        let w = ExpWindow::ending_at(0.01, 2.0);
+        assert!((w.at(2.0) - 0.01).abs() < 1e-12);
+        assert!((w.pole_shift() + 100f64.ln() / 2.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,379 @@
+//! The records of an experimental modal analysis: the responses (a camera's displacements or a
+//! DAQ's transducers) and the force, read from the files people have, brought to one sample
+//! rate and one start (docs/method.md §3.13).
+//!
+//! * `displacement.csv` of `track`/`analyze` (one row per frame and target): each target a
+//!   response (`disp_mm`, else the image's `-cy`), lost samples filled as `modal` fills them.
+//! * Any other `.csv`: a header of channel names and an optional time column (`t_s`, `time` or
+//!   `t`), every other column a channel.
+//! * `.npy` (pyidi's `(points, samples, 2)`): channels `point P y`, `point P x`; by default the
+//!   coordinate (y or x) that moves more.
+//! * `.lvm`, `.tdms`, `.uff`/`.unv` (dataset 58): channels by name, segments joined.
+//!
+//! **Rates.** From the file (a time column, LVM `Delta_X`, TDMS `wf_increment`, UFF's abscissa
+//! increment) or given; both given and stated must agree within 0.1 %. When the two records'
+//! rates differ the slower one is **upsampled** to the faster through firmware-core's Fourier
+//! upsampler ([`crate::chain::resample::upsample_record`]): the faster record's band above the
+//! slower one's Nyquist frequency is kept rather than filtered away, and the slower record, band
+//! limited by its own sampling, loses nothing by exact band-limited interpolation; the FRFs are
+//! only fitted below the slower record's Nyquist frequency.
+//!
+//! **Start.** Both records start at their shared trigger; `delay_s > 0` says the response's
+//! first sample came that long after the force's (its whole samples are dropped from the
+//! force's start; less than half a sample is left, stated), `< 0` the other way.
+
+use crate::bad_input;
+use crate::daq::{self, Channel};
+use std::path::Path;
+
+/// The channels read from one file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Channel names.
+    pub names: Vec<String>,
+    /// Their unit, when the file states one (the first channel's).
+    pub unit: Option<String>,
+    /// Sample rate, Hz.
+    pub fs_hz: f64,
+    /// The samples, one vector per channel, of equal length.
+    pub channels: Vec<Vec<f64>>,
+    /// What was done on reading (targets left out, samples filled, an axis chosen).
+    pub notes: Vec<String>,
+    /// From a camera (`displacement.csv` or a pyidi `.npy`).
+    pub camera: bool,
+}
+
+/// Which reader a file's name asks for.
+fn kind(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// The DAQ record of `path`, by its extension.
+fn daq_record(path: &Path) -> anyhow::Result<daq::Record> {
+    match kind(path).as_str() {
+        "lvm" => daq::lvm::read(path),
+        "tdms" => daq::tdms::read(path),
+        "uff" | "unv" => daq::uff::read(path),
+        "npy" => daq::npy::read(path),
+        "csv" | "txt" => {
+            let text = std::fs::read(path)
+                .map_err(|e| bad_input(format!("{}: cannot read: {e}", path.display())))?;
+            let first = String::from_utf8_lossy(text.split(|b| *b == b'\n').next().unwrap_or(&[]))
+                .to_string();
+            let time = first
+                .split(',')
+                .map(str::trim)
+                .find(|c| ["t_s", "time", "t", "time_s"].contains(&c.to_ascii_lowercase().as_str()))
+                .map(String::from);
+            daq::csv::parse(&text, &path.display().to_string(), time.as_deref())
+        }
+        other => Err(bad_input(format!(
+            "{}: cannot tell the format from the extension `.{other}` (.csv, .npy, .lvm, .tdms, \
+             .uff or .unv)",
+            path.display()
+        ))),
+    }
+}
+
+/// The rate of `channel` of `file`: stated, given, or both (then they must agree).
+fn rate(channel: &Channel, given: Option<f64>, file: &str, flag: &str) -> anyhow::Result<f64> {
+    match (channel.rate_hz(), given) {
+        (Some(s), Some(g)) if (s - g).abs() > 1e-3 * g => Err(bad_input(format!(
+            "{file}: channel `{}` is sampled at {s} Hz by the file, {flag} says {g} Hz",
+            channel.name
+        ))),
+        (Some(s), _) => Ok(s),
+        (None, Some(g)) => Ok(g),
+        (None, None) => Err(bad_input(format!(
+            "{file}: the file states no sample rate for `{}`: give {flag}",
+            channel.name
+        ))),
+    }
+}
+
+/// Whether a CSV file is `track`'s `displacement.csv` (columns `frame` and `target`).
+fn is_displacement_csv(path: &Path) -> bool {
+    let Ok(text) = std::fs::read(path) else {
+        return false;
+    };
+    let first =
+        String::from_utf8_lossy(text.split(|b| *b == b'\n').next().unwrap_or(&[])).to_string();
+    let cols: Vec<&str> = first.split(',').map(str::trim).collect();
+    cols.contains(&"frame") && cols.contains(&"target")
+}
+
+/// Reads the responses of `path`: the channels `cols` (empty: every channel; see the module
+/// documentation), at `fs_hz` when the file states no rate.
+pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyhow::Result<Series> {
+    let file = path.display().to_string();
+    let is_csv = matches!(kind(path).as_str(), "csv" | "txt");
+    if is_csv && is_displacement_csv(path) {
+        use crate::analysis::oma::input::{read, PixelAxis};
+        let r = read(path, PixelAxis::Y, fs_hz)?;
+        let mut names: Vec<String> = r
+            .targets
+            .iter()
+            .map(|(t, _)| format!("target {t}"))
+            .collect();
+        let mut channels = r.channels;
+        let mut notes: Vec<String> = r
+            .left_out
+            .iter()
+            .map(|(t, why)| format!("target {t} left out: {why}"))
+            .collect();
+        for ((t, _), n) in r.targets.iter().zip(&r.filled) {
+            if *n > 0 {
+                notes.push(format!(
+                    "target {t}: {n} lost samples filled by interpolation"
+                ));
+            }
+        }
+        if !cols.is_empty() {
+            let mut keep = Vec::new();
+            for c in cols {
+                let i = names
+                    .iter()
+                    .position(|n| n == c || n.trim_start_matches("target ") == c);
+                let i = i.ok_or_else(|| {
+                    bad_input(format!(
+                        "{file}: no response `{c}` (its targets: {})",
+                        names.join(", ")
+                    ))
+                })?;
+                keep.push(i);
+            }
+            names = keep.iter().map(|&i| names[i].clone()).collect();
+            channels = keep.iter().map(|&i| channels[i].clone()).collect();
+        }
+        return Ok(Series {
+            names,
+            unit: Some(r.unit),
+            fs_hz: r.fs_hz,
+            channels,
+            notes,
+            camera: true,
+        });
+    }
+    let record = daq_record(path)?;
+    let first: Vec<String> = record
+        .segments
+        .first()
+        .map(|s| s.iter().map(|c| c.name.clone()).collect())
+        .unwrap_or_default();
+    let mut notes = Vec::new();
+    let npy = kind(path) == "npy";
+    let wanted: Vec<String> = if !cols.is_empty() {
+        cols.to_vec()
+    } else if npy {
+        // pyidi: the coordinate that moves more
+        let spread = |axis: &str| -> f64 {
+            first
+                .iter()
+                .filter(|n| n.ends_with(axis))
+                .filter_map(|n| record.channel(n, &file).ok())
+                .map(|c| {
+                    let m = c.values.iter().sum::<f64>() / c.values.len().max(1) as f64;
+                    c.values.iter().map(|v| (v - m).powi(2)).sum::<f64>()
+                })
+                .sum()
+        };
+        let axis = if spread(" x") > spread(" y") {
+            " x"
+        } else {
+            " y"
+        };
+        notes.push(format!(
+            "{file}: the points' {} coordinate (it moves more than the other; \
+             --response-col to choose)",
+            axis.trim()
+        ));
+        first
+            .iter()
+            .filter(|n| n.ends_with(axis))
+            .cloned()
+            .collect()
+    } else {
+        first.clone()
+    };
+    if wanted.is_empty() {
+        return Err(bad_input(format!("{file}: no channels")));
+    }
+    let chans: Vec<Channel> = wanted
+        .iter()
+        .map(|n| record.channel(n, &file))
+        .collect::<anyhow::Result<_>>()?;
+    let fs = rate(&chans[0], fs_hz, &file, "--response-fs")?;
+    for c in &chans[1..] {
+        let r = rate(c, Some(fs), &file, "the first channel's rate")?;
+        if c.values.len() != chans[0].values.len() || (r - fs).abs() > 1e-9 * fs {
+            return Err(bad_input(format!(
+                "{file}: channel `{}` has {} samples at {r} Hz, `{}` {} at {fs} Hz: responses \
+                 must share one time base",
+                c.name,
+                c.values.len(),
+                chans[0].name,
+                chans[0].values.len()
+            )));
+        }
+    }
+    Ok(Series {
+        names: wanted,
+        unit: chans[0].unit.clone(),
+        fs_hz: fs,
+        channels: chans.into_iter().map(|c| c.values).collect(),
+        notes,
+        camera: npy,
+    })
+}
+
+/// Reads the force channel `col` of `path` (empty `col`: the file's only channel), at `fs_hz`
+/// when the file states no rate.
+pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<Series> {
+    let file = path.display().to_string();
+    let record = daq_record(path)?;
+    let name = if col.is_empty() {
+        let names: Vec<String> = record
+            .segments
+            .first()
+            .map(|s| s.iter().map(|c| c.name.clone()).collect())
+            .unwrap_or_default();
+        match names.as_slice() {
+            [one] => one.clone(),
+            _ => {
+                return Err(bad_input(format!(
+                    "{file}: {} channels ({}): name the force with --excitation-col",
+                    names.len(),
+                    names.join(", ")
+                )))
+            }
+        }
+    } else {
+        col.to_string()
+    };
+    let c = record.channel(&name, &file)?;
+    let fs = rate(&c, fs_hz, &file, "--excitation-fs")?;
+    if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
+        return Err(bad_input(format!(
+            "{file}: channel `{name}`, sample {}: not a finite number",
+            i + 1
+        )));
+    }
+    Ok(Series {
+        names: vec![name],
+        unit: c.unit.clone(),
+        fs_hz: fs,
+        channels: vec![c.values],
+        notes: Vec::new(),
+        camera: false,
+    })
+}
+
+/// Force and responses at one rate and one start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Aligned {
+    /// The common rate, Hz.
+    pub fs_hz: f64,
+    /// The slower record's Nyquist frequency, Hz: the FRFs' top.
+    pub nyquist_hz: f64,
+    /// The force.
+    pub force: Vec<f64>,
+    /// The responses.
+    pub responses: Vec<Vec<f64>>,
+    /// What was done (resampling and why, delay, lengths cut).
+    pub notes: Vec<String>,
+}
+
+/// Brings `response` and `force` to one rate (the faster's) and one start (`delay_s`, see the
+/// module documentation), of equal length.
+pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<Aligned> {
+    use crate::chain::resample::upsample_record;
+    let (fr, ff) = (response.fs_hz, force.fs_hz);
+    let mut notes = Vec::new();
+    let same = (fr - ff).abs() <= 1e-9 * ff;
+    let fs = fr.max(ff);
+    let up = |v: &[f64], from: f64| -> anyhow::Result<Vec<f64>> {
+        if same || from >= fs {
+            Ok(v.to_vec())
+        } else {
+            upsample_record(v, from, fs)
+        }
+    };
+    if !same {
+        let (slow, fast) = if fr < ff {
+            ("the responses", "the force")
+        } else {
+            ("the force", "the responses")
+        };
+        notes.push(format!(
+            "{slow} ({} Hz) upsampled to the rate of {fast} ({fs} Hz) by Fourier interpolation \
+             (firmware-core's upsampler, in overlapping chunks): {fast} keep their band above \
+             {} Hz, and {slow}, band limited by their own sampling, lose nothing; the FRFs are \
+             fitted below {} Hz",
+            fr.min(ff),
+            fr.min(ff) / 2.0,
+            fr.min(ff) / 2.0
+        ));
+    }
+    let mut f = up(&force.channels[0], ff)?;
+    let mut xs: Vec<Vec<f64>> = response
+        .channels
+        .iter()
+        .map(|c| up(c, fr))
+        .collect::<anyhow::Result<_>>()?;
+    let shift = delay_s * fs;
+    let whole = shift.round();
+    if whole != 0.0 {
+        let k = whole.abs() as usize;
+        let (what, len) = if whole > 0.0 {
+            ("force", f.len())
+        } else {
+            ("responses", xs[0].len())
+        };
+        if k >= len {
+            return Err(bad_input(format!(
+                "--delay-s {delay_s}: the {what} record is only {:.4} s long",
+                len as f64 / fs
+            )));
+        }
+        if whole > 0.0 {
+            f.drain(..k);
+        } else {
+            for x in &mut xs {
+                x.drain(..k);
+            }
+        }
+        notes.push(format!(
+            "--delay-s {delay_s}: the first {k} samples of the {what} dropped{}",
+            if (shift - whole).abs() > 1e-6 {
+                format!(
+                    " ({:.3} of a sample at {fs} Hz left unaligned)",
+                    (shift - whole).abs()
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
+    let n = f.len().min(xs[0].len());
+    if f.len() != xs[0].len() {
+        notes.push(format!(
+            "the {} record cut to the other's length ({:.4} s)",
+            if f.len() > n { "force" } else { "responses'" },
+            n as f64 / fs
+        ));
+    }
+    f.truncate(n);
+    for x in &mut xs {
+        x.truncate(n);
+    }
+    Ok(Aligned {
+        fs_hz: fs,
+        nyquist_hz: fr.min(ff) / 2.0,
+        force: f,
+        responses: xs,
+        notes,
+    })
+}

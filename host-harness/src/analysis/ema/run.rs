@@ -1,0 +1,394 @@
+//! `ema` as one call: a checked request (records read and aligned, settings resolved) ->
+//! the analysis -> its outputs in a staged directory (complete or absent): `frf.csv`,
+//! `modes.csv`, `shapes.csv`, `frf.uff`, `frf.png`/`.svg` (the FRFs with the fit),
+//! `stabilisation.png`/`.svg` and `report.txt`.
+
+use super::input::{Aligned, Series};
+use super::{analyse, EmaResult, EmaSettings, Excitation};
+use crate::analysis::modal::FrfForm;
+use crate::analysis::oma::uncertainty::Interval;
+use crate::analysis::request::Outcome;
+use crate::export::ema::{self as export, EmaModeRow};
+use crate::export::oma::{shapes_csv, OmaShapeRow};
+use crate::export::uff::{AxisCharacteristics, Dataset58, Dof, Quantity};
+use crate::outdir::Staged;
+use crate::plots::PoleKind;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What `ema` is asked: the records (read, at one rate and start), the settings, the outputs.
+#[derive(Debug, Clone)]
+pub struct EmaRequest {
+    /// The responses as read (names, unit, rate, notes; their samples are in `aligned`).
+    pub response: Series,
+    /// The force as read.
+    pub force: Series,
+    /// Both at one rate and one start.
+    pub aligned: Aligned,
+    /// The analysis settings.
+    pub settings: EmaSettings,
+    /// The input files.
+    pub inputs: Vec<PathBuf>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Replace an earlier `ema` output there.
+    pub force_out: bool,
+    /// Draw the figures.
+    pub plots: bool,
+}
+
+/// Runs the analysis and writes its outputs; the report is returned.
+pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
+    let a = &req.aligned;
+    let r = analyse(
+        &a.force,
+        &a.responses,
+        a.fs_hz,
+        &req.force.names[0],
+        &req.settings,
+    )?;
+    let inputs: Vec<&Path> = req.inputs.iter().map(PathBuf::as_path).collect();
+    let out = Staged::new(&req.out, req.force_out, "ema", &inputs)?;
+    out.write(
+        "frf.csv",
+        export::frf_csv(&r.freq_hz, &r.frfs.h1, &r.frfs.coherence),
+    )?;
+    let system = if req.response.camera { "vision" } else { "daq" };
+    let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
+    let rows: Vec<EmaModeRow> = r
+        .modes
+        .iter()
+        .map(|m| EmaModeRow {
+            system,
+            mode: m.mode,
+            band_hz: m.band_hz,
+            f_hz: m.pole.f_hz,
+            damping: m.pole.damping,
+            intervals: [cells(m.f_interval), cells(m.damping_interval)],
+        })
+        .collect();
+    out.write("modes.csv", export::modes_csv(&rows))?;
+    let shapes: Vec<OmaShapeRow> = r
+        .modes
+        .iter()
+        .flat_map(|m| {
+            m.shape.iter().enumerate().map(move |(o, c)| OmaShapeRow {
+                mode: m.mode,
+                target: o + 1,
+                xy_px: None,
+                value: *c,
+                method: "lscf",
+                abs_u: m
+                    .shape_abs_u
+                    .as_ref()
+                    .and_then(|u| u.get(o).copied())
+                    .filter(|v| v.is_finite()),
+            })
+        })
+        .collect();
+    out.write("shapes.csv", shapes_csv(&shapes))?;
+    out.write("frf.uff", uff(req, &r)?)?;
+    if req.plots {
+        plots(out.dir(), req, &r)?;
+    }
+    let report = report(req, &r);
+    out.write("report.txt", &report)?;
+    out.commit()?;
+    Ok(Outcome {
+        report,
+        result: Ok(()),
+    })
+}
+
+/// The FRFs as universal-file datasets 58 (function type 4): response `o` node `o`, the force
+/// node 0; the numerator's quantity from the FRF's form, units as the files state them.
+fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
+    let (quantity, label) = match req.settings.form {
+        FrfForm::Receptance => (Quantity::Displacement, "Displacement"),
+        FrfForm::Mobility => (Quantity::Velocity, "Velocity"),
+        FrfForm::Accelerance => (Quantity::Acceleration, "Acceleration"),
+    };
+    let df = r.freq_hz.get(1).copied().unwrap_or(1.0);
+    let sets: Vec<Dataset58<'_>> = r
+        .frfs
+        .h1
+        .iter()
+        .enumerate()
+        .map(|(o, h)| Dataset58 {
+            id_lines: [
+                format!("H1 {} / {}", req.response.names[o], req.force.names[0]),
+                "vibcam ema".into(),
+                String::new(),
+                String::new(),
+                String::new(),
+            ],
+            function_id: o as u32 + 1,
+            response: Dof {
+                node: o as u32 + 1,
+                direction: 0,
+            },
+            reference: Dof {
+                node: 0,
+                direction: 0,
+            },
+            f0_hz: 0.0,
+            df_hz: df,
+            numerator: AxisCharacteristics {
+                quantity,
+                label: label.into(),
+                units: req.response.unit.clone().unwrap_or_default(),
+            },
+            denominator: AxisCharacteristics {
+                quantity: Quantity::ExcitationForce,
+                label: "Force".into(),
+                units: req.force.unit.clone().unwrap_or_default(),
+            },
+            values: h,
+        })
+        .collect();
+    Ok(crate::export::uff::write_file(&sets)?)
+}
+
+/// The figures: the first four responses' |H1| with the fit, and the stabilisation diagram.
+fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
+    let (lo, hi) = req.settings.band_hz;
+    let k: Vec<usize> = (0..r.freq_hz.len())
+        .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)
+        .collect();
+    let f: Vec<f64> = k.iter().map(|&i| r.freq_hz[i]).collect();
+    let fitted: Vec<crate::analysis::modal::Pole> = r.modes.iter().map(|m| m.fitted).collect();
+    let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
+    for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
+        owned.push((
+            req.response.names[o].clone(),
+            k.iter().map(|&i| h[i].norm()).collect(),
+        ));
+        if let Some(c) = r.constants.get(o) {
+            owned.push((
+                format!("{} fit", req.response.names[o]),
+                f.iter()
+                    .map(|&fr| c.evaluate(&fitted, req.settings.form, fr).norm())
+                    .collect(),
+            ));
+        }
+    }
+    let curves: Vec<(&str, &[f64], &[f64])> = owned
+        .iter()
+        .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
+        .collect();
+    crate::plots::write_frf_plot(
+        &dir.join("frf"),
+        "H1 and the LSCF/LSFD fit",
+        "|H1|",
+        &curves,
+    )?;
+    let poles: Vec<(f64, usize, PoleKind)> = r
+        .poles
+        .iter()
+        .map(|p| {
+            let home = r.clusters.iter().find(|(c, _)| {
+                c.poles > 1 && c.members.iter().any(|&(f, o)| o == p.order && f == p.f_hz)
+            });
+            let kind = match home {
+                Some((_, true)) => PoleKind::Mode,
+                Some((_, false)) => PoleKind::Rejected,
+                None if p.stable => PoleKind::Stable,
+                None => PoleKind::Pole,
+            };
+            (p.f_hz, p.order, kind)
+        })
+        .collect();
+    let modes: Vec<f64> = r.modes.iter().map(|m| m.fitted.f_hz).collect();
+    crate::plots::write_stabilisation_plot(
+        &dir.join("stabilisation"),
+        "LSCF stabilisation diagram",
+        &poles,
+        &modes,
+        hi,
+    )?;
+    Ok(())
+}
+
+/// An interval as `lo..hi`, or `-`.
+fn range(i: Option<Interval>, digits: usize) -> String {
+    i.map_or("-".into(), |i| {
+        format!("{:.*}..{:.*}", digits, i.lo, digits, i.hi)
+    })
+}
+
+/// The human report.
+pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
+    let mut s = String::from("ema: experimental modal analysis (LSCF poles, LSFD residues)\n");
+    let a = &req.aligned;
+    let unit = |u: &Option<String>| u.clone().unwrap_or_else(|| "unit not stated".into());
+    let _ = writeln!(
+        s,
+        "responses: {} ({} channel{}, {}, {} Hz{})",
+        req.inputs[0].display(),
+        req.response.names.len(),
+        if req.response.names.len() == 1 {
+            ""
+        } else {
+            "s"
+        },
+        unit(&req.response.unit),
+        req.response.fs_hz,
+        if req.response.camera {
+            ", a camera's"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        s,
+        "force: {} channel `{}` ({}, {} Hz)",
+        req.inputs[1].display(),
+        req.force.names[0],
+        unit(&req.force.unit),
+        req.force.fs_hz
+    );
+    for n in req.response.notes.iter().chain(&a.notes) {
+        let _ = writeln!(s, "  {n}");
+    }
+    let df = r.freq_hz.get(1).copied().unwrap_or(0.0);
+    match (&req.settings.excitation, &r.hits) {
+        (Excitation::Impact { .. }, Some(h)) => {
+            let used = h.used().count();
+            let _ = writeln!(
+                s,
+                "impact: {} hit{} found, {used} used and averaged (H1; H2 and coherence beside \
+                 it); force baseline {:.4}, noise sd {:.4}",
+                h.hits.len(),
+                if h.hits.len() == 1 { "" } else { "s" },
+                h.baseline,
+                h.noise_sd
+            );
+            for (i, hit) in h.hits.iter().enumerate() {
+                let p = hit.pulse();
+                let w = (p.end - p.start) as f64 / a.fs_hz * 1e3;
+                let _ = writeln!(
+                    s,
+                    "  hit {} at {:.4} s: peak {:.4}, pulse {w:.3} ms (force window {:.3} ms){}",
+                    i + 1,
+                    p.start as f64 / a.fs_hz,
+                    p.peak,
+                    2.0 * w,
+                    hit.left_out
+                        .as_ref()
+                        .map_or(String::new(), |why| format!(": LEFT OUT, {why}"))
+                );
+            }
+            let _ = writeln!(
+                s,
+                "blocks: {} samples ({:.4} s, {:.4} s before each pulse), lines every {df:.5} Hz",
+                h.block,
+                h.block as f64 / a.fs_hz,
+                h.pre as f64 / a.fs_hz
+            );
+            match r.exp {
+                Some(w) => {
+                    let _ = writeln!(
+                        s,
+                        "exponential window: tau {:.5} s (ends at {:.2} %), on force and \
+                         responses; it adds 1/(tau w) of damping ({:.5} at {:.3} Hz), removed \
+                         from every mode's damping below",
+                        w.tau_s,
+                        100.0 * w.at(h.block as f64 / a.fs_hz),
+                        r.modes
+                            .first()
+                            .map_or(0.0, |m| w.added_damping(m.pole.f_hz)),
+                        r.modes.first().map_or(0.0, |m| m.pole.f_hz)
+                    );
+                }
+                None => {
+                    let _ = writeln!(s, "exponential window: none");
+                }
+            }
+        }
+        (Excitation::Continuous { nperseg }, _) => {
+            let _ = writeln!(
+                s,
+                "continuous excitation: Welch H1, Hann segments of {nperseg} samples, half \
+                 overlapping ({} segments in {} groups), lines every {df:.5} Hz",
+                r.unit_sizes.iter().sum::<usize>(),
+                r.unit_sizes.len()
+            );
+        }
+        _ => {}
+    }
+    let (lo, hi) = req.settings.band_hz;
+    let stable = r.poles.iter().filter(|p| p.stable).count();
+    let _ = writeln!(
+        s,
+        "fit: {lo}-{hi} Hz ({}), LSCF orders 2-{}: {} poles, {stable} stable; {} mode{}",
+        match req.settings.form {
+            FrfForm::Receptance => "receptance: residuals (iw)^-2 and 1",
+            FrfForm::Mobility => "mobility: residuals (iw)^-1 and iw",
+            FrfForm::Accelerance => "accelerance: residuals 1 and (iw)^2",
+        },
+        req.settings.lscf.max_order,
+        r.poles.len(),
+        r.modes.len(),
+        if r.modes.len() == 1 { "" } else { "s" }
+    );
+    if !r.modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nmode  f_hz        95 % interval           damping    95 % interval       \
+             poles  MPC   LSFD misfit"
+        );
+    }
+    for m in &r.modes {
+        let misfit = r.constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
+        let _ = writeln!(
+            s,
+            "{:<5} {:<11.5} {:<23} {:<10.5} {:<19} {:<6} {:<5.3} {:.3}",
+            m.mode,
+            m.pole.f_hz,
+            range(m.f_interval, 5),
+            m.pole.damping,
+            range(m.damping_interval, 5),
+            m.cluster.poles,
+            m.cluster.mpc,
+            misfit
+        );
+    }
+    if !r.modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "(f and damping: the medians of each cluster's stable poles; intervals: jackknife \
+             over the {}; LSFD misfit: the worst response's relative misfit over the band)",
+            if r.hits.is_some() {
+                "hits"
+            } else {
+                "segment groups"
+            }
+        );
+    }
+    for rej in &r.rejected {
+        let _ = writeln!(
+            s,
+            "not a mode: {:.4} Hz ({} poles): {}",
+            rej.cluster.f_hz, rej.cluster.poles, rej.reason
+        );
+    }
+    let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
+    for (o, n) in req.response.names.iter().enumerate() {
+        let coh: Vec<f64> = (0..r.freq_hz.len())
+            .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)
+            .map(|k| r.frfs.coherence[o][k])
+            .collect();
+        let mean = coh.iter().sum::<f64>() / coh.len().max(1) as f64;
+        let _ = writeln!(s, "  {}: {n} (mean coherence in the band {mean:.3})", o + 1);
+    }
+    if r.unit_sizes.len() == 1 {
+        let _ = writeln!(
+            s,
+            "  (one hit: the coherence is 1 by construction and says nothing)"
+        );
+    }
+    for n in &r.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    s
+}
