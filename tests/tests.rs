@@ -8,6 +8,7 @@ mod adversarial;
 mod analyze;
 mod centroid;
 mod daq;
+mod ema;
 mod formats;
 mod hostile;
 mod modal;

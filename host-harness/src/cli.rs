@@ -7,6 +7,7 @@ pub mod analyze;
 pub mod args;
 pub mod calibrate;
 pub mod centroid;
+pub mod ema;
 pub mod frf;
 pub mod merge;
 pub mod modal;
@@ -52,6 +53,10 @@ enum Command {
     /// Output-only modal analysis (FDD, EFDD, SSI-cov) of a displacement file: frequencies,
     /// damping and shapes without an accelerometer.
     Modal(Box<modal::Args>),
+    /// Experimental modal analysis with a measured force (impact hammer or shaker): FRFs of
+    /// the responses (a camera's displacements or a DAQ's channels) over the force, LSCF poles
+    /// with a stabilisation diagram, LSFD shapes.
+    Ema(Box<ema::Args>),
     /// Write a synthetic field record: displacements of a structure under ambient excitation
     /// and its true modes.
     SimulateField(simulate::Args),
@@ -76,6 +81,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(*a),
         Command::Track(a) => track::run(*a),
         Command::Modal(a) => modal::run(*a),
+        Command::Ema(a) => ema::run(*a),
         Command::SimulateField(a) => simulate::run(a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),

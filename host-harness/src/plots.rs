@@ -502,6 +502,25 @@ pub fn write_frf_plot(
     ))
 }
 
+/// FRFs in decibels: one curve per `(label, freq_hz, dB)`, the values' own range (negative
+/// included), written as `path_stem.png` and `path_stem.svg`.
+pub fn write_frf_db_plot(
+    path_stem: &Path,
+    title: &str,
+    y_label: &str,
+    curves: &[(&str, &[f64], &[f64])],
+) -> anyhow::Result<Vec<PathBuf>> {
+    register_font();
+    let (dir, name) = split_stem(path_stem)?;
+    figure!(dir, name, |r| draw_lines(
+        r,
+        title,
+        y_label,
+        curves,
+        Lines::FrfDb
+    ))
+}
+
 /// Tracks over time: one curve per `(label, t_s, value)`, written as `path_stem.png` and
 /// `path_stem.svg` (the value's axis spans the curves' range, negative values included).
 pub fn write_tracks_plot(
@@ -522,11 +541,12 @@ pub fn write_tracks_plot(
 }
 
 /// How [`draw_lines`] draws a figure: an FRF (frequency axis, values from 0, the first curve
-/// the transducer's, thick lines) or tracks (time axis, the values' own range, thin lines in
-/// the exposure colours).
+/// the transducer's, thick lines), an FRF in dB (frequency axis, the values' own range) or
+/// tracks (time axis, the values' own range, thin lines in the exposure colours).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Lines {
     Frf,
+    FrfDb,
     Tracks,
 }
 
@@ -548,17 +568,22 @@ where
             let y_max = values().filter(|v| v.is_finite()).fold(0.0f64, f64::max) * 1.05;
             (0.0..y_max.max(1e-12), "frequency (Hz)")
         }
-        Lines::Tracks => {
+        Lines::Tracks | Lines::FrfDb => {
             let (lo, hi) = finite_range(values()).unwrap_or((-1.0, 1.0));
             let pad = ((hi - lo) * 0.05).max(1e-9);
-            (lo - pad..hi + pad, "time (s)")
+            let x_label = if lines == Lines::Tracks {
+                "time (s)"
+            } else {
+                "frequency (Hz)"
+            };
+            (lo - pad..hi + pad, x_label)
         }
     };
     let mut chart = build_chart(&root, SINGLE, title, xr.0..xr.1, y_range, x_label, y_label)?;
     for (i, (label, x, y)) in curves.iter().enumerate() {
         let (colour, width) = match lines {
             Lines::Frf if i == 0 => (TRANSDUCER, 2),
-            Lines::Frf => (exposure_colour(i, curves.len().max(2)), 2),
+            Lines::Frf | Lines::FrfDb => (exposure_colour(i, curves.len().max(2)), 2),
             Lines::Tracks => (exposure_colour(i, curves.len().max(2)), 1),
         };
         draw_line(

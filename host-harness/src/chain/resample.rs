@@ -82,12 +82,15 @@ pub fn rate_period(from_hz: f64, to_hz: f64) -> Option<usize> {
 }
 
 /// A whole record (not periodic, of any length) upsampled from `from_hz` to `to_hz` through
-/// firmware-core's Fourier upsampler, in overlapping chunks: each chunk has the line through
-/// its first and last samples taken out (its periodic extension then has no jump to ring at),
-/// is upsampled, and the line is added back on the finer grid; of each chunk only its middle
-/// is kept (a quarter of a chunk of margin either side: the ringing of a chunk's ends decays
-/// long before). The record is first cut to a multiple of [`rate_period`] samples (at most
-/// `q - 1` samples dropped at its end); the output has `n * to / from` samples of that.
+/// firmware-core's Fourier upsampler, in overlapping chunks of `q 2^j` samples (`q` the
+/// [`rate_period`]: the chunk and its upsampled length then have small odd factors, which the
+/// core's transforms need): each chunk has the line through its first and last samples taken
+/// out (its periodic extension then has no jump to ring at; a chunk shorter than the rest, at
+/// a short record's end, is padded with zeros after that), is upsampled, and the line is added
+/// back on the finer grid; of each chunk only its middle half is kept (a quarter of a chunk of
+/// margin either side: the ringing of a chunk's ends decays long before). The record is first
+/// cut to a multiple of `q` samples (at most `q - 1` samples dropped at its end); the output
+/// has `n * to / from` samples of that.
 pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Result<Vec<f64>> {
     let q = rate_period(from_hz, to_hz).ok_or_else(|| {
         bad_input(format!(
@@ -103,27 +106,29 @@ pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
     let ratio = to_hz / from_hz;
     let n = values.len() - values.len() % q;
     let out_of = |k: usize| (k as f64 * ratio).round() as usize;
-    // a chunk's core: about 16384 output samples, a whole number of periods
-    let core = ((16384.0 / ratio) as usize / q).max(1) * q;
-    let margin = (core / 4 / q).max(1) * q;
+    // a chunk: q 2^j samples, its upsampled length at most 32768 (and at least 4 q)
+    let mut chunk = q * 4;
+    while out_of(chunk * 2) <= 32_768 {
+        chunk *= 2;
+    }
+    let core = chunk / 2;
+    let margin = chunk / 4;
     let mut out = vec![0.0; out_of(n)];
     let mut s = 0;
     while s < n {
         let e = (s + core).min(n);
-        let (a, b) = (s.saturating_sub(margin), (e + margin).min(n));
-        let chunk = &values[a..b];
-        let len = chunk.len();
-        let (first, last) = (chunk[0], chunk[len - 1]);
-        let slope = if len > 1 {
-            (last - first) / (len - 1) as f64
-        } else {
-            0.0
-        };
-        let detrended: Vec<f64> = chunk
+        let a = s.saturating_sub(margin).min(n.saturating_sub(chunk));
+        let b = (a + chunk).min(n);
+        let part = &values[a..b];
+        let len = part.len();
+        let (first, last) = (part[0], part[len - 1]);
+        let slope = if len > 1 { (last - first) / (len - 1) as f64 } else { 0.0 };
+        let mut detrended: Vec<f64> = part
             .iter()
             .enumerate()
             .map(|(k, v)| v - first - slope * k as f64)
             .collect();
+        detrended.resize(chunk, 0.0);
         let up = upsample_column(&detrended, from_hz, to_hz)?;
         for j in out_of(s)..out_of(e) {
             let local = j - out_of(a);

@@ -9,11 +9,13 @@
 //! the caller's users write them: `--gate-px` on the command line, `gate_px` in Python.
 
 mod analyze;
+mod ema;
 mod modal;
 mod track;
 pub mod tracking;
 
 pub use analyze::{AccelSettings, AnalyzeInput, AnalyzeSpec, TimeOffset, DEFAULT_ACCEL_BANDS};
+pub use ema::{EmaInput, EmaSpec};
 pub use modal::{ModalInput, ModalSpec};
 pub use track::{TrackInput, TrackSpec};
 pub use tracking::{PointsInput, Threshold, Tracker, Tracking, TrackingInput};

@@ -271,6 +271,14 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
     })
 }
 
+/// A rate as people write it: to nine significant digits (a rate from a CSV's mean time step
+/// is 49999.99999999999 Hz for 50 kHz).
+pub fn rate_text(hz: f64) -> String {
+    let digits = 8 - hz.abs().log10().floor().clamp(-9.0, 8.0) as i32;
+    let scale = 10f64.powi(digits);
+    format!("{}", (hz * scale).round() / scale)
+}
+
 /// Force and responses at one rate and one start.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Aligned {
@@ -308,11 +316,12 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
             ("the force", "the responses")
         };
         notes.push(format!(
-            "{slow} ({} Hz) upsampled to the rate of {fast} ({fs} Hz) by Fourier interpolation \
-             (firmware-core's upsampler, in overlapping chunks): {fast} keep their band above \
-             {} Hz, and {slow}, band limited by their own sampling, lose nothing; the FRFs are \
-             fitted below {} Hz",
-            fr.min(ff),
+            "{slow} ({} Hz) upsampled to {} Hz, the rate of {fast}, by Fourier interpolation \
+             (firmware-core's upsampler, in overlapping chunks): the band of {fast} above {} Hz \
+             is kept, not filtered away, and {slow}, band limited by their own sampling, lose \
+             nothing; the FRFs are fitted below {} Hz",
+            rate_text(fr.min(ff)),
+            rate_text(fs),
             fr.min(ff) / 2.0,
             fr.min(ff) / 2.0
         ));

@@ -161,13 +161,13 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
     for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
         owned.push((
             req.response.names[o].clone(),
-            k.iter().map(|&i| h[i].norm()).collect(),
+            k.iter().map(|&i| db(h[i].norm())).collect(),
         ));
         if let Some(c) = r.constants.get(o) {
             owned.push((
                 format!("{} fit", req.response.names[o]),
                 f.iter()
-                    .map(|&fr| c.evaluate(&fitted, req.settings.form, fr).norm())
+                    .map(|&fr| db(c.evaluate(&fitted, req.settings.form, fr).norm()))
                     .collect(),
             ));
         }
@@ -176,10 +176,10 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
         .iter()
         .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
         .collect();
-    crate::plots::write_frf_plot(
+    crate::plots::write_frf_db_plot(
         &dir.join("frf"),
         "H1 and the LSCF/LSFD fit",
-        "|H1|",
+        "|H1|, dB (re 1 unit of the response per unit of force)",
         &curves,
     )?;
     let poles: Vec<(f64, usize, PoleKind)> = r
@@ -209,6 +209,11 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `20 log10 v` (a floor at -400 dB for 0).
+fn db(v: f64) -> f64 {
+    20.0 * v.max(1e-20).log10()
+}
+
 /// An interval as `lo..hi`, or `-`.
 fn range(i: Option<Interval>, digits: usize) -> String {
     i.map_or("-".into(), |i| {
@@ -232,7 +237,7 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
             "s"
         },
         unit(&req.response.unit),
-        req.response.fs_hz,
+        super::input::rate_text(req.response.fs_hz),
         if req.response.camera {
             ", a camera's"
         } else {
@@ -245,7 +250,7 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
         req.inputs[1].display(),
         req.force.names[0],
         unit(&req.force.unit),
-        req.force.fs_hz
+        super::input::rate_text(req.force.fs_hz)
     );
     for n in req.response.notes.iter().chain(&a.notes) {
         let _ = writeln!(s, "  {n}");
@@ -365,11 +370,20 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
             }
         );
     }
-    for rej in &r.rejected {
+    let few = req.settings.cluster.min_poles;
+    for rej in r.rejected.iter().filter(|c| c.cluster.poles >= few) {
         let _ = writeln!(
             s,
             "not a mode: {:.4} Hz ({} poles): {}",
             rej.cluster.f_hz, rej.cluster.poles, rej.reason
+        );
+    }
+    let scattered = r.rejected.iter().filter(|c| c.cluster.poles < few).count();
+    if scattered > 0 {
+        let _ = writeln!(
+            s,
+            "not modes: {scattered} clusters of fewer than {few} stable poles (noise or \
+             computational poles; the stabilisation diagram shows them)"
         );
     }
     let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");

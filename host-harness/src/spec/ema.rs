@@ -1,0 +1,207 @@
+//! `ema`: experimental modal analysis of responses over a measured force.
+
+use super::{SpecError, SpecResult};
+use crate::analysis::ema::impact::ImpactRule;
+use crate::analysis::ema::input::{align, read_force, read_responses};
+use crate::analysis::ema::lscf::LscfRule;
+use crate::analysis::ema::run::EmaRequest;
+use crate::analysis::ema::{EmaSettings, ExpChoice, Excitation};
+use crate::analysis::modal::FrfForm;
+use crate::analysis::oma::cluster::ClusterRule;
+use std::path::PathBuf;
+
+/// `ema`'s settings as given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmaInput {
+    /// The responses' file.
+    pub response: PathBuf,
+    /// `$response_col`: the responses by name (empty: every channel).
+    pub response_cols: Vec<String>,
+    /// `$response_fs`, Hz, when the file states no rate.
+    pub response_fs: Option<f64>,
+    /// The force's file.
+    pub excitation: PathBuf,
+    /// `$excitation_col` (none: the file's only channel).
+    pub excitation_col: Option<String>,
+    /// `$excitation_fs`, Hz, when the file states no rate.
+    pub excitation_fs: Option<f64>,
+    /// `$impact`: hits of a hammer (else a continuous force).
+    pub impact: bool,
+    /// `$exp_window`.
+    pub exp_window: ExpChoice,
+    /// `$block_s`: longest block of a hit, s.
+    pub block_s: Option<f64>,
+    /// `$delay_s`: the responses' first sample after the force's, s.
+    pub delay_s: f64,
+    /// `$response_quantity`: displacement (receptance), velocity or acceleration.
+    pub form: FrfForm,
+    /// `$bands`, Hz (none: every mode the diagram shows).
+    pub bands: Option<Vec<(f64, f64)>>,
+    /// `$f_min_hz`.
+    pub f_min_hz: Option<f64>,
+    /// `$f_max_hz`.
+    pub f_max_hz: Option<f64>,
+    /// `$max_order`: LSCF's highest order.
+    pub max_order: usize,
+    /// `$nperseg`: a continuous test's Welch segment.
+    pub nperseg: Option<usize>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Replace an earlier `ema` output there.
+    pub force: bool,
+    /// Draw the figures.
+    pub plots: bool,
+}
+
+/// A checked `ema` job: its records read and aligned.
+#[derive(Debug, Clone)]
+pub struct EmaSpec {
+    request: EmaRequest,
+}
+
+impl EmaSpec {
+    /// Reads the files and checks the settings against them.
+    pub fn new(input: EmaInput) -> SpecResult<Self> {
+        if let Some(b) = &input.bands {
+            super::bands_ordered(b)?;
+        }
+        if !input.delay_s.is_finite() {
+            return Err(SpecError::setting(format!(
+                "$delay_s must be a finite number of seconds, got {}",
+                input.delay_s
+            )));
+        }
+        if let ExpChoice::End(e) = input.exp_window {
+            if !(e > 0.0 && e < 1.0) {
+                return Err(SpecError::setting(format!(
+                    "$exp_window {e}: the window's value at the block's end, between 0 and 1 \
+                     (or off, auto)"
+                )));
+            }
+        }
+        if !(2..=200).contains(&input.max_order) {
+            return Err(SpecError::setting(format!(
+                "$max_order {}: 2 to 200",
+                input.max_order
+            )));
+        }
+        if let Some(b) = input.block_s {
+            super::positive("$block_s", b, "seconds")?;
+        }
+        if !input.impact && input.exp_window != ExpChoice::Auto {
+            return Err(SpecError::setting(
+                "$exp_window is for an impact test ($impact)".to_string(),
+            ));
+        }
+        for fs in [input.response_fs, input.excitation_fs].into_iter().flatten() {
+            if !(fs.is_finite() && fs > 0.0) {
+                return Err(SpecError::setting(format!(
+                    "$response_fs and $excitation_fs must be positive, got {fs}"
+                )));
+            }
+        }
+        let response = read_responses(&input.response, &input.response_cols, input.response_fs)
+            .map_err(SpecError::Input)?;
+        let force = read_force(
+            &input.excitation,
+            input.excitation_col.as_deref().unwrap_or(""),
+            input.excitation_fs,
+        )
+        .map_err(SpecError::Input)?;
+        let aligned = align(&response, &force, input.delay_s).map_err(SpecError::Input)?;
+        let nyq = aligned.nyquist_hz;
+        if let Some(b) = &input.bands {
+            super::bands_below_nyquist(b, 2.0 * nyq, "the slower record's")?;
+        }
+        let f_max = match input.f_max_hz {
+            Some(f) if !(f.is_finite() && f > 0.0 && f <= nyq) => {
+                return Err(SpecError::setting(format!(
+                    "$f_max_hz {f}: between 0 and the slower record's Nyquist frequency ({nyq} Hz)"
+                )))
+            }
+            Some(f) => f,
+            None => match &input.bands {
+                Some(b) => b.iter().map(|x| x.1).fold(0.0, f64::max),
+                None => 0.8 * nyq,
+            },
+        };
+        let f_min = match input.f_min_hz {
+            Some(f) if !(f.is_finite() && f >= 0.0 && f < f_max) => {
+                return Err(SpecError::setting(format!(
+                    "$f_min_hz {f}: between 0 and the band's top ({f_max} Hz)"
+                )))
+            }
+            Some(f) => f,
+            None => match &input.bands {
+                Some(b) => b.iter().map(|x| x.0).fold(f64::INFINITY, f64::min),
+                None => (f_max / 100.0).max(0.5),
+            },
+        };
+        let n = aligned.force.len();
+        let excitation = if input.impact {
+            Excitation::Impact {
+                rule: ImpactRule {
+                    block_s: input.block_s,
+                    ..ImpactRule::default()
+                },
+                exp: input.exp_window,
+            }
+        } else {
+            let nperseg = match input.nperseg {
+                Some(p) if !(64..=1 << 20).contains(&p) || 2 * p > n => {
+                    return Err(SpecError::setting(format!(
+                        "$nperseg {p}: 64 to 2^20 samples and at most half the record ({n})"
+                    )))
+                }
+                Some(p) => p,
+                None => {
+                    let mut p = 1usize << 16;
+                    while p > 64 && 9 * p > 2 * n {
+                        p /= 2;
+                    }
+                    if 2 * p > n {
+                        return Err(SpecError::setting(format!(
+                            "the record has {n} samples at {} Hz: too short for Welch segments",
+                            aligned.fs_hz
+                        )));
+                    }
+                    p
+                }
+            };
+            Excitation::Continuous { nperseg }
+        };
+        let settings = EmaSettings {
+            excitation,
+            form: input.form,
+            band_hz: (f_min, f_max),
+            bands: input.bands.clone(),
+            lscf: LscfRule {
+                max_order: input.max_order,
+                ..LscfRule::default()
+            },
+            cluster: ClusterRule::default(),
+        };
+        Ok(EmaSpec {
+            request: EmaRequest {
+                response,
+                force,
+                aligned,
+                settings,
+                inputs: vec![input.response.clone(), input.excitation.clone()],
+                out: input.out.clone(),
+                force_out: input.force,
+                plots: input.plots,
+            },
+        })
+    }
+
+    /// The request: records and settings.
+    pub fn request(&self) -> &EmaRequest {
+        &self.request
+    }
+
+    /// Runs the job: the report, and whether it succeeded.
+    pub fn run(&self) -> anyhow::Result<crate::analysis::request::Outcome> {
+        crate::analysis::ema::run::run(&self.request)
+    }
+}
