@@ -23,6 +23,12 @@ MARK = "CHECK_UFF_IN_VENV"
 
 def ensure_venv():
     """Re-executes this script with the venv's python, creating the venv if needed."""
+    ensure_venv_for(__file__)
+
+
+def ensure_venv_for(script):
+    """Re-executes `script` (with this process's arguments) with the venv's python, creating
+    the venv if needed."""
     if os.environ.get(MARK) == "1":
         return
     root = Path(__file__).resolve().parent.parent
@@ -35,7 +41,7 @@ def ensure_venv():
     if have.returncode != 0:
         subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
     os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
+    os.execv(str(py), [str(py), str(Path(script).resolve()), *sys.argv[1:]])
 
 
 def main():

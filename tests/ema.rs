@@ -5,97 +5,48 @@
 //! with and without the exponential window, and name a double hit and a clipped hit.
 
 use crate::util::{assert_exit_2, assert_ok, harness};
-use host_harness::model::hammer::{HammerMode, HammerTest, Hit};
-use std::fmt::Write as _;
+use host_harness::model::hammer::HammerTest;
+use host_harness::recording::hammer::HammerRecording;
 use std::path::Path;
 
-const DAQ_HZ: f64 = 50_000.0;
-const CAMERA_HZ: f64 = 2_000.0;
 const POINTS: usize = 5;
 
-fn structure(hits: Vec<Hit>) -> HammerTest {
-    let shape = |r: usize| -> Vec<f64> {
-        (0..POINTS)
-            .map(|o| ((r + 1) as f64 * std::f64::consts::PI * (o as f64 + 0.7) / 6.0).sin())
-            .collect()
-    };
-    HammerTest {
-        modes: vec![
-            HammerMode {
-                f_hz: 23.0,
-                damping: 0.015,
-                shape: shape(0),
-            },
-            HammerMode {
-                f_hz: 61.5,
-                damping: 0.010,
-                shape: shape(1),
-            },
-            HammerMode {
-                f_hz: 118.0,
-                damping: 0.008,
-                shape: shape(2),
-            },
-        ],
-        drive: 1,
-        hits,
-    }
-}
-
-fn hits(peaks: &[f64]) -> Vec<Hit> {
-    peaks
+/// `simulate-hammer` into `dir` with `extra` flags; the test it wrote.
+fn write_test(dir: &Path, extra: &[&str]) -> HammerTest {
+    let d = dir.to_str().unwrap();
+    let mut args = vec!["simulate-hammer", "--out", d, "--force"];
+    args.extend_from_slice(extra);
+    assert_ok(&harness(&args));
+    // the same structure as the command's (its own truth.csv is checked below)
+    let peaks: Vec<f64> = extra
         .iter()
-        .enumerate()
-        .map(|(i, &p)| Hit {
-            t_s: 0.2 + 3.0 * i as f64,
-            width_s: 0.0006,
-            peak_n: p,
+        .position(|a| *a == "--peaks-n")
+        .map(|i| {
+            extra[i + 1]
+                .split(',')
+                .map(|v| v.parse().unwrap())
+                .collect()
         })
-        .collect()
-}
-
-/// A deterministic noise in [-0.5, 0.5).
-fn noise(seed: u64, n: usize) -> Vec<f64> {
-    host_harness::testing::uniform_noise(seed, n)
-}
-
-/// Writes `force.csv` (50 kHz, `t_s,force_n`, noise 0.3 N sd, clipped at `clip` N when given)
-/// and `camera.csv` (2 kHz, `t_s,p1..p5` in mm, noise 0.5 um sd) of `test`, `seconds` long.
-fn write_test(dir: &Path, test: &HammerTest, seconds: f64, clip: Option<f64>) {
-    std::fs::create_dir_all(dir).unwrap();
-    let n = (seconds * DAQ_HZ) as usize;
-    let e = noise(1, n);
-    let mut s = String::from("t_s,force_n\n");
-    for (k, e) in e.iter().enumerate() {
-        let t = k as f64 / DAQ_HZ;
-        let mut f = test.force(t) + 0.3 * 3.46 * e;
-        if let Some(c) = clip {
-            f = f.min(c);
-        }
-        let _ = writeln!(s, "{t},{f:.5}");
+        .unwrap_or(vec![150.0, 120.0, 180.0]);
+    HammerRecording {
+        seconds: 9.2,
+        daq_hz: 50_000.0,
+        camera_hz: 2_000.0,
+        peaks_n: peaks,
+        double_hit: false,
+        clip_n: None,
+        force_noise_n: 0.3,
+        camera_noise_mm: 0.0005,
+        seed: 1,
     }
-    std::fs::write(dir.join("force.csv"), s).unwrap();
-    let m = (seconds * CAMERA_HZ) as usize;
-    let e = noise(2, m * POINTS);
-    let mut s = String::from("t_s");
-    for o in 0..POINTS {
-        let _ = write!(s, ",p{}", o + 1);
-    }
-    s.push('\n');
-    for k in 0..m {
-        let t = k as f64 / CAMERA_HZ;
-        let _ = write!(s, "{t}");
-        for o in 0..POINTS {
-            let x_mm = 1e3 * test.displacement(o, t) + 5e-4 * 3.46 * e[k * POINTS + o];
-            let _ = write!(s, ",{x_mm:.7}");
-        }
-        s.push('\n');
-    }
-    std::fs::write(dir.join("camera.csv"), s).unwrap();
+    .test()
 }
 
 /// `(f_hz, damping)` per mode of modes.csv, and the shapes (per mode, per point, re + i im).
-fn results(dir: &Path) -> (Vec<(f64, f64)>, Vec<Vec<(f64, f64)>>) {
+/// A complex number as `(re, im)`.
+type C = (f64, f64);
+
+fn results(dir: &Path) -> (Vec<(f64, f64)>, Vec<Vec<C>>) {
     let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
     let modes: Vec<(f64, f64)> = text
         .lines()
@@ -150,11 +101,7 @@ fn check_modes(dir: &Path, test: &HammerTest, what: &str) {
 }
 
 fn ema(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
-    let (r, f, o) = (
-        dir.join("camera.csv"),
-        dir.join("force.csv"),
-        dir.join(out),
-    );
+    let (r, f, o) = (dir.join("camera.csv"), dir.join("force.csv"), dir.join(out));
     let mut args = vec![
         "ema",
         "--response",
@@ -178,8 +125,12 @@ fn ema(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
 #[test]
 fn a_hammer_test_at_two_rates_gives_the_modes_with_and_without_the_exponential_window() {
     let dir = std::env::temp_dir().join(format!("vibcam-ema-{}", std::process::id()));
-    let test = structure(hits(&[150.0, 120.0, 180.0]));
-    write_test(&dir, &test, 9.2, None);
+    let test = write_test(&dir, &[]);
+    let truth = std::fs::read_to_string(dir.join("truth.csv")).unwrap();
+    assert!(
+        truth.starts_with("mode,f_hz,damping,point,shape\n1,23,0.015,1,"),
+        "{truth}"
+    );
     let plain = ema(&dir, "plain", &["--exp-window", "off"]);
     assert_ok(&plain);
     let report = String::from_utf8_lossy(&plain.stdout);
@@ -202,36 +153,32 @@ fn a_hammer_test_at_two_rates_gives_the_modes_with_and_without_the_exponential_w
 #[test]
 fn a_double_hit_and_a_clipped_hit_are_named_and_left_out() {
     let dir = std::env::temp_dir().join(format!("vibcam-ema-bad-{}", std::process::id()));
-    let mut h = hits(&[80.0, 70.0, 100.0]);
-    // a rebound 4 ms after the second hit; the third clipped at 90 N
-    h.push(Hit {
-        t_s: 3.204,
-        width_s: 0.0006,
-        peak_n: 40.0,
-    });
-    let test = structure(h);
-    write_test(&dir, &test, 9.2, Some(90.0));
+    write_test(
+        &dir,
+        &["--peaks-n", "80,70,100", "--double-hit", "--clip-n", "90"],
+    );
     let out = ema(&dir, "bad", &[]);
     assert_ok(&out);
     let report = String::from_utf8_lossy(&out.stdout);
     assert!(report.contains("3 hits found, 1 used"), "{report}");
-    assert!(report.contains("hit 2 at 3.2000 s: a double hit"), "{report}");
-    assert!(report.contains("hit 3 at 6.2000 s: the force is clipped"), "{report}");
+    assert!(
+        report.contains("hit 2 at 3.2000 s: a double hit"),
+        "{report}"
+    );
+    assert!(
+        report.contains("hit 3 at 6.2000 s: the force is clipped"),
+        "{report}"
+    );
     // all hits bad: refused, each named
-    let all_bad = structure(vec![
-        Hit {
-            t_s: 0.2,
-            width_s: 0.0006,
-            peak_n: 150.0,
-        },
-        Hit {
-            t_s: 0.205,
-            width_s: 0.0006,
-            peak_n: 60.0,
-        },
-    ]);
-    write_test(&dir, &all_bad, 3.0, None);
-    let out = ema(&dir, "worse", &[]);
-    assert_exit_2(&out, "no hit can be used: hit 1 at 0.2000 s: a double hit");
+    let short = dir.join("short");
+    write_test(
+        &short,
+        &["--seconds", "3", "--peaks-n", "150", "--clip-n", "100"],
+    );
+    let out = ema(&short, "worse", &[]);
+    assert_exit_2(
+        &out,
+        "no hit can be used: hit 1 at 0.2000 s: the force is clipped",
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

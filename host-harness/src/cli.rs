@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod centroid;
 pub mod ema;
 pub mod frf;
+pub mod hammer;
 pub mod merge;
 pub mod modal;
 pub mod plan;
@@ -60,6 +61,9 @@ enum Command {
     /// Write a synthetic field record: displacements of a structure under ambient excitation
     /// and its true modes.
     SimulateField(simulate::Args),
+    /// Write a synthetic impact hammer test: the force at a DAQ's rate, five points'
+    /// displacements at a camera's rate, the true modes (to try `ema` on).
+    SimulateHammer(hammer::Args),
     /// Write PNG frames of the simulated target, sharp and blurred.
     Render(render::Args),
     /// Plan the exposure before a test: per mode the amplitude loss, the longest exposure
@@ -83,6 +87,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Modal(a) => modal::run(*a),
         Command::Ema(a) => ema::run(*a),
         Command::SimulateField(a) => simulate::run(a),
+        Command::SimulateHammer(a) => hammer::run(a),
         Command::Render(a) => render::run(a),
         Command::Plan(a) => plan::run(a),
         Command::Calibrate(a) => calibrate::run(a),

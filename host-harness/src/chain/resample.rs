@@ -122,7 +122,11 @@ pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
         let part = &values[a..b];
         let len = part.len();
         let (first, last) = (part[0], part[len - 1]);
-        let slope = if len > 1 { (last - first) / (len - 1) as f64 } else { 0.0 };
+        let slope = if len > 1 {
+            (last - first) / (len - 1) as f64
+        } else {
+            0.0
+        };
         let mut detrended: Vec<f64> = part
             .iter()
             .enumerate()
@@ -130,10 +134,11 @@ pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
             .collect();
         detrended.resize(chunk, 0.0);
         let up = upsample_column(&detrended, from_hz, to_hz)?;
-        for j in out_of(s)..out_of(e) {
-            let local = j - out_of(a);
+        let (from, base) = (out_of(s), out_of(a));
+        for (j, o) in out[from..out_of(e)].iter_mut().enumerate() {
+            let local = from + j - base;
             let t = local as f64 / ratio;
-            out[j] = f64::from(up.values[local]) * up.scale + first + slope * t;
+            *o = f64::from(up.values[local]) * up.scale + first + slope * t;
         }
         s = e;
     }

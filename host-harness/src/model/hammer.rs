@@ -55,7 +55,35 @@ pub struct HammerTest {
     pub hits: Vec<Hit>,
 }
 
+/// Points of [`HammerTest::three_modes`].
+pub const THREE_MODE_POINTS: usize = 5;
+
 impl HammerTest {
+    /// A structure of three modes (23 Hz 1.5 %, 61.5 Hz 1.0 %, 118 Hz 0.8 %) seen at five
+    /// points (the shapes of a beam's first three bending modes, `sin(r pi (o + 0.7) / 6)`),
+    /// hit at point 2 (index 1) by `hits`.
+    pub fn three_modes(hits: Vec<Hit>) -> HammerTest {
+        let shape = |r: usize| -> Vec<f64> {
+            (0..THREE_MODE_POINTS)
+                .map(|o| ((r + 1) as f64 * PI * (o as f64 + 0.7) / 6.0).sin())
+                .collect()
+        };
+        let mode = |r: usize, f_hz: f64, damping: f64| HammerMode {
+            f_hz,
+            damping,
+            shape: shape(r),
+        };
+        HammerTest {
+            modes: vec![
+                mode(0, 23.0, 0.015),
+                mode(1, 61.5, 0.010),
+                mode(2, 118.0, 0.008),
+            ],
+            drive: 1,
+            hits,
+        }
+    }
+
     /// The force at `t`, N.
     pub fn force(&self, t: f64) -> f64 {
         self.hits

@@ -14,6 +14,7 @@
 
 pub mod cluttered;
 pub mod field;
+pub mod hammer;
 pub mod release;
 pub mod scene;
 pub mod targets;

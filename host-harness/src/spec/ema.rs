@@ -5,7 +5,7 @@ use crate::analysis::ema::impact::ImpactRule;
 use crate::analysis::ema::input::{align, read_force, read_responses};
 use crate::analysis::ema::lscf::LscfRule;
 use crate::analysis::ema::run::EmaRequest;
-use crate::analysis::ema::{EmaSettings, ExpChoice, Excitation};
+use crate::analysis::ema::{EmaSettings, Excitation, ExpChoice};
 use crate::analysis::modal::FrfForm;
 use crate::analysis::oma::cluster::ClusterRule;
 use std::path::PathBuf;
@@ -93,7 +93,10 @@ impl EmaSpec {
                 "$exp_window is for an impact test ($impact)".to_string(),
             ));
         }
-        for fs in [input.response_fs, input.excitation_fs].into_iter().flatten() {
+        for fs in [input.response_fs, input.excitation_fs]
+            .into_iter()
+            .flatten()
+        {
             if !(fs.is_finite() && fs > 0.0) {
                 return Err(SpecError::setting(format!(
                     "$response_fs and $excitation_fs must be positive, got {fs}"

@@ -140,18 +140,18 @@ fn undecayed(responses: &[Vec<f64>], hits: &Hits) -> f64 {
     worst
 }
 
+/// What [`select`] finds: every pole, the modes (clusters reported), the clusters rejected,
+/// and the mode of each band (every mode, without bands).
+struct Selection {
+    poles: Vec<ssi::Pole>,
+    modes: Vec<SsiMode>,
+    rejected: Vec<Rejected>,
+    per_band: Vec<Option<SsiMode>>,
+}
+
 /// The poles of `h1` and the modes among them: every stable cluster, or per band the fullest
 /// reported cluster in it (`None` where a band has none).
-fn select(
-    freq_hz: &[f64],
-    h1: &[Vec<Complex64>],
-    s: &EmaSettings,
-) -> anyhow::Result<(
-    Vec<ssi::Pole>,
-    Vec<SsiMode>,
-    Vec<Rejected>,
-    Vec<Option<SsiMode>>,
-)> {
+fn select(freq_hz: &[f64], h1: &[Vec<Complex64>], s: &EmaSettings) -> anyhow::Result<Selection> {
     let poles = lscf::poles(freq_hz, h1, s.band_hz, s.lscf)?;
     let (modes, rejected) = cluster(&poles, s.cluster);
     let per_band = match &s.bands {
@@ -167,8 +167,16 @@ fn select(
             })
             .collect(),
     };
-    Ok((poles, modes, rejected, per_band))
+    Ok(Selection {
+        poles,
+        modes,
+        rejected,
+        per_band,
+    })
 }
+
+/// One replicate of a mode: its pole and residues (`None`: not found without that unit).
+type Replicate = Option<(Pole, Vec<Complex64>)>;
 
 /// A pole from a cluster's median frequency and damping.
 fn pole_of(m: &SsiMode) -> Pole {
@@ -241,7 +249,12 @@ pub fn analyse(
     };
     let frfs = spectra.frfs(None);
     let freq = spectra.freq_hz.clone();
-    let (poles, all, rejected, per_band) = select(&freq, &frfs.h1, s)?;
+    let Selection {
+        poles,
+        modes: all,
+        rejected,
+        per_band,
+    } = select(&freq, &frfs.h1, s)?;
     if let Some(bands) = &s.bands {
         for (b, m) in bands.iter().zip(&per_band) {
             if m.is_none() {
@@ -268,7 +281,7 @@ pub fn analyse(
     };
     let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
     // the jackknife: every unit left out in turn
-    let mut reps: Vec<Vec<Option<(Pole, Vec<Complex64>)>>> = vec![Vec::new(); chosen.len()];
+    let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); chosen.len()];
     if spectra.units.len() >= 3 && !fitted.is_empty() {
         for g in 0..spectra.units.len() {
             let f = spectra.frfs(Some(g));
@@ -276,8 +289,8 @@ pub fn analyse(
             let matched: Vec<Option<Pole>> = fitted
                 .iter()
                 .map(|p| {
-                    got.as_ref().and_then(|(_, modes, _, _)| {
-                        modes
+                    got.as_ref().and_then(|sel| {
+                        sel.modes
                             .iter()
                             .filter(|m| (m.f_hz - p.f_hz).abs() <= 0.02 * p.f_hz)
                             .min_by(|a, b| {

@@ -116,8 +116,8 @@ fn accumulate(
     let mut f = fft.make_output_vec();
     fft.process(&mut input, &mut f)
         .map_err(|e| anyhow::anyhow!("transform of {n} samples: {e}"))?;
-    for k in 0..lines {
-        unit.ff[k] += f[k].norm_sqr();
+    for (acc, v) in unit.ff.iter_mut().zip(&f) {
+        *acc += v.norm_sqr();
     }
     for (o, x) in responses.iter().enumerate() {
         let mut input = x.clone();

@@ -1,0 +1,104 @@
+//! `host-harness simulate-hammer`: a synthetic impact hammer test
+//! ([`crate::recording::hammer`]) to try `ema` on: the force at a DAQ's rate, five points'
+//! displacements at a camera's, the true modes.
+
+use crate::recording::hammer::{write_hammer_recording, HammerRecording};
+use std::path::PathBuf;
+
+/// Arguments of `host-harness simulate-hammer`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Record length, s (the hits come every 3 s from 0.2 s).
+    #[arg(long, value_name = "S", default_value_t = 9.2)]
+    pub seconds: f64,
+    /// The force's rate (a DAQ), Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 50_000.0)]
+    pub daq_hz: f64,
+    /// The displacements' rate (a camera), Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 2_000.0)]
+    pub camera_hz: f64,
+    /// The hits' peak forces, N (one hit each, 3 s apart).
+    #[arg(
+        long,
+        value_name = "N,...",
+        value_delimiter = ',',
+        default_value = "150,120,180"
+    )]
+    pub peaks_n: Vec<f64>,
+    /// A rebound 4 ms after the second hit (a double hit).
+    #[arg(long)]
+    pub double_hit: bool,
+    /// Clip the force channel at this level, N (a saturated transducer).
+    #[arg(long, value_name = "N")]
+    pub clip_n: Option<f64>,
+    /// The force's noise, N (standard deviation).
+    #[arg(long, value_name = "N", default_value_t = 0.3)]
+    pub force_noise_n: f64,
+    /// The displacements' noise, mm (standard deviation).
+    #[arg(long, value_name = "MM", default_value_t = 0.0005)]
+    pub camera_noise_mm: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory (created).
+    #[arg(long, value_name = "DIR", default_value = "hammer")]
+    pub out: PathBuf,
+    /// Replace --out if it is an earlier output of `simulate-hammer`.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `host-harness simulate-hammer`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let positive = |v: f64, flag: &str| -> anyhow::Result<()> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(crate::bad_input(format!(
+                "{flag} must be positive, got {v}"
+            )))
+        }
+    };
+    positive(a.seconds, "--seconds")?;
+    positive(a.daq_hz, "--daq-hz")?;
+    positive(a.camera_hz, "--camera-hz")?;
+    if a.seconds * a.daq_hz.max(a.camera_hz) > 2e7 {
+        return Err(crate::bad_input(format!(
+            "--seconds {} at {} Hz: more than 20 million samples",
+            a.seconds,
+            a.daq_hz.max(a.camera_hz)
+        )));
+    }
+    if a.peaks_n.is_empty() || a.peaks_n.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
+        return Err(crate::bad_input(
+            "--peaks-n: positive forces, N".to_string(),
+        ));
+    }
+    for (v, flag) in [
+        (a.force_noise_n, "--force-noise-n"),
+        (a.camera_noise_mm, "--camera-noise-mm"),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(crate::bad_input(format!("{flag} must be >= 0, got {v}")));
+        }
+    }
+    write_hammer_recording(
+        &a.out,
+        a.force,
+        &HammerRecording {
+            seconds: a.seconds,
+            daq_hz: a.daq_hz,
+            camera_hz: a.camera_hz,
+            peaks_n: a.peaks_n,
+            double_hit: a.double_hit,
+            clip_n: a.clip_n,
+            force_noise_n: a.force_noise_n,
+            camera_noise_mm: a.camera_noise_mm,
+            seed: a.seed,
+        },
+    )?;
+    super::stdout(&format!(
+        "wrote {}: force.csv, camera.csv, truth.csv, README.txt\n",
+        a.out.display()
+    ))
+}
