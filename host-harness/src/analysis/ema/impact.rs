@@ -209,6 +209,29 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
             ));
         }
     }
+    // one block length for every hit: the shortest spacing between hits, and the last used
+    // hit's rest of the record, unless that is less than half the spacing: then that hit is
+    // left out rather than every block cut short
+    let starts: Vec<usize> = hits.iter().map(|h| h.pulses[0].start).collect();
+    let between = starts.windows(2).map(|w| w[1] - w[0]).min();
+    let last = starts[starts.len() - 1];
+    let tail = force.len() - last;
+    let others_used = hits[..hits.len() - 1].iter().any(|h| h.left_out.is_none());
+    let mut spacing = between.unwrap_or(tail);
+    if let Some(h) = hits.last_mut().filter(|h| h.left_out.is_none()) {
+        if others_used && between.is_some_and(|b| 2 * tail < b) {
+            h.left_out = Some(format!(
+                "hit {} at {}: the record ends {:.3} s after it, less than half the hits' \
+                 spacing ({:.3} s)",
+                starts.len(),
+                at(last),
+                tail as f64 / fs_hz,
+                spacing as f64 / fs_hz
+            ));
+        } else {
+            spacing = spacing.min(tail);
+        }
+    }
     if hits.iter().all(|h| h.left_out.is_some()) {
         let why: Vec<&str> = hits.iter().filter_map(|h| h.left_out.as_deref()).collect();
         return Err(bad_input(format!(
@@ -216,14 +239,11 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
             why.join("; ")
         )));
     }
-    // one block length for every hit: the shortest spacing, the last to the record's end
-    let starts: Vec<usize> = hits.iter().map(|h| h.pulses[0].start).collect();
-    let mut spacing = force.len() - starts[starts.len() - 1];
-    for w in starts.windows(2) {
-        spacing = spacing.min(w[1] - w[0]);
-    }
     let pre = (spacing / 50).min(starts[0]);
-    let mut block = spacing.min(force.len() - starts[starts.len() - 1] + pre);
+    let mut block = spacing;
+    if hits.last().is_some_and(|h| h.left_out.is_none()) {
+        block = block.min(tail + pre);
+    }
     if let Some(b) = rule.block_s {
         block = block.min((b * fs_hz).round() as usize);
     }
@@ -342,6 +362,19 @@ mod tests {
         assert_eq!(h.block, 10_000);
         assert_eq!(h.pre, 200);
         assert!(h.hits[0].pulse().start <= 1001 && h.hits[0].pulse().end >= 1019);
+    }
+
+    #[test]
+    fn a_last_hit_close_to_the_record_end_is_left_out_not_every_block_cut() {
+        let f = record(
+            &[(1000, 20, 100.0), (11_000, 20, 100.0), (21_000, 20, 100.0)],
+            23_000,
+        );
+        let h = find(&f, 10_000.0, ImpactRule::default(), "force").unwrap();
+        let why = h.hits[2].left_out.as_deref().unwrap();
+        assert!(why.contains("the record ends 0.200 s after it"), "{why}");
+        assert_eq!(h.block, 10_000);
+        assert_eq!(h.used().count(), 2);
     }
 
     #[test]

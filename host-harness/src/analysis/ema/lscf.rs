@@ -107,31 +107,43 @@ pub fn poles(
         scales.push(rms);
     }
     let m1 = n + 1;
-    // R = Re(X^H X): Toeplitz in (i - j)
-    let mut r = DMatrix::<f64>::zeros(m1, m1);
-    for i in 0..m1 {
-        for j in 0..m1 {
-            r[(i, j)] = x.iter().map(|p| (p[i].conj() * p[j]).re).sum();
+    // R, S_o and T_o are Toeplitz: conj(z^i) z^j = z^(j - i) on the unit circle, so each is
+    // the real part of a sum over the lines of z^d (times -H, |H|^2) at the lag d = j - i
+    let lag = |sums: &[Complex64], i: usize, j: usize| -> Complex64 {
+        if j >= i {
+            sums[j - i]
+        } else {
+            // z^-d = conj(z^d): the sum of conj(z^d) w = conj(sum of z^d conj(w))
+            sums[m1 + (i - j)]
         }
-    }
-    let mut s_blocks = Vec::with_capacity(frfs.len());
-    let mut t_blocks = Vec::with_capacity(frfs.len());
-    for (h, scale) in frfs.iter().zip(&scales) {
-        let mut s = DMatrix::<f64>::zeros(m1, m1);
-        let mut t = DMatrix::<f64>::zeros(m1, m1);
-        for (p, &k) in x.iter().zip(&lines) {
-            let hk = h[k] / scale;
-            let a2 = hk.norm_sqr();
-            for i in 0..m1 {
-                for j in 0..m1 {
-                    let pij = p[i].conj() * p[j];
-                    s[(i, j)] -= (pij * hk).re;
-                    t[(i, j)] += pij.re * a2;
+    };
+    // sums[d] for d = 0..=n, then sums[m1 + d] = sum conj(z^d) w for d = 1..=n
+    let lag_sums = |w: &dyn Fn(usize) -> Complex64| -> Vec<Complex64> {
+        let mut sums = vec![Complex64::new(0.0, 0.0); 2 * m1];
+        for (row, p) in x.iter().enumerate() {
+            let wk = w(row);
+            for d in 0..m1 {
+                sums[d] += p[d] * wk;
+                if d > 0 {
+                    sums[m1 + d] += p[d].conj() * wk;
                 }
             }
         }
-        s_blocks.push(s);
-        t_blocks.push(t);
+        sums
+    };
+    let toeplitz = |sums: &[Complex64], sign: f64| -> DMatrix<f64> {
+        DMatrix::from_fn(m1, m1, |i, j| sign * lag(sums, i, j).re)
+    };
+    let r = toeplitz(&lag_sums(&|_| Complex64::new(1.0, 0.0)), 1.0);
+    let mut s_blocks = Vec::with_capacity(frfs.len());
+    let mut t_blocks = Vec::with_capacity(frfs.len());
+    for (h, scale) in frfs.iter().zip(&scales) {
+        let hs: Vec<Complex64> = lines.iter().map(|&k| h[k] / scale).collect();
+        s_blocks.push(toeplitz(&lag_sums(&|row| hs[row]), -1.0));
+        t_blocks.push(toeplitz(
+            &lag_sums(&|row| Complex64::new(hs[row].norm_sqr(), 0.0)),
+            1.0,
+        ));
     }
     let mut all: Vec<Pole> = Vec::new();
     let mut below: Vec<Pole> = Vec::new();
