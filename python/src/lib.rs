@@ -776,6 +776,180 @@ fn study(
     .map_err(py_err)
 }
 
+/// `ema(...)`: experimental modal analysis of responses over a measured force, as
+/// `host-harness ema`; returns a dict of arrays (the Python half's `EmaResult`). With `out`
+/// the command's files are written there too.
+#[pyfunction]
+#[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
+    excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
+    delay_s=0.0, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
+    max_order=48, nperseg=None, out=None, force=false))]
+#[allow(clippy::too_many_arguments)]
+fn ema<'py>(
+    py: Python<'py>,
+    response: String,
+    excitation: String,
+    response_cols: Vec<String>,
+    response_fs: Option<f64>,
+    excitation_col: Option<String>,
+    excitation_fs: Option<f64>,
+    impact: bool,
+    exp_window: &str,
+    block_s: Option<f64>,
+    delay_s: f64,
+    response_quantity: &str,
+    bands: Option<Vec<(f64, f64)>>,
+    f_min_hz: Option<f64>,
+    f_max_hz: Option<f64>,
+    max_order: usize,
+    nperseg: Option<usize>,
+    out: Option<String>,
+    force: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    use host_harness::analysis::ema::ExpChoice;
+    use host_harness::analysis::modal::FrfForm;
+    use host_harness::spec::{EmaInput, EmaSpec};
+    let exp = match exp_window {
+        "off" => ExpChoice::Off,
+        "auto" => ExpChoice::Auto,
+        v => ExpChoice::End(v.parse::<f64>().map_err(|_| {
+            bad(format!(
+                "exp_window `{v}`: \"off\", \"auto\" or the window's value at the block's end"
+            ))
+        })?),
+    };
+    let form = match response_quantity {
+        "displacement" => FrfForm::Receptance,
+        "velocity" => FrfForm::Mobility,
+        "acceleration" => FrfForm::Accelerance,
+        q => {
+            return Err(bad(format!(
+                "response_quantity `{q}`: displacement, velocity or acceleration"
+            )))
+        }
+    };
+    let write = out.is_some();
+    let input = EmaInput {
+        response: response.into(),
+        response_cols,
+        response_fs,
+        excitation: excitation.into(),
+        excitation_col,
+        excitation_fs,
+        impact,
+        exp_window: exp,
+        block_s,
+        delay_s,
+        form,
+        bands,
+        f_min_hz,
+        f_max_hz,
+        max_order,
+        nperseg,
+        out: out.map(std::path::PathBuf::from).unwrap_or_default(),
+        force,
+        plots: write,
+    };
+    let (r, report, names) = py
+        .allow_threads(|| -> anyhow::Result<_> {
+            let spec = EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
+            let names = spec.request().response.names.clone();
+            if write {
+                spec.run()?;
+            }
+            let (r, report) = spec.compute()?;
+            Ok((r, report, names))
+        })
+        .map_err(py_err)?;
+    let d = PyDict::new(py);
+    let n = r.modes.len();
+    let cell = |i: Option<Interval>| i.map_or([f64::NAN; 3], |i| [i.u, i.lo, i.hi]);
+    let modes = PyDict::new(py);
+    let col = |f: &dyn Fn(&host_harness::analysis::ema::EmaMode) -> f64| -> Vec<f64> {
+        r.modes.iter().map(f).collect()
+    };
+    modes.set_item(
+        "mode",
+        r.modes
+            .iter()
+            .map(|m| m.mode as i64)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    modes.set_item("f_hz", col(&|m| m.pole.f_hz).into_pyarray(py))?;
+    modes.set_item("damping", col(&|m| m.pole.damping).into_pyarray(py))?;
+    modes.set_item(
+        "band_lo_hz",
+        col(&|m| m.band_hz.map_or(f64::NAN, |b| b.0)).into_pyarray(py),
+    )?;
+    modes.set_item(
+        "band_hi_hz",
+        col(&|m| m.band_hz.map_or(f64::NAN, |b| b.1)).into_pyarray(py),
+    )?;
+    for (k, name) in ["u", "lo", "hi"].iter().enumerate() {
+        modes.set_item(
+            format!("f_hz_{name}"),
+            col(&|m| cell(m.f_interval)[k]).into_pyarray(py),
+        )?;
+        modes.set_item(
+            format!("damping_{name}"),
+            col(&|m| cell(m.damping_interval)[k]).into_pyarray(py),
+        )?;
+    }
+    d.set_item("modes", modes)?;
+    let k = names.len();
+    let mut shapes = Array2::<Complex64>::zeros((n, k));
+    let mut abs_u = Array2::<f64>::from_elem((n, k), f64::NAN);
+    for (i, m) in r.modes.iter().enumerate() {
+        for (j, v) in m.shape.iter().enumerate().take(k) {
+            shapes[[i, j]] = *v;
+        }
+        if let Some(u) = &m.shape_abs_u {
+            for (j, v) in u.iter().enumerate().take(k) {
+                abs_u[[i, j]] = *v;
+            }
+        }
+    }
+    d.set_item("shapes", shapes.into_pyarray(py))?;
+    d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
+    d.set_item("responses", names)?;
+    d.set_item("freq_hz", r.freq_hz.clone().into_pyarray(py))?;
+    let lines = r.freq_hz.len();
+    let matrix = |rows: &[Vec<Complex64>]| {
+        let mut a = Array2::<Complex64>::zeros((rows.len(), lines));
+        for (o, row) in rows.iter().enumerate() {
+            for (l, v) in row.iter().enumerate() {
+                a[[o, l]] = *v;
+            }
+        }
+        a
+    };
+    d.set_item("h1", matrix(&r.frfs.h1).into_pyarray(py))?;
+    d.set_item("h2", matrix(&r.frfs.h2).into_pyarray(py))?;
+    let mut coh = Array2::<f64>::zeros((r.frfs.coherence.len(), lines));
+    for (o, row) in r.frfs.coherence.iter().enumerate() {
+        for (l, v) in row.iter().enumerate() {
+            coh[[o, l]] = *v;
+        }
+    }
+    d.set_item("coherence", coh.into_pyarray(py))?;
+    d.set_item("notes", r.notes.clone())?;
+    d.set_item(
+        "hits_left_out",
+        r.hits
+            .as_ref()
+            .map(|h| {
+                h.hits
+                    .iter()
+                    .filter_map(|x| x.left_out.clone())
+                    .collect::<Vec<_>>()
+            })
+            .unwrap_or_default(),
+    )?;
+    d.set_item("report", report)?;
+    Ok(d)
+}
+
 /// What the decoder thread of a [`FrameReader`] sends: a labelled frame, or its error (whether
 /// it is the input's fault, and the message).
 type Decoded = Receiver<Result<(String, GreyFrame), (bool, String)>>;
@@ -908,6 +1082,7 @@ fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frf, m)?)?;
     m.add_function(wrap_pyfunction!(upsample, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(ema, m)?)?;
     m.add_function(wrap_pyfunction!(study, m)?)?;
     m.add_class::<FrameReader>()?;
     Ok(())

@@ -33,6 +33,7 @@ __all__ = [
     "Centroid",
     "Tracks",
     "AnalysisResult",
+    "EmaResult",
     "StudyResult",
     "FLAGS",
     "MODEL_REVISION",
@@ -41,6 +42,7 @@ __all__ = [
     "frf",
     "upsample",
     "analyze",
+    "ema",
     "study",
     "open_frames",
 ]
@@ -502,6 +504,118 @@ def analyze(
         shapes_abs_u=d["shapes_abs_u"],
         evidence=list(d["evidence"]),
         rejected=list(d["rejected"]),
+    )
+
+
+@dataclass
+class EmaResult:
+    """What an experimental modal analysis found (``host-harness ema``).
+
+    ``modes``: dict of arrays, one entry per mode (``mode``, ``f_hz``, ``damping`` (the
+    exponential window's damping removed), ``band_lo_hz``, ``band_hi_hz`` (NaN without bands),
+    and the standard uncertainty and 95 % interval of each, ``f_hz_u``, ``f_hz_lo``,
+    ``f_hz_hi``, ``damping_u``, ``damping_lo``, ``damping_hi``, NaN where not estimated);
+    ``shapes``: complex ``(modes, responses)``, the LSFD residues normalised (largest
+    component 1); ``shapes_abs_u``: the standard uncertainty of each component's magnitude;
+    ``responses``: the responses' names (the columns); ``freq_hz``, ``h1``, ``h2``,
+    ``coherence``: the FRFs per response and line; ``hits_left_out``: each hit of an impact test
+    not used, with the reason (a double hit, a clipped force); ``notes``; ``report``: the text
+    of ``report.txt``.
+    """
+
+    modes: dict
+    shapes: np.ndarray
+    shapes_abs_u: np.ndarray
+    responses: list
+    freq_hz: np.ndarray
+    h1: np.ndarray
+    h2: np.ndarray
+    coherence: np.ndarray
+    report: str
+    notes: list = field(default_factory=list)
+    hits_left_out: list = field(default_factory=list)
+
+
+def ema(
+    response: PathLike,
+    excitation: PathLike,
+    *,
+    response_cols: Optional[Sequence[str]] = None,
+    response_fs: Optional[float] = None,
+    excitation_col: Optional[str] = None,
+    excitation_fs: Optional[float] = None,
+    impact: bool = False,
+    exp_window: Union[str, float] = "auto",
+    block_s: Optional[float] = None,
+    delay_s: float = 0.0,
+    response_quantity: str = "displacement",
+    bands: Optional[Sequence[Sequence[float]]] = None,
+    f_min_hz: Optional[float] = None,
+    f_max_hz: Optional[float] = None,
+    max_order: int = 48,
+    nperseg: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    force: bool = False,
+) -> EmaResult:
+    """Experimental modal analysis of responses over a measured force, exactly as
+    ``host-harness ema`` (the same numbers as its ``modes.csv`` and ``shapes.csv``).
+
+    ``response``: ``displacement.csv`` of ``track``/``analyze``, a wide CSV, a pyidi ``.npy``
+    or a DAQ file (``.lvm``, ``.tdms``, ``.uff``); ``response_cols`` picks channels by name.
+    ``excitation``: the file with the force, ``excitation_col`` its channel. Rates come from the
+    files, else ``response_fs``/``excitation_fs``; the slower record is upsampled to the
+    faster's rate. ``impact``: hits of a hammer (``exp_window`` ``"off"``, ``"auto"`` or the
+    window's value at the block's end; ``block_s`` the longest block); else a continuous force
+    (Welch segments of ``nperseg``). ``delay_s``: the responses' first sample after the force's.
+    ``response_quantity``: ``"displacement"``, ``"velocity"`` or ``"acceleration"``. ``bands``:
+    ``[(lo, hi), ...]`` Hz, one mode per band (default: every mode the stabilisation diagram
+    shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
+    (``force`` replaces an earlier ``ema`` output).
+    """
+    if isinstance(exp_window, numbers.Real) and not isinstance(exp_window, bool):
+        e = float(exp_window)
+        if not 0 < e < 1:
+            raise InputError(f"exp_window {e}: the window's value at the block's end, 0 to 1")
+        exp_window = repr(e)
+    elif exp_window not in ("off", "auto"):
+        raise InputError(f"exp_window {exp_window!r}: \"off\", \"auto\" or a number in (0, 1)")
+    if response_quantity not in ("displacement", "velocity", "acceleration"):
+        raise InputError(
+            f"response_quantity {response_quantity!r}: displacement, velocity or acceleration"
+        )
+    cols = [] if response_cols is None else [str(c) for c in response_cols]
+    d = _vibcam.ema(
+        os.fspath(response),
+        os.fspath(excitation),
+        response_cols=cols,
+        response_fs=_number("response_fs", response_fs, positive=True, optional=True),
+        excitation_col=None if excitation_col is None else str(excitation_col),
+        excitation_fs=_number("excitation_fs", excitation_fs, positive=True, optional=True),
+        impact=bool(impact),
+        exp_window=exp_window,
+        block_s=_number("block_s", block_s, positive=True, optional=True),
+        delay_s=_number("delay_s", delay_s),
+        response_quantity=response_quantity,
+        bands=None if bands is None else _bands(bands),
+        f_min_hz=_number("f_min_hz", f_min_hz, optional=True),
+        f_max_hz=_number("f_max_hz", f_max_hz, positive=True, optional=True),
+        max_order=_whole("max_order", max_order, 2, 200),
+        nperseg=_whole("nperseg", nperseg, 64, 1 << 20, optional=True),
+        out=None if out is None else os.fspath(out),
+        force=bool(force),
+    )
+    return EmaResult(
+        modes=d["modes"],
+        shapes=d["shapes"],
+        shapes_abs_u=d["shapes_abs_u"],
+        responses=list(d["responses"]),
+        freq_hz=d["freq_hz"],
+        h1=d["h1"],
+        h2=d["h2"],
+        coherence=d["coherence"],
+        report=d["report"],
+        notes=list(d["notes"]),
+        hits_left_out=list(d["hits_left_out"]),
     )
 
 

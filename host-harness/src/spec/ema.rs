@@ -203,6 +203,11 @@ impl EmaSpec {
         &self.request
     }
 
+    /// The analysis and its report, nothing written (Python without an output directory).
+    pub fn compute(&self) -> anyhow::Result<(crate::analysis::ema::EmaResult, String)> {
+        crate::analysis::ema::run::compute(&self.request)
+    }
+
     /// Runs the job: the report, and whether it succeeded.
     pub fn run(&self) -> anyhow::Result<crate::analysis::request::Outcome> {
         crate::analysis::ema::run::run(&self.request)

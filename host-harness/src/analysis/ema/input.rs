@@ -24,6 +24,7 @@
 
 use crate::bad_input;
 use crate::daq::{self, Channel};
+use crate::setting::SpecError;
 use std::path::Path;
 
 /// The channels read from one file.
@@ -78,17 +79,20 @@ fn daq_record(path: &Path) -> anyhow::Result<daq::Record> {
     }
 }
 
-/// The rate of `channel` of `file`: stated, given, or both (then they must agree).
-fn rate(channel: &Channel, given: Option<f64>, file: &str, flag: &str) -> anyhow::Result<f64> {
+/// The rate of `channel` of `file`: stated, given as setting `key` (`$response_fs`), or both
+/// (then they must agree). The errors name the setting (a [`SpecError`], spelled as the caller
+/// spells it).
+fn rate(channel: &Channel, given: Option<f64>, file: &str, key: &str) -> anyhow::Result<f64> {
+    let refuse = |m: String| anyhow::Error::new(SpecError::setting(m));
     match (channel.rate_hz(), given) {
-        (Some(s), Some(g)) if (s - g).abs() > 1e-3 * g => Err(bad_input(format!(
-            "{file}: channel `{}` is sampled at {s} Hz by the file, {flag} says {g} Hz",
+        (Some(s), Some(g)) if (s - g).abs() > 1e-3 * g => Err(refuse(format!(
+            "{file}: channel `{}` is sampled at {s} Hz by the file, {key} says {g} Hz",
             channel.name
         ))),
         (Some(s), _) => Ok(s),
         (None, Some(g)) => Ok(g),
-        (None, None) => Err(bad_input(format!(
-            "{file}: the file states no sample rate for `{}`: give {flag}",
+        (None, None) => Err(refuse(format!(
+            "{file}: the file states no sample rate for `{}`: give {key}",
             channel.name
         ))),
     }
@@ -205,10 +209,10 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .iter()
         .map(|n| record.channel(n, &file))
         .collect::<anyhow::Result<_>>()?;
-    let fs = rate(&chans[0], fs_hz, &file, "--response-fs")?;
+    let fs = rate(&chans[0], fs_hz, &file, "$response_fs")?;
     for c in &chans[1..] {
-        let r = rate(c, Some(fs), &file, "the first channel's rate")?;
-        if c.values.len() != chans[0].values.len() || (r - fs).abs() > 1e-9 * fs {
+        let r = c.rate_hz().unwrap_or(fs);
+        if c.values.len() != chans[0].values.len() || (r - fs).abs() > 1e-6 * fs {
             return Err(bad_input(format!(
                 "{file}: channel `{}` has {} samples at {r} Hz, `{}` {} at {fs} Hz: responses \
                  must share one time base",
@@ -254,7 +258,7 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
         col.to_string()
     };
     let c = record.channel(&name, &file)?;
-    let fs = rate(&c, fs_hz, &file, "--excitation-fs")?;
+    let fs = rate(&c, fs_hz, &file, "$excitation_fs")?;
     if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
         return Err(bad_input(format!(
             "{file}: channel `{name}`, sample {}: not a finite number",
@@ -342,10 +346,10 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
             ("responses", xs[0].len())
         };
         if k >= len {
-            return Err(bad_input(format!(
-                "--delay-s {delay_s}: the {what} record is only {:.4} s long",
+            return Err(anyhow::Error::new(SpecError::setting(format!(
+                "$delay_s {delay_s}: the {what} record is only {:.4} s long",
                 len as f64 / fs
-            )));
+            ))));
         }
         if whole > 0.0 {
             f.drain(..k);
@@ -355,7 +359,7 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
             }
         }
         notes.push(format!(
-            "--delay-s {delay_s}: the first {k} samples of the {what} dropped{}",
+            "a delay of {delay_s} s: the first {k} samples of the {what} dropped{}",
             if (shift - whole).abs() > 1e-6 {
                 format!(
                     " ({:.3} of a sample at {fs} Hz left unaligned)",

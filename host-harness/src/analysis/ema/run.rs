@@ -37,8 +37,8 @@ pub struct EmaRequest {
     pub plots: bool,
 }
 
-/// Runs the analysis and writes its outputs; the report is returned.
-pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
+/// The analysis of `req` and its report, nothing written.
+pub fn compute(req: &EmaRequest) -> anyhow::Result<(EmaResult, String)> {
     let a = &req.aligned;
     let r = analyse(
         &a.force,
@@ -47,6 +47,13 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         &req.force.names[0],
         &req.settings,
     )?;
+    let report = report(req, &r);
+    Ok((r, report))
+}
+
+/// Runs the analysis and writes its outputs; the report is returned.
+pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
+    let (r, report) = compute(req)?;
     let inputs: Vec<&Path> = req.inputs.iter().map(PathBuf::as_path).collect();
     let out = Staged::new(&req.out, req.force_out, "ema", &inputs)?;
     out.write(
@@ -91,7 +98,6 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
     if req.plots {
         plots(out.dir(), req, &r)?;
     }
-    let report = report(req, &r);
     out.write("report.txt", &report)?;
     out.commit()?;
     Ok(Outcome {

@@ -1,0 +1,77 @@
+"""vibcam.ema on a synthetic impact hammer test (`host-harness simulate-hammer`): the camera's
+displacements given as a pyidi-style ``.npy`` (points, samples, 2), the force as a CSV at
+another rate; the modes against the truth the command wrote, and the same numbers as the
+command line's ``ema`` on the same files."""
+
+import csv
+
+import numpy as np
+import pytest
+
+import vibcam
+
+
+@pytest.fixture(scope="module")
+def hammer(tmp_path_factory, harness):
+    d = tmp_path_factory.mktemp("hammer") / "test"
+    r = harness("simulate-hammer", "--out", str(d))
+    assert r.returncode == 0, r.stderr
+    cam = np.loadtxt(d / "camera.csv", delimiter=",", skiprows=1)
+    # pyidi's layout: (points, samples, 2), (y, x) per sample; x stays still here
+    disp = np.zeros((cam.shape[1] - 1, cam.shape[0], 2))
+    disp[:, :, 0] = cam[:, 1:].T
+    np.save(d / "displacements.npy", disp)
+    return d
+
+
+def truth(d):
+    with open(d / "truth.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    modes = sorted({int(r["mode"]) for r in rows})
+    out = []
+    for m in modes:
+        rs = [r for r in rows if int(r["mode"]) == m]
+        out.append((float(rs[0]["f_hz"]), float(rs[0]["damping"]),
+                    np.array([float(r["shape"]) for r in rs])))
+    return out
+
+
+def mac(a, b):
+    return abs(np.vdot(a, b)) ** 2 / (np.vdot(a, a).real * np.vdot(b, b).real)
+
+
+def test_ema_of_a_pyidi_array_finds_the_modes_and_equals_the_command_line(hammer, harness,
+                                                                          tmp_path):
+    r = vibcam.ema(hammer / "displacements.npy", hammer / "force.csv", response_fs=2000,
+                   excitation_col="force_n", impact=True, f_max_hz=200)
+    assert r.responses == [f"point {p} y" for p in range(1, 6)]
+    t = truth(hammer)
+    assert len(r.modes["f_hz"]) == len(t) == 3
+    for i, (f, z, shape) in enumerate(t):
+        assert abs(r.modes["f_hz"][i] - f) < 1e-3 * f
+        assert abs(r.modes["damping"][i] - z) < 0.05 * z
+        assert r.modes["f_hz_lo"][i] <= r.modes["f_hz"][i] <= r.modes["f_hz_hi"][i]
+        assert mac(r.shapes[i], shape) > 0.99
+    assert r.h1.shape == (5, len(r.freq_hz)) and np.iscomplexobj(r.h1)
+    out = tmp_path / "cli"
+    p = harness("ema", "--response", str(hammer / "displacements.npy"), "--response-fs", "2000",
+                "--excitation", str(hammer / "force.csv"), "--excitation-col", "force_n",
+                "--impact", "--f-max-hz", "200", "--out", str(out), "--no-plots")
+    assert p.returncode == 0, p.stderr
+    with open(out / "modes.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [float(x["f_hz"]) for x in rows] == pytest.approx(list(r.modes["f_hz"]), rel=1e-12)
+    assert [float(x["damping"]) for x in rows] == pytest.approx(list(r.modes["damping"]),
+                                                                 rel=1e-12)
+    assert p.stdout == r.report
+
+
+def test_ema_errors_name_pythons_arguments(hammer):
+    with pytest.raises(vibcam.InputError, match="response_fs"):
+        vibcam.ema(hammer / "displacements.npy", hammer / "force.csv",
+                   excitation_col="force_n", impact=True)
+    with pytest.raises(vibcam.InputError, match="exp_window"):
+        vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="force_n",
+                   impact=True, exp_window=2.0)
+    with pytest.raises(vibcam.InputError, match="no channel `push`"):
+        vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="push")
