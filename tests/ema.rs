@@ -182,3 +182,106 @@ fn a_double_hit_and_a_clipped_hit_are_named_and_left_out() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `force.csv` (`t_s,force_n`) of `dir` rewritten as a LabVIEW measurement file with decimal
+/// commas (the channel `Excitation (Trigger)`, newtons, `Delta_X` the CSV's step).
+fn force_as_lvm(dir: &Path) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(dir.join("force.csv")).unwrap();
+    let values: Vec<&str> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    let comma = |v: &str| v.replace('.', ",");
+    let mut s = String::from(
+        "LabVIEW Measurement\t\nWriter_Version\t2\nReader_Version\t2\nSeparator\tTab\n\
+         Decimal_Separator\t,\nMulti_Headings\tYes\nX_Columns\tNo\nTime_Pref\tAbsolute\n\
+         ***End_of_Header***\t\n\t\nChannels\t1\t\n",
+    );
+    s.push_str(&format!("Samples\t{}\t\n", values.len()));
+    s.push_str(
+        "Y_Unit_Label\tNewtons\t\nX_Dimension\tTime\t\nX0\t0,0000000000000000E+0\t\n\
+         Delta_X\t2,000000E-5\t\n***End_of_Header***\t\t\nX_Value\tExcitation (Trigger)\tComment\n",
+    );
+    for v in values {
+        s.push('\t');
+        s.push_str(&comma(v));
+        s.push('\n');
+    }
+    let path = dir.join("force.lvm");
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+#[test]
+fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
+    let dir = std::env::temp_dir().join(format!("vibcam-ema-lvm-{}", std::process::id()));
+    let test = write_test(&dir, &[]);
+    let lvm = force_as_lvm(&dir);
+    // the camera started 0.1 s after the DAQ: its first 200 frames (2 kHz) were never taken
+    let cam = std::fs::read_to_string(dir.join("camera.csv")).unwrap();
+    let mut lines = cam.lines();
+    let mut late = format!("{}\n", lines.next().unwrap());
+    for l in lines.skip(200) {
+        late.push_str(l);
+        late.push('\n');
+    }
+    let late_path = dir.join("late.csv");
+    std::fs::write(&late_path, late).unwrap();
+    let out = dir.join("lvm");
+    let o = harness(&[
+        "ema",
+        "--response",
+        late_path.to_str().unwrap(),
+        "--excitation",
+        lvm.to_str().unwrap(),
+        "--excitation-col",
+        "Excitation (Trigger)",
+        "--impact",
+        "--delay-s",
+        "0.1",
+        "--f-max-hz",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plots",
+    ]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(report.contains("(Newtons, 50000 Hz)"), "{report}");
+    assert!(
+        report.contains("a delay of 0.1 s: the first 5000 samples of the force dropped"),
+        "{report}"
+    );
+    check_modes(&out, &test, "LabVIEW force, late camera");
+    assert!(!report.contains("note:"), "{report}");
+    // without the delay the camera's record is 0.1 s ahead of the force: the responses move
+    // before the pulses and the model cannot describe the FRFs; both said, not a silent number
+    let wrong = dir.join("wrong");
+    let o = harness(&[
+        "ema",
+        "--response",
+        late_path.to_str().unwrap(),
+        "--excitation",
+        lvm.to_str().unwrap(),
+        "--excitation-col",
+        "Excitation (Trigger)",
+        "--impact",
+        "--f-max-hz",
+        "200",
+        "--out",
+        wrong.to_str().unwrap(),
+        "--no-plots",
+    ]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("the responses move before the force's pulses"),
+        "{report}"
+    );
+    assert!(
+        report.contains("the numbers above are doubtful"),
+        "{report}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

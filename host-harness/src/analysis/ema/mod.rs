@@ -149,6 +149,33 @@ struct Selection {
     per_band: Vec<Option<SsiMode>>,
 }
 
+/// The largest ratio, over responses and used hits, of a response's RMS before its block's
+/// pulse to its largest excursion after it: a response that moves before the force hits is
+/// ahead of it in time (the records are not aligned).
+fn precursor(responses: &[Vec<f64>], hits: &Hits) -> f64 {
+    let mut worst = 0.0f64;
+    if hits.pre < 8 {
+        return 0.0;
+    }
+    for hit in hits.used() {
+        let s = hits.block_start(hit);
+        for x in responses {
+            let b = &x[s..s + hits.block];
+            let pre = &b[..hits.pre];
+            let mean = pre.iter().sum::<f64>() / pre.len() as f64;
+            let rms =
+                (pre.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / pre.len() as f64).sqrt();
+            let peak = b[hits.pre..]
+                .iter()
+                .fold(0.0f64, |a, v| a.max((v - mean).abs()));
+            if peak > 0.0 {
+                worst = worst.max(rms / peak);
+            }
+        }
+    }
+    worst
+}
+
 /// The poles of `h1` and the modes among them: every stable cluster, or per band the fullest
 /// reported cluster in it (`None` where a band has none).
 fn select(freq_hz: &[f64], h1: &[Vec<Complex64>], s: &EmaSettings) -> anyhow::Result<Selection> {
@@ -230,6 +257,15 @@ pub fn analyse(
                      {:.0} % of the largest excursion) and no exponential window was applied: \
                      leakage widens the peaks and raises the damping",
                     100.0 * ratio
+                ));
+            }
+            let ahead = precursor(responses, &hits);
+            if ahead > 0.1 {
+                notes.push(format!(
+                    "the responses move before the force's pulses (their RMS before a pulse is \
+                     {:.0} % of their largest excursion after it): the records are not aligned; \
+                     give the delay between their starts (--delay-s, delay_s in Python)",
+                    100.0 * ahead
                 ));
             }
             let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, top)?;
@@ -382,6 +418,15 @@ pub fn analyse(
             damping_interval: di,
             shape_abs_u: su,
         });
+    }
+    let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
+    if misfit > 0.2 {
+        notes.push(format!(
+            "the fitted model leaves {:.0} % of an FRF unexplained (LSFD misfit {misfit:.3}): a \
+             delay between the records, modes the band cuts or not found, or noise; the numbers \
+             above are doubtful",
+            100.0 * misfit
+        ));
     }
     let clusters = all
         .iter()
