@@ -77,11 +77,12 @@ pub fn poles(
         .collect();
     let n = rule.max_order;
     if n < 2 || lines.len() < n + 2 {
-        anyhow::bail!(
-            "LSCF: {} lines in {lo}..{hi} Hz, an order-{n} model needs at least {}",
+        return Err(crate::bad_input(format!(
+            "LSCF: {} lines in {lo}..{hi} Hz, an order-{n} model needs at least {} (a wider \
+             band, longer blocks or a lower highest order)",
             lines.len(),
             n + 2
-        );
+        )));
     }
     let ts = 1.0 / (2.0 * hi);
     // powers of z at each line: x[k][j] = z_k^j

@@ -272,6 +272,19 @@ pub fn analyse(
             (sp, Some(hits), window)
         }
         Excitation::Continuous { nperseg } => {
+            let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
+            let rms = (force.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+                / force.len().max(1) as f64)
+                .sqrt();
+            let peak = force.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
+            if rms > 0.0 && peak > 10.0 * rms {
+                notes.push(format!(
+                    "the force's peak is {:.0} times its RMS: it looks like hammer hits, not a \
+                     continuous force; an impact test is analysed hit by hit (--impact, \
+                     impact=True in Python)",
+                    peak / rms
+                ));
+            }
             let sp = spectra::of_segments(
                 force,
                 responses,
@@ -376,7 +389,11 @@ pub fn analyse(
                     .map(|(q, _)| unwindowed(*q, exp).damping)
                     .collect();
                 fi = jackknife_sized(pole.f_hz, &fs, &unit_sizes);
-                di = jackknife_sized(pole.damping, &ds, &unit_sizes);
+                // a damping ratio is not negative: the interval's lower end at 0 at least
+                di = jackknife_sized(pole.damping, &ds, &unit_sizes).map(|i| Interval {
+                    lo: i.lo.max(0.0),
+                    ..i
+                });
                 let reference = residues
                     .iter()
                     .enumerate()
