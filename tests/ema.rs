@@ -373,3 +373,57 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     check_modes(&out, &test, "random force");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_displacement_csv_of_track_is_a_response_file() {
+    // the camera's record as `track` writes it: one row per frame and target, a lost frame
+    let dir = std::env::temp_dir().join(format!("vibcam-ema-track-{}", std::process::id()));
+    let test = write_test(&dir, &[]);
+    let cam = std::fs::read_to_string(dir.join("camera.csv")).unwrap();
+    let mut s = String::from("frame,t_s,target,cx,cy,disp_mm,lost\n");
+    for (k, l) in cam.lines().skip(1).enumerate() {
+        let c: Vec<&str> = l.split(',').collect();
+        for (o, v) in c[1..].iter().enumerate() {
+            if k == 5000 && o == 2 {
+                s.push_str(&format!("{k},{},{},,,,1\n", c[0], o + 1));
+            } else {
+                s.push_str(&format!("{k},{},{},{},100,{v},0\n", c[0], o + 1, 50 * o));
+            }
+        }
+    }
+    let path = dir.join("displacement.csv");
+    std::fs::write(&path, s).unwrap();
+    let out = dir.join("out");
+    let o = harness(&[
+        "ema",
+        "--response",
+        path.to_str().unwrap(),
+        "--excitation",
+        dir.join("force.csv").to_str().unwrap(),
+        "--excitation-col",
+        "force_n",
+        "--impact",
+        "--f-max-hz",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+        "--no-plots",
+    ]);
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("(5 channels, mm, 2000 Hz, a camera's)"),
+        "{report}"
+    );
+    assert!(
+        report.contains("target 3: 1 lost samples filled"),
+        "{report}"
+    );
+    check_modes(&out, &test, "displacement.csv");
+    let modes = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+    assert!(
+        modes.lines().nth(1).unwrap().starts_with("vision,,1,"),
+        "{modes}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,7 @@
 //! `ema` as one call: a checked request (records read and aligned, settings resolved) ->
 //! the analysis -> its outputs in a staged directory (complete or absent): `frf.csv`,
-//! `modes.csv`, `shapes.csv`, `frf.uff`, `frf.png`/`.svg` (the FRFs with the fit),
+//! `modes.csv`, `shapes.csv`, `frf.uff`, `frf.png`/`.svg` and `frf_phase.png`/`.svg` (the
+//! FRFs' magnitude and phase with the fit),
 //! `stabilisation.png`/`.svg` and `report.txt`.
 
 use super::input::{Aligned, Series};
@@ -186,6 +187,35 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
         &dir.join("frf"),
         "H1 and the LSCF/LSFD fit",
         "|H1|, dB (re 1 unit of the response per unit of force)",
+        &curves,
+    )?;
+    let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
+    for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
+        owned.push((
+            req.response.names[o].clone(),
+            k.iter().map(|&i| h[i].arg().to_degrees()).collect(),
+        ));
+        if let Some(c) = r.constants.get(o) {
+            owned.push((
+                format!("{} fit", req.response.names[o]),
+                f.iter()
+                    .map(|&fr| {
+                        c.evaluate(&fitted, req.settings.form, fr)
+                            .arg()
+                            .to_degrees()
+                    })
+                    .collect(),
+            ));
+        }
+    }
+    let curves: Vec<(&str, &[f64], &[f64])> = owned
+        .iter()
+        .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
+        .collect();
+    crate::plots::write_frf_db_plot(
+        &dir.join("frf_phase"),
+        "H1's phase and the fit's",
+        "phase of H1, degrees",
         &curves,
     )?;
     let poles: Vec<(f64, usize, PoleKind)> = r
