@@ -21,6 +21,7 @@ def hammer(tmp_path_factory, harness):
     disp = np.zeros((cam.shape[1] - 1, cam.shape[0], 2))
     disp[:, :, 0] = cam[:, 1:].T
     np.save(d / "displacements.npy", disp)
+    np.save(d / "two_d.npy", cam[:, 1:].T.copy())
     return d
 
 
@@ -75,3 +76,10 @@ def test_ema_errors_name_pythons_arguments(hammer):
                    impact=True, exp_window=2.0)
     with pytest.raises(vibcam.InputError, match="no channel `push`"):
         vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="push")
+
+
+def test_a_two_dimensional_array_is_one_channel_per_point(hammer):
+    r = vibcam.ema(hammer / "two_d.npy", hammer / "force.csv", response_fs=2000,
+                   excitation_col="force_n", impact=True, f_max_hz=200)
+    assert r.responses == [f"point {p}" for p in range(1, 6)]
+    assert len(r.modes["f_hz"]) == 3

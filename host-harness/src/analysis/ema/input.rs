@@ -171,7 +171,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
     let npy = kind(path) == "npy";
     let wanted: Vec<String> = if !cols.is_empty() {
         cols.to_vec()
-    } else if npy {
+    } else if npy && first.iter().any(|n| n.ends_with(" y") || n.ends_with(" x")) {
         // pyidi: the coordinate that moves more
         let spread = |axis: &str| -> f64 {
             first
