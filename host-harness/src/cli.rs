@@ -12,6 +12,7 @@ pub mod frf;
 pub mod hammer;
 pub mod merge;
 pub mod modal;
+pub mod pick;
 pub mod plan;
 pub mod render;
 pub mod simulate;
@@ -58,6 +59,9 @@ enum Command {
     /// the responses (a camera's displacements or a DAQ's channels) over the force, LSCF poles
     /// with a stabilisation diagram, LSFD shapes.
     Ema(Box<ema::Args>),
+    /// Write pick.html: a page of the recording's frames where a click adds a window, a
+    /// drag moves it, and "save" downloads the points.csv `track --points` reads.
+    Pick(pick::Args),
     /// Write a synthetic field record: displacements of a structure under ambient excitation
     /// and its true modes.
     SimulateField(simulate::Args),
@@ -86,6 +90,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Track(a) => track::run(*a),
         Command::Modal(a) => modal::run(*a),
         Command::Ema(a) => ema::run(*a),
+        Command::Pick(a) => pick::run(a),
         Command::SimulateField(a) => simulate::run(a),
         Command::SimulateHammer(a) => hammer::run(a),
         Command::Render(a) => render::run(a),

@@ -38,6 +38,7 @@ pub mod frf_uncertainty;
 pub mod imaging_share;
 pub mod modal;
 pub mod oma;
+pub mod pick;
 pub mod points;
 pub mod report;
 pub mod request;

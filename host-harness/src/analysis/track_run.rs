@@ -156,8 +156,59 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
         let _ = writeln!(report, "plots: {}", names.join(", "));
     }
     out.write("report.txt", &report)?;
+    let frame = source
+        .frame_at(req.fps, 0)
+        .ok()
+        .flatten()
+        .and_then(|(_, f)| f.to_image().ok());
+    out.write(
+        "report.html",
+        page(req, &tracks, windows.as_ref(), frame, &report, out.dir()),
+    )?;
     out.commit()?;
     Ok(report)
+}
+
+/// `report.html` of `track`: the first frame with each target's window, number and lost
+/// frames; the tracks' figure; the report.
+fn page(
+    req: &Request,
+    tracks: &Tracks,
+    windows: Option<&PointsInfo>,
+    frame: Option<crate::export::html::FrameImage>,
+    text: &str,
+    dir: &Path,
+) -> String {
+    use crate::export::html::{report_html, Marker, Report};
+    let markers = tracks
+        .first
+        .iter()
+        .enumerate()
+        .map(|(t, xy)| Marker {
+            target: t + 1,
+            xy: *xy,
+            window: windows
+                .and_then(|w| w.sizes.get(t))
+                .map(|(w, h)| (f64::from(*w), f64::from(*h))),
+            lost: tracks.centroids[t]
+                .iter()
+                .filter(|c| c.position().is_none())
+                .count(),
+        })
+        .collect();
+    let figures = std::fs::read_to_string(dir.join("tracks.svg"))
+        .ok()
+        .map(|svg| vec![("tracks".to_string(), svg)])
+        .unwrap_or_default();
+    report_html(&Report {
+        title: format!("track: {}", req.frames),
+        frame,
+        markers,
+        direction: (0.0, -1.0),
+        figures,
+        text: text.to_string(),
+        ..Report::default()
+    })
 }
 
 /// Each target's displacement (mm, lost frames filled by the policy) and lost flags when a

@@ -792,6 +792,34 @@ impl FrameSource {
         }
     }
 
+    /// The `index`-th frame (0-based) and its label, decoding no further; `None` when the
+    /// source has fewer frames.
+    pub fn frame_at(&self, fps: f64, index: usize) -> anyhow::Result<Option<(String, GreyFrame)>> {
+        #[derive(Debug)]
+        struct Found;
+        impl std::fmt::Display for Found {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("found")
+            }
+        }
+        impl std::error::Error for Found {}
+        let mut k = 0usize;
+        let mut got = None;
+        let r = self.for_each(fps, |label, frame| {
+            if k == index {
+                got = Some((label, frame.clone()));
+                return Err(anyhow::Error::new(Found));
+            }
+            k += 1;
+            Ok(())
+        });
+        match r {
+            Err(e) if e.is::<Found>() => Ok(got),
+            Err(e) => Err(e),
+            Ok(()) => Ok(None),
+        }
+    }
+
     /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time (a
     /// video's frames decoded into one reused buffer); a video is opened with its timestamps
     /// checked against `fps`. Labels name the file (and page, or 0-based video frame). Frames

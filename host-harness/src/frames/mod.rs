@@ -79,6 +79,31 @@ pub enum GreyFrame {
 }
 
 impl GreyFrame {
+    /// The frame for a page (`report.html`, `pick.html`): an 8-bit grey PNG (a 16-bit frame
+    /// scaled so its largest value is 255).
+    pub fn to_image(&self) -> anyhow::Result<crate::export::html::FrameImage> {
+        let (w, h) = self.dimensions();
+        let bytes: Vec<u8> = match self {
+            GreyFrame::U8 { data, .. } => data.clone(),
+            GreyFrame::U16 { data, .. } => {
+                let top = f64::from(data.iter().copied().max().unwrap_or(0).max(1));
+                data.iter()
+                    .map(|v| (f64::from(*v) * 255.0 / top).round() as u8)
+                    .collect()
+            }
+        };
+        let img = image::GrayImage::from_raw(w as u32, h as u32, bytes)
+            .ok_or_else(|| anyhow::anyhow!("a {w} x {h} frame of the wrong length"))?;
+        let mut png = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut png, image::ImageFormat::Png)
+            .map_err(|e| anyhow::anyhow!("PNG of a {w} x {h} frame: {e}"))?;
+        Ok(crate::export::html::FrameImage {
+            width: w as u32,
+            height: h as u32,
+            png: png.into_inner(),
+        })
+    }
+
     /// `(width, height)` in pixels.
     pub fn dimensions(&self) -> (usize, usize) {
         match self {

@@ -130,6 +130,7 @@ impl ModalSpec {
                 along_x: i.axis == PixelAxis::X,
                 preamble: format!("input: {}\n", i.displacement.display()),
                 extra: Vec::new(),
+                frame: None,
             },
         )
     }

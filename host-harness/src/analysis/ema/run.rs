@@ -100,10 +100,81 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         plots(out.dir(), req, &r)?;
     }
     out.write("report.txt", &report)?;
+    out.write("report.html", page(req, &r, &report, out.dir()))?;
     out.commit()?;
     Ok(Outcome {
         report,
         result: Ok(()),
+    })
+}
+
+/// `report.html` of `ema`: the modes with their intervals, the MAC of their shapes, each shape
+/// animated along the responses (in their order: a camera's targets have no positions here),
+/// the figures, the report.
+fn page(req: &EmaRequest, r: &EmaResult, text: &str, dir: &Path) -> String {
+    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
+    let iv = |i: Option<Interval>, d: usize| {
+        i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
+    };
+    let rows: Vec<Vec<String>> = r
+        .modes
+        .iter()
+        .map(|m| {
+            vec![
+                m.mode.to_string(),
+                format!("{:.4}", m.pole.f_hz),
+                iv(m.f_interval, 4),
+                format!("{:.5}", m.pole.damping),
+                iv(m.damping_interval, 5),
+            ]
+        })
+        .collect();
+    let head: Vec<String> = [
+        "mode",
+        "f (Hz)",
+        "95 % interval",
+        "damping",
+        "95 % interval",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let labels: Vec<String> = r
+        .modes
+        .iter()
+        .map(|m| format!("{} {:.2} Hz", m.mode, m.pole.f_hz))
+        .collect();
+    let shapes: Vec<&[num_complex::Complex64]> =
+        r.modes.iter().map(|m| m.shape.as_slice()).collect();
+    let figures = ["frf", "frf_phase", "stabilisation"]
+        .iter()
+        .filter_map(|n| {
+            std::fs::read_to_string(dir.join(format!("{n}.svg")))
+                .ok()
+                .map(|svg| (n.to_string(), svg))
+        })
+        .collect();
+    report_html(&Report {
+        title: format!(
+            "ema: {} over {}",
+            req.inputs[0].display(),
+            req.force.names[0]
+        ),
+        direction: (0.0, -1.0),
+        figures,
+        modes: (!rows.is_empty()).then_some((head, rows)),
+        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
+        shapes: r
+            .modes
+            .iter()
+            .zip(&labels)
+            .map(|(m, l)| ShapeAnimation {
+                label: format!("mode {l}"),
+                shape: m.shape.clone(),
+            })
+            .collect(),
+        text: text.to_string(),
+        ..Report::default()
     })
 }
 

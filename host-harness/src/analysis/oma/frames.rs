@@ -172,6 +172,11 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
             along_x: req.displacement.axis == crate::analysis::Axis::X,
             preamble,
             extra: vec![("displacement.csv".to_string(), displacement)],
+            frame: source
+                .frame_at(req.fps, 0)
+                .ok()
+                .flatten()
+                .and_then(|(_, f)| f.to_image().ok()),
         },
     )
 }

@@ -33,6 +33,8 @@ pub struct Output<'a> {
     pub preamble: String,
     /// Further files to write beside the results (`displacement.csv` of `analyze`).
     pub extra: Vec<(String, Vec<u8>)>,
+    /// The first frame, for `report.html` (`analyze`; none from a displacement file).
+    pub frame: Option<crate::export::html::FrameImage>,
 }
 
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
@@ -95,10 +97,98 @@ pub fn write(
     }
     let report = report(r, records, settings, &o.preamble);
     out.write("report.txt", &report)?;
+    out.write("report.html", page(r, records, o, &report, out.dir()))?;
     out.commit()?;
     Ok(Outcome {
         report,
         result: Ok(()),
+    })
+}
+
+/// `report.html`: the targets (on the first frame when there is one), the modes with their
+/// intervals, the MAC of their shapes, each shape animated, the figures drawn, the report.
+fn page(r: &OmaResult, records: &Records, o: &Output<'_>, text: &str, dir: &Path) -> String {
+    use crate::export::html::{mac_matrix, report_html, Marker, Report, ShapeAnimation};
+    let markers: Vec<Marker> = records
+        .targets
+        .iter()
+        .zip(&records.filled)
+        .filter_map(|((t, xy), lost)| {
+            xy.map(|xy| Marker {
+                target: *t,
+                xy,
+                window: None,
+                lost: *lost,
+            })
+        })
+        .collect();
+    // without every target's position, the shapes are drawn on a line of their own
+    let markers = if markers.len() == records.targets.len() {
+        markers
+    } else {
+        Vec::new()
+    };
+    let fmt = |v: Option<f64>, d: usize| v.map_or(String::new(), |v| format!("{v:.d$}"));
+    let range = |i: Option<Interval>, d: usize| {
+        i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
+    };
+    let rows: Vec<Vec<String>> = r
+        .modes
+        .iter()
+        .map(|m| {
+            vec![
+                m.mode.to_string(),
+                m.method.name().to_string(),
+                format!("{:.4}", m.f_hz),
+                range(m.uncertainty.f_hz, 4),
+                fmt(m.damping, 5),
+                range(m.uncertainty.damping, 5),
+            ]
+        })
+        .collect();
+    let head: Vec<String> = [
+        "mode",
+        "method",
+        "f (Hz)",
+        "95 % interval",
+        "damping",
+        "95 % interval",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let labels: Vec<String> = r
+        .modes
+        .iter()
+        .map(|m| format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz))
+        .collect();
+    let shapes: Vec<&[Complex64]> = r.modes.iter().map(|m| m.shape.as_slice()).collect();
+    let figures = ["svd", "stabilisation"]
+        .iter()
+        .filter_map(|n| {
+            std::fs::read_to_string(dir.join(format!("{n}.svg")))
+                .ok()
+                .map(|svg| (n.to_string(), svg))
+        })
+        .collect();
+    report_html(&Report {
+        title: format!("{}: output-only modal analysis", o.command),
+        frame: o.frame.clone(),
+        markers,
+        direction: if o.along_x { (1.0, 0.0) } else { (0.0, -1.0) },
+        figures,
+        modes: (!rows.is_empty()).then_some((head, rows)),
+        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
+        shapes: r
+            .modes
+            .iter()
+            .zip(&labels)
+            .map(|(m, l)| ShapeAnimation {
+                label: l.clone(),
+                shape: m.shape.clone(),
+            })
+            .collect(),
+        text: text.to_string(),
     })
 }
 

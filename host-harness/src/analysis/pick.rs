@@ -1,0 +1,112 @@
+//! `pick` as one call: a recording's frames (evenly spaced through it) and an existing points
+//! file into `pick.html` ([`crate::export::pick`]), the page where the points `track --points`
+//! follows are chosen with the mouse.
+
+use crate::export::pick::{pick_html, PickPoint};
+
+/// What `pick` is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PickRequest {
+    /// `--frames` as given.
+    pub frames: String,
+    /// The frame rate, when the recording needs one to be read (a video).
+    pub fps: Option<f64>,
+    /// Points to show at the start.
+    pub points: Option<std::path::PathBuf>,
+    /// Frames on the page's slider (1 to 50).
+    pub shown: usize,
+    /// The page.
+    pub out: std::path::PathBuf,
+    /// Replace an existing file.
+    pub force: bool,
+}
+
+/// Writes the page; returns a line saying what it holds.
+pub fn run(req: &PickRequest) -> anyhow::Result<String> {
+    if !(1..=50).contains(&req.shown) {
+        return Err(crate::bad_input(format!(
+            "--frames-shown {}: 1 to 50",
+            req.shown
+        )));
+    }
+    if req.out.exists() && !req.force {
+        return Err(crate::bad_input(format!(
+            "{} exists: --force replaces it",
+            req.out.display()
+        )));
+    }
+    let points: Vec<PickPoint> = match &req.points {
+        Some(p) => crate::analysis::points::read_points(p)?
+            .into_iter()
+            .map(|p| PickPoint {
+                target: p.target,
+                xy: p.xy,
+                size: p.size,
+                group: p.group,
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let source = crate::frames::open_frames(&req.frames, false, None)?.source;
+    let fps = match req.fps {
+        Some(f) => f,
+        None => source.recorded_rate()?.map_or(1.0, |r| r.0),
+    };
+    let count = source.count(fps)?;
+    let step = count.map_or(1, |n| (n / req.shown).max(1));
+    let mut frames = Vec::new();
+    let mut k = 0usize;
+    #[derive(Debug)]
+    struct Enough;
+    impl std::fmt::Display for Enough {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("enough frames")
+        }
+    }
+    impl std::error::Error for Enough {}
+    let r = source.for_each(fps, |label, frame| {
+        if k.is_multiple_of(step) {
+            frames.push((label, frame.to_image()?));
+        }
+        k += 1;
+        if frames.len() >= req.shown {
+            return Err(anyhow::Error::new(Enough));
+        }
+        Ok(())
+    });
+    if let Err(e) = r {
+        if !e.is::<Enough>() {
+            return Err(e);
+        }
+    }
+    let Some(first) = frames.first() else {
+        return Err(crate::bad_input(format!("{}: no frames", req.frames)));
+    };
+    let (w, h) = (f64::from(first.1.width), f64::from(first.1.height));
+    for p in &points {
+        let (hw, hh) = (
+            (f64::from(p.size.0) - 1.0) / 2.0,
+            (f64::from(p.size.1) - 1.0) / 2.0,
+        );
+        if p.xy.0 - hw < -0.5
+            || p.xy.1 - hh < -0.5
+            || p.xy.0 + hw > w - 0.5
+            || p.xy.1 + hh > h - 0.5
+        {
+            return Err(crate::bad_input(format!(
+                "target {}: its window leaves the {w} x {h} frame",
+                p.target
+            )));
+        }
+    }
+    let html = pick_html(&format!("pick: {}", req.frames), &frames, &points);
+    crate::export::write_atomic(&req.out, html.as_bytes())?;
+    Ok(format!(
+        "wrote {} ({} frames, {} points, {:.1} MB): open it in a browser, click to add windows, \
+         save points.csv for track --points\n",
+        req.out.display(),
+        frames.len(),
+        points.len(),
+        html.len() as f64 / 1e6
+    ))
+}

@@ -1,0 +1,466 @@
+//! `report.html`: one self-contained page per analysis (inline SVG, the frame as an inline PNG,
+//! inline script; no network, no CDN: it opens from a USB stick on an offline lab PC). What it
+//! shows, each part when the analysis has it: the first frame with each target's window,
+//! number and lost-frame count; the figures the command drew (tracks, spectra or singular
+//! values, stabilisation diagram, FRFs with their fit), inlined from their SVG; the table of
+//! modes (with intervals); the MAC matrix; each mode shape animated (a deformed polyline
+//! through the targets, on the frame when there is one; a scale slider, play and pause); and
+//! the text of `report.txt`.
+//!
+//! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
+//! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
+//! `button#play`, `input#scale`, `pre#report-text`.
+
+use num_complex::Complex64;
+use std::fmt::Write as _;
+
+/// A grey frame for the page.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameImage {
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// The frame as PNG bytes.
+    pub png: Vec<u8>,
+}
+
+/// A target on the frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Marker {
+    /// Target number.
+    pub target: usize,
+    /// Position in the first frame, px.
+    pub xy: (f64, f64),
+    /// Its window (w, h), px, when it has one.
+    pub window: Option<(f64, f64)>,
+    /// Frames it was lost in.
+    pub lost: usize,
+}
+
+/// A mode shape to animate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeAnimation {
+    /// Its label (`mode 1, 7.105 Hz (ssi)`).
+    pub label: String,
+    /// The shape per target (normalised), in the targets' order of [`Report::markers`] or of
+    /// the page's own line when there are no markers.
+    pub shape: Vec<Complex64>,
+}
+
+/// What a page shows.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Report {
+    /// The page's title (`modal: ...`).
+    pub title: String,
+    /// The first frame, when there is one.
+    pub frame: Option<FrameImage>,
+    /// The targets (positions; on the frame when there is one).
+    pub markers: Vec<Marker>,
+    /// The motion's direction in the image, a unit vector (y up: `(0, -1)`).
+    pub direction: (f64, f64),
+    /// Figures: caption and SVG text.
+    pub figures: Vec<(String, String)>,
+    /// The table of modes: header and rows.
+    pub modes: Option<(Vec<String>, Vec<Vec<String>>)>,
+    /// The MAC matrix of the shapes: labels and values.
+    pub mac: Option<(Vec<String>, Vec<Vec<f64>>)>,
+    /// Mode shapes to animate.
+    pub shapes: Vec<ShapeAnimation>,
+    /// The text report.
+    pub text: String,
+}
+
+/// `s` with `&`, `<`, `>` and `"` escaped for HTML text and attributes.
+pub fn escape(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            c => o.push(c),
+        }
+    }
+    o
+}
+
+/// Standard base64 (RFC 4648) of `bytes`.
+pub fn base64(bytes: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut o = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        o.push(T[(n >> 18) as usize & 63] as char);
+        o.push(T[(n >> 12) as usize & 63] as char);
+        o.push(if c.len() > 1 {
+            T[(n >> 6) as usize & 63] as char
+        } else {
+            '='
+        });
+        o.push(if c.len() > 2 {
+            T[n as usize & 63] as char
+        } else {
+            '='
+        });
+    }
+    o
+}
+
+/// An SVG file's text ready to inline: anything before `<svg` (an XML declaration) dropped,
+/// the figure scaled to the page's width.
+pub fn inline_svg(svg: &str) -> String {
+    let start = svg.find("<svg").unwrap_or(0);
+    svg[start..].replacen("<svg ", "<svg class=\"figure\" ", 1)
+}
+
+/// A finite number for the page's script (`null` otherwise).
+fn js(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        "null".into()
+    }
+}
+
+const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1200px}\
+svg.figure{max-width:100%;height:auto;border:1px solid #ddd}\
+table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
+pre{background:#f6f6f6;padding:1em;overflow-x:auto}\
+.mode{display:inline-block;margin:0 1em 1em 0;vertical-align:top}\
+.mode svg{border:1px solid #ddd;background:#fff}\
+#frame{max-width:100%;height:auto}";
+
+/// The page's script: animates every `svg.mode-shape` from the data in `#shape-data`.
+const SCRIPT: &str = r#"(function(){
+var data=JSON.parse(document.getElementById('shape-data').textContent);
+var playing=true,scale=1,t0=performance.now(),phase=0;
+var play=document.getElementById('play'),slider=document.getElementById('scale');
+if(play){play.addEventListener('click',function(){playing=!playing;play.textContent=playing?'pause':'play';if(playing){t0=performance.now()-phase/(2*Math.PI)*1200;}});}
+if(slider){slider.addEventListener('input',function(){scale=parseFloat(slider.value);draw();});}
+function draw(){
+ var svgs=document.querySelectorAll('svg.mode-shape');
+ for(var m=0;m<svgs.length;m++){
+  var d=data.modes[m],base=data.base,amp=data.amplitude*scale,pts=[];
+  for(var i=0;i<base.length;i++){
+   var v=d.re[i]*Math.cos(phase)-d.im[i]*Math.sin(phase);
+   pts.push((base[i][0]+data.dir[0]*amp*v).toFixed(2)+','+(base[i][1]+data.dir[1]*amp*v).toFixed(2));
+  }
+  svgs[m].querySelector('polyline.shape-line').setAttribute('points',pts.join(' '));
+  var dots=svgs[m].querySelectorAll('circle.shape-dot');
+  for(var j=0;j<dots.length&&j<pts.length;j++){var p=pts[j].split(',');dots[j].setAttribute('cx',p[0]);dots[j].setAttribute('cy',p[1]);}
+  svgs[m].setAttribute('data-phase',phase.toFixed(4));
+ }
+}
+function tick(now){if(playing){phase=((now-t0)/1200)*2*Math.PI%(2*Math.PI);draw();}requestAnimationFrame(tick);}
+draw();requestAnimationFrame(tick);
+})();"#;
+
+/// The page.
+pub fn report_html(r: &Report) -> String {
+    let mut s = String::from("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
+    let _ = write!(
+        s,
+        "<meta name=\"viewport\" content=\"width=device-width\"><title>{}</title><style>{STYLE}</style></head><body>\n<h1>{}</h1>\n",
+        escape(&r.title),
+        escape(&r.title)
+    );
+    // where the targets are: on the frame, or on a line of their own
+    let (w, h, base): (f64, f64, Vec<(f64, f64)>) = match &r.frame {
+        Some(f) => (
+            f64::from(f.width),
+            f64::from(f.height),
+            // px have their origin at the top-left pixel's centre, the image at its corner
+            r.markers
+                .iter()
+                .map(|m| (m.xy.0 + 0.5, m.xy.1 + 0.5))
+                .collect(),
+        ),
+        None => {
+            let n = r
+                .markers
+                .len()
+                .max(r.shapes.first().map_or(0, |m| m.shape.len()));
+            let w = 80.0 * (n as f64 + 1.0);
+            let pts = match r.markers.iter().all(|m| m.xy.0.is_finite()) && !r.markers.is_empty() {
+                true => r.markers.iter().map(|m| m.xy).collect(),
+                false => (0..n).map(|i| (80.0 * (i as f64 + 1.0), 150.0)).collect(),
+            };
+            (w, 300.0, pts)
+        }
+    };
+    let (bx0, by0, bx1, by1) = base.iter().fold(
+        (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ),
+        |(a, b, c, d), p| (a.min(p.0), b.min(p.1), c.max(p.0), d.max(p.1)),
+    );
+    // the view of a shape: the frame, or the targets' bounding box with a margin
+    let (vx, vy, vw, vh) = if r.frame.is_some() || base.is_empty() {
+        (0.0, 0.0, w, h)
+    } else {
+        let m = 0.25 * ((bx1 - bx0).max(by1 - by0)).max(100.0);
+        (bx0 - m, by0 - m, bx1 - bx0 + 2.0 * m, by1 - by0 + 2.0 * m)
+    };
+    let frame_image = r.frame.as_ref().map(|f| {
+        format!(
+            "<image href=\"data:image/png;base64,{}\" x=\"0\" y=\"0\" width=\"{}\" height=\"{}\"/>",
+            base64(&f.png),
+            f.width,
+            f.height
+        )
+    });
+    if let Some(img) = &frame_image {
+        let _ = write!(
+            s,
+            "<h2>The first frame and the targets</h2>\n<svg id=\"frame\" viewBox=\"0 0 {w} {h}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">{img}",
+            if w < 700.0 { 700.0 } else { w.min(1100.0) }
+        );
+        let stroke = (w.max(h) / 400.0).max(1.0);
+        for m in &r.markers {
+            let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
+            let _ = write!(s, "<g class=\"marker\" data-target=\"{}\">", m.target);
+            if let Some((ww, wh)) = m.window {
+                let _ = write!(
+                    s,
+                    "<rect x=\"{}\" y=\"{}\" width=\"{ww}\" height=\"{wh}\" fill=\"none\" stroke=\"#00c8ff\" stroke-width=\"{stroke}\"/>",
+                    xy.0 - ww / 2.0,
+                    xy.1 - wh / 2.0
+                );
+            }
+            let _ = write!(
+                s,
+                "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ff3030\"/><text x=\"{}\" y=\"{}\" fill=\"#ffe000\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">{}{}</text></g>",
+                xy.0,
+                xy.1,
+                2.0 * stroke,
+                xy.0 + 3.0 * stroke,
+                xy.1 - 3.0 * stroke,
+                12.0 * stroke,
+                0.3 * stroke,
+                m.target,
+                if m.lost > 0 {
+                    format!(" ({} lost)", m.lost)
+                } else {
+                    String::new()
+                }
+            );
+        }
+        s.push_str("</svg>\n");
+    }
+    if let Some((head, rows)) = &r.modes {
+        s.push_str("<h2>Modes</h2>\n<table id=\"modes\"><tr>");
+        for h in head {
+            let _ = write!(s, "<th>{}</th>", escape(h));
+        }
+        s.push_str("</tr>\n");
+        for row in rows {
+            s.push_str("<tr>");
+            for c in row {
+                let _ = write!(s, "<td>{}</td>", escape(c));
+            }
+            s.push_str("</tr>\n");
+        }
+        s.push_str("</table>\n");
+    }
+    if !r.shapes.is_empty() {
+        s.push_str(
+            "<h2>Mode shapes</h2>\n<p><button id=\"play\">pause</button> scale \
+             <input id=\"scale\" type=\"range\" min=\"0\" max=\"5\" step=\"0.05\" value=\"1\"></p>\n",
+        );
+        let stroke = (vw.max(vh) / 300.0).max(1.0);
+        for (i, m) in r.shapes.iter().enumerate() {
+            let _ = write!(
+                s,
+                "<div class=\"mode\"><div>{}</div><svg class=\"mode-shape\" data-mode=\"{}\" viewBox=\"{vx} {vy} {vw} {vh}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">",
+                escape(&m.label),
+                i + 1,
+                if r.frame.is_some() { 540.0 } else { 360.0 }
+            );
+            if let Some(img) = &frame_image {
+                let _ = write!(s, "<g opacity=\"0.6\">{img}</g>");
+            }
+            let pts: Vec<String> = base.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
+            let _ = write!(
+                s,
+                "<polyline points=\"{}\" fill=\"none\" stroke=\"#bbb\" stroke-width=\"{stroke}\" stroke-dasharray=\"4\"/><polyline class=\"shape-line\" points=\"{}\" fill=\"none\" stroke=\"#e0301e\" stroke-width=\"{}\"/>",
+                pts.join(" "),
+                pts.join(" "),
+                1.5 * stroke
+            );
+            for p in &base {
+                let _ = write!(
+                    s,
+                    "<circle class=\"shape-dot\" cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#1e5ae0\"/>",
+                    p.0,
+                    p.1,
+                    2.0 * stroke
+                );
+            }
+            s.push_str("</svg></div>\n");
+        }
+        // the largest component moves a tenth of the view (times the slider)
+        let amplitude = 0.1 * vw.min(vh);
+        let modes: Vec<String> = r
+            .shapes
+            .iter()
+            .map(|m| {
+                let re: Vec<String> = m.shape.iter().map(|c| js(c.re)).collect();
+                let im: Vec<String> = m.shape.iter().map(|c| js(c.im)).collect();
+                format!("{{\"re\":[{}],\"im\":[{}]}}", re.join(","), im.join(","))
+            })
+            .collect();
+        let basej: Vec<String> = base
+            .iter()
+            .map(|p| format!("[{},{}]", js(p.0), js(p.1)))
+            .collect();
+        let _ = write!(
+            s,
+            "<script type=\"application/json\" id=\"shape-data\">{{\"base\":[{}],\"dir\":[{},{}],\"amplitude\":{},\"modes\":[{}]}}</script>\n<script>{SCRIPT}</script>\n",
+            basej.join(","),
+            js(r.direction.0),
+            js(r.direction.1),
+            js(amplitude),
+            modes.join(",")
+        );
+    }
+    if let Some((labels, m)) = &r.mac {
+        let n = labels.len();
+        let cell = 40.0;
+        let pad = 110.0;
+        let size = pad + cell * n as f64;
+        let _ = write!(
+            s,
+            "<h2>MAC of the mode shapes</h2>\n<svg id=\"mac\" viewBox=\"0 0 {size} {size}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\" font-size=\"11\">",
+            size.min(700.0)
+        );
+        for (i, row) in m.iter().enumerate() {
+            let _ = write!(
+                s,
+                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+                pad - 4.0,
+                pad + cell * (i as f64 + 0.6),
+                escape(&labels[i])
+            );
+            for (j, v) in row.iter().enumerate() {
+                let g = (255.0 * (1.0 - v.clamp(0.0, 1.0))) as u8;
+                let _ = write!(
+                    s,
+                    "<rect class=\"mac-cell\" x=\"{}\" y=\"{}\" width=\"{cell}\" height=\"{cell}\" fill=\"rgb({g},{g},255)\"><title>{:.3}</title></rect><text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"{}\">{:.2}</text>",
+                    pad + cell * j as f64,
+                    pad + cell * i as f64,
+                    v,
+                    pad + cell * (j as f64 + 0.5),
+                    pad + cell * (i as f64 + 0.6),
+                    if *v > 0.5 { "#fff" } else { "#000" },
+                    v
+                );
+            }
+        }
+        for (j, l) in labels.iter().enumerate() {
+            let x = pad + cell * (j as f64 + 0.6);
+            let _ = write!(
+                s,
+                "<text x=\"{x}\" y=\"{}\" transform=\"rotate(-60 {x} {})\">{}</text>",
+                pad - 4.0,
+                pad - 4.0,
+                escape(l)
+            );
+        }
+        s.push_str("</svg>\n");
+    }
+    for (caption, svg) in &r.figures {
+        let _ = writeln!(
+            s,
+            "<figure><figcaption>{}</figcaption>{}</figure>",
+            escape(caption),
+            inline_svg(svg)
+        );
+    }
+    let _ = write!(
+        s,
+        "<h2>Report</h2>\n<pre id=\"report-text\">{}</pre>\n</body></html>\n",
+        escape(&r.text)
+    );
+    s
+}
+
+/// The MAC matrix of `shapes` (each a complex vector of one length).
+pub fn mac_matrix(shapes: &[&[Complex64]]) -> Vec<Vec<f64>> {
+    shapes
+        .iter()
+        .map(|a| {
+            shapes
+                .iter()
+                .map(|b| {
+                    let ab: Complex64 = a.iter().zip(b.iter()).map(|(x, y)| x.conj() * y).sum();
+                    let aa: f64 = a.iter().map(|x| x.norm_sqr()).sum();
+                    let bb: f64 = b.iter().map(|x| x.norm_sqr()).sum();
+                    if aa > 0.0 && bb > 0.0 {
+                        ab.norm_sqr() / (aa * bb)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_of_known_strings() {
+        assert_eq!(base64(b""), "");
+        assert_eq!(base64(b"f"), "Zg==");
+        assert_eq!(base64(b"fo"), "Zm8=");
+        assert_eq!(base64(b"foo"), "Zm9v");
+        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
+    }
+
+    #[test]
+    fn a_page_holds_its_parts_and_no_address() {
+        let r = Report {
+            title: "modal: <test>".into(),
+            markers: (1..=3)
+                .map(|t| Marker {
+                    target: t,
+                    xy: (10.0 * t as f64, 20.0),
+                    window: Some((9.0, 9.0)),
+                    lost: t - 1,
+                })
+                .collect(),
+            frame: Some(FrameImage {
+                width: 40,
+                height: 30,
+                png: vec![1, 2, 3],
+            }),
+            direction: (0.0, -1.0),
+            shapes: vec![ShapeAnimation {
+                label: "mode 1".into(),
+                shape: vec![Complex64::new(1.0, 0.0); 3],
+            }],
+            mac: Some((vec!["1".into()], vec![vec![1.0]])),
+            modes: Some((vec!["f_hz".into()], vec![vec!["7.1".into()]])),
+            text: "a < b".into(),
+            ..Report::default()
+        };
+        let html = report_html(&r);
+        assert_eq!(html.matches("class=\"marker\"").count(), 3);
+        assert_eq!(html.matches("class=\"mode-shape\"").count(), 1);
+        assert!(html.contains("(2 lost)"));
+        assert!(html.contains("modal: &lt;test&gt;"));
+        assert!(html.contains("a &lt; b"));
+        // no address but the SVG namespace (an identifier, never fetched)
+        let without_ns = html.replace("http://www.w3.org/2000/svg", "");
+        assert!(!without_ns.contains("http://") && !without_ns.contains("https://"));
+    }
+}

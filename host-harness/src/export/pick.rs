@@ -1,0 +1,161 @@
+//! `pick.html`: a self-contained page to choose the points `track --points` follows. Frames of
+//! the recording (a slider between them), where a click adds a window centred there (its size
+//! and group editable), a drag moves one, Delete (or Backspace) removes the selected one, the
+//! points of an existing file are shown, and "save points.csv" downloads the file in the
+//! format `track --points` reads: `target,x,y,w,h,group`, `x, y` in px with the origin at the
+//! centre of the top-left pixel (the page's image has it at the pixel's corner: half a pixel
+//! apart), `w, h` whole and at least 3, every window inside the frame.
+//!
+//! Elements the browser tests use: `svg#pick` (the image, one `g.window` per point),
+//! `input#frame-slider`, `input#size-w`, `input#size-h`, `input#group`, `button#save`,
+//! `table#points`; `window.vibcamPointsCsv()` returns the text "save" downloads.
+
+use super::html::{base64, escape, FrameImage};
+use std::fmt::Write as _;
+
+/// A point shown at the start (from `--points`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PickPoint {
+    /// Target number.
+    pub target: usize,
+    /// Centre, px (origin at the centre of the top-left pixel).
+    pub xy: (f64, f64),
+    /// Window, px.
+    pub size: (u32, u32),
+    /// Group.
+    pub group: Option<u32>,
+}
+
+const SCRIPT: &str = r#"(function(){
+var data=JSON.parse(document.getElementById('pick-data').textContent);
+var svg=document.getElementById('pick'),img=document.getElementById('frame-image');
+var slider=document.getElementById('frame-slider'),label=document.getElementById('frame-label');
+var sw=document.getElementById('size-w'),sh=document.getElementById('size-h'),sg=document.getElementById('group');
+var pts=data.points.map(function(p){return {target:p.target,x:p.x,y:p.y,w:p.w,h:p.h,group:p.group};});
+var sel=-1,drag=null,W=data.width,H=data.height;
+function clamp(p){var hw=(p.w-1)/2,hh=(p.h-1)/2;p.x=Math.min(Math.max(p.x,hw),W-1-hw);p.y=Math.min(Math.max(p.y,hh),H-1-hh);}
+function toPx(ev){var pt=svg.createSVGPoint();pt.x=ev.clientX;pt.y=ev.clientY;var q=pt.matrixTransform(svg.getScreenCTM().inverse());return {x:q.x-0.5,y:q.y-0.5};}
+function render(){
+ var old=svg.querySelectorAll('g.window');for(var i=0;i<old.length;i++){old[i].remove();}
+ var ns='http://www.w3.org/2000/svg';
+ pts.forEach(function(p,i){
+  var g=document.createElementNS(ns,'g');g.setAttribute('class','window');g.setAttribute('data-target',p.target);
+  var r=document.createElementNS(ns,'rect');
+  r.setAttribute('x',p.x+0.5-p.w/2);r.setAttribute('y',p.y+0.5-p.h/2);r.setAttribute('width',p.w);r.setAttribute('height',p.h);
+  r.setAttribute('fill','rgba(0,200,255,0.08)');r.setAttribute('stroke',i===sel?'#ff3030':'#00c8ff');r.setAttribute('stroke-width',Math.max(W,H)/400+0.5);
+  r.addEventListener('mousedown',function(ev){ev.stopPropagation();sel=i;drag={i:i,start:toPx(ev),x:p.x,y:p.y,moved:false};sw.value=p.w;sh.value=p.h;sg.value=p.group==null?'':p.group;render();});
+  var t=document.createElementNS(ns,'text');t.setAttribute('x',p.x+0.5-p.w/2);t.setAttribute('y',p.y+0.5-p.h/2-1);t.setAttribute('fill','#ffe000');t.setAttribute('font-size',Math.max(10,Math.max(W,H)/50));
+  t.textContent=p.target+(p.group!=null?' (group '+p.group+')':'');
+  g.appendChild(r);g.appendChild(t);svg.appendChild(g);
+ });
+ var tb=document.getElementById('points');var rows='<tr><th>target</th><th>x</th><th>y</th><th>w</th><th>h</th><th>group</th></tr>';
+ pts.forEach(function(p){rows+='<tr><td>'+p.target+'</td><td>'+p.x.toFixed(2)+'</td><td>'+p.y.toFixed(2)+'</td><td>'+p.w+'</td><td>'+p.h+'</td><td>'+(p.group==null?'':p.group)+'</td></tr>';});
+ tb.innerHTML=rows;
+}
+function size(v){v=Math.round(parseFloat(v));return isFinite(v)&&v>=3?v:21;}
+svg.addEventListener('mousedown',function(ev){
+ if(ev.button!==0)return;var q=toPx(ev);
+ var next=pts.reduce(function(a,p){return Math.max(a,p.target);},0)+1;
+ var g=sg.value===''?null:Math.max(0,Math.round(parseFloat(sg.value)));
+ var p={target:next,x:q.x,y:q.y,w:Math.min(size(sw.value),W),h:Math.min(size(sh.value),H),group:isFinite(g)?g:null};clamp(p);
+ pts.push(p);sel=pts.length-1;render();
+});
+window.addEventListener('mousemove',function(ev){if(!drag)return;var q=toPx(ev);var p=pts[drag.i];p.x=drag.x+q.x-drag.start.x;p.y=drag.y+q.y-drag.start.y;clamp(p);drag.moved=true;render();});
+window.addEventListener('mouseup',function(){drag=null;});
+window.addEventListener('keydown',function(ev){
+ if((ev.key==='Delete'||ev.key==='Backspace')&&sel>=0&&document.activeElement.tagName!=='INPUT'){pts.splice(sel,1);sel=-1;
+  pts.forEach(function(p,i){p.target=i+1;});render();ev.preventDefault();}
+});
+function edit(){if(sel<0)return;var p=pts[sel];p.w=Math.min(size(sw.value),W);p.h=Math.min(size(sh.value),H);
+ var g=sg.value===''?null:Math.round(parseFloat(sg.value));p.group=(g!=null&&isFinite(g)&&g>=0)?g:null;clamp(p);render();}
+sw.addEventListener('change',edit);sh.addEventListener('change',edit);sg.addEventListener('change',edit);
+if(slider){slider.addEventListener('input',function(){var f=data.frames[parseInt(slider.value)];img.setAttribute('href','data:image/png;base64,'+f.png);label.textContent=f.label;});}
+window.vibcamPointsCsv=function(){
+ var grouped=pts.some(function(p){return p.group!=null;});
+ var s='target,x,y,w,h'+(grouped?',group':'')+'\n';
+ pts.forEach(function(p){s+=p.target+','+p.x.toFixed(3)+','+p.y.toFixed(3)+','+p.w+','+p.h+(grouped?','+(p.group==null?0:p.group):'')+'\n';});
+ return s;
+};
+document.getElementById('save').addEventListener('click',function(){
+ var a=document.createElement('a');a.href=URL.createObjectURL(new Blob([window.vibcamPointsCsv()],{type:'text/csv'}));
+ a.download='points.csv';document.body.appendChild(a);a.click();a.remove();
+});
+render();
+})();"#;
+
+/// The page: `frames` (label and image; the first shown), `points` at the start.
+pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoint]) -> String {
+    let (w, h) = frames.first().map_or((1, 1), |(_, f)| (f.width, f.height));
+    let mut s = String::from("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
+    let _ = write!(
+        s,
+        "<title>{}</title><style>body{{font-family:sans-serif;margin:1em}}#pick{{border:1px solid #888;cursor:crosshair;max-width:100%;height:auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:2px 6px}}</style></head><body>\n<h1>{}</h1>\n",
+        escape(title),
+        escape(title)
+    );
+    s.push_str(
+        "<p>Click to add a window centred there; drag a window to move it; select one and press \
+         Delete to remove it; window size and group apply to new windows and to the selected \
+         one. \"save points.csv\" downloads the file <code>track --points</code> reads.</p>\n",
+    );
+    let _ = writeln!(
+        s,
+        "<p>window <input id=\"size-w\" type=\"number\" min=\"3\" value=\"21\" style=\"width:4em\"> x \
+         <input id=\"size-h\" type=\"number\" min=\"3\" value=\"21\" style=\"width:4em\"> px, group \
+         <input id=\"group\" type=\"number\" min=\"0\" style=\"width:4em\"> \
+         <button id=\"save\">save points.csv</button></p>"
+    );
+    if frames.len() > 1 {
+        let _ = writeln!(
+            s,
+            "<p>frame <input id=\"frame-slider\" type=\"range\" min=\"0\" max=\"{}\" value=\"0\"> <span id=\"frame-label\">{}</span></p>",
+            frames.len() - 1,
+            escape(&frames[0].0)
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "<p><span id=\"frame-label\">{}</span></p>",
+            escape(frames.first().map_or("", |f| f.0.as_str()))
+        );
+    }
+    let display = if w < 700 { 700 } else { w.min(1400) };
+    let _ = write!(
+        s,
+        "<svg id=\"pick\" viewBox=\"0 0 {w} {h}\" width=\"{display}\" xmlns=\"http://www.w3.org/2000/svg\"><image id=\"frame-image\" href=\"data:image/png;base64,{}\" x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" style=\"image-rendering:pixelated\"/></svg>\n<table id=\"points\"></table>\n",
+        frames.first().map_or(String::new(), |(_, f)| base64(&f.png))
+    );
+    let frames_json: Vec<String> = frames
+        .iter()
+        .map(|(l, f)| {
+            format!(
+                "{{\"label\":{},\"png\":\"{}\"}}",
+                serde_json::Value::String(l.clone())
+                    .to_string()
+                    .replace("</", "<\\/"),
+                base64(&f.png)
+            )
+        })
+        .collect();
+    let points_json: Vec<String> = points
+        .iter()
+        .map(|p| {
+            format!(
+                "{{\"target\":{},\"x\":{},\"y\":{},\"w\":{},\"h\":{},\"group\":{}}}",
+                p.target,
+                p.xy.0,
+                p.xy.1,
+                p.size.0,
+                p.size.1,
+                p.group.map_or("null".to_string(), |g| g.to_string())
+            )
+        })
+        .collect();
+    let _ = write!(
+        s,
+        "<script type=\"application/json\" id=\"pick-data\">{{\"width\":{w},\"height\":{h},\"frames\":[{}],\"points\":[{}]}}</script>\n<script>{SCRIPT}</script>\n</body></html>\n",
+        frames_json.join(","),
+        points_json.join(",")
+    );
+    s
+}

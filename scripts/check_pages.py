@@ -1,0 +1,250 @@
+#!/usr/bin/env python3
+"""The pages host-harness writes, opened in a real headless browser (Debian's chromium and
+chromedriver, driven by selenium): every report.html (track, analyze, modal, ema) loads with no
+console error and no network request, holds what it should (the frame, one marker per target,
+one animation per mode, the table of modes) and its animations advance; on pick.html scripted
+clicks add windows, a drag moves one, Delete removes one, "save points.csv" downloads a file, and
+`track --points` with that file gives the same tracks as with the hand-written one.
+
+    python3 scripts/check_pages.py --harness target/debug/host-harness --work target/pages
+
+Needs `chromium` and `chromedriver` on the PATH (apt-get install chromium chromium-driver) and
+selenium (pip). Exit status 0 when every check passes, 1 otherwise.
+"""
+import argparse
+import csv
+import json
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+failures = []
+
+
+def check(ok, what):
+    print(("ok    " if ok else "FAIL  ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+
+
+def run(harness, *args):
+    p = subprocess.run([harness, *map(str, args)], capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"{' '.join(map(str, args))}: exit {p.returncode}\n{p.stderr}")
+    return p.stdout
+
+
+def browser(download_dir):
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,1200",
+              "--disable-dev-shm-usage"):
+        opts.add_argument(a)
+    opts.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
+    drv = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
+    drv.execute_cdp_cmd("Browser.setDownloadBehavior",
+                        {"behavior": "allow", "downloadPath": str(download_dir)})
+    return drv
+
+
+def network_requests(drv):
+    """URLs the page asked the network for (the performance log's Network events; data: and
+    blob: URLs are not the network)."""
+    urls = []
+    for entry in drv.get_log("performance"):
+        msg = json.loads(entry["message"])["message"]
+        if msg.get("method") == "Network.requestWillBeSent":
+            url = msg["params"]["request"]["url"]
+            if not url.startswith(("data:", "blob:", "file:")):
+                urls.append(url)
+    return urls
+
+
+def console_errors(drv):
+    return [e["message"] for e in drv.get_log("browser") if e["level"] == "SEVERE"]
+
+
+def open_page(drv, path):
+    drv.get_log("performance")
+    drv.get_log("browser")
+    drv.get(Path(path).resolve().as_uri())
+    time.sleep(0.5)
+
+
+def check_report(drv, path, markers, modes, what):
+    from selenium.webdriver.common.by import By
+
+    open_page(drv, path)
+    size = Path(path).stat().st_size
+    check(size < 5_000_000, f"{what}: {size / 1e6:.2f} MB")
+    check(console_errors(drv) == [], f"{what}: no console error {console_errors(drv)}")
+    check(network_requests(drv) == [], f"{what}: no network request")
+    if markers is not None:
+        check(len(drv.find_elements(By.CSS_SELECTOR, "svg#frame image")) == 1,
+              f"{what}: the frame")
+        n = len(drv.find_elements(By.CSS_SELECTOR, "svg#frame g.marker"))
+        check(n == markers, f"{what}: {n} markers, {markers} targets")
+    if modes is not None:
+        shapes = drv.find_elements(By.CSS_SELECTOR, "svg.mode-shape")
+        check(len(shapes) == modes, f"{what}: {len(shapes)} animations, {modes} modes")
+        rows = drv.find_elements(By.CSS_SELECTOR, "table#modes tr")
+        check(len(rows) == modes + 1, f"{what}: the table of modes has {len(rows) - 1} rows")
+        if shapes:
+            line = shapes[0].find_element(By.CSS_SELECTOR, "polyline.shape-line")
+            a = line.get_attribute("points")
+            time.sleep(0.35)
+            b = line.get_attribute("points")
+            check(a != b, f"{what}: the first shape's animation advances")
+            drv.find_element(By.ID, "play").click()
+            c = line.get_attribute("points")
+            time.sleep(0.35)
+            check(line.get_attribute("points") == c, f"{what}: pause stops it")
+    check(drv.find_element(By.ID, "report-text").text.strip() != "", f"{what}: the report")
+
+
+def click_at(drv, svg, x_px, y_px):
+    """A real mouse click at image pixel (x, y) (origin at the top-left pixel's centre)."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    cx, cy = drv.execute_script(
+        "var s=arguments[0],p=s.createSVGPoint();p.x=arguments[1]+0.5;p.y=arguments[2]+0.5;"
+        "var q=p.matrixTransform(s.getScreenCTM());var r=s.getBoundingClientRect();"
+        "return [q.x-r.left-r.width/2,q.y-r.top-r.height/2];", svg, x_px, y_px)
+    ActionChains(drv).move_to_element_with_offset(svg, cx, cy).click().perform()
+    return cx, cy
+
+
+def check_pick(drv, harness, work, rec):
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    hand = rec / "points.csv"
+    with open(hand, newline="") as f:
+        rows = list(csv.DictReader(f))
+    # the hand-written file: the recording's targets at whole pixels, 31 px windows
+    written = work / "hand.csv"
+    with open(written, "w") as f:
+        f.write("target,x,y,w,h\n")
+        for r in rows:
+            f.write(f"{r['target']},{round(float(r['x']))},{round(float(r['y']))},31,31\n")
+    page = work / "pick.html"
+    run(harness, "pick", "--frames", rec / "frames", "--out", page, "--force")
+    downloads = work / "downloads"
+    shutil.rmtree(downloads, ignore_errors=True)
+    downloads.mkdir(parents=True)
+    drv.execute_cdp_cmd("Browser.setDownloadBehavior",
+                        {"behavior": "allow", "downloadPath": str(downloads)})
+    open_page(drv, page)
+    check(console_errors(drv) == [], "pick.html: no console error")
+    check(network_requests(drv) == [], "pick.html: no network request")
+    for k, v in (("size-w", "31"), ("size-h", "31")):
+        el = drv.find_element(By.ID, k)
+        el.clear()
+        el.send_keys(v)
+    svg = drv.find_element(By.ID, "pick")
+    with open(written, newline="") as f:
+        want = list(csv.DictReader(f))
+    for r in want:
+        click_at(drv, svg, float(r["x"]), float(r["y"]))
+    n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
+    check(n == len(want), f"pick.html: {n} windows after {len(want)} clicks")
+    # one more, dragged, then deleted
+    click_at(drv, svg, 80, 80)
+    rect = drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window rect")[-1]
+    before = float(rect.get_attribute("x"))
+    ActionChains(drv).click_and_hold(rect).move_by_offset(40, 0).release().perform()
+    rect = drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window rect")[-1]
+    check(float(rect.get_attribute("x")) > before + 2, "pick.html: a drag moves a window")
+    ActionChains(drv).send_keys(Keys.DELETE).perform()
+    n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
+    check(n == len(want), "pick.html: Delete removes the selected window")
+    drv.find_element(By.ID, "save").click()
+    saved = downloads / "points.csv"
+    for _ in range(50):
+        if saved.exists() and saved.stat().st_size > 0:
+            break
+        time.sleep(0.1)
+    check(saved.exists(), "pick.html: save downloads points.csv")
+    if not saved.exists():
+        return
+    # the same tracks from the saved file as from the hand-written one
+    out_a, out_b = work / "track-saved", work / "track-hand"
+    run(harness, "track", "--frames", rec / "frames", "--fps", "120", "--points", saved,
+        "--threshold", "127", "--out", out_a, "--force", "--no-plots")
+    run(harness, "track", "--frames", rec / "frames", "--fps", "120", "--points", written,
+        "--threshold", "127", "--out", out_b, "--force", "--no-plots")
+
+    def tracks(d):
+        with open(d / "displacement.csv", newline="") as f:
+            return [(r["frame"], r["target"], r["cx"], r["cy"]) for r in csv.DictReader(f)]
+
+    a, b = tracks(out_a), tracks(out_b)
+    check(a == b and len(a) > 0,
+          f"pick.html: track --points with the saved file equals the hand-written one "
+          f"({len(a)} rows)")
+    # and the page shows an existing file's points
+    run(harness, "pick", "--frames", rec / "frames", "--points", written, "--out", page,
+        "--force")
+    open_page(drv, page)
+    n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
+    check(n == len(want), f"pick.html --points: {n} windows shown")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--harness", default="target/debug/host-harness")
+    ap.add_argument("--work", default="target/pages")
+    ap.add_argument("--screenshots", default=None,
+                    help="also save screenshots of the analyze report and the picker here")
+    args = ap.parse_args()
+    h = str(Path(args.harness).resolve())
+    work = Path(args.work).resolve()
+    work.mkdir(parents=True, exist_ok=True)
+    rec = work / "rec"
+    run(h, "render", "--preset", "cantilever", "--recording", rec, "--targets", "5",
+        "--exposure-ms", "2", "--force")
+    run(h, "track", "--frames", rec / "frames", "--fps", "120", "--points", rec / "points.csv",
+        "--threshold", "127", "--out", work / "track", "--force")
+    run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--threshold", "127",
+        "--mm-per-px", "0.1266", "--targets", "5", "--out", work / "analyze", "--force")
+    run(h, "modal", "--displacement", work / "analyze" / "displacement.csv", "--out",
+        work / "modal", "--force")
+    run(h, "simulate-hammer", "--out", work / "hammer", "--force")
+    run(h, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
+        work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
+        "--f-max-hz", "200", "--out", work / "ema", "--force")
+
+    def mode_rows(d):
+        with open(d / "modes.csv", newline="") as f:
+            return len(list(csv.DictReader(f)))
+
+    drv = browser(work)
+    try:
+        check_report(drv, work / "track" / "report.html", 5, None, "track")
+        check_report(drv, work / "analyze" / "report.html", 5, mode_rows(work / "analyze"),
+                     "analyze")
+        check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
+                     "modal")
+        check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema")
+        check_pick(drv, h, work, rec)
+        if args.screenshots:
+            shots = Path(args.screenshots)
+            shots.mkdir(parents=True, exist_ok=True)
+            open_page(drv, work / "analyze" / "report.html")
+            drv.save_screenshot(str(shots / "report.png"))
+            open_page(drv, work / "pick.html")
+            drv.save_screenshot(str(shots / "pick.png"))
+    finally:
+        drv.quit()
+    print(f"{len(failures)} failed" if failures else "all checks passed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
