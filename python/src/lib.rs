@@ -563,10 +563,28 @@ fn analyze<'py>(
             let c = oma_frames::compute(&req, &source)?;
             let report =
                 host_harness::analysis::oma::run::report(&c.result, &c.records, &c.settings, "");
-            Ok((c, report, fps))
+            // the page of `analyze`'s report.html, the figures left out (none are drawn here)
+            let frame = source
+                .frame_at(fps, 0)
+                .ok()
+                .flatten()
+                .and_then(|(_, f)| f.to_image().ok());
+            let html = host_harness::analysis::oma::run::page(
+                &c.result,
+                &c.records,
+                "analyze",
+                req.displacement.axis == Axis::X,
+                frame,
+                Vec::new(),
+                &report,
+            );
+            Ok((c, report, fps, html))
         })
         .map_err(py_err)?;
-    analysis_dict(py, computed)
+    let (c, report, fps, html) = computed;
+    let d = analysis_dict(py, (c, report, fps))?;
+    d.set_item("html", html)?;
+    Ok(d)
 }
 
 /// The dict `analyze` returns.
@@ -850,7 +868,7 @@ fn ema<'py>(
         force,
         plots: write,
     };
-    let (r, report, names) = py
+    let (r, report, names, html) = py
         .allow_threads(|| -> anyhow::Result<_> {
             let spec = EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
             let names = spec.request().response.names.clone();
@@ -858,7 +876,9 @@ fn ema<'py>(
                 spec.run()?;
             }
             let (r, report) = spec.compute()?;
-            Ok((r, report, names))
+            let html =
+                host_harness::analysis::ema::run::page(spec.request(), &r, &report, Vec::new());
+            Ok((r, report, names, html))
         })
         .map_err(py_err)?;
     let d = PyDict::new(py);
@@ -947,6 +967,7 @@ fn ema<'py>(
             .unwrap_or_default(),
     )?;
     d.set_item("report", report)?;
+    d.set_item("html", html)?;
     Ok(d)
 }
 

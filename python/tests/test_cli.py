@@ -69,6 +69,12 @@ def test_analyze_equals_the_command_line(recording, harness, tmp_path, flags, kw
         assert e in report
     for r in res.rejected:
         assert ": " in r and r in report
+    # the notebook's view: report.html's page, one marker per target, one animation per mode
+    html = res._repr_html_()
+    assert html.count('class="marker"') == 5
+    assert html.count('class="mode-shape"') == len(res.modes["method"])
+    assert html.count('class="mode-shape"') == (out / "report.html").read_text().count(
+        'class="mode-shape"')
 
 
 def test_analyze_of_an_array_equals_the_files(recording):

@@ -65,6 +65,8 @@ def test_ema_of_a_pyidi_array_finds_the_modes_and_equals_the_command_line(hammer
     assert [float(x["damping"]) for x in rows] == pytest.approx(list(r.modes["damping"]),
                                                                  rel=1e-12)
     assert p.stdout == r.report
+    html = r._repr_html_()
+    assert html.count('class="mode-shape"') == 3 and "<table id=\"modes\">" in html
 
 
 def test_ema_errors_name_pythons_arguments(hammer):

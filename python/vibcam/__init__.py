@@ -371,6 +371,12 @@ class AnalysisResult:
     shapes_abs_u: Optional[np.ndarray] = None
     evidence: list = field(default_factory=list)
     rejected: list = field(default_factory=list)
+    html: str = field(default="", repr=False)
+
+    def _repr_html_(self) -> str:
+        """The page of ``analyze``'s ``report.html`` (the frame with the targets, the modes,
+        the MAC, the shapes animated), shown inline by a notebook."""
+        return self.html
 
     def modes_rows(self) -> list:
         """The rows of ``modes.csv`` (dicts; ``None`` for an empty cell)."""
@@ -504,6 +510,7 @@ def analyze(
         shapes_abs_u=d["shapes_abs_u"],
         evidence=list(d["evidence"]),
         rejected=list(d["rejected"]),
+        html=d["html"],
     )
 
 
@@ -534,6 +541,12 @@ class EmaResult:
     report: str
     notes: list = field(default_factory=list)
     hits_left_out: list = field(default_factory=list)
+    html: str = field(default="", repr=False)
+
+    def _repr_html_(self) -> str:
+        """The page of ``ema``'s ``report.html`` (modes, MAC, animated shapes), shown inline by
+        a notebook."""
+        return self.html
 
 
 def ema(
@@ -616,6 +629,7 @@ def ema(
         report=d["report"],
         notes=list(d["notes"]),
         hits_left_out=list(d["hits_left_out"]),
+        html=d["html"],
     )
 
 

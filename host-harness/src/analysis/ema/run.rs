@@ -100,7 +100,15 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         plots(out.dir(), req, &r)?;
     }
     out.write("report.txt", &report)?;
-    out.write("report.html", page(req, &r, &report, out.dir()))?;
+    let figures = ["frf", "frf_phase", "stabilisation"]
+        .iter()
+        .filter_map(|n| {
+            std::fs::read_to_string(out.dir().join(format!("{n}.svg")))
+                .ok()
+                .map(|svg| (n.to_string(), svg))
+        })
+        .collect();
+    out.write("report.html", page(req, &r, &report, figures))?;
     out.commit()?;
     Ok(Outcome {
         report,
@@ -110,8 +118,8 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
 
 /// `report.html` of `ema`: the modes with their intervals, the MAC of their shapes, each shape
 /// animated along the responses (in their order: a camera's targets have no positions here),
-/// the figures, the report.
-fn page(req: &EmaRequest, r: &EmaResult, text: &str, dir: &Path) -> String {
+/// the figures (caption, SVG), the report `text`.
+pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, String)>) -> String {
     use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
     let iv = |i: Option<Interval>, d: usize| {
         i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
@@ -146,14 +154,6 @@ fn page(req: &EmaRequest, r: &EmaResult, text: &str, dir: &Path) -> String {
         .collect();
     let shapes: Vec<&[num_complex::Complex64]> =
         r.modes.iter().map(|m| m.shape.as_slice()).collect();
-    let figures = ["frf", "frf_phase", "stabilisation"]
-        .iter()
-        .filter_map(|n| {
-            std::fs::read_to_string(dir.join(format!("{n}.svg")))
-                .ok()
-                .map(|svg| (n.to_string(), svg))
-        })
-        .collect();
     report_html(&Report {
         title: format!(
             "ema: {} over {}",

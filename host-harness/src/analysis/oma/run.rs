@@ -97,7 +97,26 @@ pub fn write(
     }
     let report = report(r, records, settings, &o.preamble);
     out.write("report.txt", &report)?;
-    out.write("report.html", page(r, records, o, &report, out.dir()))?;
+    let figures = ["svd", "stabilisation"]
+        .iter()
+        .filter_map(|n| {
+            std::fs::read_to_string(out.dir().join(format!("{n}.svg")))
+                .ok()
+                .map(|svg| (n.to_string(), svg))
+        })
+        .collect();
+    out.write(
+        "report.html",
+        page(
+            r,
+            records,
+            o.command,
+            o.along_x,
+            o.frame.clone(),
+            figures,
+            &report,
+        ),
+    )?;
     out.commit()?;
     Ok(Outcome {
         report,
@@ -106,8 +125,17 @@ pub fn write(
 }
 
 /// `report.html`: the targets (on the first frame when there is one), the modes with their
-/// intervals, the MAC of their shapes, each shape animated, the figures drawn, the report.
-fn page(r: &OmaResult, records: &Records, o: &Output<'_>, text: &str, dir: &Path) -> String {
+/// intervals, the MAC of their shapes, each shape animated, the figures (caption, SVG), the
+/// report `text`. `command` names the page (`modal`, `analyze`); `along_x` the motion's axis.
+pub fn page(
+    r: &OmaResult,
+    records: &Records,
+    command: &str,
+    along_x: bool,
+    frame: Option<crate::export::html::FrameImage>,
+    figures: Vec<(String, String)>,
+    text: &str,
+) -> String {
     use crate::export::html::{mac_matrix, report_html, Marker, Report, ShapeAnimation};
     let markers: Vec<Marker> = records
         .targets
@@ -163,19 +191,11 @@ fn page(r: &OmaResult, records: &Records, o: &Output<'_>, text: &str, dir: &Path
         .map(|m| format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz))
         .collect();
     let shapes: Vec<&[Complex64]> = r.modes.iter().map(|m| m.shape.as_slice()).collect();
-    let figures = ["svd", "stabilisation"]
-        .iter()
-        .filter_map(|n| {
-            std::fs::read_to_string(dir.join(format!("{n}.svg")))
-                .ok()
-                .map(|svg| (n.to_string(), svg))
-        })
-        .collect();
     report_html(&Report {
-        title: format!("{}: output-only modal analysis", o.command),
-        frame: o.frame.clone(),
+        title: format!("{command}: output-only modal analysis"),
+        frame,
         markers,
-        direction: if o.along_x { (1.0, 0.0) } else { (0.0, -1.0) },
+        direction: if along_x { (1.0, 0.0) } else { (0.0, -1.0) },
         figures,
         modes: (!rows.is_empty()).then_some((head, rows)),
         mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
