@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The pages host-harness writes, opened in a real headless browser (Debian's chromium and
-chromedriver, driven by selenium): every report.html (track, analyze, modal, ema) loads with no
+chromedriver, driven by selenium): every report.html (track, analyze with and without an
+accelerometer, with one target and several, modal, ema) loads with no
 console error and no network request, holds what it should (the frame, one marker per target,
 one animation per mode, the table of modes) and its animations advance; on pick.html scripted
 clicks add windows, a drag moves one, Delete removes one, "save points.csv" downloads a file, and
@@ -76,7 +77,7 @@ def open_page(drv, path):
     time.sleep(0.5)
 
 
-def check_report(drv, path, markers, modes, what):
+def check_report(drv, path, markers, modes, what, rows=None):
     from selenium.webdriver.common.by import By
 
     open_page(drv, path)
@@ -92,8 +93,9 @@ def check_report(drv, path, markers, modes, what):
     if modes is not None:
         shapes = drv.find_elements(By.CSS_SELECTOR, "svg.mode-shape")
         check(len(shapes) == modes, f"{what}: {len(shapes)} animations, {modes} modes")
-        rows = drv.find_elements(By.CSS_SELECTOR, "table#modes tr")
-        check(len(rows) == modes + 1, f"{what}: the table of modes has {len(rows) - 1} rows")
+        got = drv.find_elements(By.CSS_SELECTOR, "table#modes tr")
+        want = modes if rows is None else rows
+        check(len(got) == want + 1, f"{what}: the table of modes has {len(got) - 1} rows")
         if shapes:
             line = shapes[0].find_element(By.CSS_SELECTOR, "polyline.shape-line")
             a = line.get_attribute("points")
@@ -215,6 +217,13 @@ def main():
         "--mm-per-px", "0.1266", "--targets", "5", "--out", work / "analyze", "--force")
     run(h, "modal", "--displacement", work / "analyze" / "displacement.csv", "--out",
         work / "modal", "--force")
+    run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
+        "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
+        "--exposure-ms", "2", "--targets", "5", "--window", "rect", "--out", work / "accel5",
+        "--force")
+    run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
+        "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
+        "--exposure-ms", "2", "--window", "rect", "--out", work / "accel1", "--force")
     run(h, "simulate-hammer", "--out", work / "hammer", "--force")
     run(h, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
         work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
@@ -232,6 +241,12 @@ def main():
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
                      "modal")
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema")
+        # with the accelerometer: one shape per band over the five targets, a row per target
+        # and mode; one target: its marker and the modes of both systems, no shapes
+        check_report(drv, work / "accel5" / "report.html", 5, 2, "analyze --targets --accel",
+                     rows=mode_rows(work / "accel5"))
+        check_report(drv, work / "accel1" / "report.html", 1, 0, "analyze --accel",
+                     rows=mode_rows(work / "accel1"))
         check_pick(drv, h, work, rec)
         if args.screenshots:
             shots = Path(args.screenshots)

@@ -125,6 +125,10 @@ fn one_target(
         write_results(&out, req, a, &mut report)?;
     }
     out.write("report.txt", &report)?;
+    out.write(
+        "report.html",
+        one_target_page(req, source, &centroids, a, &report, out.dir()),
+    )?;
     if result.is_ok() {
         out.commit()?;
     } else if !out.commit_unless_replacing()? {
@@ -136,6 +140,86 @@ fn one_target(
     Ok(Outcome {
         report,
         result: result.map(|_| ()),
+    })
+}
+
+/// `report.html` of a one-target analysis: the first frame with the target and its lost
+/// frames, the modes of both systems with their intervals, the FRF figure, the report.
+fn one_target_page(
+    req: &Request,
+    source: &FrameSource,
+    centroids: &[firmware_core::centroid::Centroid],
+    a: Option<&super::Analysis>,
+    text: &str,
+    dir: &std::path::Path,
+) -> String {
+    use crate::export::html::{report_html, Marker, Report};
+    let fps = req.settings.frame_rate_hz;
+    let frame = source
+        .frame_at(fps, 0)
+        .ok()
+        .flatten()
+        .and_then(|(_, f)| f.to_image().ok());
+    let lost = centroids.iter().filter(|c| c.position().is_none()).count();
+    let markers: Vec<Marker> = centroids
+        .iter()
+        .find_map(|c| c.position())
+        .map(|(x, y)| Marker {
+            target: 1,
+            xy: (f64::from(x), f64::from(y)),
+            window: None,
+            lost,
+        })
+        .into_iter()
+        .collect();
+    let iv = |i: Option<(f64, f64, f64)>, d: usize| {
+        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
+    };
+    let rows: Vec<Vec<String>> = a
+        .map(|a| {
+            super::mode_rows(a)
+                .iter()
+                .map(|m| {
+                    vec![
+                        m.system.to_string(),
+                        m.mode.to_string(),
+                        format!("{:.4}", m.f_hz),
+                        iv(m.intervals[0], 4),
+                        format!("{:.4}", m.amplitude),
+                        iv(m.intervals[2], 4),
+                        m.damping.map_or(String::new(), |d| format!("{d:.5}")),
+                        iv(m.intervals[1], 5),
+                    ]
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let head: Vec<String> = [
+        "system",
+        "mode",
+        "f (Hz)",
+        "95 % interval",
+        "|H1|",
+        "95 % interval",
+        "damping",
+        "95 % interval",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let figures = std::fs::read_to_string(dir.join("frf.svg"))
+        .ok()
+        .map(|svg| vec![("FRFs".to_string(), svg)])
+        .unwrap_or_default();
+    report_html(&Report {
+        title: format!("analyze: {}", req.frames),
+        frame,
+        markers,
+        direction: (0.0, -1.0),
+        figures,
+        modes: (!rows.is_empty()).then_some((head, rows)),
+        text: text.to_string(),
+        ..Report::default()
     })
 }
 

@@ -55,6 +55,18 @@ pub fn run(
     }
     let failed = a.failures();
     out.write("report.txt", &report)?;
+    out.write(
+        "report.html",
+        page(
+            req,
+            source,
+            &a,
+            &tracks,
+            windows.as_ref(),
+            &report,
+            out.dir(),
+        ),
+    )?;
     // a run with failed targets exits 2: it never replaces an earlier output
     let written = if failed.is_empty() {
         out.commit().map(|()| true)?
@@ -83,6 +95,117 @@ pub fn run(
         )))
     };
     Ok(Outcome { report, result })
+}
+
+/// `report.html` of a multi-target analysis: the first frame with every target's window,
+/// number and lost frames; the modes per target with their intervals; the MAC of the fitted
+/// shapes, each animated; the shapes' figure; the report.
+fn page(
+    req: &Request,
+    source: &FrameSource,
+    a: &TargetAnalysis,
+    tracks: &Tracks,
+    windows: Option<&super::points::PointsInfo>,
+    text: &str,
+    dir: &std::path::Path,
+) -> String {
+    use crate::export::html::{mac_matrix, report_html, Marker, Report, ShapeAnimation};
+    use num_complex::Complex64;
+    let frame = source
+        .frame_at(req.settings.frame_rate_hz, 0)
+        .ok()
+        .flatten()
+        .and_then(|(_, f)| f.to_image().ok());
+    let markers = tracks
+        .first
+        .iter()
+        .enumerate()
+        .map(|(t, xy)| Marker {
+            target: t + 1,
+            xy: *xy,
+            window: windows
+                .and_then(|w| w.sizes.get(t))
+                .map(|(w, h)| (f64::from(*w), f64::from(*h))),
+            lost: tracks.centroids[t]
+                .iter()
+                .filter(|c| c.position().is_none())
+                .count(),
+        })
+        .collect();
+    let iv = |i: Option<(f64, f64, f64)>, d: usize| {
+        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
+    };
+    let rows: Vec<Vec<String>> = a
+        .modes
+        .iter()
+        .map(|m| {
+            vec![
+                m.target.to_string(),
+                m.mode.to_string(),
+                m.f_hz.map_or(String::new(), |f| format!("{f:.4}")),
+                iv(m.intervals[0], 4),
+                format!("{:.4}", m.amplitude),
+                m.damping.map_or(String::new(), |d| format!("{d:.5}")),
+                iv(m.intervals[1], 5),
+            ]
+        })
+        .collect();
+    let head: Vec<String> = [
+        "target",
+        "mode",
+        "f (Hz)",
+        "95 % interval",
+        "|H1|",
+        "damping",
+        "95 % interval",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let fitted: Vec<(String, Vec<Complex64>)> = a
+        .shapes
+        .iter()
+        .enumerate()
+        .filter_map(|(b, s)| {
+            s.as_ref().map(|(p, v)| {
+                (
+                    format!("mode {} {:.3} Hz", b + 1, p.f_hz),
+                    v.iter().map(|c| c.unwrap_or_default()).collect(),
+                )
+            })
+        })
+        .collect();
+    let shapes: Vec<&[Complex64]> = fitted.iter().map(|(_, v)| v.as_slice()).collect();
+    let figures = std::fs::read_to_string(dir.join("shapes.svg"))
+        .ok()
+        .map(|svg| vec![("shapes".to_string(), svg)])
+        .unwrap_or_default();
+    report_html(&Report {
+        title: format!("analyze: {}", req.frames),
+        frame,
+        markers,
+        direction: if req.displacement.axis == Axis::X {
+            (1.0, 0.0)
+        } else {
+            (0.0, -1.0)
+        },
+        figures,
+        modes: (!rows.is_empty()).then_some((head, rows)),
+        mac: (!fitted.is_empty()).then(|| {
+            (
+                fitted.iter().map(|(l, _)| l.clone()).collect(),
+                mac_matrix(&shapes),
+            )
+        }),
+        shapes: fitted
+            .iter()
+            .map(|(l, v)| ShapeAnimation {
+                label: l.clone(),
+                shape: v.clone(),
+            })
+            .collect(),
+        text: text.to_string(),
+    })
 }
 
 /// The CSV files and the UFF of a multi-target analysis.
