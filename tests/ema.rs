@@ -427,3 +427,34 @@ fn a_displacement_csv_of_track_is_a_response_file() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bands_give_one_mode_each_and_an_empty_band_is_named() {
+    let dir = std::env::temp_dir().join(format!("vibcam-ema-bands-{}", std::process::id()));
+    let test = write_test(&dir, &[]);
+    let out = ema(&dir, "bands", &["--bands", "15-30,50-70,100-130,150-160"]);
+    assert_ok(&out);
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        report.contains("band 150-160 Hz: no mode (no cluster of stable poles there)"),
+        "{report}"
+    );
+    check_modes(&dir.join("bands"), &test, "bands");
+    let modes = std::fs::read_to_string(dir.join("bands/modes.csv")).unwrap();
+    let bands: Vec<(String, String)> = modes
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[3].to_string(), c[4].to_string())
+        })
+        .collect();
+    assert_eq!(
+        bands,
+        [("15", "30"), ("50", "70"), ("100", "130")]
+            .iter()
+            .map(|(a, b)| (a.to_string(), b.to_string()))
+            .collect::<Vec<_>>()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
