@@ -207,10 +207,7 @@ fn one_target_page(
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let figures = std::fs::read_to_string(dir.join("frf.svg"))
-        .ok()
-        .map(|svg| vec![("FRFs".to_string(), svg)])
-        .unwrap_or_default();
+    let figures = crate::export::html::read_figures(dir, &["frf"]);
     report_html(&Report {
         title: format!("analyze: {}", req.frames),
         frame,

@@ -109,29 +109,14 @@ fn page(
     text: &str,
     dir: &std::path::Path,
 ) -> String {
-    use crate::export::html::{mac_matrix, report_html, Marker, Report, ShapeAnimation};
+    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
     use num_complex::Complex64;
     let frame = source
         .frame_at(req.settings.frame_rate_hz, 0)
         .ok()
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
-    let markers = tracks
-        .first
-        .iter()
-        .enumerate()
-        .map(|(t, xy)| Marker {
-            target: t + 1,
-            xy: *xy,
-            window: windows
-                .and_then(|w| w.sizes.get(t))
-                .map(|(w, h)| (f64::from(*w), f64::from(*h))),
-            lost: tracks.centroids[t]
-                .iter()
-                .filter(|c| c.position().is_none())
-                .count(),
-        })
-        .collect();
+    let markers = super::track_run::markers(tracks, windows);
     let iv = |i: Option<(f64, f64, f64)>, d: usize| {
         i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
     };
@@ -176,10 +161,7 @@ fn page(
         })
         .collect();
     let shapes: Vec<&[Complex64]> = fitted.iter().map(|(_, v)| v.as_slice()).collect();
-    let figures = std::fs::read_to_string(dir.join("shapes.svg"))
-        .ok()
-        .map(|svg| vec![("shapes".to_string(), svg)])
-        .unwrap_or_default();
+    let figures = crate::export::html::read_figures(dir, &["shapes"]);
     report_html(&Report {
         title: format!("analyze: {}", req.frames),
         frame,

@@ -179,27 +179,9 @@ fn page(
     text: &str,
     dir: &Path,
 ) -> String {
-    use crate::export::html::{report_html, Marker, Report};
-    let markers = tracks
-        .first
-        .iter()
-        .enumerate()
-        .map(|(t, xy)| Marker {
-            target: t + 1,
-            xy: *xy,
-            window: windows
-                .and_then(|w| w.sizes.get(t))
-                .map(|(w, h)| (f64::from(*w), f64::from(*h))),
-            lost: tracks.centroids[t]
-                .iter()
-                .filter(|c| c.position().is_none())
-                .count(),
-        })
-        .collect();
-    let figures = std::fs::read_to_string(dir.join("tracks.svg"))
-        .ok()
-        .map(|svg| vec![("tracks".to_string(), svg)])
-        .unwrap_or_default();
+    use crate::export::html::{report_html, Report};
+    let markers = markers(tracks, windows);
+    let figures = crate::export::html::read_figures(dir, &["tracks"]);
     report_html(&Report {
         title: format!("track: {}", req.frames),
         frame,
@@ -331,4 +313,24 @@ fn plot(dir: &Path, tracks: &Tracks, fps: f64, along_x: bool) -> anyhow::Result<
         "px",
         &curves,
     )
+}
+
+/// The targets for `report.html`: first positions, windows (chosen points) and lost frames.
+pub fn markers(tracks: &Tracks, windows: Option<&PointsInfo>) -> Vec<crate::export::html::Marker> {
+    tracks
+        .first
+        .iter()
+        .enumerate()
+        .map(|(t, xy)| crate::export::html::Marker {
+            target: t + 1,
+            xy: *xy,
+            window: windows
+                .and_then(|w| w.sizes.get(t))
+                .map(|(w, h)| (f64::from(*w), f64::from(*h))),
+            lost: tracks.centroids[t]
+                .iter()
+                .filter(|c| c.position().is_none())
+                .count(),
+        })
+        .collect()
 }

@@ -13,7 +13,7 @@ use crate::export::ema::{self as export, EmaModeRow};
 use crate::export::oma::{shapes_csv, OmaShapeRow};
 use crate::export::uff::{AxisCharacteristics, Dataset58, Dof, Quantity};
 use crate::outdir::Staged;
-use crate::plots::PoleKind;
+use num_complex::Complex64;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -100,14 +100,8 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         plots(out.dir(), req, &r)?;
     }
     out.write("report.txt", &report)?;
-    let figures = ["frf", "frf_phase", "stabilisation"]
-        .iter()
-        .filter_map(|n| {
-            std::fs::read_to_string(out.dir().join(format!("{n}.svg")))
-                .ok()
-                .map(|svg| (n.to_string(), svg))
-        })
-        .collect();
+    let figures =
+        crate::export::html::read_figures(out.dir(), &["frf", "frf_phase", "stabilisation"]);
     out.write("report.html", page(req, &r, &report, figures))?;
     out.commit()?;
     Ok(Outcome {
@@ -235,76 +229,42 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
         .collect();
     let f: Vec<f64> = k.iter().map(|&i| r.freq_hz[i]).collect();
     let fitted: Vec<crate::analysis::modal::Pole> = r.modes.iter().map(|m| m.fitted).collect();
-    let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
-    for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
-        owned.push((
-            req.response.names[o].clone(),
-            k.iter().map(|&i| db(h[i].norm())).collect(),
-        ));
-        if let Some(c) = r.constants.get(o) {
+    // the first four responses' H1 and fit, each complex value drawn as `value` makes it
+    let draw = |stem: &str, title: &str, y_label: &str, value: fn(Complex64) -> f64| {
+        let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
+        for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
             owned.push((
-                format!("{} fit", req.response.names[o]),
-                f.iter()
-                    .map(|&fr| db(c.evaluate(&fitted, req.settings.form, fr).norm()))
-                    .collect(),
+                req.response.names[o].clone(),
+                k.iter().map(|&i| value(h[i])).collect(),
             ));
+            if let Some(c) = r.constants.get(o) {
+                owned.push((
+                    format!("{} fit", req.response.names[o]),
+                    f.iter()
+                        .map(|&fr| value(c.evaluate(&fitted, req.settings.form, fr)))
+                        .collect(),
+                ));
+            }
         }
-    }
-    let curves: Vec<(&str, &[f64], &[f64])> = owned
-        .iter()
-        .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
-        .collect();
-    crate::plots::write_frf_db_plot(
-        &dir.join("frf"),
+        let curves: Vec<(&str, &[f64], &[f64])> = owned
+            .iter()
+            .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
+            .collect();
+        crate::plots::write_frf_db_plot(&dir.join(stem), title, y_label, &curves)
+    };
+    draw(
+        "frf",
         "H1 and the LSCF/LSFD fit",
         "|H1|, dB (re 1 unit of the response per unit of force)",
-        &curves,
+        |c| db(c.norm()),
     )?;
-    let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
-    for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
-        owned.push((
-            req.response.names[o].clone(),
-            k.iter().map(|&i| h[i].arg().to_degrees()).collect(),
-        ));
-        if let Some(c) = r.constants.get(o) {
-            owned.push((
-                format!("{} fit", req.response.names[o]),
-                f.iter()
-                    .map(|&fr| {
-                        c.evaluate(&fitted, req.settings.form, fr)
-                            .arg()
-                            .to_degrees()
-                    })
-                    .collect(),
-            ));
-        }
-    }
-    let curves: Vec<(&str, &[f64], &[f64])> = owned
-        .iter()
-        .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
-        .collect();
-    crate::plots::write_frf_db_plot(
-        &dir.join("frf_phase"),
+    draw(
+        "frf_phase",
         "H1's phase and the fit's",
         "phase of H1, degrees",
-        &curves,
+        |c| c.arg().to_degrees(),
     )?;
-    let poles: Vec<(f64, usize, PoleKind)> = r
-        .poles
-        .iter()
-        .map(|p| {
-            let home = r.clusters.iter().find(|(c, _)| {
-                c.poles > 1 && c.members.iter().any(|&(f, o)| o == p.order && f == p.f_hz)
-            });
-            let kind = match home {
-                Some((_, true)) => PoleKind::Mode,
-                Some((_, false)) => PoleKind::Rejected,
-                None if p.stable => PoleKind::Stable,
-                None => PoleKind::Pole,
-            };
-            (p.f_hz, p.order, kind)
-        })
-        .collect();
+    let poles = crate::analysis::oma::run::pole_kinds(&r.poles, &r.clusters);
     let modes: Vec<f64> = r.modes.iter().map(|m| m.fitted.f_hz).collect();
     crate::plots::write_stabilisation_plot(
         &dir.join("stabilisation"),

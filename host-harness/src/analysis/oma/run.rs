@@ -80,7 +80,7 @@ pub fn write(
             &r.svd.s,
             &picks,
         )?;
-        let poles = pole_kinds(r);
+        let poles = pole_kinds(&r.poles, &r.clusters);
         let ssi: Vec<f64> = r
             .modes
             .iter()
@@ -97,14 +97,7 @@ pub fn write(
     }
     let report = report(r, records, settings, &o.preamble);
     out.write("report.txt", &report)?;
-    let figures = ["svd", "stabilisation"]
-        .iter()
-        .filter_map(|n| {
-            std::fs::read_to_string(out.dir().join(format!("{n}.svg")))
-                .ok()
-                .map(|svg| (n.to_string(), svg))
-        })
-        .collect();
+    let figures = crate::export::html::read_figures(out.dir(), &["svd", "stabilisation"]);
     out.write(
         "report.html",
         page(
@@ -214,11 +207,14 @@ pub fn page(
 
 /// Every pole of the stabilisation diagram and what it is: in a cluster reported or
 /// rejected (the clusters hold their poles' frequencies and orders), stable, or neither.
-fn pole_kinds(r: &OmaResult) -> Vec<(f64, usize, PoleKind)> {
-    r.poles
+pub fn pole_kinds(
+    poles: &[super::ssi::Pole],
+    clusters: &[(super::cluster::SsiMode, bool)],
+) -> Vec<(f64, usize, PoleKind)> {
+    poles
         .iter()
         .map(|p| {
-            let home = r.clusters.iter().find(|(c, _)| {
+            let home = clusters.iter().find(|(c, _)| {
                 c.poles > 1 && c.members.iter().any(|&(f, o)| o == p.order && f == p.f_hz)
             });
             let kind = match home {
