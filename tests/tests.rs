@@ -124,6 +124,7 @@ const ROOMS: [&[&str]; 12] = [
         "plots",
         "lost_frames",
         "setting",
+        "geometry",
     ],
     &["model"],
     &["imaging"],

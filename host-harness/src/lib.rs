@@ -23,6 +23,7 @@
 //! | [`plan`] | the exposure planner: per mode, the longest exposure meeting a tolerance, the compensated residual, the lost-frame risk |
 //! | [`export`] | every output file's columns: typed rows -> bytes (one module per family), `write_atomic` |
 //! | [`plots`] | PNG and SVG figures |
+//! | [`geometry`] | homographies: fitted to point pairs (translation, similarity, normalised DLT), a plane seen obliquely |
 //! | [`csvio`] | numeric CSV columns with errors naming row and column |
 //! | [`outdir`] | output directories that are complete or absent (staged, synced, moved into place) |
 //! | [`failpoint`] | `VIBCAM_FAILPOINT`: abort at a named point, for crash tests |
@@ -40,6 +41,7 @@ pub mod daq;
 pub mod export;
 pub mod failpoint;
 pub mod frames;
+pub mod geometry;
 pub mod imaging;
 pub mod lost_frames;
 pub mod model;

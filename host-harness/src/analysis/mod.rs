@@ -31,6 +31,7 @@
 //! * **Units.** Accelerations are in m/s^2 (the accelerometer CSV must be in m/s^2); the FRFs are
 //!   dimensionless (acceleration over acceleration).
 
+pub mod camera_motion;
 pub mod columns;
 pub mod compensate;
 pub mod ema;
