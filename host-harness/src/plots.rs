@@ -830,25 +830,50 @@ pub fn write_svd_plot(
     s: &[Vec<f64>],
     picks: &[(f64, f64, String)],
 ) -> anyhow::Result<Vec<PathBuf>> {
+    let k = s.first().map_or(0, Vec::len);
+    let curves: Vec<(String, Vec<f64>)> = (0..k)
+        .map(|i| (format!("s{}", i + 1), s.iter().map(|sv| sv[i]).collect()))
+        .collect();
+    write_db_plot(
+        path_stem,
+        (title, "singular value (dB)"),
+        freq_hz,
+        &curves,
+        picks,
+    )
+}
+
+/// Power spectra in dB (`10 log10 p`) over `freq_hz` (the line at 0 Hz left out), one curve
+/// per `(label, values)`, the lines `(f_hz, value, label)` marked, written as `path_stem.png`
+/// and `path_stem.svg`; `(title, y_label)`.
+pub fn write_db_plot(
+    path_stem: &Path,
+    (title, y_label): (&str, &str),
+    freq_hz: &[f64],
+    curves: &[(String, Vec<f64>)],
+    picks: &[(f64, f64, String)],
+) -> anyhow::Result<Vec<PathBuf>> {
     register_font();
     let (dir, name) = split_stem(path_stem)?;
-    let k = s.first().map_or(0, Vec::len);
-    let curves: Vec<Curve> = (0..k)
-        .map(|i| {
+    let k = curves.len();
+    let curves: Vec<Curve> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, (label, v))| {
             (
-                format!("s{}", i + 1),
+                label.clone(),
                 exposure_colour(i, k),
                 freq_hz
                     .iter()
-                    .zip(s)
+                    .zip(v)
                     .skip(1)
-                    .map(|(&f, sv)| (f, decibels(sv[i])))
+                    .map(|(&f, &p)| (f, decibels(p)))
                     .collect(),
             )
         })
         .collect();
     let xr = finite_range(freq_hz.iter().copied()).unwrap_or((0.0, 1.0));
-    figure!(dir, name, |r| draw_svd(r, title, xr, &curves, picks))
+    figure!(dir, name, |r| draw_svd(r, (title, y_label), xr, &curves, picks))
 }
 
 fn decibels(v: f64) -> f64 {
@@ -857,7 +882,7 @@ fn decibels(v: f64) -> f64 {
 
 fn draw_svd<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
-    title: &str,
+    (title, y_label): (&str, &str),
     xr: (f64, f64),
     curves: &[Curve],
     picks: &[(f64, f64, String)],
@@ -875,7 +900,7 @@ where
         xr.0..xr.1,
         lo - 3.0..hi + 6.0,
         "frequency (Hz)",
-        "singular value (dB)",
+        y_label,
     )?;
     for (label, colour, points) in curves {
         draw_line(

@@ -49,6 +49,7 @@ pub mod targets;
 pub mod targets_run;
 pub mod track_run;
 pub mod twin;
+pub mod view;
 
 pub use crate::chain::displacement::{
     displacement_mm, Axis, Displacement, DisplacementSettings, MAX_LOST_FRACTION,

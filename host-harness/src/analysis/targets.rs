@@ -715,6 +715,7 @@ pub fn track_rows<'a>(tracks: &'a Tracks, a: &'a TargetAnalysis) -> Vec<Track<'a
             centroids: c,
             mm: Some(&d.mm),
             lost: Some(&d.lost),
+            raw: None,
         })
         .collect()
 }

@@ -62,6 +62,8 @@ pub struct Request {
     pub force: bool,
     /// Input files besides the frames (the points file).
     pub inputs: Vec<PathBuf>,
+    /// Static references and the scale from the scene.
+    pub view: super::view::ViewSettings,
 }
 
 /// Follows `targets` through `source`: the one tracking dispatcher of `track`, `analyze` (with
@@ -103,7 +105,19 @@ pub fn track_targets(
 /// Runs `track`; returns the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
-    let (tracks, windows) = track_targets(&source, req.fps, &req.centroid, &req.targets)?;
+    let along_x = req
+        .displacement
+        .as_ref()
+        .is_some_and(|d| d.axis == super::Axis::X);
+    let viewed = super::view::track_view(
+        &source,
+        req.fps,
+        &req.centroid,
+        &req.targets,
+        &req.view,
+        along_x,
+    )?;
+    let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
     // nothing measured is the user's to fix, as `analyze` says it: exit 2, and why
     if tracks
         .centroids
@@ -129,26 +143,30 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     }
     let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));
+    let view_inputs = req.view.inputs();
+    inputs.extend(view_inputs.iter().map(PathBuf::as_path));
     let out = Staged::new(&req.out, req.force, "track", &inputs)?;
-    let (mm, failures) = displacements(&tracks, req.displacement.as_ref());
+    let (mm, failures) = displacements(&viewed, req.displacement.as_ref());
     let rows: Vec<Track<'_>> = tracks
         .centroids
         .iter()
         .zip(&mm)
-        .map(|(c, m)| Track {
+        .enumerate()
+        .map(|(t, (c, m))| Track {
             centroids: c,
             mm: m.as_ref().map(|d| d.0.as_slice()),
             lost: m.as_ref().map(|d| d.1.as_slice()),
+            raw: viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
     out.write("displacement.csv", displacement_csv(&rows, req.fps, 0.0))?;
-    let mut report = report(req, &tracks, windows.as_ref(), &failures);
+    let mut report = report(req, tracks, windows, &failures);
+    report.push_str(&viewed.describe(along_x));
+    report.push_str(&super::view::write_camera_outputs(
+        &out, &viewed, req.fps, req.plots,
+    )?);
     if req.plots {
-        let along_x = req
-            .displacement
-            .as_ref()
-            .is_some_and(|d| d.axis == super::Axis::X);
-        let plots = plot(out.dir(), &tracks, req.fps, along_x)?;
+        let plots = plot(out.dir(), tracks, req.fps, along_x)?;
         let names: Vec<String> = plots
             .iter()
             .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
@@ -163,7 +181,7 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
         .and_then(|(_, f)| f.to_image().ok());
     out.write(
         "report.html",
-        page(req, &tracks, windows.as_ref(), frame, &report, out.dir()),
+        page(req, tracks, windows, frame, &report, out.dir()),
     )?;
     out.commit()?;
     Ok(report)
@@ -181,7 +199,7 @@ fn page(
 ) -> String {
     use crate::export::html::{report_html, Report};
     let markers = markers(tracks, windows);
-    let figures = crate::export::html::read_figures(dir, &["tracks"]);
+    let figures = crate::export::html::read_figures(dir, &["tracks", "camera_motion"]);
     report_html(&Report {
         title: format!("track: {}", req.frames),
         frame,
@@ -197,17 +215,14 @@ fn page(
 /// scale was given; a target with too many lost frames gets none, and the reason.
 #[allow(clippy::type_complexity)]
 fn displacements(
-    tracks: &Tracks,
+    viewed: &super::view::Viewed,
     settings: Option<&DisplacementSettings>,
 ) -> (Vec<Option<(Vec<f64>, Vec<bool>)>>, Vec<String>) {
     let mut failures = Vec::new();
-    let mm = tracks
-        .centroids
-        .iter()
-        .enumerate()
-        .map(|(t, c)| {
+    let mm = (0..viewed.tracks.centroids.len())
+        .map(|t| {
             let s = settings?;
-            match super::displacement_mm(c, s) {
+            match viewed.displacement(t, s) {
                 Ok(d) => Some((d.mm, d.lost)),
                 Err(e) => {
                     failures.push(format!("target {}: {e:#}", t + 1));
@@ -254,7 +269,7 @@ fn report(
         }
     }
     if req.displacement.is_none() {
-        s.push_str("disp_mm: empty (no --mm-per-px)\n");
+        s.push_str("disp_mm: empty (no scale: --mm-per-px, --scale, --target-size-mm or --world)\n");
     }
     for f in failures {
         let _ = writeln!(s, "no displacement for {f}");

@@ -84,6 +84,9 @@ pub struct Args {
     /// Centroid settings.
     #[command(flatten)]
     pub centroid: CentroidArgs,
+    /// Static references, the camera's motion model and the scale from the scene.
+    #[command(flatten)]
+    pub view: super::args::ViewArgs,
     /// Scale, millimetres per pixel (needed with --accel; without it the output-only analysis
     /// stays in pixels).
     #[arg(long, value_name = "MM")]
@@ -240,6 +243,7 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
             args.search_px,
         ),
         mm_per_px: args.mm_per_px,
+        view: args.view.view(),
         axis: args.axis.axis(),
         invert: args.invert,
         lost_frames: args.lost_frames,

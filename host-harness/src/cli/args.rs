@@ -345,3 +345,84 @@ mod tests {
         }
     }
 }
+
+/// The camera's view: static references and the scale from the scene (`track`, `analyze`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ViewArgs {
+    /// Windows on parts of the scene that do not move (a wall, the ground, another building):
+    /// CSV `target,x,y,w,h` as --points, numbered r1, r2, ... in the report. Followed by
+    /// Lucas-Kanade; from them the camera's own motion per frame is estimated (a robust fit:
+    /// a reference that moves or is lost is left out and named) and removed from every
+    /// target; camera_motion.csv holds it, displacement.csv the raw position too.
+    #[arg(long, value_name = "FILE.csv")]
+    pub reference: Option<std::path::PathBuf>,
+    /// With --reference: the camera's motion in the image: `translation` (one reference or
+    /// more), `similarity` (rotation, scale and shift: two or more; the default with two or
+    /// more) or `homography` (four or more: a camera that pans or tilts).
+    #[arg(long, value_enum, requires = "reference")]
+    pub camera_model: Option<CameraModelArg>,
+    /// The scale from a known distance: `A,B,MM`, the distance in mm between two tracked
+    /// points, A and B a target (`3`) or a reference (`r2`); one scale for the whole frame.
+    #[arg(long, value_name = "A,B,MM", value_parser = parse_scale)]
+    pub scale: Option<(String, String, f64)>,
+    /// The scale from each target's known diameter, mm (its blob's area in the image; a
+    /// centroid tracker): each target its own scale.
+    #[arg(long, value_name = "MM")]
+    pub target_size_mm: Option<f64>,
+    /// The structure's plane: CSV `x,y,x_mm,y_mm[,u_px]`, four or more points with their
+    /// image position (px) and their position in the plane (mm; `u_px` the image position's
+    /// standard uncertainty, default 0.5). A homography converts each target's motion with
+    /// its own local scale and direction (a structure seen at an angle); the displacement is
+    /// along the plane's y_mm (or x_mm with --axis x).
+    #[arg(long, value_name = "FILE.csv")]
+    pub world: Option<std::path::PathBuf>,
+}
+
+/// `--camera-model`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CameraModelArg {
+    /// A shift.
+    Translation,
+    /// Rotation, scale and shift.
+    Similarity,
+    /// A projective homography.
+    Homography,
+}
+
+impl ViewArgs {
+    /// The flags as the library's [`crate::spec::ViewInput`].
+    pub fn view(&self) -> crate::spec::ViewInput {
+        use crate::geometry::Model;
+        crate::spec::ViewInput {
+            reference: self
+                .reference
+                .clone()
+                .map(crate::spec::PointsInput::File),
+            camera_model: self.camera_model.map(|m| match m {
+                CameraModelArg::Translation => Model::Translation,
+                CameraModelArg::Similarity => Model::Similarity,
+                CameraModelArg::Homography => Model::Homography,
+            }),
+            scale: self.scale.clone(),
+            target_size_mm: self.target_size_mm,
+            world: self.world.clone().map(crate::spec::WorldInput::File),
+        }
+    }
+}
+
+/// `--scale A,B,MM`.
+fn parse_scale(s: &str) -> Result<(String, String, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    match parts.as_slice() {
+        [a, b, mm] => {
+            let mm: f64 = mm
+                .parse()
+                .map_err(|_| format!("`{mm}` is not a distance in mm (A,B,MM)"))?;
+            Ok((a.to_string(), b.to_string(), mm))
+        }
+        _ => Err(format!(
+            "`{s}`: give A,B,MM (two tracked points, a target `3` or a reference `r2`, and \
+             their distance in mm)"
+        )),
+    }
+}

@@ -60,6 +60,9 @@ pub struct Args {
     /// Centroid settings (`--threshold T|auto`, `--tracker binary|blob|weighted`, `--roi`).
     #[command(flatten)]
     pub centroid: CentroidArgs,
+    /// Static references, the camera's motion model and the scale from the scene.
+    #[command(flatten)]
+    pub view: super::args::ViewArgs,
     /// Millimetres per pixel: fills `disp_mm` (empty without it).
     #[arg(long, value_name = "MM")]
     pub mm_per_px: Option<f64>,
@@ -97,6 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.search_px,
         ),
         mm_per_px: args.mm_per_px,
+        view: args.view.view(),
         axis: args.axis.axis(),
         lost_frames: args.lost_frames,
         plots: !args.no_plots,

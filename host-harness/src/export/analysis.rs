@@ -102,6 +102,7 @@ pub fn displacement_csv(
         centroids,
         mm: Some(mm),
         lost: Some(lost),
+        raw: None,
     };
     tracks_displacement_csv(&[track], frame_rate_hz, time_offset_s)
 }
@@ -174,19 +175,25 @@ pub struct Track<'a> {
     pub mm: Option<&'a [f64]>,
     /// Lost per frame (`None`: the frames without a centroid).
     pub lost: Option<&'a [bool]>,
+    /// The centroid as measured, when `centroids` has the camera's motion removed.
+    pub raw: Option<&'a [Centroid]>,
 }
 
 /// `displacement.csv` of `analyze` (one target or several) and `track`:
 /// `frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost`, one row per frame and target (`tracks[t]`
 /// is target `t + 1`); `t_s = time_offset_s + frame / fps`; `cx`, `cy` in pixels of the full
 /// frame, empty where the target was lost; `flags` the firmware-core flag byte; `disp_mm` empty
-/// where it was not computed; `lost` 0 or 1.
+/// where it was not computed; `lost` 0 or 1. When the camera's motion was removed (`raw`
+/// given), `cx`, `cy` are the compensated position and `cx_raw,cy_raw` end each row with the
+/// position as measured.
 pub fn tracks_displacement_csv(
     tracks: &[Track<'_>],
     frame_rate_hz: f64,
     time_offset_s: f64,
 ) -> Vec<u8> {
-    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost\n");
+    let raw = tracks.iter().any(|t| t.raw.is_some());
+    let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost");
+    s.push_str(if raw { ",cx_raw,cy_raw\n" } else { "\n" });
     let frames = tracks.first().map_or(0, |t| t.centroids.len());
     for k in 0..frames {
         let t_s = time_offset_s + k as f64 / frame_rate_hz;
@@ -194,7 +201,7 @@ pub fn tracks_displacement_csv(
             let c = &tr.centroids[k];
             let (cx, cy) = position(c);
             let lost = tr.lost.map_or(c.position().is_none(), |l| l[k]);
-            let _ = writeln!(
+            let _ = write!(
                 s,
                 "{k},{t_s},{},{cx},{cy},{},{},{},{}",
                 t + 1,
@@ -203,6 +210,11 @@ pub fn tracks_displacement_csv(
                 opt(tr.mm.map(|m| m[k])),
                 u8::from(lost)
             );
+            if raw {
+                let (x, y) = tr.raw.map_or((String::new(), String::new()), |r| position(&r[k]));
+                let _ = write!(s, ",{x},{y}");
+            }
+            s.push('\n');
         }
     }
     s.into_bytes()

@@ -137,3 +137,44 @@ pub fn compensation_csv<'a>(
     }
     s.into_bytes()
 }
+
+/// One frame of `camera_motion.csv`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraRow {
+    /// Seconds from the first frame.
+    pub t_s: f64,
+    /// The image centre's shift (x, y, px), the roll (degrees, clockwise on the image) and the
+    /// scale; `None` where no reference was seen.
+    pub motion: Option<(f64, f64, f64, f64)>,
+    /// References the frame's fit used.
+    pub references: usize,
+    /// Their RMS residual, px (NaN: none).
+    pub residual_px: f64,
+}
+
+/// `camera_motion.csv`: `frame,t_s,dx_px,dy_px,rotation_deg,scale,references,residual_px`, one
+/// row per frame (the motion cells empty where it is unknown).
+pub fn camera_motion_csv(rows: &[CameraRow]) -> Vec<u8> {
+    let mut s = String::from("frame,t_s,dx_px,dy_px,rotation_deg,scale,references,residual_px\n");
+    for (k, r) in rows.iter().enumerate() {
+        match r.motion {
+            Some((x, y, a, m)) => {
+                let _ = write!(s, "{k},{},{x},{y},{a},{m}", r.t_s);
+            }
+            None => {
+                let _ = write!(s, "{k},{},,,,", r.t_s);
+            }
+        }
+        let _ = writeln!(
+            s,
+            ",{},{}",
+            r.references,
+            if r.residual_px.is_finite() {
+                r.residual_px.to_string()
+            } else {
+                String::new()
+            }
+        );
+    }
+    s.into_bytes()
+}

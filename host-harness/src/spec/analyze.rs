@@ -45,6 +45,8 @@ pub struct AnalyzeInput {
     pub tracking: TrackingInput,
     /// `$mm_per_px` (needed with an accelerometer; without, the analysis stays in pixels).
     pub mm_per_px: Option<f64>,
+    /// Static references and the scale from the scene (output-only).
+    pub view: super::ViewInput,
     /// `$axis` of the motion.
     pub axis: Axis,
     /// Flip the displacement's sign.
@@ -143,6 +145,12 @@ fn with_reference(
         .fs
         .ok_or_else(|| SpecError::setting("$accel needs $fs (its sample rate, Hz)"))?;
     let fs = super::positive("fs", fs, "the accelerometer's sample rate, Hz")?;
+    if input.view != super::ViewInput::default() {
+        return Err(SpecError::setting(
+            "$reference, $scale, $target_size_mm and $world are those of the output-only \
+             analysis (and of track) for now; with $accel give $mm_per_px",
+        ));
+    }
     let mm_per_px = input
         .mm_per_px
         .ok_or_else(|| SpecError::setting("$accel needs $mm_per_px (the scale, mm per pixel)"))?;
@@ -311,6 +319,13 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
     let bands = input.bands.unwrap_or_default();
     super::bands_below_nyquist(&bands, rates.fps, "the camera's")?;
     let tracking = Tracking::new(input.tracking)?;
+    let scaled = input.mm_per_px.is_some() || input.view.has_scale();
+    let view = super::view::check(
+        input.view,
+        input.mm_per_px,
+        &tracking.targets,
+        tracking.tracker,
+    )?;
     Ok(FramesRequest {
         frames: input.frames.frames,
         retime: input.frames.retime,
@@ -323,7 +338,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
             axis: input.axis,
             invert: input.invert,
         },
-        scaled: input.mm_per_px.is_some(),
+        scaled,
         targets: tracking.targets,
         points_file: tracking.points_file,
         welch: input.welch,
@@ -331,5 +346,6 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         out: input.out,
         force: input.force,
         notes: rates.notes,
+        view,
     })
 }

@@ -13,12 +13,14 @@ mod ema;
 mod modal;
 mod track;
 pub mod tracking;
+pub mod view;
 
 pub use analyze::{AccelSettings, AnalyzeInput, AnalyzeSpec, TimeOffset, DEFAULT_ACCEL_BANDS};
 pub use ema::{EmaInput, EmaSpec};
 pub use modal::{ModalInput, ModalSpec};
 pub use track::{TrackInput, TrackSpec};
 pub use tracking::{PointsInput, Threshold, Tracker, Tracking, TrackingInput};
+pub use view::{ViewInput, WorldInput};
 
 pub use crate::frames::Rates;
 pub use crate::setting::{

@@ -131,6 +131,7 @@ impl ModalSpec {
                 preamble: format!("input: {}\n", i.displacement.display()),
                 extra: Vec::new(),
                 frame: None,
+                view: None,
             },
         )
     }

@@ -15,6 +15,8 @@ pub struct TrackInput {
     pub tracking: TrackingInput,
     /// `$mm_per_px`: the displacement in mm beside the pixels.
     pub mm_per_px: Option<f64>,
+    /// Static references and the scale from the scene.
+    pub view: super::ViewInput,
     /// `$axis` of the displacement.
     pub axis: Axis,
     /// What a lost frame's displacement becomes.
@@ -37,15 +39,25 @@ impl TrackSpec {
     /// Checks `input` at `rates` (from [`crate::frames::resolve_rates`]).
     pub fn new(input: TrackInput, rates: Rates) -> SpecResult<Self> {
         let tracking = Tracking::new(input.tracking)?;
-        let displacement = match input.mm_per_px {
-            Some(s) => Some(DisplacementSettings {
-                lost_frames: input.lost_frames,
-                mm_per_px: super::positive("mm_per_px", s, "millimetres per pixel")?,
-                axis: input.axis,
-                invert: false,
-            }),
+        let has_scale = input.view.has_scale();
+        let view = super::view::check(
+            input.view,
+            input.mm_per_px,
+            &tracking.targets,
+            tracking.tracker,
+        )?;
+        let mm_per_px = match input.mm_per_px {
+            Some(s) => Some(super::positive("mm_per_px", s, "millimetres per pixel")?),
+            // the scene's scale, per target: 1 stands in
+            None if has_scale => Some(1.0),
             None => None,
         };
+        let displacement = mm_per_px.map(|mm_per_px| DisplacementSettings {
+            lost_frames: input.lost_frames,
+            mm_per_px,
+            axis: input.axis,
+            invert: false,
+        });
         super::positive("fps", rates.fps, "frames per second")?;
         Ok(TrackSpec {
             request: Request {
@@ -61,6 +73,7 @@ impl TrackSpec {
                 out: input.out,
                 force: input.force,
                 inputs: tracking.points_file.into_iter().collect(),
+                view,
             },
         })
     }

@@ -7,8 +7,9 @@ use super::run::Output;
 use super::{OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
 use crate::analysis::targets::Tracks;
-use crate::analysis::track_run::{track_targets, Targets};
-use crate::chain::displacement::{displacement_mm, DisplacementSettings};
+use crate::analysis::track_run::Targets;
+use crate::analysis::view::track_view;
+use crate::chain::displacement::DisplacementSettings;
 use crate::export::targets as export;
 use crate::frames::FrameSource;
 use firmware_core::centroid::CentroidConfig;
@@ -45,6 +46,8 @@ pub struct FramesRequest {
     pub force: bool,
     /// Notes on the frames' rate.
     pub notes: Vec<String>,
+    /// Static references and the scale from the scene.
+    pub view: crate::analysis::view::ViewSettings,
 }
 
 /// What the output-only analysis of frames found, before anything is written.
@@ -62,12 +65,23 @@ pub struct Computed {
     pub displacement: Vec<Option<Vec<f64>>>,
     /// Per target and frame: lost (no position; filled in its displacement).
     pub lost: Vec<Vec<bool>>,
+    /// The camera's view: the tracks as measured, its motion, the scale.
+    pub viewed: crate::analysis::view::Viewed,
 }
 
 /// Tracks the targets of `req` in `source` and analyses their displacements output-only;
 /// `req.out` and `req.force` play no part.
 pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Computed> {
-    let tracks = track_targets(source, req.fps, &req.centroid, &req.targets)?.0;
+    let along_x = req.displacement.axis == crate::analysis::Axis::X;
+    let viewed = track_view(
+        source,
+        req.fps,
+        &req.centroid,
+        &req.targets,
+        &req.view,
+        along_x,
+    )?;
+    let tracks = viewed.tracks.clone();
     let mut records = Records {
         fs_hz: req.fps,
         unit: if req.scaled { "mm" } else { "px" }.to_string(),
@@ -79,7 +93,7 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
     let mut mm: Vec<Option<Vec<f64>>> = Vec::new();
     let mut lost: Vec<Vec<bool>> = Vec::new();
     for (t, c) in tracks.centroids.iter().enumerate() {
-        let d = match displacement_mm(c, &req.displacement) {
+        let d = match viewed.displacement(t, &req.displacement) {
             Ok(d) => d,
             Err(e) => {
                 records.left_out.push((t + 1, format!("{e:#}")));
@@ -128,6 +142,7 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
         result,
         displacement: mm,
         lost,
+        viewed,
     })
 }
 
@@ -143,10 +158,12 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
         .iter()
         .zip(&c.displacement)
         .zip(&c.lost)
-        .map(|((c, m), l)| export::Track {
-            centroids: c,
+        .enumerate()
+        .map(|(t, ((cent, m), l))| export::Track {
+            centroids: cent,
             mm: m.as_deref().filter(|_| req.scaled),
             lost: Some(l),
+            raw: c.viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
     let displacement = export::displacement_csv(&rows, req.fps, 0.0);
@@ -159,6 +176,10 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     for note in &req.notes {
         preamble.push_str(&format!("note: {note}\n"));
     }
+    preamble.push_str(
+        &c.viewed
+            .describe(req.displacement.axis == crate::analysis::Axis::X),
+    );
     super::run::write(
         &c.records,
         &c.settings,
@@ -177,6 +198,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
                 .ok()
                 .flatten()
                 .and_then(|(_, f)| f.to_image().ok()),
+            view: Some((&c.viewed, req.fps)),
         },
     )
 }

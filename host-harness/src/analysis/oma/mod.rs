@@ -325,6 +325,7 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
         m.uncertainty = u;
     }
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
+    notes.extend(common_motion_notes(&found));
     Ok(OmaResult {
         csd,
         svd,
@@ -335,6 +336,43 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
         rejected,
         notes,
     })
+}
+
+/// A mode's shape this alike at every target (MAC with all targets moving as one) is named as
+/// a common motion.
+pub const COMMON_MOTION_MAC: f64 = 0.95;
+
+/// Warnings on modes whose shape is the same at every target (three or more targets, MAC >=
+/// [`COMMON_MOTION_MAC`] with a rigid shift of all of them): the camera's own motion (a
+/// tripod in the wind, traffic) moves every target alike, and so does a structure moving as
+/// one; the references (`--reference`) take the camera's out.
+pub fn common_motion_notes(modes: &[OmaMode]) -> Vec<String> {
+    modes
+        .iter()
+        .filter(|m| m.shape.len() >= 3)
+        .filter_map(|m| {
+            let n = m.shape.len() as f64;
+            let sum: Complex64 = m.shape.iter().sum();
+            let norm: f64 = m.shape.iter().map(|c| c.norm_sqr()).sum();
+            let mac = if norm > 0.0 {
+                sum.norm_sqr() / (n * norm)
+            } else {
+                0.0
+            };
+            (mac >= COMMON_MOTION_MAC).then(|| {
+                format!(
+                    "warning: {} mode {} at {:.4} Hz moves every target alike (MAC {mac:.3} \
+                     with all of them moving as one): the camera's own motion (a tripod in \
+                     the wind, traffic), not the structure's, unless the whole structure \
+                     moves as one; give --reference (windows on parts of the scene that do \
+                     not move) to take the camera's motion out",
+                    m.method.name(),
+                    m.mode,
+                    m.f_hz
+                )
+            })
+        })
+        .collect()
 }
 
 /// Notes on modes that may be harmonics of a lower mode of the same method: a frequency within

@@ -35,6 +35,8 @@ pub struct Output<'a> {
     pub extra: Vec<(String, Vec<u8>)>,
     /// The first frame, for `report.html` (`analyze`; none from a displacement file).
     pub frame: Option<crate::export::html::FrameImage>,
+    /// The camera's view (references, scale) and the frame rate, from frames.
+    pub view: Option<(&'a crate::analysis::view::Viewed, f64)>,
 }
 
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
@@ -59,6 +61,10 @@ pub fn write(
     for (name, bytes) in &o.extra {
         out.write(name, bytes)?;
     }
+    let camera = match o.view {
+        Some((v, fps)) => crate::analysis::view::write_camera_outputs(&out, v, fps, o.plots)?,
+        None => String::new(),
+    };
     out.write(
         "shapes.uff",
         export::shapes_uff(&shape_sets(r, records, o.along_x))?,
@@ -95,9 +101,10 @@ pub fn write(
             settings.fs_hz / 2.0,
         )?;
     }
-    let report = report(r, records, settings, &o.preamble);
+    let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
     out.write("report.txt", &report)?;
-    let figures = crate::export::html::read_figures(out.dir(), &["svd", "stabilisation"]);
+    let figures =
+        crate::export::html::read_figures(out.dir(), &["svd", "stabilisation", "camera_motion"]);
     out.write(
         "report.html",
         page(

@@ -1,0 +1,268 @@
+//! The camera's view as `track`, `analyze` and Python take it: static references
+//! (`$reference`, `$camera_model`) and the scale from the scene (`$mm_per_px`, `$scale`,
+//! `$target_size_mm`, `$world`: one of them).
+
+use super::{SpecError, SpecResult, Tracker};
+use crate::analysis::points::{read_points, Point};
+use crate::analysis::track_run::Targets;
+use crate::analysis::view::{
+    check_world, read_world, PointRef, References, ScaleInput, ViewSettings, WorldPoint,
+};
+use crate::geometry::Model;
+use std::path::PathBuf;
+
+/// Points of the structure's plane as given.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WorldInput {
+    /// A CSV file `x,y,x_mm,y_mm[,u_px]`.
+    File(PathBuf),
+    /// Points in memory (Python).
+    List(Vec<WorldPoint>),
+}
+
+/// The view's settings as given, unchecked.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ViewInput {
+    /// `$reference`: windows on static parts of the scene.
+    pub reference: Option<super::PointsInput>,
+    /// `$camera_model` (`None`: a similarity with two references or more).
+    pub camera_model: Option<Model>,
+    /// `$scale`: `(A, B, mm)`, A and B a target `K` or a reference `rK`.
+    pub scale: Option<(String, String, f64)>,
+    /// `$target_size_mm`: each target's diameter.
+    pub target_size_mm: Option<f64>,
+    /// `$world`: points of the structure's plane.
+    pub world: Option<WorldInput>,
+}
+
+impl ViewInput {
+    /// Whether any scale other than `$mm_per_px` was asked for.
+    pub fn has_scale(&self) -> bool {
+        self.scale.is_some() || self.target_size_mm.is_some() || self.world.is_some()
+    }
+}
+
+/// Checks `input` against the targets and the tracker; `mm_per_px` the one scale given.
+pub fn check(
+    input: ViewInput,
+    mm_per_px: Option<f64>,
+    targets: &Targets,
+    tracker: Tracker,
+) -> SpecResult<ViewSettings> {
+    let given: Vec<&str> = [
+        ("$mm_per_px", mm_per_px.is_some()),
+        ("$scale", input.scale.is_some()),
+        ("$target_size_mm", input.target_size_mm.is_some()),
+        ("$world", input.world.is_some()),
+    ]
+    .iter()
+    .filter(|(_, g)| *g)
+    .map(|(k, _)| *k)
+    .collect();
+    if given.len() > 1 {
+        return Err(SpecError::setting(format!(
+            "{}: one scale only",
+            given.join(" and ")
+        )));
+    }
+    if input.camera_model.is_some() && input.reference.is_none() {
+        return Err(SpecError::setting(
+            "$camera_model is the model of the camera's motion from $reference: give \
+             $reference (windows on parts of the scene that do not move)",
+        ));
+    }
+    let references = match input.reference {
+        Some(r) => {
+            let (points, file) = match r {
+                super::PointsInput::File(f) => {
+                    (read_points(&f).map_err(SpecError::Input)?, Some(f))
+                }
+                super::PointsInput::List(p) => (checked(p)?, None),
+            };
+            if let Some(m) = input.camera_model {
+                if points.len() < m.minimum() {
+                    return Err(SpecError::setting(format!(
+                        "$camera_model {}: needs {} references or more; $reference has {}",
+                        m.name(),
+                        m.minimum(),
+                        points.len()
+                    )));
+                }
+            }
+            Some(References {
+                points,
+                model: input.camera_model,
+                file,
+            })
+        }
+        None => None,
+    };
+    let n_refs = references.as_ref().map_or(0, |r| r.points.len());
+    let scale = if let Some((a, b, mm)) = input.scale {
+        super::positive("scale", mm, "the distance between the two points, mm")?;
+        let parse = |s: &str| -> SpecResult<PointRef> {
+            let p = PointRef::parse(s).ok_or_else(|| {
+                SpecError::setting(format!(
+                    "$scale: `{s}` is neither a target (1, 2, ...) nor a reference (r1, r2, ...)"
+                ))
+            })?;
+            match p {
+                PointRef::Target(k) if k > targets.count() => Err(SpecError::setting(format!(
+                    "$scale: target {k}, but there are {} target(s)",
+                    targets.count()
+                ))),
+                PointRef::Reference(k) if k > n_refs => Err(SpecError::setting(format!(
+                    "$scale: reference r{k}, but $reference has {n_refs}"
+                ))),
+                p => Ok(p),
+            }
+        };
+        let (pa, pb) = (parse(&a)?, parse(&b)?);
+        if pa == pb {
+            return Err(SpecError::setting(format!(
+                "$scale: `{a}` and `{b}` are the same point"
+            )));
+        }
+        Some(ScaleInput::Between(pa, pb, mm))
+    } else if let Some(mm) = input.target_size_mm {
+        super::positive("target_size_mm", mm, "each target's diameter, mm")?;
+        if tracker == Tracker::Lk {
+            return Err(SpecError::setting(
+                "$target_size_mm: a target's size in the image is its blob's (pixels above the \
+                 threshold); $tracker lk has no blob: give $scale or $world",
+            ));
+        }
+        Some(ScaleInput::TargetSize(mm))
+    } else if let Some(w) = input.world {
+        Some(match w {
+            WorldInput::File(f) => {
+                ScaleInput::World(read_world(&f).map_err(SpecError::Input)?, Some(f))
+            }
+            WorldInput::List(p) => {
+                check_world(&p).map_err(|e| SpecError::setting(format!("$world: {e}")))?;
+                ScaleInput::World(p, None)
+            }
+        })
+    } else {
+        None
+    };
+    Ok(ViewSettings { references, scale })
+}
+
+/// References given in memory, checked as a points file's rows are.
+fn checked(points: Vec<Point>) -> SpecResult<Vec<Point>> {
+    if points.is_empty() {
+        return Err(SpecError::setting("$reference: no points given"));
+    }
+    for (i, p) in points.iter().enumerate() {
+        if !(p.xy.0.is_finite() && p.xy.1.is_finite()) || p.size.0 < 3 || p.size.1 < 3 {
+            return Err(SpecError::setting(format!(
+                "$reference[{i}]: a finite centre and a window of 3 x 3 px or more"
+            )));
+        }
+    }
+    Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::Naming;
+
+    fn refs(n: usize) -> Option<super::super::PointsInput> {
+        Some(super::super::PointsInput::List(
+            (1..=n)
+                .map(|k| Point {
+                    target: k,
+                    xy: (10.0 * k as f64, 5.0),
+                    size: (9, 9),
+                    threshold: None,
+                    group: None,
+                })
+                .collect(),
+        ))
+    }
+
+    #[test]
+    fn view_settings_that_do_not_go_together_are_named() {
+        let t = Targets::Blobs(3, 10.0);
+        let cases: Vec<(ViewInput, Option<f64>, Tracker, &str)> = vec![
+            (
+                ViewInput {
+                    target_size_mm: Some(10.0),
+                    ..Default::default()
+                },
+                Some(0.1),
+                Tracker::Binary,
+                "mm_per_px and target_size_mm: one scale only",
+            ),
+            (
+                ViewInput {
+                    camera_model: Some(Model::Similarity),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "camera_model is the model",
+            ),
+            (
+                ViewInput {
+                    reference: refs(3),
+                    camera_model: Some(Model::Homography),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "needs 4 references or more; reference has 3",
+            ),
+            (
+                ViewInput {
+                    scale: Some(("1".into(), "r2".into(), 100.0)),
+                    reference: refs(1),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "reference r2, but reference has 1",
+            ),
+            (
+                ViewInput {
+                    scale: Some(("1".into(), "4".into(), 100.0)),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "target 4, but there are 3",
+            ),
+            (
+                ViewInput {
+                    target_size_mm: Some(10.0),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Lk,
+                "tracker lk has no blob",
+            ),
+            (
+                ViewInput {
+                    world: Some(WorldInput::List(vec![
+                        WorldPoint {
+                            px: (0.0, 0.0),
+                            mm: (0.0, 0.0),
+                            u_px: 0.5
+                        };
+                        3
+                    ])),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "needs 4 or more",
+            ),
+        ];
+        for (input, mm, tracker, want) in cases {
+            let e = check(input.clone(), mm, &t, tracker).unwrap_err();
+            assert!(e.message(Naming::Python).contains(want), "{input:?}: {e}");
+        }
+    }
+}
