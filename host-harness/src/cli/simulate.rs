@@ -43,6 +43,27 @@ pub struct Args {
     /// With --render: also write frames.mkv (FFV1, lossless; ffmpeg needed).
     #[arg(long, requires = "render")]
     pub video: bool,
+    /// With --render: N static reference disks (0-8) above and below the row of targets, in
+    /// the structure's plane (references.csv and world.csv written for `--reference` and
+    /// `--world`). Any of --references, --shake-px, --roll-deg, --oblique-deg draws the scene
+    /// as a plane seen by a pinhole camera (targets in a row, truth_motion.csv and
+    /// camera_truth.csv beside the frames) instead of one strip per target.
+    #[arg(long, value_name = "N", requires = "render")]
+    pub references: Option<usize>,
+    /// With --render: the camera's shake, RMS px along each image axis (band-limited noise
+    /// over --shake-hz).
+    #[arg(long, value_name = "PX", requires = "render")]
+    pub shake_px: Option<f64>,
+    /// With --render: the camera's roll about the image centre, RMS degrees (over --shake-hz).
+    #[arg(long, value_name = "DEG", requires = "render")]
+    pub roll_deg: Option<f64>,
+    /// With --render: the shake's band, Hz (a flat spectrum between A and B).
+    #[arg(long, value_name = "A,B", value_parser = parse_band, requires = "render")]
+    pub shake_hz: Option<(f64, f64)>,
+    /// With --render: the structure's plane turned by this angle about its vertical axis,
+    /// degrees (a camera looking at it obliquely: each target at its own scale).
+    #[arg(long, value_name = "DEG", requires = "render")]
+    pub oblique_deg: Option<f64>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -98,6 +119,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             read_noise: args.read_noise,
             rms_px: args.rms_px,
             video: args.video,
+            view: view(&args),
         };
         let bar = crate::study::runner::progress_bar(n as u64, true, "frames");
         let report = write_field_recording(&rec, &args.out, args.force, |done| {
@@ -110,6 +132,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let report =
         crate::recording::field::write_field(&args.out, args.force, &model, &rec, args.fps)?;
     super::stdout(&with_warnings(report, &warnings))
+}
+
+/// The camera's view when any of its flags was given.
+fn view(args: &Args) -> Option<crate::recording::camera_view::CameraView> {
+    let any = args.references.is_some()
+        || args.shake_px.is_some()
+        || args.roll_deg.is_some()
+        || args.shake_hz.is_some()
+        || args.oblique_deg.is_some();
+    any.then(|| {
+        let band = args.shake_hz.unwrap_or((1.0, 5.0));
+        crate::recording::camera_view::CameraView {
+            references: args.references.unwrap_or(4),
+            shake_px: args.shake_px.unwrap_or(0.0),
+            roll_deg: args.roll_deg.unwrap_or(0.0),
+            shake_band_hz: band,
+            oblique_deg: args.oblique_deg.unwrap_or(0.0),
+        }
+    })
+}
+
+/// `--shake-hz A,B`.
+fn parse_band(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse().ok()).collect();
+    match v.as_slice() {
+        [Some(a), Some(b)] => Ok((*a, *b)),
+        _ => Err(format!("`{s}`: give the band as A,B in Hz")),
+    }
 }
 
 /// The report with the warnings after it.

@@ -12,6 +12,7 @@
 //! Frame `k` is at `t = k / fps`, its exposure centred on it. A positive tip displacement moves the
 //! disk **up** in the image (the `--axis y` convention of `analyze`).
 
+pub mod camera_view;
 pub mod cluttered;
 pub mod field;
 pub mod hammer;

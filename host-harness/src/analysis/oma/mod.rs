@@ -325,7 +325,7 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
         m.uncertainty = u;
     }
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
-    notes.extend(common_motion_notes(&found));
+    notes.extend(common_motion_notes(&found, &svd, s));
     Ok(OmaResult {
         csd,
         svd,
@@ -342,37 +342,63 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
 /// a common motion.
 pub const COMMON_MOTION_MAC: f64 = 0.95;
 
-/// Warnings on modes whose shape is the same at every target (three or more targets, MAC >=
-/// [`COMMON_MOTION_MAC`] with a rigid shift of all of them): the camera's own motion (a
-/// tripod in the wind, traffic) moves every target alike, and so does a structure moving as
-/// one; the references (`--reference`) take the camera's out.
-pub fn common_motion_notes(modes: &[OmaMode]) -> Vec<String> {
-    modes
-        .iter()
-        .filter(|m| m.shape.len() >= 3)
-        .filter_map(|m| {
-            let n = m.shape.len() as f64;
-            let sum: Complex64 = m.shape.iter().sum();
-            let norm: f64 = m.shape.iter().map(|c| c.norm_sqr()).sum();
-            let mac = if norm > 0.0 {
-                sum.norm_sqr() / (n * norm)
-            } else {
-                0.0
-            };
-            (mac >= COMMON_MOTION_MAC).then(|| {
-                format!(
-                    "warning: {} mode {} at {:.4} Hz moves every target alike (MAC {mac:.3} \
-                     with all of them moving as one): the camera's own motion (a tripod in \
-                     the wind, traffic), not the structure's, unless the whole structure \
-                     moves as one; give --reference (windows on parts of the scene that do \
-                     not move) to take the camera's motion out",
-                    m.method.name(),
-                    m.mode,
-                    m.f_hz
-                )
-            })
-        })
-        .collect()
+/// MAC of `shape` with every target moving as one.
+fn mac_with_all(shape: &[Complex64]) -> f64 {
+    let n = shape.len() as f64;
+    let sum: Complex64 = shape.iter().sum();
+    let norm: f64 = shape.iter().map(|c| c.norm_sqr()).sum();
+    if norm > 0.0 {
+        sum.norm_sqr() / (n * norm)
+    } else {
+        0.0
+    }
+}
+
+/// Warnings on modes, and on peaks of the first singular value not taken as modes, whose
+/// shape is the same at every target (three or more targets, MAC >= [`COMMON_MOTION_MAC`]
+/// with a rigid shift of all of them): the camera's own motion (a tripod in the wind, traffic)
+/// moves every target alike, and so does a structure moving as one; the references
+/// (`--reference`) take the camera's out. Such a peak inside a mode's bell biases that
+/// mode's damping.
+pub fn common_motion_notes(modes: &[OmaMode], svd: &fdd::Svd, s: &OmaSettings) -> Vec<String> {
+    const FIX: &str = "the camera's own motion (a tripod in the wind, traffic), not the \
+        structure's, unless the whole structure moves as one; give --reference (windows on \
+        parts of the scene that do not move) to take the camera's motion out";
+    let mut out = Vec::new();
+    let mut warned: Vec<f64> = Vec::new();
+    for m in modes.iter().filter(|m| m.shape.len() >= 3) {
+        let mac = mac_with_all(&m.shape);
+        if mac >= COMMON_MOTION_MAC {
+            out.push(format!(
+                "warning: {} mode {} at {:.4} Hz moves every target alike (MAC {mac:.3} with \
+                 all of them moving as one): {FIX}",
+                m.method.name(),
+                m.mode,
+                m.f_hz
+            ));
+            warned.push(m.f_hz);
+        }
+    }
+    if svd.u1.first().map_or(0, Vec::len) < 3 {
+        return out;
+    }
+    let df = svd.freq_hz.get(1).copied().unwrap_or(0.0);
+    for (l, prominence) in fdd::pick_peaks(svd, s.peaks) {
+        let f = svd.freq_hz[l];
+        if warned.iter().any(|w| (w - f).abs() <= 3.0 * df) {
+            continue;
+        }
+        let mac = mac_with_all(&svd.u1[l]);
+        if mac >= COMMON_MOTION_MAC {
+            out.push(format!(
+                "warning: the peak of the first singular value at {f:.4} Hz ({prominence:.1} \
+                 dB; not a mode above) moves every target alike (MAC {mac:.3} with all of them \
+                 moving as one), and biases any mode whose bell it lies in: {FIX}"
+            ));
+            warned.push(f);
+        }
+    }
+    out
 }
 
 /// Notes on modes that may be harmonics of a lower mode of the same method: a frequency within

@@ -434,7 +434,11 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
         }
     }
     for note in &r.notes {
-        let _ = writeln!(o, "note: {note}");
+        if note.starts_with("warning: ") {
+            let _ = writeln!(o, "{note}");
+        } else {
+            let _ = writeln!(o, "note: {note}");
+        }
     }
     o
 }
