@@ -18,6 +18,7 @@ mod signal;
 mod study;
 mod targets;
 mod trackers;
+mod view;
 
 #[test]
 fn help_lists_every_subcommand() {

@@ -873,7 +873,13 @@ pub fn write_db_plot(
         })
         .collect();
     let xr = finite_range(freq_hz.iter().copied()).unwrap_or((0.0, 1.0));
-    figure!(dir, name, |r| draw_svd(r, (title, y_label), xr, &curves, picks))
+    figure!(dir, name, |r| draw_svd(
+        r,
+        (title, y_label),
+        xr,
+        &curves,
+        picks
+    ))
 }
 
 fn decibels(v: f64) -> f64 {

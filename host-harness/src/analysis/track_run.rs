@@ -269,7 +269,9 @@ fn report(
         }
     }
     if req.displacement.is_none() {
-        s.push_str("disp_mm: empty (no scale: --mm-per-px, --scale, --target-size-mm or --world)\n");
+        s.push_str(
+            "disp_mm: empty (no scale: --mm-per-px, --scale, --target-size-mm or --world)\n",
+        );
     }
     for f in failures {
         let _ = writeln!(s, "no displacement for {f}");

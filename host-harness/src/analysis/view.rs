@@ -265,9 +265,7 @@ impl Viewed {
     ) -> anyhow::Result<Displacement> {
         let c = &self.tracks.centroids[t];
         match &self.scales {
-            Some(Scales {
-                world: Some(h), ..
-            }) => {
+            Some(Scales { world: Some(h), .. }) => {
                 // the plane's coordinates in mm as an image's (x right, y down): the
                 // displacement along y is then +y_mm
                 let w: Vec<Centroid> = c
@@ -372,7 +370,9 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
             let at = |p: PointRef| -> anyhow::Result<(f64, f64, f64)> {
                 let track = match p {
                     PointRef::Target(i) => v.tracks.centroids.get(i - 1),
-                    PointRef::Reference(i) => v.references.as_ref().and_then(|r| r.centroids.get(i - 1)),
+                    PointRef::Reference(i) => {
+                        v.references.as_ref().and_then(|r| r.centroids.get(i - 1))
+                    }
                 };
                 let track = track.ok_or_else(|| {
                     bad_input(format!(
@@ -385,7 +385,10 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
                     ))
                 })?;
                 let (x, y) = median_position(track).ok_or_else(|| {
-                    bad_input(format!("--scale: {} has no position in any frame", p.label()))
+                    bad_input(format!(
+                        "--scale: {} has no position in any frame",
+                        p.label()
+                    ))
                 })?;
                 Ok((x, y, position_noise(track)))
             };
@@ -438,8 +441,8 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
                 d.sort_by(f64::total_cmp);
                 let med = d[d.len() / 2];
                 let mean = d.iter().sum::<f64>() / d.len() as f64;
-                let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len() as f64)
-                    .sqrt();
+                let sd =
+                    (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
                 let u_rel = sd / med;
                 let m = mm / med;
                 let _ = writeln!(
@@ -492,7 +495,12 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
     } else {
         None
     };
-    let at: Vec<Option<(f64, f64)>> = v.tracks.centroids.iter().map(|c| median_position(c)).collect();
+    let at: Vec<Option<(f64, f64)>> = v
+        .tracks
+        .centroids
+        .iter()
+        .map(|c| median_position(c))
+        .collect();
     // Monte Carlo over the image positions of the plane's points
     let noise = crate::testing::gaussian_noise(0x5ca1e, WORLD_DRAWS * points.len() * 2);
     let mut draws: Vec<Vec<f64>> = vec![Vec::new(); at.len()];
@@ -552,7 +560,9 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
         let (lo, hi) = finite
             .iter()
             .map(|m| 100.0 * (mean - m) / m)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), e| (a.min(e), b.max(e)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), e| {
+                (a.min(e), b.max(e))
+            });
         let _ = writeln!(
             text,
             "  one --mm-per-px for the whole frame (their mean, {mean:.6}) would be off by \

@@ -394,10 +394,7 @@ impl ViewArgs {
     pub fn view(&self) -> crate::spec::ViewInput {
         use crate::geometry::Model;
         crate::spec::ViewInput {
-            reference: self
-                .reference
-                .clone()
-                .map(crate::spec::PointsInput::File),
+            reference: self.reference.clone().map(crate::spec::PointsInput::File),
             camera_model: self.camera_model.map(|m| match m {
                 CameraModelArg::Translation => Model::Translation,
                 CameraModelArg::Similarity => Model::Similarity,

@@ -211,7 +211,9 @@ pub fn tracks_displacement_csv(
                 u8::from(lost)
             );
             if raw {
-                let (x, y) = tr.raw.map_or((String::new(), String::new()), |r| position(&r[k]));
+                let (x, y) = tr
+                    .raw
+                    .map_or((String::new(), String::new()), |r| position(&r[k]));
                 let _ = write!(s, ",{x},{y}");
             }
             s.push('\n');

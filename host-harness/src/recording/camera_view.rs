@@ -199,7 +199,14 @@ pub(super) fn render(
     let fine_hz = fps * SUB as f64;
     let n_fine = fine.first().map_or(0, Vec::len);
     let shake: Vec<Vec<f64>> = (0..3)
-        .map(|i| band_noise(n_fine, fine_hz, view.shake_band_hz, seed ^ (0x5a4e_0000 + i)))
+        .map(|i| {
+            band_noise(
+                n_fine,
+                fine_hz,
+                view.shake_band_hz,
+                seed ^ (0x5a4e_0000 + i),
+            )
+        })
         .collect();
     let sizes = [view.shake_px, view.shake_px, view.roll_deg.to_radians()];
     let camera_at = |s: f64| -> Homography {
@@ -251,8 +258,14 @@ pub(super) fn render(
                 let jac = h_cam.jacobian((x0, y));
                 let px_per_mm = (jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0]).abs().sqrt();
                 let r_px = DISK_MM * px_per_mm * 1.6 + 2.0;
-                let (x_lo, x_hi) = ((p.0 - r_px).floor().max(0.0) as usize, ((p.0 + r_px).ceil() as usize).min(w - 1));
-                let (y_lo, y_hi) = ((p.1 - r_px).floor().max(0.0) as usize, ((p.1 + r_px).ceil() as usize).min(h - 1));
+                let (x_lo, x_hi) = (
+                    (p.0 - r_px).floor().max(0.0) as usize,
+                    ((p.0 + r_px).ceil() as usize).min(w - 1),
+                );
+                let (y_lo, y_hi) = (
+                    (p.1 - r_px).floor().max(0.0) as usize,
+                    ((p.1 + r_px).ceil() as usize).min(h - 1),
+                );
                 for yy in y_lo..=y_hi {
                     for xx in x_lo..=x_hi {
                         let q = inv.apply((xx as f64, yy as f64));
@@ -260,8 +273,9 @@ pub(super) fn render(
                         // the edge blurred by a Gaussian of EDGE_SIGMA_PX (a lens's): no
                         // staircase for the centroid to lock to
                         let cover = (0.5
-                            * libm::erfc(dist * px_per_mm / (EDGE_SIGMA_PX * std::f64::consts::SQRT_2)))
-                            as f32;
+                            * libm::erfc(
+                                dist * px_per_mm / (EDGE_SIGMA_PX * std::f64::consts::SQRT_2),
+                            )) as f32;
                         frame[yy * w + xx] += LEVEL * cover / INSTANTS as f32;
                     }
                 }
