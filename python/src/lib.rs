@@ -16,7 +16,7 @@ use host_harness::lost_frames::LostFramePolicy;
 use host_harness::setting::{Naming, SpecError};
 use host_harness::spec::{
     AnalyzeInput, AnalyzeSpec, FramesInput, PointsInput, Rates, Threshold, Tracker, Tracking,
-    TrackingInput,
+    TrackingInput, ViewInput, WorldInput,
 };
 use numpy::ndarray::{Array2, Array3, ArrayViewD, Axis as NdAxis};
 use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
@@ -370,49 +370,207 @@ impl TrackingArgs {
     }
 }
 
+/// The camera's view as `track` and `analyze` take it (the Python half builds this dict;
+/// every key present).
+#[derive(Debug, FromPyObject)]
+#[pyo3(from_item_all)]
+struct ViewArgs {
+    /// Static references' windows.
+    reference: Option<Vec<PointTuple>>,
+    /// A references CSV file.
+    reference_file: Option<String>,
+    /// translation, similarity or homography.
+    camera_model: Option<String>,
+    /// `(A, B, mm)`.
+    scale: Option<(String, String, f64)>,
+    /// Each target's diameter, mm.
+    target_size_mm: Option<f64>,
+    /// `(x, y, x_mm, y_mm, u_px)` points of the plane.
+    world: Option<Vec<(f64, f64, f64, f64, f64)>>,
+    /// A world points CSV file.
+    world_file: Option<String>,
+}
+
+impl ViewArgs {
+    /// The view's settings as the library takes them (checked by the spec).
+    fn input(self) -> PyResult<ViewInput> {
+        use host_harness::analysis::view::WorldPoint;
+        use host_harness::geometry::Model;
+        let reference = match (self.reference, self.reference_file) {
+            (Some(p), None) => Some(PointsInput::List(
+                p.into_iter()
+                    .enumerate()
+                    .map(|(i, (x, y, w, h, threshold, group))| Point {
+                        target: i + 1,
+                        xy: (x, y),
+                        size: (w, h),
+                        threshold,
+                        group,
+                    })
+                    .collect(),
+            )),
+            (None, Some(f)) => Some(PointsInput::File(f.into())),
+            (None, None) => None,
+            (Some(_), Some(_)) => return Err(bad("give reference points or a file, not both")),
+        };
+        let world = match (self.world, self.world_file) {
+            (Some(p), None) => Some(WorldInput::List(
+                p.into_iter()
+                    .map(|(x, y, xm, ym, u)| WorldPoint {
+                        px: (x, y),
+                        mm: (xm, ym),
+                        u_px: u,
+                    })
+                    .collect(),
+            )),
+            (None, Some(f)) => Some(WorldInput::File(f.into())),
+            (None, None) => None,
+            (Some(_), Some(_)) => return Err(bad("give world points or a file, not both")),
+        };
+        let camera_model = match self.camera_model.as_deref() {
+            None => None,
+            Some("translation") => Some(Model::Translation),
+            Some("similarity") => Some(Model::Similarity),
+            Some("homography") => Some(Model::Homography),
+            Some(m) => {
+                return Err(bad(format!(
+                    "camera_model `{m}`: translation, similarity or homography"
+                )))
+            }
+        };
+        Ok(ViewInput {
+            reference,
+            camera_model,
+            scale: self.scale,
+            target_size_mm: self.target_size_mm,
+            world,
+        })
+    }
+}
+
+/// The camera's motion per frame, `(N, 4)`: the image centre's shift x, y (px), the roll
+/// (degrees) and the scale; NaN where unknown (empty `(0, 4)` without references).
+fn camera_motion_array(v: &host_harness::analysis::view::Viewed) -> Array2<f64> {
+    let Some(m) = &v.motion else {
+        return Array2::<f64>::zeros((0, 4));
+    };
+    let n = m.transforms.len();
+    let mut a = Array2::<f64>::from_elem((n, 4), f64::NAN);
+    for k in 0..n {
+        if let Some(r) = m.row(k) {
+            a[[k, 0]] = r.dx_px;
+            a[[k, 1]] = r.dy_px;
+            a[[k, 2]] = r.rotation_deg;
+            a[[k, 3]] = r.scale;
+        }
+    }
+    a
+}
+
+/// Positions `(N, K, 2)` (NaN where lost) and flags `(N, K)` of `tracks`.
+fn positions_of(tracks: &host_harness::analysis::targets::Tracks) -> (Array3<f64>, Array2<u8>) {
+    let n = tracks.centroids.first().map_or(0, Vec::len);
+    let k = tracks.centroids.len();
+    let mut pos = Array3::<f64>::from_elem((n, k, 2), f64::NAN);
+    let mut flags = Array2::<u8>::zeros((n, k));
+    for (t, cs) in tracks.centroids.iter().enumerate() {
+        for (i, c) in cs.iter().enumerate() {
+            if let Some((x, y)) = c.position() {
+                pos[[i, t, 0]] = f64::from(x);
+                pos[[i, t, 1]] = f64::from(y);
+            }
+            flags[[i, t]] = c.flags.bits();
+        }
+    }
+    (pos, flags)
+}
+
 /// `track(frames, tracking)`: every target's position per frame, `(N, K, 2)` pixels (NaN where
 /// lost), and the firmware's flags `(N, K)`; also the frame rate used.
 #[pyfunction]
+#[pyo3(signature = (frames, tracking, view=None, axis="y"))]
 fn track<'py>(
     py: Python<'py>,
     frames: &Bound<'py, PyAny>,
     tracking: TrackingArgs,
+    view: Option<ViewArgs>,
+    axis: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
     let input = tracking.input()?;
-    let (positions, flags, fps) = py
-        .allow_threads(|| -> anyhow::Result<_> {
+    let view = view.map(ViewArgs::input).transpose()?.unwrap_or_default();
+    let axis = match axis {
+        "x" => Axis::X,
+        "y" => Axis::Y,
+        a => return Err(bad(format!("axis `{a}`: x or y"))),
+    };
+    type Tracked = (
+        (Array3<f64>, Array2<u8>),
+        Option<Array3<f64>>,
+        Array2<f64>,
+        Option<Array2<f64>>,
+        String,
+        f64,
+    );
+    let tracked = py
+        .allow_threads(|| -> anyhow::Result<Tracked> {
             let (source, rates) = frames.resolve(fps, retime, false, None)?;
             let t = Tracking::new(input).map_err(SpecError::into_anyhow)?;
-            let tracks = host_harness::analysis::track_run::track_targets(
+            let has_scale = view.has_scale();
+            let settings = host_harness::spec::view::check(view, None, &t.targets, t.tracker)
+                .map_err(SpecError::into_anyhow)?;
+            let v = host_harness::analysis::view::track_view(
                 &source,
                 rates.fps,
                 &t.centroid,
                 &t.targets,
-            )?
-            .0;
-            let fps = rates.fps;
-            let n = tracks.centroids.first().map_or(0, Vec::len);
-            let k = tracks.centroids.len();
-            let mut pos = Array3::<f64>::from_elem((n, k, 2), f64::NAN);
-            let mut flags = Array2::<u8>::zeros((n, k));
-            for (t, cs) in tracks.centroids.iter().enumerate() {
-                for (i, c) in cs.iter().enumerate() {
-                    if let Some((x, y)) = c.position() {
-                        pos[[i, t, 0]] = f64::from(x);
-                        pos[[i, t, 1]] = f64::from(y);
+                &settings,
+                axis == Axis::X,
+            )?;
+            let raw = v.raw.as_ref().map(|r| positions_of(r).0);
+            let mm = if has_scale {
+                let n = v.tracks.centroids.first().map_or(0, Vec::len);
+                let k = v.tracks.centroids.len();
+                let mut a = Array2::<f64>::from_elem((n, k), f64::NAN);
+                let s = host_harness::chain::displacement::DisplacementSettings {
+                    lost_frames: LostFramePolicy::Interpolate,
+                    mm_per_px: 1.0,
+                    axis,
+                    invert: false,
+                };
+                for t in 0..k {
+                    if let Ok(d) = v.displacement(t, &s) {
+                        for (i, (x, lost)) in d.mm.iter().zip(&d.lost).enumerate() {
+                            if !lost {
+                                a[[i, t]] = *x;
+                            }
+                        }
                     }
-                    flags[[i, t]] = c.flags.bits();
                 }
-            }
-            Ok((pos, flags, fps))
+                Some(a)
+            } else {
+                None
+            };
+            Ok((
+                positions_of(&v.tracks),
+                raw,
+                camera_motion_array(&v),
+                mm,
+                v.describe(axis == Axis::X),
+                rates.fps,
+            ))
         })
         .map_err(py_err)?;
+    let ((positions, flags), raw, camera, mm, report, fps) = tracked;
     let d = PyDict::new(py);
     d.set_item("positions", positions.into_pyarray(py))?;
     d.set_item("flags", flags.into_pyarray(py))?;
     d.set_item("fps", fps)?;
+    d.set_item("raw_positions", raw.map(|r| r.into_pyarray(py)))?;
+    d.set_item("camera_motion", camera.into_pyarray(py))?;
+    d.set_item("displacement_mm", mm.map(|m| m.into_pyarray(py)))?;
+    d.set_item("view_report", report)?;
     Ok(d)
 }
 
@@ -505,7 +663,7 @@ fn upsample<'py>(
 #[pyfunction]
 #[pyo3(signature = (frames, tracking, mm_per_px=None, axis="y", invert=false,
     lost_frames="interpolate", window="hann", nperseg=None, noverlap=None, nfft=None,
-    detrend="constant", bands=None))]
+    detrend="constant", bands=None, view=None))]
 #[allow(clippy::too_many_arguments)]
 fn analyze<'py>(
     py: Python<'py>,
@@ -521,10 +679,12 @@ fn analyze<'py>(
     nfft: Option<usize>,
     detrend: &str,
     bands: Option<Vec<(f64, f64)>>,
+    view: Option<ViewArgs>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
     let input = AnalyzeInput {
+        view: view.map(ViewArgs::input).transpose()?.unwrap_or_default(),
         frames: FramesInput {
             frames: String::new(),
             retime: false,
@@ -561,8 +721,12 @@ fn analyze<'py>(
             let fps = rates.fps;
             let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
             let c = oma_frames::compute(&req, &source)?;
-            let report =
-                host_harness::analysis::oma::run::report(&c.result, &c.records, &c.settings, "");
+            let report = host_harness::analysis::oma::run::report(
+                &c.result,
+                &c.records,
+                &c.settings,
+                &c.viewed.describe(req.displacement.axis == Axis::X),
+            );
             // the page of `analyze`'s report.html, the figures left out (none are drawn here)
             let frame = source
                 .frame_at(fps, 0)
@@ -653,6 +817,10 @@ fn analysis_dict<'py>(
             .iter()
             .map(|m| m.evidence.clone())
             .collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "camera_motion",
+        camera_motion_array(&c.viewed).into_pyarray(py),
     )?;
     d.set_item("report", report)?;
     d.set_item("fps", fps)?;

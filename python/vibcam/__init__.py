@@ -188,6 +188,51 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
     }
 
 
+def _view(reference, camera_model, scale, target_size_mm, world) -> Optional[dict]:
+    """The camera's view (static references, the scale from the scene) for the native ``track``
+    and ``analyze``; ``None`` when nothing of it was asked."""
+    if reference is None and camera_model is None and scale is None and target_size_mm is None \
+            and world is None:
+        return None
+    ref, rfile = _points(reference)
+    if ref is not None:
+        ref = [p for p in ref]
+    if camera_model is not None and camera_model not in ("translation", "similarity", "homography"):
+        raise InputError(
+            f"camera_model {camera_model!r}: 'translation', 'similarity' or 'homography'"
+        )
+    sc = None
+    if scale is not None:
+        try:
+            a, b, mm = scale
+        except (TypeError, ValueError):
+            raise InputError(f"scale = {scale!r}: (A, B, mm) expected, A and B a target (3) or "
+                             "a reference ('r2')") from None
+        sc = (str(a), str(b), _number("scale[2]", mm, positive=True))
+    w, wfile = None, None
+    if world is not None:
+        if isinstance(world, (str, os.PathLike)):
+            wfile = os.fspath(world)
+        else:
+            w = []
+            for i, p in enumerate(world):
+                p = tuple(p)
+                if len(p) not in (4, 5):
+                    raise InputError(f"world[{i}]: (x, y, x_mm, y_mm[, u_px]) expected")
+                u = p[4] if len(p) == 5 else 0.5
+                w.append(tuple(_number(f"world[{i}][{j}]", v) for j, v in enumerate(p[:4]))
+                         + (_number(f"world[{i}].u_px", u),))
+    return {
+        "reference": ref,
+        "reference_file": rfile,
+        "camera_model": camera_model,
+        "scale": sc,
+        "target_size_mm": _number("target_size_mm", target_size_mm, positive=True, optional=True),
+        "world": w,
+        "world_file": wfile,
+    }
+
+
 @dataclass(frozen=True)
 class Centroid:
     """One frame's centroid: position (px; NaN when no pixel passed the threshold), the pixels
@@ -233,12 +278,21 @@ class Tracks:
 
     ``positions``: ``(N, K, 2)`` pixels ``(x, y)``, NaN where the target was lost;
     ``flags``: ``(N, K)`` bits of :data:`FLAGS` (why a frame was lost, or a warning);
-    ``fps``: the frame rate used (1.0 when none was known nor needed).
+    ``fps``: the frame rate used (1.0 when none was known nor needed); with ``reference``:
+    ``raw_positions`` (as measured; ``positions`` has the camera's motion removed) and
+    ``camera_motion`` ``(N, 4)`` (the image centre's shift x, y in px, the roll in degrees, the
+    scale; NaN where no reference was seen); with a scale: ``displacement_mm`` ``(N, K)`` along
+    ``axis`` (positive up for ``y``); ``view_report``: what the references and the scale gave
+    (references left out and why, each target's scale and its uncertainty).
     """
 
     positions: np.ndarray
     flags: np.ndarray
     fps: float
+    raw_positions: Optional[np.ndarray] = None
+    camera_motion: Optional[np.ndarray] = None
+    displacement_mm: Optional[np.ndarray] = None
+    view_report: str = ""
 
     @property
     def lost(self) -> np.ndarray:
@@ -259,6 +313,12 @@ def track(
     gate_px: Optional[float] = None,
     roi: Optional[Sequence[int]] = None,
     return_flags: bool = False,
+    reference: Any = None,
+    camera_model: Optional[str] = None,
+    scale: Optional[Sequence] = None,
+    target_size_mm: Optional[float] = None,
+    world: Any = None,
+    axis: str = "y",
 ) -> Union[np.ndarray, Tracks]:
     """Each target's position in every frame, ``(N, K, 2)`` pixels (NaN where lost), as
     ``host-harness track`` follows them.
@@ -272,13 +332,35 @@ def track(
     ``"lk"`` (Lucas-Kanade; with points, no threshold). ``threshold``: a grey level, or
     ``"auto"`` with points (Otsu's of each window). ``search_px``: with ``lk``, the largest
     motion between frames to catch. With ``return_flags``: a :class:`Tracks`.
+
+    The camera's view (as ``host-harness track``): ``reference``, windows on parts of the scene
+    that do not move (as ``points``), from which the camera's own motion is estimated (model
+    ``camera_model``: ``"translation"``, ``"similarity"`` (the default with two or more) or
+    ``"homography"``) and removed from ``positions``; a reference that moves or is lost is left
+    out and named in ``view_report``. A scale: ``scale=(A, B, mm)`` (the distance between two
+    tracked points, ``A`` a target number or ``"rK"`` a reference), ``target_size_mm`` (each
+    target's diameter; a centroid tracker) or ``world`` (four or more ``(x, y, x_mm, y_mm[,
+    u_px])`` points of the structure's plane, or a CSV file ``x,y,x_mm,y_mm[,u_px]``): each
+    target's ``displacement_mm`` along ``axis``.
     """
+    if axis not in ("x", "y"):
+        raise InputError(f"axis {axis!r}: 'x' or 'y'")
     d = _vibcam.track(
         _frames(frames),
         _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
+        _view(reference, camera_model, scale, target_size_mm, world),
+        axis,
     )
     if return_flags:
-        return Tracks(d["positions"], d["flags"], d["fps"])
+        return Tracks(
+            d["positions"],
+            d["flags"],
+            d["fps"],
+            d["raw_positions"],
+            d["camera_motion"] if d["raw_positions"] is not None else None,
+            d["displacement_mm"],
+            d["view_report"],
+        )
     return d["positions"]
 
 
@@ -372,6 +454,7 @@ class AnalysisResult:
     evidence: list = field(default_factory=list)
     rejected: list = field(default_factory=list)
     html: str = field(default="", repr=False)
+    camera_motion: Optional[np.ndarray] = None
 
     def _repr_html_(self) -> str:
         """The page of ``analyze``'s ``report.html`` (the frame with the targets, the modes,
@@ -468,6 +551,11 @@ def analyze(
     nfft: Optional[int] = None,
     detrend: str = "constant",
     bands: Optional[Sequence[Sequence[float]]] = None,
+    reference: Any = None,
+    camera_model: Optional[str] = None,
+    scale: Optional[Sequence] = None,
+    target_size_mm: Optional[float] = None,
+    world: Any = None,
 ) -> AnalysisResult:
     """Output-only modal analysis of the targets in ``frames`` (FDD, EFDD and SSI-cov on their
     displacements), exactly as ``host-harness analyze`` without ``--accel`` (the same numbers as
@@ -478,6 +566,9 @@ def analyze(
     ``"x"``; ``invert`` flips the sign; ``lost_frames`` ``"interpolate"`` or ``"hold"``; the
     Welch settings of the cross-spectral matrix as :func:`frf` (default: the command line's);
     ``bands``: ``[(lo, hi), ...]`` Hz, one mode per band (default: peaks picked).
+    ``reference``, ``camera_model``, ``scale``, ``target_size_mm``, ``world``: the camera's
+    motion removed and the scale from the scene, as :func:`track` (``camera_motion`` in the
+    result; a scale other than ``mm_per_px`` makes the values mm).
     """
     d = _vibcam.analyze(
         _frames(frames),
@@ -492,6 +583,7 @@ def analyze(
         nfft=_whole("nfft", nfft, 1, 65536, optional=True),
         detrend=detrend,
         bands=None if bands is None else _bands(bands),
+        view=_view(reference, camera_model, scale, target_size_mm, world),
     )
     return AnalysisResult(
         modes=d["modes"],
@@ -511,6 +603,7 @@ def analyze(
         evidence=list(d["evidence"]),
         rejected=list(d["rejected"]),
         html=d["html"],
+        camera_motion=d["camera_motion"] if reference is not None else None,
     )
 
 

@@ -16,7 +16,12 @@ _Point = tuple[float, float, int, int, Optional[int], Optional[int]]
 def centroid(
     frame: np.ndarray, threshold: int, mode: str = ..., roi: Optional[tuple[int, int, int, int]] = ...
 ) -> tuple[float, float, int, list[str]]: ...
-def track(frames: Any, tracking: dict[str, Any]) -> dict[str, Any]: ...
+def track(
+    frames: Any,
+    tracking: dict[str, Any],
+    view: Optional[dict[str, Any]] = ...,
+    axis: str = ...,
+) -> dict[str, Any]: ...
 def frf(
     x: npt.NDArray[np.float64],
     y: npt.NDArray[np.float64],
