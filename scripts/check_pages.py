@@ -224,6 +224,12 @@ def main():
     run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
         "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
         "--exposure-ms", "2", "--window", "rect", "--out", work / "accel1", "--force")
+    shaken = work / "shaken"
+    run(h, "simulate-field", "--render", "--minutes", "0.5", "--references", "4",
+        "--shake-px", "0.5", "--roll-deg", "0.2", "--out", shaken, "--force")
+    run(h, "analyze", "--frames", shaken / "frames", "--fps", "60", "--points",
+        shaken / "points.csv", "--threshold", "127", "--tracker", "weighted", "--reference",
+        shaken / "references.csv", "--out", work / "reference", "--force")
     run(h, "simulate-hammer", "--out", work / "hammer", "--force")
     run(h, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
         work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
@@ -232,6 +238,8 @@ def main():
     def mode_rows(d):
         with open(d / "modes.csv", newline="") as f:
             return len(list(csv.DictReader(f)))
+
+    from selenium.webdriver.common.by import By
 
     drv = browser(work)
     try:
@@ -247,6 +255,12 @@ def main():
                      rows=mode_rows(work / "accel5"))
         check_report(drv, work / "accel1" / "report.html", 1, 0, "analyze --accel",
                      rows=mode_rows(work / "accel1"))
+        # the camera's motion: the references on the frame, its spectrum among the figures
+        check_report(drv, work / "reference" / "report.html", 5,
+                     mode_rows(work / "reference"), "analyze --reference")
+        n = len(drv.find_elements(By.CSS_SELECTOR, "svg#frame g.reference"))
+        check(n == 4, f"analyze --reference: {n} references drawn, 4 given")
+        check("camera_motion" in drv.page_source, "analyze --reference: the camera's spectrum")
         check_pick(drv, h, work, rec)
         if args.screenshots:
             shots = Path(args.screenshots)

@@ -736,9 +736,11 @@ fn analyze<'py>(
             let html = host_harness::analysis::oma::run::page(
                 &c.result,
                 &c.records,
-                "analyze",
-                req.displacement.axis == Axis::X,
-                frame,
+                ("analyze", req.displacement.axis == Axis::X),
+                (
+                    frame,
+                    host_harness::analysis::view::reference_markers(&c.viewed),
+                ),
                 Vec::new(),
                 &report,
             );

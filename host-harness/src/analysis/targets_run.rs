@@ -187,6 +187,7 @@ fn page(
             })
             .collect(),
         text: text.to_string(),
+        references: Vec::new(),
     })
 }
 

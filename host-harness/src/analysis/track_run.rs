@@ -181,7 +181,13 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
         .and_then(|(_, f)| f.to_image().ok());
     out.write(
         "report.html",
-        page(req, tracks, windows, frame, &report, out.dir()),
+        page(
+            req,
+            (tracks, windows, super::view::reference_markers(&viewed)),
+            frame,
+            &report,
+            out.dir(),
+        ),
     )?;
     out.commit()?;
     Ok(report)
@@ -191,8 +197,11 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
 /// frames; the tracks' figure; the report.
 fn page(
     req: &Request,
-    tracks: &Tracks,
-    windows: Option<&PointsInfo>,
+    (tracks, windows, references): (
+        &Tracks,
+        Option<&PointsInfo>,
+        Vec<crate::export::html::Marker>,
+    ),
     frame: Option<crate::export::html::FrameImage>,
     text: &str,
     dir: &Path,
@@ -204,6 +213,7 @@ fn page(
         title: format!("track: {}", req.frames),
         frame,
         markers,
+        references,
         direction: (0.0, -1.0),
         figures,
         text: text.to_string(),

@@ -314,6 +314,26 @@ impl Viewed {
     }
 }
 
+/// The references for `report.html`: each one's anchor (its median position), numbered as in
+/// the report; `window` `None` for one left out.
+pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::Marker> {
+    let (Some(refs), Some(m)) = (&v.references, &v.motion) else {
+        return Vec::new();
+    };
+    refs.centroids
+        .iter()
+        .enumerate()
+        .filter_map(|(r, c)| {
+            median_position(c).map(|xy| crate::export::html::Marker {
+                target: r + 1,
+                xy,
+                window: m.used.contains(&(r + 1)).then_some((0.0, 0.0)),
+                lost: c.iter().filter(|c| c.position().is_none()).count(),
+            })
+        })
+        .collect()
+}
+
 /// The median position of a track (compensated), px.
 fn median_position(c: &[Centroid]) -> Option<(f64, f64)> {
     let mut xs: Vec<f64> = Vec::new();

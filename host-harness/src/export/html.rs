@@ -57,6 +57,9 @@ pub struct Report {
     pub frame: Option<FrameImage>,
     /// The targets (positions; on the frame when there is one).
     pub markers: Vec<Marker>,
+    /// Static references (`--reference`), drawn as `g.reference` labelled `rK`; `lost` the
+    /// frames each was lost in, a window drawn dashed when it was left out (`window` none).
+    pub references: Vec<Marker>,
     /// The motion's direction in the image, a unit vector (y up: `(0, -1)`).
     pub direction: (f64, f64),
     /// Figures: caption and SVG text.
@@ -263,6 +266,23 @@ pub fn report_html(r: &Report) -> String {
                 } else {
                     String::new()
                 }
+            );
+        }
+        for m in &r.references {
+            let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
+            let _ = write!(
+                s,
+                "<g class=\"reference\" data-reference=\"{}\"><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#30ff60\"/><text x=\"{}\" y=\"{}\" fill=\"#30ff60\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">r{}{}</text></g>",
+                m.target,
+                xy.0,
+                xy.1,
+                2.0 * stroke,
+                xy.0 + 3.0 * stroke,
+                xy.1 - 3.0 * stroke,
+                12.0 * stroke,
+                0.3 * stroke,
+                m.target,
+                if m.window.is_none() { " (left out)" } else { "" }
             );
         }
         s.push_str("</svg>\n");

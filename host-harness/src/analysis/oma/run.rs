@@ -110,9 +110,13 @@ pub fn write(
         page(
             r,
             records,
-            o.command,
-            o.along_x,
-            o.frame.clone(),
+            (o.command, o.along_x),
+            (
+                o.frame.clone(),
+                o.view
+                    .map(|v| crate::analysis::view::reference_markers(v.0))
+                    .unwrap_or_default(),
+            ),
             figures,
             &report,
         ),
@@ -130,9 +134,11 @@ pub fn write(
 pub fn page(
     r: &OmaResult,
     records: &Records,
-    command: &str,
-    along_x: bool,
-    frame: Option<crate::export::html::FrameImage>,
+    (command, along_x): (&str, bool),
+    (frame, references): (
+        Option<crate::export::html::FrameImage>,
+        Vec<crate::export::html::Marker>,
+    ),
     figures: Vec<(String, String)>,
     text: &str,
 ) -> String {
@@ -195,6 +201,7 @@ pub fn page(
         title: format!("{command}: output-only modal analysis"),
         frame,
         markers,
+        references,
         direction: if along_x { (1.0, 0.0) } else { (0.0, -1.0) },
         figures,
         modes: (!rows.is_empty()).then_some((head, rows)),
