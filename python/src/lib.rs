@@ -370,6 +370,9 @@ impl TrackingArgs {
     }
 }
 
+/// A point of the structure's plane: `(x, y, x_mm, y_mm, u_px)`.
+type WorldTuple = (f64, f64, f64, f64, f64);
+
 /// The camera's view as `track` and `analyze` take it (the Python half builds this dict;
 /// every key present).
 #[derive(Debug, FromPyObject)]
@@ -386,7 +389,7 @@ struct ViewArgs {
     /// Each target's diameter, mm.
     target_size_mm: Option<f64>,
     /// `(x, y, x_mm, y_mm, u_px)` points of the plane.
-    world: Option<Vec<(f64, f64, f64, f64, f64)>>,
+    world: Option<Vec<WorldTuple>>,
     /// A world points CSV file.
     world_file: Option<String>,
 }

@@ -596,37 +596,6 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::plane_view;
-
-    #[test]
-    fn point_refs_parse_targets_and_references() {
-        assert_eq!(PointRef::parse("3"), Some(PointRef::Target(3)));
-        assert_eq!(PointRef::parse("r2"), Some(PointRef::Reference(2)));
-        assert_eq!(PointRef::parse("r0"), None);
-        assert_eq!(PointRef::parse("x"), None);
-    }
-
-    #[test]
-    fn the_local_scale_is_the_planes_mm_per_px_at_the_point() {
-        // a plane square to the camera at 500 mm with f = 1000 px: 0.5 mm/px everywhere
-        let img_of_world = plane_view(0.0, 500.0, 1000.0, (100.0, 100.0));
-        let h = img_of_world.inverse().unwrap();
-        for p in [(100.0, 100.0), (10.0, 190.0)] {
-            assert!((local_scale(&h, p, false) - 0.5).abs() < 1e-12);
-            assert!((local_scale(&h, p, true) - 0.5).abs() < 1e-12);
-        }
-        // turned by 30 deg about its vertical axis: along y the scale is depth / f
-        let img_of_world = plane_view(30.0, 500.0, 1000.0, (100.0, 100.0));
-        let h = img_of_world.inverse().unwrap();
-        let p = img_of_world.apply((80.0, 0.0));
-        let depth = 500.0 + 80.0 * 0.5;
-        assert!((local_scale(&h, p, false) - depth / 1000.0).abs() < 1e-9);
-    }
-}
-
 /// Writes `camera_motion.csv` and the camera motion's spectrum (`camera_motion.png`/`.svg`)
 /// into `out` when references were given; returns the report's line naming them (empty
 /// without references).
@@ -689,4 +658,35 @@ pub fn write_camera_outputs(
     }
     line.push('\n');
     Ok(line)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::plane_view;
+
+    #[test]
+    fn point_refs_parse_targets_and_references() {
+        assert_eq!(PointRef::parse("3"), Some(PointRef::Target(3)));
+        assert_eq!(PointRef::parse("r2"), Some(PointRef::Reference(2)));
+        assert_eq!(PointRef::parse("r0"), None);
+        assert_eq!(PointRef::parse("x"), None);
+    }
+
+    #[test]
+    fn the_local_scale_is_the_planes_mm_per_px_at_the_point() {
+        // a plane square to the camera at 500 mm with f = 1000 px: 0.5 mm/px everywhere
+        let img_of_world = plane_view(0.0, 500.0, 1000.0, (100.0, 100.0));
+        let h = img_of_world.inverse().unwrap();
+        for p in [(100.0, 100.0), (10.0, 190.0)] {
+            assert!((local_scale(&h, p, false) - 0.5).abs() < 1e-12);
+            assert!((local_scale(&h, p, true) - 0.5).abs() < 1e-12);
+        }
+        // turned by 30 deg about its vertical axis: along y the scale is depth / f
+        let img_of_world = plane_view(30.0, 500.0, 1000.0, (100.0, 100.0));
+        let h = img_of_world.inverse().unwrap();
+        let p = img_of_world.apply((80.0, 0.0));
+        let depth = 500.0 + 80.0 * 0.5;
+        assert!((local_scale(&h, p, false) - depth / 1000.0).abs() < 1e-9);
+    }
 }

@@ -99,8 +99,11 @@ impl CameraView {
     }
 }
 
+/// Points of the plane, mm.
+type PlanePoints = Vec<(f64, f64)>;
+
 /// The plane's points: the targets' rest centres and the references', mm.
-fn layout(k: usize, refs: usize) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
+fn layout(k: usize, refs: usize) -> (PlanePoints, PlanePoints) {
     let half = (k as f64 - 1.0) / 2.0;
     let targets = (0..k)
         .map(|j| ((j as f64 - half) * SPACING_MM, 0.0))
