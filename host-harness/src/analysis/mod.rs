@@ -35,6 +35,7 @@ pub mod camera_motion;
 pub mod columns;
 pub mod compensate;
 pub mod ema;
+pub mod follow;
 pub mod frf_uncertainty;
 pub mod imaging_share;
 pub mod modal;

@@ -7,9 +7,9 @@
 //! positions it came from.
 
 use super::camera_motion::CameraMotion;
+use super::follow::{track_targets, Targets};
 use super::points::{Point, PointTracker, PointsInfo};
 use super::targets::Tracks;
-use super::track_run::{track_targets, Targets};
 use crate::bad_input;
 use crate::chain::displacement::{displacement_mm, Displacement, DisplacementSettings};
 use crate::frames::FrameSource;
