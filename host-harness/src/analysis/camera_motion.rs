@@ -2,8 +2,9 @@
 //! every target's track (docs/method.md §3.14).
 //!
 //! The references are windows on parts of the scene that do not move (a wall, the ground),
-//! followed by Lucas-Kanade like chosen points. Each reference's anchor is its median position
-//! over the record; per frame the map from the anchors to where the references are (a
+//! followed by Lucas-Kanade like chosen points. The anchors are the references' positions in
+//! the frame nearest their median positions (of those that see the most of them); per frame
+//! the map from the anchors to where the references are (a
 //! translation, a similarity: rotation, scale and shift, or a homography) is fitted by least
 //! squares, and every target's position is taken back through its inverse.
 //!
@@ -306,12 +307,37 @@ pub fn estimate(
             avail.push(r);
         }
     }
-    let anchors: Vec<(f64, f64)> = pos
+    // the anchors: the references in one frame (positions of one pose are what one map takes
+    // to every other frame), the frame nearest their median positions among those that see
+    // the most of them
+    let medians: Vec<(f64, f64)> = pos
         .iter()
         .map(|p| {
             let xs: Vec<f64> = p.iter().flatten().map(|q| q.0).collect();
             let ys: Vec<f64> = p.iter().flatten().map(|q| q.1).collect();
             (median(xs), median(ys))
+        })
+        .collect();
+    let anchor_frame = (0..frames)
+        .map(|k| {
+            let seen = avail.iter().filter(|&&r| pos[r][k].is_some()).count();
+            let d: f64 = avail
+                .iter()
+                .filter_map(|&r| {
+                    pos[r][k].map(|q| (q.0 - medians[r].0).powi(2) + (q.1 - medians[r].1).powi(2))
+                })
+                .sum();
+            (k, seen, d)
+        })
+        .max_by(|a, b| a.1.cmp(&b.1).then(b.2.total_cmp(&a.2)))
+        .map_or(0, |(k, _, _)| k);
+    let anchors: Vec<(f64, f64)> = (0..n_refs)
+        .map(|r| {
+            pos[r]
+                .get(anchor_frame)
+                .copied()
+                .flatten()
+                .unwrap_or(medians[r])
         })
         .collect();
     let name = |rs: &[usize]| {
@@ -386,10 +412,19 @@ pub fn estimate(
             all.sort_unstable();
             all.dedup();
             let groups: Vec<String> = top.iter().map(|t| format!("({})", name(t))).collect();
+            let hint = match model {
+                Model::Homography => String::new(),
+                m if avail.len() >= 4 => format!(
+                    "; or the camera's motion is more than a {}: a camera that pans or tilts \
+                     is a homography (--camera-model homography)",
+                    m.name()
+                ),
+                _ => String::new(),
+            };
             return Err(crate::bad_input(format!(
                 "the references disagree: {} each move together, as many in each; which are \
                  static cannot be told (give more references on parts of the scene that do not \
-                 move, or leave out the ones that may move: {})",
+                 move, or leave out the ones that may move: {}){hint}",
                 groups.join(" and "),
                 name(&all)
             )));
@@ -691,6 +726,70 @@ mod tests {
         let (two, _) = tracks(&AT[..2], 100, Some(1));
         let e = estimate(&two, Some(Model::Translation), (200, 160)).unwrap_err();
         assert!(format!("{e:#}").contains("cannot be told"), "{e:#}");
+    }
+
+    #[test]
+    fn a_camera_that_pans_is_a_homography_and_a_similarity_is_refused() {
+        // references on a plane seen by a camera that pans a little about its vertical axis
+        let at = [
+            (10.0, 10.0),
+            (190.0, 12.0),
+            (185.0, 150.0),
+            (15.0, 148.0),
+            (100.0, 20.0),
+            (60.0, 120.0),
+        ];
+        let view = |k: usize| {
+            // degrees: the plane turns about its vertical axis, a projective map of the image
+            let pan = 10.0 * (k as f64 / 9.0).sin();
+            let shift =
+                Homography::similarity((0.0, 0.0), 0.0, 1.0, (2.0 * (k as f64 / 5.0).cos(), 0.0));
+            shift.after(
+                &crate::geometry::plane_view(pan, 800.0, 800.0, (100.0, 80.0)).after(
+                    &crate::geometry::plane_view(0.0, 800.0, 800.0, (100.0, 80.0))
+                        .inverse()
+                        .unwrap(),
+                ),
+            )
+        };
+        let frames = 200;
+        let track = |p: (f64, f64)| -> Vec<Centroid> {
+            (0..frames)
+                .map(|k| centroid(Some(view(k).apply(p))))
+                .collect()
+        };
+        let refs = Tracks {
+            centroids: at.iter().map(|&p| track(p)).collect(),
+            first: at.to_vec(),
+            refused: vec![0; at.len()],
+            depth: FrameDepth::default(),
+        };
+        let target = Tracks {
+            centroids: vec![track((150.0, 60.0))],
+            first: vec![(150.0, 60.0)],
+            refused: vec![0],
+            depth: FrameDepth::default(),
+        };
+        let spread = |m: &CameraMotion| {
+            let c = m.compensate(&target);
+            let xs: Vec<f64> = c.centroids[0].iter().map(|c| f64::from(c.cx)).collect();
+            centred_rms(&xs)
+        };
+        let h = estimate(&refs, Some(Model::Homography), (200, 160)).unwrap();
+        assert_eq!(h.used.len(), 6);
+        // the pan moves the target by px; the homography takes it out to the f32 text
+        let raw: Vec<f64> = target.centroids[0]
+            .iter()
+            .map(|c| f64::from(c.cx))
+            .collect();
+        assert!(centred_rms(&raw) > 1.0, "{}", centred_rms(&raw));
+        assert!(spread(&h) < 1e-3, "{}", spread(&h));
+        // a similarity cannot explain the references: named, with the way out
+        let e = estimate(&refs, Some(Model::Similarity), (200, 160)).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("--camera-model homography"),
+            "{e:#}"
+        );
     }
 
     #[test]
