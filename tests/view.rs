@@ -268,6 +268,72 @@ fn an_oblique_view_is_measured_in_millimetres_through_the_planes_points() {
     }
     let report = std::fs::read_to_string(world.join("report.txt")).unwrap();
     assert!(report.contains("would be off by"), "{report}");
+    // the output-only analysis in mm through the plane: the scale's uncertainty is in the
+    // amplitudes' intervals, which are wider than the record's statistics alone
+    let a = tmp.path().join("analyze");
+    let wfile = rec.join("world.csv");
+    let run = |out: &Path, scale: &[&str]| {
+        let mut args = vec![
+            "analyze",
+            "--frames",
+            rec.join("frames").to_str().unwrap(),
+            "--fps",
+            "60",
+            "--points",
+            rec.join("points.csv").to_str().unwrap(),
+            "--threshold",
+            "127",
+            "--tracker",
+            "weighted",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        args.extend(scale.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        assert_ok(&harness(&args));
+        rows(&out.join("modes.csv"))
+    };
+    // the same plane with its points' image positions taken as exact, then as 3 px uncertain:
+    // the same homography, the same records, only the scale's uncertainty differs
+    let with_u = |u: &str, name: &str| {
+        let text = std::fs::read_to_string(&wfile).unwrap();
+        let mut lines = text.lines();
+        let mut out = format!("{},u_px\n", lines.next().unwrap());
+        for l in lines {
+            out.push_str(&format!("{l},{u}\n"));
+        }
+        let f = tmp.path().join(name);
+        std::fs::write(&f, out).unwrap();
+        f
+    };
+    let (exact, loose) = (with_u("0", "exact.csv"), with_u("3", "loose.csv"));
+    let plain = run(
+        &tmp.path().join("exact"),
+        &["--world", exact.to_str().unwrap()],
+    );
+    let report = std::fs::read_to_string(tmp.path().join("exact/report.txt")).unwrap();
+    assert!(!report.contains("is folded into the"), "{report}");
+    let with = run(&a, &["--world", loose.to_str().unwrap()]);
+    let report = std::fs::read_to_string(a.join("report.txt")).unwrap();
+    assert!(report.contains("is folded into the"), "{report}");
+    let rel = |r: &BTreeMap<String, String>| -> Option<f64> {
+        Some(r["amplitude_u"].parse::<f64>().ok()? / r["amplitude"].parse::<f64>().ok()?)
+    };
+    let mut compared = 0;
+    for (w, p) in with.iter().zip(&plain) {
+        if let (Some(a), Some(b)) = (rel(w), rel(p)) {
+            assert!(
+                a > b,
+                "{}: {a} with the plane's scale, {b} without",
+                w["f_hz"]
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared > 0, "no amplitude intervals: {with:?}");
     // one scale for the frame (the true one at the row's centre) is off at the ends
     let one = tmp.path().join("one");
     assert_ok(&track(&rec, &one, &["--mm-per-px", "2"]));

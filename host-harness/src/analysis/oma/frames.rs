@@ -134,7 +134,22 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
     }
     let n = records.channels[0].len();
     let settings = settings(req, n)?;
-    let result = super::analyze(&records.channels, &settings)?;
+    let mut result = super::analyze(&records.channels, &settings)?;
+    if let Some(sc) = &viewed.scales {
+        let u: Vec<f64> = records
+            .targets
+            .iter()
+            .map(|(t, _)| sc.per_target.get(t - 1).map_or(0.0, |p| p.1))
+            .collect();
+        if super::uncertainty::fold_scale(&mut result.modes, &u) {
+            result.notes.push(
+                "the scale's standard uncertainty (each target's, above) is folded into the \
+                 amplitude and shape-magnitude intervals, taken as fully correlated between \
+                 the targets: the amplitude (a power) gets twice the shape-weighted mean"
+                    .to_string(),
+            );
+        }
+    }
     Ok(Computed {
         tracks,
         records,
