@@ -429,3 +429,63 @@ fn bad_references_are_named_never_silently_used() {
     );
     assert_exit_2(&o, "cannot be told");
 }
+
+#[test]
+fn references_with_an_accelerometer_follow_the_same_rules() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--targets",
+        "5",
+        "--exposure-ms",
+        "2",
+    ]));
+    // a reference on the black background: nothing to follow
+    let refs = tmp.path().join("refs.csv");
+    std::fs::write(&refs, "target,x,y,w,h\n1,4,4,7,7\n").unwrap();
+    let analyze = |extra: &[&str]| {
+        let mut args = vec![
+            "analyze",
+            "--frames",
+            rec.join("frames").to_str().unwrap(),
+            "--fps",
+            "120",
+            "--accel",
+            rec.join("accel.csv").to_str().unwrap(),
+            "--fs",
+            "2048",
+            "--time-col",
+            "t_s",
+            "--threshold",
+            "127",
+            "--mm-per-px",
+            "0.1266",
+            "--out",
+            tmp.path().join("out").to_str().unwrap(),
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        harness(&args)
+    };
+    let r = refs.to_str().unwrap();
+    let o = analyze(&["--targets", "5", "--reference", r]);
+    assert_exit_2(&o, "needs 1 reference(s) that stay; 0 of 1 remain");
+    assert!(
+        crate::util::stderr(&o).contains("r1 lost in"),
+        "{}",
+        crate::util::stderr(&o)
+    );
+    assert_exit_2(&analyze(&["--reference", r]), "--reference with --accel");
+    assert_exit_2(
+        &analyze(&["--targets", "5", "--target-size-mm", "10"]),
+        "with --accel give --mm-per-px",
+    );
+}

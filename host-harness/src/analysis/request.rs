@@ -33,6 +33,9 @@ pub struct TargetsRequest {
     pub accel_target: usize,
     /// Reference shapes to compute the MAC against.
     pub shape_reference: Option<PathBuf>,
+    /// Static references: the camera's motion removed from the targets (no scale: the
+    /// request's `mm_per_px`).
+    pub view: super::view::ViewSettings,
 }
 
 /// An `analyze` request with an accelerometer, as [`crate::spec::AnalyzeSpec`] checks it: every
@@ -81,6 +84,7 @@ impl Request {
         let mut v = vec![Path::new(self.frames.as_str()), self.accel.path.as_path()];
         if let Some(t) = &self.targets {
             v.extend(t.shape_reference.as_deref());
+            v.extend(t.view.references.as_ref().and_then(|r| r.file.as_deref()));
         }
         v.extend(self.points_file.as_deref());
         v

@@ -705,17 +705,23 @@ pub fn frf_spectra(a: &TargetAnalysis) -> Vec<(usize, Spectrum<'_>)> {
         .collect()
 }
 
-/// Each target's track for `displacement.csv`.
-pub fn track_rows<'a>(tracks: &'a Tracks, a: &'a TargetAnalysis) -> Vec<Track<'a>> {
+/// Each target's track for `displacement.csv` (`raw`: the tracks as measured, when the
+/// camera's motion was removed from `tracks`).
+pub fn track_rows<'a>(
+    tracks: &'a Tracks,
+    raw: Option<&'a Tracks>,
+    a: &'a TargetAnalysis,
+) -> Vec<Track<'a>> {
     tracks
         .centroids
         .iter()
         .zip(&a.displacements)
-        .map(|(c, d)| Track {
+        .enumerate()
+        .map(|(t, (c, d))| Track {
             centroids: c,
             mm: Some(&d.mm),
             lost: Some(&d.lost),
-            raw: None,
+            raw: raw.map(|r| r.centroids[t].as_slice()),
         })
         .collect()
 }

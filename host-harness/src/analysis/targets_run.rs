@@ -28,8 +28,16 @@ pub fn run(
         .as_deref()
         .map(|p| targets::read_shape_reference(p, k, settings.bands.len()))
         .transpose()?;
-    let (tracks, windows) =
-        super::track_run::track_targets(source, settings.frame_rate_hz, &req.centroid, &t.targets)?;
+    let along_x = req.displacement.axis == Axis::X;
+    let viewed = super::view::track_view(
+        source,
+        settings.frame_rate_hz,
+        &req.centroid,
+        &t.targets,
+        &t.view,
+        along_x,
+    )?;
+    let (tracks, windows) = (viewed.tracks.clone(), viewed.windows.clone());
     let compensate = match (req.compensate_exposure, settings.exposure_s) {
         (true, Some(exposure_s)) => Some(targets::CompensationRequest {
             exposure_s,
@@ -46,10 +54,22 @@ pub fn run(
     )?;
     let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let macs = reference.as_ref().map(|r| targets::macs(&a, r));
-    write_tables(&out, req, &a, &tracks, macs.as_deref())?;
-    let along_x = req.displacement.axis == Axis::X;
+    write_tables(
+        &out,
+        req,
+        &a,
+        (&tracks, viewed.raw.as_ref()),
+        macs.as_deref(),
+    )?;
     shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
     let mut report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
+    report.push_str(&viewed.describe(along_x));
+    report.push_str(&super::view::write_camera_outputs(
+        &out,
+        &viewed,
+        settings.frame_rate_hz,
+        true,
+    )?);
     if let Some(w) = &windows {
         report.push_str(&super::points::windows_report(w, &tracks));
     }
@@ -62,7 +82,7 @@ pub fn run(
             source,
             &a,
             &tracks,
-            windows.as_ref(),
+            (windows.as_ref(), super::view::reference_markers(&viewed)),
             &report,
             out.dir(),
         ),
@@ -105,7 +125,10 @@ fn page(
     source: &FrameSource,
     a: &TargetAnalysis,
     tracks: &Tracks,
-    windows: Option<&super::points::PointsInfo>,
+    (windows, references): (
+        Option<&super::points::PointsInfo>,
+        Vec<crate::export::html::Marker>,
+    ),
     text: &str,
     dir: &std::path::Path,
 ) -> String {
@@ -187,7 +210,7 @@ fn page(
             })
             .collect(),
         text: text.to_string(),
-        references: Vec::new(),
+        references,
     })
 }
 
@@ -196,7 +219,7 @@ fn write_tables(
     out: &Staged,
     req: &Request,
     a: &TargetAnalysis,
-    tracks: &Tracks,
+    (tracks, raw): (&Tracks, Option<&Tracks>),
     macs: Option<&[(usize, f64)]>,
 ) -> anyhow::Result<()> {
     let s = &req.settings;
@@ -209,7 +232,7 @@ fn write_tables(
     out.write(
         "displacement.csv",
         export::displacement_csv(
-            &targets::track_rows(tracks, a),
+            &targets::track_rows(tracks, raw, a),
             s.frame_rate_hz,
             s.time_offset_s,
         ),

@@ -145,10 +145,10 @@ fn with_reference(
         .fs
         .ok_or_else(|| SpecError::setting("$accel needs $fs (its sample rate, Hz)"))?;
     let fs = super::positive("fs", fs, "the accelerometer's sample rate, Hz")?;
-    if input.view != super::ViewInput::default() {
+    if input.view.has_scale() {
         return Err(SpecError::setting(
-            "$reference, $scale, $target_size_mm and $world are those of the output-only \
-             analysis (and of track) for now; with $accel give $mm_per_px",
+            "$scale, $target_size_mm and $world are those of the output-only analysis (and of \
+             track) for now; with $accel give $mm_per_px",
         ));
     }
     let mm_per_px = input
@@ -170,7 +170,19 @@ fn with_reference(
         None => 0.0,
     };
     let tracking = Tracking::new(input.tracking)?;
-    let targets = targets_request(&tracking.targets, input.accel_target, input.shape_reference)?;
+    let view = super::view::check(input.view, None, &tracking.targets, tracking.tracker)?;
+    let mut targets =
+        targets_request(&tracking.targets, input.accel_target, input.shape_reference)?;
+    match (&mut targets, view.references.is_some()) {
+        (Some(t), _) => t.view = view,
+        (None, true) => {
+            return Err(SpecError::setting(
+                "$reference with $accel: the camera's motion is taken out of $targets K or \
+                 $points (the one target of the frame keeps its own chain)",
+            ))
+        }
+        (None, false) => {}
+    }
     if let Some(t) = &input.twin {
         check_twin(t, targets.is_some(), tracking.points_file.is_some())?;
     }
@@ -296,6 +308,7 @@ fn targets_request(
         targets: targets.clone(),
         accel_target,
         shape_reference,
+        view: Default::default(),
     }))
 }
 

@@ -410,7 +410,7 @@ pub fn fold_scale(modes: &mut [super::OmaMode], u_rel: &[f64]) -> bool {
             continue;
         }
         let norm: f64 = m.shape.iter().map(|c| c.norm_sqr()).sum();
-        if !(norm > 0.0) {
+        if norm <= 0.0 || norm.is_nan() {
             continue;
         }
         let rel: f64 = 2.0
