@@ -252,6 +252,8 @@ fn normalising(p: &[(f64, f64)]) -> Option<Matrix3<f64>> {
 fn fit_homography(src: &[(f64, f64)], dst: &[(f64, f64)]) -> Option<Homography> {
     let (ts, td) = (normalising(src)?, normalising(dst)?);
     let n = src.len();
+    // at least 9 rows (zeros past the pairs): a thin SVD then gives all 9 right singular
+    // vectors, the null one of four pairs among them
     let mut a = DMatrix::<f64>::zeros(2 * n.max(5), 9);
     for (i, (s, d)) in src.iter().zip(dst).enumerate() {
         let p = ts * Vector3::new(s.0, s.1, 1.0);

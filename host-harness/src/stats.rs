@@ -36,6 +36,14 @@ pub fn percentile_sorted(sorted: &[f64], p: f64) -> Option<f64> {
     Some(sorted[lo] + (sorted[hi] - sorted[lo]) * frac)
 }
 
+/// The median of `x` (a sorted copy; the mean of the two middle values of an even count);
+/// `None` for an empty slice.
+pub fn median(x: &[f64]) -> Option<f64> {
+    let mut s = x.to_vec();
+    s.sort_by(f64::total_cmp);
+    percentile_sorted(&s, 50.0)
+}
+
 /// Histogram of `x` over `bins` equal bins spanning `[lo, hi]`, normalised as a probability
 /// density (area 1 over the values inside the range). Returns the bin centres and densities.
 pub fn density_histogram(x: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f64)> {

@@ -339,18 +339,7 @@ impl TrackingArgs {
     /// The tracking settings as the library takes them (checked by [`Tracking::new`]).
     fn input(self) -> PyResult<TrackingInput> {
         let points = match (self.points, self.points_file) {
-            (Some(p), None) => Some(PointsInput::List(
-                p.into_iter()
-                    .enumerate()
-                    .map(|(i, (x, y, w, h, threshold, group))| Point {
-                        target: i + 1,
-                        xy: (x, y),
-                        size: (w, h),
-                        threshold,
-                        group,
-                    })
-                    .collect(),
-            )),
+            (Some(p), None) => Some(PointsInput::List(points_of(p))),
             (None, Some(f)) => Some(PointsInput::File(f.into())),
             (None, None) => None,
             (Some(_), Some(_)) => return Err(bad("give points or a points file, not both")),
@@ -372,6 +361,20 @@ impl TrackingArgs {
 
 /// A point of the structure's plane: `(x, y, x_mm, y_mm, u_px)`.
 type WorldTuple = (f64, f64, f64, f64, f64);
+
+/// Windows as the Python half gives them, numbered 1, 2, ... in their order.
+fn points_of(p: Vec<PointTuple>) -> Vec<Point> {
+    p.into_iter()
+        .enumerate()
+        .map(|(i, (x, y, w, h, threshold, group))| Point {
+            target: i + 1,
+            xy: (x, y),
+            size: (w, h),
+            threshold,
+            group,
+        })
+        .collect()
+}
 
 /// The camera's view as `track` and `analyze` take it (the Python half builds this dict;
 /// every key present).
@@ -400,18 +403,7 @@ impl ViewArgs {
         use host_harness::analysis::view::WorldPoint;
         use host_harness::geometry::Model;
         let reference = match (self.reference, self.reference_file) {
-            (Some(p), None) => Some(PointsInput::List(
-                p.into_iter()
-                    .enumerate()
-                    .map(|(i, (x, y, w, h, threshold, group))| Point {
-                        target: i + 1,
-                        xy: (x, y),
-                        size: (w, h),
-                        threshold,
-                        group,
-                    })
-                    .collect(),
-            )),
+            (Some(p), None) => Some(PointsInput::List(points_of(p))),
             (None, Some(f)) => Some(PointsInput::File(f.into())),
             (None, None) => None,
             (Some(_), Some(_)) => return Err(bad("give reference points or a file, not both")),

@@ -195,8 +195,6 @@ def _view(reference, camera_model, scale, target_size_mm, world) -> Optional[dic
             and world is None:
         return None
     ref, rfile = _points(reference)
-    if ref is not None:
-        ref = [p for p in ref]
     if camera_model is not None and camera_model not in ("translation", "similarity", "homography"):
         raise InputError(
             f"camera_model {camera_model!r}: 'translation', 'similarity' or 'homography'"

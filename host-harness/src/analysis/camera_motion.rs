@@ -95,13 +95,19 @@ impl CameraMotion {
     /// `tracks` with the camera's motion removed from every position (a frame with no
     /// reference loses every target's position).
     pub fn compensate(&self, tracks: &Tracks) -> Tracks {
+        // each frame's inverse map once, for every target
+        let inverse: Vec<Option<Homography>> = self
+            .transforms
+            .iter()
+            .map(|h| h.and_then(|h| h.inverse()))
+            .collect();
         let centroids: Vec<Vec<Centroid>> = tracks
             .centroids
             .iter()
             .map(|c| {
                 c.iter()
                     .enumerate()
-                    .map(|(k, c)| self.compensate_one(k, c))
+                    .map(|(k, c)| compensate_one(inverse.get(k).copied().flatten(), c))
                     .collect()
             })
             .collect();
@@ -119,34 +125,6 @@ impl CameraMotion {
             first,
             refused: tracks.refused.clone(),
             depth: tracks.depth,
-        }
-    }
-
-    fn compensate_one(&self, k: usize, c: &Centroid) -> Centroid {
-        let Some((x, y)) = c.position() else {
-            return *c;
-        };
-        match self
-            .transforms
-            .get(k)
-            .copied()
-            .flatten()
-            .and_then(|h| h.inverse())
-        {
-            Some(inv) => {
-                let (u, v) = inv.apply((f64::from(x), f64::from(y)));
-                Centroid {
-                    cx: u as f32,
-                    cy: v as f32,
-                    ..*c
-                }
-            }
-            None => Centroid {
-                cx: 0.0,
-                cy: 0.0,
-                flags: c.flags.union(Flags::EMPTY),
-                ..*c
-            },
         }
     }
 
@@ -242,6 +220,30 @@ impl CameraMotion {
     }
 }
 
+/// `c` taken back through `inverse`, the frame's inverse map (`None`: the frame's motion is
+/// unknown, and `c` loses its position).
+fn compensate_one(inverse: Option<Homography>, c: &Centroid) -> Centroid {
+    let Some((x, y)) = c.position() else {
+        return *c;
+    };
+    match inverse {
+        Some(inv) => {
+            let (u, v) = inv.apply((f64::from(x), f64::from(y)));
+            Centroid {
+                cx: u as f32,
+                cy: v as f32,
+                ..*c
+            }
+        }
+        None => Centroid {
+            cx: 0.0,
+            cy: 0.0,
+            flags: c.flags.union(Flags::EMPTY),
+            ..*c
+        },
+    }
+}
+
 fn centred_rms(v: &[f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
@@ -256,18 +258,6 @@ fn rms_finite(v: &[f64]) -> f64 {
         return f64::NAN;
     }
     (f.iter().map(|x| x * x).sum::<f64>() / f.len() as f64).sqrt()
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 /// Estimates the camera's motion from the references' tracks (`refs.centroids[r][k]`);
@@ -315,7 +305,10 @@ pub fn estimate(
         .map(|p| {
             let xs: Vec<f64> = p.iter().flatten().map(|q| q.0).collect();
             let ys: Vec<f64> = p.iter().flatten().map(|q| q.1).collect();
-            (median(xs), median(ys))
+            (
+                crate::stats::median(&xs).unwrap_or(f64::NAN),
+                crate::stats::median(&ys).unwrap_or(f64::NAN),
+            )
         })
         .collect();
     let anchor_frame = (0..frames)
@@ -435,7 +428,8 @@ pub fn estimate(
         }
         // second pass: the kept references' own deviation sets the tolerance
         let dev = deviations(&kept, &sample);
-        let own = median(kept.iter().map(|&r| dev[r]).collect());
+        let own =
+            crate::stats::median(&kept.iter().map(|&r| dev[r]).collect::<Vec<_>>()).unwrap_or(0.0);
         let tol = (5.0 * own).clamp(MIN_TOLERANCE_PX, TOLERANCE_PX);
         let mut kept2: Vec<usize> = kept.iter().copied().filter(|&r| dev[r] < tol).collect();
         if kept2.len() < model.minimum() {
@@ -576,19 +570,26 @@ fn per_reference_deviation(
 
 /// The subsets of `size` of `items`, at most [`MAX_SETS`] of them spread over all.
 fn subsets(items: &[usize], size: usize) -> Vec<Vec<usize>> {
-    let mut out = Vec::new();
-    let mut idx: Vec<usize> = (0..size).collect();
     let n = items.len();
     if size == 0 || size > n {
-        return out;
+        return Vec::new();
     }
+    // C(n, size), then every step-th combination kept as they are enumerated (never all
+    // held: 64 references make 635 376 sets of four)
+    let total = (0..size).fold(1u128, |c, i| c * (n - i) as u128 / (i + 1) as u128);
+    let step = total.div_ceil(MAX_SETS as u128).max(1);
+    let mut out = Vec::new();
+    let mut idx: Vec<usize> = (0..size).collect();
+    let mut count = 0u128;
     loop {
-        out.push(idx.iter().map(|&i| items[i]).collect());
+        if count.is_multiple_of(step) {
+            out.push(idx.iter().map(|&i| items[i]).collect());
+        }
+        count += 1;
         let mut i = size;
         loop {
             if i == 0 {
-                let step = (out.len() / MAX_SETS).max(1);
-                return out.into_iter().step_by(step).collect();
+                return out;
             }
             i -= 1;
             if idx[i] != i + n - size {
@@ -799,5 +800,14 @@ mod tests {
         assert_eq!(s[0], vec![3, 5]);
         assert_eq!(s[5], vec![7, 9]);
         assert_eq!(subsets(&[1, 2], 4).len(), 0);
+        // many references: a spread of at most about MAX_SETS sets
+        let many: Vec<usize> = (0..64).collect();
+        let s = subsets(&many, 4);
+        assert!(
+            s.len() <= MAX_SETS + 1 && s.len() > MAX_SETS / 2,
+            "{}",
+            s.len()
+        );
+        assert_eq!(s[0], vec![0, 1, 2, 3]);
     }
 }

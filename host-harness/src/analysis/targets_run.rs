@@ -127,7 +127,7 @@ fn page(
     tracks: &Tracks,
     (windows, references): (
         Option<&super::points::PointsInfo>,
-        Vec<crate::export::html::Marker>,
+        Vec<crate::export::html::ReferenceMarker>,
     ),
     text: &str,
     dir: &std::path::Path,

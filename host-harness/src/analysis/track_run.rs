@@ -142,7 +142,7 @@ fn page(
     (tracks, windows, references): (
         &Tracks,
         Option<&PointsInfo>,
-        Vec<crate::export::html::Marker>,
+        Vec<crate::export::html::ReferenceMarker>,
     ),
     frame: Option<crate::export::html::FrameImage>,
     text: &str,

@@ -314,9 +314,9 @@ impl Viewed {
     }
 }
 
-/// The references for `report.html`: each one's anchor (its median position), numbered as in
-/// the report; `window` `None` for one left out.
-pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::Marker> {
+/// The references for `report.html`: each one's median position, numbered as in the report,
+/// and whether it was left out.
+pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::ReferenceMarker> {
     let (Some(refs), Some(m)) = (&v.references, &v.motion) else {
         return Vec::new();
     };
@@ -324,11 +324,10 @@ pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::Marker> {
         .iter()
         .enumerate()
         .filter_map(|(r, c)| {
-            median_position(c).map(|xy| crate::export::html::Marker {
-                target: r + 1,
+            median_position(c).map(|xy| crate::export::html::ReferenceMarker {
+                number: r + 1,
                 xy,
-                window: m.used.contains(&(r + 1)).then_some((0.0, 0.0)),
-                lost: c.iter().filter(|c| c.position().is_none()).count(),
+                left_out: !m.used.contains(&(r + 1)),
             })
         })
         .collect()
@@ -336,18 +335,12 @@ pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::Marker> {
 
 /// The median position of a track (compensated), px.
 fn median_position(c: &[Centroid]) -> Option<(f64, f64)> {
-    let mut xs: Vec<f64> = Vec::new();
-    let mut ys: Vec<f64> = Vec::new();
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
     for p in c.iter().filter_map(Centroid::position) {
         xs.push(f64::from(p.0));
         ys.push(f64::from(p.1));
     }
-    if xs.is_empty() {
-        return None;
-    }
-    xs.sort_by(f64::total_cmp);
-    ys.sort_by(f64::total_cmp);
-    Some((xs[xs.len() / 2], ys[ys.len() / 2]))
+    Some((crate::stats::median(&xs)?, crate::stats::median(&ys)?))
 }
 
 /// A track's position noise per frame, px: from second differences in time
@@ -446,7 +439,7 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
                  pixels (2 sqrt(N / pi), the median over the frames):"
             );
             for (t, c) in v.tracks.centroids.iter().enumerate() {
-                let mut d: Vec<f64> = c
+                let d: Vec<f64> = c
                     .iter()
                     .filter(|c| c.position().is_some() && c.pixels() > 0)
                     .map(|c| 2.0 * (c.pixels() as f64 / std::f64::consts::PI).sqrt())
@@ -458,11 +451,8 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
                         t + 1
                     )));
                 }
-                d.sort_by(f64::total_cmp);
-                let med = d[d.len() / 2];
-                let mean = d.iter().sum::<f64>() / d.len() as f64;
-                let sd =
-                    (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
+                let med = crate::stats::median(&d).unwrap_or(f64::NAN);
+                let sd = crate::stats::std_dev(&d).unwrap_or(0.0);
                 let u_rel = sd / med;
                 let m = mm / med;
                 let _ = writeln!(
@@ -559,10 +549,7 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
             continue;
         };
         let m = local_scale(&h, *p, along_x);
-        let d = &draws[t];
-        let mean = d.iter().sum::<f64>() / d.len().max(1) as f64;
-        let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len().max(2) as f64 - 0.0)
-            .sqrt();
+        let sd = crate::stats::std_dev(&draws[t]).unwrap_or(f64::NAN);
         let _ = writeln!(
             text,
             "  target {} at ({:.1}, {:.1}) px: {m:.6} mm/px, standard uncertainty {:.3} % \
@@ -609,12 +596,13 @@ pub fn write_camera_outputs(
         return Ok(String::new());
     };
     let n = m.transforms.len();
-    let rows: Vec<crate::export::targets::CameraRow> = (0..n)
-        .map(|k| crate::export::targets::CameraRow {
+    let motion: Vec<Option<super::camera_motion::MotionRow>> = (0..n).map(|k| m.row(k)).collect();
+    let rows: Vec<crate::export::targets::CameraRow> = motion
+        .iter()
+        .enumerate()
+        .map(|(k, r)| crate::export::targets::CameraRow {
             t_s: k as f64 / fps,
-            motion: m
-                .row(k)
-                .map(|r| (r.dx_px, r.dy_px, r.rotation_deg, r.scale)),
+            motion: r.map(|r| (r.dx_px, r.dy_px, r.rotation_deg, r.scale)),
             references: m.seen[k],
             residual_px: m.residual_px[k],
         })
@@ -625,15 +613,13 @@ pub fn write_camera_outputs(
     )?;
     let mut line = "camera motion per frame: camera_motion.csv".to_string();
     if plots && n >= 32 {
-        let mean = |f: &dyn Fn(&super::camera_motion::MotionRow) -> f64| {
-            let v: Vec<f64> = (0..n).filter_map(|k| m.row(k)).map(|r| f(&r)).collect();
-            v.iter().sum::<f64>() / v.len().max(1) as f64
+        // a frame whose motion is unknown counts as the mean's
+        let series = |f: fn(&super::camera_motion::MotionRow) -> f64| -> Vec<f64> {
+            let known: Vec<f64> = motion.iter().flatten().map(f).collect();
+            let mean = crate::stats::mean(&known).unwrap_or(0.0);
+            motion.iter().map(|r| r.as_ref().map_or(mean, f)).collect()
         };
-        let (mx, my) = (mean(&|r| r.dx_px), mean(&|r| r.dy_px));
-        let series = |f: &dyn Fn(&super::camera_motion::MotionRow) -> f64, m0: f64| -> Vec<f64> {
-            (0..n).map(|k| m.row(k).map_or(m0, |r| f(&r))).collect()
-        };
-        let channels = vec![series(&|r| r.dx_px, mx), series(&|r| r.dy_px, my)];
+        let channels = vec![series(|r| r.dx_px), series(|r| r.dy_px)];
         let nperseg = (1usize << ((n / 4).max(16).ilog2())).clamp(16, 4096);
         let c = super::oma::csd::CsdConfig {
             window: firmware_core::spectrum::Window::Hann,

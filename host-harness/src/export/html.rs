@@ -38,6 +38,37 @@ pub struct Marker {
     pub lost: usize,
 }
 
+/// A static reference on the frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceMarker {
+    /// Reference number (`rK`).
+    pub number: usize,
+    /// Its anchor, px.
+    pub xy: (f64, f64),
+    /// Left out of the camera's motion (lost or moving).
+    pub left_out: bool,
+}
+
+/// A dot at `xy` (px, pixel centres at integers) and its label, sized by `stroke`, in
+/// `colours` (dot, label).
+fn dot(s: &mut String, xy: (f64, f64), stroke: f64, colours: (&str, &str), label: &str) {
+    let xy = (xy.0 + 0.5, xy.1 + 0.5);
+    let _ = write!(
+        s,
+        "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/><text x=\"{}\" y=\"{}\" fill=\"{}\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">{}</text>",
+        xy.0,
+        xy.1,
+        2.0 * stroke,
+        colours.0,
+        xy.0 + 3.0 * stroke,
+        xy.1 - 3.0 * stroke,
+        colours.1,
+        12.0 * stroke,
+        0.3 * stroke,
+        escape(label)
+    );
+}
+
 /// A mode shape to animate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShapeAnimation {
@@ -57,9 +88,8 @@ pub struct Report {
     pub frame: Option<FrameImage>,
     /// The targets (positions; on the frame when there is one).
     pub markers: Vec<Marker>,
-    /// Static references (`--reference`), drawn as `g.reference` labelled `rK`; `lost` the
-    /// frames each was lost in, a window drawn dashed when it was left out (`window` none).
-    pub references: Vec<Marker>,
+    /// Static references (`--reference`), drawn as `g.reference` labelled `rK`.
+    pub references: Vec<ReferenceMarker>,
     /// The motion's direction in the image, a unit vector (y up: `(0, -1)`).
     pub direction: (f64, f64),
     /// Figures: caption and SVG text.
@@ -250,40 +280,23 @@ pub fn report_html(r: &Report) -> String {
                     xy.1 - wh / 2.0
                 );
             }
-            let _ = write!(
-                s,
-                "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#ff3030\"/><text x=\"{}\" y=\"{}\" fill=\"#ffe000\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">{}{}</text></g>",
-                xy.0,
-                xy.1,
-                2.0 * stroke,
-                xy.0 + 3.0 * stroke,
-                xy.1 - 3.0 * stroke,
-                12.0 * stroke,
-                0.3 * stroke,
-                m.target,
-                if m.lost > 0 {
-                    format!(" ({} lost)", m.lost)
-                } else {
-                    String::new()
-                }
-            );
+            let label = if m.lost > 0 {
+                format!("{} ({} lost)", m.target, m.lost)
+            } else {
+                m.target.to_string()
+            };
+            dot(&mut s, m.xy, stroke, ("#ff3030", "#ffe000"), &label);
+            s.push_str("</g>");
         }
         for m in &r.references {
-            let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
-            let _ = write!(
-                s,
-                "<g class=\"reference\" data-reference=\"{}\"><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#30ff60\"/><text x=\"{}\" y=\"{}\" fill=\"#30ff60\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">r{}{}</text></g>",
-                m.target,
-                xy.0,
-                xy.1,
-                2.0 * stroke,
-                xy.0 + 3.0 * stroke,
-                xy.1 - 3.0 * stroke,
-                12.0 * stroke,
-                0.3 * stroke,
-                m.target,
-                if m.window.is_none() { " (left out)" } else { "" }
+            let _ = write!(s, "<g class=\"reference\" data-reference=\"{}\">", m.number);
+            let label = format!(
+                "r{}{}",
+                m.number,
+                if m.left_out { " (left out)" } else { "" }
             );
+            dot(&mut s, m.xy, stroke, ("#30ff60", "#30ff60"), &label);
+            s.push_str("</g>");
         }
         s.push_str("</svg>\n");
     }

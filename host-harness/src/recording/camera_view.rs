@@ -241,11 +241,11 @@ pub(super) fn render(
             } else {
                 mid + exposure_steps * ((i as f64 + 0.5) / INSTANTS as f64 - 0.5)
             };
-            let h_cam = camera_at(s).after(&base);
+            let c = camera_at(s);
+            let h_cam = c.after(&base);
             let Some(inv) = h_cam.inverse() else {
                 continue;
             };
-            let c = camera_at(s);
             let (cx, cy) = c.apply(centre);
             cam.0 += (cx - centre.0) / INSTANTS as f64;
             cam.1 += (cy - centre.1) / INSTANTS as f64;

@@ -11,6 +11,9 @@ use crate::analysis::view::{
 use crate::geometry::Model;
 use std::path::PathBuf;
 
+/// The most references (`$reference`): the consensus tries sets of them.
+pub const MAX_REFERENCES: usize = 64;
+
 /// Points of the structure's plane as given.
 #[derive(Debug, Clone, PartialEq)]
 pub enum WorldInput {
@@ -79,6 +82,13 @@ pub fn check(
                 }
                 super::PointsInput::List(p) => (checked(p)?, None),
             };
+            if points.len() > MAX_REFERENCES {
+                return Err(SpecError::setting(format!(
+                    "$reference: {} references; at most {MAX_REFERENCES} (a few on static \
+                     parts around the scene suffice)",
+                    points.len()
+                )));
+            }
             if let Some(m) = input.camera_model {
                 if points.len() < m.minimum() {
                     return Err(SpecError::setting(format!(
@@ -195,6 +205,15 @@ mod tests {
                 Some(0.1),
                 Tracker::Binary,
                 "mm_per_px and target_size_mm: one scale only",
+            ),
+            (
+                ViewInput {
+                    reference: refs(MAX_REFERENCES + 1),
+                    ..Default::default()
+                },
+                None,
+                Tracker::Binary,
+                "reference: 65 references; at most 64",
             ),
             (
                 ViewInput {

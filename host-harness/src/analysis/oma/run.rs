@@ -137,7 +137,7 @@ pub fn page(
     (command, along_x): (&str, bool),
     (frame, references): (
         Option<crate::export::html::FrameImage>,
-        Vec<crate::export::html::Marker>,
+        Vec<crate::export::html::ReferenceMarker>,
     ),
     figures: Vec<(String, String)>,
     text: &str,
