@@ -27,6 +27,19 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> anyhow::Result<Columns> {
     read_columns_from(file, &path.display().to_string(), wanted)
 }
 
+/// The names of the header row of CSV `bytes`, as the csv crate reads them (a UTF-8 byte-order
+/// mark stripped, quotes removed, spaces trimmed); empty when there is no readable header.
+pub fn header_names(bytes: &[u8]) -> Vec<String> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(bytes);
+    rdr.headers()
+        .map(|h| h.iter().map(String::from).collect())
+        .unwrap_or_default()
+}
+
 /// Same as [`read_columns`] from any reader; `source` names it in error messages.
 pub fn read_columns_from(
     reader: impl std::io::Read,

@@ -11,9 +11,14 @@
 //! hand), and when none of the run's inputs lies inside it. A run that fails
 //! ([`Staged::commit_unless_replacing`]) never replaces anything.
 //!
-//! A staging directory is locked (`flock`) by the process writing it; the next run into the same
-//! target removes any staging or set-aside directory whose lock is free (its writer is gone,
-//! whoever it was), and ignores one it cannot remove.
+//! A staging directory is locked (`flock`) by the process writing it and holds [`STAGE_MARKER`],
+//! written before anything else. The next run into the same target looks only at the staging
+//! directories holding that marker and the set-aside ones holding a manifest of ours, whose lock
+//! is free (their writer is gone, whoever it was): a folder that merely has such a name is never
+//! touched. A writer killed between its two renames leaves the target absent, the earlier output
+//! set aside and the new one complete in its stage: the next run puts the newest complete output
+//! back in place (the staged one when it holds its manifest, otherwise the set-aside one) before
+//! it removes the rest.
 
 use crate::bad_input;
 use anyhow::Context as _;
@@ -22,6 +27,9 @@ use std::path::{Path, PathBuf};
 
 /// The manifest file of an output directory (hidden, TOML).
 pub const MANIFEST: &str = ".vibcam-manifest.toml";
+
+/// The file a staging directory holds from its creation on: what marks it as this program's.
+pub const STAGE_MARKER: &str = ".vibcam-stage";
 
 /// What a manifest records: the command and every entry it wrote, relative paths with `/`,
 /// folders with a trailing `/`.
@@ -69,10 +77,10 @@ impl Staged {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        recover_and_remove_stale_stages(&parent, name, target);
         let replace = check_target(target, force, command, inputs)?;
         std::fs::create_dir_all(&parent)
             .with_context(|| format!("cannot create {}", parent.display()))?;
-        remove_stale_stages(&parent, name);
         let stage = parent.join(format!(".{name}.partial-{}", std::process::id()));
         if stage.exists() {
             std::fs::remove_dir_all(&stage)
@@ -85,6 +93,8 @@ impl Staged {
         // a fresh directory of this process: nobody else can hold its lock
         lock.try_lock()
             .with_context(|| format!("cannot lock {}", stage.display()))?;
+        std::fs::write(stage.join(STAGE_MARKER), "a staging directory of vibcam\n")
+            .with_context(|| format!("cannot write in {}", stage.display()))?;
         Ok(Staged {
             target: target.to_path_buf(),
             stage,
@@ -141,6 +151,8 @@ impl Staged {
         let text = toml::to_string(&manifest).context("cannot write the manifest")?;
         self.write(MANIFEST, text)?;
         sync_tree(&self.stage)?;
+        // the stage holds its manifest: from here on it is a complete output (what a recovery
+        // puts back in place if this writer dies before its renames are done)
         crate::failpoint::hit("outdir-synced");
         let parent = self.stage.parent().unwrap_or(Path::new(".")).to_path_buf();
         if self.replaces() {
@@ -177,6 +189,8 @@ impl Staged {
                 .with_context(|| format!("cannot move the outputs to {}", self.target.display()))?;
             self.committed = true;
         }
+        // the marker served the stage; a kill before this line leaves it, ignored, in place
+        std::fs::remove_file(self.target.join(STAGE_MARKER)).ok();
         sync_dir(&parent)
     }
 }
@@ -202,7 +216,7 @@ fn list_entries(dir: &Path, prefix: &str, out: &mut Vec<String>) -> anyhow::Resu
     }
     names.sort();
     for (name, is_dir) in names {
-        if prefix.is_empty() && name == MANIFEST {
+        if prefix.is_empty() && (name == MANIFEST || name == STAGE_MARKER) {
             continue;
         }
         if is_dir {
@@ -296,6 +310,43 @@ pub fn input_inside<'a>(dir: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
     })
 }
 
+/// Refuses an output file that is one of the run's inputs (the same file, by any name) or lies
+/// inside an input folder (a folder of frames, or a pattern's folder).
+pub fn refuse_output_file_among_inputs(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    refuse_overwriting_input(out, inputs)?;
+    let folder = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let folders: Vec<&Path> = inputs
+        .iter()
+        .copied()
+        .filter(|p| p.is_dir() || !p.exists())
+        .collect();
+    if let Some(input) = input_folder_holding(folder, &folders) {
+        return Err(bad_input(format!(
+            "--out {}: lies inside {}, an input of this run; the command never writes among \
+             its inputs, choose another --out",
+            out.display(),
+            input.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The first of `inputs` (folders, or patterns checked by their folder) that holds `dir`.
+fn input_folder_holding<'a>(dir: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
+    let dir = std::fs::canonicalize(dir).ok()?;
+    inputs.iter().copied().find(|p| {
+        let p = if p.exists() {
+            p.to_path_buf()
+        } else {
+            p.parent().map(Path::to_path_buf).unwrap_or_default()
+        };
+        std::fs::canonicalize(&p).is_ok_and(|c| dir.starts_with(c))
+    })
+}
+
 /// Refuses an output file that is one of the run's inputs (the same file, by any name).
 pub fn refuse_overwriting_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     use std::os::unix::fs::MetadataExt as _;
@@ -317,25 +368,95 @@ pub fn refuse_overwriting_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<
     Ok(())
 }
 
-/// Removes staging and set-aside directories of `name` whose writer is gone: their lock is
-/// free (a live writer holds it). One that cannot be removed is ignored.
-fn remove_stale_stages(parent: &Path, name: &str) {
+/// What a directory left beside the target is, when this program made it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Leftover {
+    /// A staging directory (holds [`STAGE_MARKER`]); `complete` when it holds its manifest too.
+    Stage { complete: bool },
+    /// An earlier output set aside by a commit (holds a manifest this program wrote).
+    SetAside,
+}
+
+fn is_our_manifest(dir: &Path) -> bool {
+    std::fs::read_to_string(dir.join(MANIFEST))
+        .ok()
+        .and_then(|t| toml::from_str::<Manifest>(&t).ok())
+        .is_some()
+}
+
+/// The leftovers of `name` whose writer is gone (their lock is free: a live writer holds it),
+/// with what they are and their modification time; folders of that name without our marker are
+/// not listed.
+fn stale_leftovers(parent: &Path, name: &str) -> Vec<(PathBuf, Leftover, std::time::SystemTime)> {
     let Ok(entries) = std::fs::read_dir(parent) else {
-        return;
+        return Vec::new();
     };
-    let prefixes = [format!(".{name}.partial-"), format!(".{name}.old-")];
+    let (partial, old) = (format!(".{name}.partial-"), format!(".{name}.old-"));
+    let mut out = Vec::new();
     for e in entries.flatten() {
         let file = e.file_name();
         let Some(f) = file.to_str() else { continue };
-        if !prefixes.iter().any(|p| f.starts_with(p.as_str())) {
-            continue;
-        }
-        let Ok(dir) = std::fs::File::open(e.path()) else {
+        let path = e.path();
+        let kind = if f.starts_with(partial.as_str()) && path.join(STAGE_MARKER).is_file() {
+            Leftover::Stage {
+                complete: is_our_manifest(&path),
+            }
+        } else if f.starts_with(old.as_str()) && is_our_manifest(&path) {
+            Leftover::SetAside
+        } else {
             continue;
         };
-        if dir.try_lock().is_ok() {
-            std::fs::remove_dir_all(e.path()).ok();
+        let Ok(dir) = std::fs::File::open(&path) else {
+            continue;
+        };
+        if dir.try_lock().is_err() {
+            continue;
         }
+        // the lock is released when `dir` closes; a writer that starts now makes a stage of
+        // its own pid, never one of these
+        let modified = std::fs::metadata(&path)
+            .and_then(|m| m.modified())
+            .unwrap_or(std::time::UNIX_EPOCH);
+        out.push((path, kind, modified));
+    }
+    out
+}
+
+/// Puts the newest complete output of a writer that died between its renames back in place
+/// when `target` is absent (a complete stage before a set-aside earlier output), then removes
+/// the other leftovers of dead writers. What cannot be moved or removed is left as it is.
+fn recover_and_remove_stale_stages(parent: &Path, name: &str, target: &Path) {
+    let mut left = stale_leftovers(parent, name);
+    if !target.exists() {
+        let rank = |k: &Leftover| match k {
+            Leftover::Stage { complete: true } => 2,
+            Leftover::SetAside => 1,
+            Leftover::Stage { complete: false } => 0,
+        };
+        let best = left
+            .iter()
+            .enumerate()
+            .filter(|(_, (_, k, _))| rank(k) > 0)
+            .max_by_key(|(_, (_, k, t))| (rank(k), *t))
+            .map(|(i, _)| i);
+        if let Some(i) = best {
+            let (path, kind, _) = left.remove(i);
+            if std::fs::rename(&path, target).is_ok() {
+                std::fs::remove_file(target.join(STAGE_MARKER)).ok();
+                let what = match kind {
+                    Leftover::SetAside => "the earlier output it had set aside",
+                    _ => "its complete new output",
+                };
+                eprintln!(
+                    "note: a run into {} was stopped before it finished replacing its output: \
+                     {what} was put back in place",
+                    target.display()
+                );
+            }
+        }
+    }
+    for (path, _, _) in left {
+        std::fs::remove_dir_all(path).ok();
     }
 }
 
@@ -455,21 +576,92 @@ mod tests {
     #[test]
     fn leftovers_of_a_killed_writer_are_removed_but_a_live_ones_are_not() {
         let tmp = tempfile::tempdir().unwrap();
+        // an earlier output, so that the set-aside one below is not recovered
+        Staged::new(&tmp.path().join("out"), false, CMD, &[])
+            .unwrap()
+            .commit()
+            .unwrap();
         // a pid that is alive (init's) but no lock: a killed writer whose pid was reused
         let dead = tmp.path().join(".out.partial-1");
         let old = tmp.path().join(".out.old-1");
         let live = tmp.path().join(".out.partial-999999999");
         for d in [&dead, &old, &live] {
             std::fs::create_dir(d).unwrap();
-            std::fs::write(d.join("x"), "").unwrap();
+            std::fs::write(d.join(STAGE_MARKER), "").unwrap();
         }
+        std::fs::write(old.join(MANIFEST), "command = \"analyze\"\nentries = []\n").unwrap();
         let holder = std::fs::File::open(&live).unwrap();
         holder.lock().unwrap();
-        let s = Staged::new(&tmp.path().join("out"), false, CMD, &[]).unwrap();
+        let s = Staged::new(&tmp.path().join("out"), true, CMD, &[]).unwrap();
         assert!(!old.exists() && !dead.exists());
         assert!(live.exists(), "a live writer's stage was removed");
         s.commit().unwrap();
         assert!(live.exists());
+        assert!(!tmp.path().join("out").join(STAGE_MARKER).exists());
+    }
+
+    #[test]
+    fn folders_that_only_bear_a_stage_name_are_never_removed() {
+        let tmp = tempfile::tempdir().unwrap();
+        for name in [".res.old-2023", ".res.partial-7"] {
+            let d = tmp.path().join(name);
+            std::fs::create_dir(&d).unwrap();
+            std::fs::write(d.join("n.txt"), "notes").unwrap();
+        }
+        Staged::new(&tmp.path().join("res"), false, CMD, &[])
+            .unwrap()
+            .commit()
+            .unwrap();
+        for name in [".res.old-2023", ".res.partial-7"] {
+            assert_eq!(
+                std::fs::read_to_string(tmp.path().join(name).join("n.txt")).unwrap(),
+                "notes"
+            );
+        }
+    }
+
+    #[test]
+    fn a_kill_between_the_renames_keeps_the_newest_complete_output() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("e");
+        let s = Staged::new(&out, false, CMD, &[]).unwrap();
+        s.write("report.txt", "old").unwrap();
+        s.commit().unwrap();
+        // what a writer killed between its renames leaves: the old output set aside, the new
+        // one complete (manifest written) in its stage, the target absent
+        let old = tmp.path().join(".e.old-1");
+        std::fs::rename(&out, &old).unwrap();
+        let stage = tmp.path().join(".e.partial-1");
+        std::fs::create_dir(&stage).unwrap();
+        std::fs::write(stage.join(STAGE_MARKER), "").unwrap();
+        std::fs::write(stage.join("report.txt"), "new").unwrap();
+        std::fs::write(
+            stage.join(MANIFEST),
+            "command = \"analyze\"\nentries = [\"report.txt\"]\n",
+        )
+        .unwrap();
+        // the next run (refused without --force) finds the new output in place, nothing lost
+        let e = Staged::new(&out, false, CMD, &[]).unwrap_err().to_string();
+        assert!(e.contains("not empty"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(out.join("report.txt")).unwrap(),
+            "new"
+        );
+        assert!(!out.join(STAGE_MARKER).exists());
+        // only the set-aside one: it comes back
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("e");
+        let s = Staged::new(&out, false, CMD, &[]).unwrap();
+        s.write("report.txt", "old").unwrap();
+        s.commit().unwrap();
+        std::fs::rename(&out, tmp.path().join(".e.old-1")).unwrap();
+        let s = Staged::new(&out, true, CMD, &[]).unwrap();
+        assert!(s.replaces());
+        drop(s);
+        assert_eq!(
+            std::fs::read_to_string(out.join("report.txt")).unwrap(),
+            "old"
+        );
     }
 
     #[test]

@@ -34,15 +34,23 @@ const KEYS: &[&str] = &[
     "accel_target",
     "axis",
     "bands",
+    "block_s",
     "camera_model",
     "compensate_exposure",
+    "delay_s",
+    "excitation_col",
+    "excitation_fs",
+    "exp_window",
     "exposure_ms",
+    "f_max_hz",
     "f_min_hz",
     "fps",
     "frame_range",
     "frames",
     "fs",
     "gate_px",
+    "impact",
+    "max_order",
     "mm_per_px",
     "nfft",
     "noverlap",
@@ -50,6 +58,9 @@ const KEYS: &[&str] = &[
     "points",
     "prominence_db",
     "reference",
+    "response_col",
+    "response_fs",
+    "response_quantity",
     "retime",
     "roi",
     "scale",
@@ -64,6 +75,7 @@ const KEYS: &[&str] = &[
     "tick_offset",
     "time_offset_s",
     "tracker",
+    "twin",
     "world",
 ];
 
@@ -109,7 +121,7 @@ impl SpecError {
     pub fn message(&self, naming: Naming) -> String {
         match self {
             SpecError::Setting(t) => render(t, naming),
-            SpecError::Input(e) => format!("{e:#}"),
+            SpecError::Input(e) => message(e, naming),
         }
     }
 
@@ -150,6 +162,8 @@ pub fn positive(key: &str, v: f64, what: &str) -> SpecResult<f64> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
+        // `key` with or without its `$`
+        let key = key.trim_start_matches('$');
         Err(SpecError::setting(format!(
             "${key} must be positive ({what}), got {v}"
         )))
@@ -199,6 +213,72 @@ mod tests {
             "gate_px with targets; fps, $unknown and $ alone"
         );
         assert_eq!(e.to_string(), e.message(Naming::Cli));
+    }
+
+    /// Every `$key` a message of the library or of the Python binding writes is a known
+    /// setting (else the user would read `$key`), and every known setting is a flag of the
+    /// command line (a field of a clap `Args`) and an argument of the Python package, so that
+    /// each message names it the user's way. The words of two macros' metavariables (plots.rs,
+    /// daq/tdms.rs) and of this module's own documentation are not messages.
+    #[test]
+    fn every_setting_a_message_names_is_a_flag_and_a_python_argument() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut files = Vec::new();
+        fn walk(d: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+            for e in std::fs::read_dir(d).unwrap().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    walk(&p, out);
+                } else if p.extension().is_some_and(|x| x == "rs") {
+                    out.push(p);
+                }
+            }
+        }
+        walk(&root.join("src"), &mut files);
+        walk(&root.join("../python/src"), &mut files);
+        let not_messages = ["dir", "name", "f", "t", "k", "key", "unknown", "e"];
+        let mut unknown = Vec::new();
+        let mut cli = String::new();
+        for f in &files {
+            let text = std::fs::read_to_string(f).unwrap();
+            if f.to_string_lossy().contains("/src/cli/") {
+                cli.push_str(&text);
+            }
+            let b = text.as_bytes();
+            for (i, _) in text.match_indices('$') {
+                if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'$') {
+                    // `decimals$e` (a format width) is no setting; `$$key` is one doubled
+                    if b[i - 1] != b'$' {
+                        continue;
+                    }
+                }
+                let w: String = text[i + 1..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_lowercase() || *c == '_')
+                    .collect();
+                if w.is_empty() || not_messages.contains(&w.as_str()) {
+                    continue;
+                }
+                let doubled = text[i + 1..].starts_with('$');
+                if doubled || !KEYS.contains(&w.as_str()) {
+                    unknown.push(format!("{}: ${w}", f.display()));
+                }
+            }
+        }
+        assert!(unknown.is_empty(), "messages name unknown settings: {unknown:?}");
+        let python = std::fs::read_to_string(root.join("../python/vibcam/__init__.py")).unwrap();
+        for key in KEYS {
+            assert!(
+                cli.contains(&format!("pub {key}:")),
+                "${key} is no flag of the command line"
+            );
+            // Python's spelling of a list of responses is `response_cols`
+            let py = if *key == "response_col" { "response_cols" } else { key };
+            assert!(
+                python.contains(&format!("{py}:")) || python.contains(&format!("{py}=")),
+                "${key} is no argument of the Python package"
+            );
+        }
     }
 
     #[test]

@@ -4,6 +4,11 @@
 
 use crate::export::pick::{pick_html, PickPoint};
 
+/// The longest side of a frame as the page holds it, px: larger frames are shown scaled down
+/// (clicks still give full-resolution pixels), so that 50 frames of a 6000 x 6000 camera make a
+/// page of tens, not hundreds, of megabytes.
+pub const SHOWN_MAX_SIDE: u32 = 2048;
+
 /// What `pick` is asked.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PickRequest {
@@ -29,6 +34,10 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             req.shown
         )));
     }
+    let frames_path = std::path::Path::new(&req.frames);
+    let mut inputs = vec![frames_path];
+    inputs.extend(req.points.as_deref());
+    crate::outdir::refuse_output_file_among_inputs(&req.out, &inputs)?;
     if req.out.exists() && !req.force {
         return Err(crate::bad_input(format!(
             "{} exists: --force replaces it",
@@ -66,7 +75,7 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     impl std::error::Error for Enough {}
     let r = source.for_each(fps, |label, frame| {
         if k.is_multiple_of(step) {
-            frames.push((label, frame.to_image()?));
+            frames.push((label, frame.to_image_within(SHOWN_MAX_SIDE)?));
         }
         k += 1;
         if frames.len() >= req.shown {

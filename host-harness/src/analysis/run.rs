@@ -372,10 +372,17 @@ fn describe_inputs(
         ),
         (
             "alignment".into(),
-            format!(
-                "first frame at {} s after the first sample",
-                req.settings.time_offset_s
-            ),
+            match req.frame_range {
+                Some(r) => format!(
+                    "first frame analysed (frame {} of the recording) at {} s after the first \
+                     sample",
+                    r.first, req.settings.time_offset_s
+                ),
+                None => format!(
+                    "first frame at {} s after the first sample",
+                    req.settings.time_offset_s
+                ),
+            },
         ),
         (
             "centroid".into(),

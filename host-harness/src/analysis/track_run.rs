@@ -30,6 +30,9 @@ pub struct Request {
     pub centroid: CentroidConfig,
     /// Pixels to millimetres, axis and sign, when a scale was given.
     pub displacement: Option<DisplacementSettings>,
+    /// The image axis of the motion (`--axis`), with or without a scale: the one the report
+    /// and the plots follow.
+    pub axis: super::Axis,
     /// Draw the tracks.
     pub plots: bool,
     /// Remarks for the report.
@@ -47,10 +50,7 @@ pub struct Request {
 /// Runs `track`; returns the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
-    let along_x = req
-        .displacement
-        .as_ref()
-        .is_some_and(|d| d.axis == super::Axis::X);
+    let along_x = req.axis == super::Axis::X;
     let viewed = super::view::track_view(
         &source,
         req.fps,
@@ -101,14 +101,24 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
             raw: viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
-    out.write("displacement.csv", displacement_csv(&rows, req.fps, 0.0))?;
+    out.write("displacement.csv", displacement_csv(
+            &rows,
+            req.fps,
+            crate::frames::FrameRange::start_s(req.frame_range, req.fps),
+        ))?;
     let mut report = report(req, tracks, windows, &failures);
     report.push_str(&viewed.describe(along_x));
     report.push_str(&super::view::write_camera_outputs(
         &out, &viewed, req.fps, req.plots,
     )?);
     if req.plots {
-        let plots = plot(out.dir(), tracks, req.fps, along_x)?;
+        let plots = plot(
+            out.dir(),
+            tracks,
+            req.fps,
+            crate::frames::FrameRange::start_s(req.frame_range, req.fps),
+            along_x,
+        )?;
         let names: Vec<String> = plots
             .iter()
             .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
@@ -247,7 +257,13 @@ fn report(
 }
 
 /// Each target's motion from its first position along the image's y (or x), px, against time.
-fn plot(dir: &Path, tracks: &Tracks, fps: f64, along_x: bool) -> anyhow::Result<Vec<PathBuf>> {
+fn plot(
+    dir: &Path,
+    tracks: &Tracks,
+    fps: f64,
+    start_s: f64,
+    along_x: bool,
+) -> anyhow::Result<Vec<PathBuf>> {
     let series: Vec<(String, Vec<f64>, Vec<f64>)> = tracks
         .centroids
         .iter()
@@ -257,7 +273,7 @@ fn plot(dir: &Path, tracks: &Tracks, fps: f64, along_x: bool) -> anyhow::Result<
             let (mut ts, mut d) = (Vec::new(), Vec::new());
             for (k, c) in c.iter().enumerate() {
                 if let Some((x, y)) = c.position() {
-                    ts.push(k as f64 / fps);
+                    ts.push(start_s + k as f64 / fps);
                     d.push(if along_x {
                         f64::from(x) - x0
                     } else {

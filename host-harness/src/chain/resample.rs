@@ -81,6 +81,13 @@ pub fn rate_period(from_hz: f64, to_hz: f64) -> Option<usize> {
     (1..=4096).find(|&q| output_len(q, from_hz, to_hz).is_some())
 }
 
+/// The most samples [`upsample_record`] makes of one record (1 GiB of f64).
+pub const MAX_UPSAMPLED: usize = 1 << 27;
+
+/// The largest ratio of rates [`upsample_record`] takes (a camera at 25 fps beside a DAQ at
+/// 2.5 MHz is 10^5).
+pub const MAX_UPSAMPLE_RATIO: f64 = 1e5;
+
 /// A whole record (not periodic, of any length) upsampled from `from_hz` to `to_hz` through
 /// firmware-core's Fourier upsampler, in overlapping chunks of `q 2^j` samples (`q` the
 /// [`rate_period`]: the chunk and its upsampled length then have small odd factors, which the
@@ -105,6 +112,16 @@ pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
     }
     let ratio = to_hz / from_hz;
     let n = values.len() - values.len() % q;
+    let out_len = n as f64 * ratio;
+    if !(out_len <= MAX_UPSAMPLED as f64) || ratio > MAX_UPSAMPLE_RATIO {
+        return Err(bad_input(format!(
+            "{} samples at {from_hz} Hz upsampled to {to_hz} Hz would be {out_len:.3e} samples \
+             (a ratio of {ratio:.4e}); at most {MAX_UPSAMPLED} samples and a ratio of \
+             {MAX_UPSAMPLE_RATIO} are made: check the rates (a time column in ms or us read \
+             as seconds?)",
+            values.len()
+        )));
+    }
     let out_of = |k: usize| (k as f64 * ratio).round() as usize;
     // a chunk: q 2^j samples, its upsampled length at most 32768 (and at least 4 q)
     let mut chunk = q * 4;

@@ -76,6 +76,7 @@ pub fn parse(bytes: &[u8], file: &str, time_col: Option<&str>) -> anyhow::Result
             x0: t.as_ref().map(|(_, t)| t[0]),
             values,
             x: t.as_ref().map(|(_, t)| t.clone()),
+            start_time: None,
         })
         .collect();
     Ok(Record {

@@ -292,6 +292,7 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
                     x0: h.x0.get(k).copied().flatten(),
                     values: std::mem::take(&mut values[k]),
                     x: (xcols != XColumns::No).then(|| std::mem::take(&mut xs[k])),
+                    start_time: None,
                 })
                 .collect(),
         );

@@ -25,6 +25,9 @@ pub struct Channel {
     pub values: Vec<f64>,
     /// The channel's own time column, when the file has one (`X_Columns` `One` or `Multi`).
     pub x: Option<Vec<f64>>,
+    /// The absolute time of the first sample, s since 1904-01-01 UTC, when the file states it
+    /// (TDMS `wf_start_time`).
+    pub start_time: Option<f64>,
 }
 
 impl Channel {
@@ -50,6 +53,17 @@ impl Record {
     pub fn channel(&self, name: &str, file: &str) -> anyhow::Result<Channel> {
         let mut out: Option<Channel> = None;
         for (s, seg) in self.segments.iter().enumerate() {
+            if seg.iter().filter(|c| c.name == name).count() > 1 {
+                return Err(crate::bad_input(format!(
+                    "{file}: two channels are named `{name}`{}: which one is meant cannot be \
+                     told; rename one in the file",
+                    if self.segments.len() > 1 {
+                        format!(" in segment {}", s + 1)
+                    } else {
+                        String::new()
+                    }
+                )));
+            }
             let Some(c) = seg.iter().find(|c| c.name == name) else {
                 let names: Vec<&str> = seg.iter().map(|c| c.name.as_str()).collect();
                 return Err(crate::bad_input(format!(

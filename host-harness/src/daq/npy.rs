@@ -69,7 +69,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
         .map_err(|_| bad("a `shape` that is not whole numbers"))?;
     let (big, kind, size) = {
         let b = descr.as_bytes();
-        if b.len() < 3 {
+        if b.len() < 3 || !descr.is_ascii() {
             return Err(bad(&format!("data type `{descr}`")));
         }
         let size: usize = descr[2..]
@@ -80,6 +80,11 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
     if !matches!((kind, size), (b'f', 4 | 8) | (b'i' | b'u', 1 | 2 | 4 | 8)) {
         return Err(bad(&format!(
             "data type `{descr}` (floats of 4 or 8 bytes and integers are read)"
+        )));
+    }
+    if shape.contains(&0) {
+        return Err(bad(&format!(
+            "a {shape:?} array holds no samples (a dimension of length 0)"
         )));
     }
     let data = &bytes[start + len..];
@@ -134,6 +139,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
         x0: None,
         values,
         x: None,
+        start_time: None,
     };
     let channels = match shape.as_slice() {
         [n] => vec![channel(

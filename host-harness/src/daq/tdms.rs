@@ -25,6 +25,8 @@ const TOC_RAW: u32 = 1 << 3;
 const TOC_INTERLEAVED: u32 = 1 << 5;
 const TOC_BIG_ENDIAN: u32 = 1 << 6;
 const TOC_DAQMX: u32 = 1 << 7;
+/// The type code of a timestamp (16 bytes).
+const TIMESTAMP: u32 = 0x44;
 
 /// Reads the TDMS file `path`.
 pub fn read(path: &Path) -> anyhow::Result<Record> {
@@ -47,6 +49,8 @@ struct Object {
     increment: Option<f64>,
     start: Option<f64>,
     unit: Option<String>,
+    /// `wf_start_time`: the absolute time of the first sample, s since 1904-01-01 UTC.
+    start_time: Option<f64>,
     values: Vec<f64>,
     /// Set when its data cannot be read as numbers (the type's name).
     unreadable: Option<String>,
@@ -59,7 +63,7 @@ fn size_of(dtype: u32) -> Option<usize> {
         2 | 6 => Some(2),
         3 | 7 | 9 | 0x19 => Some(4),
         4 | 8 | 10 | 0x1A => Some(8),
-        0x44 => Some(16),
+        TIMESTAMP => Some(16),
         _ => None,
     }
 }
@@ -69,7 +73,7 @@ fn unreadable(dtype: u32) -> Option<&'static str> {
     match dtype {
         0x20 => Some("strings"),
         0x21 => Some("booleans"),
-        0x44 => Some("timestamps"),
+        TIMESTAMP => Some("timestamps"),
         0xFFFF_FFFF => Some("DAQmx raw data"),
         t if size_of(t).is_none() => Some("an unknown data type"),
         _ => None,
@@ -117,12 +121,27 @@ impl Cur<'_> {
         let n = self.u32()? as usize;
         Ok(String::from_utf8_lossy(self.take(n)?).into_owned())
     }
-    /// One value of a numeric type, as f64.
+    /// One value of a numeric type, as f64; a timestamp as seconds since 1904-01-01 UTC
+    /// (TDMS's epoch; a microsecond's resolution in an f64).
     fn value(&mut self, dtype: u32) -> anyhow::Result<f64> {
         let n = size_of(dtype).unwrap_or(0);
         let b = self.take(n)?;
+        if dtype == TIMESTAMP {
+            // little endian: fractions (u64, 2^-64 s) then seconds (i64); big endian: seconds
+            // then fractions, each big endian
+            let (w0, w1): ([u8; 8], [u8; 8]) = (
+                b[..8].try_into().unwrap_or([0; 8]),
+                b[8..].try_into().unwrap_or([0; 8]),
+            );
+            let (secs, frac) = if self.big {
+                (i64::from_be_bytes(w0), u64::from_be_bytes(w1))
+            } else {
+                (i64::from_le_bytes(w1), u64::from_le_bytes(w0))
+            };
+            return Ok(secs as f64 + frac as f64 / 18_446_744_073_709_551_616.0);
+        }
         let mut a = [0u8; 8];
-        a[..n].copy_from_slice(b);
+        a[..n.min(8)].copy_from_slice(&b[..n.min(8)]);
         let big = self.big;
         macro_rules! num {
             ($t:ty, $k:expr) => {{
@@ -155,6 +174,8 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
     let mut objects: HashMap<String, Object> = HashMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut list: Vec<String> = Vec::new();
+    // the paths in `list`, for constant-time membership (files with 10^5 channels)
+    let mut in_list: std::collections::HashSet<String> = std::collections::HashSet::new();
     let mut at = 0usize;
     let mut seg = 0;
     while at + 28 <= bytes.len() {
@@ -209,6 +230,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
         if toc & TOC_META != 0 {
             if toc & TOC_NEW_LIST != 0 {
                 list.clear();
+                in_list.clear();
             }
             c.at = lead;
             let n = c.u32()?;
@@ -222,10 +244,12 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                 match raw {
                     0xFFFF_FFFF => {
                         o.index = None;
-                        list.retain(|p| *p != path);
+                        if in_list.remove(&path) {
+                            list.retain(|p| *p != path);
+                        }
                     }
                     0 => {
-                        if !list.contains(&path) && o.index.is_some() {
+                        if o.index.is_some() && in_list.insert(path.clone()) {
                             list.push(path.clone());
                         }
                     }
@@ -244,7 +268,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                             let _bytes = c.u64()?;
                         }
                         o.index = Some(Index { dtype, count });
-                        if !list.contains(&path) {
+                        if in_list.insert(path.clone()) {
                             list.push(path.clone());
                         }
                     }
@@ -265,6 +289,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                             match name.as_str() {
                                 "wf_increment" => o.increment = Some(v),
                                 "wf_start_offset" => o.start = Some(v),
+                                "wf_start_time" if t == TIMESTAMP => o.start_time = Some(v),
                                 _ => {}
                             }
                         }
@@ -285,6 +310,14 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                 .filter_map(|p| objects[p].index.map(|i| (p.clone(), i)))
                 .collect();
             for (p, i) in &chans {
+                if size_of(i.dtype).is_none() {
+                    // its values' size is unknown: nothing after them can be found
+                    return Err(bad_input(format!(
+                        "{file}: segment {seg}: channel {p} holds raw data of type {:#x}, \
+                         which is not a TDMS data type read here",
+                        i.dtype
+                    )));
+                }
                 if let Some(what) = unreadable(i.dtype) {
                     if let Some(o) = objects.get_mut(p) {
                         o.unreadable = Some(what.into());
@@ -331,7 +364,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                         for _ in 0..n {
                             for (p, i) in &chans {
                                 let v = c.value(i.dtype)?;
-                                if let Some(o) = objects.get_mut(p) {
+                                if let Some(o) = objects.get_mut(p).filter(|o| o.unreadable.is_none()) {
                                     o.values.push(v);
                                 }
                             }
@@ -340,7 +373,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                         for (p, i) in &chans {
                             for _ in 0..i.count {
                                 let v = c.value(i.dtype)?;
-                                if let Some(o) = objects.get_mut(p) {
+                                if let Some(o) = objects.get_mut(p).filter(|o| o.unreadable.is_none()) {
                                     o.values.push(v);
                                 }
                             }
@@ -372,9 +405,13 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
     if named.is_empty() {
         return Err(bad_input(format!("{file}: holds no channel")));
     }
+    let mut uses: HashMap<&str, usize> = HashMap::new();
+    for (_, ch, _) in &named {
+        *uses.entry(ch.as_str()).or_default() += 1;
+    }
     let mut channels = Vec::with_capacity(named.len());
     for (g, ch, o) in &named {
-        let shared = named.iter().filter(|(_, c, _)| c == ch).count() > 1;
+        let shared = uses[ch.as_str()] > 1;
         let name = if shared {
             format!("{g}/{ch}")
         } else {
@@ -389,6 +426,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                 x0: None,
                 values: Vec::new(),
                 x: None,
+                start_time: None,
             });
             continue;
         }
@@ -399,6 +437,7 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
             x0: o.start,
             values: o.values.clone(),
             x: None,
+            start_time: o.start_time,
         });
     }
     Ok(Record {

@@ -72,6 +72,7 @@ pub fn read(path: &Path) -> anyhow::Result<Record> {
             )),
             values: f.data.iter().map(|c| c.re).collect(),
             x: f.x,
+            start_time: None,
         });
     }
     Ok(Record {

@@ -119,6 +119,17 @@ pub fn escape(s: &str) -> String {
     o
 }
 
+/// `s` as a JSON string literal safe inside an HTML `<script>` block: `<`, `>` and `&` as
+/// `\u` escapes, so that no `</script>`, `<!--` or `<script` in it changes how the page's
+/// parser reads the block.
+pub fn json_string_in_script(s: &str) -> String {
+    serde_json::Value::String(s.to_string())
+        .to_string()
+        .replace('<', "\\u003c")
+        .replace('>', "\\u003e")
+        .replace('&', "\\u0026")
+}
+
 /// Standard base64 (RFC 4648) of `bytes`.
 pub fn base64(bytes: &[u8]) -> String {
     const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

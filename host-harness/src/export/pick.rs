@@ -10,7 +10,7 @@
 //! `input#frame-slider`, `input#size-w`, `input#size-h`, `input#group`, `button#save`,
 //! `table#points`; `window.vibcamPointsCsv()` returns the text "save" downloads.
 
-use super::html::{base64, escape, FrameImage};
+use super::html::{base64, escape, json_string_in_script, FrameImage};
 use std::fmt::Write as _;
 
 /// A point shown at the start (from `--points`).
@@ -122,7 +122,7 @@ pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoi
     let display = if w < 700 { 700 } else { w.min(1400) };
     let _ = write!(
         s,
-        "<svg id=\"pick\" viewBox=\"0 0 {w} {h}\" width=\"{display}\" xmlns=\"http://www.w3.org/2000/svg\"><image id=\"frame-image\" href=\"data:image/png;base64,{}\" x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" style=\"image-rendering:pixelated\"/></svg>\n<table id=\"points\"></table>\n",
+        "<svg id=\"pick\" viewBox=\"0 0 {w} {h}\" width=\"{display}\" xmlns=\"http://www.w3.org/2000/svg\"><image id=\"frame-image\" href=\"data:image/png;base64,{}\" x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" preserveAspectRatio=\"none\" style=\"image-rendering:pixelated\"/></svg>\n<table id=\"points\"></table>\n",
         frames.first().map_or(String::new(), |(_, f)| base64(&f.png))
     );
     let frames_json: Vec<String> = frames
@@ -130,9 +130,7 @@ pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoi
         .map(|(l, f)| {
             format!(
                 "{{\"label\":{},\"png\":\"{}\"}}",
-                serde_json::Value::String(l.clone())
-                    .to_string()
-                    .replace("</", "<\\/"),
+                json_string_in_script(l),
                 base64(&f.png)
             )
         })

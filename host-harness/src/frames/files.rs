@@ -92,6 +92,12 @@ impl FrameRange {
         }
     }
 
+    /// The time of the range's first frame in the recording's own time, s: frame A at
+    /// `(A - 1) / fps` (no range: 0).
+    pub fn start_s(range: Option<FrameRange>, fps: f64) -> f64 {
+        range.map_or(0.0, |r| (r.first - 1) as f64 / fps)
+    }
+
     /// Whether 0-based frame `k` is in the range.
     fn holds(&self, k: usize) -> bool {
         k + 1 >= self.first && self.last.is_none_or(|l| k < l)

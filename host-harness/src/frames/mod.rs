@@ -82,6 +82,13 @@ impl GreyFrame {
     /// The frame for a page (`report.html`, `pick.html`): an 8-bit grey PNG (a 16-bit frame
     /// scaled so its largest value is 255).
     pub fn to_image(&self) -> anyhow::Result<crate::export::html::FrameImage> {
+        self.to_image_within(u32::MAX)
+    }
+
+    /// As [`to_image`](Self::to_image), the PNG scaled down (area-averaged) so that its longer
+    /// side is at most `max_side` pixels; `width` and `height` stay the frame's own, so that a
+    /// page drawing the PNG over them keeps full-resolution pixel coordinates.
+    pub fn to_image_within(&self, max_side: u32) -> anyhow::Result<crate::export::html::FrameImage> {
         let (w, h) = self.dimensions();
         let bytes: Vec<u8> = match self {
             GreyFrame::U8 { data, .. } => data.clone(),
@@ -94,6 +101,17 @@ impl GreyFrame {
         };
         let img = image::GrayImage::from_raw(w as u32, h as u32, bytes)
             .ok_or_else(|| anyhow::anyhow!("a {w} x {h} frame of the wrong length"))?;
+        let long = w.max(h) as f64;
+        let img = if long > f64::from(max_side) {
+            let k = f64::from(max_side) / long;
+            let (sw, sh) = (
+                ((w as f64 * k).round() as u32).max(1),
+                ((h as f64 * k).round() as u32).max(1),
+            );
+            image::imageops::resize(&img, sw, sh, image::imageops::FilterType::Triangle)
+        } else {
+            img
+        };
         let mut png = std::io::Cursor::new(Vec::new());
         img.write_to(&mut png, image::ImageFormat::Png)
             .map_err(|e| anyhow::anyhow!("PNG of a {w} x {h} frame: {e}"))?;

@@ -169,6 +169,9 @@ fn with_reference(
         Some(TimeOffset::Ticks(k, hz)) => crate::analysis::tick_offset_to_seconds(k, hz)?,
         None => 0.0,
     };
+    // the time offset is the recording's first frame's; a range starts later in it
+    let time_offset_s =
+        time_offset_s + crate::frames::FrameRange::start_s(input.frames.frame_range, fps);
     let tracking = Tracking::new(input.tracking)?;
     let view = super::view::check(input.view, None, &tracking.targets, tracking.tracker)?;
     let mut targets =

@@ -68,6 +68,7 @@ impl TrackSpec {
                 centroid: tracking.centroid,
                 targets: tracking.targets,
                 displacement,
+                axis: input.axis,
                 plots: input.plots,
                 notes: rates.notes,
                 out: input.out,

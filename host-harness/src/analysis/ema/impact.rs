@@ -244,15 +244,24 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
     if hits.last().is_some_and(|h| h.left_out.is_none()) {
         block = block.min(tail + pre);
     }
-    if let Some(b) = rule.block_s {
-        block = block.min((b * fs_hz).round() as usize);
-    }
     let width = hits
         .iter()
         .map(|h| h.pulses[0].end - h.pulses[0].start)
         .max()
         .unwrap_or(1);
-    if block < 8 * width.max(4) {
+    if let Some(b) = rule.block_s {
+        let given = (b * fs_hz).round();
+        let least = pre + 8 * width.max(4);
+        if given < least as f64 {
+            return Err(anyhow::Error::new(crate::setting::SpecError::setting(format!(
+                "$block_s {b}: {given} samples at {fs_hz} Hz, shorter than the {pre} samples \
+                 kept before each pulse and 8 pulse widths after it ({least} samples, {:.6} s)",
+                least as f64 / fs_hz
+            ))));
+        }
+        block = block.min(given as usize);
+    }
+    if block < pre + 8 * width.max(4) {
         return Err(bad_input(format!(
             "{name}: the hits' blocks would be {block} samples, too short beside the pulses \
              ({width} samples): hits closer than the response takes to decay"

@@ -42,6 +42,9 @@ pub struct Series {
     pub notes: Vec<String>,
     /// From a camera (`displacement.csv` or a pyidi `.npy`).
     pub camera: bool,
+    /// The absolute time of the first sample (s since 1904-01-01 UTC), when the file states
+    /// it (TDMS `wf_start_time`).
+    pub start_time: Option<f64>,
 }
 
 /// Which reader a file's name asks for.
@@ -62,13 +65,9 @@ fn daq_record(path: &Path) -> anyhow::Result<daq::Record> {
         "csv" | "txt" => {
             let text = std::fs::read(path)
                 .map_err(|e| bad_input(format!("{}: cannot read: {e}", path.display())))?;
-            let first = String::from_utf8_lossy(text.split(|b| *b == b'\n').next().unwrap_or(&[]))
-                .to_string();
-            let time = first
-                .split(',')
-                .map(str::trim)
-                .find(|c| ["t_s", "time", "t", "time_s"].contains(&c.to_ascii_lowercase().as_str()))
-                .map(String::from);
+            let time = crate::csvio::header_names(&text)
+                .into_iter()
+                .find(|c| ["t_s", "time", "t", "time_s"].contains(&c.to_ascii_lowercase().as_str()));
             daq::csv::parse(&text, &path.display().to_string(), time.as_deref())
         }
         other => Err(bad_input(format!(
@@ -103,10 +102,8 @@ fn is_displacement_csv(path: &Path) -> bool {
     let Ok(text) = std::fs::read(path) else {
         return false;
     };
-    let first =
-        String::from_utf8_lossy(text.split(|b| *b == b'\n').next().unwrap_or(&[])).to_string();
-    let cols: Vec<&str> = first.split(',').map(str::trim).collect();
-    cols.contains(&"frame") && cols.contains(&"target")
+    let cols = crate::csvio::header_names(&text);
+    cols.iter().any(|c| c == "frame") && cols.iter().any(|c| c == "target")
 }
 
 /// Reads the responses of `path`: the channels `cols` (empty: every channel; see the module
@@ -159,6 +156,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
             channels,
             notes,
             camera: true,
+            start_time: None,
         });
     }
     let record = daq_record(path)?;
@@ -209,6 +207,22 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .iter()
         .map(|n| record.channel(n, &file))
         .collect::<anyhow::Result<_>>()?;
+    for c in &chans {
+        if c.values.is_empty() {
+            return Err(bad_input(format!(
+                "{file}: response channel `{}` holds no samples",
+                c.name
+            )));
+        }
+        if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
+            return Err(bad_input(format!(
+                "{file}: response channel `{}`, sample {}: not a finite number ({})",
+                c.name,
+                i + 1,
+                c.values[i]
+            )));
+        }
+    }
     let fs = rate(&chans[0], fs_hz, &file, "$response_fs")?;
     for c in &chans[1..] {
         let r = c.rate_hz().unwrap_or(fs);
@@ -223,6 +237,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
             )));
         }
     }
+    let start_time = chans[0].start_time;
     Ok(Series {
         names: wanted,
         unit: chans[0].unit.clone(),
@@ -230,6 +245,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         channels: chans.into_iter().map(|c| c.values).collect(),
         notes,
         camera: npy,
+        start_time,
     })
 }
 
@@ -269,9 +285,10 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
         names: vec![name],
         unit: c.unit.clone(),
         fs_hz: fs,
-        channels: vec![c.values],
+        channels: vec![c.values.clone()],
         notes: Vec::new(),
         camera: false,
+        start_time: c.start_time,
     })
 }
 
@@ -336,6 +353,30 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
         .iter()
         .map(|c| up(c, fr))
         .collect::<anyhow::Result<_>>()?;
+    // both files state when their first sample was taken (TDMS `wf_start_time`): without a
+    // delay given, that is the delay
+    let stated = match (response.start_time, force.start_time) {
+        (Some(r), Some(f)) => Some(r - f),
+        _ => None,
+    };
+    let delay_s = match stated {
+        Some(d) if delay_s == 0.0 && (d * fs).abs() >= 0.5 => {
+            notes.push(format!(
+                "the files state their first samples {} s apart (wf_start_time): the responses \
+                 taken as starting {d:.6} s after the force (a delay given, --delay-s, overrides it)",
+                d.abs()
+            ));
+            d
+        }
+        Some(d) if delay_s != 0.0 && ((d - delay_s) * fs).abs() >= 0.5 => {
+            notes.push(format!(
+                "the delay given ({delay_s} s) used, though the files state their first samples {d:.6} s \
+                 apart (wf_start_time)"
+            ));
+            delay_s
+        }
+        _ => delay_s,
+    };
     let shift = delay_s * fs;
     let whole = shift.round();
     if whole != 0.0 {

@@ -181,7 +181,11 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
             raw: c.viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
-    let displacement = export::displacement_csv(&rows, req.fps, 0.0);
+    let displacement = export::displacement_csv(
+        &rows,
+        req.fps,
+        crate::frames::FrameRange::start_s(req.frame_range, req.fps),
+    );
     let mut inputs = vec![PathBuf::from(&req.frames)];
     inputs.extend(req.points_file.clone());
     let mut preamble = format!(
