@@ -110,6 +110,13 @@ pub fn stdout(text: &str) -> anyhow::Result<()> {
         .map_err(stdout_error)
 }
 
+/// The last line of a command that writes an output directory: where its outputs are (a
+/// default `--out` such as `./analysis` is otherwise found only by looking).
+pub fn outputs_in(dir: &std::path::Path) -> anyhow::Result<()> {
+    let shown = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    stdout(&format!("outputs in {}\n", shown.display()))
+}
+
 /// A failed write to standard output, named as such, the `io::Error` kept as its source (a
 /// closed pipe is recognised by [`main`]).
 fn stdout_error(e: std::io::Error) -> anyhow::Error {

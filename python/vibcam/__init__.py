@@ -12,19 +12,22 @@ Every function releases the GIL while it works.
 
 from __future__ import annotations
 
-import csv
-import io
-import math
-import numbers
-import os
-import tempfile
-from dataclasses import dataclass, field
-from typing import Any, Optional, Sequence, Union
+import csv as _csv
+import io as _io
+import math as _math
+import numbers as _numbers
+import os as _os
+import tempfile as _tempfile
+from dataclasses import dataclass as _dataclass, field as _field
+from typing import Any as _Any, Optional as _Optional, Sequence as _Sequence, Union as _Union
 
-import numpy as np
+import numpy as _np
 
 from . import _vibcam
 from ._vibcam import InputError, VibcamError, FrameReader
+
+#: The package's version (the workspace's).
+__version__ = _vibcam.__version__
 
 __all__ = [
     "InputError",
@@ -52,18 +55,18 @@ FLAGS = tuple(_vibcam.FLAGS)
 #: The revision of the simulation models (a study's numbers belong to it).
 MODEL_REVISION = _vibcam.MODEL_REVISION
 
-PathLike = Union[str, "os.PathLike[str]"]
+_PathLike = _Union[str, "_os.PathLike[str]"]
 
 
-def _frames(frames: Any) -> Any:
+def _frames(frames: _Any) -> _Any:
     """A path as a ``str`` (what the native module takes); arrays pass through."""
-    if isinstance(frames, (str, os.PathLike)):
-        return os.fspath(frames)
-    if isinstance(frames, np.ndarray):
+    if isinstance(frames, (str, _os.PathLike)):
+        return _os.fspath(frames)
+    if isinstance(frames, _np.ndarray):
         return frames
     if isinstance(frames, (list, tuple)):
-        return np.stack([np.asarray(f) for f in frames])
-    return np.asarray(frames)
+        return _np.stack([_np.asarray(f) for f in frames])
+    return _np.asarray(frames)
 
 
 # Every argument is checked here, before the native module sees it: a refused value raises
@@ -71,13 +74,13 @@ def _frames(frames: Any) -> Any:
 # conversion), and nothing is truncated (a threshold of 1.7 is refused, not taken as 1).
 
 
-def _whole(name: str, v: Any, lo: int, hi: int, optional: bool = False) -> Optional[int]:
+def _whole(name: str, v: _Any, lo: int, hi: int, optional: bool = False) -> _Optional[int]:
     """``v`` as a whole number in ``lo..=hi``."""
     if v is None and optional:
         return None
-    ok = isinstance(v, numbers.Integral) and not isinstance(v, bool)
-    if isinstance(v, numbers.Real) and not isinstance(v, bool) and not ok:
-        ok = math.isfinite(float(v)) and float(v) == int(v)
+    ok = isinstance(v, _numbers.Integral) and not isinstance(v, bool)
+    if isinstance(v, _numbers.Real) and not isinstance(v, bool) and not ok:
+        ok = _math.isfinite(float(v)) and float(v) == int(v)
     if not ok:
         raise InputError(f"{name} = {v!r}: a whole number from {lo} to {hi} is needed")
     i = int(v)
@@ -86,36 +89,36 @@ def _whole(name: str, v: Any, lo: int, hi: int, optional: bool = False) -> Optio
     return i
 
 
-def _number(name: str, v: Any, positive: bool = False, optional: bool = False) -> Optional[float]:
+def _number(name: str, v: _Any, positive: bool = False, optional: bool = False) -> _Optional[float]:
     """``v`` as a finite number (``> 0`` with ``positive``)."""
     if v is None and optional:
         return None
-    if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(float(v)):
+    if isinstance(v, bool) or not isinstance(v, _numbers.Real) or not _math.isfinite(float(v)):
         raise InputError(f"{name} = {v!r}: a finite number is needed")
     if positive and not float(v) > 0:
         raise InputError(f"{name} = {v!r}: a positive number is needed")
     return float(v)
 
 
-def _vector(name: str, x: Any) -> np.ndarray:
+def _vector(name: str, x: _Any) -> _np.ndarray:
     """``x`` as a 1-D array of finite float64 values."""
     try:
-        a = np.asarray(x, dtype=np.float64)
+        a = _np.asarray(x, dtype=_np.float64)
     except (TypeError, ValueError) as e:
         raise InputError(f"{name}: not an array of numbers ({e})") from None
     if a.ndim != 1:
         raise InputError(f"{name}: a 1-D array is needed, got shape {a.shape}")
-    bad = np.flatnonzero(~np.isfinite(a))
+    bad = _np.flatnonzero(~_np.isfinite(a))
     if bad.size:
         v = a[bad[0]]
-        raise InputError(f"{name}[{bad[0]}] is {'NaN' if np.isnan(v) else v}: every value must be finite")
-    return np.ascontiguousarray(a)
+        raise InputError(f"{name}[{bad[0]}] is {'NaN' if _np.isnan(v) else v}: every value must be finite")
+    return _np.ascontiguousarray(a)
 
 
-def _roi(roi: Any) -> Optional[tuple]:
+def _roi(roi: _Any) -> _Optional[tuple]:
     if roi is None:
         return None
-    r = tuple(roi) if isinstance(roi, (list, tuple, np.ndarray)) else None
+    r = tuple(roi) if isinstance(roi, (list, tuple, _np.ndarray)) else None
     if r is None or len(r) != 4:
         raise InputError(f"roi = {roi!r}: (x, y, w, h) is needed")
     x, y = (_whole(f"roi[{i}]", v, 0, 65535) for i, v in enumerate(r[:2]))
@@ -123,7 +126,7 @@ def _roi(roi: Any) -> Optional[tuple]:
     return (x, y, w, h)
 
 
-def _threshold(threshold: Union[int, str, None]) -> tuple:
+def _threshold(threshold: _Union[int, str, None]) -> tuple:
     if threshold is None:
         return None, False
     if isinstance(threshold, str):
@@ -133,12 +136,12 @@ def _threshold(threshold: Union[int, str, None]) -> tuple:
     return _whole("threshold", threshold, 0, 65535), False
 
 
-def _points(points: Any) -> tuple:
+def _points(points: _Any) -> tuple:
     """``(points, points_file)`` for the native module."""
     if points is None:
         return None, None
-    if isinstance(points, (str, os.PathLike)):
-        return None, os.fspath(points)
+    if isinstance(points, (str, _os.PathLike)):
+        return None, _os.fspath(points)
     out = []
     for i, p in enumerate(points):
         if isinstance(p, dict):
@@ -188,7 +191,7 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
     }
 
 
-def _view(reference, camera_model, scale, target_size_mm, world) -> Optional[dict]:
+def _view(reference, camera_model, scale, target_size_mm, world) -> _Optional[dict]:
     """The camera's view (static references, the scale from the scene) for the native ``track``
     and ``analyze``; ``None`` when nothing of it was asked."""
     if reference is None and camera_model is None and scale is None and target_size_mm is None \
@@ -209,8 +212,8 @@ def _view(reference, camera_model, scale, target_size_mm, world) -> Optional[dic
         sc = (str(a), str(b), _number("scale[2]", mm, positive=True))
     w, wfile = None, None
     if world is not None:
-        if isinstance(world, (str, os.PathLike)):
-            wfile = os.fspath(world)
+        if isinstance(world, (str, _os.PathLike)):
+            wfile = _os.fspath(world)
         else:
             w = []
             for i, p in enumerate(world):
@@ -231,7 +234,7 @@ def _view(reference, camera_model, scale, target_size_mm, world) -> Optional[dic
     }
 
 
-@dataclass(frozen=True)
+@_dataclass(frozen=True)
 class Centroid:
     """One frame's centroid: position (px; NaN when no pixel passed the threshold), the pixels
     above it, and the firmware's flags by name (``EMPTY``, ``SATURATED``, ``BORDER``, ...)."""
@@ -244,14 +247,14 @@ class Centroid:
     @property
     def found(self) -> bool:
         """Whether there is a position."""
-        return not (np.isnan(self.x) or np.isnan(self.y))
+        return not (_np.isnan(self.x) or _np.isnan(self.y))
 
 
 def centroid(
-    frame: np.ndarray,
+    frame: _np.ndarray,
     threshold: int,
     mode: str = "binary",
-    roi: Optional[Sequence[int]] = None,
+    roi: _Optional[_Sequence[int]] = None,
 ) -> Centroid:
     """The centroid of one frame by firmware-core (as ``host-harness centroid``).
 
@@ -260,9 +263,9 @@ def centroid(
     ``"blob"``: every pixel above weighs 1) or ``"weighted"`` (weights ``pixel - threshold``);
     ``roi``: ``(x, y, w, h)``.
     """
-    a = np.asarray(frame)
+    a = _np.asarray(frame)
     if a.ndim == 3 and a.shape[-1] in (3, 4):
-        a = a[np.newaxis]  # one colour frame
+        a = a[_np.newaxis]  # one colour frame
     if not isinstance(mode, str):
         raise InputError(f"mode = {mode!r}: 'binary' (alias 'blob') or 'weighted'")
     level = _whole("threshold", threshold, 0, 65535)
@@ -270,7 +273,7 @@ def centroid(
     return Centroid(x, y, pixels, tuple(flags))
 
 
-@dataclass(frozen=True)
+@_dataclass(frozen=True)
 class Tracks:
     """Each target's position per frame.
 
@@ -284,40 +287,40 @@ class Tracks:
     (references left out and why, each target's scale and its uncertainty).
     """
 
-    positions: np.ndarray
-    flags: np.ndarray
+    positions: _np.ndarray
+    flags: _np.ndarray
     fps: float
-    raw_positions: Optional[np.ndarray] = None
-    camera_motion: Optional[np.ndarray] = None
-    displacement_mm: Optional[np.ndarray] = None
+    raw_positions: _Optional[_np.ndarray] = None
+    camera_motion: _Optional[_np.ndarray] = None
+    displacement_mm: _Optional[_np.ndarray] = None
     view_report: str = ""
 
     @property
-    def lost(self) -> np.ndarray:
+    def lost(self) -> _np.ndarray:
         """``(N, K)``: frames without a position."""
-        return np.isnan(self.positions[..., 0])
+        return _np.isnan(self.positions[..., 0])
 
 
 def track(
-    frames: Any,
-    points: Any = None,
+    frames: _Any,
+    points: _Any = None,
     *,
-    targets: Optional[int] = None,
+    targets: _Optional[int] = None,
     tracker: str = "binary",
-    threshold: Union[int, str, None] = None,
-    fps: Optional[float] = None,
+    threshold: _Union[int, str, None] = None,
+    fps: _Optional[float] = None,
     retime: bool = False,
-    search_px: Optional[int] = None,
-    gate_px: Optional[float] = None,
-    roi: Optional[Sequence[int]] = None,
+    search_px: _Optional[int] = None,
+    gate_px: _Optional[float] = None,
+    roi: _Optional[_Sequence[int]] = None,
     return_flags: bool = False,
-    reference: Any = None,
-    camera_model: Optional[str] = None,
-    scale: Optional[Sequence] = None,
-    target_size_mm: Optional[float] = None,
-    world: Any = None,
+    reference: _Any = None,
+    camera_model: _Optional[str] = None,
+    scale: _Optional[_Sequence] = None,
+    target_size_mm: _Optional[float] = None,
+    world: _Any = None,
     axis: str = "y",
-) -> Union[np.ndarray, Tracks]:
+) -> _Union[_np.ndarray, Tracks]:
     """Each target's position in every frame, ``(N, K, 2)`` pixels (NaN where lost), as
     ``host-harness track`` follows them.
 
@@ -363,14 +366,14 @@ def track(
 
 
 def frf(
-    x: Any,
-    y: Any,
+    x: _Any,
+    y: _Any,
     fs: float,
     window: str = "hann",
-    nperseg: Optional[int] = None,
-    noverlap: Optional[int] = None,
-    nfft: Optional[int] = None,
-    detrend: Union[str, bool] = "constant",
+    nperseg: _Optional[int] = None,
+    noverlap: _Optional[int] = None,
+    nfft: _Optional[int] = None,
+    detrend: _Union[str, bool] = "constant",
 ) -> tuple:
     """H1 = Pxy / Pxx and coherence by firmware-core's streaming Welch estimator (f32 inside,
     as on the MCU), with scipy.signal.csd's conventions and defaults (``nperseg`` 256 or the
@@ -395,7 +398,7 @@ def frf(
     return f, h, c
 
 
-def upsample(x: Any, from_hz: float, to_hz: float) -> np.ndarray:
+def upsample(x: _Any, from_hz: float, to_hz: float) -> _np.ndarray:
     """``x`` sampled at ``from_hz`` Fourier-upsampled to ``to_hz`` by firmware-core (``len(x) *
     to_hz / from_hz`` samples, which must be whole; the record is taken as periodic, as
     ``scipy.signal.resample``)."""
@@ -414,7 +417,7 @@ _MODES_COLUMNS = (
 _SHAPES_COLUMNS = "mode,target,x_px,y_px,re,im,abs,method,abs_u".split(",")
 
 
-@dataclass
+@_dataclass
 class AnalysisResult:
     """What an output-only analysis found (``host-harness analyze`` without ``--accel``).
 
@@ -436,23 +439,23 @@ class AnalysisResult:
     """
 
     modes: dict
-    shapes: np.ndarray
-    targets: np.ndarray
-    first_xy: np.ndarray
-    svd_freq_hz: np.ndarray
-    svd: np.ndarray
-    displacement: np.ndarray
-    lost: np.ndarray
+    shapes: _np.ndarray
+    targets: _np.ndarray
+    first_xy: _np.ndarray
+    svd_freq_hz: _np.ndarray
+    svd: _np.ndarray
+    displacement: _np.ndarray
+    lost: _np.ndarray
     unit: str
     fps: float
     report: str
-    left_out: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
-    shapes_abs_u: Optional[np.ndarray] = None
-    evidence: list = field(default_factory=list)
-    rejected: list = field(default_factory=list)
-    html: str = field(default="", repr=False)
-    camera_motion: Optional[np.ndarray] = None
+    left_out: list = _field(default_factory=list)
+    notes: list = _field(default_factory=list)
+    shapes_abs_u: _Optional[_np.ndarray] = None
+    evidence: list = _field(default_factory=list)
+    rejected: list = _field(default_factory=list)
+    html: str = _field(default="", repr=False)
+    camera_motion: _Optional[_np.ndarray] = None
 
     def _repr_html_(self) -> str:
         """The page of ``analyze``'s ``report.html`` (the frame with the targets, the modes,
@@ -464,8 +467,8 @@ class AnalysisResult:
         rows = []
         m = self.modes
         for i in range(len(m["method"])):
-            def opt(v: float) -> Optional[float]:
-                return None if np.isnan(v) else float(v)
+            def opt(v: float) -> _Optional[float]:
+                return None if _np.isnan(v) else float(v)
 
             rows.append(
                 {
@@ -495,13 +498,13 @@ class AnalysisResult:
                     {
                         "mode": int(self.modes["mode"][i]),
                         "target": int(t),
-                        "x_px": None if np.isnan(x) else float(x),
-                        "y_px": None if np.isnan(y) else float(y),
+                        "x_px": None if _np.isnan(x) else float(x),
+                        "y_px": None if _np.isnan(y) else float(y),
                         "re": float(c.real),
                         "im": float(c.imag),
                         "abs": float(abs(c)),
                         "method": method,
-                        "abs_u": None if np.isnan(self.shapes_abs_u[i, j])
+                        "abs_u": None if _np.isnan(self.shapes_abs_u[i, j])
                         else float(self.shapes_abs_u[i, j]),
                     }
                 )
@@ -519,7 +522,7 @@ class AnalysisResult:
             pd.DataFrame(self.shapes_rows(), columns=_SHAPES_COLUMNS),
         )
 
-    def shape(self, mode: int, method: str = "ssi") -> np.ndarray:
+    def shape(self, mode: int, method: str = "ssi") -> _np.ndarray:
         """The complex shape of mode ``mode`` (1-based) by ``method``."""
         for i, (m, n) in enumerate(zip(self.modes["method"], self.modes["mode"])):
             if m == method and n == mode:
@@ -528,32 +531,32 @@ class AnalysisResult:
 
 
 def analyze(
-    frames: Any,
-    points: Any = None,
+    frames: _Any,
+    points: _Any = None,
     *,
-    targets: Optional[int] = None,
-    fps: Optional[float] = None,
+    targets: _Optional[int] = None,
+    fps: _Optional[float] = None,
     tracker: str = "binary",
-    threshold: Union[int, str, None] = None,
+    threshold: _Union[int, str, None] = None,
     retime: bool = False,
-    search_px: Optional[int] = None,
-    gate_px: Optional[float] = None,
-    roi: Optional[Sequence[int]] = None,
-    mm_per_px: Optional[float] = None,
+    search_px: _Optional[int] = None,
+    gate_px: _Optional[float] = None,
+    roi: _Optional[_Sequence[int]] = None,
+    mm_per_px: _Optional[float] = None,
     axis: str = "y",
     invert: bool = False,
     lost_frames: str = "interpolate",
     window: str = "hann",
-    nperseg: Optional[int] = None,
-    noverlap: Optional[int] = None,
-    nfft: Optional[int] = None,
+    nperseg: _Optional[int] = None,
+    noverlap: _Optional[int] = None,
+    nfft: _Optional[int] = None,
     detrend: str = "constant",
-    bands: Optional[Sequence[Sequence[float]]] = None,
-    reference: Any = None,
-    camera_model: Optional[str] = None,
-    scale: Optional[Sequence] = None,
-    target_size_mm: Optional[float] = None,
-    world: Any = None,
+    bands: _Optional[_Sequence[_Sequence[float]]] = None,
+    reference: _Any = None,
+    camera_model: _Optional[str] = None,
+    scale: _Optional[_Sequence] = None,
+    target_size_mm: _Optional[float] = None,
+    world: _Any = None,
 ) -> AnalysisResult:
     """Output-only modal analysis of the targets in ``frames`` (FDD, EFDD and SSI-cov on their
     displacements), exactly as ``host-harness analyze`` without ``--accel`` (the same numbers as
@@ -605,7 +608,7 @@ def analyze(
     )
 
 
-@dataclass
+@_dataclass
 class EmaResult:
     """What an experimental modal analysis found (``host-harness ema``).
 
@@ -622,17 +625,17 @@ class EmaResult:
     """
 
     modes: dict
-    shapes: np.ndarray
-    shapes_abs_u: np.ndarray
+    shapes: _np.ndarray
+    shapes_abs_u: _np.ndarray
     responses: list
-    freq_hz: np.ndarray
-    h1: np.ndarray
-    h2: np.ndarray
-    coherence: np.ndarray
+    freq_hz: _np.ndarray
+    h1: _np.ndarray
+    h2: _np.ndarray
+    coherence: _np.ndarray
     report: str
-    notes: list = field(default_factory=list)
-    hits_left_out: list = field(default_factory=list)
-    html: str = field(default="", repr=False)
+    notes: list = _field(default_factory=list)
+    hits_left_out: list = _field(default_factory=list)
+    html: str = _field(default="", repr=False)
 
     def _repr_html_(self) -> str:
         """The page of ``ema``'s ``report.html`` (modes, MAC, animated shapes), shown inline by
@@ -641,24 +644,24 @@ class EmaResult:
 
 
 def ema(
-    response: PathLike,
-    excitation: PathLike,
+    response: _PathLike,
+    excitation: _PathLike,
     *,
-    response_cols: Optional[Sequence[str]] = None,
-    response_fs: Optional[float] = None,
-    excitation_col: Optional[str] = None,
-    excitation_fs: Optional[float] = None,
+    response_cols: _Optional[_Sequence[str]] = None,
+    response_fs: _Optional[float] = None,
+    excitation_col: _Optional[str] = None,
+    excitation_fs: _Optional[float] = None,
     impact: bool = False,
-    exp_window: Union[str, float] = "auto",
-    block_s: Optional[float] = None,
+    exp_window: _Union[str, float] = "auto",
+    block_s: _Optional[float] = None,
     delay_s: float = 0.0,
     response_quantity: str = "displacement",
-    bands: Optional[Sequence[Sequence[float]]] = None,
-    f_min_hz: Optional[float] = None,
-    f_max_hz: Optional[float] = None,
+    bands: _Optional[_Sequence[_Sequence[float]]] = None,
+    f_min_hz: _Optional[float] = None,
+    f_max_hz: _Optional[float] = None,
     max_order: int = 48,
-    nperseg: Optional[int] = None,
-    out: Optional[PathLike] = None,
+    nperseg: _Optional[int] = None,
+    out: _Optional[_PathLike] = None,
     force: bool = False,
 ) -> EmaResult:
     """Experimental modal analysis of responses over a measured force, exactly as
@@ -676,7 +679,7 @@ def ema(
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
     (``force`` replaces an earlier ``ema`` output).
     """
-    if isinstance(exp_window, numbers.Real) and not isinstance(exp_window, bool):
+    if isinstance(exp_window, _numbers.Real) and not isinstance(exp_window, bool):
         e = float(exp_window)
         if not 0 < e < 1:
             raise InputError(f"exp_window {e}: the window's value at the block's end, 0 to 1")
@@ -689,8 +692,8 @@ def ema(
         )
     cols = [] if response_cols is None else [str(c) for c in response_cols]
     d = _vibcam.ema(
-        os.fspath(response),
-        os.fspath(excitation),
+        _os.fspath(response),
+        _os.fspath(excitation),
         response_cols=cols,
         response_fs=_number("response_fs", response_fs, positive=True, optional=True),
         excitation_col=None if excitation_col is None else str(excitation_col),
@@ -705,7 +708,7 @@ def ema(
         f_max_hz=_number("f_max_hz", f_max_hz, positive=True, optional=True),
         max_order=_whole("max_order", max_order, 2, 200),
         nperseg=_whole("nperseg", nperseg, 64, 1 << 20, optional=True),
-        out=None if out is None else os.fspath(out),
+        out=None if out is None else _os.fspath(out),
         force=bool(force),
     )
     return EmaResult(
@@ -724,7 +727,7 @@ def ema(
     )
 
 
-def _bands(bands: Any) -> list:
+def _bands(bands: _Any) -> list:
     out = []
     for i, b in enumerate(bands):
         try:
@@ -738,7 +741,7 @@ def _bands(bands: Any) -> list:
     return out
 
 
-@dataclass
+@_dataclass
 class StudyResult:
     """A Monte Carlo study's summary: ``table`` (what ``host-harness study`` prints),
     ``summary`` (the columns of ``summary.csv`` as arrays: numbers as float arrays, NaN for an
@@ -748,36 +751,36 @@ class StudyResult:
     table: str
     summary: dict
     summary_csv: str
-    out: Optional[str]
+    out: _Optional[str]
 
-    def to_pandas(self) -> Any:
+    def to_pandas(self) -> _Any:
         """``summary.csv`` as a pandas DataFrame."""
         import pandas as pd
 
-        return pd.read_csv(io.StringIO(self.summary_csv))
+        return pd.read_csv(_io.StringIO(self.summary_csv))
 
 
 def _columns(text: str) -> dict:
-    rows = list(csv.reader(io.StringIO(text)))
+    rows = list(_csv.reader(_io.StringIO(text)))
     header, body = rows[0], rows[1:]
     out = {}
     for j, name in enumerate(header):
         cells = [r[j] if j < len(r) else "" for r in body]
         try:
-            out[name] = np.array([float(c) if c != "" else np.nan for c in cells])
+            out[name] = _np.array([float(c) if c != "" else _np.nan for c in cells])
         except ValueError:
             out[name] = cells
     return out
 
 
 def study(
-    config: Optional[PathLike] = None,
-    preset: Optional[str] = None,
+    config: _Optional[_PathLike] = None,
+    preset: _Optional[str] = None,
     *,
-    runs: Optional[int] = None,
-    exposures_ms: Optional[Sequence[float]] = None,
-    seed: Optional[int] = None,
-    out: Optional[PathLike] = None,
+    runs: _Optional[int] = None,
+    exposures_ms: _Optional[_Sequence[float]] = None,
+    seed: _Optional[int] = None,
+    out: _Optional[_PathLike] = None,
     threads: int = 0,
     progress: bool = True,
     plots: bool = False,
@@ -792,7 +795,7 @@ def study(
     def run(directory: str) -> tuple:
         return _vibcam.study(
             directory,
-            config=None if config is None else os.fspath(config),
+            config=None if config is None else _os.fspath(config),
             preset=preset,
             runs=_whole("runs", runs, 1, 1_000_000, optional=True),
             exposures_ms=None
@@ -805,21 +808,21 @@ def study(
         )
 
     if out is None:
-        with tempfile.TemporaryDirectory(prefix="vibcam-study-") as tmp:
-            where = os.path.join(tmp, "study")
+        with _tempfile.TemporaryDirectory(prefix="vibcam-study-") as tmp:
+            where = _os.path.join(tmp, "study")
             table, summary = run(where)
         # the directory is gone: the line naming the files written in it goes with it
         table = "".join(ln for ln in table.splitlines(True) if not ln.rstrip().endswith(where))
         return StudyResult(table, _columns(summary), summary, None)
-    table, summary = run(os.fspath(out))
-    return StudyResult(table, _columns(summary), summary, os.fspath(out))
+    table, summary = run(_os.fspath(out))
+    return StudyResult(table, _columns(summary), summary, _os.fspath(out))
 
 
 def open_frames(
-    path: PathLike,
-    fps: Optional[float] = None,
+    path: _PathLike,
+    fps: _Optional[float] = None,
     retime: bool = False,
-    frame_range: Optional[str] = None,
+    frame_range: _Optional[str] = None,
 ) -> FrameReader:
     """The frames of a recording one at a time, as ``uint8``/``uint16`` arrays ``(H, W)``:
     every format the command line reads (image directories and patterns, multi-page TIFF,
@@ -835,7 +838,7 @@ def open_frames(
     if frame_range is not None and not isinstance(frame_range, str):
         raise InputError(f"frame_range = {frame_range!r}: 'A..B' (frames A to B, 1-based)")
     return FrameReader(
-        os.fspath(path),
+        _os.fspath(path),
         fps=_number("fps", fps, positive=True, optional=True),
         retime=retime,
         frame_range=frame_range,

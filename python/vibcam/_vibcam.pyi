@@ -10,6 +10,7 @@ class VibcamError(RuntimeError): ...
 
 FLAGS: list[tuple[int, str]]
 MODEL_REVISION: int
+__version__: str
 
 _Point = tuple[float, float, int, int, Optional[int], Optional[int]]
 

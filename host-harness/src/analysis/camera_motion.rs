@@ -198,16 +198,20 @@ impl CameraMotion {
             let _ = writeln!(s, "  note: {n}");
         }
         let axis = if along_x { "x" } else { "y" };
+        // whether the references took (nearly) all of every target's motion
+        let mut all_taken = !raw.centroids.is_empty();
         for (t, (r, c)) in raw.centroids.iter().zip(&compensated.centroids).enumerate() {
-            let (mut raw_v, mut cam_v) = (Vec::new(), Vec::new());
+            let (mut raw_v, mut cam_v, mut left_v) = (Vec::new(), Vec::new(), Vec::new());
             for (a, b) in r.iter().zip(c) {
                 if let (Some(p), Some(q)) = (a.position(), b.position()) {
                     let (p, q) = if along_x { (p.0, q.0) } else { (p.1, q.1) };
                     raw_v.push(f64::from(p));
                     cam_v.push(f64::from(p) - f64::from(q));
+                    left_v.push(f64::from(q));
                 }
             }
             let (cam, all) = (centred_rms(&cam_v), centred_rms(&raw_v));
+            all_taken &= all > 0.0 && centred_rms(&left_v) < TAKEN_ALL * all;
             let _ = writeln!(
                 s,
                 "  target {}: the camera moved it {cam:.3} px RMS along {axis}, {:.0} % of its \
@@ -216,9 +220,24 @@ impl CameraMotion {
                 if all > 0.0 { 100.0 * cam / all } else { 0.0 }
             );
         }
+        if all_taken {
+            let _ = writeln!(
+                s,
+                "  warning: the references move with the targets: the camera's motion found \
+                 from them takes over {:.0} % of every target's motion along {axis}; unless \
+                 the camera shook and the structure stood still, references are on the \
+                 structure (or on parts that move with it) and the structure's own motion was \
+                 removed: place them on parts of the scene that do not move",
+                100.0 * (1.0 - TAKEN_ALL)
+            );
+        }
         s
     }
 }
+
+/// A target is taken over by the references when what is left of its motion after the
+/// camera's is removed is below this fraction of its raw motion (RMS about the means).
+const TAKEN_ALL: f64 = 0.1;
 
 /// `c` taken back through `inverse`, the frame's inverse map (`None`: the frame's motion is
 /// unknown, and `c` loses its position).

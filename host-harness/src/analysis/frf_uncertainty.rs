@@ -155,14 +155,24 @@ pub fn of_system(
     let line_hz = fs / c.nperseg as f64;
     for (i, m) in modes.iter().enumerate() {
         let o = &mut out[i];
-        o.f_hz = jackknife_sized(m.f_hz, &reps[i][0], &sizes).map(|j| {
+        o.f_hz = jackknife_sized(m.f_hz, &reps[i][0], &sizes).and_then(|j| {
             let u = (j.u * j.u + df * df / 12.0).sqrt();
             let half = t975(groups - 1) * u;
-            Interval {
+            let kept = Interval {
                 u,
                 lo: m.f_hz - half,
                 hi: m.f_hz + half,
             }
+            .of_positive();
+            if kept.is_none() {
+                notes.push(format!(
+                    "{} mode {}: the 95 % interval of its frequency reaches 0 Hz (segments of \
+                     {line_hz:.3} Hz lines cannot place it): no interval of its frequency",
+                    sys.name,
+                    i + 1
+                ));
+            }
+            kept
         });
         match (fits[i], failed[i]) {
             (Some(Fitted { damping, .. }), false)
@@ -184,7 +194,8 @@ pub fn of_system(
                 if z.is_some_and(|z| z.lo > 0.0) {
                     o.damping = z;
                     o.amplitude = jackknife_sized(f.at_line, &reps[i][2], &sizes);
-                    o.f_fit_interval = jackknife_sized(f.f_hz, &reps[i][3], &sizes);
+                    o.f_fit_interval = jackknife_sized(f.f_hz, &reps[i][3], &sizes)
+                        .and_then(Interval::of_positive);
                 } else {
                     notes.push(format!(
                         "{} mode {}: its damping is not determined (the 95 % interval reaches \

@@ -14,8 +14,11 @@ pub const SHOWN_MAX_SIDE: u32 = 2048;
 pub struct PickRequest {
     /// `--frames` as given.
     pub frames: String,
-    /// The frame rate, when the recording needs one to be read (a video).
+    /// The frame rate, when the recording needs one to be read (a video; without it a video
+    /// is read at its container's own rate).
     pub fps: Option<f64>,
+    /// `--retime`: `fps` retimes a video's container rate (slow motion).
+    pub retime: bool,
     /// Points to show at the start.
     pub points: Option<std::path::PathBuf>,
     /// Frames on the page's slider (1 to 50).
@@ -56,10 +59,23 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             .collect(),
         None => Vec::new(),
     };
-    let source = crate::frames::open_frames(&req.frames, false, None)?.source;
-    let fps = match req.fps {
-        Some(f) => f,
-        None => source.recorded_rate()?.map_or(1.0, |r| r.0),
+    let source = crate::frames::open_frames(&req.frames, req.retime, None)?.source;
+    let fps = match (req.fps, source.recorded_rate()?, source.inner()) {
+        (Some(f), _, _) => f,
+        (None, Some(r), _) => r.0,
+        // the page shows frames: a video's own container rate reads them as they are
+        (None, None, crate::frames::FrameSource::Video { path, .. }) => {
+            crate::frames::video::container_rate(path)
+                .map_err(|e| e.into_anyhow())?
+                .ok_or_else(|| {
+                    crate::bad_input(format!(
+                        "{}: its frames' times give no rate: give --fps",
+                        req.frames
+                    ))
+                })?
+        }
+        // image files: the rate plays no part in reading them
+        (None, None, _) => 1.0,
     };
     let count = source.count(fps)?;
     let step = count.map_or(1, |n| (n / req.shown).max(1));

@@ -28,7 +28,7 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     )?;
     let found = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?;
     let source = found.source.clone();
-    let ignored = ignored_note(&found.ignored);
+    let ignored = crate::frames::ignored_note(&found.ignored);
     if let Some(n) = &ignored {
         eprintln!("warning: {n}");
     }
@@ -286,19 +286,6 @@ fn append_compensation(
     Ok(())
 }
 
-/// The sentence naming image files beside the frames that are not of their numbered sequence.
-pub fn ignored_note(ignored: &[PathBuf]) -> Option<String> {
-    if ignored.is_empty() {
-        return None;
-    }
-    let names: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
-    Some(format!(
-        "{} image file(s) beside the frames are not of their numbered sequence and were \
-         ignored: {}",
-        names.len(),
-        names.join(", ")
-    ))
-}
 
 /// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
 /// camera's Nyquist frequency (the vision path has no content above it, and outside the

@@ -592,6 +592,19 @@ impl Twin {
         );
         for m in self.modes() {
             let bias = m.ratio - 1.0;
+            if m.runs < 2 {
+                // one run has no spread: an interval of zero width would claim an exact bias
+                s += &format!(
+                    "  mode {}: amplitude ratio {:.5} (bias {:+.3} %) from a single run: no \
+                     uncertainty and no interval (2 runs or more give them), and the bias is \
+                     not divided out of the recording's amplitude; frequency {:+.4} Hz\n",
+                    m.mode,
+                    m.ratio,
+                    100.0 * bias,
+                    m.df_hz
+                );
+                continue;
+            }
             s += &format!(
                 "  mode {}: amplitude ratio {:.5} +- {:.5} (bias {:+.3} %; 95 % of the {} runs \
                  within {:.5}..{:.5}); frequency {:+.4} Hz (sd {:.4})\n",

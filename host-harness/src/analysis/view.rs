@@ -176,6 +176,27 @@ pub fn check_world(points: &[WorldPoint]) -> Result<Homography, String> {
             points.len()
         ));
     }
+    for (i, a) in points.iter().enumerate() {
+        for (j, b) in points.iter().enumerate().skip(i + 1) {
+            let same_px = (a.px.0 - b.px.0).hypot(a.px.1 - b.px.1) < 0.5;
+            let same_mm = (a.mm.0 - b.mm.0).hypot(a.mm.1 - b.mm.1) < 1e-9;
+            if same_px || same_mm {
+                return Err(format!(
+                    "points {} and {} are the same point {} ({}, {}){}",
+                    i + 1,
+                    j + 1,
+                    if same_px { "in the image" } else { "on the plane" },
+                    if same_px { a.px.0 } else { a.mm.0 },
+                    if same_px { a.px.1 } else { a.mm.1 },
+                    if same_px != same_mm {
+                        ", with different coordinates in the other: a point listed twice?"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+        }
+    }
     let (px, mm): (Vec<_>, Vec<_>) = points.iter().map(|p| (p.px, p.mm)).unzip();
     fit(Model::Homography, &px, &mm).ok_or_else(|| {
         format!(
@@ -226,16 +247,13 @@ pub fn track_view(
     along_x: bool,
 ) -> anyhow::Result<Viewed> {
     let (tracks, windows) = track_targets(source, fps, centroid, targets)?;
+    refuse_targets_never_seen(&tracks, targets)?;
     let (tracks, raw, references, motion) = match &view.references {
         Some(r) => {
             let refs = Targets::Points(r.points.clone(), PointTracker::Lk { search_px: None });
             let (rt, _) = track_targets(source, fps, centroid, &refs)
                 .map_err(|e| e.context("tracking the references (--reference)"))?;
-            let size = source
-                .frame_at(fps, 0)?
-                .map(|(_, f)| f.dimensions())
-                .unwrap_or((0, 0));
-            let m = super::camera_motion::estimate(&rt, r.model, size)?;
+            let m = super::camera_motion::estimate(&rt, r.model, frame_size(source, fps)?)?;
             let comp = m.compensate(&tracks);
             (comp, Some(tracks), Some(rt), Some(m))
         }
@@ -250,9 +268,54 @@ pub fn track_view(
         windows,
     };
     if let Some(s) = &view.scale {
-        viewed.scales = Some(resolve_scale(&viewed, s, along_x)?);
+        let size = frame_size(source, fps)?;
+        viewed.scales = Some(resolve_scale(&viewed, s, along_x, size)?);
     }
     Ok(viewed)
+}
+
+/// A chosen point lost in every frame measured nothing: an error naming it (and what tracks
+/// a point a threshold cannot separate), not a run that ends well with empty columns.
+pub fn refuse_targets_never_seen(tracks: &Tracks, targets: &Targets) -> anyhow::Result<()> {
+    let Targets::Points(_, rule) = targets else {
+        return Ok(());
+    };
+    let never: Vec<String> = tracks
+        .centroids
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| !c.is_empty() && c.iter().all(|c| c.position().is_none()))
+        .map(|(t, _)| (t + 1).to_string())
+        .collect();
+    if never.is_empty() {
+        return Ok(());
+    }
+    let frames = tracks.centroids.first().map_or(0, Vec::len);
+    let hint = match rule {
+        super::points::PointTracker::Centroid(_) => {
+            "the threshold finds no single bright blob in their windows (a dot on a tag, a \
+             pattern, a dark target?): --tracker lk follows any texture, or give each window \
+             a threshold of its own"
+        }
+        super::points::PointTracker::Lk { .. } => {
+            "their windows have too little texture to follow, or their motion leaves the \
+             search range (--search-px)"
+        }
+    };
+    Err(bad_input(format!(
+        "target(s) {} of {} lost in every one of the {frames} frames: nothing is measured of \
+         them; {hint}",
+        never.join(", "),
+        tracks.centroids.len()
+    )))
+}
+
+/// The frames' width and height, px (the first frame's; (0, 0) without one).
+fn frame_size(source: &FrameSource, fps: f64) -> anyhow::Result<(usize, usize)> {
+    Ok(source
+        .frame_at(fps, 0)?
+        .map(|(_, f)| f.dimensions())
+        .unwrap_or((0, 0)))
 }
 
 impl Viewed {
@@ -363,7 +426,12 @@ fn position_noise(c: &[Centroid]) -> f64 {
     }
 }
 
-fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Scales> {
+fn resolve_scale(
+    v: &Viewed,
+    s: &ScaleInput,
+    along_x: bool,
+    size: (usize, usize),
+) -> anyhow::Result<Scales> {
     let k = v.tracks.centroids.len();
     let mut text = String::new();
     let scales = match s {
@@ -470,7 +538,7 @@ fn resolve_scale(v: &Viewed, s: &ScaleInput, along_x: bool) -> anyhow::Result<Sc
                 text,
             }
         }
-        ScaleInput::World(points, _) => world_scales(v, points, along_x)?,
+        ScaleInput::World(points, _) => world_scales(v, points, along_x, size)?,
     };
     Ok(scales)
 }
@@ -489,8 +557,89 @@ fn local_scale(h: &Homography, p: (f64, f64), along_x: bool) -> f64 {
     1.0 / (a * a + b * b).sqrt()
 }
 
-fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Result<Scales> {
+/// The largest RMS reprojection error of the plane's points, px, when no point states its
+/// uncertainty (points clicked on the image are good to about a pixel).
+const WORLD_RESIDUAL_PX: f64 = 1.0;
+
+/// Checks the plane's points against the frame (`size`) and the homography `h` fitted to them:
+/// every point inside the frame; their reprojection error within 3 times their stated
+/// uncertainty (at least [`WORLD_RESIDUAL_PX`]); the stated uncertainty small beside their
+/// spacing (the Monte Carlo propagates small errors). Returns the RMS reprojection error, px.
+fn check_world_fit(
+    points: &[WorldPoint],
+    h: &Homography,
+    size: (usize, usize),
+) -> anyhow::Result<f64> {
+    let (w, hgt) = (size.0 as f64, size.1 as f64);
+    if size.0 > 0 {
+        if let Some((i, p)) = points.iter().enumerate().find(|(_, p)| {
+            !(p.px.0 >= -0.5 && p.px.1 >= -0.5 && p.px.0 <= w - 0.5 && p.px.1 <= hgt - 0.5)
+        }) {
+            return Err(bad_input(format!(
+                "--world: point {} at ({}, {}) px lies outside the {w} x {hgt} frame (measured \
+                 on an image of another resolution?)",
+                i + 1,
+                p.px.0,
+                p.px.1
+            )));
+        }
+    }
+    let back = h
+        .inverse()
+        .ok_or_else(|| bad_input("--world: the plane's map cannot be inverted"))?;
+    let errors: Vec<f64> = points
+        .iter()
+        .map(|p| {
+            let q = back.apply(p.mm);
+            ((q.0 - p.px.0).powi(2) + (q.1 - p.px.1).powi(2)).sqrt()
+        })
+        .collect();
+    let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    let u_rms =
+        (points.iter().map(|p| p.u_px * p.u_px).sum::<f64>() / points.len() as f64).sqrt();
+    let tol = (3.0 * u_rms).max(WORLD_RESIDUAL_PX);
+    if rms > tol {
+        let (worst, e) = errors
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |m, (i, e)| if *e > m.1 { (i, *e) } else { m });
+        return Err(bad_input(format!(
+            "--world: the {} points do not lie on one plane seen by the camera: their image \
+             positions are {rms:.3} px RMS from the fitted plane's, more than {tol:.3} px (3 \
+             times their stated uncertainty u_px, at least {WORLD_RESIDUAL_PX} px); the worst \
+             is point {} at ({}, {}) px, {e:.3} px off (a point listed twice, or a mistyped \
+             coordinate?)",
+            points.len(),
+            worst + 1,
+            points[worst].px.0,
+            points[worst].px.1
+        )));
+    }
+    let mut spacing = f64::INFINITY;
+    for (i, a) in points.iter().enumerate() {
+        for b in &points[i + 1..] {
+            spacing = spacing.min(((a.px.0 - b.px.0).powi(2) + (a.px.1 - b.px.1).powi(2)).sqrt());
+        }
+    }
+    let u_max = points.iter().map(|p| p.u_px).fold(0.0, f64::max);
+    if u_max > 0.1 * spacing {
+        return Err(bad_input(format!(
+            "--world: u_px {u_max} beside points {spacing:.1} px apart: an uncertainty above a \
+             tenth of the points' spacing is no small error to propagate; the plane is not \
+             known from these points"
+        )));
+    }
+    Ok(rms)
+}
+
+fn world_scales(
+    v: &Viewed,
+    points: &[WorldPoint],
+    along_x: bool,
+    size: (usize, usize),
+) -> anyhow::Result<Scales> {
     let h = check_world(points).map_err(|e| bad_input(format!("--world: {e}")))?;
+    let reprojection_px = check_world_fit(points, &h, size)?;
     let (px, mm): (Vec<_>, Vec<_>) = points.iter().map(|p| (p.px, p.mm)).unzip();
     let residual = if points.len() > 4 {
         let s: f64 = px
@@ -524,7 +673,13 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
             })
             .collect();
         let Some(hd) = fit(Model::Homography, &moved, &mm) else {
-            continue;
+            // dropping it would narrow the spread: the uncertainty is not known
+            return Err(bad_input(format!(
+                "--world: with the points moved by their stated u_px the plane could not be \
+                 fitted (draw {} of {WORLD_DRAWS}): the uncertainty is too large for these \
+                 points",
+                d + 1
+            )));
         };
         for (t, p) in at.iter().enumerate() {
             if let Some(p) = p {
@@ -538,7 +693,7 @@ fn world_scales(v: &Viewed, points: &[WorldPoint], along_x: bool) -> anyhow::Res
          displacement along its {axis} with its own local scale:\n",
         points.len(),
         match residual {
-            Some(r) => format!(", residual {r:.3} mm RMS"),
+            Some(r) => format!(", residual {r:.3} mm RMS, {reprojection_px:.3} px in the image"),
             None => ", exact through 4 points".to_string(),
         }
     );

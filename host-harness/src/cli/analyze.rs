@@ -203,6 +203,7 @@ impl AxisArg {
 
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let out = args.out.clone();
     let rates = crate::frames::resolve_rates(
         &args.frames,
         args.fps,
@@ -216,6 +217,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let outcome = spec.run()?;
     super::stdout(&outcome.report)?;
+    if outcome.result.is_ok() {
+        super::outputs_in(&out)?;
+    }
     outcome.result
 }
 

@@ -104,6 +104,7 @@ pub struct Args {
 
 /// Runs `host-harness ema`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let out = args.out.clone();
     let spec = EmaSpec::new(EmaInput {
         response: args.response,
         response_cols: args.response_col,
@@ -132,5 +133,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     .map_err(SpecError::into_anyhow)?;
     let outcome = spec.run()?;
     super::stdout(&outcome.report)?;
+    if outcome.result.is_ok() {
+        super::outputs_in(&out)?;
+    }
     outcome.result
 }

@@ -55,6 +55,7 @@ pub struct Args {
 
 /// Runs `host-harness modal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let out = args.out.clone();
     let spec = ModalSpec::new(ModalInput {
         displacement: args.displacement,
         fps: args.fps,
@@ -75,5 +76,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     .map_err(SpecError::into_anyhow)?;
     let outcome = spec.run()?;
     super::stdout(&outcome.report)?;
+    if outcome.result.is_ok() {
+        super::outputs_in(&out)?;
+    }
     outcome.result
 }

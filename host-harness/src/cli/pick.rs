@@ -13,6 +13,9 @@ pub struct Args {
     /// Frame rate, Hz (a video without a stated rate needs it to be read).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
+    /// --fps retimes a slow-motion video's container rate (as `track --retime`).
+    #[arg(long, requires = "fps")]
+    pub retime: bool,
     /// Points to show at the start (`track --points`'s format).
     #[arg(long, value_name = "FILE.csv")]
     pub points: Option<PathBuf>,
@@ -32,6 +35,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let line = pick(&PickRequest {
         frames: a.frames,
         fps: a.fps,
+        retime: a.retime,
         points: a.points,
         shown: a.frames_shown,
         out: a.out,

@@ -110,5 +110,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let report = TrackSpec::new(input, rates)
         .map_err(SpecError::into_anyhow)?
         .run()?;
-    super::stdout(&report)
+    super::stdout(&report)?;
+    super::outputs_in(&args.out)
 }

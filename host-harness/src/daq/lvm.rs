@@ -37,6 +37,8 @@ struct Header {
     units: Vec<Option<String>>,
     x0: Vec<Option<f64>>,
     delta_x: Vec<Option<f64>>,
+    /// `Samples`: each channel's count in the segment, when stated.
+    samples: Vec<Option<usize>>,
     names: Vec<String>,
 }
 
@@ -54,6 +56,17 @@ pub fn read(path: &Path) -> anyhow::Result<Record> {
 
 /// Parses the text of a LabVIEW measurement file; `file` names it in errors.
 pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
+    // a byte-order mark (Notepad's "UTF-8") is no part of the first line
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if !text.is_empty() && !text.ends_with('\n') {
+        // LabVIEW ends every line: a file without its last line's end was cut (`head -c`),
+        // and its last value may be cut inside its digits
+        return Err(bad_input(format!(
+            "{file}: ends inside a line ({:?}): a file cut short; its last value cannot be \
+             trusted",
+            text.lines().last().unwrap_or("")
+        )));
+    }
     let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
     if !lines
         .first()
@@ -70,8 +83,17 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
     let mut sep = '\t';
     let mut i = 1;
     while i < lines.len() && !lines[i].starts_with("***End_of_Header***") {
-        let mut f = lines[i].split('\t');
-        let (key, value) = (f.next().unwrap_or(""), f.next().unwrap_or("").trim());
+        // the key, then its value up to the next separator: a tab, or a comma in a file whose
+        // `Separator` is `Comma` (its file header is written with commas too)
+        let line = lines[i];
+        let (key, value) = match line.find(['\t', ',']) {
+            Some(at) => {
+                let sep_char = line[at..].chars().next().unwrap_or('\t');
+                let rest = &line[at + sep_char.len_utf8()..];
+                (&line[..at], rest.split(sep_char).next().unwrap_or("").trim())
+            }
+            None => (line, ""),
+        };
         match key {
             "Decimal_Separator" => {
                 decimal = value.chars().next().unwrap_or('.');
@@ -125,6 +147,7 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
         }
     };
     let mut segments: Vec<Vec<Channel>> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
     let mut header: Option<Header> = None;
     while i < lines.len() {
         if lines[i].split(sep).all(|f| f.trim().is_empty()) {
@@ -158,6 +181,11 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
                                     i + 1
                                 ))
                             })?;
+                    }
+                    "Samples" => {
+                        h.samples = (0..h.channels)
+                            .map(|k| per_channel(k).and_then(|v| v.parse().ok()))
+                            .collect()
                     }
                     "Y_Unit_Label" => {
                         h.units = (0..h.channels)
@@ -283,6 +311,21 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
             }
             i += 1;
         }
+        for k in 0..h.channels {
+            if let Some(n) = h.samples.get(k).copied().flatten() {
+                if values[k].len() < n {
+                    // a file cut at a line's end (`head -n`), or shortened by hand (lvm_read's
+                    // own test files are): named, not refused
+                    notes.push(format!(
+                        "warning: {file}: segment {}, channel `{}`: {} samples where its header \
+                         states {n} (`Samples`): the file may have been cut short",
+                        segments.len() + 1,
+                        h.names[k],
+                        values[k].len()
+                    ));
+                }
+            }
+        }
         segments.push(
             (0..h.channels)
                 .map(|k| Channel {
@@ -300,7 +343,7 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
     if segments.is_empty() {
         return Err(bad_input(format!("{file}: no data segment")));
     }
-    Ok(Record { segments })
+    Ok(Record { segments, notes })
 }
 
 /// The data column of channel `k`.

@@ -43,6 +43,9 @@ impl Channel {
 pub struct Record {
     /// The segments in file order.
     pub segments: Vec<Vec<Channel>>,
+    /// What the reader found doubtful but read (a count the header states and the data do
+    /// not reach), each line to be shown to the user.
+    pub notes: Vec<String>,
 }
 
 impl Record {

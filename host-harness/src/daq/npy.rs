@@ -173,5 +173,6 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
     };
     Ok(Record {
         segments: vec![channels],
+        notes: Vec::new(),
     })
 }

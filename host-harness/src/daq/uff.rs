@@ -77,6 +77,7 @@ pub fn read(path: &Path) -> anyhow::Result<Record> {
     }
     Ok(Record {
         segments: vec![channels],
+        notes: Vec::new(),
     })
 }
 
@@ -298,8 +299,13 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Vec<Function>> {
             data,
             complex,
         });
-        // the dataset's closing -1
-        if let Some(l) = lines.next() {
+        // the dataset's closing -1; after a 58b's binary block some writers end the block's
+        // line first, so the -1 sits on a line of its own (pyuff reads both)
+        let mut closing = lines.next();
+        while binary && closing.is_some_and(|l| l.trim().is_empty()) {
+            closing = lines.next();
+        }
+        if let Some(l) = closing {
             if l.trim() != "-1" {
                 return Err(err(
                     lines.line,

@@ -328,10 +328,26 @@ pub fn open_frames(
     range: Option<FrameRange>,
 ) -> anyhow::Result<Discovered> {
     let found = discover_frames(spec)?;
+    if let Some(note) = ignored_note(&found.ignored) {
+        eprintln!("warning: {note}");
+    }
     Ok(Discovered {
         source: found.source.retimed(retime)?.ranged(range)?,
         ignored: found.ignored,
     })
+}
+
+/// The line naming the files beside the frames that are not read (`None`: none).
+pub fn ignored_note(ignored: &[PathBuf]) -> Option<String> {
+    if ignored.is_empty() {
+        return None;
+    }
+    let names: Vec<String> = ignored.iter().map(|p| p.display().to_string()).collect();
+    Some(format!(
+        "{} file(s) beside the frames are not of their numbered sequence and were ignored: {}",
+        names.len(),
+        names.join(", ")
+    ))
 }
 
 /// Resolves `--frames`: a directory, a file-name pattern, or a multi-page TIFF.
@@ -345,8 +361,10 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
                 path.display()
             )));
         }
-        let (files, ignored) = numbered_sequence(files, &path.display().to_string())?;
+        let (files, mut ignored) = numbered_sequence(files, &path.display().to_string())?;
         check_numbering(&files)?;
+        // files of other kinds (notes.txt, Thumbs.db) are named too
+        ignored.extend(sorted_files(path, |n| !has_frame_ext(Path::new(n)))?);
         return Ok(Discovered {
             source: FrameSource::Files(files),
             ignored,

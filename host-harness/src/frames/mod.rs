@@ -11,7 +11,7 @@ pub mod video;
 
 pub use files::{
     centroid_source, centroid_source_seen, discover_frames, for_each_tiff_page, load_frame,
-    open_frames, Discovered, FrameDepth, FrameRange, FrameSource,
+    ignored_note, open_frames, Discovered, FrameDepth, FrameRange, FrameSource,
 };
 pub use rates::{resolve_rates, Rates};
 

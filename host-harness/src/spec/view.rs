@@ -89,6 +89,7 @@ pub fn check(
                     points.len()
                 )));
             }
+            check_reference_layout(&points, input.camera_model, targets)?;
             if let Some(m) = input.camera_model {
                 if points.len() < m.minimum() {
                     return Err(SpecError::setting(format!(
@@ -157,6 +158,68 @@ pub fn check(
         None
     };
     Ok(ViewSettings { references, scale })
+}
+
+/// Whether two windows (centre and size) share a pixel.
+fn overlap(a: &Point, b: &Point) -> bool {
+    (a.xy.0 - b.xy.0).abs() < f64::from(a.size.0 + b.size.0) / 2.0
+        && (a.xy.1 - b.xy.1).abs() < f64::from(a.size.1 + b.size.1) / 2.0
+}
+
+/// References the camera's motion can be found from: no two windows on the same part of the
+/// scene, none on a target's window (it would take the structure's motion for the camera's),
+/// and a layout the model can be fitted from (a homography needs four with no three on a line,
+/// a similarity two apart).
+fn check_reference_layout(
+    refs: &[Point],
+    model: Option<Model>,
+    targets: &Targets,
+) -> SpecResult<()> {
+    for (i, a) in refs.iter().enumerate() {
+        for (j, b) in refs.iter().enumerate().skip(i + 1) {
+            if overlap(a, b) {
+                return Err(SpecError::setting(format!(
+                    "$reference: r{} at ({}, {}) and r{} at ({}, {}) have overlapping windows: \
+                     they follow the same part of the scene, and the camera's roll and scale \
+                     cannot be told from them; place references apart, around the scene",
+                    i + 1,
+                    a.xy.0,
+                    a.xy.1,
+                    j + 1,
+                    b.xy.0,
+                    b.xy.1
+                )));
+            }
+        }
+        if let Targets::Points(points, _) = targets {
+            if let Some(t) = points.iter().find(|t| overlap(a, t)) {
+                return Err(SpecError::setting(format!(
+                    "$reference: r{} at ({}, {}) overlaps target {}'s window at ({}, {}): a \
+                     reference must be on a part of the scene that does not move, or the \
+                     structure's own motion is taken for the camera's and removed",
+                    i + 1,
+                    a.xy.0,
+                    a.xy.1,
+                    t.target,
+                    t.xy.0,
+                    t.xy.1
+                )));
+            }
+        }
+    }
+    let centres: Vec<(f64, f64)> = refs.iter().map(|p| p.xy).collect();
+    if model == Some(Model::Homography)
+        && centres.len() >= 4
+        && crate::geometry::fit(Model::Homography, &centres, &centres).is_none()
+    {
+        return Err(SpecError::setting(format!(
+            "$camera_model homography: the {} references lie on one line, or three of four do: \
+             a homography cannot be fitted from them; place four or more around the scene, no \
+             three on a line, or use $camera_model similarity",
+            centres.len()
+        )));
+    }
+    Ok(())
 }
 
 /// References given in memory, checked as a points file's rows are.

@@ -81,14 +81,32 @@ fn daq_record(path: &Path) -> anyhow::Result<daq::Record> {
 /// The rate of `channel` of `file`: stated, given as setting `key` (`$response_fs`), or both
 /// (then they must agree). The errors name the setting (a [`SpecError`], spelled as the caller
 /// spells it).
-fn rate(channel: &Channel, given: Option<f64>, file: &str, key: &str) -> anyhow::Result<f64> {
+fn rate(
+    channel: &Channel,
+    given: Option<f64>,
+    file: &str,
+    key: &str,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<f64> {
     let refuse = |m: String| anyhow::Error::new(SpecError::setting(m));
     match (channel.rate_hz(), given) {
         (Some(s), Some(g)) if (s - g).abs() > 1e-3 * g => Err(refuse(format!(
             "{file}: channel `{}` is sampled at {s} Hz by the file, {key} says {g} Hz",
             channel.name
         ))),
-        (Some(s), _) => Ok(s),
+        // a rate stated exactly beats one from a rounded time column: the given one is used
+        (Some(s), Some(g)) => {
+            if s != g {
+                notes.push(format!(
+                    "{file}: the rate given, {} Hz, used; the file's time column gives {} Hz \
+                     (within 0.1 %: rounded times)",
+                    rate_text(g),
+                    rate_text(s)
+                ));
+            }
+            Ok(g)
+        }
+        (Some(s), None) => Ok(s),
         (None, Some(g)) => Ok(g),
         (None, None) => Err(refuse(format!(
             "{file}: the file states no sample rate for `{}`: give {key}",
@@ -165,7 +183,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .first()
         .map(|s| s.iter().map(|c| c.name.clone()).collect())
         .unwrap_or_default();
-    let mut notes = Vec::new();
+    let mut notes = record.notes.clone();
     let npy = kind(path) == "npy";
     let wanted: Vec<String> = if !cols.is_empty() {
         cols.to_vec()
@@ -223,7 +241,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
             )));
         }
     }
-    let fs = rate(&chans[0], fs_hz, &file, "$response_fs")?;
+    let fs = rate(&chans[0], fs_hz, &file, "$response_fs", &mut notes)?;
     for c in &chans[1..] {
         let r = c.rate_hz().unwrap_or(fs);
         if c.values.len() != chans[0].values.len() || (r - fs).abs() > 1e-6 * fs {
@@ -261,6 +279,11 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
             .map(|s| s.iter().map(|c| c.name.clone()).collect())
             .unwrap_or_default();
         match names.as_slice() {
+            [] => {
+                return Err(bad_input(format!(
+                    "{file}: holds no channel that can be read as a force"
+                )))
+            }
             [one] => one.clone(),
             _ => {
                 return Err(bad_input(format!(
@@ -274,7 +297,15 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
         col.to_string()
     };
     let c = record.channel(&name, &file)?;
-    let fs = rate(&c, fs_hz, &file, "$excitation_fs")?;
+    if let Some(what) = c.unit.as_deref().and_then(not_a_force) {
+        return Err(bad_input(format!(
+            "{file}: channel `{name}` is in `{}`, a unit of {what}, not of a force: name the \
+             hammer's or the force transducer's channel with --excitation-col",
+            c.unit.as_deref().unwrap_or_default()
+        )));
+    }
+    let mut notes = record.notes.clone();
+    let fs = rate(&c, fs_hz, &file, "$excitation_fs", &mut notes)?;
     if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
         return Err(bad_input(format!(
             "{file}: channel `{name}`, sample {}: not a finite number",
@@ -286,10 +317,34 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
         unit: c.unit.clone(),
         fs_hz: fs,
         channels: vec![c.values.clone()],
-        notes: Vec::new(),
+        notes,
         camera: false,
         start_time: c.start_time,
     })
+}
+
+/// What a unit measures when it is clearly not a force (acceleration, velocity, displacement,
+/// time); `None` for a force's units and for units that say nothing of it (volts, counts).
+pub fn not_a_force(unit: &str) -> Option<&'static str> {
+    let u: String = unit
+        .trim()
+        .to_ascii_lowercase()
+        .replace(['²', ' '], "")
+        .replace("^2", "2")
+        .replace("**2", "2")
+        .replace('µ', "u");
+    let u = u.trim_matches(|c| c == '(' || c == ')' || c == '[' || c == ']');
+    match u {
+        "g" | "gn" | "g's" | "m/s2" | "m/s/s" | "mm/s2" | "in/s2" | "ft/s2" | "gal" => {
+            Some("acceleration")
+        }
+        "m/s" | "mm/s" | "in/s" | "ips" | "ft/s" => Some("velocity"),
+        "m" | "mm" | "um" | "nm" | "in" | "mil" | "mils" | "px" | "pixels" => {
+            Some("displacement")
+        }
+        "s" | "ms" | "sec" | "seconds" => Some("time"),
+        _ => None,
+    }
 }
 
 /// A rate as people write it: to nine significant digits (a rate from a CSV's mean time step
@@ -321,6 +376,20 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
     use crate::chain::resample::upsample_record;
     let (fr, ff) = (response.fs_hz, force.fs_hz);
     let mut notes = Vec::new();
+    // records of one test last about as long: a rate given wrong (1500 for 15 kHz) shows here
+    let (tr, tf) = (
+        response.channels[0].len() as f64 / fr,
+        force.channels[0].len() as f64 / ff,
+    );
+    if (tr - tf).abs() > 0.1 * tr.min(tf) {
+        notes.push(format!(
+            "warning: the responses last {tr:.4} s at {} Hz, the force {tf:.4} s at {} Hz: \
+             records of one test should last about as long; check both rates (a rate given \
+             wrong stretches its record)",
+            rate_text(fr),
+            rate_text(ff)
+        ));
+    }
     let same = (fr - ff).abs() <= 1e-9 * ff;
     let fs = fr.max(ff);
     let up = |v: &[f64], from: f64| -> anyhow::Result<Vec<f64>> {

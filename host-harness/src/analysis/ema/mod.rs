@@ -388,7 +388,8 @@ pub fn analyse(
                     .iter()
                     .map(|(q, _)| unwindowed(*q, exp).damping)
                     .collect();
-                fi = jackknife_sized(pole.f_hz, &fs, &unit_sizes);
+                // a frequency is positive: an interval reaching 0 Hz determines nothing
+                fi = jackknife_sized(pole.f_hz, &fs, &unit_sizes).and_then(Interval::of_positive);
                 // a damping ratio is not negative: the interval's lower end at 0 at least
                 di = jackknife_sized(pole.damping, &ds, &unit_sizes).map(|i| Interval {
                     lo: i.lo.max(0.0),

@@ -172,6 +172,38 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
     })
 }
 
+/// `s` within a universal file's text field of `max` characters: line breaks as spaces, cut
+/// to `max` (the report says so: [`uff_cut_notes`]).
+fn uff_field(s: &str, max: usize) -> String {
+    s.chars()
+        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
+        .take(max)
+        .collect()
+}
+
+/// The report's lines for the units and names `frf.uff` cuts to its fields' widths.
+fn uff_cut_notes(req: &EmaRequest) -> Vec<String> {
+    let mut notes = Vec::new();
+    for u in [&req.response.unit, &req.force.unit].into_iter().flatten() {
+        if u.chars().count() > 20 {
+            notes.push(format!(
+                "note: the unit `{u}` is cut to its first 20 characters in frf.uff (the \
+                 format's field width)"
+            ));
+        }
+    }
+    for name in &req.response.names {
+        let line = format!("H1 {name} / {}", req.force.names[0]);
+        if line.chars().count() > 80 {
+            notes.push(format!(
+                "note: `{line}` is cut to 80 characters in frf.uff's ID line (the format's \
+                 line width)"
+            ));
+        }
+    }
+    notes
+}
+
 /// The FRFs as universal-file datasets 58 (function type 4): response `o` node `o`, the force
 /// node 0; the numerator's quantity from the FRF's form, units as the files state them.
 fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
@@ -188,7 +220,10 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
         .enumerate()
         .map(|(o, h)| Dataset58 {
             id_lines: [
-                format!("H1 {} / {}", req.response.names[o], req.force.names[0]),
+                uff_field(
+                    &format!("H1 {} / {}", req.response.names[o], req.force.names[0]),
+                    80,
+                ),
                 "vibcam ema".into(),
                 String::new(),
                 String::new(),
@@ -208,12 +243,12 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
             numerator: AxisCharacteristics {
                 quantity,
                 label: label.into(),
-                units: req.response.unit.clone().unwrap_or_default(),
+                units: uff_field(req.response.unit.as_deref().unwrap_or_default(), 20),
             },
             denominator: AxisCharacteristics {
                 quantity: Quantity::ExcitationForce,
                 label: "Force".into(),
-                units: req.force.unit.clone().unwrap_or_default(),
+                units: uff_field(req.force.unit.as_deref().unwrap_or_default(), 20),
             },
             values: h,
         })
@@ -319,7 +354,14 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
         unit(&req.force.unit),
         super::input::rate_text(req.force.fs_hz)
     );
-    for n in req.response.notes.iter().chain(&a.notes) {
+    for n in req
+        .response
+        .notes
+        .iter()
+        .chain(&req.force.notes)
+        .chain(&a.notes)
+        .chain(&uff_cut_notes(req))
+    {
         let _ = writeln!(s, "  {n}");
     }
     let df = r.freq_hz.get(1).copied().unwrap_or(0.0);

@@ -40,6 +40,13 @@ impl Interval {
         (self.hi - self.lo) / 2.0
     }
 
+    /// The interval of a quantity that is positive (a frequency), when it stays so: `None`
+    /// when its lower end reaches 0 or below (the uncertainty is as large as the quantity:
+    /// no interval means anything then; the caller says so).
+    pub fn of_positive(self) -> Option<Interval> {
+        (self.lo > 0.0).then_some(self)
+    }
+
     /// The interval scaled by `k > 0` (a change of unit).
     pub fn scaled(self, k: f64) -> Interval {
         Interval {
@@ -228,7 +235,21 @@ pub fn of_modes(
             }
             Method::Efdd | Method::Ssi => {
                 match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
-                    Some(v) => u.f_hz = jackknife(m.f_hz, &v),
+                    Some(v) => {
+                        u.f_hz = jackknife(m.f_hz, &v).and_then(|i| {
+                            let kept = i.of_positive();
+                            if kept.is_none() {
+                                notes.push(format!(
+                                    "{} mode {} ({:.4} Hz): the 95 % interval of its frequency \
+                                     reaches 0 Hz: its frequency is not determined, no interval",
+                                    m.method.name(),
+                                    m.mode,
+                                    m.f_hz
+                                ));
+                            }
+                            kept
+                        })
+                    }
                     None => notes.push(missing("frequency and damping")),
                 }
                 if let (Some(z), Some(v)) = (m.damping, pick(&|r| r.efdd_or_ssi.map(|x| x.1))) {

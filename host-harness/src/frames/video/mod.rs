@@ -102,6 +102,18 @@ pub fn check_rate(path: &Path, fps: f64, retime: bool) -> Result<Option<f64>, Vi
     Ok(rate)
 }
 
+/// The container's own mean frame rate, Hz, from its timestamps (ffprobe only): what a video
+/// is read at when only its frames matter, not the rate the camera captured them at.
+pub fn container_rate(path: &Path) -> Result<Option<f64>, VideoError> {
+    let times_s = probe::probe_times(path, "ffprobe")?;
+    Ok(match (times_s.first(), times_s.last()) {
+        (Some(a), Some(b)) if times_s.len() > 1 && b > a => {
+            Some((times_s.len() - 1) as f64 / (b - a))
+        }
+        _ => None,
+    })
+}
+
 /// The frame just read.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameInfo {
