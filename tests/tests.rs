@@ -8,6 +8,7 @@ mod adversarial;
 mod analyze;
 mod centroid;
 mod daq;
+mod defects;
 mod ema;
 mod formats;
 mod hostile;

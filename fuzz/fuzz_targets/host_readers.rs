@@ -1,6 +1,7 @@
 //! The host's file readers on arbitrary bytes: the frame loader (PNG, TIFF, JPEG, multi-page
 //! TIFF), the camera files' headers and frames (Phantom `.cine`; Photron `.cih` with a 16-byte
-//! `.mraw` beside it) and the accelerometer CSV reader must return an error, never panic nor
+//! `.mraw` beside it), the accelerometer CSV reader and the DAQ readers (TDMS, LabVIEW `.lvm`,
+//! universal file 58, NumPy `.npy`, CSV) must return an error, never panic nor
 //! allocate what a header claims before checking it against the file (the seeds `seed_*` are
 //! a small valid cine, cih and JPEG).
 #![no_main]
@@ -44,5 +45,29 @@ fuzz_target!(|data: &[u8]| {
     let p = dir.join("a.csv");
     if std::fs::write(&p, data).is_ok() {
         let _ = host_harness::analysis::load_accel(&p, 2048.0, "base_acc", "tip_acc", Some("t_s"));
+    }
+    // the DAQ readers on the bytes as they are, every channel then taken by name
+    use host_harness::daq;
+    let name = "fuzz";
+    let text = String::from_utf8_lossy(data);
+    for record in [
+        daq::tdms::parse(data, name),
+        daq::lvm::parse(&text, name),
+        daq::uff::parse(data, name).map(|_| daq::Record {
+            segments: Vec::new(),
+            notes: Vec::new(),
+        }),
+        daq::npy::parse(data, name),
+        daq::csv::parse(data, name, Some("t_s")),
+        daq::csv::parse(data, name, None),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        for seg in &record.segments {
+            for c in seg {
+                let _ = record.channel(&c.name, name);
+            }
+        }
     }
 });

@@ -111,10 +111,12 @@ pub fn stdout(text: &str) -> anyhow::Result<()> {
 }
 
 /// The last line of a command that writes an output directory: where its outputs are (a
-/// default `--out` such as `./analysis` is otherwise found only by looking).
+/// default `--out` such as `./analysis` is otherwise found only by looking). On standard error,
+/// beside the progress: standard output stays the report.
 pub fn outputs_in(dir: &std::path::Path) -> anyhow::Result<()> {
     let shown = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-    stdout(&format!("outputs in {}\n", shown.display()))
+    eprintln!("outputs in {}", shown.display());
+    Ok(())
 }
 
 /// A failed write to standard output, named as such, the `io::Error` kept as its source (a

@@ -183,8 +183,8 @@ pub fn bands_below_nyquist(bands: &[(f64, f64)], fs_hz: f64, of: &str) -> SpecRe
     }
 }
 
-/// Each band finite with `0 <= lo < hi` (bands given as numbers; the command line's text is
-/// checked by its parser with the same rule).
+/// Each band finite with `0 <= lo < hi`, no two overlapping (bands given as numbers; the
+/// command line's text is checked by its parser with the same rules).
 pub fn bands_ordered(bands: &[(f64, f64)]) -> SpecResult<()> {
     match bands
         .iter()
@@ -193,7 +193,18 @@ pub fn bands_ordered(bands: &[(f64, f64)]) -> SpecResult<()> {
         Some((lo, hi)) => Err(SpecError::setting(format!(
             "$bands ({lo}, {hi}): need 0 <= lo < hi, finite, in Hz"
         ))),
-        None => Ok(()),
+        None => {
+            for (i, a) in bands.iter().enumerate() {
+                if let Some(b) = bands[i + 1..].iter().find(|b| a.0 < b.1 && b.0 < a.1) {
+                    return Err(SpecError::setting(format!(
+                        "$bands ({}, {}) and ({}, {}) overlap: each band holds one mode, and a \
+                         mode in two bands would be reported twice; make them disjoint",
+                        a.0, a.1, b.0, b.1
+                    )));
+                }
+            }
+            Ok(())
+        }
     }
 }
 
@@ -292,5 +303,8 @@ mod tests {
         );
         assert!(bands_ordered(&[(2.0, 1.0)]).is_err());
         assert!(bands_ordered(&[(0.0, f64::INFINITY)]).is_err());
+        let e = bands_ordered(&[(1.0, 5.0), (4.0, 8.0)]).unwrap_err();
+        assert!(e.message(Naming::Cli).contains("overlap"), "{e}");
+        assert!(bands_ordered(&[(1.0, 4.0), (4.0, 8.0)]).is_ok());
     }
 }

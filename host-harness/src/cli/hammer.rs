@@ -82,6 +82,62 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             return Err(crate::bad_input(format!("{flag} must be >= 0, got {v}")));
         }
     }
+    // the pulses are 0.6 ms wide: a DAQ must sample each several times or `ema` finds none
+    const WIDTH_S: f64 = 0.0006;
+    if a.daq_hz * WIDTH_S < 5.0 {
+        return Err(crate::bad_input(format!(
+            "--daq-hz {}: the hammer's pulses are {} ms wide, {:.2} samples at that rate; at \
+             least 5 samples across a pulse need {} Hz or more",
+            a.daq_hz,
+            WIDTH_S * 1e3,
+            a.daq_hz * WIDTH_S,
+            (5.0 / WIDTH_S).ceil()
+        )));
+    }
+    if let Some(c) = a.clip_n {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(crate::bad_input(format!(
+                "--clip-n must be a positive force, N, got {c}"
+            )));
+        }
+    }
+    if a.double_hit && a.peaks_n.len() < 2 {
+        return Err(crate::bad_input(
+            "--double-hit: the rebound follows the second hit; give two peaks or more \
+             (--peaks-n)"
+                .to_string(),
+        ));
+    }
+    // hits every 3 s from 0.2 s; one needs the 0.5 s after it that `ema` takes as its block
+    let hits_held = a
+        .peaks_n
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| 0.2 + 3.0 * *i as f64 + 0.5 <= a.seconds)
+        .count();
+    if hits_held == 0 {
+        return Err(crate::bad_input(format!(
+            "--seconds {}: the first hit comes at 0.2 s and needs 0.5 s of response after it; \
+             give --seconds 0.7 or more",
+            a.seconds
+        )));
+    }
+    let mut notes = Vec::new();
+    if hits_held < a.peaks_n.len() {
+        notes.push(format!(
+            "note: the record holds {hits_held} of the {} hits (one every 3 s from 0.2 s, each \
+             with 0.5 s after it)",
+            a.peaks_n.len()
+        ));
+    }
+    if let Some(c) = a.clip_n {
+        let max = a.peaks_n.iter().copied().fold(0.0, f64::max);
+        if c >= max {
+            notes.push(format!(
+                "note: --clip-n {c} N is above every hit's peak ({max} N): nothing is clipped"
+            ));
+        }
+    }
     write_hammer_recording(
         &a.out,
         a.force,
@@ -97,8 +153,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             seed: a.seed,
         },
     )?;
-    super::stdout(&format!(
+    let mut text = String::new();
+    for n in &notes {
+        text.push_str(n);
+        text.push('\n');
+    }
+    text.push_str(&format!(
         "wrote {}: force.csv, camera.csv, truth.csv, README.txt\n",
         a.out.display()
-    ))
+    ));
+    super::stdout(&text)?;
+    super::outputs_in(&a.out)
 }

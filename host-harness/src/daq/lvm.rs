@@ -378,6 +378,38 @@ X_Value\tF\ta\tComment\n\t0,914018\t1,204792\n\t0,537321\t1,208403\n\t0,616905\t
     }
 
     #[test]
+    fn a_file_cut_short_is_refused_or_named_and_bom_and_comma_files_are_read() {
+        // `head -c`: the last value cut inside its digits
+        let cut = &SHORT[..SHORT.len() - 4];
+        let e = parse(cut, "cut.lvm").unwrap_err().to_string();
+        assert!(e.contains("cut.lvm: ends inside a line"), "{e}");
+        // `head -n`: whole lines, fewer than `Samples` states: read, named
+        let lines: Vec<&str> = SHORT.lines().collect();
+        let short = lines[..lines.len() - 1].join("\n") + "\n";
+        let r = parse(&short, "short.lvm").unwrap();
+        assert_eq!(r.channel("F", "short.lvm").unwrap().values.len(), 2);
+        assert!(
+            r.notes.iter().any(|n| n.contains("2 samples where its header states 3")),
+            "{:?}",
+            r.notes
+        );
+        assert!(parse(SHORT, "short.lvm").unwrap().notes.is_empty());
+        // a byte-order mark, and a comma-separated file (its header too)
+        let bom = format!("\u{feff}{SHORT}");
+        assert_eq!(parse(&bom, "bom.lvm").unwrap(), parse(SHORT, "s").unwrap());
+        let comma = SHORT
+            .replace("Separator\tTab", "Separator\tComma")
+            .replace("Decimal_Separator\t,", "Decimal_Separator\t.")
+            .replace(',', ".")
+            .replace('\t', ",");
+        let r = parse(&comma, "comma.lvm").unwrap();
+        let f = r.channel("F", "comma.lvm").unwrap();
+        assert_eq!(f.values, vec![0.914018, 0.537321, 0.616905]);
+        assert_eq!(f.unit.as_deref(), Some("Newtons"));
+        assert_eq!(f.delta_x, Some(3.90625e-5));
+    }
+
+    #[test]
     fn bad_fields_and_gaps_are_errors_naming_the_line_and_channel() {
         let bad = SHORT.replace("0,537321", "0,53x");
         let e = format!("{:#}", parse(&bad, "s.lvm").unwrap_err());

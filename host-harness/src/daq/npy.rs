@@ -176,3 +176,38 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
         notes: Vec::new(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An `.npy` (version 1) with `header` (padded) and `data`.
+    fn npy(header: &str, data: &[u8]) -> Vec<u8> {
+        let mut h = header.as_bytes().to_vec();
+        while (10 + h.len() + 1) % 64 != 0 {
+            h.push(b' ');
+        }
+        h.push(b'\n');
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend((h.len() as u16).to_le_bytes());
+        out.extend(h);
+        out.extend(data);
+        out
+    }
+
+    #[test]
+    fn a_non_ascii_type_and_empty_or_huge_empty_arrays_are_refused() {
+        let e = parse(
+            &npy("{'descr': '<fé', 'fortran_order': False, 'shape': (2,), }", &[0; 16]),
+            "a.npy",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("data type `<fé`"), "{e}");
+        for shape in ["(5, 0, 2)", "(1000000000000, 0, 2)", "(0,)"] {
+            let h = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}");
+            let e = parse(&npy(&h, &[]), "e.npy").unwrap_err().to_string();
+            assert!(e.contains("holds no samples"), "{shape}: {e}");
+        }
+    }
+}

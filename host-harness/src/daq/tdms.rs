@@ -535,6 +535,102 @@ mod tests {
         assert!(e.contains("cut.tdms: segment 1 states"), "{e}");
     }
 
+    /// A little-endian segment: `objects` as (path, raw index (type, count) or none,
+    /// properties (name, type, value bytes)), then `raw`.
+    fn segment(objects: &[(&str, Option<(u32, u64)>, Vec<(&str, u32, Vec<u8>)>)], raw: &[u8]) -> Vec<u8> {
+        let s = |m: &mut Vec<u8>, t: &str| {
+            m.extend((t.len() as u32).to_le_bytes());
+            m.extend(t.as_bytes());
+        };
+        let mut meta = Vec::new();
+        meta.extend((objects.len() as u32).to_le_bytes());
+        for (path, index, props) in objects {
+            s(&mut meta, path);
+            match index {
+                Some((t, n)) => {
+                    meta.extend(20u32.to_le_bytes());
+                    meta.extend(t.to_le_bytes());
+                    meta.extend(1u32.to_le_bytes());
+                    meta.extend(n.to_le_bytes());
+                }
+                None => meta.extend(0xFFFF_FFFFu32.to_le_bytes()),
+            }
+            meta.extend((props.len() as u32).to_le_bytes());
+            for (name, t, v) in props {
+                s(&mut meta, name);
+                meta.extend(t.to_le_bytes());
+                meta.extend(v);
+            }
+        }
+        let toc = TOC_META | TOC_NEW_LIST | TOC_RAW;
+        let mut out = b"TDSm".to_vec();
+        out.extend(toc.to_le_bytes());
+        out.extend(4713u32.to_le_bytes());
+        out.extend(((meta.len() + raw.len()) as u64).to_le_bytes());
+        out.extend((meta.len() as u64).to_le_bytes());
+        out.extend(meta);
+        out.extend(raw);
+        out
+    }
+
+    /// A timestamp: `secs` since 1904 and `frac` of a second (little endian: fraction first).
+    fn stamp(secs: i64, frac: f64) -> Vec<u8> {
+        let mut v = ((frac * 18_446_744_073_709_551_616.0) as u64).to_le_bytes().to_vec();
+        v.extend(secs.to_le_bytes());
+        v
+    }
+
+    #[test]
+    fn timestamps_as_properties_and_as_a_channel_are_read_not_a_panic() {
+        let mut raw = Vec::new();
+        for v in [1.0f64, 2.0, 3.0] {
+            raw.extend(v.to_le_bytes());
+        }
+        for k in 0..3 {
+            raw.extend(stamp(3_800_000_000 + k, 0.25));
+        }
+        let f = segment(
+            &[
+                ("/", None, vec![("started", TIMESTAMP, stamp(3_800_000_000, 0.0))]),
+                (
+                    "/'g'/'force'",
+                    Some((10, 3)),
+                    vec![
+                        ("wf_increment", 10, 0.001f64.to_le_bytes().to_vec()),
+                        ("wf_start_time", TIMESTAMP, stamp(3_800_000_000, 0.5)),
+                        ("unit_string", 0x20, {
+                            let mut v = 1u32.to_le_bytes().to_vec();
+                            v.push(b'N');
+                            v
+                        }),
+                    ],
+                ),
+                ("/'g'/'time'", Some((TIMESTAMP, 3)), vec![]),
+            ],
+            &raw,
+        );
+        let r = parse(&f, "wf.tdms").unwrap();
+        let c = r.channel("force", "wf.tdms").unwrap();
+        assert_eq!(c.values, vec![1.0, 2.0, 3.0]);
+        assert_eq!(c.start_time, Some(3_800_000_000.5));
+        assert_eq!(c.unit.as_deref(), Some("N"));
+        assert!(r.segments[0][1].name.contains("timestamps, not read"));
+    }
+
+    #[test]
+    fn raw_data_of_an_unknown_type_is_refused_not_read_without_end() {
+        // type 0 (void) with 2^36 values beside one float: no size to step over them
+        let f = segment(
+            &[
+                ("/'g'/'void'", Some((0, 1 << 36)), vec![]),
+                ("/'g'/'x'", Some((10, 1)), vec![]),
+            ],
+            &1.0f64.to_le_bytes(),
+        );
+        let e = parse(&f, "void.tdms").unwrap_err().to_string();
+        assert!(e.contains("type 0x0"), "{e}");
+    }
+
     #[test]
     fn paths_split_with_quotes_doubled() {
         assert_eq!(split_path("/'g'/'it''s'"), vec!["g", "it's"]);

@@ -319,3 +319,27 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Vec<Function>> {
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_58b_whose_closing_minus_one_sits_on_its_own_line_is_read() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/uff");
+        let bytes = std::fs::read(dir.join("time_binary.uff")).unwrap();
+        let want = parse(&bytes, "b.uff").unwrap();
+        // the writer's variant: the binary block's line ended before the closing -1
+        let mut variant = Vec::new();
+        let mut ended = 0;
+        for (i, &b) in bytes.iter().enumerate() {
+            if i > 0 && bytes[i..].starts_with(b"    -1\n") && bytes[i - 1] != b'\n' {
+                variant.push(b'\n');
+                ended += 1;
+            }
+            variant.push(b);
+        }
+        assert_eq!(ended, 2, "two binary blocks");
+        assert_eq!(parse(&variant, "v.uff").unwrap(), want);
+    }
+}

@@ -10,6 +10,9 @@ use crate::analysis::modal::FrfForm;
 use crate::analysis::oma::cluster::ClusterRule;
 use std::path::PathBuf;
 
+/// The smallest value at a block's end an exponential window may have (`$exp_window`).
+pub const MIN_EXP_END: f64 = 1e-3;
+
 /// `ema`'s settings as given.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmaInput {
@@ -53,6 +56,49 @@ pub struct EmaInput {
     pub plots: bool,
 }
 
+/// The responses without the force's own channel when both come from one file: taken among
+/// every channel it is left out (said so); named as a response it is refused (the FRF of the
+/// force over itself is 1, and would be fitted as a mode).
+fn without_the_force(
+    mut response: crate::analysis::ema::input::Series,
+    force: &crate::analysis::ema::input::Series,
+    input: &EmaInput,
+) -> SpecResult<crate::analysis::ema::input::Series> {
+    let same_file = match (
+        std::fs::canonicalize(&input.response),
+        std::fs::canonicalize(&input.excitation),
+    ) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if !same_file {
+        return Ok(response);
+    }
+    let Some(i) = response.names.iter().position(|n| *n == force.names[0]) else {
+        return Ok(response);
+    };
+    if !input.response_cols.is_empty() {
+        return Err(SpecError::setting(format!(
+            "$response_col {}: the force's own channel (of the same file) is no response: its \
+             FRF over itself is 1",
+            force.names[0]
+        )));
+    }
+    response.names.remove(i);
+    response.channels.remove(i);
+    if response.names.is_empty() {
+        return Err(SpecError::setting(format!(
+            "{}: its only channel is the force: give the responses' file",
+            input.response.display()
+        )));
+    }
+    response.notes.push(format!(
+        "the force's channel `{}` left out of the responses (the same file holds both)",
+        force.names[0]
+    ));
+    Ok(response)
+}
+
 /// A checked `ema` job: its records read and aligned.
 #[derive(Debug, Clone)]
 pub struct EmaSpec {
@@ -72,10 +118,12 @@ impl EmaSpec {
             )));
         }
         if let ExpChoice::End(e) = input.exp_window {
-            if !(e > 0.0 && e < 1.0) {
+            // below 0.1 % the window adds a damping that swamps every mode's own
+            if !(e >= MIN_EXP_END && e < 1.0) {
                 return Err(SpecError::setting(format!(
-                    "$exp_window {e}: the window's value at the block's end, between 0 and 1 \
-                     (or off, auto)"
+                    "$exp_window {e:?}: the window's value at the block's end, from \
+                     {MIN_EXP_END} to below 1 (or off, auto); a smaller end value damps the \
+                     modes away"
                 )));
             }
         }
@@ -111,6 +159,7 @@ impl EmaSpec {
             input.excitation_fs,
         )
         .map_err(SpecError::Input)?;
+        let response = without_the_force(response, &force, &input)?;
         let aligned = align(&response, &force, input.delay_s).map_err(SpecError::Input)?;
         let nyq = aligned.nyquist_hz;
         if let Some(b) = &input.bands {
@@ -140,6 +189,17 @@ impl EmaSpec {
                 None => (f_max / 100.0).max(0.5),
             },
         };
+        if let Some(b) = input.bands.as_ref().and_then(|b| {
+            b.iter()
+                .find(|(lo, hi)| *lo < f_min || *hi > f_max)
+                .copied()
+        }) {
+            return Err(SpecError::setting(format!(
+                "$bands {}-{} reaches outside the band analysed, {f_min}-{f_max} Hz \
+                 ($f_min_hz, $f_max_hz): nothing is fitted there",
+                b.0, b.1
+            )));
+        }
         let n = aligned.force.len();
         let excitation = if input.impact {
             Excitation::Impact {

@@ -81,6 +81,9 @@ pub struct Hits {
     pub block: usize,
     /// Samples of a block before its pulse.
     pub pre: usize,
+    /// Single-sample spikes of the force set aside (a glitch of the DAQ or a cable, not a
+    /// hit: no hammer pulse is one sample wide), as sample indexes.
+    pub spikes: Vec<usize>,
 }
 
 impl Hits {
@@ -113,14 +116,35 @@ fn median(v: &[f64]) -> f64 {
 /// is no pulse clearly above the noise, or no hit is left to use (each left-out hit named).
 pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::Result<Hits> {
     let baseline = median(force);
-    let dev: Vec<f64> = force.iter().map(|v| (v - baseline).abs()).collect();
+    let mut dev: Vec<f64> = force.iter().map(|v| (v - baseline).abs()).collect();
     let noise_sd = 1.4826 * median(&dev);
+    // single-sample spikes (both neighbours below a tenth of it, well above the noise): no
+    // hammer's pulse is one sample wide; one 100 times the hits would otherwise hide them
+    let spikes: Vec<usize> = (0..dev.len())
+        .filter(|&k| {
+            let d = dev[k];
+            let side = |j: Option<usize>| j.and_then(|j| dev.get(j)).is_none_or(|&n| n < 0.1 * d);
+            d > 10.0 * noise_sd && side(k.checked_sub(1)) && side(Some(k + 1))
+        })
+        .collect();
+    for &k in &spikes {
+        dev[k] = 0.0;
+    }
     let level = dev.iter().fold(0.0f64, |a, &b| a.max(b));
     if !(level > 10.0 * noise_sd && level > 0.0) {
         return Err(bad_input(format!(
             "{name}: no impact found (the largest excursion, {level:.4}, is not 10 times the \
              noise's standard deviation {noise_sd:.4}); is this the force channel, and was the \
-             structure hit?"
+             structure hit?{}",
+            if spikes.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " ({} single-sample spike(s) were set aside: a pulse one sample wide is a \
+                     glitch, or a force sampled too slowly for the hammer's pulses)",
+                    spikes.len()
+                )
+            }
         )));
     }
     let above = (0.05 * level).max(6.0 * noise_sd);
@@ -198,7 +222,13 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
                 (second.start - first.start) as f64 / fs_hz * 1e3,
                 100.0 * second.peak.abs() / first.peak.abs()
             ));
-        } else if first.flat >= 3 {
+        } else if first.start == 0 {
+            h.left_out = Some(format!(
+                "hit {} at {}: the record starts inside its pulse (its rise is not recorded)",
+                i + 1,
+                at(first.start)
+            ));
+        } else if first.flat >= 2 {
             h.left_out = Some(format!(
                 "hit {} at {}: the force is clipped ({} samples in a row at its peak {:.4}: the \
                  hammer's transducer or the ADC saturated)",
@@ -273,6 +303,7 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         hits,
         block,
         pre,
+        spikes,
     })
 }
 
@@ -394,6 +425,49 @@ mod tests {
         let f = record(&[(1000, 20, 100.0), (1100, 20, 50.0)], 5000);
         let e = find(&f, 10_000.0, ImpactRule::default(), "ch").unwrap_err();
         assert!(e.to_string().contains("no hit can be used"), "{e}");
+    }
+
+    #[test]
+    fn a_spike_a_cut_first_pulse_and_a_two_sample_flat_top_are_named() {
+        let fs = 10_000.0;
+        // a record that starts inside its first pulse (its rise missing), two good hits, a
+        // third clipped flat over two samples only, and a one-sample spike 100 times the hits
+        let mut f = record(
+            &[
+                (0, 20, 0.0),
+                (11_000, 20, 100.0),
+                (21_000, 20, 100.0),
+                (31_000, 20, 100.0),
+            ],
+            42_000,
+        );
+        for (k, v) in f.iter_mut().take(10).enumerate() {
+            *v += 100.0 * (std::f64::consts::PI * (k + 10) as f64 / 20.0).sin();
+        }
+        let top = f[31_010].max(f[31_009]);
+        f[31_009] = top;
+        f[31_010] = top;
+        f[5_000] = 10_000.0;
+        let h = find(&f, fs, ImpactRule::default(), "force").unwrap();
+        assert_eq!(h.spikes, vec![5_000]);
+        assert_eq!(h.hits.len(), 4, "{:?}", h.hits);
+        let cut = h.hits[0].left_out.as_deref().unwrap();
+        assert!(cut.contains("starts inside its pulse"), "{cut}");
+        assert!(h.hits[1].left_out.is_none() && h.hits[2].left_out.is_none());
+        let clipped = h.hits[3].left_out.as_deref().unwrap();
+        assert!(clipped.contains("clipped (2 samples"), "{clipped}");
+    }
+
+    #[test]
+    fn a_block_shorter_than_the_pre_trigger_is_refused_naming_the_setting() {
+        let f = record(&[(10_000, 20, 100.0), (40_000, 20, 100.0)], 70_000);
+        let rule = ImpactRule {
+            block_s: Some(0.01),
+            ..ImpactRule::default()
+        };
+        let e = find(&f, 10_000.0, rule, "force").unwrap_err();
+        let m = crate::setting::message(&e, crate::setting::Naming::Cli);
+        assert!(m.contains("--block-s 0.01") && m.contains("before each pulse"), "{m}");
     }
 
     #[test]

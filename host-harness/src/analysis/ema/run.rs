@@ -377,6 +377,23 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
                 h.baseline,
                 h.noise_sd
             );
+            if !h.spikes.is_empty() {
+                let at: Vec<String> = h
+                    .spikes
+                    .iter()
+                    .take(10)
+                    .map(|&k| format!("{:.4} s", k as f64 / a.fs_hz))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "  warning: {} single-sample spike(s) of the force set aside, not taken for \
+                     hits (a glitch of the DAQ or a cable; no hammer's pulse is one sample \
+                     wide): at {}{}",
+                    h.spikes.len(),
+                    at.join(", "),
+                    if h.spikes.len() > 10 { ", ..." } else { "" }
+                );
+            }
             for (i, hit) in h.hits.iter().enumerate() {
                 let p = hit.pulse();
                 let w = (p.end - p.start) as f64 / a.fs_hz * 1e3;
