@@ -655,6 +655,15 @@ fn the_twin_of_a_rendered_recording_finds_the_exposures_bias() {
             "mode {mode}: twin {mean}, sinc {sinc}\n{report}"
         );
     }
+    // one run has no spread: no interval of zero width, no bias divided out as exact
+    let mut e = extra.to_vec();
+    e[7] = "1";
+    let (_, one) = analyze_recording(&files.analyze_args, &e, &tmp.path().join("one"));
+    assert!(
+        one.contains("from a single run: no uncertainty and no interval"),
+        "{one}"
+    );
+    assert!(!one.contains("+- 0.00000") && !one.contains("bias divided out:"), "{one}");
     // two shards: their rows together are the whole's
     let mut together = Vec::new();
     for shard in ["1/2", "2/2"] {

@@ -239,6 +239,43 @@ fn hammer_files_as_careless_users_give_them_are_refused_named_or_read() {
     assert_ok(&o);
     assert_eq!(cells(&tmp.path().join("bom/modes.csv")), modes);
 
+    // times rounded to fewer digits than the rate needs: read, and a rate given exactly wins
+    let h3 = tmp.path().join("h3");
+    assert_ok(&harness(&[
+        "simulate-hammer",
+        "--out",
+        h3.to_str().unwrap(),
+        "--seconds",
+        "3.7",
+        "--peaks-n",
+        "150",
+        "--camera-hz",
+        "3000",
+    ]));
+    let rounded: String = std::fs::read_to_string(h3.join("camera.csv"))
+        .unwrap()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match (i, l.split_once(',')) {
+            (0, _) | (_, None) => format!("{l}\n"),
+            (_, Some((t, rest))) => format!("{:.5},{rest}\n", t.parse::<f64>().unwrap()),
+        })
+        .collect();
+    let rounded_file = tmp.path().join("rounded.csv");
+    std::fs::write(&rounded_file, rounded).unwrap();
+    let o = ema(
+        &rounded_file,
+        &h3.join("force.csv"),
+        &tmp.path().join("r"),
+        &["--response-fs", "3000"],
+    );
+    assert_ok(&o);
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("the rate given, 3000 Hz, used"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+
     // two channels of one name: refused, naming it (response 2 was a copy of response 1)
     let cam = std::fs::read_to_string(&camera).unwrap();
     let dup = cam.replacen("p2", "p1", 1);

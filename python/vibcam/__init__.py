@@ -29,6 +29,9 @@ from ._vibcam import InputError, VibcamError, FrameReader
 #: The package's version (the workspace's).
 __version__ = _vibcam.__version__
 
+# the future import's name is no part of the package (its effect on this module stays)
+del annotations
+
 __all__ = [
     "InputError",
     "VibcamError",
