@@ -663,7 +663,10 @@ fn the_twin_of_a_rendered_recording_finds_the_exposures_bias() {
         one.contains("from a single run: no uncertainty and no interval"),
         "{one}"
     );
-    assert!(!one.contains("+- 0.00000") && !one.contains("bias divided out:"), "{one}");
+    assert!(
+        !one.contains("+- 0.00000") && !one.contains("bias divided out:"),
+        "{one}"
+    );
     // two shards: their rows together are the whole's
     let mut together = Vec::new();
     for shard in ["1/2", "2/2"] {

@@ -376,7 +376,11 @@ fn bad_references_are_named_never_silently_used() {
     std::fs::write(&bad_file, bad).unwrap();
     // placed on a target's window it is refused at once: the target's own motion would be
     // taken for the camera's
-    let o = track(&rec, &tmp.path().join("on"), &["--reference", bad_file.to_str().unwrap()]);
+    let o = track(
+        &rec,
+        &tmp.path().join("on"),
+        &["--reference", bad_file.to_str().unwrap()],
+    );
     assert_exit_2(&o, "r5 at");
     assert_exit_2(&o, "overlaps target 5's window");
     // on a moving part that is not a target (the top storey, not followed here): found moving

@@ -114,7 +114,10 @@ pub fn stdout(text: &str) -> anyhow::Result<()> {
 /// default `--out` such as `./analysis` is otherwise found only by looking). On standard error,
 /// beside the progress: standard output stays the report.
 pub fn outputs_in(dir: &std::path::Path) -> anyhow::Result<()> {
-    let shown = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let shown = match std::env::current_dir() {
+        Ok(here) if dir.is_relative() => here.join(dir),
+        _ => dir.to_path_buf(),
+    };
     eprintln!("outputs in {}", shown.display());
     Ok(())
 }

@@ -276,7 +276,10 @@ mod tests {
                 }
             }
         }
-        assert!(unknown.is_empty(), "messages name unknown settings: {unknown:?}");
+        assert!(
+            unknown.is_empty(),
+            "messages name unknown settings: {unknown:?}"
+        );
         for key in KEYS {
             let flag = key.replace('_', "-");
             assert!(

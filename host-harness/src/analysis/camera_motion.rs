@@ -695,6 +695,36 @@ mod tests {
     ];
 
     #[test]
+    fn references_that_take_every_targets_motion_are_warned_of() {
+        let (refs, truth) = tracks(&AT, 300, None);
+        let m = estimate(&refs, None, (200, 160)).unwrap();
+        // a target that moves exactly as the references (they are on the structure with it)
+        let with = |own: f64| Tracks {
+            centroids: vec![truth
+                .iter()
+                .enumerate()
+                .map(|(k, h)| {
+                    let (x, y) = h.apply((60.0, 90.0));
+                    centroid(Some((x, y + own * (k as f64 / 5.0).sin())))
+                })
+                .collect()],
+            first: vec![(60.0, 90.0)],
+            refused: vec![0],
+            depth: FrameDepth::default(),
+        };
+        let all = with(0.0);
+        let text = m.describe(&all, &m.compensate(&all), false);
+        assert!(
+            text.contains("warning: the references move with the targets"),
+            "{text}"
+        );
+        // a target with a motion of its own beside the camera's: no warning
+        let own = with(0.5);
+        let text = m.describe(&own, &m.compensate(&own), false);
+        assert!(!text.contains("warning"), "{text}");
+    }
+
+    #[test]
     fn a_similarity_is_taken_out_exactly_and_a_moving_reference_is_named() {
         let (refs, truth) = tracks(&AT, 300, Some(2));
         let m = estimate(&refs, None, (200, 160)).unwrap();

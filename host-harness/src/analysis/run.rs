@@ -286,7 +286,6 @@ fn append_compensation(
     Ok(())
 }
 
-
 /// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
 /// camera's Nyquist frequency (the vision path has no content above it, and outside the
 /// excitation band H1 is noise over noise).

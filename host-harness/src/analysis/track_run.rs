@@ -101,11 +101,14 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
             raw: viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
-    out.write("displacement.csv", displacement_csv(
+    out.write(
+        "displacement.csv",
+        displacement_csv(
             &rows,
             req.fps,
             crate::frames::FrameRange::start_s(req.frame_range, req.fps),
-        ))?;
+        ),
+    )?;
     let mut report = report(req, tracks, windows, &failures);
     report.push_str(&viewed.describe(along_x));
     report.push_str(&super::view::write_camera_outputs(

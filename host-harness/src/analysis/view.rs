@@ -185,7 +185,11 @@ pub fn check_world(points: &[WorldPoint]) -> Result<Homography, String> {
                     "points {} and {} are the same point {} ({}, {}){}",
                     i + 1,
                     j + 1,
-                    if same_px { "in the image" } else { "on the plane" },
+                    if same_px {
+                        "in the image"
+                    } else {
+                        "on the plane"
+                    },
                     if same_px { a.px.0 } else { a.mm.0 },
                     if same_px { a.px.1 } else { a.mm.1 },
                     if same_px != same_mm {
@@ -274,39 +278,35 @@ pub fn track_view(
     Ok(viewed)
 }
 
-/// A chosen point lost in every frame measured nothing: an error naming it (and what tracks
-/// a point a threshold cannot separate), not a run that ends well with empty columns.
+/// A chosen point a threshold loses in every frame measured nothing: an error naming it, why
+/// (its frames' flags) and what tracks a point a threshold cannot separate, not a run that
+/// ends well with empty columns. (Lucas-Kanade flags each frame's loss and goes on: a window
+/// it cannot follow is named per frame in the report.)
 pub fn refuse_targets_never_seen(tracks: &Tracks, targets: &Targets) -> anyhow::Result<()> {
-    let Targets::Points(_, rule) = targets else {
+    let Targets::Points(_, super::points::PointTracker::Centroid(_)) = targets else {
         return Ok(());
     };
-    let never: Vec<String> = tracks
+    let never: Vec<usize> = tracks
         .centroids
         .iter()
         .enumerate()
         .filter(|(_, c)| !c.is_empty() && c.iter().all(|c| c.position().is_none()))
-        .map(|(t, _)| (t + 1).to_string())
+        .map(|(t, _)| t)
         .collect();
-    if never.is_empty() {
+    let Some(&first) = never.first() else {
         return Ok(());
-    }
-    let frames = tracks.centroids.first().map_or(0, Vec::len);
-    let hint = match rule {
-        super::points::PointTracker::Centroid(_) => {
-            "the threshold finds no single bright blob in their windows (a dot on a tag, a \
-             pattern, a dark target?): --tracker lk follows any texture, or give each window \
-             a threshold of its own"
-        }
-        super::points::PointTracker::Lk { .. } => {
-            "their windows have too little texture to follow, or their motion leaves the \
-             search range (--search-px)"
-        }
     };
+    let frames = tracks.centroids[first].len();
+    let names: Vec<String> = never.iter().map(|t| (t + 1).to_string()).collect();
     Err(bad_input(format!(
         "target(s) {} of {} lost in every one of the {frames} frames: nothing is measured of \
-         them; {hint}",
-        never.join(", "),
-        tracks.centroids.len()
+         them (target {}: {}); a threshold finds no single bright blob in such windows (a dot on \
+         a tag, a pattern, a dark target?): --tracker lk follows any texture, or give each \
+         window a threshold of its own",
+        names.join(", "),
+        tracks.centroids.len(),
+        first + 1,
+        crate::chain::displacement::why_lost(&tracks.centroids[first])
     )))
 }
 
@@ -595,14 +595,14 @@ fn check_world_fit(
         })
         .collect();
     let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
-    let u_rms =
-        (points.iter().map(|p| p.u_px * p.u_px).sum::<f64>() / points.len() as f64).sqrt();
+    let u_rms = (points.iter().map(|p| p.u_px * p.u_px).sum::<f64>() / points.len() as f64).sqrt();
     let tol = (3.0 * u_rms).max(WORLD_RESIDUAL_PX);
     if rms > tol {
-        let (worst, e) = errors
-            .iter()
-            .enumerate()
-            .fold((0, 0.0), |m, (i, e)| if *e > m.1 { (i, *e) } else { m });
+        let (worst, e) =
+            errors
+                .iter()
+                .enumerate()
+                .fold((0, 0.0), |m, (i, e)| if *e > m.1 { (i, *e) } else { m });
         return Err(bad_input(format!(
             "--world: the {} points do not lie on one plane seen by the camera: their image \
              positions are {rms:.3} px RMS from the fitted plane's, more than {tol:.3} px (3 \

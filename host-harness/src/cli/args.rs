@@ -261,7 +261,10 @@ pub fn parse_bands(s: &str) -> Result<Bands, String> {
         if lo_hz >= hi_hz {
             return Err(format!("band `{label}`: need LO < HI"));
         }
-        if let Some(b) = out.iter().find(|b: &&Band| lo_hz < b.hi_hz && b.lo_hz < hi_hz) {
+        if let Some(b) = out
+            .iter()
+            .find(|b: &&Band| lo_hz < b.hi_hz && b.lo_hz < hi_hz)
+        {
             return Err(format!(
                 "bands `{}` and `{label}` overlap: each band holds one mode, and a mode in two \
                  bands would be reported twice; make them disjoint",

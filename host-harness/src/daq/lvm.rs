@@ -90,7 +90,10 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
             Some(at) => {
                 let sep_char = line[at..].chars().next().unwrap_or('\t');
                 let rest = &line[at + sep_char.len_utf8()..];
-                (&line[..at], rest.split(sep_char).next().unwrap_or("").trim())
+                (
+                    &line[..at],
+                    rest.split(sep_char).next().unwrap_or("").trim(),
+                )
             }
             None => (line, ""),
         };
@@ -389,7 +392,9 @@ X_Value\tF\ta\tComment\n\t0,914018\t1,204792\n\t0,537321\t1,208403\n\t0,616905\t
         let r = parse(&short, "short.lvm").unwrap();
         assert_eq!(r.channel("F", "short.lvm").unwrap().values.len(), 2);
         assert!(
-            r.notes.iter().any(|n| n.contains("2 samples where its header states 3")),
+            r.notes
+                .iter()
+                .any(|n| n.contains("2 samples where its header states 3")),
             "{:?}",
             r.notes
         );

@@ -198,7 +198,10 @@ mod tests {
     #[test]
     fn a_non_ascii_type_and_empty_or_huge_empty_arrays_are_refused() {
         let e = parse(
-            &npy("{'descr': '<fé', 'fortran_order': False, 'shape': (2,), }", &[0; 16]),
+            &npy(
+                "{'descr': '<fé', 'fortran_order': False, 'shape': (2,), }",
+                &[0; 16],
+            ),
             "a.npy",
         )
         .unwrap_err()

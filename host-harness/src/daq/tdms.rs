@@ -364,7 +364,9 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                         for _ in 0..n {
                             for (p, i) in &chans {
                                 let v = c.value(i.dtype)?;
-                                if let Some(o) = objects.get_mut(p).filter(|o| o.unreadable.is_none()) {
+                                if let Some(o) =
+                                    objects.get_mut(p).filter(|o| o.unreadable.is_none())
+                                {
                                     o.values.push(v);
                                 }
                             }
@@ -373,7 +375,9 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                         for (p, i) in &chans {
                             for _ in 0..i.count {
                                 let v = c.value(i.dtype)?;
-                                if let Some(o) = objects.get_mut(p).filter(|o| o.unreadable.is_none()) {
+                                if let Some(o) =
+                                    objects.get_mut(p).filter(|o| o.unreadable.is_none())
+                                {
                                     o.values.push(v);
                                 }
                             }
@@ -537,7 +541,10 @@ mod tests {
 
     /// A little-endian segment: `objects` as (path, raw index (type, count) or none,
     /// properties (name, type, value bytes)), then `raw`.
-    fn segment(objects: &[(&str, Option<(u32, u64)>, Vec<(&str, u32, Vec<u8>)>)], raw: &[u8]) -> Vec<u8> {
+    fn segment(
+        objects: &[(&str, Option<(u32, u64)>, Vec<(&str, u32, Vec<u8>)>)],
+        raw: &[u8],
+    ) -> Vec<u8> {
         let s = |m: &mut Vec<u8>, t: &str| {
             m.extend((t.len() as u32).to_le_bytes());
             m.extend(t.as_bytes());
@@ -575,7 +582,9 @@ mod tests {
 
     /// A timestamp: `secs` since 1904 and `frac` of a second (little endian: fraction first).
     fn stamp(secs: i64, frac: f64) -> Vec<u8> {
-        let mut v = ((frac * 18_446_744_073_709_551_616.0) as u64).to_le_bytes().to_vec();
+        let mut v = ((frac * 18_446_744_073_709_551_616.0) as u64)
+            .to_le_bytes()
+            .to_vec();
         v.extend(secs.to_le_bytes());
         v
     }
@@ -591,7 +600,11 @@ mod tests {
         }
         let f = segment(
             &[
-                ("/", None, vec![("started", TIMESTAMP, stamp(3_800_000_000, 0.0))]),
+                (
+                    "/",
+                    None,
+                    vec![("started", TIMESTAMP, stamp(3_800_000_000, 0.0))],
+                ),
                 (
                     "/'g'/'force'",
                     Some((10, 3)),

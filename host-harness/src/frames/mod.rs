@@ -10,8 +10,8 @@ mod rates;
 pub mod video;
 
 pub use files::{
-    centroid_source, centroid_source_seen, discover_frames, for_each_tiff_page, load_frame,
-    ignored_note, open_frames, Discovered, FrameDepth, FrameRange, FrameSource,
+    centroid_source, centroid_source_seen, discover_frames, for_each_tiff_page, ignored_note,
+    load_frame, open_frames, Discovered, FrameDepth, FrameRange, FrameSource,
 };
 pub use rates::{resolve_rates, Rates};
 
@@ -88,7 +88,10 @@ impl GreyFrame {
     /// As [`to_image`](Self::to_image), the PNG scaled down (area-averaged) so that its longer
     /// side is at most `max_side` pixels; `width` and `height` stay the frame's own, so that a
     /// page drawing the PNG over them keeps full-resolution pixel coordinates.
-    pub fn to_image_within(&self, max_side: u32) -> anyhow::Result<crate::export::html::FrameImage> {
+    pub fn to_image_within(
+        &self,
+        max_side: u32,
+    ) -> anyhow::Result<crate::export::html::FrameImage> {
         let (w, h) = self.dimensions();
         let bytes: Vec<u8> = match self {
             GreyFrame::U8 { data, .. } => data.clone(),

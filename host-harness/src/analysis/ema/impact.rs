@@ -283,11 +283,13 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         let given = (b * fs_hz).round();
         let least = pre + 8 * width.max(4);
         if given < least as f64 {
-            return Err(anyhow::Error::new(crate::setting::SpecError::setting(format!(
-                "$block_s {b}: {given} samples at {fs_hz} Hz, shorter than the {pre} samples \
+            return Err(anyhow::Error::new(crate::setting::SpecError::setting(
+                format!(
+                    "$block_s {b}: {given} samples at {fs_hz} Hz, shorter than the {pre} samples \
                  kept before each pulse and 8 pulse widths after it ({least} samples, {:.6} s)",
-                least as f64 / fs_hz
-            ))));
+                    least as f64 / fs_hz
+                ),
+            )));
         }
         block = block.min(given as usize);
     }
@@ -467,7 +469,10 @@ mod tests {
         };
         let e = find(&f, 10_000.0, rule, "force").unwrap_err();
         let m = crate::setting::message(&e, crate::setting::Naming::Cli);
-        assert!(m.contains("--block-s 0.01") && m.contains("before each pulse"), "{m}");
+        assert!(
+            m.contains("--block-s 0.01") && m.contains("before each pulse"),
+            "{m}"
+        );
     }
 
     #[test]

@@ -65,9 +65,9 @@ fn daq_record(path: &Path) -> anyhow::Result<daq::Record> {
         "csv" | "txt" => {
             let text = std::fs::read(path)
                 .map_err(|e| bad_input(format!("{}: cannot read: {e}", path.display())))?;
-            let time = crate::csvio::header_names(&text)
-                .into_iter()
-                .find(|c| ["t_s", "time", "t", "time_s"].contains(&c.to_ascii_lowercase().as_str()));
+            let time = crate::csvio::header_names(&text).into_iter().find(|c| {
+                ["t_s", "time", "t", "time_s"].contains(&c.to_ascii_lowercase().as_str())
+            });
             daq::csv::parse(&text, &path.display().to_string(), time.as_deref())
         }
         other => Err(bad_input(format!(
@@ -339,9 +339,7 @@ pub fn not_a_force(unit: &str) -> Option<&'static str> {
             Some("acceleration")
         }
         "m/s" | "mm/s" | "in/s" | "ips" | "ft/s" => Some("velocity"),
-        "m" | "mm" | "um" | "nm" | "in" | "mil" | "mils" | "px" | "pixels" => {
-            Some("displacement")
-        }
+        "m" | "mm" | "um" | "nm" | "in" | "mil" | "mils" | "px" | "pixels" => Some("displacement"),
         "s" | "ms" | "sec" | "seconds" => Some("time"),
         _ => None,
     }
