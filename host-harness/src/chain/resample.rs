@@ -113,7 +113,7 @@ pub fn upsample_record(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
     let ratio = to_hz / from_hz;
     let n = values.len() - values.len() % q;
     let out_len = n as f64 * ratio;
-    if !(out_len <= MAX_UPSAMPLED as f64) || ratio > MAX_UPSAMPLE_RATIO {
+    if out_len.is_nan() || out_len > MAX_UPSAMPLED as f64 || ratio > MAX_UPSAMPLE_RATIO {
         return Err(bad_input(format!(
             "{} samples at {from_hz} Hz upsampled to {to_hz} Hz would be {out_len:.3e} samples \
              (a ratio of {ratio:.4e}); at most {MAX_UPSAMPLED} samples and a ratio of \

@@ -57,7 +57,7 @@ pub fn parse(bytes: &[u8], file: &str, time_col: Option<&str>) -> anyhow::Result
             for (k, w) in t.windows(2).enumerate() {
                 let step = w[1] - w[0];
                 let drift = t[k + 1] - (t[0] + (k + 1) as f64 * dt);
-                if !((step - dt).abs() <= 0.1 * dt) || drift.abs() > 0.5 * dt {
+                if step.is_nan() || (step - dt).abs() > 0.1 * dt || drift.abs() > 0.5 * dt {
                     return Err(bad_input(format!(
                         "{file}: row {}: time step {step} s in `{name}` where the record's mean \
                          is {dt} s (the time {} s is {drift:+e} s off the even grid, more than \

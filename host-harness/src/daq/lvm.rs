@@ -314,9 +314,9 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
             }
             i += 1;
         }
-        for k in 0..h.channels {
+        for (k, got) in values.iter().enumerate() {
             if let Some(n) = h.samples.get(k).copied().flatten() {
-                if values[k].len() < n {
+                if got.len() < n {
                     // a file cut at a line's end (`head -n`), or shortened by hand (lvm_read's
                     // own test files are): named, not refused
                     notes.push(format!(
@@ -324,7 +324,7 @@ pub fn parse(text: &str, file: &str) -> anyhow::Result<Record> {
                          states {n} (`Samples`): the file may have been cut short",
                         segments.len() + 1,
                         h.names[k],
-                        values[k].len()
+                        got.len()
                     ));
                 }
             }

@@ -539,12 +539,14 @@ mod tests {
         assert!(e.contains("cut.tdms: segment 1 states"), "{e}");
     }
 
+    /// A property: name, type, value bytes.
+    type Prop<'a> = (&'a str, u32, Vec<u8>);
+    /// An object: path, raw index (type, count) or none, properties.
+    type Object<'a> = (&'a str, Option<(u32, u64)>, Vec<Prop<'a>>);
+
     /// A little-endian segment: `objects` as (path, raw index (type, count) or none,
     /// properties (name, type, value bytes)), then `raw`.
-    fn segment(
-        objects: &[(&str, Option<(u32, u64)>, Vec<(&str, u32, Vec<u8>)>)],
-        raw: &[u8],
-    ) -> Vec<u8> {
+    fn segment(objects: &[Object<'_>], raw: &[u8]) -> Vec<u8> {
         let s = |m: &mut Vec<u8>, t: &str| {
             m.extend((t.len() as u32).to_le_bytes());
             m.extend(t.as_bytes());

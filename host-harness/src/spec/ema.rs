@@ -119,7 +119,7 @@ impl EmaSpec {
         }
         if let ExpChoice::End(e) = input.exp_window {
             // below 0.1 % the window adds a damping that swamps every mode's own
-            if !(e >= MIN_EXP_END && e < 1.0) {
+            if !(MIN_EXP_END..1.0).contains(&e) {
                 return Err(SpecError::setting(format!(
                     "$exp_window {e:?}: the window's value at the block's end, from \
                      {MIN_EXP_END} to below 1 (or off, auto); a smaller end value damps the \
