@@ -801,3 +801,57 @@ fn references_and_plane_points_the_camera_model_cannot_use_are_refused() {
     let o = track(&["--world", write("w3.csv", s).to_str().unwrap()]);
     assert_exit_2(&o, "u_px 1000000");
 }
+
+#[test]
+fn an_interval_never_leaves_its_quantitys_domain() {
+    // short Welch segments: 2 Hz lines cannot place the 7.1 Hz mode; its symmetric frequency
+    // interval reached -0.75 Hz
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    assert_ok(&harness(&[
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--exposure-ms",
+        "2",
+    ]));
+    let out = tmp.path().join("a");
+    let o = harness(&[
+        "analyze",
+        "--frames",
+        rec.join("frames").to_str().unwrap(),
+        "--fps",
+        "120",
+        "--accel",
+        rec.join("accel.csv").to_str().unwrap(),
+        "--fs",
+        "2048",
+        "--time-col",
+        "t_s",
+        "--threshold",
+        "127",
+        "--mm-per-px",
+        "0.1266",
+        "--nperseg",
+        "1024",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let m = cells(&out.join("modes.csv"));
+    for name in ["f_hz_lo", "damping_lo", "amplitude_lo"] {
+        let c = m[0].iter().position(|h| h == name).unwrap();
+        for row in &m[1..] {
+            if let Ok(v) = row[c].parse::<f64>() {
+                assert!(v >= 0.0, "{name} {v} in {row:?}");
+            }
+        }
+    }
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("the 95 % interval of its frequency reaches 0 Hz"),
+        "{report}"
+    );
+}
