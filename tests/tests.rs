@@ -11,6 +11,7 @@ mod daq;
 mod defects;
 mod ema;
 mod formats;
+mod golden;
 mod hostile;
 mod modal;
 mod plan;
