@@ -1,4 +1,4 @@
-//! Golden outputs: what each job wrote before the restructuring into crates (issue 57), and
+//! Golden outputs: what each job wrote before the restructuring into crates, and
 //! the comparison that holds every later change to them: every cell of every CSV equal, or
 //! within 1e-12 relative for numbers. A change that moves a number on purpose regenerates them
 //! (`VIBCAM_BLESS=1 cargo test -p host-harness --test e2e golden`) and says why in its commit.
@@ -43,9 +43,7 @@ fn same_cell(a: &str, b: &str) -> bool {
         return true;
     }
     match (a.parse::<f64>(), b.parse::<f64>()) {
-        (Ok(x), Ok(y)) => {
-            (x - y).abs() <= 1e-12 * x.abs().max(y.abs()) || (x - y).abs() <= 1e-300
-        }
+        (Ok(x), Ok(y)) => (x - y).abs() <= 1e-12 * x.abs().max(y.abs()) || (x - y).abs() <= 1e-300,
         _ => false,
     }
 }
@@ -76,9 +74,7 @@ fn check(case: &str, dir: &Path, files: &[&str]) {
         for (row, (a, b)) in w.iter().zip(&g).enumerate() {
             let (ca, cb): (Vec<&str>, Vec<&str>) = (a.split(',').collect(), b.split(',').collect());
             if ca.len() != cb.len() || ca.iter().zip(&cb).any(|(x, y)| !same_cell(x, y)) {
-                problems.push(format!(
-                    "{case}/{f} row {row}:\n  golden {a}\n  now    {b}"
-                ));
+                problems.push(format!("{case}/{f} row {row}:\n  golden {a}\n  now    {b}"));
                 break;
             }
         }
@@ -124,7 +120,11 @@ fn a_hammer_test_and_its_ema_write_what_they_wrote() {
     let tmp = tempfile::tempdir().unwrap();
     let h = tmp.path().join("h");
     run(&["simulate-hammer", "--out", h.to_str().unwrap()]);
-    check("simulate-hammer", &h, &["force.csv", "camera.csv", "truth.csv"]);
+    check(
+        "simulate-hammer",
+        &h,
+        &["force.csv", "camera.csv", "truth.csv"],
+    );
     let e = tmp.path().join("e");
     run(&[
         "ema",
@@ -273,5 +273,9 @@ fn a_shaken_scene_tracked_by_lucas_kanade_with_references_writes_what_it_wrote()
         "--out",
         out.to_str().unwrap(),
     ]);
-    check("track-lk-reference", &out, &["displacement.csv", "camera_motion.csv"]);
+    check(
+        "track-lk-reference",
+        &out,
+        &["displacement.csv", "camera_motion.csv"],
+    );
 }

@@ -136,7 +136,7 @@ const ROOMS: [&[&str]; 12] = [
     &["study"],
     &["recording"],
     &["analysis"],
-    &["spec"],
+    &["jobs"],
     &["plan"],
     &["calibrate"],
     &["cli"],

@@ -16,7 +16,7 @@
 //! | [`study`] | Monte Carlo studies: configuration, scenarios, runner (seeds, threads, shards), checkpoint, aggregation, merge |
 //! | [`recording`] | synthetic recordings (frames + transducer CSV) written from a model through the camera |
 //! | [`analysis`] | real recordings: frame loading, alignment, the chain, modes, reports |
-//! | [`spec`] | one checked spec per job (`track`, `analyze`, `modal`): what the CLI and Python translate into |
+//! | [`jobs`] | one checked job per command (`track`, `analyze`, `modal`, `ema`): what the CLI and Python translate into |
 //! | [`setting`] | errors naming the user's settings (`--gate-px` or `gate_px`), the rules several jobs share |
 //! | [`stats`] | means, standard deviations, percentiles, histograms |
 //! | [`uncertainty`] | JCGM 101: coverage intervals, standard uncertainty of the mean, the adaptive Monte Carlo procedure |
@@ -43,6 +43,7 @@ pub mod failpoint;
 pub mod frames;
 pub mod geometry;
 pub mod imaging;
+pub mod jobs;
 pub mod lost_frames;
 pub mod model;
 pub mod outdir;
@@ -50,7 +51,6 @@ pub mod plan;
 pub mod plots;
 pub mod recording;
 pub mod setting;
-pub mod spec;
 pub mod stats;
 pub mod study;
 pub mod testing;

@@ -2,7 +2,7 @@
 //! [`SpecError`] names a setting by its key (`$gate_px`); [`SpecError::message`] spells it
 //! `--gate-px` for the command line and `gate_px` for Python. Every room may refuse a setting
 //! this way (a segment longer than the record is found only once the record is read); the
-//! rules of each job live in [`crate::spec`]. Also the rules several jobs share: a positive
+//! rules of each job live in [`crate::jobs`]. Also the rules several jobs share: a positive
 //! number, ordered bands, the Nyquist frequency.
 
 /// How a [`SpecError`] spells a setting.

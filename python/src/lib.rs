@@ -12,12 +12,12 @@ use host_harness::analysis::points::Point;
 use host_harness::analysis::{Axis, WelchSettings};
 use host_harness::frames::files::{luma, LumaLevel};
 use host_harness::frames::{open_frames, FrameRange, FrameSource, GreyFrame};
-use host_harness::lost_frames::LostFramePolicy;
-use host_harness::setting::{Naming, SpecError};
-use host_harness::spec::{
+use host_harness::jobs::{
     AnalyzeInput, AnalyzeSpec, FramesInput, PointsInput, Rates, Threshold, Tracker, Tracking,
     TrackingInput, ViewInput, WorldInput,
 };
+use host_harness::lost_frames::LostFramePolicy;
+use host_harness::setting::{Naming, SpecError};
 use numpy::ndarray::{Array2, Array3, ArrayViewD, Axis as NdAxis};
 use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
@@ -290,7 +290,7 @@ fn centroid(
             "mode lk: Lucas-Kanade follows a window through frames (track with points)",
         ));
     }
-    let config = host_harness::spec::tracking::centroid_config(
+    let config = host_harness::jobs::tracking::centroid_config(
         Some(Threshold::Level(threshold)),
         tracker,
         roi_of(roi),
@@ -513,7 +513,7 @@ fn track<'py>(
             let (source, rates) = frames.resolve(fps, retime, false, None)?;
             let t = Tracking::new(input).map_err(SpecError::into_anyhow)?;
             let has_scale = view.has_scale();
-            let settings = host_harness::spec::view::check(view, None, &t.targets, t.tracker)
+            let settings = host_harness::jobs::view::check(view, None, &t.targets, t.tracker)
                 .map_err(SpecError::into_anyhow)?;
             let v = host_harness::analysis::view::track_view(
                 &source,
@@ -991,7 +991,7 @@ fn ema<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::analysis::ema::ExpChoice;
     use host_harness::analysis::modal::FrfForm;
-    use host_harness::spec::{EmaInput, EmaSpec};
+    use host_harness::jobs::{EmaInput, EmaSpec};
     let exp = match exp_window {
         "off" => ExpChoice::Off,
         "auto" => ExpChoice::Auto,

@@ -1,5 +1,5 @@
 //! What `analyze` with an accelerometer is asked (a [`Request`], built and checked by
-//! [`crate::spec::AnalyzeSpec`]) and what a run gives back ([`Outcome`]): the types
+//! [`crate::jobs::AnalyzeSpec`]) and what a run gives back ([`Outcome`]): the types
 //! `analysis::run` and `analysis::targets_run` share, in a file of their own so that neither
 //! of the two imports the other's.
 
@@ -38,7 +38,7 @@ pub struct TargetsRequest {
     pub view: super::view::ViewSettings,
 }
 
-/// An `analyze` request with an accelerometer, as [`crate::spec::AnalyzeSpec`] checks it: every
+/// An `analyze` request with an accelerometer, as [`crate::jobs::AnalyzeSpec`] checks it: every
 /// value in range, nothing read yet.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Request {

@@ -4,7 +4,7 @@
 use super::args::{parse_bands, Bands, CentroidArgs, WelchArgs};
 use crate::analysis::twin::TwinSettings;
 use crate::analysis::Axis;
-use crate::spec::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
+use crate::jobs::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
 use crate::study::runner::Shard;
 use std::path::PathBuf;
 
@@ -213,7 +213,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     let (spec, warnings) = AnalyzeSpec::new(input(args)?, rates).map_err(SpecError::into_anyhow)?;
     for w in warnings {
-        eprintln!("warning: {}", crate::spec::SpecError::setting(w));
+        eprintln!("warning: {}", crate::jobs::SpecError::setting(w));
     }
     let outcome = spec.run()?;
     super::stdout(&outcome.report)?;

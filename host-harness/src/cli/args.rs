@@ -134,15 +134,15 @@ pub fn parse_threshold(s: &str) -> Result<ThresholdArg, String> {
 
 impl CentroidArgs {
     /// The tracking settings these flags give, with the targets' flags (checked by
-    /// [`crate::spec::Tracking::new`]).
+    /// [`crate::jobs::Tracking::new`]).
     pub fn tracking(
         &self,
         points: Option<&std::path::Path>,
         targets: Option<usize>,
         gate_px: Option<f64>,
         search_px: Option<u16>,
-    ) -> crate::spec::TrackingInput {
-        use crate::spec::{PointsInput, Threshold, Tracker, TrackingInput};
+    ) -> crate::jobs::TrackingInput {
+        use crate::jobs::{PointsInput, Threshold, Tracker, TrackingInput};
         TrackingInput {
             threshold: self.threshold.map(|t| match t {
                 ThresholdArg::Level(l) => Threshold::Level(l),
@@ -165,8 +165,8 @@ impl CentroidArgs {
     /// saturation level.
     pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
         let t = self.tracking(None, None, None, None);
-        let mut c = crate::spec::tracking::centroid_config(t.threshold, t.tracker, t.roi, false)
-            .map_err(crate::spec::SpecError::into_anyhow)?;
+        let mut c = crate::jobs::tracking::centroid_config(t.threshold, t.tracker, t.roi, false)
+            .map_err(crate::jobs::SpecError::into_anyhow)?;
         c.saturation = saturation;
         c.validate()
             .map_err(|e| crate::bad_input(format!("centroid settings: {e}")))
@@ -400,11 +400,11 @@ pub enum CameraModelArg {
 }
 
 impl ViewArgs {
-    /// The flags as the library's [`crate::spec::ViewInput`].
-    pub fn view(&self) -> crate::spec::ViewInput {
+    /// The flags as the library's [`crate::jobs::ViewInput`].
+    pub fn view(&self) -> crate::jobs::ViewInput {
         use crate::geometry::Model;
-        crate::spec::ViewInput {
-            reference: self.reference.clone().map(crate::spec::PointsInput::File),
+        crate::jobs::ViewInput {
+            reference: self.reference.clone().map(crate::jobs::PointsInput::File),
             camera_model: self.camera_model.map(|m| match m {
                 CameraModelArg::Translation => Model::Translation,
                 CameraModelArg::Similarity => Model::Similarity,
@@ -412,7 +412,7 @@ impl ViewArgs {
             }),
             scale: self.scale.clone(),
             target_size_mm: self.target_size_mm,
-            world: self.world.clone().map(crate::spec::WorldInput::File),
+            world: self.world.clone().map(crate::jobs::WorldInput::File),
         }
     }
 }

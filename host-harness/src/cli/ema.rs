@@ -4,7 +4,7 @@
 use super::args::{parse_bands, Bands};
 use crate::analysis::ema::ExpChoice;
 use crate::analysis::modal::FrfForm;
-use crate::spec::{EmaInput, EmaSpec, SpecError};
+use crate::jobs::{EmaInput, EmaSpec, SpecError};
 use std::path::PathBuf;
 
 /// What the responses measure.

@@ -4,7 +4,7 @@
 
 use super::args::{parse_bands, Bands, WelchArgs};
 use crate::analysis::oma::input::PixelAxis;
-use crate::spec::{ModalInput, ModalSpec, SpecError};
+use crate::jobs::{ModalInput, ModalSpec, SpecError};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness modal`.

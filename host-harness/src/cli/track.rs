@@ -4,7 +4,7 @@
 
 use super::analyze::AxisArg;
 use super::args::CentroidArgs;
-use crate::spec::{FramesInput, SpecError, TrackInput, TrackSpec};
+use crate::jobs::{FramesInput, SpecError, TrackInput, TrackSpec};
 use std::path::PathBuf;
 
 /// Arguments of `host-harness track`.

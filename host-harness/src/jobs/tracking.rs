@@ -254,7 +254,7 @@ pub fn centroid_config(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::Naming;
+    use crate::jobs::Naming;
 
     fn point() -> Point {
         Point {

@@ -240,7 +240,7 @@ fn checked(points: Vec<Point>) -> SpecResult<Vec<Point>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::Naming;
+    use crate::jobs::Naming;
 
     fn refs(n: usize) -> Option<super::super::PointsInput> {
         Some(super::super::PointsInput::List(
