@@ -1,4 +1,4 @@
-"""Writes host-harness/src/frames/phantom_lut.rs: the 10-bit to 12-bit linearisation table of
+"""Writes readers/src/frames/phantom_lut.rs: the 10-bit to 12-bit linearisation table of
 Phantom packed 10-bit (P10) cine files, taken from pycine's linLUT.py (which copies it from
 Vision Research's "Cine File Format" document). pycine is LGPL-3.0; the table's notice is in
 the generated file.
@@ -25,5 +25,5 @@ out = (
     + "".join(f"    {r},\n" for r in rows)
     + "];\n"
 )
-open("host-harness/src/frames/phantom_lut.rs", "w").write(out)
-print("wrote host-harness/src/frames/phantom_lut.rs")
+open("readers/src/frames/phantom_lut.rs", "w").write(out)
+print("wrote readers/src/frames/phantom_lut.rs")

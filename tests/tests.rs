@@ -113,13 +113,75 @@ fn the_docs_stand_on_their_own_and_the_readme_is_a_front_page() {
     assert!(found.is_empty(), "{}", found.join("\n"));
 }
 
+/// The workspace's crates by layer, bottom first: a crate may depend on crates of the layers
+/// below its own, never on one of its own layer or above (ARCHITECTURE.md draws them).
+const LAYERS: [&[&str]; 4] = [
+    &["firmware-core"],
+    &["vibcam-readers", "firmware-core-ffi"],
+    &["host-harness"],
+    &["vibcam-python"],
+];
+
+/// Cargo's own dependency graph (`cargo metadata`) between the workspace's crates: every crate
+/// in a layer, every dependency (normal, build or dev) on a lower layer; so no cycle.
+#[test]
+fn the_crates_depend_only_on_layers_below_theirs() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = std::process::Command::new(cargo)
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo metadata runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let meta: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let layer = |name: &str| LAYERS.iter().position(|l| l.contains(&name));
+    let mut bad = Vec::new();
+    let packages = meta["packages"].as_array().unwrap();
+    let names: Vec<&str> = packages
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    for p in packages {
+        let name = p["name"].as_str().unwrap();
+        let Some(own) = layer(name) else {
+            bad.push(format!("{name} is in no layer"));
+            continue;
+        };
+        for d in p["dependencies"].as_array().unwrap() {
+            let dep = d["name"].as_str().unwrap();
+            if !names.contains(&dep) {
+                continue;
+            }
+            if layer(dep).is_none_or(|l| l >= own) {
+                bad.push(format!(
+                    "{name} depends on {dep}, not on a layer below its own"
+                ));
+            }
+        }
+    }
+    assert!(names.len() >= 5, "{names:?}");
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
 /// host-harness's rooms in the order data flows; a module may use its own room and those
 /// before it, never one after it (`cli` calls them all). ARCHITECTURE.md explains the order.
+/// The first holds the readers' crate (`vibcam-readers`: `frames`, `daq`, `csvio`, re-exported
+/// under the same names), below every room of host-harness.
 const ROOMS: [&[&str]; 12] = [
+    &["frames", "daq", "csvio", "bad_input", "BadInput"],
     &[
         "stats",
         "uncertainty",
-        "csvio",
         "testing",
         "failpoint",
         "outdir",
@@ -131,7 +193,6 @@ const ROOMS: [&[&str]; 12] = [
     ],
     &["model"],
     &["imaging"],
-    &["frames", "daq"],
     &["chain"],
     &["study"],
     &["recording"],

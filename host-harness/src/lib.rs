@@ -36,11 +36,8 @@ pub mod calibrate;
 pub mod chain;
 #[cfg(feature = "cli")]
 pub mod cli;
-pub mod csvio;
-pub mod daq;
 pub mod export;
 pub mod failpoint;
-pub mod frames;
 pub mod geometry;
 pub mod imaging;
 pub mod jobs;
@@ -56,13 +53,5 @@ pub mod study;
 pub mod testing;
 pub mod uncertainty;
 
-/// An error caused by the user's input (a file, a field, a flag value). The binary exits with
-/// code 2 when the error chain contains one; other failures exit with 1.
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct BadInput(pub String);
-
-/// Shorthand to build an [`anyhow::Error`] carrying [`BadInput`].
-pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
-    anyhow::Error::new(BadInput(msg.into()))
-}
+// The readers' crate: its modules and its error are this crate's too, under the same paths.
+pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};

@@ -14,16 +14,8 @@
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
-/// A grey frame for the page.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FrameImage {
-    /// Width, px.
-    pub width: u32,
-    /// Height, px.
-    pub height: u32,
-    /// The frame as PNG bytes.
-    pub png: Vec<u8>,
-}
+/// A grey frame for the page (made by the readers: [`crate::frames::GreyFrame::to_image`]).
+pub use crate::frames::FrameImage;
 
 /// A target on the frame.
 #[derive(Debug, Clone, PartialEq)]

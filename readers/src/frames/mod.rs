@@ -18,6 +18,18 @@ pub use rates::{resolve_rates, Rates};
 use crate::bad_input;
 use firmware_core::centroid::{self, Centroid, CentroidConfig};
 
+/// A grey frame as a PNG, for a page: its own size in pixels (the PNG may be scaled down:
+/// [`GreyFrame::to_image_within`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameImage {
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// The frame as PNG bytes.
+    pub png: Vec<u8>,
+}
+
 /// The most bytes one stored or decoded frame may take (a 16-bit frame of 16 384 x 16 384
 /// pixels): a header that states a larger frame is refused before anything is allocated.
 pub const MAX_FRAME_BYTES: u64 = 1 << 29;
@@ -81,17 +93,14 @@ pub enum GreyFrame {
 impl GreyFrame {
     /// The frame for a page (`report.html`, `pick.html`): an 8-bit grey PNG (a 16-bit frame
     /// scaled so its largest value is 255).
-    pub fn to_image(&self) -> anyhow::Result<crate::export::html::FrameImage> {
+    pub fn to_image(&self) -> anyhow::Result<FrameImage> {
         self.to_image_within(u32::MAX)
     }
 
     /// As [`to_image`](Self::to_image), the PNG scaled down (area-averaged) so that its longer
     /// side is at most `max_side` pixels; `width` and `height` stay the frame's own, so that a
     /// page drawing the PNG over them keeps full-resolution pixel coordinates.
-    pub fn to_image_within(
-        &self,
-        max_side: u32,
-    ) -> anyhow::Result<crate::export::html::FrameImage> {
+    pub fn to_image_within(&self, max_side: u32) -> anyhow::Result<FrameImage> {
         let (w, h) = self.dimensions();
         let bytes: Vec<u8> = match self {
             GreyFrame::U8 { data, .. } => data.clone(),
@@ -118,7 +127,7 @@ impl GreyFrame {
         let mut png = std::io::Cursor::new(Vec::new());
         img.write_to(&mut png, image::ImageFormat::Png)
             .map_err(|e| anyhow::anyhow!("PNG of a {w} x {h} frame: {e}"))?;
-        Ok(crate::export::html::FrameImage {
+        Ok(FrameImage {
             width: w as u32,
             height: h as u32,
             png: png.into_inner(),
