@@ -116,6 +116,20 @@ fn pick_never_writes_over_its_inputs_and_its_page_holds_any_file_name_and_large_
     ]);
     assert_exit_2(&o, "an input of this run");
     assert_eq!(std::fs::read(&frame).unwrap(), frame_bytes);
+    // anyone's file elsewhere (a camera's raw data beside its header): only a page `pick`
+    // wrote is replaced
+    let raw = tmp.path().join("rec.mraw");
+    std::fs::write(&raw, [7u8; 64]).unwrap();
+    let o = harness(&[
+        "pick",
+        "--frames",
+        f,
+        "--out",
+        raw.to_str().unwrap(),
+        "--force",
+    ]);
+    assert_exit_2(&o, "is not a page `pick` wrote");
+    assert_eq!(std::fs::read(&raw).unwrap(), [7u8; 64]);
     // the page: its data block closes (no `<` inside it), the frames shown at most 2048 px
     // wide, the clicks' coordinates the frame's own (3000 x 2400)
     let page = tmp.path().join("pick.html");
@@ -212,6 +226,16 @@ fn hammer_files_as_careless_users_give_them_are_refused_named_or_read() {
             &["--bands", "20-30", "--f-min-hz", "50"],
         ),
         "reaches outside the band analysed",
+    );
+    // one response named twice would be two identical responses
+    assert_exit_2(
+        &ema(
+            &camera,
+            &force,
+            &out,
+            &["--response-col", "p1", "--response-col", "p1"],
+        ),
+        "--response-col p1 is given twice",
     );
 
     // a force and responses without time columns at rates 10^6 apart (an abort allocating
@@ -716,6 +740,18 @@ fn references_and_plane_points_the_camera_model_cannot_use_are_refused() {
         "homography",
     ]);
     assert_exit_2(&o, "lie on one line");
+    // nearly so: three on a line and the fourth 2 px off it
+    let near = write(
+        "near.csv",
+        "target,x,y,w,h\n1,40,10,9,9\n2,80,10,9,9\n3,120,10,9,9\n4,160,12,9,9\n".into(),
+    );
+    let o = track(&[
+        "--reference",
+        near.to_str().unwrap(),
+        "--camera-model",
+        "homography",
+    ]);
+    assert_exit_2(&o, "no four of them stand apart");
     // two windows on the same spot, and one 1 px beside another
     let twice = write(
         "twice.csv",

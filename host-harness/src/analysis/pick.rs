@@ -29,6 +29,17 @@ pub struct PickRequest {
     pub force: bool,
 }
 
+/// Whether `path` begins as the pages [`run`] writes do (`--force` replaces only those).
+fn is_pick_page(path: &std::path::Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 512];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    let head = String::from_utf8_lossy(&head[..n]);
+    head.starts_with("<!DOCTYPE html>") && head.contains("<title>pick: ")
+}
+
 /// Writes the page; returns a line saying what it holds.
 pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     if !(1..=50).contains(&req.shown) {
@@ -44,6 +55,14 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     if req.out.exists() && !req.force {
         return Err(crate::bad_input(format!(
             "{} exists: --force replaces it",
+            req.out.display()
+        )));
+    }
+    if req.out.exists() && !is_pick_page(&req.out) {
+        // a frame, a camera's raw data beside its header, anyone's file: never replaced
+        return Err(crate::bad_input(format!(
+            "--out {}: exists and is not a page `pick` wrote: not replaced even with --force; \
+             choose another --out",
             req.out.display()
         )));
     }

@@ -111,6 +111,16 @@ impl EmaSpec {
         if let Some(b) = &input.bands {
             super::bands_ordered(b)?;
         }
+        if let Some((_, c)) = input
+            .response_cols
+            .iter()
+            .enumerate()
+            .find(|(i, c)| input.response_cols[..*i].contains(c))
+        {
+            return Err(SpecError::setting(format!(
+                "$response_col {c} is given twice: each response once"
+            )));
+        }
         if !input.delay_s.is_finite() {
             return Err(SpecError::setting(format!(
                 "$delay_s must be a finite number of seconds, got {}",

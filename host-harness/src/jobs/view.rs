@@ -208,18 +208,54 @@ fn check_reference_layout(
         }
     }
     let centres: Vec<(f64, f64)> = refs.iter().map(|p| p.xy).collect();
-    if model == Some(Model::Homography)
-        && centres.len() >= 4
-        && crate::geometry::fit(Model::Homography, &centres, &centres).is_none()
+    if model == Some(Model::Homography) && centres.len() >= 4 && !spread_for_a_homography(&centres)
     {
         return Err(SpecError::setting(format!(
-            "$camera_model homography: the {} references lie on one line, or three of four do: \
-             a homography cannot be fitted from them; place four or more around the scene, no \
+            "$camera_model homography: the {} references lie on one line, or no four of them \
+             stand apart from each other's lines (by 5 % of their layout's extent): a \
+             homography cannot be fitted from them; place four or more around the scene, no \
              three on a line, or use $camera_model similarity",
             centres.len()
         )));
     }
     Ok(())
+}
+
+/// Whether four of `p` stand apart from each other's lines: each of the four at least 5 % of
+/// the layout's extent (and 10 px) from the line through any two others. Nearly on a line, a
+/// homography's fit amplifies the references' noise without bound (four on a line once gave a
+/// roll of 110 degrees).
+fn spread_for_a_homography(p: &[(f64, f64)]) -> bool {
+    let extent = p
+        .iter()
+        .flat_map(|a| p.iter().map(move |b| (a.0 - b.0).hypot(a.1 - b.1)))
+        .fold(0.0, f64::max);
+    let least = (0.05 * extent).max(10.0);
+    // the distance of `c` from the line through `a` and `b`
+    let off = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        ((c.0 - a.0) * dy - (c.1 - a.1) * dx).abs() / dx.hypot(dy).max(1e-300)
+    };
+    let n = p.len();
+    for i in 0..n {
+        for j in i + 1..n {
+            for k in j + 1..n {
+                for l in k + 1..n {
+                    let q = [p[i], p[j], p[k], p[l]];
+                    let apart = (0..4).all(|m| {
+                        let o: Vec<(f64, f64)> = (0..4).filter(|x| *x != m).map(|x| q[x]).collect();
+                        off(o[0], o[1], q[m]) >= least
+                            && off(o[0], o[2], q[m]) >= least
+                            && off(o[1], o[2], q[m]) >= least
+                    });
+                    if apart {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    false
 }
 
 /// References given in memory, checked as a points file's rows are.

@@ -293,6 +293,13 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
                                 _ => {}
                             }
                         }
+                        // complex single and double: no setting of ours; stepped over
+                        0x0008_000C => {
+                            c.take(8)?;
+                        }
+                        0x0010_000D => {
+                            c.take(16)?;
+                        }
                         other => {
                             return Err(bad_input(format!(
                                 "{file}: segment {seg}, object {path}: property `{name}` of \
