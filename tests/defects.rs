@@ -728,30 +728,20 @@ fn references_and_plane_points_the_camera_model_cannot_use_are_refused() {
         .map(str::to_string)
         .collect();
     let row = |i: usize| refs[i].split_once(',').unwrap().1.to_string();
-    // four on one line, for a homography
-    let line = write(
-        "line.csv",
-        "target,x,y,w,h\n1,40,10,9,9\n2,80,10,9,9\n3,120,10,9,9\n4,160,10,9,9\n".into(),
-    );
-    let o = track(&[
-        "--reference",
-        line.to_str().unwrap(),
-        "--camera-model",
-        "homography",
-    ]);
-    assert_exit_2(&o, "lie on one line");
-    // nearly so: three on a line and the fourth 2 px off it
-    let near = write(
-        "near.csv",
-        "target,x,y,w,h\n1,40,10,9,9\n2,80,10,9,9\n3,120,10,9,9\n4,160,12,9,9\n".into(),
-    );
-    let o = track(&[
-        "--reference",
-        near.to_str().unwrap(),
-        "--camera-model",
-        "homography",
-    ]);
-    assert_exit_2(&o, "no four of them stand apart");
+    // four on one line for a homography, and nearly so: the fourth 2 px off the others' line
+    for (y4, needle) in [(10, "lie on one line"), (12, "no four of them stand apart")] {
+        let refs = write(
+            "line.csv",
+            format!("target,x,y,w,h\n1,40,10,9,9\n2,80,10,9,9\n3,120,10,9,9\n4,160,{y4},9,9\n"),
+        );
+        let o = track(&[
+            "--reference",
+            refs.to_str().unwrap(),
+            "--camera-model",
+            "homography",
+        ]);
+        assert_exit_2(&o, needle);
+    }
     // two windows on the same spot, and one 1 px beside another
     let twice = write(
         "twice.csv",

@@ -296,18 +296,23 @@ fn check_target(
     Ok(true)
 }
 
+/// The canonical path of an input; a pattern (`rec/frame_*.png`) by its folder's.
+fn canonical_input(p: &Path) -> Option<PathBuf> {
+    let p = if p.exists() {
+        p.to_path_buf()
+    } else {
+        p.parent().map(Path::to_path_buf).unwrap_or_default()
+    };
+    std::fs::canonicalize(p).ok()
+}
+
 /// The first of `inputs` that lies inside `dir` (or is `dir`), by their canonical paths.
 pub fn input_inside<'a>(dir: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
     let dir = std::fs::canonicalize(dir).ok()?;
-    inputs.iter().copied().find(|p| {
-        // a pattern (`rec/frame_*.png`) is checked by its folder
-        let p = if p.exists() {
-            p.to_path_buf()
-        } else {
-            p.parent().map(Path::to_path_buf).unwrap_or_default()
-        };
-        std::fs::canonicalize(&p).is_ok_and(|c| c.starts_with(&dir))
-    })
+    inputs
+        .iter()
+        .copied()
+        .find(|p| canonical_input(p).is_some_and(|c| c.starts_with(&dir)))
 }
 
 /// Refuses an output file that is one of the run's inputs (the same file, by any name) or lies
@@ -337,14 +342,10 @@ pub fn refuse_output_file_among_inputs(out: &Path, inputs: &[&Path]) -> anyhow::
 /// The first of `inputs` (folders, or patterns checked by their folder) that holds `dir`.
 fn input_folder_holding<'a>(dir: &Path, inputs: &[&'a Path]) -> Option<&'a Path> {
     let dir = std::fs::canonicalize(dir).ok()?;
-    inputs.iter().copied().find(|p| {
-        let p = if p.exists() {
-            p.to_path_buf()
-        } else {
-            p.parent().map(Path::to_path_buf).unwrap_or_default()
-        };
-        std::fs::canonicalize(&p).is_ok_and(|c| dir.starts_with(c))
-    })
+    inputs
+        .iter()
+        .copied()
+        .find(|p| canonical_input(p).is_some_and(|c| dir.starts_with(c)))
 }
 
 /// Refuses an output file that is one of the run's inputs (the same file, by any name).
