@@ -1264,6 +1264,7 @@ fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("FLAGS", flag_table())?;
     m.add("MODEL_REVISION", host_harness::study::MODEL_REVISION)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MAX_TARGETS", host_harness::jobs::tracking::MAX_TARGETS)?;
     m.add_function(wrap_pyfunction!(centroid, m)?)?;
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_function(wrap_pyfunction!(frf, m)?)?;

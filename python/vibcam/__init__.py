@@ -184,7 +184,7 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
         "retime": bool(retime),
         "points": pts,
         "points_file": pfile,
-        "targets": _whole("targets", targets, 1, 32, optional=True),
+        "targets": _whole("targets", targets, 1, _vibcam.MAX_TARGETS, optional=True),
         "gate_px": _number("gate_px", gate_px, positive=True, optional=True),
         "threshold": t,
         "auto_threshold": auto,

@@ -11,6 +11,7 @@ class VibcamError(RuntimeError): ...
 FLAGS: list[tuple[int, str]]
 MODEL_REVISION: int
 __version__: str
+MAX_TARGETS: int
 
 _Point = tuple[float, float, int, int, Optional[int], Optional[int]]
 

@@ -132,7 +132,7 @@ pub struct Args {
     /// Targets (1-32): numbered left to right (then top to bottom) in the first frame
     /// and followed frame to frame; writes modes.csv with a target column and the fitted
     /// damping, shapes.csv and frf.uff (docs/cli.md).
-    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
+    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=crate::jobs::tracking::MAX_TARGETS as u64))]
     pub targets: Option<usize>,
     /// With --targets: how far a target may move between frames and still be the same, px
     /// (> 0; default 10).

@@ -45,7 +45,7 @@ pub struct Args {
     #[arg(long, value_name = "R", requires = "points")]
     pub search_px: Option<u16>,
     /// The K blobs of the first frame (global threshold), numbered left to right.
-    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=32))]
+    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=crate::jobs::tracking::MAX_TARGETS as u64))]
     pub targets: Option<usize>,
     /// With --targets: how far a target may move between frames and still be the same, px
     /// (> 0; default 10). Not with --points (each window follows its own target).
