@@ -40,6 +40,28 @@ fn is_pick_page(path: &std::path::Path) -> bool {
     head.starts_with("<!DOCTYPE html>") && head.contains("<title>pick: ")
 }
 
+/// The rate the recording is read at: `--fps`, else the one its file states, else a video's
+/// container's own (the page shows frames; their capture rate plays no part).
+fn reading_rate(req: &PickRequest, source: &crate::frames::FrameSource) -> anyhow::Result<f64> {
+    Ok(match (req.fps, source.recorded_rate()?, source.inner()) {
+        (Some(f), _, _) => f,
+        (None, Some(r), _) => r.0,
+        // the page shows frames: a video's own container rate reads them as they are
+        (None, None, crate::frames::FrameSource::Video { path, .. }) => {
+            crate::frames::video::container_rate(path)
+                .map_err(|e| e.into_anyhow())?
+                .ok_or_else(|| {
+                    crate::bad_input(format!(
+                        "{}: its frames' times give no rate: give --fps",
+                        req.frames
+                    ))
+                })?
+        }
+        // image files: the rate plays no part in reading them
+        (None, None, _) => 1.0,
+    })
+}
+
 /// Writes the page; returns a line saying what it holds.
 pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     if !(1..=50).contains(&req.shown) {
@@ -79,23 +101,7 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
         None => Vec::new(),
     };
     let source = crate::frames::open_frames(&req.frames, req.retime, None)?.source;
-    let fps = match (req.fps, source.recorded_rate()?, source.inner()) {
-        (Some(f), _, _) => f,
-        (None, Some(r), _) => r.0,
-        // the page shows frames: a video's own container rate reads them as they are
-        (None, None, crate::frames::FrameSource::Video { path, .. }) => {
-            crate::frames::video::container_rate(path)
-                .map_err(|e| e.into_anyhow())?
-                .ok_or_else(|| {
-                    crate::bad_input(format!(
-                        "{}: its frames' times give no rate: give --fps",
-                        req.frames
-                    ))
-                })?
-        }
-        // image files: the rate plays no part in reading them
-        (None, None, _) => 1.0,
-    };
+    let fps = reading_rate(req, &source)?;
     let count = source.count(fps)?;
     let step = count.map_or(1, |n| (n / req.shown).max(1));
     let mut frames = Vec::new();

@@ -358,17 +358,14 @@ fn describe_inputs(
         ),
         (
             "alignment".into(),
-            match req.frame_range {
-                Some(r) => format!(
-                    "first frame analysed (frame {} of the recording) at {} s after the first \
-                     sample",
-                    r.first, req.settings.time_offset_s
-                ),
-                None => format!(
-                    "first frame at {} s after the first sample",
-                    req.settings.time_offset_s
-                ),
-            },
+            format!(
+                "first frame{} at {} s after the first sample",
+                req.frame_range.map_or(String::new(), |r| format!(
+                    " analysed (frame {} of the recording)",
+                    r.first
+                )),
+                req.settings.time_offset_s
+            ),
         ),
         (
             "centroid".into(),

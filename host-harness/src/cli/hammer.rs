@@ -48,8 +48,8 @@ pub struct Args {
     pub force: bool,
 }
 
-/// Runs `host-harness simulate-hammer`.
-pub fn run(a: Args) -> anyhow::Result<()> {
+/// The flags checked ([`hits_held`] too); the notes on what the record will hold.
+fn check(a: &Args) -> anyhow::Result<Vec<String>> {
     let positive = |v: f64, flag: &str| -> anyhow::Result<()> {
         if v.is_finite() && v > 0.0 {
             Ok(())
@@ -82,6 +82,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             return Err(crate::bad_input(format!("{flag} must be >= 0, got {v}")));
         }
     }
+    hits_held(a)
+}
+
+/// The hits the record can hold, checked against the pulses' width and the record's length;
+/// the notes on what it will hold.
+fn hits_held(a: &Args) -> anyhow::Result<Vec<String>> {
     // the pulses are 0.6 ms wide: a DAQ must sample each several times or `ema` finds none
     const WIDTH_S: f64 = 0.0006;
     if a.daq_hz * WIDTH_S < 5.0 {
@@ -138,6 +144,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ));
         }
     }
+    Ok(notes)
+}
+
+/// Runs `host-harness simulate-hammer`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let notes = check(&a)?;
     write_hammer_recording(
         &a.out,
         a.force,

@@ -112,21 +112,26 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
+/// The single-sample spikes of `dev` (the excursions from the baseline): both neighbours below
+/// a tenth of it, and it well above the noise. No hammer's pulse is one sample wide; a spike 100
+/// times the hits would otherwise hide them below the pulses' threshold.
+fn single_sample_spikes(dev: &[f64], noise_sd: f64) -> Vec<usize> {
+    (0..dev.len())
+        .filter(|&k| {
+            let d = dev[k];
+            let side = |j: Option<usize>| j.and_then(|j| dev.get(j)).is_none_or(|&n| n < 0.1 * d);
+            d > 10.0 * noise_sd && side(k.checked_sub(1)) && side(Some(k + 1))
+        })
+        .collect()
+}
+
 /// Finds the hits of `force` (sampled at `fs_hz`; `name` names it in errors). Errors when there
 /// is no pulse clearly above the noise, or no hit is left to use (each left-out hit named).
 pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::Result<Hits> {
     let baseline = median(force);
     let mut dev: Vec<f64> = force.iter().map(|v| (v - baseline).abs()).collect();
     let noise_sd = 1.4826 * median(&dev);
-    // single-sample spikes (both neighbours below a tenth of it, well above the noise): no
-    // hammer's pulse is one sample wide; one 100 times the hits would otherwise hide them
-    let spikes: Vec<usize> = (0..dev.len())
-        .filter(|&k| {
-            let d = dev[k];
-            let side = |j: Option<usize>| j.and_then(|j| dev.get(j)).is_none_or(|&n| n < 0.1 * d);
-            d > 10.0 * noise_sd && side(k.checked_sub(1)) && side(Some(k + 1))
-        })
-        .collect();
+    let spikes = single_sample_spikes(&dev, noise_sd);
     for &k in &spikes {
         dev[k] = 0.0;
     }

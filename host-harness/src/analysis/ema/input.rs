@@ -368,26 +368,65 @@ pub struct Aligned {
     pub notes: Vec<String>,
 }
 
+/// A warning when the two records last more than 10 % apart: records of one test last about
+/// as long, and a rate given wrong (1500 for 15 kHz) shows here.
+fn lengths_disagree(response: &Series, force: &Series) -> Option<String> {
+    let (fr, ff) = (response.fs_hz, force.fs_hz);
+    let (tr, tf) = (
+        response.channels[0].len() as f64 / fr,
+        force.channels[0].len() as f64 / ff,
+    );
+    ((tr - tf).abs() > 0.1 * tr.min(tf)).then(|| {
+        format!(
+            "warning: the responses last {tr:.4} s at {} Hz, the force {tf:.4} s at {} Hz: \
+             records of one test should last about as long; check both rates (a rate given \
+             wrong stretches its record)",
+            rate_text(fr),
+            rate_text(ff)
+        )
+    })
+}
+
+/// The delay of the responses after the force, s: `given` unless it is 0 and both files state
+/// when their first sample was taken (TDMS `wf_start_time`), then theirs; the notes say which.
+fn stated_delay(
+    response: &Series,
+    force: &Series,
+    given: f64,
+    fs: f64,
+    notes: &mut Vec<String>,
+) -> f64 {
+    let stated = match (response.start_time, force.start_time) {
+        (Some(r), Some(f)) => Some(r - f),
+        _ => None,
+    };
+    match stated {
+        Some(d) if given == 0.0 && (d * fs).abs() >= 0.5 => {
+            notes.push(format!(
+                "the files state their first samples {} s apart (wf_start_time): the responses \
+                 taken as starting {d:.6} s after the force (a delay given, --delay-s, overrides it)",
+                d.abs()
+            ));
+            d
+        }
+        Some(d) if given != 0.0 && ((d - given) * fs).abs() >= 0.5 => {
+            notes.push(format!(
+                "the delay given ({given} s) used, though the files state their first samples {d:.6} s \
+                 apart (wf_start_time)"
+            ));
+            given
+        }
+        _ => given,
+    }
+}
+
 /// Brings `response` and `force` to one rate (the faster's) and one start (`delay_s`, see the
 /// module documentation), of equal length.
 pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<Aligned> {
     use crate::chain::resample::upsample_record;
     let (fr, ff) = (response.fs_hz, force.fs_hz);
     let mut notes = Vec::new();
-    // records of one test last about as long: a rate given wrong (1500 for 15 kHz) shows here
-    let (tr, tf) = (
-        response.channels[0].len() as f64 / fr,
-        force.channels[0].len() as f64 / ff,
-    );
-    if (tr - tf).abs() > 0.1 * tr.min(tf) {
-        notes.push(format!(
-            "warning: the responses last {tr:.4} s at {} Hz, the force {tf:.4} s at {} Hz: \
-             records of one test should last about as long; check both rates (a rate given \
-             wrong stretches its record)",
-            rate_text(fr),
-            rate_text(ff)
-        ));
-    }
+    notes.extend(lengths_disagree(response, force));
     let same = (fr - ff).abs() <= 1e-9 * ff;
     let fs = fr.max(ff);
     let up = |v: &[f64], from: f64| -> anyhow::Result<Vec<f64>> {
@@ -420,30 +459,7 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
         .iter()
         .map(|c| up(c, fr))
         .collect::<anyhow::Result<_>>()?;
-    // both files state when their first sample was taken (TDMS `wf_start_time`): without a
-    // delay given, that is the delay
-    let stated = match (response.start_time, force.start_time) {
-        (Some(r), Some(f)) => Some(r - f),
-        _ => None,
-    };
-    let delay_s = match stated {
-        Some(d) if delay_s == 0.0 && (d * fs).abs() >= 0.5 => {
-            notes.push(format!(
-                "the files state their first samples {} s apart (wf_start_time): the responses \
-                 taken as starting {d:.6} s after the force (a delay given, --delay-s, overrides it)",
-                d.abs()
-            ));
-            d
-        }
-        Some(d) if delay_s != 0.0 && ((d - delay_s) * fs).abs() >= 0.5 => {
-            notes.push(format!(
-                "the delay given ({delay_s} s) used, though the files state their first samples {d:.6} s \
-                 apart (wf_start_time)"
-            ));
-            delay_s
-        }
-        _ => delay_s,
-    };
+    let delay_s = stated_delay(response, force, delay_s, fs, &mut notes);
     let shift = delay_s * fs;
     let whole = shift.round();
     if whole != 0.0 {
