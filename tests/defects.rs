@@ -697,26 +697,8 @@ fn references_and_plane_points_the_camera_model_cannot_use_are_refused() {
         "--out",
         rec.to_str().unwrap(),
     ]));
-    let track = |extra: &[&str]| {
-        let mut args = vec![
-            "track".to_string(),
-            "--frames".into(),
-            rec.join("frames").to_str().unwrap().into(),
-            "--fps".into(),
-            "60".into(),
-            "--points".into(),
-            rec.join("points.csv").to_str().unwrap().into(),
-            "--threshold".into(),
-            "127".into(),
-            "--tracker".into(),
-            "weighted".into(),
-            "--out".into(),
-            tmp.path().join("out").to_str().unwrap().into(),
-        ];
-        args.extend(extra.iter().map(|s| s.to_string()));
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        harness(&args)
-    };
+    let out = tmp.path().join("out");
+    let track = |extra: &[&str]| crate::view::track(&rec, &out, extra);
     let write = |name: &str, text: String| -> PathBuf {
         let p = tmp.path().join(name);
         std::fs::write(&p, text).unwrap();

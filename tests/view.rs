@@ -73,7 +73,13 @@ fn errors(dir: &Path, out: &Path) -> Vec<(f64, f64)> {
         .collect()
 }
 
-fn track(dir: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+/// `track` of the record in `dir` with its own `points.csv`.
+pub(crate) fn track(dir: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    track_points(dir, &dir.join("points.csv"), out, extra)
+}
+
+/// `track` of the record in `dir` with the windows of `points`.
+fn track_points(dir: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args: Vec<String> = vec![
         "track".into(),
         "--frames".into(),
@@ -81,7 +87,7 @@ fn track(dir: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
         "--fps".into(),
         "60".into(),
         "--points".into(),
-        dir.join("points.csv").to_str().unwrap().to_owned(),
+        points.to_str().unwrap().to_owned(),
         "--threshold".into(),
         "127".into(),
         "--tracker".into(),
@@ -388,29 +394,7 @@ fn bad_references_are_named_never_silently_used() {
     let four = tmp.path().join("four.csv");
     let kept: Vec<&str> = points.lines().take(points.lines().count() - 1).collect();
     std::fs::write(&four, kept.join("\n") + "\n").unwrap();
-    let track4 = |out: &Path, extra: &[&str]| {
-        let frames = rec.join("frames");
-        let mut args = vec![
-            "track",
-            "--frames",
-            frames.to_str().unwrap(),
-            "--fps",
-            "60",
-            "--points",
-            four.to_str().unwrap(),
-            "--threshold",
-            "127",
-            "--tracker",
-            "weighted",
-            "--out",
-            out.to_str().unwrap(),
-        ]
-        .into_iter()
-        .map(String::from)
-        .collect::<Vec<String>>();
-        args.extend(extra.iter().map(|s| s.to_string()));
-        harness(&args.iter().map(String::as_str).collect::<Vec<_>>())
-    };
+    let track4 = |out: &Path, extra: &[&str]| track_points(&rec, &four, out, extra);
     let out = tmp.path().join("out");
     let o = track4(&out, &["--reference", bad_file.to_str().unwrap()]);
     assert_ok(&o);
