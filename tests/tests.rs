@@ -115,9 +115,10 @@ fn the_docs_stand_on_their_own_and_the_readme_is_a_front_page() {
 
 /// The workspace's crates by layer, bottom first: a crate may depend on crates of the layers
 /// below its own, never on one of its own layer or above (ARCHITECTURE.md draws them).
-const LAYERS: [&[&str]; 4] = [
+const LAYERS: [&[&str]; 5] = [
     &["firmware-core"],
     &["vibcam-readers", "firmware-core-ffi"],
+    &["vibcam-common"],
     &["host-harness"],
     &["vibcam-python"],
 ];
@@ -366,22 +367,41 @@ fn the_python_wheel_reuses_the_workspace_build() {
     );
 }
 
-/// No two files of host-harness use each other, directly or through others: every
+/// The folders of the host side's crates (each with a `src/`), bottom layer first.
+const HOST_CRATES: [&str; 3] = ["readers", "common", "host-harness"];
+
+/// No two files of a host-side crate use each other, directly or through others: every
 /// `crate::a::b`, `super::x` and `self::y` path (also inside `use a::{b, c::d}`, test modules and
 /// comments left out) is resolved to the file of the longest module it names, and the graph of
 /// files has no circle. (A circle makes a file impossible to read without the other.)
 #[test]
-fn no_two_files_of_host_harness_use_each_other() {
+fn no_two_files_of_a_crate_use_each_other() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut circles = Vec::new();
+    let mut files = 0;
+    for krate in HOST_CRATES {
+        let src = root.join(krate).join("src").canonicalize().unwrap();
+        let (n, c) = file_circles(&src);
+        assert!(n > 1, "{krate}: only {n} files");
+        files += n;
+        circles.extend(c.into_iter().map(|c| format!("{krate}: {c}")));
+    }
+    assert!(files > 100, "only {files} files");
+    assert!(
+        circles.is_empty(),
+        "files that use each other:\n{}",
+        circles.join("\n")
+    );
+}
+
+/// The number of source files under `src` and the circles between them (each as `a -> b -> a`).
+fn file_circles(src: &std::path::Path) -> (usize, Vec<String>) {
     use std::collections::{BTreeMap, BTreeSet};
-    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("src")
-        .canonicalize()
-        .unwrap();
     // module path -> file
     let mut files: BTreeMap<Vec<String>, String> = BTreeMap::new();
     for p in workspace_files(&[".rs"]) {
         let p = p.canonicalize().unwrap();
-        let Ok(rel) = p.strip_prefix(&src) else {
+        let Ok(rel) = p.strip_prefix(src) else {
             continue;
         };
         let mut m: Vec<String> = rel
@@ -396,7 +416,6 @@ fn no_two_files_of_host_harness_use_each_other() {
         }
         files.insert(m, rel.display().to_string());
     }
-    assert!(files.len() > 50, "only {} files", files.len());
     let resolve = |parts: &[String]| {
         (1..=parts.len())
             .rev()
@@ -490,11 +509,7 @@ fn no_two_files_of_host_harness_use_each_other() {
     for f in edges.keys() {
         visit(f, &edges, &mut Vec::new(), &mut done, &mut circles);
     }
-    assert!(
-        circles.is_empty(),
-        "files that use each other:\n{}",
-        circles.join("\n")
-    );
+    (files.len(), circles)
 }
 
 /// ARCHITECTURE.md names every module of host-harness and firmware-core (each source file's
@@ -509,7 +524,7 @@ fn the_architecture_names_every_module_and_crate() {
         .collect();
     let mut missing = Vec::new();
     let mut checked = 0;
-    for krate in ["host-harness", "firmware-core"] {
+    for krate in HOST_CRATES.iter().chain(&["firmware-core"]) {
         let src = root.join(krate).join("src").canonicalize().unwrap();
         for p in workspace_files(&[".rs"]) {
             let p = p.canonicalize().unwrap();
@@ -534,13 +549,11 @@ fn the_architecture_names_every_module_and_crate() {
         }
     }
     assert!(checked > 80, "only {checked} modules found");
-    for krate in [
-        "firmware-core",
-        "firmware-core-ffi",
-        "host-harness",
-        "python",
-        "mcu-demo",
-    ] {
+    for krate in
+        HOST_CRATES
+            .iter()
+            .chain(&["firmware-core", "firmware-core-ffi", "python", "mcu-demo"])
+    {
         if !map.contains(&format!("`{krate}/`")) {
             missing.push(format!("crate {krate}"));
         }
@@ -550,4 +563,71 @@ fn the_architecture_names_every_module_and_crate() {
         "ARCHITECTURE.md does not name:\n{}",
         missing.join("\n")
     );
+}
+
+/// Every `$key` a message of the library or of the Python binding writes is a known
+/// setting (else the user would read `$key`, or `$$key`), and every known setting is a flag
+/// of the command line (a field of a clap `Args`, or an alias), so that each message names
+/// it the user's way (Python spells it as the key, its arguments' names). The words of two macros' metavariables (plots.rs,
+/// daq/tdms.rs) and of this module's own documentation are not messages.
+#[test]
+fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
+    use host_harness::setting::KEYS;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files = Vec::new();
+    fn walk(d: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    for krate in HOST_CRATES.iter().chain(&["python"]) {
+        walk(&root.join(krate).join("src"), &mut files);
+    }
+    let not_messages = ["dir", "name", "f", "t", "k", "key", "unknown", "e"];
+    let mut unknown = Vec::new();
+    let mut cli = String::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        if f.to_string_lossy().contains("/src/cli/") {
+            cli.push_str(&text);
+        }
+        let b = text.as_bytes();
+        for (i, _) in text.match_indices('$') {
+            if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'$') {
+                // `decimals$e` (a format width) is no setting; `$$key` is one doubled
+                if b[i - 1] != b'$' {
+                    continue;
+                }
+            }
+            let w: String = text[i + 1..]
+                .chars()
+                .take_while(|c| c.is_ascii_lowercase() || *c == '_')
+                .collect();
+            if w.is_empty() || not_messages.contains(&w.as_str()) {
+                continue;
+            }
+            let doubled = text[i + 1..].starts_with('$');
+            if doubled || !KEYS.contains(&w.as_str()) {
+                unknown.push(format!("{}: ${w}", f.display()));
+            }
+        }
+    }
+    assert!(
+        unknown.is_empty(),
+        "messages name unknown settings: {unknown:?}"
+    );
+    for key in KEYS {
+        let flag = key.replace('_', "-");
+        assert!(
+            cli.contains(&format!("pub {key}:"))
+                || cli.contains(&format!("alias = \"{flag}\""))
+                || cli.contains(&format!("aliases = [\"{flag}\"")),
+            "${key} is no flag of the command line"
+        );
+    }
 }

@@ -37,21 +37,16 @@ pub mod chain;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod export;
-pub mod failpoint;
-pub mod geometry;
 pub mod imaging;
 pub mod jobs;
-pub mod lost_frames;
 pub mod model;
 pub mod outdir;
 pub mod plan;
 pub mod plots;
 pub mod recording;
-pub mod setting;
-pub mod stats;
 pub mod study;
-pub mod testing;
-pub mod uncertainty;
 
 // The readers' crate: its modules and its error are this crate's too, under the same paths.
 pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};
+// What every layer shares: the same paths as before the cut.
+pub use vibcam_common::{failpoint, geometry, lost_frames, setting, stats, testing, uncertainty};

@@ -5,6 +5,7 @@ use super::args::{parse_bands, Bands, CentroidArgs, WelchArgs};
 use crate::analysis::twin::TwinSettings;
 use crate::analysis::Axis;
 use crate::jobs::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
+use crate::lost_frames::LostFramePolicy;
 use crate::study::runner::Shard;
 use std::path::PathBuf;
 
@@ -118,8 +119,8 @@ pub struct Args {
     pub out: PathBuf,
     /// What a lost frame's value becomes: `interpolate` (linearly between its valid
     /// neighbours) or `hold` (the last valid value, as firmware repeating its last output).
-    #[arg(long, value_enum, default_value_t = crate::lost_frames::LostFramePolicy::Interpolate)]
-    pub lost_frames: crate::lost_frames::LostFramePolicy,
+    #[arg(long, default_value = "interpolate", value_parser = super::args::choice(&LostFramePolicy::ALL, LostFramePolicy::name))]
+    pub lost_frames: LostFramePolicy,
     /// Take the displacement record as periodic in the Fourier upsampling (no end matching):
     /// by default the line through its first and last samples is subtracted first, since a
     /// real record is not periodic (docs/method.md §3.2).

@@ -433,3 +433,20 @@ fn parse_scale(s: &str) -> Result<(String, String, f64), String> {
         )),
     }
 }
+
+/// A flag whose values are a library type's choices, spelled by its `name` (declared once,
+/// in the library): clap lists them in `--help` and refuses any other.
+pub fn choice<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    name: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(all.iter().map(|t| name(*t))).try_map(
+        move |s: String| {
+            all.iter()
+                .copied()
+                .find(|t| name(*t) == s)
+                .ok_or_else(|| format!("no choice {s}"))
+        },
+    )
+}

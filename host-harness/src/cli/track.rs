@@ -5,6 +5,7 @@
 use super::analyze::AxisArg;
 use super::args::CentroidArgs;
 use crate::jobs::{FramesInput, SpecError, TrackInput, TrackSpec};
+use crate::lost_frames::LostFramePolicy;
 use std::path::PathBuf;
 
 /// Arguments of `host-harness track`.
@@ -70,8 +71,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = AxisArg::Y)]
     pub axis: AxisArg,
     /// What a lost frame's displacement becomes (as `analyze`).
-    #[arg(long, value_enum, default_value_t = crate::lost_frames::LostFramePolicy::Interpolate)]
-    pub lost_frames: crate::lost_frames::LostFramePolicy,
+    #[arg(long, default_value = "interpolate", value_parser = super::args::choice(&LostFramePolicy::ALL, LostFramePolicy::name))]
+    pub lost_frames: LostFramePolicy,
     /// No tracks.png/.svg.
     #[arg(long)]
     pub no_plots: bool,

@@ -9,7 +9,6 @@ pub const MAX_LOST_FRACTION: f64 = 0.05;
 
 /// What a lost frame's value becomes (`[imaging] lost_frame_policy`, `analyze --lost-frames`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum LostFramePolicy {
     /// Linear interpolation between the neighbouring valid frames ([`fill_lost_frames`]).
@@ -17,6 +16,19 @@ pub enum LostFramePolicy {
     Interpolate,
     /// The last valid frame's value (the first valid one's before it): a zero-order hold.
     Hold,
+}
+
+impl LostFramePolicy {
+    /// Every policy, the default first.
+    pub const ALL: [LostFramePolicy; 2] = [LostFramePolicy::Interpolate, LostFramePolicy::Hold];
+
+    /// `interpolate` or `hold` (as a study file and the command line spell it).
+    pub fn name(self) -> &'static str {
+        match self {
+            LostFramePolicy::Interpolate => "interpolate",
+            LostFramePolicy::Hold => "hold",
+        }
+    }
 }
 
 /// [`fill_lost_frames`] with a policy: interpolation, or a hold of the last valid value.

@@ -2,7 +2,7 @@
 //! [`SpecError`] names a setting by its key (`$gate_px`); [`SpecError::message`] spells it
 //! `--gate-px` for the command line and `gate_px` for Python. Every room may refuse a setting
 //! this way (a segment longer than the record is found only once the record is read); the
-//! rules of each job live in [`crate::jobs`]. Also the rules several jobs share: a positive
+//! rules of each job live in the jobs (`host_harness::jobs`). Also the rules several jobs share: a positive
 //! number, ordered bands, the Nyquist frequency.
 
 /// How a [`SpecError`] spells a setting.
@@ -29,7 +29,7 @@ pub enum SpecError {
 
 /// The settings a message may name, by key (the Python spelling; the command line's is `--`
 /// and the key with `-` for `_`).
-const KEYS: &[&str] = &[
+pub const KEYS: &[&str] = &[
     "accel",
     "accel_target",
     "axis",
@@ -135,11 +135,11 @@ impl SpecError {
     }
 }
 
-/// Whether `e` is the user's to fix (exit 2): its chain holds a [`crate::BadInput`] or a
+/// Whether `e` is the user's to fix (exit 2): its chain holds a [`vibcam_readers::BadInput`] or a
 /// [`SpecError`].
 pub fn is_bad_input(e: &anyhow::Error) -> bool {
     e.chain()
-        .any(|c| c.is::<crate::BadInput>() || c.is::<SpecError>())
+        .any(|c| c.is::<vibcam_readers::BadInput>() || c.is::<SpecError>())
 }
 
 /// `e` as one line, each [`SpecError`] in its chain spelled for `naming` (as `{e:#}` writes
@@ -224,71 +224,6 @@ mod tests {
             "gate_px with targets; fps, $unknown and $ alone"
         );
         assert_eq!(e.to_string(), e.message(Naming::Cli));
-    }
-
-    /// Every `$key` a message of the library or of the Python binding writes is a known
-    /// setting (else the user would read `$key`, or `$$key`), and every known setting is a flag
-    /// of the command line (a field of a clap `Args`, or an alias), so that each message names
-    /// it the user's way (Python spells it as the key, its arguments' names). The words of two macros' metavariables (plots.rs,
-    /// daq/tdms.rs) and of this module's own documentation are not messages.
-    #[test]
-    fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let mut files = Vec::new();
-        fn walk(d: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
-            for e in std::fs::read_dir(d).unwrap().flatten() {
-                let p = e.path();
-                if p.is_dir() {
-                    walk(&p, out);
-                } else if p.extension().is_some_and(|x| x == "rs") {
-                    out.push(p);
-                }
-            }
-        }
-        walk(&root.join("src"), &mut files);
-        walk(&root.join("../python/src"), &mut files);
-        let not_messages = ["dir", "name", "f", "t", "k", "key", "unknown", "e"];
-        let mut unknown = Vec::new();
-        let mut cli = String::new();
-        for f in &files {
-            let text = std::fs::read_to_string(f).unwrap();
-            if f.to_string_lossy().contains("/src/cli/") {
-                cli.push_str(&text);
-            }
-            let b = text.as_bytes();
-            for (i, _) in text.match_indices('$') {
-                if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'$') {
-                    // `decimals$e` (a format width) is no setting; `$$key` is one doubled
-                    if b[i - 1] != b'$' {
-                        continue;
-                    }
-                }
-                let w: String = text[i + 1..]
-                    .chars()
-                    .take_while(|c| c.is_ascii_lowercase() || *c == '_')
-                    .collect();
-                if w.is_empty() || not_messages.contains(&w.as_str()) {
-                    continue;
-                }
-                let doubled = text[i + 1..].starts_with('$');
-                if doubled || !KEYS.contains(&w.as_str()) {
-                    unknown.push(format!("{}: ${w}", f.display()));
-                }
-            }
-        }
-        assert!(
-            unknown.is_empty(),
-            "messages name unknown settings: {unknown:?}"
-        );
-        for key in KEYS {
-            let flag = key.replace('_', "-");
-            assert!(
-                cli.contains(&format!("pub {key}:"))
-                    || cli.contains(&format!("alias = \"{flag}\""))
-                    || cli.contains(&format!("aliases = [\"{flag}\"")),
-                "${key} is no flag of the command line"
-            );
-        }
     }
 
     #[test]
