@@ -18,9 +18,9 @@
 //! `+1` half-width of `-2 ln L`, correlations ignored).
 
 use crate::bad_input;
-use crate::chain::exposure::ExposureCorrection;
 use crate::export::calibrate::{ParameterRow, ResidualRow};
 use crate::export::study::{CoverageRow, SummaryRow, System};
+use crate::imaging::exposure::ExposureCorrection;
 use crate::study::{aggregate, run_rng, scenario_for, Preset, RunRecord, StudyConfig};
 use std::collections::BTreeMap;
 use std::path::Path;

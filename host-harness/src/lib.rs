@@ -33,13 +33,11 @@
 
 pub mod analysis;
 pub mod calibrate;
-pub mod chain;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod export;
 pub mod imaging;
 pub mod jobs;
-pub mod model;
 pub mod outdir;
 pub mod plan;
 pub mod plots;
@@ -49,4 +47,6 @@ pub mod study;
 // The readers' crate: its modules and its error are this crate's too, under the same paths.
 pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};
 // What every layer shares: the same paths as before the cut.
+pub use vibcam_chain as chain;
 pub use vibcam_common::{failpoint, geometry, lost_frames, setting, stats, testing, uncertainty};
+pub use vibcam_model as model;

@@ -68,7 +68,7 @@ pub struct PlanInput {
     /// The target's motion as the H1 estimator weighs it (a study preset's nominal record):
     /// when given, the measured transfer is the input-energy weighted average of the transfers
     /// at the segments' amplitudes, as the study's `vision_compensated` rows use
-    /// ([`crate::chain::exposure::ExposureCorrection::for_segments`]); otherwise the transfer
+    /// ([`crate::imaging::exposure::ExposureCorrection::for_segments`]); otherwise the transfer
     /// at each mode's own amplitude.
     pub motion: Option<Vec<crate::model::MotionSegment>>,
 }
@@ -348,7 +348,7 @@ fn measured_transfer(
     };
     let total: f64 = segments.iter().map(|s| s.weight).sum();
     let mut out: Vec<(f64, f64)> = grid.iter().map(|e| (*e, 0.0)).collect();
-    for (a, w) in crate::chain::exposure::amplitude_groups(segments) {
+    for (a, w) in crate::imaging::exposure::amplitude_groups(segments) {
         let curve = transfer_curve(
             &TransferSetup {
                 amplitude_px: a,

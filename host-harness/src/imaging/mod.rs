@@ -7,10 +7,13 @@
 //!   noise, bit depth) and the [`Camera`] that chains renderer -> effects -> quantisation ->
 //!   firmware-core centroid;
 //! - [`TargetPath`]: the motion of a target in pixels on a fine time base, and which part of it a
-//!   frame of a given exposure integrates.
+//!   frame of a given exposure integrates;
+//! - [`compensation`] and [`exposure`]: the exposure transfer the vision amplitudes are divided
+//!   by (sinc for the weighted centroid, a measured table for the binary one).
 
 pub mod compensation;
 pub mod effects;
+pub mod exposure;
 pub mod fastpath;
 pub mod render;
 pub mod tracker;

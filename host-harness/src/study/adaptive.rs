@@ -13,8 +13,8 @@
 use super::aggregate::{picks, SYSTEMS};
 use super::{RunRecord, StudyConfig};
 use crate::bad_input;
-use crate::chain::exposure::ExposureCorrection;
 use crate::export::study::{AdaptiveRow, System};
+use crate::imaging::exposure::ExposureCorrection;
 use crate::uncertainty::{
     coverage_summary, AdaptiveQuantity, BatchResult, IntervalKind, Stability,
 };

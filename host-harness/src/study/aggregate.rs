@@ -3,8 +3,8 @@
 //! writing them. Everything here is deterministic: the records come sorted by run.
 
 use super::{checkpoint::files, PeakRecord, RunRecord, Scenario, StudyConfig, SystemRecord};
-use crate::chain::exposure::ExposureCorrection;
 use crate::export::study::{CoverageRow, FrfBandRow, RealizationRow, SummaryRow, System};
+use crate::imaging::exposure::ExposureCorrection;
 use crate::uncertainty::coverage_summary;
 use crate::{bad_input, stats};
 use std::collections::BTreeMap;

@@ -7,8 +7,8 @@
 //! in the grandstand ([`crate::imaging::Camera`]).
 
 use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
-use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
+use crate::imaging::exposure::ExposureCorrection;
 use crate::imaging::{Setup, TargetPath};
 use crate::model::cantilever::{
     Rig, BANDS, FINE_PER_SAMPLE, FPS, FRAMES, FS_HZ, MM_PER_PX, SAMPLES, TARGET, THRESHOLD, WELCH,

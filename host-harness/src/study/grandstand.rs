@@ -5,8 +5,8 @@
 //! ([`crate::chain::frf::measure`]).
 
 use super::{Filming, Reporting, RunRecord, Scenario, StudyConfig};
-use crate::chain::exposure::ExposureCorrection;
 use crate::chain::frf::measure;
+use crate::imaging::exposure::ExposureCorrection;
 use crate::imaging::{Setup, TargetPath};
 use crate::model::grandstand::{
     simulate, BANDS, FINE, FS_HZ, N, NFFT, NPERSEG, PX_PER_MM, TARGET, THRESHOLD, WELCH,

@@ -146,7 +146,7 @@ pub trait Scenario: Sync {
         Vec::new()
     }
     /// What the `vision_compensated` rows divide the vision amplitudes by (method.md §2.8).
-    fn exposure_correction(&self) -> anyhow::Result<crate::chain::exposure::ExposureCorrection>;
+    fn exposure_correction(&self) -> anyhow::Result<crate::imaging::exposure::ExposureCorrection>;
 }
 
 /// A Welch H1 estimator of firmware-core on the heap (its buffers are large), or the error

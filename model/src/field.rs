@@ -148,7 +148,7 @@ pub fn record_length(
 ) -> anyhow::Result<(usize, Vec<String>)> {
     for (name, v) in [("--minutes", minutes), ("--fps", fs_hz)] {
         if !(v.is_finite() && v > 0.0) {
-            return Err(crate::bad_input(format!(
+            return Err(vibcam_readers::bad_input(format!(
                 "{name} must be a positive number, got {v}"
             )));
         }
@@ -162,7 +162,7 @@ pub fn record_length(
     let samples = (seconds * fs_hz).round();
     let shortest = MIN_PERIODS / f1;
     if seconds < shortest || samples < 2.0 {
-        return Err(crate::bad_input(format!(
+        return Err(vibcam_readers::bad_input(format!(
             "--minutes {minutes} at --fps {fs_hz}: {samples} samples over {seconds:.3} s; the \
              record must span at least {MIN_PERIODS} periods of the lowest mode ({f1} Hz): \
              --minutes {:.3} or more",
@@ -171,14 +171,14 @@ pub fn record_length(
     }
     let settle = settling_periods(model, fs_hz);
     if samples + settle > MAX_SIMULATED_PERIODS as f64 {
-        return Err(crate::bad_input(format!(
+        return Err(vibcam_readers::bad_input(format!(
             "--minutes {minutes} at --fps {fs_hz}: {samples} samples and {settle} of settling \
              (ten decay times of the slowest mode) exceed the {MAX_SIMULATED_PERIODS} sample \
              periods simulated at most; shorten the record or lower the rate"
         )));
     }
     if render && samples > MAX_RENDERED_FRAMES as f64 {
-        return Err(crate::bad_input(format!(
+        return Err(vibcam_readers::bad_input(format!(
             "--render --minutes {minutes} at --fps {fs_hz}: {samples} frames, more than the \
              {MAX_RENDERED_FRAMES} frames (PNG files) rendered at most"
         )));

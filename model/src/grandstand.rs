@@ -4,7 +4,7 @@
 //! camera that looks at a painted disk on the platform. The only place the rig's constants live.
 
 use super::DiskTarget;
-use crate::model::{normal, uniform_ms};
+use crate::{normal, uniform_ms};
 use firmware_core::spectrum::{Detrend, WelchConfig, Window};
 use num_complex::Complex64;
 use rand::Rng;
@@ -43,7 +43,7 @@ pub const TARGET: DiskTarget = DiskTarget {
     radius_px: 12.0,
     level: 200.0,
     edge_sigma_px: 1.5,
-    texture: crate::model::Texture::Plain,
+    texture: crate::Texture::Plain,
 };
 /// Binary centroid threshold (grey levels).
 pub const THRESHOLD: u16 = 100;
@@ -62,12 +62,12 @@ pub const ALPHA: f64 = 5.6;
 
 /// The target's motion in the Welch segments of one nominal record (fixed structure, the
 /// excitation of seed 0), as the H1 estimator weighs it
-/// ([`crate::chain::exposure::ExposureCorrection::for_segments`]): per segment of the study's
+/// (`imaging::exposure::ExposureCorrection::for_segments` of the simulation): per segment of the study's
 /// estimator, the energy of the Hamming-windowed, mean-removed force and the equivalent
 /// sinusoidal amplitude (`sqrt(2)` windowed RMS) of the motion in px. The decay test makes it
 /// two populations: a few px of response to the process noise, and the impulse's segments
 /// with tens of px that carry most of the input energy.
-pub fn nominal_motion_segments() -> Vec<crate::model::MotionSegment> {
+pub fn nominal_motion_segments() -> Vec<crate::MotionSegment> {
     use rand::SeedableRng as _;
     let r = simulate(&mut ChaCha8Rng::seed_from_u64(0), true, 0);
     let step = NPERSEG - NOVERLAP;
@@ -89,7 +89,7 @@ pub fn nominal_motion_segments() -> Vec<crate::model::MotionSegment> {
                 .clone()
                 .map(|i| r.fine_disp_m[i * FINE] * 1000.0 * PX_PER_MM)
                 .collect();
-            crate::model::MotionSegment {
+            crate::MotionSegment {
                 weight: centred_energy(&r.force_n[seg]),
                 amplitude_px: (2.0 * centred_energy(&px) / w2).sqrt(),
             }

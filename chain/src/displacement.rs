@@ -15,10 +15,10 @@
 //!   than [`MAX_LOST_FRACTION`] of lost frames makes a measurement fail: a study reports the run
 //!   as failed and leaves it out, an analysis stops with an error.
 
-use crate::bad_input;
 use firmware_core::centroid::{Centroid, Flags};
+use vibcam_readers::bad_input;
 
-pub use crate::lost_frames::{
+pub use vibcam_common::lost_frames::{
     fill_lost_frames, fill_lost_frames_with, too_many_lost, LostFramePolicy, MAX_LOST_FRACTION,
 };
 

@@ -35,7 +35,7 @@ pub const TARGET: DiskTarget = DiskTarget {
     radius_px: 10.0,
     level: 255.0,
     edge_sigma_px: 0.5,
-    texture: crate::model::Texture::Plain,
+    texture: crate::Texture::Plain,
 };
 /// Binary centroid threshold: half the target level.
 pub const THRESHOLD: u16 = 127;
@@ -276,15 +276,15 @@ pub fn mode_shape(mode: usize, xi: f64) -> f64 {
 /// The tip's motion as the H1 estimator of the study weighs it: the nominal rig's test of seed 0
 /// with acquisition `acq` is stationary, so one segment with the equivalent sinusoidal
 /// amplitude (`sqrt(2)` RMS, px) of the whole record
-/// ([`crate::chain::exposure::ExposureCorrection::for_segments`]).
+/// (`imaging::exposure::ExposureCorrection::for_segments` of the simulation).
 pub fn nominal_motion_segments(
-    acq: &crate::model::Acquisition,
-) -> anyhow::Result<Vec<crate::model::MotionSegment>> {
-    let sim = crate::model::simulate(&crate::model::Rig::Cantilever(Rig::nominal()), acq, 0)?;
+    acq: &crate::Acquisition,
+) -> anyhow::Result<Vec<crate::MotionSegment>> {
+    let sim = crate::simulate(&crate::Rig::Cantilever(Rig::nominal()), acq, 0)?;
     let px: Vec<f64> = sim.tip_mm.iter().map(|mm| mm / MM_PER_PX).collect();
-    Ok(vec![crate::model::MotionSegment {
+    Ok(vec![crate::MotionSegment {
         weight: 1.0,
-        amplitude_px: crate::model::equivalent_amplitude_px(&px),
+        amplitude_px: crate::equivalent_amplitude_px(&px),
     }])
 }
 

@@ -5,14 +5,11 @@
 //!   lost-frame policy (linear interpolation, more than 5 % lost fails);
 //! - [`frf`]: two channels -> Welch H1 and coherence (firmware-core, one settings type, one place
 //!   that centres and scales in `f64` before the `f32` core) -> peaks of |Im H1| in bands;
-//! - [`exposure`]: the exposure transfer the vision amplitudes are divided by (sinc for the
-//!   weighted centroid, a measured table for the binary one);
 //! - [`resample`]: one column of samples upsampled (the `upsample` command);
 //! - [`vision_acceleration`]: displacement at the frame rate -> acceleration at the transducer
 //!   rate (firmware-core's Fourier upsampling fused with `-omega^2`).
 
 pub mod displacement;
-pub mod exposure;
 pub mod frf;
 pub mod resample;
 
@@ -102,7 +99,7 @@ fn vision_acceleration_with(
         Ok(out)
     })?
     .map_err(|e| {
-        crate::bad_input(format!(
+        vibcam_readers::bad_input(format!(
             "upsampling {n} frames to {m} samples (at most {MAX_SAMPLES}): {e}"
         ))
     })?;
@@ -112,8 +109,8 @@ fn vision_acceleration_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bad_input;
     use num_complex::Complex64;
+    use vibcam_readers::bad_input;
 
     /// Reference upsampling + -omega^2 (rustfft, f64, written from method.md §2.2/§2.3).
     fn reference_vision_acceleration(
@@ -183,7 +180,7 @@ mod tests {
     /// frames at 120 fps to 2048 Hz.
     #[test]
     fn firmware_upsampling_matches_the_reference() {
-        let x = crate::testing::uniform_noise(5, 1200);
+        let x = vibcam_common::testing::uniform_noise(5, 1200);
         let got = vision_acceleration(&x, 120.0, 20480).unwrap();
         let want = reference_vision_acceleration(&x, 120.0, 2048.0, 20480).unwrap();
         let peak = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));

@@ -3,8 +3,8 @@
 //! capacity, the exact power-of-two scaling of values the `f32` core could overflow on, and the
 //! large stack its fixed buffers need. `upsample` is this plus reading and writing CSV.
 
-use crate::bad_input;
 use firmware_core::upsample::Upsampler;
+use vibcam_readers::bad_input;
 
 /// Largest output length the host instantiation handles.
 pub const MAX_OUTPUT: usize = 1 << 16;

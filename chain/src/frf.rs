@@ -10,12 +10,12 @@
 //! - [`measure`] for `f32` records already in sensible units with an estimator of exactly the
 //!   needed size, reused across calls (the Monte Carlo inner loop): peaks and |H1|.
 
-use crate::bad_input;
 use firmware_core::peaks;
 use firmware_core::spectrum::{Detrend, WelchConfig, WelchH1, Window};
 use firmware_core::Complex32;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
+use vibcam_readers::bad_input;
 
 /// Largest segment and transform length on the host: 65 536 samples (32 s at 2048 Hz in one
 /// segment).
@@ -333,7 +333,7 @@ pub fn measure<const SEG: usize, const NFFT: usize, const SCR: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::uniform_noise;
+    use vibcam_common::testing::uniform_noise;
 
     fn window_coeffs(w: Window, n: usize) -> Vec<f64> {
         let two_pi = 2.0 * std::f64::consts::PI;

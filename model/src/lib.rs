@@ -18,11 +18,11 @@ pub mod target;
 
 pub use target::{DiskTarget, Texture};
 
-use crate::bad_input;
 use num_complex::Complex64;
 use rand::{Rng, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution as _, StandardNormal};
+use vibcam_readers::bad_input;
 
 /// Standard gravity, m/s^2 (firmware-core's value).
 pub const G0: f64 = firmware_core::convert::STANDARD_GRAVITY_F64;

@@ -1,5 +1,5 @@
 //! The target a rig's camera looks at: a physical object of the rig (its size and contrast are
-//! the rig's constants, `model::cantilever::TARGET`), drawn by [`crate::imaging`].
+//! the rig's constants, `model::cantilever::TARGET`), drawn by the simulation's `imaging`.
 
 use serde::{Deserialize, Serialize};
 
