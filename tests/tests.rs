@@ -115,11 +115,12 @@ fn the_docs_stand_on_their_own_and_the_readme_is_a_front_page() {
 
 /// The workspace's crates by layer, bottom first: a crate may depend on crates of the layers
 /// below its own, never on one of its own layer or above (ARCHITECTURE.md draws them).
-const LAYERS: [&[&str]; 6] = [
+const LAYERS: [&[&str]; 7] = [
     &["firmware-core"],
     &["vibcam-readers", "firmware-core-ffi"],
     &["vibcam-common"],
     &["vibcam-chain", "vibcam-model"],
+    &["vibcam-identify"],
     &["host-harness"],
     &["vibcam-python"],
 ];
@@ -369,7 +370,14 @@ fn the_python_wheel_reuses_the_workspace_build() {
 }
 
 /// The folders of the host side's crates (each with a `src/`), bottom layer first.
-const HOST_CRATES: [&str; 5] = ["readers", "common", "chain", "model", "host-harness"];
+const HOST_CRATES: [&str; 6] = [
+    "readers",
+    "common",
+    "chain",
+    "model",
+    "identify",
+    "host-harness",
+];
 
 /// No two files of a host-side crate use each other, directly or through others: every
 /// `crate::a::b`, `super::x` and `self::y` path (also inside `use a::{b, c::d}`, test modules and

@@ -38,7 +38,7 @@ pub mod ema;
 pub mod follow;
 pub mod frf_uncertainty;
 pub mod imaging_share;
-pub mod modal;
+pub use vibcam_identify::modal;
 pub mod oma;
 pub mod pick;
 pub mod points;

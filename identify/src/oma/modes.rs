@@ -15,7 +15,7 @@ use super::cluster::{self, SsiMode};
 use super::fdd::{self, Svd};
 use super::ssi::{self, Pole};
 use super::{Method, OmaMode, OmaSettings};
-use crate::analysis::modal::{mac, normalise_shape};
+use crate::modal::{mac, normalise_shape};
 use num_complex::Complex64;
 
 /// Least prominence of a peak taken without SSI-cov's support, dB.

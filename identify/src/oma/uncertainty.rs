@@ -18,7 +18,7 @@ use super::fdd::{self, Svd};
 use super::modes::Peak;
 use super::ssi::{self, CorrelationSums};
 use super::{Method, OmaMode, OmaSettings};
-use crate::analysis::modal::{mac, normalise_shape};
+use crate::modal::{mac, normalise_shape};
 
 /// Groups of the jackknife by default.
 pub const GROUPS: usize = 10;
@@ -474,8 +474,8 @@ mod fold_tests {
 
     #[test]
     fn a_scales_uncertainty_widens_amplitude_and_shape_intervals_in_quadrature() {
-        let mut m = vec![crate::analysis::oma::OmaMode {
-            method: crate::analysis::oma::Method::Fdd,
+        let mut m = vec![crate::oma::OmaMode {
+            method: crate::oma::Method::Fdd,
             mode: 1,
             band_hz: None,
             f_hz: 2.0,
@@ -509,8 +509,8 @@ mod fold_tests {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::oma::{analyze, OmaSettings};
-    use crate::model::field::{simulate, FieldCase};
+    use crate::oma::{analyze, OmaSettings};
+    use vibcam_model::field::{simulate, FieldCase};
 
     #[test]
     fn the_jackknife_by_hand() {

@@ -223,7 +223,7 @@ pub fn fit(
 
 #[cfg(test)]
 mod tests {
-    use crate::analysis::oma::fdd::lag_window;
+    use crate::oma::fdd::lag_window;
     use firmware_core::spectrum::Window;
 
     /// The Welch expectation of one mode's displacement spectrum computed the other way

@@ -225,7 +225,7 @@ pub fn of_segments(
     let mut units = Vec::new();
     for g in 0..groups {
         let mut unit = empty_unit(lines, responses.len());
-        for seg in crate::analysis::oma::uncertainty::group(g, groups, segments) {
+        for seg in crate::oma::uncertainty::group(g, groups, segments) {
             let s = seg * step;
             let f = prepare(&force[s..s + n]);
             let xs: Vec<Vec<f64>> = responses.iter().map(|x| prepare(&x[s..s + n])).collect();
@@ -248,7 +248,7 @@ mod tests {
         // x = 2 f delayed by one sample: H = 2 exp(-i w / fs), coherence 1
         let fs = 1000.0;
         let n = 4096;
-        let force = crate::testing::uniform_noise(3, n);
+        let force = vibcam_common::testing::uniform_noise(3, n);
         let x: Vec<f64> = (0..n)
             .map(|k| if k > 0 { 2.0 * force[k - 1] } else { 0.0 })
             .collect();

@@ -563,8 +563,8 @@ mod tests {
                 let xi = j as f64 / 5.0;
                 let gphi: Vec<f64> = (0..2)
                     .map(|m| {
-                        RIG[m].2 * crate::model::cantilever::mode_shape(m, xi)
-                            / crate::model::cantilever::mode_shape(m, 1.0)
+                        RIG[m].2 * vibcam_model::cantilever::mode_shape(m, xi)
+                            / vibcam_model::cantilever::mode_shape(m, 1.0)
                     })
                     .collect();
                 f.iter().map(|&x| base_excited(x, &gphi)).collect()
@@ -576,7 +576,7 @@ mod tests {
         (1..=5)
             .map(|j| {
                 Complex64::new(
-                    crate::model::cantilever::mode_shape(mode, j as f64 / 5.0),
+                    vibcam_model::cantilever::mode_shape(mode, j as f64 / 5.0),
                     0.0,
                 )
             })
@@ -679,7 +679,7 @@ mod tests {
     /// Welch H1 (Hann segments of `nperseg`, half overlap) of a long record of white input
     /// through the first mode of the rig, exactly (periodic over the record, in the frequency
     /// domain): the estimate whose resolution bias the smoothed fit must remove.
-    fn welch_of_one_mode(nperseg: usize, seed: u64) -> crate::chain::frf::Frf {
+    fn welch_of_one_mode(nperseg: usize, seed: u64) -> vibcam_chain::frf::Frf {
         use realfft::RealFftPlanner;
         let (fs, n) = (64.0, 1 << 18);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -694,7 +694,7 @@ mod tests {
         spec[n / 2].im = 0.0;
         let mut y = vec![0.0; n];
         inv.process(&mut spec, &mut y).unwrap();
-        let settings = crate::chain::frf::WelchSettings {
+        let settings = vibcam_chain::frf::WelchSettings {
             window: Window::Hann,
             nperseg: Some(nperseg),
             noverlap: None,
@@ -702,9 +702,9 @@ mod tests {
             detrend: Default::default(),
         };
         let config = settings
-            .resolve(n, fs, crate::chain::frf::Defaults::Scipy)
+            .resolve(n, fs, vibcam_chain::frf::Defaults::Scipy)
             .unwrap();
-        crate::chain::frf::estimate(&x, &y, config).unwrap()
+        vibcam_chain::frf::estimate(&x, &y, config).unwrap()
     }
 
     use firmware_core::spectrum::Window;

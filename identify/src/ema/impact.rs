@@ -18,7 +18,7 @@
 //!   the windowed record is exactly that of a structure whose poles are `p - 1 / tau`, so the
 //!   damping it adds is removed from each pole afterwards ([`ExpWindow::pole_shift`]).
 
-use crate::bad_input;
+use vibcam_readers::bad_input;
 
 /// The rules of hit finding.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -288,13 +288,13 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         let given = (b * fs_hz).round();
         let least = pre + 8 * width.max(4);
         if given < least as f64 {
-            return Err(anyhow::Error::new(crate::setting::SpecError::setting(
-                format!(
+            return Err(anyhow::Error::new(
+                vibcam_common::setting::SpecError::setting(format!(
                     "$block_s {b}: {given} samples at {fs_hz} Hz, shorter than the {pre} samples \
                  kept before each pulse and 8 pulse widths after it ({least} samples, {:.6} s)",
                     least as f64 / fs_hz
-                ),
-            )));
+                )),
+            ));
         }
         block = block.min(given as usize);
     }
@@ -473,7 +473,7 @@ mod tests {
             ..ImpactRule::default()
         };
         let e = find(&f, 10_000.0, rule, "force").unwrap_err();
-        let m = crate::setting::message(&e, crate::setting::Naming::Cli);
+        let m = vibcam_common::setting::message(&e, vibcam_common::setting::Naming::Cli);
         assert!(
             m.contains("--block-s 0.01") && m.contains("before each pulse"),
             "{m}"

@@ -4,10 +4,10 @@
 //! per-segment detrending (density scaling: `1 / (fs sum w^2)`, doubled except at 0 and at the
 //! Nyquist line of an even transform).
 
-use crate::bad_input;
 use firmware_core::spectrum::{Detrend, Window};
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
+use vibcam_readers::bad_input;
 
 /// Welch settings of the cross-spectral matrix (resolved: every length known).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

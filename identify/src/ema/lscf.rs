@@ -24,11 +24,11 @@
 //!
 //! A pole of order `n` is stable when a pole of order `n - 1` lies within 1 % in frequency,
 //! 5 % in damping and has a shape with a MAC of at least 0.98 with it: the rules of the SSI-cov
-//! diagram of `modal`, so that [`crate::analysis::oma::cluster`] groups LSCF's stable poles into
+//! diagram of `modal`, so that [`crate::oma::cluster`] groups LSCF's stable poles into
 //! modes by the same rules.
 
-use crate::analysis::modal::mac;
-use crate::analysis::oma::ssi::Pole;
+use crate::modal::mac;
+use crate::oma::ssi::Pole;
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -77,7 +77,7 @@ pub fn poles(
         .collect();
     let n = rule.max_order;
     if n < 2 || lines.len() < n + 2 {
-        return Err(crate::bad_input(format!(
+        return Err(vibcam_readers::bad_input(format!(
             "LSCF: {} lines in {lo}..{hi} Hz, an order-{n} model needs at least {} (a wider \
              band, longer blocks or a lower highest order)",
             lines.len(),
@@ -233,7 +233,7 @@ fn roots(c: &[f64]) -> Vec<Complex64> {
     for i in 0..n {
         comp[(i, n - 1)] = -c[i] / c[n];
     }
-    nalgebra::Schur::try_new(comp, f64::EPSILON, crate::analysis::oma::MAX_ITERATIONS)
+    nalgebra::Schur::try_new(comp, f64::EPSILON, crate::oma::MAX_ITERATIONS)
         .map(|s| s.complex_eigenvalues().iter().copied().collect())
         .unwrap_or_default()
 }

@@ -4,7 +4,7 @@
 //! a correlation function for damping and frequency.
 
 use super::csd::Csd;
-use crate::analysis::modal::mac;
+use crate::modal::mac;
 use nalgebra::{DMatrix, SymmetricEigen};
 use num_complex::Complex64;
 

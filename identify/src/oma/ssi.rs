@@ -3,7 +3,7 @@
 //! a state-space model per order, the model's poles and shapes, and poles stable from one order
 //! to the next (clustered into modes by [`super::cluster`]).
 
-use crate::analysis::modal::mac;
+use crate::modal::mac;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -108,7 +108,7 @@ pub fn correlation_sums(
     let n = channels.first().map_or(0, Vec::len);
     let i = block_rows;
     if k == 0 || i < 2 || n < 4 * i {
-        return Err(crate::bad_input(format!(
+        return Err(vibcam_readers::bad_input(format!(
             "SSI-cov: {n} samples are too few for {i} block rows (at least {})",
             4 * i
         )));

@@ -11,7 +11,7 @@
 //! form ([`FrfForm::residual_exponents`]: receptance `-2, 0`). All FRFs share one design matrix:
 //! one SVD (columns scaled to unit norm first), every FRF a right-hand side.
 
-use crate::analysis::modal::{FrfForm, Pole};
+use crate::modal::{FrfForm, Pole};
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -102,7 +102,7 @@ pub fn fit(
         true,
         true,
         f64::EPSILON,
-        crate::analysis::oma::MAX_ITERATIONS,
+        crate::oma::MAX_ITERATIONS,
     )
     .ok_or_else(|| anyhow::anyhow!("LSFD: the decomposition did not converge"))?;
     let smax = svd.singular_values.max();

@@ -10,7 +10,7 @@
 //! one odd pole does not split a mode's column.
 
 use super::ssi::Pole;
-use crate::analysis::modal::{mac, normalise_shape};
+use crate::modal::{mac, normalise_shape};
 use num_complex::Complex64;
 
 /// The rules of the clustering.

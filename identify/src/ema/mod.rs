@@ -1,0 +1,465 @@
+//! Experimental modal analysis with a measured force (`ema`, docs/method.md §3.13): FRFs of the
+//! responses (a camera's displacements, a DAQ's transducers) over the force, from the hits of
+//! an impact test ([`impact`]) or Welch segments of a continuous one ([`spectra`]); poles by
+//! LSCF with a stabilisation diagram ([`lscf`]), its stable poles grouped into modes by the
+//! rules of `modal`'s SSI ([`crate::oma::cluster`]); residues and mode shapes by LSFD
+//! with residual terms ([`lsfd`]); each mode's interval by the jackknife over the hits or the
+//! segment groups.
+
+pub mod impact;
+pub mod lscf;
+pub mod lsfd;
+pub mod spectra;
+
+use crate::modal::{normalise_shape, FrfForm, Pole};
+use crate::oma::cluster::{cluster, ClusterRule, Rejected, SsiMode};
+use crate::oma::ssi;
+use crate::oma::uncertainty::{jackknife_sized, Interval};
+use impact::{ExpWindow, Hits, ImpactRule};
+use num_complex::Complex64;
+use spectra::{Frfs, Spectra};
+
+/// The exponential window of an impact test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ExpChoice {
+    /// None.
+    Off,
+    /// Applied when a response has not decayed by its block's end (the RMS of its last tenth
+    /// above 5 % of its largest excursion), ending at 1 %.
+    Auto,
+    /// Applied, its value at the block's end this (0 < end < 1).
+    End(f64),
+}
+
+/// How the structure was excited.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Excitation {
+    /// Hits of a hammer.
+    Impact {
+        /// Hit finding.
+        rule: ImpactRule,
+        /// The exponential window.
+        exp: ExpChoice,
+    },
+    /// A continuous force (shaker, random): Welch segments.
+    Continuous {
+        /// Samples per segment.
+        nperseg: usize,
+    },
+}
+
+/// What the analysis is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmaSettings {
+    /// The excitation.
+    pub excitation: Excitation,
+    /// Displacement, velocity or acceleration over force.
+    pub form: FrfForm,
+    /// The band the poles and residues are fitted in, Hz.
+    pub band_hz: (f64, f64),
+    /// One mode per band (none: every mode the stabilisation diagram shows).
+    pub bands: Option<Vec<(f64, f64)>>,
+    /// LSCF's orders and stability rules.
+    pub lscf: lscf::LscfRule,
+    /// The clustering of stable poles into modes.
+    pub cluster: ClusterRule,
+}
+
+/// One mode found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmaMode {
+    /// Number, 1-based, ascending frequency.
+    pub mode: usize,
+    /// Its band (with bands).
+    pub band_hz: Option<(f64, f64)>,
+    /// The pole, the exponential window's damping removed.
+    pub pole: Pole,
+    /// The pole of the (windowed) FRFs.
+    pub fitted: Pole,
+    /// The shape: residues normalised (largest component 1).
+    pub shape: Vec<Complex64>,
+    /// Its cluster of stable poles.
+    pub cluster: SsiMode,
+    /// Interval of the frequency.
+    pub f_interval: Option<Interval>,
+    /// Interval of the damping ratio.
+    pub damping_interval: Option<Interval>,
+    /// Standard uncertainty of each shape component's magnitude.
+    pub shape_abs_u: Option<Vec<f64>>,
+}
+
+/// What the analysis found.
+#[derive(Debug, Clone)]
+pub struct EmaResult {
+    /// The FRFs' lines, Hz.
+    pub freq_hz: Vec<f64>,
+    /// H1, H2 and coherence of all units.
+    pub frfs: Frfs,
+    /// Every pole of the stabilisation diagram.
+    pub poles: Vec<ssi::Pole>,
+    /// The clusters: reported (true) or rejected.
+    pub clusters: Vec<(SsiMode, bool)>,
+    /// Clusters rejected, with the reason.
+    pub rejected: Vec<Rejected>,
+    /// The modes.
+    pub modes: Vec<EmaMode>,
+    /// LSFD's constants per response (residues in mode order).
+    pub constants: Vec<lsfd::Constants>,
+    /// The hits (impact).
+    pub hits: Option<Hits>,
+    /// The exponential window applied.
+    pub exp: Option<ExpWindow>,
+    /// Units averaged (hits or segment groups) and their sizes.
+    pub unit_sizes: Vec<usize>,
+    /// What the reader should know.
+    pub notes: Vec<String>,
+}
+
+/// The largest ratio, over responses and used hits, of the RMS of a block's last tenth to its
+/// largest excursion (each less its mean before the pulse).
+fn undecayed(responses: &[Vec<f64>], hits: &Hits) -> f64 {
+    let n = hits.block;
+    let mut worst = 0.0f64;
+    for hit in hits.used() {
+        let s = hits.block_start(hit);
+        for x in responses {
+            let b = &x[s..s + n];
+            let pre = hits.pre.max(1);
+            let mean = b[..pre].iter().sum::<f64>() / pre as f64;
+            let peak = b.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
+            let tail = &b[n - n / 10..];
+            let rms =
+                (tail.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / tail.len() as f64).sqrt();
+            if peak > 0.0 {
+                worst = worst.max(rms / peak);
+            }
+        }
+    }
+    worst
+}
+
+/// What [`select`] finds: every pole, the modes (clusters reported), the clusters rejected,
+/// and the mode of each band (every mode, without bands).
+struct Selection {
+    poles: Vec<ssi::Pole>,
+    modes: Vec<SsiMode>,
+    rejected: Vec<Rejected>,
+    per_band: Vec<Option<SsiMode>>,
+}
+
+/// The largest ratio, over responses and used hits, of a response's RMS before its block's
+/// pulse to its largest excursion after it: a response that moves before the force hits is
+/// ahead of it in time (the records are not aligned).
+fn precursor(responses: &[Vec<f64>], hits: &Hits) -> f64 {
+    let mut worst = 0.0f64;
+    if hits.pre < 8 {
+        return 0.0;
+    }
+    for hit in hits.used() {
+        let s = hits.block_start(hit);
+        for x in responses {
+            let b = &x[s..s + hits.block];
+            let pre = &b[..hits.pre];
+            let mean = pre.iter().sum::<f64>() / pre.len() as f64;
+            let rms =
+                (pre.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / pre.len() as f64).sqrt();
+            let peak = b[hits.pre..]
+                .iter()
+                .fold(0.0f64, |a, v| a.max((v - mean).abs()));
+            if peak > 0.0 {
+                worst = worst.max(rms / peak);
+            }
+        }
+    }
+    worst
+}
+
+/// The poles of `h1` and the modes among them: every stable cluster, or per band the fullest
+/// reported cluster in it (`None` where a band has none).
+fn select(freq_hz: &[f64], h1: &[Vec<Complex64>], s: &EmaSettings) -> anyhow::Result<Selection> {
+    let poles = lscf::poles(freq_hz, h1, s.band_hz, s.lscf)?;
+    let (modes, rejected) = cluster(&poles, s.cluster);
+    let per_band = match &s.bands {
+        None => modes.iter().cloned().map(Some).collect(),
+        Some(bands) => bands
+            .iter()
+            .map(|&(lo, hi)| {
+                modes
+                    .iter()
+                    .filter(|m| m.f_hz >= lo && m.f_hz <= hi)
+                    .max_by_key(|m| m.poles)
+                    .cloned()
+            })
+            .collect(),
+    };
+    Ok(Selection {
+        poles,
+        modes,
+        rejected,
+        per_band,
+    })
+}
+
+/// One replicate of a mode: its pole and residues (`None`: not found without that unit).
+type Replicate = Option<(Pole, Vec<Complex64>)>;
+
+/// A pole from a cluster's median frequency and damping.
+fn pole_of(m: &SsiMode) -> Pole {
+    Pole {
+        f_hz: m.f_hz,
+        damping: m.damping,
+    }
+}
+
+/// `p` with the exponential window's shift of the real part undone.
+fn unwindowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
+    match exp {
+        None => p,
+        Some(w) => {
+            let s = p.s();
+            let s = Complex64::new(s.re - w.pole_shift(), s.im);
+            let wn = s.norm();
+            Pole {
+                f_hz: wn / (2.0 * std::f64::consts::PI),
+                damping: -s.re / wn,
+            }
+        }
+    }
+}
+
+/// The analysis of `force` and `responses` (one rate `fs_hz`); `force_name` names the force in
+/// errors.
+pub fn analyse(
+    force: &[f64],
+    responses: &[Vec<f64>],
+    fs_hz: f64,
+    force_name: &str,
+    s: &EmaSettings,
+) -> anyhow::Result<EmaResult> {
+    let mut notes = Vec::new();
+    let top = s.band_hz.1 * 1.05;
+    let (spectra, hits, exp): (Spectra, Option<Hits>, Option<ExpWindow>) = match s.excitation {
+        Excitation::Impact { rule, exp } => {
+            let hits = impact::find(force, fs_hz, rule, force_name)?;
+            let block_s = hits.block as f64 / fs_hz;
+            let ratio = undecayed(responses, &hits);
+            let window = match exp {
+                ExpChoice::Off => None,
+                ExpChoice::End(e) => Some(ExpWindow::ending_at(e, block_s)),
+                ExpChoice::Auto if ratio > 0.05 => Some(ExpWindow::ending_at(0.01, block_s)),
+                ExpChoice::Auto => None,
+            };
+            if window.is_none() && ratio > 0.05 {
+                notes.push(format!(
+                    "the responses have not decayed by the blocks' end (the last tenth's RMS is \
+                     {:.0} % of the largest excursion) and no exponential window was applied: \
+                     leakage widens the peaks and raises the damping",
+                    100.0 * ratio
+                ));
+            }
+            let ahead = precursor(responses, &hits);
+            if ahead > 0.1 {
+                notes.push(format!(
+                    "the responses move before the force's pulses (their RMS before a pulse is \
+                     {:.0} % of their largest excursion after it): the records are not aligned; \
+                     give the delay between their starts (--delay-s, delay_s in Python)",
+                    100.0 * ahead
+                ));
+            }
+            let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, top)?;
+            (sp, Some(hits), window)
+        }
+        Excitation::Continuous { nperseg } => {
+            let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
+            let rms = (force.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+                / force.len().max(1) as f64)
+                .sqrt();
+            let peak = force.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
+            if rms > 0.0 && peak > 10.0 * rms {
+                notes.push(format!(
+                    "the force's peak is {:.0} times its RMS: it looks like hammer hits, not a \
+                     continuous force; an impact test is analysed hit by hit (--impact, \
+                     impact=True in Python)",
+                    peak / rms
+                ));
+            }
+            let sp = spectra::of_segments(
+                force,
+                responses,
+                fs_hz,
+                nperseg,
+                crate::oma::uncertainty::GROUPS,
+                top,
+            )?;
+            (sp, None, None)
+        }
+    };
+    let frfs = spectra.frfs(None);
+    let freq = spectra.freq_hz.clone();
+    let Selection {
+        poles,
+        modes: all,
+        rejected,
+        per_band,
+    } = select(&freq, &frfs.h1, s)?;
+    if let Some(bands) = &s.bands {
+        for (b, m) in bands.iter().zip(&per_band) {
+            if m.is_none() {
+                notes.push(format!(
+                    "band {}-{} Hz: no mode (no cluster of stable poles there)",
+                    b.0, b.1
+                ));
+            }
+        }
+    }
+    let chosen: Vec<(Option<(f64, f64)>, SsiMode)> = match &s.bands {
+        None => per_band.into_iter().flatten().map(|m| (None, m)).collect(),
+        Some(bands) => bands
+            .iter()
+            .zip(per_band)
+            .filter_map(|(b, m)| m.map(|m| (Some(*b), m)))
+            .collect(),
+    };
+    let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
+    let constants = if fitted.is_empty() {
+        Vec::new()
+    } else {
+        lsfd::fit(&freq, &frfs.h1, s.band_hz, &fitted, s.form)?
+    };
+    let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
+    // the jackknife: every unit left out in turn
+    let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); chosen.len()];
+    if spectra.units.len() >= 3 && !fitted.is_empty() {
+        for g in 0..spectra.units.len() {
+            let f = spectra.frfs(Some(g));
+            let got = select(&freq, &f.h1, s).ok();
+            let matched: Vec<Option<Pole>> = fitted
+                .iter()
+                .map(|p| {
+                    got.as_ref().and_then(|sel| {
+                        sel.modes
+                            .iter()
+                            .filter(|m| (m.f_hz - p.f_hz).abs() <= 0.02 * p.f_hz)
+                            .min_by(|a, b| {
+                                (a.f_hz - p.f_hz).abs().total_cmp(&(b.f_hz - p.f_hz).abs())
+                            })
+                            .map(pole_of)
+                    })
+                })
+                .collect();
+            let rep_poles: Vec<Pole> = matched
+                .iter()
+                .zip(&fitted)
+                .map(|(m, p)| m.unwrap_or(*p))
+                .collect();
+            let rep_shapes = lsfd::fit(&freq, &f.h1, s.band_hz, &rep_poles, s.form).ok();
+            for (r, m) in matched.iter().enumerate() {
+                let shape = rep_shapes
+                    .as_ref()
+                    .map(|c| c.iter().map(|k| k.residues[r]).collect::<Vec<_>>());
+                reps[r].push(m.and_then(|p| shape.map(|sh| (p, sh))));
+            }
+        }
+    } else if !fitted.is_empty() {
+        notes.push(format!(
+            "no intervals: {} {} averaged, the jackknife needs at least 3",
+            spectra.units.len(),
+            if hits.is_some() {
+                "hits"
+            } else {
+                "segment groups"
+            }
+        ));
+    }
+    let mut modes = Vec::new();
+    for (i, ((band, cl), p)) in chosen.into_iter().zip(&fitted).enumerate() {
+        let residues: Vec<Complex64> = constants.iter().map(|c| c.residues[i]).collect();
+        let shape = normalise_shape(&residues);
+        let pole = unwindowed(*p, exp);
+        let (mut fi, mut di, mut su) = (None, None, None);
+        let r = &reps[i];
+        if !r.is_empty() {
+            if r.iter().all(Option::is_some) {
+                let reps: Vec<(Pole, Vec<Complex64>)> = r.iter().flatten().cloned().collect();
+                let fs: Vec<f64> = reps.iter().map(|(q, _)| unwindowed(*q, exp).f_hz).collect();
+                let ds: Vec<f64> = reps
+                    .iter()
+                    .map(|(q, _)| unwindowed(*q, exp).damping)
+                    .collect();
+                // a frequency is positive: an interval reaching 0 Hz determines nothing
+                fi = jackknife_sized(pole.f_hz, &fs, &unit_sizes).and_then(Interval::of_positive);
+                // a damping ratio is not negative: the interval's lower end at 0 at least
+                di = jackknife_sized(pole.damping, &ds, &unit_sizes).map(|i| Interval {
+                    lo: i.lo.max(0.0),
+                    ..i
+                });
+                let reference = residues
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
+                    .map_or(0, |(k, _)| k);
+                su = Some(
+                    (0..residues.len())
+                        .map(|k| {
+                            let a: Vec<f64> = reps
+                                .iter()
+                                .map(|(_, sh)| (sh[k] / sh[reference]).norm())
+                                .collect();
+                            jackknife_sized(shape[k].norm(), &a, &unit_sizes)
+                                .map_or(f64::NAN, |v| v.u)
+                        })
+                        .collect(),
+                );
+            } else {
+                notes.push(format!(
+                    "mode {} ({:.4} Hz): no interval, it was not found with every {} left out",
+                    i + 1,
+                    pole.f_hz,
+                    if hits.is_some() {
+                        "hit"
+                    } else {
+                        "segment group"
+                    }
+                ));
+            }
+        }
+        modes.push(EmaMode {
+            mode: i + 1,
+            band_hz: band,
+            pole,
+            fitted: *p,
+            shape,
+            cluster: cl,
+            f_interval: fi,
+            damping_interval: di,
+            shape_abs_u: su,
+        });
+    }
+    let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
+    if misfit > 0.2 {
+        notes.push(format!(
+            "the fitted model leaves {:.0} % of an FRF unexplained (LSFD misfit {misfit:.3}): a \
+             delay between the records, modes the band cuts or not found, or noise; the numbers \
+             above are doubtful",
+            100.0 * misfit
+        ));
+    }
+    let clusters = all
+        .iter()
+        .map(|m| (m.clone(), true))
+        .chain(rejected.iter().map(|r| (r.cluster.clone(), false)))
+        .collect();
+    Ok(EmaResult {
+        freq_hz: freq,
+        frfs,
+        poles,
+        clusters,
+        rejected,
+        modes,
+        constants,
+        hits,
+        exp,
+        unit_sizes,
+        notes,
+    })
+}
