@@ -119,7 +119,7 @@ const LAYERS: [&[&str]; 7] = [
     &["firmware-core"],
     &["vibcam-readers", "firmware-core-ffi"],
     &["vibcam-common"],
-    &["vibcam-chain", "vibcam-model"],
+    &["vibcam-chain", "vibcam-model", "vibcam-report"],
     &["vibcam-identify"],
     &["host-harness"],
     &["vibcam-python"],
@@ -370,11 +370,12 @@ fn the_python_wheel_reuses_the_workspace_build() {
 }
 
 /// The folders of the host side's crates (each with a `src/`), bottom layer first.
-const HOST_CRATES: [&str; 6] = [
+const HOST_CRATES: [&str; 7] = [
     "readers",
     "common",
     "chain",
     "model",
+    "report",
     "identify",
     "host-harness",
 ];

@@ -35,12 +35,9 @@ pub mod analysis;
 pub mod calibrate;
 #[cfg(feature = "cli")]
 pub mod cli;
-pub mod export;
 pub mod imaging;
 pub mod jobs;
-pub mod outdir;
 pub mod plan;
-pub mod plots;
 pub mod recording;
 pub mod study;
 
@@ -50,3 +47,4 @@ pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};
 pub use vibcam_chain as chain;
 pub use vibcam_common::{failpoint, geometry, lost_frames, setting, stats, testing, uncertainty};
 pub use vibcam_model as model;
+pub use vibcam_report::{export, outdir, plots};

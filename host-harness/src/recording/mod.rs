@@ -305,91 +305,89 @@ pub struct RecordingFiles {
 
 pub use crate::export::recording::{ModeRow, RecordingToml, TargetShape};
 
-impl RecordingToml {
-    /// The parameters of a recording of `spec` with frames of `frame_size` (one target).
-    pub fn of(spec: &RecordingSpec, frame_size: (usize, usize)) -> Self {
-        let mut t = RecordingToml {
-            preset: match spec.rig {
-                Rig::Cantilever(_) => "cantilever",
-                Rig::Grandstand(_) => "grandstand",
-            },
-            seed: spec.seed,
-            exposure_ms: spec.exposure_ms,
-            fps: spec.acquisition.fps,
-            fs: spec.acquisition.fs,
-            frames: spec.acquisition.frames,
-            samples: spec.samples(),
-            mm_per_px: spec.mm_per_px,
-            radius_px: spec.target.radius_px,
-            level: spec.target.level,
-            edge_sigma_px: spec.target.edge_sigma_px,
-            texture: spec.target.texture.name(),
-            threshold: spec.threshold,
-            frame_size: [frame_size.0, frame_size.1],
-            read_noise: spec.read_noise,
-            band_hz: None,
-            tip_pp_mm: None,
-            accel_noise_g: None,
-            accel_tilt_gain: None,
-            beam_length_m: None,
-            f0_n: None,
-            alpha: None,
-            t0_s: None,
-            process_noise_n: None,
-            force_snr: None,
-            accel_snr: None,
-            targets: None,
-            target_xi: None,
-            target_x_px: None,
-            modes: Vec::new(),
-            target_shapes: Vec::new(),
-        };
-        match &spec.rig {
-            Rig::Cantilever(r) => {
-                t.band_hz = Some([r.band_hz.0, r.band_hz.1]);
-                t.tip_pp_mm = Some(r.tip_pp_mm);
-                t.accel_noise_g = Some(r.accel_noise_g);
-                if r.accel_tilt_gain != 0.0 {
-                    t.accel_tilt_gain = Some(r.accel_tilt_gain);
-                    t.beam_length_m = Some(r.beam_length_m);
-                }
-                t.modes = r
-                    .modes
-                    .iter()
-                    .map(|m| ModeRow {
-                        f_hz: m.f_hz,
-                        zeta: m.zeta,
-                        g_phi: Some(m.g_phi),
-                        mass_kg: None,
-                    })
-                    .collect();
+/// The parameters of a recording of `spec` with frames of `frame_size` (one target).
+pub fn toml_of(spec: &RecordingSpec, frame_size: (usize, usize)) -> RecordingToml {
+    let mut t = RecordingToml {
+        preset: match spec.rig {
+            Rig::Cantilever(_) => "cantilever",
+            Rig::Grandstand(_) => "grandstand",
+        },
+        seed: spec.seed,
+        exposure_ms: spec.exposure_ms,
+        fps: spec.acquisition.fps,
+        fs: spec.acquisition.fs,
+        frames: spec.acquisition.frames,
+        samples: spec.samples(),
+        mm_per_px: spec.mm_per_px,
+        radius_px: spec.target.radius_px,
+        level: spec.target.level,
+        edge_sigma_px: spec.target.edge_sigma_px,
+        texture: spec.target.texture.name(),
+        threshold: spec.threshold,
+        frame_size: [frame_size.0, frame_size.1],
+        read_noise: spec.read_noise,
+        band_hz: None,
+        tip_pp_mm: None,
+        accel_noise_g: None,
+        accel_tilt_gain: None,
+        beam_length_m: None,
+        f0_n: None,
+        alpha: None,
+        t0_s: None,
+        process_noise_n: None,
+        force_snr: None,
+        accel_snr: None,
+        targets: None,
+        target_xi: None,
+        target_x_px: None,
+        modes: Vec::new(),
+        target_shapes: Vec::new(),
+    };
+    match &spec.rig {
+        Rig::Cantilever(r) => {
+            t.band_hz = Some([r.band_hz.0, r.band_hz.1]);
+            t.tip_pp_mm = Some(r.tip_pp_mm);
+            t.accel_noise_g = Some(r.accel_noise_g);
+            if r.accel_tilt_gain != 0.0 {
+                t.accel_tilt_gain = Some(r.accel_tilt_gain);
+                t.beam_length_m = Some(r.beam_length_m);
             }
-            Rig::Grandstand(g) => {
-                t.f0_n = Some(g.f0_n);
-                t.alpha = Some(g.alpha);
-                t.t0_s = Some(g.t0_s);
-                t.process_noise_n = Some(g.process_noise_n);
-                t.force_snr = Some(g.force_snr);
-                t.accel_snr = Some(g.accel_snr);
-                t.modes = g
-                    .modes
-                    .iter()
-                    .map(|m| ModeRow {
-                        f_hz: m.f_hz,
-                        zeta: m.zeta,
-                        g_phi: None,
-                        mass_kg: Some(m.mass_kg),
-                    })
-                    .collect();
-            }
+            t.modes = r
+                .modes
+                .iter()
+                .map(|m| ModeRow {
+                    f_hz: m.f_hz,
+                    zeta: m.zeta,
+                    g_phi: Some(m.g_phi),
+                    mass_kg: None,
+                })
+                .collect();
         }
-        t
+        Rig::Grandstand(g) => {
+            t.f0_n = Some(g.f0_n);
+            t.alpha = Some(g.alpha);
+            t.t0_s = Some(g.t0_s);
+            t.process_noise_n = Some(g.process_noise_n);
+            t.force_snr = Some(g.force_snr);
+            t.accel_snr = Some(g.accel_snr);
+            t.modes = g
+                .modes
+                .iter()
+                .map(|m| ModeRow {
+                    f_hz: m.f_hz,
+                    zeta: m.zeta,
+                    g_phi: None,
+                    mass_kg: Some(m.mass_kg),
+                })
+                .collect();
+        }
     }
+    t
 }
 
 /// `recording.toml` of a one-target recording of `spec` ([`RecordingToml`]).
 pub fn recording_toml(spec: &RecordingSpec, frame_size: (usize, usize)) -> anyhow::Result<String> {
-    RecordingToml::of(spec, frame_size).to_text()
+    toml_of(spec, frame_size).to_text()
 }
 
 /// Writes the recording of `spec` (with `targets`: K targets along the cantilever,

@@ -250,7 +250,7 @@ fn write_texts(
     std::fs::write(write_to.join("accel.csv"), csv)
         .with_context(|| format!("cannot write {}", dir.join("accel.csv").display()))?;
     let targets = layout.xi.len();
-    let mut toml = super::RecordingToml::of(spec, layout.frame_size);
+    let mut toml = super::toml_of(spec, layout.frame_size);
     toml.targets = Some(targets);
     toml.target_xi = Some(layout.xi);
     toml.target_x_px = Some(layout.x_px);

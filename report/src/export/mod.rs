@@ -84,9 +84,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
-        crate::failpoint::hit("atomic-synced");
+        vibcam_common::failpoint::hit("atomic-synced");
         std::fs::rename(&tmp, path)?;
-        crate::failpoint::hit("atomic-renamed");
+        vibcam_common::failpoint::hit("atomic-renamed");
         if let Ok(d) = std::fs::File::open(dir) {
             d.sync_all().ok();
         }

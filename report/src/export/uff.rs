@@ -25,7 +25,7 @@
 //! For the workspace's FRFs (acceleration over base acceleration, dimensionless) numerator and
 //! denominator are both [`Quantity::Acceleration`] in `m/s^2`; readers that pick the FRF form
 //! from the ordinate type (sdypy-EMA) then treat them as accelerance, which matches their
-//! residual terms (see [`crate::analysis::modal`]).
+//! residual terms (see `vibcam_identify::modal`).
 
 use num_complex::Complex64;
 

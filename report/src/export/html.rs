@@ -14,8 +14,8 @@
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
-/// A grey frame for the page (made by the readers: [`crate::frames::GreyFrame::to_image`]).
-pub use crate::frames::FrameImage;
+/// A grey frame for the page (made by the readers: [`vibcam_readers::frames::GreyFrame::to_image`]).
+pub use vibcam_readers::frames::FrameImage;
 
 /// A target on the frame.
 #[derive(Debug, Clone, PartialEq)]

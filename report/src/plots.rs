@@ -373,7 +373,7 @@ where
             curves.push((
                 "transducer".into(),
                 TRANSDUCER,
-                crate::stats::density_histogram(&t, lo, hi, bins),
+                vibcam_common::stats::density_histogram(&t, lo, hi, bins),
             ));
         }
         for (i, &e) in exps.iter().enumerate() {
@@ -385,7 +385,7 @@ where
             curves.push((
                 format!("vision {e} ms"),
                 exposure_colour(i, exps.len()),
-                crate::stats::density_histogram(&v, lo, hi, bins),
+                vibcam_common::stats::density_histogram(&v, lo, hi, bins),
             ));
         }
         let y_max = curves

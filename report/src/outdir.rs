@@ -20,10 +20,10 @@
 //! back in place (the staged one when it holds its manifest, otherwise the set-aside one) before
 //! it removes the rest.
 
-use crate::bad_input;
 use anyhow::Context as _;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use vibcam_readers::bad_input;
 
 /// The manifest file of an output directory (hidden, TOML).
 pub const MANIFEST: &str = ".vibcam-manifest.toml";
@@ -68,7 +68,7 @@ impl Staged {
             .and_then(|n| n.to_str())
             .filter(|n| *n != "." && *n != "..")
             .ok_or_else(|| {
-                crate::bad_input(format!(
+                vibcam_readers::bad_input(format!(
                     "{}: an output directory needs a name (not . or ..)",
                     target.display()
                 ))
@@ -153,7 +153,7 @@ impl Staged {
         sync_tree(&self.stage)?;
         // the stage holds its manifest: from here on it is a complete output (what a recovery
         // puts back in place if this writer dies before its renames are done)
-        crate::failpoint::hit("outdir-synced");
+        vibcam_common::failpoint::hit("outdir-synced");
         let parent = self.stage.parent().unwrap_or(Path::new(".")).to_path_buf();
         if self.replaces() {
             let old = parent.join(format!(
@@ -166,7 +166,7 @@ impl Staged {
             ));
             std::fs::rename(&self.target, &old)
                 .with_context(|| format!("cannot move {} aside", self.target.display()))?;
-            crate::failpoint::hit("outdir-old-moved");
+            vibcam_common::failpoint::hit("outdir-old-moved");
             std::fs::rename(&self.stage, &self.target)
                 .with_context(|| format!("cannot move the outputs to {}", self.target.display()))?;
             self.committed = true;

@@ -3,8 +3,8 @@
 //! in [`crate::plots`].
 
 use super::{csv_bytes, num};
-use crate::uncertainty::{CoverageSummary, Stability};
 use std::fmt::Write as _;
+use vibcam_common::uncertainty::{CoverageSummary, Stability};
 
 /// Which measurement system a row describes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -349,7 +349,7 @@ mod tests {
         );
         let mut with_cov = rows.clone();
         with_cov[1].a_coverage =
-            Some(crate::uncertainty::coverage_summary(&[1.0, 2.0, 3.0, 4.0], 0.5).unwrap());
+            Some(vibcam_common::uncertainty::coverage_summary(&[1.0, 2.0, 3.0, 4.0], 0.5).unwrap());
         let text = String::from_utf8(summary_csv(&with_cov, true)).unwrap();
         assert!(text
             .lines()
