@@ -120,7 +120,7 @@ const LAYERS: [&[&str]; 7] = [
     &["vibcam-readers", "firmware-core-ffi"],
     &["vibcam-common"],
     &["vibcam-chain", "vibcam-model", "vibcam-report"],
-    &["vibcam-identify"],
+    &["vibcam-identify", "vibcam-sim"],
     &["host-harness"],
     &["vibcam-python"],
 ];
@@ -370,13 +370,14 @@ fn the_python_wheel_reuses_the_workspace_build() {
 }
 
 /// The folders of the host side's crates (each with a `src/`), bottom layer first.
-const HOST_CRATES: [&str; 7] = [
+const HOST_CRATES: [&str; 8] = [
     "readers",
     "common",
     "chain",
     "model",
     "report",
     "identify",
+    "sim",
     "host-harness",
 ];
 

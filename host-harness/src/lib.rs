@@ -32,14 +32,9 @@
 //! | [`testing`] | seeded noise for tests, examples and benchmarks |
 
 pub mod analysis;
-pub mod calibrate;
 #[cfg(feature = "cli")]
 pub mod cli;
-pub mod imaging;
 pub mod jobs;
-pub mod plan;
-pub mod recording;
-pub mod study;
 
 // The readers' crate: its modules and its error are this crate's too, under the same paths.
 pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};
@@ -48,3 +43,4 @@ pub use vibcam_chain as chain;
 pub use vibcam_common::{failpoint, geometry, lost_frames, setting, stats, testing, uncertainty};
 pub use vibcam_model as model;
 pub use vibcam_report::{export, outdir, plots};
+pub use vibcam_sim::{calibrate, imaging, plan, recording, study};

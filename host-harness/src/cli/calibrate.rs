@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE.toml", conflicts_with = "preset")]
     pub config: Option<PathBuf>,
     /// The rig, when no --config is given.
-    #[arg(long, value_enum, default_value_t = Preset::Grandstand)]
+    #[arg(long, default_value = "grandstand", value_parser = super::args::choice(&Preset::ALL, Preset::name))]
     pub preset: Preset,
     /// A free parameter and its range, NAME=LO:HI (repeat): target_radius_px,
     /// target_edge_sigma_px, threshold_frac, read_noise, optical_blur_sigma_px, gain,

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// Take the modes, motion amplitudes, target, threshold and frame rate from this study
     /// preset's model (only `grandstand` is supported).
-    #[arg(long, value_enum, conflicts_with = "config")]
+    #[arg(long, conflicts_with = "config", value_parser = super::args::choice(&Preset::ALL, Preset::name))]
     pub preset: Option<Preset>,
     /// Natural frequencies of the modes, Hz, comma separated (> 0).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scenario whose camera is rendered.
-    #[arg(long, value_enum, default_value = "grandstand")]
+    #[arg(long, default_value = "grandstand", value_parser = super::args::choice(&Preset::ALL, Preset::name))]
     pub preset: Preset,
     /// Seed of the simulated run (the study's run 0 of this seed).
     #[arg(long, default_value_t = 1)]

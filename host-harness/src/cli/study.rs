@@ -8,7 +8,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scenario preset (ignored fields come from it).
-    #[arg(long, value_enum, conflicts_with = "config")]
+    #[arg(long, conflicts_with = "config", value_parser = super::args::choice(&Preset::ALL, Preset::name))]
     pub preset: Option<Preset>,
     /// Study file (TOML) with the fields of the resolved `config.toml`; flags override it.
     #[arg(long, value_name = "FILE.toml")]
