@@ -31,21 +31,19 @@
 //! * **Units.** Accelerations are in m/s^2 (the accelerometer CSV must be in m/s^2); the FRFs are
 //!   dimensionless (acceleration over acceleration).
 
-pub mod camera_motion;
 pub mod columns;
 pub mod compensate;
 pub mod ema;
-pub mod follow;
 pub mod frf_uncertainty;
 pub mod imaging_share;
 pub use vibcam_identify::modal;
+// Tracking, under the paths it had here.
+pub use vibcam_track::{camera_motion, follow, points, shared_motion};
 pub mod oma;
 pub mod pick;
-pub mod points;
 pub mod report;
 pub mod request;
 pub mod run;
-pub mod shared_motion;
 pub mod targets;
 pub mod targets_run;
 pub mod track_run;

@@ -14,11 +14,7 @@ use super::{DiskTarget, TrackerKind};
 use firmware_core::centroid::{centroid, CentroidConfig, Frame, FrameError, Pixel};
 use firmware_core::lk::LkConfig;
 
-/// The host's capacities of a Lucas-Kanade window: pixels and row length.
-pub const LK_PIXELS: usize = 136 * 136;
-pub const LK_ROW: usize = 128 + 7;
-/// The host's Lucas-Kanade tracker (windows up to 128 px wide, with the spline's margin).
-pub type HostLk = firmware_core::lk::LkTracker<LK_PIXELS, LK_ROW>;
+pub use vibcam_chain::lk::{HostLk, LK_PIXELS, LK_ROW};
 
 /// One camera's measurement of a frame, with the state the LK tracker keeps between frames.
 #[derive(Debug, Clone)]

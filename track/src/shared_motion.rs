@@ -9,7 +9,7 @@
 //! one target on its neighbour puts the group's end target on the wall, and the tags' spacing
 //! is never quite regular, so the sum is largest at the true motion.
 
-use crate::frames::GreyFrame;
+use vibcam_readers::frames::GreyFrame;
 
 /// Side of the blocks whose sums are correlated, px.
 pub const BLOCK: usize = 4;

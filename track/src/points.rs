@@ -21,12 +21,12 @@
 //! Thresholds: `--threshold T` for all, the file's `threshold` column per target, or `--threshold
 //! auto`: Otsu's threshold of each window in the first frame.
 
-use super::shared_motion::{shared_offset, BlockTemplate, Integral};
-use super::targets::{lost, Tracks};
-use crate::bad_input;
-use crate::frames::{FrameSource, GreyFrame};
+use crate::shared_motion::{shared_offset, BlockTemplate, Integral};
+use crate::tracks::{lost, Tracks};
 use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Roi};
 use std::path::Path;
+use vibcam_readers::bad_input;
+use vibcam_readers::frames::{FrameSource, GreyFrame};
 
 /// One chosen point.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,7 +41,7 @@ pub struct Point {
     pub threshold: Option<u16>,
     /// The file's group for this target, if it has the column: targets of one group move
     /// together (a storey, a beam), and `--tracker lk` catches their large jumps by the motion
-    /// they share ([`super::shared_motion`]).
+    /// they share ([`crate::shared_motion`]).
     pub group: Option<u32>,
 }
 
@@ -250,7 +250,7 @@ pub enum PointTracker {
     },
 }
 
-use crate::imaging::tracker::{HostLk, LK_PIXELS, LK_ROW};
+use vibcam_chain::lk::{HostLk, LK_PIXELS, LK_ROW};
 
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
@@ -907,7 +907,7 @@ fn follow(
 }
 
 /// The `--points` windows: per target its window, threshold and lost frames.
-pub fn windows_report(w: &PointsInfo, tracks: &super::targets::Tracks) -> String {
+pub fn windows_report(w: &PointsInfo, tracks: &crate::tracks::Tracks) -> String {
     use std::fmt::Write as _;
     let mut s = String::from("\npoints (each target in its own window):\n");
     for (t, (size, c)) in w.sizes.iter().zip(&tracks.centroids).enumerate() {

@@ -2,10 +2,10 @@
 //! without an accelerometer) and Python: the whole frame, the K blobs of the first frame or
 //! chosen points.
 
-use super::points::{Point, PointsInfo};
-use super::targets::Tracks;
-use crate::frames::FrameSource;
+use crate::points::{Point, PointsInfo};
+use crate::tracks::Tracks;
 use firmware_core::centroid::CentroidConfig;
+use vibcam_readers::frames::FrameSource;
 
 /// Which targets are followed.
 #[derive(Debug, Clone, PartialEq)]
@@ -13,7 +13,7 @@ pub enum Targets {
     /// The one target of the whole frame (or the centroid's ROI).
     Whole,
     /// Chosen points and their threshold rule.
-    Points(Vec<Point>, super::points::PointTracker),
+    Points(Vec<Point>, crate::points::PointTracker),
     /// The K blobs of the first frame, with the gate (px).
     Blobs(usize, f64),
 }
@@ -40,7 +40,7 @@ pub fn track_targets(
 ) -> anyhow::Result<(Tracks, Option<PointsInfo>)> {
     Ok(match targets {
         Targets::Whole => {
-            let (c, depth) = crate::frames::centroid_source(source, fps, centroid)?;
+            let (c, depth) = vibcam_readers::frames::centroid_source(source, fps, centroid)?;
             let first = c
                 .iter()
                 .find_map(|c| c.position())
@@ -55,11 +55,11 @@ pub fn track_targets(
             (tracks, None)
         }
         Targets::Points(points, rule) => {
-            let (t, w) = super::points::track_points(source, fps, points, centroid, *rule)?;
+            let (t, w) = crate::points::track_points(source, fps, points, centroid, *rule)?;
             (t, Some(w))
         }
         Targets::Blobs(k, gate) => (
-            super::targets::track(source, fps, centroid, *k, *gate)?,
+            crate::tracks::track(source, fps, centroid, *k, *gate)?,
             None,
         ),
     })

@@ -20,10 +20,10 @@
 //!   with fewer references seen than the model needs is fitted with a translation (counted), a
 //!   frame with none is a lost frame of every target (counted).
 
-use super::targets::Tracks;
-use crate::geometry::{fit, Homography, Model};
+use crate::tracks::Tracks;
 use firmware_core::centroid::{Centroid, Flags};
 use std::fmt::Write as _;
+use vibcam_common::geometry::{fit, Homography, Model};
 
 /// A reference agrees with the others' camera motion when its RMS deviation from it is below
 /// this, px (first pass).
@@ -303,13 +303,13 @@ pub fn estimate(
     let mut avail: Vec<usize> = Vec::new();
     for (r, p) in pos.iter().enumerate() {
         let lost = p.iter().filter(|p| p.is_none()).count();
-        if lost as f64 > super::MAX_LOST_FRACTION * frames as f64 {
-            let why = crate::chain::displacement::why_lost(&refs.centroids[r]);
+        if lost as f64 > vibcam_common::lost_frames::MAX_LOST_FRACTION * frames as f64 {
+            let why = vibcam_chain::displacement::why_lost(&refs.centroids[r]);
             left_out.push((
                 r,
                 format!(
                     "lost in {lost} of {frames} frames (more than {:.0} %: {why})",
-                    100.0 * super::MAX_LOST_FRACTION
+                    100.0 * vibcam_common::lost_frames::MAX_LOST_FRACTION
                 ),
             ));
         } else {
@@ -325,8 +325,8 @@ pub fn estimate(
             let xs: Vec<f64> = p.iter().flatten().map(|q| q.0).collect();
             let ys: Vec<f64> = p.iter().flatten().map(|q| q.1).collect();
             (
-                crate::stats::median(&xs).unwrap_or(f64::NAN),
-                crate::stats::median(&ys).unwrap_or(f64::NAN),
+                vibcam_common::stats::median(&xs).unwrap_or(f64::NAN),
+                vibcam_common::stats::median(&ys).unwrap_or(f64::NAN),
             )
         })
         .collect();
@@ -368,7 +368,7 @@ pub fn estimate(
             .iter()
             .map(|(r, w)| format!("r{} {w}", r + 1))
             .collect();
-        crate::bad_input(format!(
+        vibcam_readers::bad_input(format!(
             "the camera's motion as a {} needs {} reference(s) that stay; {} of {n_refs} \
              remain ({}){}",
             model.name(),
@@ -433,7 +433,7 @@ pub fn estimate(
                 ),
                 _ => String::new(),
             };
-            return Err(crate::bad_input(format!(
+            return Err(vibcam_readers::bad_input(format!(
                 "the references disagree: {} each move together, as many in each; which are \
                  static cannot be told (give more references on parts of the scene that do not \
                  move, or leave out the ones that may move: {}){hint}",
@@ -447,8 +447,8 @@ pub fn estimate(
         }
         // second pass: the kept references' own deviation sets the tolerance
         let dev = deviations(&kept, &sample);
-        let own =
-            crate::stats::median(&kept.iter().map(|&r| dev[r]).collect::<Vec<_>>()).unwrap_or(0.0);
+        let own = vibcam_common::stats::median(&kept.iter().map(|&r| dev[r]).collect::<Vec<_>>())
+            .unwrap_or(0.0);
         let tol = (5.0 * own).clamp(MIN_TOLERANCE_PX, TOLERANCE_PX);
         let mut kept2: Vec<usize> = kept.iter().copied().filter(|&r| dev[r] < tol).collect();
         if kept2.len() < model.minimum() {
@@ -625,7 +625,7 @@ fn subsets(items: &[usize], size: usize) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frames::FrameDepth;
+    use vibcam_readers::frames::FrameDepth;
 
     fn centroid(p: Option<(f64, f64)>) -> Centroid {
         let mut c = firmware_core::centroid::Centroid::default();
@@ -795,8 +795,8 @@ mod tests {
             let shift =
                 Homography::similarity((0.0, 0.0), 0.0, 1.0, (2.0 * (k as f64 / 5.0).cos(), 0.0));
             shift.after(
-                &crate::geometry::plane_view(pan, 800.0, 800.0, (100.0, 80.0)).after(
-                    &crate::geometry::plane_view(0.0, 800.0, 800.0, (100.0, 80.0))
+                &vibcam_common::geometry::plane_view(pan, 800.0, 800.0, (100.0, 80.0)).after(
+                    &vibcam_common::geometry::plane_view(0.0, 800.0, 800.0, (100.0, 80.0))
                         .inverse()
                         .unwrap(),
                 ),

@@ -1,0 +1,21 @@
+//! Tracking real recordings: where each target is in each frame, and what the camera's own
+//! motion and the scene's scale make of it. Knows nothing of spectra, modes or outputs.
+//!
+//! - [`tracks`]: what every tracker returns ([`tracks::Tracks`]), and the K blobs of the whole
+//!   frame followed with a gate and each target's history;
+//! - [`points`]: chosen points, a window each: firmware-core's centroid at the window's
+//!   threshold (Otsu) or its Lucas-Kanade tracker; groups from the file or found from the first
+//!   frames' motion; look-alikes named;
+//! - [`shared_motion`]: a group's shared offset (block templates, integral images);
+//! - [`follow`]: the one tracking dispatcher ([`follow::Targets`]: the whole frame, K blobs or
+//!   chosen points);
+//! - [`camera_motion`]: the camera's motion per frame from static references, by consensus;
+//! - [`view`]: the targets tracked, the camera's motion removed, the scale from the scene (one,
+//!   between two points, each target's size, the plane's homography).
+
+pub mod camera_motion;
+pub mod follow;
+pub mod points;
+pub mod shared_motion;
+pub mod tracks;
+pub mod view;
