@@ -67,29 +67,80 @@ type Curve = (String, RGBColor, Vec<(f64, f64)>);
 
 const TRANSDUCER: RGBColor = RGBColor(30, 30, 30);
 
-/// Writes one figure as PNG and SVG through the same drawing function.
+/// A figure drawn in memory: its file name stem (`NAME.png`, `NAME.svg`), the PNG's bytes and
+/// the SVG's text. The writer of a job puts both beside its other outputs and embeds the SVG in
+/// `report.html` from here (no figure is read back from the disk).
+#[derive(Debug, Clone)]
+pub struct Figure {
+    /// File name stem.
+    pub name: String,
+    /// `NAME.png`.
+    pub png: Vec<u8>,
+    /// `NAME.svg`.
+    pub svg: String,
+}
+
+impl Figure {
+    /// Writes `NAME.png` and `NAME.svg` into `dir` (a study's directory); returns the paths.
+    pub fn write_into(&self, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+        let png = dir.join(format!("{}.png", self.name));
+        let svg = dir.join(format!("{}.svg", self.name));
+        std::fs::write(&png, &self.png)
+            .with_context(|| format!("cannot write {}", png.display()))?;
+        std::fs::write(&svg, &self.svg)
+            .with_context(|| format!("cannot write {}", svg.display()))?;
+        Ok(vec![png, svg])
+    }
+}
+
+impl Figure {
+    /// Puts `NAME.png` and `NAME.svg` into a job's staged output.
+    pub fn write_staged(&self, out: &crate::outdir::Staged) -> anyhow::Result<()> {
+        out.write(&format!("{}.png", self.name), &self.png)?;
+        out.write(&format!("{}.svg", self.name), &self.svg)?;
+        Ok(())
+    }
+}
+
+/// The figures as `report.html` takes them: (caption, SVG text).
+pub fn page_figures(figures: &[Figure]) -> Vec<(String, String)> {
+    figures
+        .iter()
+        .map(|f| (f.name.clone(), f.svg.clone()))
+        .collect()
+}
+
+/// Draws one figure as PNG and SVG, in memory, through the same drawing function.
 fn both(
-    dir: &Path,
     name: &str,
     draw: &dyn Fn(DrawingArea<BitMapBackend, Shift>) -> DrawResult,
     draw_svg: &dyn Fn(DrawingArea<SVGBackend, Shift>) -> DrawResult,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let png = dir.join(format!("{name}.png"));
-    let svg = dir.join(format!("{name}.svg"));
+) -> anyhow::Result<Figure> {
+    use image::ImageEncoder as _;
+    let mut rgb = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
     {
-        let root = BitMapBackend::new(&png, SIZE).into_drawing_area();
-        draw(root).map_err(|e| anyhow::anyhow!("{}: {e}", png.display()))?;
+        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
+        draw(root).map_err(|e| anyhow::anyhow!("{name}.png: {e}"))?;
     }
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, SIZE.0, SIZE.1, image::ExtendedColorType::Rgb8)
+        .with_context(|| format!("{name}.png"))?;
+    let mut svg = String::new();
     {
-        let root = SVGBackend::new(&svg, SIZE).into_drawing_area();
-        draw_svg(root).map_err(|e| anyhow::anyhow!("{}: {e}", svg.display()))?;
+        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        draw_svg(root).map_err(|e| anyhow::anyhow!("{name}.svg: {e}"))?;
     }
-    Ok(vec![png, svg])
+    Ok(Figure {
+        name: name.to_string(),
+        png,
+        svg,
+    })
 }
 
 macro_rules! figure {
-    ($dir:expr, $name:expr, $f:expr) => {
-        both($dir, $name, &|r| $f(r), &|r| $f(r))
+    ($name:expr, $f:expr) => {
+        both($name, &|r| $f(r), &|r| $f(r))
     };
 }
 
@@ -115,7 +166,7 @@ const PANEL: Layout = Layout {
     labels: 13,
 };
 
-/// The single chart of a figure ([`write_frf_plot`]).
+/// The single chart of a figure ([`frf_figure`]).
 const SINGLE: Layout = Layout {
     caption: 24,
     margin: 10,
@@ -212,19 +263,19 @@ fn finite_range(v: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     }
 }
 
-/// Writes every study figure as PNG and SVG into `dir`; returns the paths written.
-pub fn write_study_plots(dir: &Path, p: &StudyPlots) -> anyhow::Result<Vec<PathBuf>> {
+/// Every study figure, drawn in memory.
+pub fn study_figures(p: &StudyPlots) -> anyhow::Result<Vec<Figure>> {
     register_font();
     if p.summary.is_empty() {
         anyhow::bail!("no study results to plot");
     }
-    let mut out = Vec::new();
-    out.extend(figure!(dir, "frf_band", |r| draw_frf_band(r, p, false))?);
-    out.extend(figure!(dir, "band_width", |r| draw_frf_band(r, p, true))?);
-    out.extend(figure!(dir, "pdf_a", |r| draw_pdfs(r, p, true))?);
-    out.extend(figure!(dir, "pdf_f", |r| draw_pdfs(r, p, false))?);
-    out.extend(figure!(dir, "sigma_vs_mu", |r| draw_sigma_mu(r, p))?);
-    Ok(out)
+    Ok(vec![
+        figure!("frf_band", |r| draw_frf_band(r, p, false))?,
+        figure!("band_width", |r| draw_frf_band(r, p, true))?,
+        figure!("pdf_a", |r| draw_pdfs(r, p, true))?,
+        figure!("pdf_f", |r| draw_pdfs(r, p, false))?,
+        figure!("sigma_vs_mu", |r| draw_sigma_mu(r, p))?,
+    ])
 }
 
 fn draw_frf_band<DB: DrawingBackend>(
@@ -483,36 +534,28 @@ where
     Ok(())
 }
 
-/// One FRF magnitude figure with several labelled curves `(label, freq_hz, |H|)`, written as
-/// `path_stem.png` and `path_stem.svg`.
-pub fn write_frf_plot(
-    path_stem: &Path,
+/// One FRF magnitude figure with several labelled curves `(label, freq_hz, |H|)`, drawn as
+/// `NAME.png` and `NAME.svg`.
+pub fn frf_figure(
+    name: &str,
     title: &str,
     y_label: &str,
     curves: &[(&str, &[f64], &[f64])],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_lines(
-        r,
-        title,
-        y_label,
-        curves,
-        Lines::Frf
-    ))
+    figure!(name, |r| draw_lines(r, title, y_label, curves, Lines::Frf))
 }
 
 /// FRFs in decibels: one curve per `(label, freq_hz, dB)`, the values' own range (negative
-/// included), written as `path_stem.png` and `path_stem.svg`.
-pub fn write_frf_db_plot(
-    path_stem: &Path,
+/// included), written as `NAME.png` and `NAME.svg`.
+pub fn frf_db_figure(
+    name: &str,
     title: &str,
     y_label: &str,
     curves: &[(&str, &[f64], &[f64])],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_lines(
+    figure!(name, |r| draw_lines(
         r,
         title,
         y_label,
@@ -521,17 +564,15 @@ pub fn write_frf_db_plot(
     ))
 }
 
-/// Tracks over time: one curve per `(label, t_s, value)`, written as `path_stem.png` and
-/// `path_stem.svg` (the value's axis spans the curves' range, negative values included).
-pub fn write_tracks_plot(
-    path_stem: &Path,
+/// Tracks over time: one curve per `(label, t_s, value)`, as `NAME.png` and `NAME.svg` (the value's axis spans the curves' range, negative values included).
+pub fn tracks_figure(
+    name: &str,
     title: &str,
     y_label: &str,
     curves: &[(&str, &[f64], &[f64])],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_lines(
+    figure!(name, |r| draw_lines(
         r,
         title,
         y_label,
@@ -664,8 +705,7 @@ mod tests {
     }
 
     #[test]
-    fn study_figures_are_written_as_png_and_svg() {
-        let dir = tempfile::tempdir().unwrap();
+    fn study_figures_are_drawn_as_png_and_svg() {
         let (s, r, f) = sample();
         let p = StudyPlots {
             title: "test",
@@ -674,19 +714,18 @@ mod tests {
             realizations: &r,
             frf_band: &f,
         };
-        let paths = write_study_plots(dir.path(), &p).unwrap();
-        assert_eq!(paths.len(), 10);
-        for path in paths {
-            let ext = path.extension().unwrap().to_str().unwrap().to_string();
-            if ext == "png" {
-                let img = image::open(&path).unwrap();
-                assert_eq!((img.width(), img.height()), SIZE);
-            } else {
-                let text = std::fs::read_to_string(&path).unwrap();
-                assert!(text.contains("<svg"), "{}", path.display());
-                assert!(text.contains("mode 1") || text.contains("exposure"));
-            }
+        let figures = study_figures(&p).unwrap();
+        assert_eq!(figures.len(), 5);
+        for fig in &figures {
+            let img = image::load_from_memory(&fig.png).unwrap();
+            assert_eq!((img.width(), img.height()), SIZE);
+            assert!(fig.svg.contains("<svg"), "{}", fig.name);
+            assert!(fig.svg.contains("mode 1") || fig.svg.contains("exposure"));
         }
+        let dir = tempfile::tempdir().unwrap();
+        let paths = figures[0].write_into(dir.path()).unwrap();
+        assert_eq!(paths.len(), 2);
+        assert!(paths.iter().all(|p| p.exists()));
         let empty = StudyPlots {
             title: "empty",
             amplitude_unit: "",
@@ -694,35 +733,18 @@ mod tests {
             realizations: &[],
             frf_band: &[],
         };
-        assert!(write_study_plots(dir.path(), &empty).is_err());
+        assert!(study_figures(&empty).is_err());
     }
 
     #[test]
-    fn frf_figure() {
-        let dir = tempfile::tempdir().unwrap();
+    fn an_frf_figure_is_drawn_in_memory() {
         let f: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
         let a: Vec<f64> = f.iter().map(|x| 1.0 / (1.0 + (x - 5.0).powi(2))).collect();
-        let paths = write_frf_plot(
-            &dir.path().join("frf"),
-            "t",
-            "|H|",
-            &[("acc", &f, &a), ("vis", &f, &a)],
-        )
-        .unwrap();
-        assert_eq!(paths.len(), 2);
-        assert!(paths.iter().all(|p| p.exists()));
+        let fig = frf_figure("frf", "t", "|H|", &[("acc", &f, &a), ("vis", &f, &a)]).unwrap();
+        assert_eq!(fig.name, "frf");
+        assert!(fig.png.starts_with(b"\x89PNG"));
+        assert!(fig.svg.contains("vis"));
     }
-}
-
-/// The directory and file-name stem of a figure's `path_stem` (`dir/name` -> `name.png`,
-/// `name.svg` in `dir`).
-fn split_stem(path_stem: &Path) -> anyhow::Result<(&Path, &str)> {
-    let dir = path_stem.parent().unwrap_or(Path::new("."));
-    let name = path_stem
-        .file_name()
-        .and_then(|n| n.to_str())
-        .context("plot path has no file name")?;
-    Ok((dir, name))
 }
 
 /// One mode shape to plot: its label, the real part of each component (normalised), and
@@ -739,18 +761,15 @@ pub struct ShapeCurve<'a> {
 
 /// `shapes.png` / `shapes.svg`: each mode shape (real part, unit largest modulus) against the
 /// targets' positions along the structure, with its points marked, and reference shapes dashed.
-pub fn write_shape_plot(
-    path_stem: &Path,
+pub fn shape_figure(
+    name: &str,
     title: &str,
     x_label: &str,
     positions: &[f64],
     curves: &[ShapeCurve],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_shapes(
-        r, title, x_label, positions, curves
-    ))
+    figure!(name, |r| draw_shapes(r, title, x_label, positions, curves))
 }
 
 fn draw_shapes<DB: DrawingBackend>(
@@ -822,20 +841,20 @@ where
 
 /// The singular values of an output-only analysis: one curve per singular value in dB
 /// (`10 log10 s`) over `freq_hz`, the picked lines `(f_hz, s1, label)` marked and labelled,
-/// written as `path_stem.png` and `path_stem.svg`.
-pub fn write_svd_plot(
-    path_stem: &Path,
+/// written as `NAME.png` and `NAME.svg`.
+pub fn svd_figure(
+    name: &str,
     title: &str,
     freq_hz: &[f64],
     s: &[Vec<f64>],
     picks: &[(f64, f64, String)],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     let k = s.first().map_or(0, Vec::len);
     let curves: Vec<(String, Vec<f64>)> = (0..k)
         .map(|i| (format!("s{}", i + 1), s.iter().map(|sv| sv[i]).collect()))
         .collect();
-    write_db_plot(
-        path_stem,
+    db_figure(
+        name,
         (title, "singular value (dB)"),
         freq_hz,
         &curves,
@@ -844,17 +863,16 @@ pub fn write_svd_plot(
 }
 
 /// Power spectra in dB (`10 log10 p`) over `freq_hz` (the line at 0 Hz left out), one curve
-/// per `(label, values)`, the lines `(f_hz, value, label)` marked, written as `path_stem.png`
-/// and `path_stem.svg`; `(title, y_label)`.
-pub fn write_db_plot(
-    path_stem: &Path,
+/// per `(label, values)`, the lines `(f_hz, value, label)` marked, drawn as `NAME.png` and
+/// `NAME.svg`; `(title, y_label)`.
+pub fn db_figure(
+    name: &str,
     (title, y_label): (&str, &str),
     freq_hz: &[f64],
     curves: &[(String, Vec<f64>)],
     picks: &[(f64, f64, String)],
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
     let k = curves.len();
     let curves: Vec<Curve> = curves
         .iter()
@@ -873,13 +891,7 @@ pub fn write_db_plot(
         })
         .collect();
     let xr = finite_range(freq_hz.iter().copied()).unwrap_or((0.0, 1.0));
-    figure!(dir, name, |r| draw_svd(
-        r,
-        (title, y_label),
-        xr,
-        &curves,
-        picks
-    ))
+    figure!(name, |r| draw_svd(r, (title, y_label), xr, &curves, picks))
 }
 
 fn decibels(v: f64) -> f64 {
@@ -944,18 +956,16 @@ pub enum PoleKind {
 
 /// A stabilisation diagram: every pole `(f_hz, order, kind)`: a grey dot, a cross (stable),
 /// a filled blue disk (in a mode's cluster) or an open orange square (in a rejected
-/// cluster); the modes' frequencies as vertical lines, written as `path_stem.png` and
-/// `path_stem.svg`.
-pub fn write_stabilisation_plot(
-    path_stem: &Path,
+/// cluster); the modes' frequencies as vertical lines, as `NAME.png` and `NAME.svg`.
+pub fn stabilisation_figure(
+    name: &str,
     title: &str,
     poles: &[(f64, usize, PoleKind)],
     modes_hz: &[f64],
     f_max_hz: f64,
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<Figure> {
     register_font();
-    let (dir, name) = split_stem(path_stem)?;
-    figure!(dir, name, |r| draw_stabilisation(
+    figure!(name, |r| draw_stabilisation(
         r, title, poles, modes_hz, f_max_hz
     ))
 }

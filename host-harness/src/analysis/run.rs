@@ -9,7 +9,6 @@ use super::Axis;
 use crate::export::analysis as export;
 use crate::frames::{centroid_source_seen, FrameSource};
 use crate::outdir::Staged;
-use std::path::{Path, PathBuf};
 
 pub use super::request::{AccelInput, Outcome, Request, TargetsRequest};
 
@@ -121,13 +120,14 @@ fn one_target(
              measure the noise from)\n",
         );
     }
-    if let Some(a) = a {
-        write_results(&out, req, a, &mut report)?;
-    }
+    let figures = match a {
+        Some(a) => write_results(&out, req, a, &mut report)?,
+        None => Vec::new(),
+    };
     out.write("report.txt", &report)?;
     out.write(
         "report.html",
-        one_target_page(req, source, &centroids, a, &report, out.dir()),
+        one_target_page(req, source, &centroids, a, &report, &figures),
     )?;
     if result.is_ok() {
         out.commit()?;
@@ -151,7 +151,7 @@ fn one_target_page(
     centroids: &[firmware_core::centroid::Centroid],
     a: Option<&super::Analysis>,
     text: &str,
-    dir: &std::path::Path,
+    figures: &[crate::plots::Figure],
 ) -> String {
     use crate::export::html::{report_html, Marker, Report};
     let fps = req.settings.frame_rate_hz;
@@ -207,7 +207,7 @@ fn one_target_page(
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let figures = crate::export::html::read_figures(dir, &["frf"]);
+    let figures = crate::plots::page_figures(figures);
     report_html(&Report {
         title: format!("analyze: {}", req.frames),
         frame,
@@ -226,23 +226,24 @@ fn write_results(
     req: &Request,
     a: &super::Analysis,
     report: &mut String,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let (acc, vis) = (super::spectrum(&a.acc_frf), super::spectrum(&a.vis_frf));
     out.write("frf.csv", export::frf_csv(acc, vis))?;
     out.write("modes.csv", export::modes_csv(&super::mode_rows(a)))?;
-    let plots = write_plot(out.dir(), a, req.settings.frame_rate_hz)?;
+    let figure = frf_figure(a, req.settings.frame_rate_hz)?;
+    figure.write_staged(out)?;
     let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
-    let names: Vec<String> = plots
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
+    let names = [
+        format!("{}.png", figure.name),
+        format!("{}.svg", figure.name),
+    ];
     files.extend(names.iter().map(String::as_str));
     let files: Vec<String> = files
         .iter()
         .map(|f| req.out.join(f).display().to_string())
         .collect();
     report.push_str(&format!("\nwritten: {}\n", files.join(", ")));
-    Ok(())
+    Ok(vec![figure])
 }
 
 /// The analysis (its failure is reported, not returned) and, with `--compensate-exposure`,
@@ -289,7 +290,7 @@ fn append_compensation(
 /// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
 /// camera's Nyquist frequency (the vision path has no content above it, and outside the
 /// excitation band H1 is noise over noise).
-fn write_plot(out: &Path, a: &super::Analysis, fps: f64) -> anyhow::Result<Vec<PathBuf>> {
+fn frf_figure(a: &super::Analysis, fps: f64) -> anyhow::Result<crate::plots::Figure> {
     let top = a
         .acc_modes
         .iter()
@@ -305,8 +306,8 @@ fn write_plot(out: &Path, a: &super::Analysis, fps: f64) -> anyhow::Result<Vec<P
     let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
     let acc: Vec<f64> = abs(&a.acc_frf.h1);
     let vis: Vec<f64> = abs(&a.vis_frf.h1);
-    crate::plots::write_frf_plot(
-        &out.join("frf"),
+    crate::plots::frf_figure(
+        "frf",
         "H1 of the recording: accelerometer and vision",
         "|H1|",
         &[("accelerometer", freq, &acc), ("vision", freq, &vis)],

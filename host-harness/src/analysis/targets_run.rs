@@ -61,15 +61,12 @@ pub fn run(
         (&tracks, viewed.raw.as_ref()),
         macs.as_deref(),
     )?;
-    shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
+    let shapes = shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
     let mut report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
     report.push_str(&viewed.describe(along_x));
-    report.push_str(&super::view::write_camera_outputs(
-        &out,
-        &viewed,
-        settings.frame_rate_hz,
-        true,
-    )?);
+    let (camera, _) =
+        super::view::write_camera_outputs(&out, &viewed, settings.frame_rate_hz, true)?;
+    report.push_str(&camera);
     if let Some(w) = &windows {
         report.push_str(&super::points::windows_report(w, &tracks));
     }
@@ -84,7 +81,7 @@ pub fn run(
             &tracks,
             (windows.as_ref(), super::view::reference_markers(&viewed)),
             &report,
-            out.dir(),
+            std::slice::from_ref(&shapes),
         ),
     )?;
     // a run with failed targets exits 2: it never replaces an earlier output
@@ -130,7 +127,7 @@ fn page(
         Vec<crate::export::html::ReferenceMarker>,
     ),
     text: &str,
-    dir: &std::path::Path,
+    figures: &[crate::plots::Figure],
 ) -> String {
     use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
     use num_complex::Complex64;
@@ -184,7 +181,7 @@ fn page(
         })
         .collect();
     let shapes: Vec<&[Complex64]> = fitted.iter().map(|(_, v)| v.as_slice()).collect();
-    let figures = crate::export::html::read_figures(dir, &["shapes"]);
+    let figures = crate::plots::page_figures(figures);
     report_html(&Report {
         title: format!("analyze: {}", req.frames),
         frame,
@@ -341,7 +338,7 @@ fn shape_plot(
     tracks: &Tracks,
     reference: Option<&targets::ShapeReference>,
     motion_along_x: bool,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<crate::plots::Figure> {
     use crate::plots::ShapeCurve;
     // targets lie across the motion: along x for vertical motion, along y for horizontal
     let positions: Vec<f64> = tracks
@@ -387,14 +384,15 @@ fn shape_plot(
         });
     }
     let axis = if motion_along_x { "y" } else { "x" };
-    crate::plots::write_shape_plot(
-        &out.dir().join("shapes"),
+    let f = crate::plots::shape_figure(
+        "shapes",
         "Mode shapes along the targets",
         &format!("target position in the first frame, {axis} (px)"),
         &positions,
         &curves,
     )?;
-    Ok(())
+    f.write_staged(out)?;
+    Ok(f)
 }
 
 /// The printed report: lost frames per target, failed targets, modes, the co-located target

@@ -111,23 +111,22 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     )?;
     let mut report = report(req, tracks, windows, &failures);
     report.push_str(&viewed.describe(along_x));
-    report.push_str(&super::view::write_camera_outputs(
-        &out, &viewed, req.fps, req.plots,
-    )?);
+    let (camera, camera_figure) =
+        super::view::write_camera_outputs(&out, &viewed, req.fps, req.plots)?;
+    report.push_str(&camera);
+    let mut figures = Vec::new();
     if req.plots {
-        let plots = plot(
-            out.dir(),
+        let f = plot(
             tracks,
             req.fps,
             crate::frames::FrameRange::start_s(req.frame_range, req.fps),
             along_x,
         )?;
-        let names: Vec<String> = plots
-            .iter()
-            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-            .collect();
-        let _ = writeln!(report, "plots: {}", names.join(", "));
+        f.write_staged(&out)?;
+        let _ = writeln!(report, "plots: {0}.png, {0}.svg", f.name);
+        figures.push(f);
     }
+    figures.extend(camera_figure);
     out.write("report.txt", &report)?;
     let frame = source
         .frame_at(req.fps, 0)
@@ -141,7 +140,7 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
             (tracks, windows, super::view::reference_markers(&viewed)),
             frame,
             &report,
-            out.dir(),
+            &figures,
         ),
     )?;
     out.commit()?;
@@ -159,11 +158,11 @@ fn page(
     ),
     frame: Option<crate::export::html::FrameImage>,
     text: &str,
-    dir: &Path,
+    figures: &[crate::plots::Figure],
 ) -> String {
     use crate::export::html::{report_html, Report};
     let markers = markers(tracks, windows);
-    let figures = crate::export::html::read_figures(dir, &["tracks", "camera_motion"]);
+    let figures = crate::plots::page_figures(figures);
     report_html(&Report {
         title: format!("track: {}", req.frames),
         frame,
@@ -261,12 +260,11 @@ fn report(
 
 /// Each target's motion from its first position along the image's y (or x), px, against time.
 fn plot(
-    dir: &Path,
     tracks: &Tracks,
     fps: f64,
     start_s: f64,
     along_x: bool,
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<crate::plots::Figure> {
     let series: Vec<(String, Vec<f64>, Vec<f64>)> = tracks
         .centroids
         .iter()
@@ -291,8 +289,8 @@ fn plot(
         .iter()
         .map(|(l, t, d)| (l.as_str(), t.as_slice(), d.as_slice()))
         .collect();
-    crate::plots::write_tracks_plot(
-        &dir.join("tracks"),
+    crate::plots::tracks_figure(
+        "tracks",
         if along_x {
             "Tracks: x - x(first frame), image x right"
         } else {

@@ -25,15 +25,15 @@ pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::ReferenceMarker
 
 /// Writes `camera_motion.csv` and the camera motion's spectrum (`camera_motion.png`/`.svg`)
 /// into `out` when references were given; returns the report's line naming them (empty
-/// without references).
+/// without references) and the spectrum's figure (for `report.html`).
 pub fn write_camera_outputs(
     out: &crate::outdir::Staged,
     viewed: &Viewed,
     fps: f64,
     plots: bool,
-) -> anyhow::Result<String> {
+) -> anyhow::Result<(String, Option<crate::plots::Figure>)> {
     let Some(m) = &viewed.motion else {
-        return Ok(String::new());
+        return Ok((String::new(), None));
     };
     let n = m.transforms.len();
     let motion: Vec<Option<vibcam_track::camera_motion::MotionRow>> =
@@ -53,6 +53,7 @@ pub fn write_camera_outputs(
         crate::export::targets::camera_motion_csv(&rows),
     )?;
     let mut line = "camera motion per frame: camera_motion.csv".to_string();
+    let mut figure = None;
     if plots && n >= 32 {
         // a frame whose motion is unknown counts as the mean's
         let series = |f: fn(&vibcam_track::camera_motion::MotionRow) -> f64| -> Vec<f64> {
@@ -71,8 +72,8 @@ pub fn write_camera_outputs(
         };
         let csd = super::oma::csd::csd_matrix(&channels, fps, c)?;
         let curve = |i: usize| -> Vec<f64> { csd.g.iter().map(|g| g[i * 2 + i].re).collect() };
-        crate::plots::write_db_plot(
-            &out.dir().join("camera_motion"),
+        let f = crate::plots::db_figure(
+            "camera_motion",
             (
                 "Camera motion at the image centre: power spectral density",
                 "PSD (dB re 1 px^2/Hz)",
@@ -81,8 +82,10 @@ pub fn write_camera_outputs(
             &[("x".to_string(), curve(0)), ("y".to_string(), curve(1))],
             &[],
         )?;
+        f.write_staged(out)?;
+        figure = Some(f);
         line.push_str(", its spectrum camera_motion.png");
     }
     line.push('\n');
-    Ok(line)
+    Ok((line, figure))
 }

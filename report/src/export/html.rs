@@ -153,19 +153,6 @@ pub fn inline_svg(svg: &str) -> String {
     svg[start..].replacen("<svg ", "<svg class=\"figure\" ", 1)
 }
 
-/// The figures `names` the command drew into `dir` (`name.svg`), as (caption, SVG text): the
-/// ones there (none with `--no-plots`).
-pub fn read_figures(dir: &std::path::Path, names: &[&str]) -> Vec<(String, String)> {
-    names
-        .iter()
-        .filter_map(|n| {
-            std::fs::read_to_string(dir.join(format!("{n}.svg")))
-                .ok()
-                .map(|svg| (n.to_string(), svg))
-        })
-        .collect()
-}
-
 /// A finite number for the page's script (`null` otherwise).
 fn js(v: f64) -> String {
     if v.is_finite() {

@@ -337,10 +337,12 @@ pub fn finish(
             realizations: &outputs.realizations,
             frf_band: &outputs.frf_band,
         };
-        written.extend(
-            vibcam_report::plots::write_study_plots(out, &p)
-                .with_context(|| format!("cannot write the figures in {}", out.display()))?,
-        );
+        for f in vibcam_report::plots::study_figures(&p)? {
+            written.extend(
+                f.write_into(out)
+                    .with_context(|| format!("cannot write the figures in {}", out.display()))?,
+            );
+        }
     }
     use std::fmt::Write as _;
     let mut text = format!(

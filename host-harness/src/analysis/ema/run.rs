@@ -96,13 +96,19 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         .collect();
     out.write("shapes.csv", shapes_csv(&shapes))?;
     out.write("frf.uff", uff(req, &r)?)?;
-    if req.plots {
-        plots(out.dir(), req, &r)?;
+    let figures = if req.plots {
+        figures(req, &r)?
+    } else {
+        Vec::new()
+    };
+    for f in &figures {
+        f.write_staged(&out)?;
     }
     out.write("report.txt", &report)?;
-    let figures =
-        crate::export::html::read_figures(out.dir(), &["frf", "frf_phase", "stabilisation"]);
-    out.write("report.html", page(req, &r, &report, figures))?;
+    out.write(
+        "report.html",
+        page(req, &r, &report, crate::plots::page_figures(&figures)),
+    )?;
     out.commit()?;
     Ok(Outcome {
         report,
@@ -257,7 +263,7 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
 }
 
 /// The figures: the first four responses' |H1| with the fit, and the stabilisation diagram.
-fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
+fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let (lo, hi) = req.settings.band_hz;
     let k: Vec<usize> = (0..r.freq_hz.len())
         .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)
@@ -285,15 +291,15 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
             .iter()
             .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
             .collect();
-        crate::plots::write_frf_db_plot(&dir.join(stem), title, y_label, &curves)
+        crate::plots::frf_db_figure(stem, title, y_label, &curves)
     };
-    draw(
+    let magnitude = draw(
         "frf",
         "H1 and the LSCF/LSFD fit",
         "|H1|, dB (re 1 unit of the response per unit of force)",
         |c| db(c.norm()),
     )?;
-    draw(
+    let phase = draw(
         "frf_phase",
         "H1's phase and the fit's",
         "phase of H1, degrees",
@@ -301,14 +307,14 @@ fn plots(dir: &Path, req: &EmaRequest, r: &EmaResult) -> anyhow::Result<()> {
     )?;
     let poles = crate::analysis::oma::run::pole_kinds(&r.poles, &r.clusters);
     let modes: Vec<f64> = r.modes.iter().map(|m| m.fitted.f_hz).collect();
-    crate::plots::write_stabilisation_plot(
-        &dir.join("stabilisation"),
+    let stabilisation = crate::plots::stabilisation_figure(
+        "stabilisation",
         "LSCF stabilisation diagram",
         &poles,
         &modes,
         hi,
     )?;
-    Ok(())
+    Ok(vec![magnitude, phase, stabilisation])
 }
 
 /// `20 log10 v` (a floor at -400 dB for 0).

@@ -61,14 +61,15 @@ pub fn write(
     for (name, bytes) in &o.extra {
         out.write(name, bytes)?;
     }
-    let camera = match o.view {
+    let (camera, camera_figure) = match o.view {
         Some((v, fps)) => crate::analysis::view::write_camera_outputs(&out, v, fps, o.plots)?,
-        None => String::new(),
+        None => (String::new(), None),
     };
     out.write(
         "shapes.uff",
         export::shapes_uff(&shape_sets(r, records, o.along_x))?,
     )?;
+    let mut figures = Vec::new();
     if o.plots {
         let picks: Vec<(f64, f64, String)> = r
             .modes
@@ -79,13 +80,13 @@ pub fn write(
                 (m.f_hz, s1, format!("{:.3} Hz", m.f_hz))
             })
             .collect();
-        crate::plots::write_svd_plot(
-            &out.dir().join("svd"),
+        figures.push(crate::plots::svd_figure(
+            "svd",
             "singular values of the cross-spectral matrix",
             &r.svd.freq_hz,
             &r.svd.s,
             &picks,
-        )?;
+        )?);
         let poles = pole_kinds(&r.poles, &r.clusters);
         let ssi: Vec<f64> = r
             .modes
@@ -93,18 +94,21 @@ pub fn write(
             .filter(|m| m.method == Method::Ssi)
             .map(|m| m.f_hz)
             .collect();
-        crate::plots::write_stabilisation_plot(
-            &out.dir().join("stabilisation"),
+        figures.push(crate::plots::stabilisation_figure(
+            "stabilisation",
             "SSI-cov stabilisation diagram",
             &poles,
             &ssi,
             settings.fs_hz / 2.0,
-        )?;
+        )?);
+    }
+    figures.extend(camera_figure);
+    for f in &figures {
+        f.write_staged(&out)?;
     }
     let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
     out.write("report.txt", &report)?;
-    let figures =
-        crate::export::html::read_figures(out.dir(), &["svd", "stabilisation", "camera_motion"]);
+    let figures = crate::plots::page_figures(&figures);
     out.write(
         "report.html",
         page(
