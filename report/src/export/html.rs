@@ -195,7 +195,8 @@ function tick(now){if(playing){phase=((now-t0)/1200)*2*Math.PI%(2*Math.PI);draw(
 draw();requestAnimationFrame(tick);
 })();"#;
 
-/// The page.
+/// The page: the first frame with the targets, the modes, the animated shapes, the MAC, the
+/// figures and the report's text, each section where the report has it.
 pub fn report_html(r: &Report) -> String {
     let mut s = String::from("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
     let _ = write!(
@@ -204,46 +205,7 @@ pub fn report_html(r: &Report) -> String {
         escape(&r.title),
         escape(&r.title)
     );
-    // where the targets are: on the frame, or on a line of their own
-    let (w, h, base): (f64, f64, Vec<(f64, f64)>) = match &r.frame {
-        Some(f) => (
-            f64::from(f.width),
-            f64::from(f.height),
-            // px have their origin at the top-left pixel's centre, the image at its corner
-            r.markers
-                .iter()
-                .map(|m| (m.xy.0 + 0.5, m.xy.1 + 0.5))
-                .collect(),
-        ),
-        None => {
-            let n = r
-                .markers
-                .len()
-                .max(r.shapes.first().map_or(0, |m| m.shape.len()));
-            let w = 80.0 * (n as f64 + 1.0);
-            let pts = match r.markers.iter().all(|m| m.xy.0.is_finite()) && !r.markers.is_empty() {
-                true => r.markers.iter().map(|m| m.xy).collect(),
-                false => (0..n).map(|i| (80.0 * (i as f64 + 1.0), 150.0)).collect(),
-            };
-            (w, 300.0, pts)
-        }
-    };
-    let (bx0, by0, bx1, by1) = base.iter().fold(
-        (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        ),
-        |(a, b, c, d), p| (a.min(p.0), b.min(p.1), c.max(p.0), d.max(p.1)),
-    );
-    // the view of a shape: the frame, or the targets' bounding box with a margin
-    let (vx, vy, vw, vh) = if r.frame.is_some() || base.is_empty() {
-        (0.0, 0.0, w, h)
-    } else {
-        let m = 0.25 * ((bx1 - bx0).max(by1 - by0)).max(100.0);
-        (bx0 - m, by0 - m, bx1 - bx0 + 2.0 * m, by1 - by0 + 2.0 * m)
-    };
+    let view = View::of(r);
     let frame_image = r.frame.as_ref().map(|f| {
         format!(
             "<image href=\"data:image/png;base64,{}\" x=\"0\" y=\"0\" width=\"{}\" height=\"{}\"/>",
@@ -253,163 +215,16 @@ pub fn report_html(r: &Report) -> String {
         )
     });
     if let Some(img) = &frame_image {
-        let _ = write!(
-            s,
-            "<h2>The first frame and the targets</h2>\n<svg id=\"frame\" viewBox=\"0 0 {w} {h}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">{img}",
-            if w < 700.0 { 700.0 } else { w.min(1100.0) }
-        );
-        let stroke = (w.max(h) / 400.0).max(1.0);
-        for m in &r.markers {
-            let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
-            let _ = write!(s, "<g class=\"marker\" data-target=\"{}\">", m.target);
-            if let Some((ww, wh)) = m.window {
-                let _ = write!(
-                    s,
-                    "<rect x=\"{}\" y=\"{}\" width=\"{ww}\" height=\"{wh}\" fill=\"none\" stroke=\"#00c8ff\" stroke-width=\"{stroke}\"/>",
-                    xy.0 - ww / 2.0,
-                    xy.1 - wh / 2.0
-                );
-            }
-            let label = if m.lost > 0 {
-                format!("{} ({} lost)", m.target, m.lost)
-            } else {
-                m.target.to_string()
-            };
-            dot(&mut s, m.xy, stroke, ("#ff3030", "#ffe000"), &label);
-            s.push_str("</g>");
-        }
-        for m in &r.references {
-            let _ = write!(s, "<g class=\"reference\" data-reference=\"{}\">", m.number);
-            let label = format!(
-                "r{}{}",
-                m.number,
-                if m.left_out { " (left out)" } else { "" }
-            );
-            dot(&mut s, m.xy, stroke, ("#30ff60", "#30ff60"), &label);
-            s.push_str("</g>");
-        }
-        s.push_str("</svg>\n");
+        frame_section(&mut s, r, &view, img);
     }
     if let Some((head, rows)) = &r.modes {
-        s.push_str("<h2>Modes</h2>\n<table id=\"modes\"><tr>");
-        for h in head {
-            let _ = write!(s, "<th>{}</th>", escape(h));
-        }
-        s.push_str("</tr>\n");
-        for row in rows {
-            s.push_str("<tr>");
-            for c in row {
-                let _ = write!(s, "<td>{}</td>", escape(c));
-            }
-            s.push_str("</tr>\n");
-        }
-        s.push_str("</table>\n");
+        modes_section(&mut s, head, rows);
     }
     if !r.shapes.is_empty() {
-        s.push_str(
-            "<h2>Mode shapes</h2>\n<p><button id=\"play\">pause</button> scale \
-             <input id=\"scale\" type=\"range\" min=\"0\" max=\"5\" step=\"0.05\" value=\"1\"></p>\n",
-        );
-        let stroke = (vw.max(vh) / 300.0).max(1.0);
-        for (i, m) in r.shapes.iter().enumerate() {
-            let _ = write!(
-                s,
-                "<div class=\"mode\"><div>{}</div><svg class=\"mode-shape\" data-mode=\"{}\" viewBox=\"{vx} {vy} {vw} {vh}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">",
-                escape(&m.label),
-                i + 1,
-                if r.frame.is_some() { 540.0 } else { 360.0 }
-            );
-            if let Some(img) = &frame_image {
-                let _ = write!(s, "<g opacity=\"0.6\">{img}</g>");
-            }
-            let pts: Vec<String> = base.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
-            let _ = write!(
-                s,
-                "<polyline points=\"{}\" fill=\"none\" stroke=\"#bbb\" stroke-width=\"{stroke}\" stroke-dasharray=\"4\"/><polyline class=\"shape-line\" points=\"{}\" fill=\"none\" stroke=\"#e0301e\" stroke-width=\"{}\"/>",
-                pts.join(" "),
-                pts.join(" "),
-                1.5 * stroke
-            );
-            for p in &base {
-                let _ = write!(
-                    s,
-                    "<circle class=\"shape-dot\" cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#1e5ae0\"/>",
-                    p.0,
-                    p.1,
-                    2.0 * stroke
-                );
-            }
-            s.push_str("</svg></div>\n");
-        }
-        // the largest component moves a tenth of the view (times the slider)
-        let amplitude = 0.1 * vw.min(vh);
-        let modes: Vec<String> = r
-            .shapes
-            .iter()
-            .map(|m| {
-                let re: Vec<String> = m.shape.iter().map(|c| js(c.re)).collect();
-                let im: Vec<String> = m.shape.iter().map(|c| js(c.im)).collect();
-                format!("{{\"re\":[{}],\"im\":[{}]}}", re.join(","), im.join(","))
-            })
-            .collect();
-        let basej: Vec<String> = base
-            .iter()
-            .map(|p| format!("[{},{}]", js(p.0), js(p.1)))
-            .collect();
-        let _ = write!(
-            s,
-            "<script type=\"application/json\" id=\"shape-data\">{{\"base\":[{}],\"dir\":[{},{}],\"amplitude\":{},\"modes\":[{}]}}</script>\n<script>{SCRIPT}</script>\n",
-            basej.join(","),
-            js(r.direction.0),
-            js(r.direction.1),
-            js(amplitude),
-            modes.join(",")
-        );
+        shapes_section(&mut s, r, &view, frame_image.as_deref());
     }
     if let Some((labels, m)) = &r.mac {
-        let n = labels.len();
-        let cell = 40.0;
-        let pad = 110.0;
-        let size = pad + cell * n as f64;
-        let _ = write!(
-            s,
-            "<h2>MAC of the mode shapes</h2>\n<svg id=\"mac\" viewBox=\"0 0 {size} {size}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\" font-size=\"11\">",
-            size.min(700.0)
-        );
-        for (i, row) in m.iter().enumerate() {
-            let _ = write!(
-                s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
-                pad - 4.0,
-                pad + cell * (i as f64 + 0.6),
-                escape(&labels[i])
-            );
-            for (j, v) in row.iter().enumerate() {
-                let g = (255.0 * (1.0 - v.clamp(0.0, 1.0))) as u8;
-                let _ = write!(
-                    s,
-                    "<rect class=\"mac-cell\" x=\"{}\" y=\"{}\" width=\"{cell}\" height=\"{cell}\" fill=\"rgb({g},{g},255)\"><title>{:.3}</title></rect><text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"{}\">{:.2}</text>",
-                    pad + cell * j as f64,
-                    pad + cell * i as f64,
-                    v,
-                    pad + cell * (j as f64 + 0.5),
-                    pad + cell * (i as f64 + 0.6),
-                    if *v > 0.5 { "#fff" } else { "#000" },
-                    v
-                );
-            }
-        }
-        for (j, l) in labels.iter().enumerate() {
-            let x = pad + cell * (j as f64 + 0.6);
-            let _ = write!(
-                s,
-                "<text x=\"{x}\" y=\"{}\" transform=\"rotate(-60 {x} {})\">{}</text>",
-                pad - 4.0,
-                pad - 4.0,
-                escape(l)
-            );
-        }
-        s.push_str("</svg>\n");
+        mac_section(&mut s, labels, m);
     }
     for (caption, svg) in &r.figures {
         let _ = writeln!(
@@ -425,6 +240,239 @@ pub fn report_html(r: &Report) -> String {
         escape(&r.text)
     );
     s
+}
+
+/// Where the targets are drawn: the frame's size (or a line of the targets' own) and their
+/// points, and the view box of a shape (the frame, or the targets' bounding box with a margin).
+#[derive(Debug)]
+struct View {
+    w: f64,
+    h: f64,
+    base: Vec<(f64, f64)>,
+    view_box: (f64, f64, f64, f64),
+}
+
+impl View {
+    fn of(r: &Report) -> View {
+        // where the targets are: on the frame, or on a line of their own
+        let (w, h, base): (f64, f64, Vec<(f64, f64)>) = match &r.frame {
+            Some(f) => (
+                f64::from(f.width),
+                f64::from(f.height),
+                // px have their origin at the top-left pixel's centre, the image at its corner
+                r.markers
+                    .iter()
+                    .map(|m| (m.xy.0 + 0.5, m.xy.1 + 0.5))
+                    .collect(),
+            ),
+            None => {
+                let n = r
+                    .markers
+                    .len()
+                    .max(r.shapes.first().map_or(0, |m| m.shape.len()));
+                let w = 80.0 * (n as f64 + 1.0);
+                let pts =
+                    match r.markers.iter().all(|m| m.xy.0.is_finite()) && !r.markers.is_empty() {
+                        true => r.markers.iter().map(|m| m.xy).collect(),
+                        false => (0..n).map(|i| (80.0 * (i as f64 + 1.0), 150.0)).collect(),
+                    };
+                (w, 300.0, pts)
+            }
+        };
+        let (bx0, by0, bx1, by1) = base.iter().fold(
+            (
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ),
+            |(a, b, c, d), p| (a.min(p.0), b.min(p.1), c.max(p.0), d.max(p.1)),
+        );
+        // the view of a shape: the frame, or the targets' bounding box with a margin
+        let (vx, vy, vw, vh) = if r.frame.is_some() || base.is_empty() {
+            (0.0, 0.0, w, h)
+        } else {
+            let m = 0.25 * ((bx1 - bx0).max(by1 - by0)).max(100.0);
+            (bx0 - m, by0 - m, bx1 - bx0 + 2.0 * m, by1 - by0 + 2.0 * m)
+        };
+        View {
+            w,
+            h,
+            base,
+            view_box: (vx, vy, vw, vh),
+        }
+    }
+}
+
+/// The first frame, each target's window, number and lost frames, the references.
+fn frame_section(s: &mut String, r: &Report, view: &View, img: &str) {
+    let (w, h) = (view.w, view.h);
+    let _ = write!(
+        s,
+        "<h2>The first frame and the targets</h2>\n<svg id=\"frame\" viewBox=\"0 0 {w} {h}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">{img}",
+        if w < 700.0 { 700.0 } else { w.min(1100.0) }
+    );
+    let stroke = (w.max(h) / 400.0).max(1.0);
+    for m in &r.markers {
+        let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
+        let _ = write!(s, "<g class=\"marker\" data-target=\"{}\">", m.target);
+        if let Some((ww, wh)) = m.window {
+            let _ = write!(
+                s,
+                "<rect x=\"{}\" y=\"{}\" width=\"{ww}\" height=\"{wh}\" fill=\"none\" stroke=\"#00c8ff\" stroke-width=\"{stroke}\"/>",
+                xy.0 - ww / 2.0,
+                xy.1 - wh / 2.0
+            );
+        }
+        let label = if m.lost > 0 {
+            format!("{} ({} lost)", m.target, m.lost)
+        } else {
+            m.target.to_string()
+        };
+        dot(s, m.xy, stroke, ("#ff3030", "#ffe000"), &label);
+        s.push_str("</g>");
+    }
+    for m in &r.references {
+        let _ = write!(s, "<g class=\"reference\" data-reference=\"{}\">", m.number);
+        let label = format!(
+            "r{}{}",
+            m.number,
+            if m.left_out { " (left out)" } else { "" }
+        );
+        dot(s, m.xy, stroke, ("#30ff60", "#30ff60"), &label);
+        s.push_str("</g>");
+    }
+    s.push_str("</svg>\n");
+}
+
+/// The modes' table.
+fn modes_section(s: &mut String, head: &[String], rows: &[Vec<String>]) {
+    s.push_str("<h2>Modes</h2>\n<table id=\"modes\"><tr>");
+    for h in head {
+        let _ = write!(s, "<th>{}</th>", escape(h));
+    }
+    s.push_str("</tr>\n");
+    for row in rows {
+        s.push_str("<tr>");
+        for c in row {
+            let _ = write!(s, "<td>{}</td>", escape(c));
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n");
+}
+
+/// Each mode's shape animated over the frame (or the targets' line), and the data its script
+/// reads.
+fn shapes_section(s: &mut String, r: &Report, view: &View, frame_image: Option<&str>) {
+    let (vx, vy, vw, vh) = view.view_box;
+    let base = &view.base;
+    s.push_str(
+        "<h2>Mode shapes</h2>\n<p><button id=\"play\">pause</button> scale \
+         <input id=\"scale\" type=\"range\" min=\"0\" max=\"5\" step=\"0.05\" value=\"1\"></p>\n",
+    );
+    let stroke = (vw.max(vh) / 300.0).max(1.0);
+    for (i, m) in r.shapes.iter().enumerate() {
+        let _ = write!(
+            s,
+            "<div class=\"mode\"><div>{}</div><svg class=\"mode-shape\" data-mode=\"{}\" viewBox=\"{vx} {vy} {vw} {vh}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">",
+            escape(&m.label),
+            i + 1,
+            if r.frame.is_some() { 540.0 } else { 360.0 }
+        );
+        if let Some(img) = frame_image {
+            let _ = write!(s, "<g opacity=\"0.6\">{img}</g>");
+        }
+        let pts: Vec<String> = base.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
+        let _ = write!(
+            s,
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"#bbb\" stroke-width=\"{stroke}\" stroke-dasharray=\"4\"/><polyline class=\"shape-line\" points=\"{}\" fill=\"none\" stroke=\"#e0301e\" stroke-width=\"{}\"/>",
+            pts.join(" "),
+            pts.join(" "),
+            1.5 * stroke
+        );
+        for p in base {
+            let _ = write!(
+                s,
+                "<circle class=\"shape-dot\" cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#1e5ae0\"/>",
+                p.0,
+                p.1,
+                2.0 * stroke
+            );
+        }
+        s.push_str("</svg></div>\n");
+    }
+    // the largest component moves a tenth of the view (times the slider)
+    let amplitude = 0.1 * vw.min(vh);
+    let modes: Vec<String> = r
+        .shapes
+        .iter()
+        .map(|m| {
+            let re: Vec<String> = m.shape.iter().map(|c| js(c.re)).collect();
+            let im: Vec<String> = m.shape.iter().map(|c| js(c.im)).collect();
+            format!("{{\"re\":[{}],\"im\":[{}]}}", re.join(","), im.join(","))
+        })
+        .collect();
+    let basej: Vec<String> = base
+        .iter()
+        .map(|p| format!("[{},{}]", js(p.0), js(p.1)))
+        .collect();
+    let _ = write!(
+        s,
+        "<script type=\"application/json\" id=\"shape-data\">{{\"base\":[{}],\"dir\":[{},{}],\"amplitude\":{},\"modes\":[{}]}}</script>\n<script>{SCRIPT}</script>\n",
+        basej.join(","),
+        js(r.direction.0),
+        js(r.direction.1),
+        js(amplitude),
+        modes.join(",")
+    );
+}
+
+/// The MAC matrix of the shapes as a coloured grid.
+fn mac_section(s: &mut String, labels: &[String], m: &[Vec<f64>]) {
+    let n = labels.len();
+    let cell = 40.0;
+    let pad = 110.0;
+    let size = pad + cell * n as f64;
+    let _ = write!(
+        s,
+        "<h2>MAC of the mode shapes</h2>\n<svg id=\"mac\" viewBox=\"0 0 {size} {size}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\" font-size=\"11\">",
+        size.min(700.0)
+    );
+    for (i, row) in m.iter().enumerate() {
+        let _ = write!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+            pad - 4.0,
+            pad + cell * (i as f64 + 0.6),
+            escape(&labels[i])
+        );
+        for (j, v) in row.iter().enumerate() {
+            let g = (255.0 * (1.0 - v.clamp(0.0, 1.0))) as u8;
+            let _ = write!(
+                s,
+                "<rect class=\"mac-cell\" x=\"{}\" y=\"{}\" width=\"{cell}\" height=\"{cell}\" fill=\"rgb({g},{g},255)\"><title>{:.3}</title></rect><text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"{}\">{:.2}</text>",
+                pad + cell * j as f64,
+                pad + cell * i as f64,
+                v,
+                pad + cell * (j as f64 + 0.5),
+                pad + cell * (i as f64 + 0.6),
+                if *v > 0.5 { "#fff" } else { "#000" },
+                v
+            );
+        }
+    }
+    for (j, l) in labels.iter().enumerate() {
+        let x = pad + cell * (j as f64 + 0.6);
+        let _ = write!(
+            s,
+            "<text x=\"{x}\" y=\"{}\" transform=\"rotate(-60 {x} {})\">{}</text>",
+            pad - 4.0,
+            pad - 4.0,
+            escape(l)
+        );
+    }
+    s.push_str("</svg>\n");
 }
 
 /// The MAC matrix of `shapes` (each a complex vector of one length).
