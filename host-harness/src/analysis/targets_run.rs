@@ -21,6 +21,25 @@ pub fn run(
     (base, tip): (&[f64], &[f64]),
     ignored: Option<&str>,
 ) -> anyhow::Result<Outcome> {
+    let c = compute(req, t, source, (base, tip))?;
+    write(req, t, source, &c, ignored)
+}
+
+/// What a multi-target analysis computes before anything is written: the reference shapes,
+/// the targets tracked in the camera's view, each target's analysis.
+#[derive(Debug)]
+struct Computed {
+    reference: Option<targets::ShapeReference>,
+    viewed: super::view::Viewed,
+    analysis: TargetAnalysis,
+}
+
+fn compute(
+    req: &Request,
+    t: &TargetsRequest,
+    source: &FrameSource,
+    (base, tip): (&[f64], &[f64]),
+) -> anyhow::Result<Computed> {
     let (settings, k) = (&req.settings, t.targets.count());
     // the reference is read before the frames: a bad file fails at once
     let reference = t
@@ -37,7 +56,6 @@ pub fn run(
         &t.view,
         along_x,
     )?;
-    let (tracks, windows) = (viewed.tracks.clone(), viewed.windows.clone());
     let compensate = match (req.compensate_exposure, settings.exposure_s) {
         (true, Some(exposure_s)) => Some(targets::CompensationRequest {
             exposure_s,
@@ -45,30 +63,43 @@ pub fn run(
         }),
         _ => None,
     };
-    let a = targets::analyze_targets(
-        &tracks,
+    let analysis = targets::analyze_targets(
+        &viewed.tracks,
         &req.displacement,
         (base, tip),
         settings,
         compensate,
     )?;
+    Ok(Computed {
+        reference,
+        viewed,
+        analysis,
+    })
+}
+
+/// Writes every output of a multi-target analysis into the staged directory, and commits it
+/// (a run with failed targets never replaces an earlier output).
+fn write(
+    req: &Request,
+    t: &TargetsRequest,
+    source: &FrameSource,
+    c: &Computed,
+    ignored: Option<&str>,
+) -> anyhow::Result<Outcome> {
+    let (settings, a, viewed) = (&req.settings, &c.analysis, &c.viewed);
+    let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
+    let along_x = req.displacement.axis == Axis::X;
     let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
-    let macs = reference.as_ref().map(|r| targets::macs(&a, r));
-    write_tables(
-        &out,
-        req,
-        &a,
-        (&tracks, viewed.raw.as_ref()),
-        macs.as_deref(),
-    )?;
-    let shapes = shape_plot(&out, &a, &tracks, reference.as_ref(), along_x)?;
-    let mut report = full_report(req, t, &a, &tracks, macs.as_deref(), ignored);
+    let macs = c.reference.as_ref().map(|r| targets::macs(a, r));
+    write_tables(&out, req, a, (tracks, viewed.raw.as_ref()), macs.as_deref())?;
+    let shapes = shape_plot(&out, a, tracks, c.reference.as_ref(), along_x)?;
+    let mut report = full_report(req, t, a, tracks, macs.as_deref(), ignored);
     report.push_str(&viewed.describe(along_x));
     let (camera, _) =
-        super::view::write_camera_outputs(&out, &viewed, settings.frame_rate_hz, true)?;
+        super::view::write_camera_outputs(&out, viewed, settings.frame_rate_hz, true)?;
     report.push_str(&camera);
-    if let Some(w) = &windows {
-        report.push_str(&super::points::windows_report(w, &tracks));
+    if let Some(w) = windows {
+        report.push_str(&super::points::windows_report(w, tracks));
     }
     let failed = a.failures();
     out.write("report.txt", &report)?;
@@ -77,9 +108,9 @@ pub fn run(
         page(
             req,
             source,
-            &a,
-            &tracks,
-            (windows.as_ref(), super::view::reference_markers(&viewed)),
+            a,
+            tracks,
+            (windows, super::view::reference_markers(viewed)),
             &report,
             std::slice::from_ref(&shapes),
         ),
@@ -93,25 +124,36 @@ pub fn run(
     let result = if failed.is_empty() {
         Ok(())
     } else {
-        let list: Vec<String> = failed
-            .iter()
-            .map(|(t, why)| format!("target {t}: {why}"))
-            .collect();
-        let whereabouts = if written {
-            format!("the others' results are in {}", req.out.display())
-        } else {
-            format!(
-                "nothing was written: the earlier output in {} was left as it was",
-                req.out.display()
-            )
-        };
-        Err(crate::bad_input(format!(
-            "{} of {k} targets could not be analysed ({}); {whereabouts}",
-            failed.len(),
-            list.join("; "),
-        )))
+        Err(failed_targets(&failed, t.targets.count(), written, req))
     };
     Ok(Outcome { report, result })
+}
+
+/// The error of a run in which some targets could not be analysed: which, why, and where the
+/// others' results are (or that the earlier output was left as it was).
+fn failed_targets(
+    failed: &[(usize, &str)],
+    k: usize,
+    written: bool,
+    req: &Request,
+) -> anyhow::Error {
+    let list: Vec<String> = failed
+        .iter()
+        .map(|(t, why)| format!("target {t}: {why}"))
+        .collect();
+    let whereabouts = if written {
+        format!("the others' results are in {}", req.out.display())
+    } else {
+        format!(
+            "nothing was written: the earlier output in {} was left as it was",
+            req.out.display()
+        )
+    };
+    crate::bad_input(format!(
+        "{} of {k} targets could not be analysed ({}); {whereabouts}",
+        failed.len(),
+        list.join("; "),
+    ))
 }
 
 /// `report.html` of a multi-target analysis: the first frame with every target's window,

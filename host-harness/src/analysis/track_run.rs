@@ -47,7 +47,8 @@ pub struct Request {
     pub view: super::view::ViewSettings,
 }
 
-/// Runs `track`; returns the report (also written to `report.txt`).
+/// Runs `track`: the targets tracked in the camera's view, then every output written; returns
+/// the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
     let along_x = req.axis == super::Axis::X;
@@ -59,8 +60,13 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
         &req.view,
         along_x,
     )?;
-    let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
-    // nothing measured is the user's to fix, as `analyze` says it: exit 2, and why
+    refuse_nothing_measured(&viewed.tracks)?;
+    write(req, &source, &viewed)
+}
+
+/// Nothing measured is the user's to fix, as `analyze` says it: exit 2, and why each target
+/// was lost.
+fn refuse_nothing_measured(tracks: &Tracks) -> anyhow::Result<()> {
     if tracks
         .centroids
         .iter()
@@ -83,12 +89,23 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
             why.join("; ")
         )));
     }
+    Ok(())
+}
+
+/// Writes every output of `track` into the staged directory and commits it.
+fn write(
+    req: &Request,
+    source: &crate::frames::FrameSource,
+    viewed: &super::view::Viewed,
+) -> anyhow::Result<String> {
+    let along_x = req.axis == super::Axis::X;
+    let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
     let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
     inputs.extend(req.inputs.iter().map(PathBuf::as_path));
     let view_inputs = req.view.inputs();
     inputs.extend(view_inputs.iter().map(PathBuf::as_path));
     let out = Staged::new(&req.out, req.force, "track", &inputs)?;
-    let (mm, failures) = displacements(&viewed, req.displacement.as_ref());
+    let (mm, failures) = displacements(viewed, req.displacement.as_ref());
     let rows: Vec<Track<'_>> = tracks
         .centroids
         .iter()
@@ -112,7 +129,7 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     let mut report = report(req, tracks, windows, &failures);
     report.push_str(&viewed.describe(along_x));
     let (camera, camera_figure) =
-        super::view::write_camera_outputs(&out, &viewed, req.fps, req.plots)?;
+        super::view::write_camera_outputs(&out, viewed, req.fps, req.plots)?;
     report.push_str(&camera);
     let mut figures = Vec::new();
     if req.plots {
@@ -137,7 +154,7 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
         "report.html",
         page(
             req,
-            (tracks, windows, super::view::reference_markers(&viewed)),
+            (tracks, windows, super::view::reference_markers(viewed)),
             frame,
             &report,
             &figures,

@@ -329,9 +329,35 @@ fn range(i: Option<Interval>, digits: usize) -> String {
     })
 }
 
-/// The human report.
+/// The human report: the inputs, the excitation, the fit and its modes, the responses.
 pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
     let mut s = String::from("ema: experimental modal analysis (LSCF poles, LSFD residues)\n");
+    inputs_text(&mut s, req);
+    let df = r.freq_hz.get(1).copied().unwrap_or(0.0);
+    match (&req.settings.excitation, &r.hits) {
+        (Excitation::Impact { .. }, Some(h)) => hits_text(&mut s, &req.aligned, r, h, df),
+        (Excitation::Continuous { nperseg }, _) => {
+            let _ = writeln!(
+                s,
+                "continuous excitation: Welch H1, Hann segments of {nperseg} samples, half \
+                 overlapping ({} segments in {} groups), lines every {df:.5} Hz",
+                r.unit_sizes.iter().sum::<usize>(),
+                r.unit_sizes.len()
+            );
+        }
+        _ => {}
+    }
+    modes_text(&mut s, req, r);
+    responses_text(&mut s, req, r);
+    for n in &r.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    s
+}
+
+/// The report's lines on the files read: the responses, the force, the notes of their reading
+/// and alignment.
+fn inputs_text(s: &mut String, req: &EmaRequest) {
     let a = &req.aligned;
     let unit = |u: &Option<String>| u.clone().unwrap_or_else(|| "unit not stated".into());
     let _ = writeln!(
@@ -370,89 +396,83 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
     {
         let _ = writeln!(s, "  {n}");
     }
-    let df = r.freq_hz.get(1).copied().unwrap_or(0.0);
-    match (&req.settings.excitation, &r.hits) {
-        (Excitation::Impact { .. }, Some(h)) => {
-            let used = h.used().count();
-            let _ = writeln!(
-                s,
-                "impact: {} hit{} found, {used} used and averaged (H1; H2 and coherence beside \
-                 it); force baseline {:.4}, noise sd {:.4}",
-                h.hits.len(),
-                if h.hits.len() == 1 { "" } else { "s" },
-                h.baseline,
-                h.noise_sd
-            );
-            if !h.spikes.is_empty() {
-                let at: Vec<String> = h
-                    .spikes
-                    .iter()
-                    .take(10)
-                    .map(|&k| format!("{:.4} s", k as f64 / a.fs_hz))
-                    .collect();
-                let _ = writeln!(
-                    s,
-                    "  warning: {} single-sample spike(s) of the force set aside, not taken for \
-                     hits (a glitch of the DAQ or a cable; no hammer's pulse is one sample \
-                     wide): at {}{}",
-                    h.spikes.len(),
-                    at.join(", "),
-                    if h.spikes.len() > 10 { ", ..." } else { "" }
-                );
-            }
-            for (i, hit) in h.hits.iter().enumerate() {
-                let p = hit.pulse();
-                let w = (p.end - p.start) as f64 / a.fs_hz * 1e3;
-                let _ = writeln!(
-                    s,
-                    "  hit {} at {:.4} s: peak {:.4}, pulse {w:.3} ms (force window {:.3} ms){}",
-                    i + 1,
-                    p.start as f64 / a.fs_hz,
-                    p.peak,
-                    2.0 * w,
-                    hit.left_out
-                        .as_ref()
-                        .map_or(String::new(), |why| format!(": LEFT OUT, {why}"))
-                );
-            }
-            let _ = writeln!(
-                s,
-                "blocks: {} samples ({:.4} s, {:.4} s before each pulse), lines every {df:.5} Hz",
-                h.block,
-                h.block as f64 / a.fs_hz,
-                h.pre as f64 / a.fs_hz
-            );
-            match r.exp {
-                Some(w) => {
-                    let _ = writeln!(
-                        s,
-                        "exponential window: tau {:.5} s (ends at {:.2} %), on force and \
-                         responses; it adds 1/(tau w) of damping ({:.5} at {:.3} Hz), removed \
-                         from every mode's damping below",
-                        w.tau_s,
-                        100.0 * w.at(h.block as f64 / a.fs_hz),
-                        r.modes
-                            .first()
-                            .map_or(0.0, |m| w.added_damping(m.pole.f_hz)),
-                        r.modes.first().map_or(0.0, |m| m.pole.f_hz)
-                    );
-                }
-                None => {
-                    let _ = writeln!(s, "exponential window: none");
-                }
-            }
-        }
-        (Excitation::Continuous { nperseg }, _) => {
-            let _ = writeln!(
-                s,
-                "continuous excitation: Welch H1, Hann segments of {nperseg} samples, half \
-                 overlapping ({} segments in {} groups), lines every {df:.5} Hz",
-                r.unit_sizes.iter().sum::<usize>(),
-                r.unit_sizes.len()
-            );
-        }
-        _ => {}
+}
+
+/// The report's lines on the hits: each hit, the spikes set aside, the blocks, the exponential
+/// window.
+fn hits_text(s: &mut String, a: &Aligned, r: &EmaResult, h: &super::impact::Hits, df: f64) {
+    let used = h.used().count();
+    let _ = writeln!(
+        s,
+        "impact: {} hit{} found, {used} used and averaged (H1; H2 and coherence beside \
+         it); force baseline {:.4}, noise sd {:.4}",
+        h.hits.len(),
+        if h.hits.len() == 1 { "" } else { "s" },
+        h.baseline,
+        h.noise_sd
+    );
+    if !h.spikes.is_empty() {
+        let at: Vec<String> = h
+            .spikes
+            .iter()
+            .take(10)
+            .map(|&k| format!("{:.4} s", k as f64 / a.fs_hz))
+            .collect();
+        let _ = writeln!(
+            s,
+            "  warning: {} single-sample spike(s) of the force set aside, not taken for \
+             hits (a glitch of the DAQ or a cable; no hammer's pulse is one sample \
+             wide): at {}{}",
+            h.spikes.len(),
+            at.join(", "),
+            if h.spikes.len() > 10 { ", ..." } else { "" }
+        );
     }
+    for (i, hit) in h.hits.iter().enumerate() {
+        let p = hit.pulse();
+        let w = (p.end - p.start) as f64 / a.fs_hz * 1e3;
+        let _ = writeln!(
+            s,
+            "  hit {} at {:.4} s: peak {:.4}, pulse {w:.3} ms (force window {:.3} ms){}",
+            i + 1,
+            p.start as f64 / a.fs_hz,
+            p.peak,
+            2.0 * w,
+            hit.left_out
+                .as_ref()
+                .map_or(String::new(), |why| format!(": LEFT OUT, {why}"))
+        );
+    }
+    let _ = writeln!(
+        s,
+        "blocks: {} samples ({:.4} s, {:.4} s before each pulse), lines every {df:.5} Hz",
+        h.block,
+        h.block as f64 / a.fs_hz,
+        h.pre as f64 / a.fs_hz
+    );
+    match r.exp {
+        Some(w) => {
+            let _ = writeln!(
+                s,
+                "exponential window: tau {:.5} s (ends at {:.2} %), on force and \
+                 responses; it adds 1/(tau w) of damping ({:.5} at {:.3} Hz), removed \
+                 from every mode's damping below",
+                w.tau_s,
+                100.0 * w.at(h.block as f64 / a.fs_hz),
+                r.modes
+                    .first()
+                    .map_or(0.0, |m| w.added_damping(m.pole.f_hz)),
+                r.modes.first().map_or(0.0, |m| m.pole.f_hz)
+            );
+        }
+        None => {
+            let _ = writeln!(s, "exponential window: none");
+        }
+    }
+}
+
+/// The report's lines on the fit and its modes, and the clusters that are not modes.
+fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
     let (lo, hi) = req.settings.band_hz;
     let stable = r.poles.iter().filter(|p| p.stable).count();
     let _ = writeln!(
@@ -518,6 +538,11 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
              computational poles; the stabilisation diagram shows them)"
         );
     }
+}
+
+/// The report's lines on each response: its number and its mean coherence in the band.
+fn responses_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
+    let (lo, hi) = req.settings.band_hz;
     let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
     for (o, n) in req.response.names.iter().enumerate() {
         let coh: Vec<f64> = (0..r.freq_hz.len())
@@ -533,8 +558,4 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
             "  (one hit: the coherence is 1 by construction and says nothing)"
         );
     }
-    for n in &r.notes {
-        let _ = writeln!(s, "note: {n}");
-    }
-    s
 }

@@ -146,7 +146,41 @@ pub fn page(
     figures: Vec<(String, String)>,
     text: &str,
 ) -> String {
-    use crate::export::html::{mac_matrix, report_html, Marker, Report, ShapeAnimation};
+    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
+    let markers = markers(records);
+    let (head, rows) = modes_table(r);
+    let labels: Vec<String> = r
+        .modes
+        .iter()
+        .map(|m| format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz))
+        .collect();
+    let shapes: Vec<&[Complex64]> = r.modes.iter().map(|m| m.shape.as_slice()).collect();
+    report_html(&Report {
+        title: format!("{command}: output-only modal analysis"),
+        frame,
+        markers,
+        references,
+        direction: if along_x { (1.0, 0.0) } else { (0.0, -1.0) },
+        figures,
+        modes: (!rows.is_empty()).then_some((head, rows)),
+        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
+        shapes: r
+            .modes
+            .iter()
+            .zip(&labels)
+            .map(|(m, l)| ShapeAnimation {
+                label: l.clone(),
+                shape: m.shape.clone(),
+            })
+            .collect(),
+        text: text.to_string(),
+    })
+}
+
+/// The targets on the page: each one's position and lost samples (none when a target has no
+/// position: the shapes are then drawn on a line of their own).
+fn markers(records: &Records) -> Vec<crate::export::html::Marker> {
+    use crate::export::html::Marker;
     let markers: Vec<Marker> = records
         .targets
         .iter()
@@ -161,11 +195,15 @@ pub fn page(
         })
         .collect();
     // without every target's position, the shapes are drawn on a line of their own
-    let markers = if markers.len() == records.targets.len() {
+    if markers.len() == records.targets.len() {
         markers
     } else {
         Vec::new()
-    };
+    }
+}
+
+/// The page's table of modes: method, frequency, damping and their 95 % intervals.
+fn modes_table(r: &OmaResult) -> (Vec<String>, Vec<Vec<String>>) {
     let fmt = |v: Option<f64>, d: usize| v.map_or(String::new(), |v| format!("{v:.d$}"));
     let range = |i: Option<Interval>, d: usize| {
         i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
@@ -195,32 +233,7 @@ pub fn page(
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let labels: Vec<String> = r
-        .modes
-        .iter()
-        .map(|m| format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz))
-        .collect();
-    let shapes: Vec<&[Complex64]> = r.modes.iter().map(|m| m.shape.as_slice()).collect();
-    report_html(&Report {
-        title: format!("{command}: output-only modal analysis"),
-        frame,
-        markers,
-        references,
-        direction: if along_x { (1.0, 0.0) } else { (0.0, -1.0) },
-        figures,
-        modes: (!rows.is_empty()).then_some((head, rows)),
-        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
-        shapes: r
-            .modes
-            .iter()
-            .zip(&labels)
-            .map(|(m, l)| ShapeAnimation {
-                label: l.clone(),
-                shape: m.shape.clone(),
-            })
-            .collect(),
-        text: text.to_string(),
-    })
+    (head, rows)
 }
 
 /// Every pole of the stabilisation diagram and what it is: in a cluster reported or
@@ -330,6 +343,28 @@ fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSe
 /// The report: the records, the settings, the modes per method, the notes.
 pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str) -> String {
     let mut o = String::from(preamble);
+    records_text(&mut o, records, s);
+    methods_text(&mut o, r, s);
+    modes_text(&mut o, r, s);
+    if !r.rejected.is_empty() {
+        let _ = writeln!(o, "\nnot modes:");
+        for why in &r.rejected {
+            let _ = writeln!(o, "  {why}");
+        }
+    }
+    for note in &r.notes {
+        if note.starts_with("warning: ") {
+            let _ = writeln!(o, "{note}");
+        } else {
+            let _ = writeln!(o, "note: {note}");
+        }
+    }
+    o
+}
+
+/// The report's lines on the records: targets, samples, rate, unit, lost samples, targets left
+/// out.
+fn records_text(o: &mut String, records: &Records, s: &OmaSettings) {
     let n = records.channels.first().map_or(0, Vec::len);
     let _ = writeln!(
         o,
@@ -347,6 +382,11 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
     for (t, why) in &records.left_out {
         let _ = writeln!(o, "  target {t} left out: {why}");
     }
+}
+
+/// The report's lines on the methods and their settings: the cross-spectra, the peaks, EFDD,
+/// SSI-cov.
+fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
     let _ = writeln!(
         o,
         "cross-spectral matrix: {} segments of {} samples ({:?} window, overlap {}), line \
@@ -399,6 +439,10 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
         c.mpc_min,
         c.mpd_max_deg
     );
+}
+
+/// The report's table of modes and their 95 % intervals.
+fn modes_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
     let _ = writeln!(
         o,
         "\nmethod  mode  f_hz        damping   amplitude   evidence"
@@ -438,18 +482,4 @@ pub fn report(r: &OmaResult, records: &Records, s: &OmaSettings, preamble: &str)
             let _ = writeln!(o, "  {} mode {}: {f}{z}", m.method.name(), m.mode);
         }
     }
-    if !r.rejected.is_empty() {
-        let _ = writeln!(o, "\nnot modes:");
-        for why in &r.rejected {
-            let _ = writeln!(o, "  {why}");
-        }
-    }
-    for note in &r.notes {
-        if note.starts_with("warning: ") {
-            let _ = writeln!(o, "{note}");
-        } else {
-            let _ = writeln!(o, "note: {note}");
-        }
-    }
-    o
 }
