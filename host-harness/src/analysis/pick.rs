@@ -70,6 +70,40 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             req.shown
         )));
     }
+    refuse_replacing(req)?;
+    let points: Vec<PickPoint> = match &req.points {
+        Some(p) => crate::analysis::points::read_points(p)?
+            .into_iter()
+            .map(|p| PickPoint {
+                target: p.target,
+                xy: p.xy,
+                size: p.size,
+                group: p.group,
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let source = crate::frames::open_frames(&req.frames, req.retime, None)?.source;
+    let frames = spread_frames(req, &source)?;
+    let Some(first) = frames.first() else {
+        return Err(crate::bad_input(format!("{}: no frames", req.frames)));
+    };
+    windows_inside(&points, (first.1.width, first.1.height))?;
+    let html = pick_html(&format!("pick: {}", req.frames), &frames, &points);
+    crate::export::write_atomic(&req.out, html.as_bytes())?;
+    Ok(format!(
+        "wrote {} ({} frames, {} points, {:.1} MB): open it in a browser, click to add windows, \
+         save points.csv for track --points\n",
+        req.out.display(),
+        frames.len(),
+        points.len(),
+        html.len() as f64 / 1e6
+    ))
+}
+
+/// `--out` is never an input, never inside the frames' folder, and replaced (with `--force`)
+/// only when it is a page `pick` wrote.
+fn refuse_replacing(req: &PickRequest) -> anyhow::Result<()> {
     let frames_path = std::path::Path::new(&req.frames);
     let mut inputs = vec![frames_path];
     inputs.extend(req.points.as_deref());
@@ -88,20 +122,16 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             req.out.display()
         )));
     }
-    let points: Vec<PickPoint> = match &req.points {
-        Some(p) => crate::analysis::points::read_points(p)?
-            .into_iter()
-            .map(|p| PickPoint {
-                target: p.target,
-                xy: p.xy,
-                size: p.size,
-                group: p.group,
-            })
-            .collect(),
-        None => Vec::new(),
-    };
-    let source = crate::frames::open_frames(&req.frames, req.retime, None)?.source;
-    let fps = reading_rate(req, &source)?;
+    Ok(())
+}
+
+/// Up to `--frames-shown` frames spread evenly over the recording, each downscaled for the
+/// page, with their labels.
+fn spread_frames(
+    req: &PickRequest,
+    source: &crate::frames::FrameSource,
+) -> anyhow::Result<Vec<(String, crate::export::html::FrameImage)>> {
+    let fps = reading_rate(req, source)?;
     let count = source.count(fps)?;
     let step = count.map_or(1, |n| (n / req.shown).max(1));
     let mut frames = Vec::new();
@@ -129,11 +159,13 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             return Err(e);
         }
     }
-    let Some(first) = frames.first() else {
-        return Err(crate::bad_input(format!("{}: no frames", req.frames)));
-    };
-    let (w, h) = (f64::from(first.1.width), f64::from(first.1.height));
-    for p in &points {
+    Ok(frames)
+}
+
+/// Every given window lies inside the `(width, height)` frame.
+fn windows_inside(points: &[PickPoint], (width, height): (u32, u32)) -> anyhow::Result<()> {
+    let (w, h) = (f64::from(width), f64::from(height));
+    for p in points {
         let (hw, hh) = (
             (f64::from(p.size.0) - 1.0) / 2.0,
             (f64::from(p.size.1) - 1.0) / 2.0,
@@ -149,14 +181,5 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             )));
         }
     }
-    let html = pick_html(&format!("pick: {}", req.frames), &frames, &points);
-    crate::export::write_atomic(&req.out, html.as_bytes())?;
-    Ok(format!(
-        "wrote {} ({} frames, {} points, {:.1} MB): open it in a browser, click to add windows, \
-         save points.csv for track --points\n",
-        req.out.display(),
-        frames.len(),
-        points.len(),
-        html.len() as f64 / 1e6
-    ))
+    Ok(())
 }

@@ -124,6 +124,17 @@ pub fn report_text(
         a.alignment.len,
         a.alignment.residual_s
     );
+    s.push_str(&modes_table(a));
+    if let Some(i) = &a.intervals {
+        s.push_str(&intervals_text(a, i));
+    }
+    s
+}
+
+/// The report's table of modes: each band's accelerometer and vision peaks side by side.
+fn modes_table(a: &Analysis) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
     let _ = writeln!(
         s,
         "\nmode  band_hz        acc_f_hz  acc_amp     vis_f_hz  vis_amp     vis/acc_amp  \
@@ -146,9 +157,6 @@ pub fn report_text(
             vm.amplitude / am.amplitude,
             vm.f_hz - am.f_hz
         );
-    }
-    if let Some(i) = &a.intervals {
-        s.push_str(&intervals_text(a, i));
     }
     s
 }

@@ -93,27 +93,14 @@ fn one_target(
     let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
     append_compensation(&out, compensation.as_ref(), &mut report)?;
     if let (Some(a), Some((index, first)), Some(noise)) = (a, &template, noise.estimate()) {
-        let d = &req.displacement;
-        let share = Share::of(a, first, noise, &req.centroid, (d.axis, d.mm_per_px), fps)?;
-        report.push_str(&share.map_or_else(
-            || "\nimaging share: the stillest frame has no pixel above the threshold\n".into(),
-            |s| s.report(),
-        ));
-        if let Some(t) = req.twin {
-            let rec = super::twin::Recording {
-                analysis: a,
-                disp: &disp,
-                template: (*index, first),
-                noise,
-                accel: (base, tip),
-            };
-            let bar = crate::study::runner::progress_bar(t.mine().len() as u64, true, "twin runs");
-            let twin = super::twin::run(req, rec, t, &|| bar.inc(1))?;
-            bar.finish_and_clear();
-            let p = out.write("twin.csv", twin.csv())?;
-            report.push_str(&twin.report());
-            report.push_str(&format!("  written: {}\n", p.display()));
-        }
+        let rec = super::twin::Recording {
+            analysis: a,
+            disp: &disp,
+            template: (*index, first),
+            noise,
+            accel: (base, tip),
+        };
+        share_and_twin(req, &out, rec, &mut report)?;
     } else if req.twin.is_some() {
         report.push_str(
             "\ntwin: not run (the analysis failed, or the record has fewer than 3 frames to \
@@ -141,6 +128,38 @@ fn one_target(
         report,
         result: result.map(|_| ()),
     })
+}
+
+/// The imaging's share of |H1| (from the stillest frame and the frames' noise) and, with
+/// `--twin`, the recording's twin runs (`twin.csv`), both added to the report.
+fn share_and_twin(
+    req: &Request,
+    out: &Staged,
+    rec: super::twin::Recording<'_>,
+    report: &mut String,
+) -> anyhow::Result<()> {
+    let (d, fps) = (&req.displacement, req.settings.frame_rate_hz);
+    let share = Share::of(
+        rec.analysis,
+        rec.template.1,
+        rec.noise,
+        &req.centroid,
+        (d.axis, d.mm_per_px),
+        fps,
+    )?;
+    report.push_str(&share.map_or_else(
+        || "\nimaging share: the stillest frame has no pixel above the threshold\n".into(),
+        |s| s.report(),
+    ));
+    if let Some(t) = req.twin {
+        let bar = crate::study::runner::progress_bar(t.mine().len() as u64, true, "twin runs");
+        let twin = super::twin::run(req, rec, t, &|| bar.inc(1))?;
+        bar.finish_and_clear();
+        let p = out.write("twin.csv", twin.csv())?;
+        report.push_str(&twin.report());
+        report.push_str(&format!("  written: {}\n", p.display()));
+    }
+    Ok(())
 }
 
 /// `report.html` of a one-target analysis: the first frame with the target and its lost
@@ -314,16 +333,13 @@ fn frf_figure(a: &super::Analysis, fps: f64) -> anyhow::Result<crate::plots::Fig
     )
 }
 
-fn describe_inputs(
-    req: &Request,
-    source: &FrameSource,
-    frames: usize,
-    samples: usize,
-) -> Vec<(String, String)> {
-    let src = match source {
+/// The frames as the page names them: a folder's or pattern's files with the first and last,
+/// or the camera file or video.
+fn source_text(frames: &str, source: &FrameSource) -> String {
+    match source {
         FrameSource::Files(f) => format!(
             "{} ({} files, {} .. {})",
-            req.frames,
+            frames,
             f.len(),
             f.first()
                 .map(|p| p.display().to_string())
@@ -333,7 +349,41 @@ fn describe_inputs(
                 .unwrap_or_default()
         ),
         other => other.describe(),
-    };
+    }
+}
+
+/// The centroid's settings in one line: threshold, mode, region of interest.
+fn centroid_text(c: &firmware_core::centroid::CentroidConfig) -> String {
+    format!(
+        "threshold {}, {:?}, ROI {}",
+        c.threshold,
+        c.mode,
+        c.roi
+            .map(|r| format!("{},{},{},{}", r.x, r.y, r.width, r.height))
+            .unwrap_or_else(|| "none".into())
+    )
+}
+
+/// The displacement's settings in one line: scale, axis, sign.
+fn displacement_text(d: &super::DisplacementSettings) -> String {
+    format!(
+        "{} mm/px, axis {}{}",
+        d.mm_per_px,
+        match d.axis {
+            Axis::X => "x (positive right)",
+            Axis::Y => "y (positive up in the image)",
+        },
+        if d.invert { ", inverted" } else { "" }
+    )
+}
+
+fn describe_inputs(
+    req: &Request,
+    source: &FrameSource,
+    frames: usize,
+    samples: usize,
+) -> Vec<(String, String)> {
+    let src = source_text(&req.frames, source);
     let (fps, a, d, c) = (
         req.settings.frame_rate_hz,
         &req.accel,
@@ -368,29 +418,8 @@ fn describe_inputs(
                 req.settings.time_offset_s
             ),
         ),
-        (
-            "centroid".into(),
-            format!(
-                "threshold {}, {:?}, ROI {}",
-                c.threshold,
-                c.mode,
-                c.roi
-                    .map(|r| format!("{},{},{},{}", r.x, r.y, r.width, r.height))
-                    .unwrap_or_else(|| "none".into())
-            ),
-        ),
-        (
-            "displacement".into(),
-            format!(
-                "{} mm/px, axis {}{}",
-                d.mm_per_px,
-                match d.axis {
-                    Axis::X => "x (positive right)",
-                    Axis::Y => "y (positive up in the image)",
-                },
-                if d.invert { ", inverted" } else { "" }
-            ),
-        ),
+        ("centroid".into(), centroid_text(c)),
+        ("displacement".into(), displacement_text(d)),
     ];
     if let Some(e) = req.exposure_ms {
         v.push(("exposure".into(), format!("{e} ms")));

@@ -69,39 +69,11 @@ pub fn write(
         "shapes.uff",
         export::shapes_uff(&shape_sets(r, records, o.along_x))?,
     )?;
-    let mut figures = Vec::new();
-    if o.plots {
-        let picks: Vec<(f64, f64, String)> = r
-            .modes
-            .iter()
-            .filter(|m| m.method == Method::Fdd)
-            .map(|m| {
-                let s1 = m.amplitude.unwrap_or(0.0);
-                (m.f_hz, s1, format!("{:.3} Hz", m.f_hz))
-            })
-            .collect();
-        figures.push(crate::plots::svd_figure(
-            "svd",
-            "singular values of the cross-spectral matrix",
-            &r.svd.freq_hz,
-            &r.svd.s,
-            &picks,
-        )?);
-        let poles = pole_kinds(&r.poles, &r.clusters);
-        let ssi: Vec<f64> = r
-            .modes
-            .iter()
-            .filter(|m| m.method == Method::Ssi)
-            .map(|m| m.f_hz)
-            .collect();
-        figures.push(crate::plots::stabilisation_figure(
-            "stabilisation",
-            "SSI-cov stabilisation diagram",
-            &poles,
-            &ssi,
-            settings.fs_hz / 2.0,
-        )?);
-    }
+    let mut figures = if o.plots {
+        figures(r, settings)?
+    } else {
+        Vec::new()
+    };
     figures.extend(camera_figure);
     for f in &figures {
         f.write_staged(&out)?;
@@ -130,6 +102,42 @@ pub fn write(
         report,
         result: Ok(()),
     })
+}
+
+/// The singular values' figure (FDD's picks marked) and the SSI-cov stabilisation diagram.
+fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crate::plots::Figure>> {
+    let mut figures = Vec::new();
+    let picks: Vec<(f64, f64, String)> = r
+        .modes
+        .iter()
+        .filter(|m| m.method == Method::Fdd)
+        .map(|m| {
+            let s1 = m.amplitude.unwrap_or(0.0);
+            (m.f_hz, s1, format!("{:.3} Hz", m.f_hz))
+        })
+        .collect();
+    figures.push(crate::plots::svd_figure(
+        "svd",
+        "singular values of the cross-spectral matrix",
+        &r.svd.freq_hz,
+        &r.svd.s,
+        &picks,
+    )?);
+    let poles = pole_kinds(&r.poles, &r.clusters);
+    let ssi: Vec<f64> = r
+        .modes
+        .iter()
+        .filter(|m| m.method == Method::Ssi)
+        .map(|m| m.f_hz)
+        .collect();
+    figures.push(crate::plots::stabilisation_figure(
+        "stabilisation",
+        "SSI-cov stabilisation diagram",
+        &poles,
+        &ssi,
+        settings.fs_hz / 2.0,
+    )?);
+    Ok(figures)
 }
 
 /// `report.html`: the targets (on the first frame when there is one), the modes with their
