@@ -159,31 +159,14 @@ fn with_reference(
     let exposure_ms = rates.exposure_ms;
     let warnings = check_exposure(exposure_ms, fps, input.compensate_exposure)?;
     super::bands_below_nyquist(&bands, fps, "the camera's")?;
-    let time_offset_s = match input.time_offset {
-        Some(TimeOffset::Seconds(t)) if t.is_finite() => t,
-        Some(TimeOffset::Seconds(t)) => {
-            return Err(SpecError::setting(format!(
-                "$time_offset_s {t}: not a finite time"
-            )))
-        }
-        Some(TimeOffset::Ticks(k, hz)) => crate::analysis::tick_offset_to_seconds(k, hz)?,
-        None => 0.0,
-    };
-    // the time offset is the recording's first frame's; a range starts later in it
-    let time_offset_s =
-        time_offset_s + crate::frames::FrameRange::start_s(input.frames.frame_range, fps);
+    let time_offset_s = time_offset_s(input.time_offset, input.frames.frame_range, fps)?;
     let tracking = Tracking::new(input.tracking)?;
     let view = super::view::check(input.view, None, &tracking.targets, tracking.tracker)?;
     let mut targets =
         targets_request(&tracking.targets, input.accel_target, input.shape_reference)?;
     match (&mut targets, view.references.is_some()) {
         (Some(t), _) => t.view = view,
-        (None, true) => {
-            return Err(SpecError::setting(
-                "$reference with $accel: the camera's motion is taken out of $targets K or \
-                 $points (the one target of the frame keeps its own chain)",
-            ))
-        }
+        (None, true) => return Err(SpecError::setting(REFERENCE_NEEDS_TARGETS)),
         (None, false) => {}
     }
     if let Some(t) = &input.twin {
@@ -227,6 +210,31 @@ fn with_reference(
         force: input.force,
     };
     Ok((AnalyzeSpec::Reference(Box::new(request)), warnings))
+}
+
+/// References take the camera's motion out of several targets only.
+const REFERENCE_NEEDS_TARGETS: &str = "$reference with $accel: the camera's motion is taken out \
+     of $targets K or $points (the one target of the frame keeps its own chain)";
+
+/// The time of the first frame analysed after the accelerometer's first sample, s: the offset
+/// given (seconds, or ticks of a clock) plus the start of `--frame-range`.
+fn time_offset_s(
+    offset: Option<TimeOffset>,
+    range: Option<crate::frames::FrameRange>,
+    fps: f64,
+) -> SpecResult<f64> {
+    let t = match offset {
+        Some(TimeOffset::Seconds(t)) if t.is_finite() => t,
+        Some(TimeOffset::Seconds(t)) => {
+            return Err(SpecError::setting(format!(
+                "$time_offset_s {t}: not a finite time"
+            )))
+        }
+        Some(TimeOffset::Ticks(k, hz)) => crate::analysis::tick_offset_to_seconds(k, hz)?,
+        None => 0.0,
+    };
+    // the time offset is the recording's first frame's; a range starts later in it
+    Ok(t + crate::frames::FrameRange::start_s(range, fps))
 }
 
 /// The exposure against the frame period: an exposure longer than the period is a warning,

@@ -108,59 +108,7 @@ pub struct EmaSpec {
 impl EmaSpec {
     /// Reads the files and checks the settings against them.
     pub fn new(input: EmaInput) -> SpecResult<Self> {
-        if let Some(b) = &input.bands {
-            super::bands_ordered(b)?;
-        }
-        if let Some((_, c)) = input
-            .response_cols
-            .iter()
-            .enumerate()
-            .find(|(i, c)| input.response_cols[..*i].contains(c))
-        {
-            return Err(SpecError::setting(format!(
-                "$response_col {c} is given twice: each response once"
-            )));
-        }
-        if !input.delay_s.is_finite() {
-            return Err(SpecError::setting(format!(
-                "$delay_s must be a finite number of seconds, got {}",
-                input.delay_s
-            )));
-        }
-        if let ExpChoice::End(e) = input.exp_window {
-            // below 0.1 % the window adds a damping that swamps every mode's own
-            if !(MIN_EXP_END..1.0).contains(&e) {
-                return Err(SpecError::setting(format!(
-                    "$exp_window {e:?}: the window's value at the block's end, from \
-                     {MIN_EXP_END} to below 1 (or off, auto); a smaller end value damps the \
-                     modes away"
-                )));
-            }
-        }
-        if !(2..=200).contains(&input.max_order) {
-            return Err(SpecError::setting(format!(
-                "$max_order {}: 2 to 200",
-                input.max_order
-            )));
-        }
-        if let Some(b) = input.block_s {
-            super::positive("$block_s", b, "seconds")?;
-        }
-        if !input.impact && input.exp_window != ExpChoice::Auto {
-            return Err(SpecError::setting(
-                "$exp_window is for an impact test ($impact)".to_string(),
-            ));
-        }
-        for fs in [input.response_fs, input.excitation_fs]
-            .into_iter()
-            .flatten()
-        {
-            if !(fs.is_finite() && fs > 0.0) {
-                return Err(SpecError::setting(format!(
-                    "$response_fs and $excitation_fs must be positive, got {fs}"
-                )));
-            }
-        }
+        check_alone(&input)?;
         let response = read_responses(&input.response, &input.response_cols, input.response_fs)
             .map_err(SpecError::Input)?;
         let force = read_force(
@@ -175,74 +123,8 @@ impl EmaSpec {
         if let Some(b) = &input.bands {
             super::bands_below_nyquist(b, 2.0 * nyq, "the slower record's")?;
         }
-        let f_max = match input.f_max_hz {
-            Some(f) if !(f.is_finite() && f > 0.0 && f <= nyq) => {
-                return Err(SpecError::setting(format!(
-                    "$f_max_hz {f}: between 0 and the slower record's Nyquist frequency ({nyq} Hz)"
-                )))
-            }
-            Some(f) => f,
-            None => match &input.bands {
-                Some(b) => b.iter().map(|x| x.1).fold(0.0, f64::max),
-                None => 0.8 * nyq,
-            },
-        };
-        let f_min = match input.f_min_hz {
-            Some(f) if !(f.is_finite() && f >= 0.0 && f < f_max) => {
-                return Err(SpecError::setting(format!(
-                    "$f_min_hz {f}: between 0 and the band's top ({f_max} Hz)"
-                )))
-            }
-            Some(f) => f,
-            None => match &input.bands {
-                Some(b) => b.iter().map(|x| x.0).fold(f64::INFINITY, f64::min),
-                None => (f_max / 100.0).max(0.5),
-            },
-        };
-        if let Some(b) = input.bands.as_ref().and_then(|b| {
-            b.iter()
-                .find(|(lo, hi)| *lo < f_min || *hi > f_max)
-                .copied()
-        }) {
-            return Err(SpecError::setting(format!(
-                "$bands {}-{} reaches outside the band analysed, {f_min}-{f_max} Hz \
-                 ($f_min_hz, $f_max_hz): nothing is fitted there",
-                b.0, b.1
-            )));
-        }
-        let n = aligned.force.len();
-        let excitation = if input.impact {
-            Excitation::Impact {
-                rule: ImpactRule {
-                    block_s: input.block_s,
-                    ..ImpactRule::default()
-                },
-                exp: input.exp_window,
-            }
-        } else {
-            let nperseg = match input.nperseg {
-                Some(p) if !(64..=1 << 20).contains(&p) || 2 * p > n => {
-                    return Err(SpecError::setting(format!(
-                        "$nperseg {p}: 64 to 2^20 samples and at most half the record ({n})"
-                    )))
-                }
-                Some(p) => p,
-                None => {
-                    let mut p = 1usize << 16;
-                    while p > 64 && 9 * p > 2 * n {
-                        p /= 2;
-                    }
-                    if 2 * p > n {
-                        return Err(SpecError::setting(format!(
-                            "the record has {n} samples at {} Hz: too short for Welch segments",
-                            aligned.fs_hz
-                        )));
-                    }
-                    p
-                }
-            };
-            Excitation::Continuous { nperseg }
-        };
+        let (f_min, f_max) = band_analysed(&input, aligned.nyquist_hz)?;
+        let excitation = excitation(&input, &aligned)?;
         let settings = EmaSettings {
             excitation,
             form: input.form,
@@ -282,4 +164,145 @@ impl EmaSpec {
     pub fn run(&self) -> anyhow::Result<crate::analysis::request::Outcome> {
         crate::analysis::ema::run::run(&self.request)
     }
+}
+
+/// The settings checked on their own, before any file is read.
+fn check_alone(input: &EmaInput) -> SpecResult<()> {
+    if let Some(b) = &input.bands {
+        super::bands_ordered(b)?;
+    }
+    if let Some((_, c)) = input
+        .response_cols
+        .iter()
+        .enumerate()
+        .find(|(i, c)| input.response_cols[..*i].contains(c))
+    {
+        return Err(SpecError::setting(format!(
+            "$response_col {c} is given twice: each response once"
+        )));
+    }
+    if !input.delay_s.is_finite() {
+        return Err(SpecError::setting(format!(
+            "$delay_s must be a finite number of seconds, got {}",
+            input.delay_s
+        )));
+    }
+    if let ExpChoice::End(e) = input.exp_window {
+        // below 0.1 % the window adds a damping that swamps every mode's own
+        if !(MIN_EXP_END..1.0).contains(&e) {
+            return Err(SpecError::setting(format!(
+                "$exp_window {e:?}: the window's value at the block's end, from \
+                 {MIN_EXP_END} to below 1 (or off, auto); a smaller end value damps the \
+                 modes away"
+            )));
+        }
+    }
+    if !(2..=200).contains(&input.max_order) {
+        return Err(SpecError::setting(format!(
+            "$max_order {}: 2 to 200",
+            input.max_order
+        )));
+    }
+    if let Some(b) = input.block_s {
+        super::positive("$block_s", b, "seconds")?;
+    }
+    if !input.impact && input.exp_window != ExpChoice::Auto {
+        return Err(SpecError::setting(
+            "$exp_window is for an impact test ($impact)".to_string(),
+        ));
+    }
+    for fs in [input.response_fs, input.excitation_fs]
+        .into_iter()
+        .flatten()
+    {
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(SpecError::setting(format!(
+                "$response_fs and $excitation_fs must be positive, got {fs}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The band analysed, `(f_min, f_max)`: given, else the bands' extent, else 1 % to 80 % of the
+/// slower record's Nyquist frequency `nyq`; every band inside it.
+fn band_analysed(input: &EmaInput, nyq: f64) -> SpecResult<(f64, f64)> {
+    let f_max = match input.f_max_hz {
+        Some(f) if !(f.is_finite() && f > 0.0 && f <= nyq) => {
+            return Err(SpecError::setting(format!(
+                "$f_max_hz {f}: between 0 and the slower record's Nyquist frequency ({nyq} Hz)"
+            )))
+        }
+        Some(f) => f,
+        None => match &input.bands {
+            Some(b) => b.iter().map(|x| x.1).fold(0.0, f64::max),
+            None => 0.8 * nyq,
+        },
+    };
+    let f_min = match input.f_min_hz {
+        Some(f) if !(f.is_finite() && f >= 0.0 && f < f_max) => {
+            return Err(SpecError::setting(format!(
+                "$f_min_hz {f}: between 0 and the band's top ({f_max} Hz)"
+            )))
+        }
+        Some(f) => f,
+        None => match &input.bands {
+            Some(b) => b.iter().map(|x| x.0).fold(f64::INFINITY, f64::min),
+            None => (f_max / 100.0).max(0.5),
+        },
+    };
+    if let Some(b) = input.bands.as_ref().and_then(|b| {
+        b.iter()
+            .find(|(lo, hi)| *lo < f_min || *hi > f_max)
+            .copied()
+    }) {
+        return Err(SpecError::setting(format!(
+            "$bands {}-{} reaches outside the band analysed, {f_min}-{f_max} Hz \
+             ($f_min_hz, $f_max_hz): nothing is fitted there",
+            b.0, b.1
+        )));
+    }
+    Ok((f_min, f_max))
+}
+
+/// The excitation: an impact's rule and window, or a continuous excitation's Welch segments
+/// (given, else the longest power of two with at least 9 half-overlapping segments).
+fn excitation(
+    input: &EmaInput,
+    aligned: &crate::analysis::ema::input::Aligned,
+) -> SpecResult<Excitation> {
+    let n = aligned.force.len();
+    let excitation = if input.impact {
+        Excitation::Impact {
+            rule: ImpactRule {
+                block_s: input.block_s,
+                ..ImpactRule::default()
+            },
+            exp: input.exp_window,
+        }
+    } else {
+        let nperseg = match input.nperseg {
+            Some(p) if !(64..=1 << 20).contains(&p) || 2 * p > n => {
+                return Err(SpecError::setting(format!(
+                    "$nperseg {p}: 64 to 2^20 samples and at most half the record ({n})"
+                )))
+            }
+            Some(p) => p,
+            None => {
+                let mut p = 1usize << 16;
+                while p > 64 && 9 * p > 2 * n {
+                    p /= 2;
+                }
+                if 2 * p > n {
+                    return Err(SpecError::setting(format!(
+                        "the record has {n} samples at {} Hz: too short for Welch segments",
+                        aligned.fs_hz
+                    )));
+                }
+                p
+            }
+        };
+        Excitation::Continuous { nperseg }
+    };
+    Ok(excitation)
 }

@@ -74,7 +74,25 @@ pub fn check(
              $reference (windows on parts of the scene that do not move)",
         ));
     }
-    let references = match input.reference {
+    let references = references(input.reference, input.camera_model, targets)?;
+    let n_refs = references.as_ref().map_or(0, |r| r.points.len());
+    let scale = scale(
+        input.scale,
+        input.target_size_mm,
+        input.world,
+        (targets, n_refs, tracker),
+    )?;
+    Ok(ViewSettings { references, scale })
+}
+
+/// The static references read or taken from a list, checked against the targets and the
+/// camera's model.
+fn references(
+    reference: Option<super::PointsInput>,
+    camera_model: Option<Model>,
+    targets: &Targets,
+) -> SpecResult<Option<References>> {
+    let references = match reference {
         Some(r) => {
             let (points, file) = match r {
                 super::PointsInput::File(f) => {
@@ -89,8 +107,8 @@ pub fn check(
                     points.len()
                 )));
             }
-            check_reference_layout(&points, input.camera_model, targets)?;
-            if let Some(m) = input.camera_model {
+            check_reference_layout(&points, camera_model, targets)?;
+            if let Some(m) = camera_model {
                 if points.len() < m.minimum() {
                     return Err(SpecError::setting(format!(
                         "$camera_model {}: needs {} references or more; $reference has {}",
@@ -102,14 +120,24 @@ pub fn check(
             }
             Some(References {
                 points,
-                model: input.camera_model,
+                model: camera_model,
                 file,
             })
         }
         None => None,
     };
-    let n_refs = references.as_ref().map_or(0, |r| r.points.len());
-    let scale = if let Some((a, b, mm)) = input.scale {
+    Ok(references)
+}
+
+/// The one scale asked for: between two points, each target's size, or the plane's points;
+/// `n_refs` the number of references.
+fn scale(
+    scale: Option<(String, String, f64)>,
+    target_size_mm: Option<f64>,
+    world: Option<WorldInput>,
+    (targets, n_refs, tracker): (&Targets, usize, Tracker),
+) -> SpecResult<Option<ScaleInput>> {
+    let scale = if let Some((a, b, mm)) = scale {
         super::positive("scale", mm, "the distance between the two points, mm")?;
         let parse = |s: &str| -> SpecResult<PointRef> {
             let p = PointRef::parse(s).ok_or_else(|| {
@@ -135,7 +163,7 @@ pub fn check(
             )));
         }
         Some(ScaleInput::Between(pa, pb, mm))
-    } else if let Some(mm) = input.target_size_mm {
+    } else if let Some(mm) = target_size_mm {
         super::positive("target_size_mm", mm, "each target's diameter, mm")?;
         if tracker == Tracker::Lk {
             return Err(SpecError::setting(
@@ -144,7 +172,7 @@ pub fn check(
             ));
         }
         Some(ScaleInput::TargetSize(mm))
-    } else if let Some(w) = input.world {
+    } else if let Some(w) = world {
         Some(match w {
             WorldInput::File(f) => {
                 ScaleInput::World(read_world(&f).map_err(SpecError::Input)?, Some(f))
@@ -157,7 +185,7 @@ pub fn check(
     } else {
         None
     };
-    Ok(ViewSettings { references, scale })
+    Ok(scale)
 }
 
 /// Whether two windows (centre and size) share a pixel.

@@ -130,52 +130,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
     let file = path.display().to_string();
     let is_csv = matches!(kind(path).as_str(), "csv" | "txt");
     if is_csv && is_displacement_csv(path) {
-        use crate::analysis::oma::input::{read, PixelAxis};
-        let r = read(path, PixelAxis::Y, fs_hz)?;
-        let mut names: Vec<String> = r
-            .targets
-            .iter()
-            .map(|(t, _)| format!("target {t}"))
-            .collect();
-        let mut channels = r.channels;
-        let mut notes: Vec<String> = r
-            .left_out
-            .iter()
-            .map(|(t, why)| format!("target {t} left out: {why}"))
-            .collect();
-        for ((t, _), n) in r.targets.iter().zip(&r.filled) {
-            if *n > 0 {
-                notes.push(format!(
-                    "target {t}: {n} lost samples filled by interpolation"
-                ));
-            }
-        }
-        if !cols.is_empty() {
-            let mut keep = Vec::new();
-            for c in cols {
-                let i = names
-                    .iter()
-                    .position(|n| n == c || n.trim_start_matches("target ") == c);
-                let i = i.ok_or_else(|| {
-                    bad_input(format!(
-                        "{file}: no response `{c}` (its targets: {})",
-                        names.join(", ")
-                    ))
-                })?;
-                keep.push(i);
-            }
-            names = keep.iter().map(|&i| names[i].clone()).collect();
-            channels = keep.iter().map(|&i| channels[i].clone()).collect();
-        }
-        return Ok(Series {
-            names,
-            unit: Some(r.unit),
-            fs_hz: r.fs_hz,
-            channels,
-            notes,
-            camera: true,
-            start_time: None,
-        });
+        return responses_from_displacement(path, cols, fs_hz);
     }
     let record = daq_record(path)?;
     let first: Vec<String> = record
@@ -185,39 +140,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .unwrap_or_default();
     let mut notes = record.notes.clone();
     let npy = kind(path) == "npy";
-    let wanted: Vec<String> = if !cols.is_empty() {
-        cols.to_vec()
-    } else if npy && first.iter().any(|n| n.ends_with(" y") || n.ends_with(" x")) {
-        // pyidi: the coordinate that moves more
-        let spread = |axis: &str| -> f64 {
-            first
-                .iter()
-                .filter(|n| n.ends_with(axis))
-                .filter_map(|n| record.channel(n, &file).ok())
-                .map(|c| {
-                    let m = c.values.iter().sum::<f64>() / c.values.len().max(1) as f64;
-                    c.values.iter().map(|v| (v - m).powi(2)).sum::<f64>()
-                })
-                .sum()
-        };
-        let axis = if spread(" x") > spread(" y") {
-            " x"
-        } else {
-            " y"
-        };
-        notes.push(format!(
-            "{file}: the points' {} coordinate (it moves more than the other; \
-             --response-col to choose)",
-            axis.trim()
-        ));
-        first
-            .iter()
-            .filter(|n| n.ends_with(axis))
-            .cloned()
-            .collect()
-    } else {
-        first.clone()
-    };
+    let wanted = wanted_channels(&record, &first, cols, npy, &mut notes, &file);
     if wanted.is_empty() {
         return Err(bad_input(format!("{file}: no channels")));
     }
@@ -226,20 +149,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .map(|n| record.channel(n, &file))
         .collect::<anyhow::Result<_>>()?;
     for c in &chans {
-        if c.values.is_empty() {
-            return Err(bad_input(format!(
-                "{file}: response channel `{}` holds no samples",
-                c.name
-            )));
-        }
-        if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
-            return Err(bad_input(format!(
-                "{file}: response channel `{}`, sample {}: not a finite number ({})",
-                c.name,
-                i + 1,
-                c.values[i]
-            )));
-        }
+        refuse_empty_or_not_finite(c, &file)?;
     }
     let fs = rate(&chans[0], fs_hz, &file, "$response_fs", &mut notes)?;
     for c in &chans[1..] {
@@ -265,6 +175,126 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         camera: npy,
         start_time,
     })
+}
+
+/// The responses of a `displacement.csv` of `track` or `analyze`: each target a channel (or
+/// the targets `cols` names), the lost samples filled.
+fn responses_from_displacement(
+    path: &Path,
+    cols: &[String],
+    fs_hz: Option<f64>,
+) -> anyhow::Result<Series> {
+    let file = path.display().to_string();
+    use crate::analysis::oma::input::{read, PixelAxis};
+    let r = read(path, PixelAxis::Y, fs_hz)?;
+    let mut names: Vec<String> = r
+        .targets
+        .iter()
+        .map(|(t, _)| format!("target {t}"))
+        .collect();
+    let mut channels = r.channels;
+    let mut notes: Vec<String> = r
+        .left_out
+        .iter()
+        .map(|(t, why)| format!("target {t} left out: {why}"))
+        .collect();
+    for ((t, _), n) in r.targets.iter().zip(&r.filled) {
+        if *n > 0 {
+            notes.push(format!(
+                "target {t}: {n} lost samples filled by interpolation"
+            ));
+        }
+    }
+    if !cols.is_empty() {
+        let mut keep = Vec::new();
+        for c in cols {
+            let i = names
+                .iter()
+                .position(|n| n == c || n.trim_start_matches("target ") == c);
+            let i = i.ok_or_else(|| {
+                bad_input(format!(
+                    "{file}: no response `{c}` (its targets: {})",
+                    names.join(", ")
+                ))
+            })?;
+            keep.push(i);
+        }
+        names = keep.iter().map(|&i| names[i].clone()).collect();
+        channels = keep.iter().map(|&i| channels[i].clone()).collect();
+    }
+    Ok(Series {
+        names,
+        unit: Some(r.unit),
+        fs_hz: r.fs_hz,
+        channels,
+        notes,
+        camera: true,
+        start_time: None,
+    })
+}
+
+/// The channels to read: those named, else (a pyidi `.npy`) the coordinate that moves more
+/// (said in `notes`), else every channel of the first segment.
+fn wanted_channels(
+    record: &crate::daq::Record,
+    first: &[String],
+    cols: &[String],
+    npy: bool,
+    notes: &mut Vec<String>,
+    file: &str,
+) -> Vec<String> {
+    if !cols.is_empty() {
+        cols.to_vec()
+    } else if npy && first.iter().any(|n| n.ends_with(" y") || n.ends_with(" x")) {
+        // pyidi: the coordinate that moves more
+        let spread = |axis: &str| -> f64 {
+            first
+                .iter()
+                .filter(|n| n.ends_with(axis))
+                .filter_map(|n| record.channel(n, file).ok())
+                .map(|c| {
+                    let m = c.values.iter().sum::<f64>() / c.values.len().max(1) as f64;
+                    c.values.iter().map(|v| (v - m).powi(2)).sum::<f64>()
+                })
+                .sum()
+        };
+        let axis = if spread(" x") > spread(" y") {
+            " x"
+        } else {
+            " y"
+        };
+        notes.push(format!(
+            "{file}: the points' {} coordinate (it moves more than the other; \
+             --response-col to choose)",
+            axis.trim()
+        ));
+        first
+            .iter()
+            .filter(|n| n.ends_with(axis))
+            .cloned()
+            .collect()
+    } else {
+        first.to_vec()
+    }
+}
+
+/// A response channel holds samples, every one finite.
+fn refuse_empty_or_not_finite(c: &Channel, file: &str) -> anyhow::Result<()> {
+    if c.values.is_empty() {
+        return Err(bad_input(format!(
+            "{file}: response channel `{}` holds no samples",
+            c.name
+        )));
+    }
+    if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
+        return Err(bad_input(format!(
+            "{file}: response channel `{}`, sample {}: not a finite number ({})",
+            c.name,
+            i + 1,
+            c.values[i]
+        )));
+    }
+    Ok(())
 }
 
 /// Reads the force channel `col` of `path` (empty `col`: the file's only channel), at `fs_hz`
@@ -460,40 +490,7 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
         .map(|c| up(c, fr))
         .collect::<anyhow::Result<_>>()?;
     let delay_s = stated_delay(response, force, delay_s, fs, &mut notes);
-    let shift = delay_s * fs;
-    let whole = shift.round();
-    if whole != 0.0 {
-        let k = whole.abs() as usize;
-        let (what, len) = if whole > 0.0 {
-            ("force", f.len())
-        } else {
-            ("responses", xs[0].len())
-        };
-        if k >= len {
-            return Err(anyhow::Error::new(SpecError::setting(format!(
-                "$delay_s {delay_s}: the {what} record is only {:.4} s long",
-                len as f64 / fs
-            ))));
-        }
-        if whole > 0.0 {
-            f.drain(..k);
-        } else {
-            for x in &mut xs {
-                x.drain(..k);
-            }
-        }
-        notes.push(format!(
-            "a delay of {delay_s} s: the first {k} samples of the {what} dropped{}",
-            if (shift - whole).abs() > 1e-6 {
-                format!(
-                    " ({:.3} of a sample at {fs} Hz left unaligned)",
-                    (shift - whole).abs()
-                )
-            } else {
-                String::new()
-            }
-        ));
-    }
+    drop_delay(delay_s, fs, (&mut f, &mut xs), &mut notes)?;
     let n = f.len().min(xs[0].len());
     if f.len() != xs[0].len() {
         notes.push(format!(
@@ -513,4 +510,49 @@ pub fn align(response: &Series, force: &Series, delay_s: f64) -> anyhow::Result<
         responses: xs,
         notes,
     })
+}
+
+/// Drops the whole samples of a stated delay from the start of the force (a positive delay) or
+/// of the responses (negative), said in `notes`.
+fn drop_delay(
+    delay_s: f64,
+    fs: f64,
+    (f, xs): (&mut Vec<f64>, &mut [Vec<f64>]),
+    notes: &mut Vec<String>,
+) -> anyhow::Result<()> {
+    let shift = delay_s * fs;
+    let whole = shift.round();
+    if whole != 0.0 {
+        let k = whole.abs() as usize;
+        let (what, len) = if whole > 0.0 {
+            ("force", f.len())
+        } else {
+            ("responses", xs[0].len())
+        };
+        if k >= len {
+            return Err(anyhow::Error::new(SpecError::setting(format!(
+                "$delay_s {delay_s}: the {what} record is only {:.4} s long",
+                len as f64 / fs
+            ))));
+        }
+        if whole > 0.0 {
+            f.drain(..k);
+        } else {
+            for x in xs.iter_mut() {
+                x.drain(..k);
+            }
+        }
+        notes.push(format!(
+            "a delay of {delay_s} s: the first {k} samples of the {what} dropped{}",
+            if (shift - whole).abs() > 1e-6 {
+                format!(
+                    " ({:.3} of a sample at {fs} Hz left unaligned)",
+                    (shift - whole).abs()
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
+    Ok(())
 }
