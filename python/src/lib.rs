@@ -524,29 +524,7 @@ fn track<'py>(
                 axis == Axis::X,
             )?;
             let raw = v.raw.as_ref().map(|r| positions_of(r).0);
-            let mm = if has_scale {
-                let n = v.tracks.centroids.first().map_or(0, Vec::len);
-                let k = v.tracks.centroids.len();
-                let mut a = Array2::<f64>::from_elem((n, k), f64::NAN);
-                let s = host_harness::chain::displacement::DisplacementSettings {
-                    lost_frames: LostFramePolicy::Interpolate,
-                    mm_per_px: 1.0,
-                    axis,
-                    invert: false,
-                };
-                for t in 0..k {
-                    if let Ok(d) = v.displacement(t, &s) {
-                        for (i, (x, lost)) in d.mm.iter().zip(&d.lost).enumerate() {
-                            if !lost {
-                                a[[i, t]] = *x;
-                            }
-                        }
-                    }
-                }
-                Some(a)
-            } else {
-                None
-            };
+            let mm = has_scale.then(|| scaled_displacements(&v, axis));
             Ok((
                 positions_of(&v.tracks),
                 raw,
@@ -567,6 +545,29 @@ fn track<'py>(
     d.set_item("displacement_mm", mm.map(|m| m.into_pyarray(py)))?;
     d.set_item("view_report", report)?;
     Ok(d)
+}
+
+/// Each target's displacement in the scene's scale (frame by target; a lost frame NaN).
+fn scaled_displacements(v: &host_harness::analysis::view::Viewed, axis: Axis) -> Array2<f64> {
+    let n = v.tracks.centroids.first().map_or(0, Vec::len);
+    let k = v.tracks.centroids.len();
+    let mut a = Array2::<f64>::from_elem((n, k), f64::NAN);
+    let s = host_harness::chain::displacement::DisplacementSettings {
+        lost_frames: LostFramePolicy::Interpolate,
+        mm_per_px: 1.0,
+        axis,
+        invert: false,
+    };
+    for t in 0..k {
+        if let Ok(d) = v.displacement(t, &s) {
+            for (i, (x, lost)) in d.mm.iter().zip(&d.lost).enumerate() {
+                if !lost {
+                    a[[i, t]] = *x;
+                }
+            }
+        }
+    }
+    a
 }
 
 /// `frf(x, y, fs, ...)`: H1 and coherence by firmware-core's Welch estimator; returns
@@ -716,29 +717,7 @@ fn analyze<'py>(
             let fps = rates.fps;
             let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
             let c = oma_frames::compute(&req, &source)?;
-            let report = host_harness::analysis::oma::run::report(
-                &c.result,
-                &c.records,
-                &c.settings,
-                &c.viewed.describe(req.displacement.axis == Axis::X),
-            );
-            // the page of `analyze`'s report.html, the figures left out (none are drawn here)
-            let frame = source
-                .frame_at(fps, 0)
-                .ok()
-                .flatten()
-                .and_then(|(_, f)| f.to_image().ok());
-            let html = host_harness::analysis::oma::run::page(
-                &c.result,
-                &c.records,
-                ("analyze", req.displacement.axis == Axis::X),
-                (
-                    frame,
-                    host_harness::analysis::view::reference_markers(&c.viewed),
-                ),
-                Vec::new(),
-                &report,
-            );
+            let (report, html) = analyze_page(&c, &req, &source)?;
             Ok((c, report, fps, html))
         })
         .map_err(py_err)?;
@@ -746,6 +725,41 @@ fn analyze<'py>(
     let d = analysis_dict(py, (c, report, fps))?;
     d.set_item("html", html)?;
     Ok(d)
+}
+
+/// The report and the page of `analyze` without an accelerometer, as the command writes them
+/// (its figures drawn in memory, the same SVGs embedded).
+fn analyze_page(
+    c: &oma_frames::Computed,
+    req: &oma_frames::FramesRequest,
+    source: &host_harness::frames::FrameSource,
+) -> anyhow::Result<(String, String)> {
+    use host_harness::analysis::oma::run;
+    let along_x = req.displacement.axis == Axis::X;
+    let report = run::report(
+        &c.result,
+        &c.records,
+        &c.settings,
+        &c.viewed.describe(along_x),
+    );
+    let frame = source
+        .frame_at(req.fps, 0)
+        .ok()
+        .flatten()
+        .and_then(|(_, f)| f.to_image().ok());
+    let figures = run::figures(&c.result, &c.settings)?;
+    let html = run::page(
+        &c.result,
+        &c.records,
+        ("analyze", along_x),
+        (
+            frame,
+            host_harness::analysis::view::reference_markers(&c.viewed),
+        ),
+        host_harness::plots::page_figures(&figures),
+        &report,
+    );
+    Ok((report, html))
 }
 
 /// The dict `analyze` returns.
@@ -989,28 +1003,8 @@ fn ema<'py>(
     out: Option<String>,
     force: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use host_harness::analysis::ema::ExpChoice;
-    use host_harness::analysis::modal::FrfForm;
     use host_harness::jobs::{EmaInput, EmaSpec};
-    let exp = match exp_window {
-        "off" => ExpChoice::Off,
-        "auto" => ExpChoice::Auto,
-        v => ExpChoice::End(v.parse::<f64>().map_err(|_| {
-            bad(format!(
-                "exp_window `{v}`: \"off\", \"auto\" or the window's value at the block's end"
-            ))
-        })?),
-    };
-    let form = match response_quantity {
-        "displacement" => FrfForm::Receptance,
-        "velocity" => FrfForm::Mobility,
-        "acceleration" => FrfForm::Accelerance,
-        q => {
-            return Err(bad(format!(
-                "response_quantity `{q}`: displacement, velocity or acceleration"
-            )))
-        }
-    };
+    let (exp, form) = ema_choices(exp_window, response_quantity)?;
     let write = out.is_some();
     let input = EmaInput {
         response: response.into(),
@@ -1041,13 +1035,80 @@ fn ema<'py>(
                 spec.run()?;
             }
             let (r, report) = spec.compute()?;
-            let html =
-                host_harness::analysis::ema::run::page(spec.request(), &r, &report, Vec::new());
+            // the command's page, its figures drawn in memory
+            let figures = host_harness::analysis::ema::run::figures(spec.request(), &r)?;
+            let html = host_harness::analysis::ema::run::page(
+                spec.request(),
+                &r,
+                &report,
+                host_harness::plots::page_figures(&figures),
+            );
             Ok((r, report, names, html))
         })
         .map_err(py_err)?;
     let d = PyDict::new(py);
-    let n = r.modes.len();
+    d.set_item("modes", ema_modes(py, &r)?)?;
+    let (shapes, abs_u) = ema_shapes(&r, names.len());
+    d.set_item("shapes", shapes.into_pyarray(py))?;
+    d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
+    d.set_item("responses", names)?;
+    d.set_item("freq_hz", r.freq_hz.clone().into_pyarray(py))?;
+    ema_spectra(py, &r, &d)?;
+    d.set_item("notes", r.notes.clone())?;
+    d.set_item(
+        "hits_left_out",
+        r.hits
+            .as_ref()
+            .map(|h| {
+                h.hits
+                    .iter()
+                    .filter_map(|x| x.left_out.clone())
+                    .collect::<Vec<_>>()
+            })
+            .unwrap_or_default(),
+    )?;
+    d.set_item("report", report)?;
+    d.set_item("html", html)?;
+    Ok(d)
+}
+
+/// `exp_window` and `response_quantity` as the library's choices.
+fn ema_choices(
+    exp_window: &str,
+    response_quantity: &str,
+) -> PyResult<(
+    host_harness::analysis::ema::ExpChoice,
+    host_harness::analysis::modal::FrfForm,
+)> {
+    use host_harness::analysis::ema::ExpChoice;
+    use host_harness::analysis::modal::FrfForm;
+    let exp = match exp_window {
+        "off" => ExpChoice::Off,
+        "auto" => ExpChoice::Auto,
+        v => ExpChoice::End(v.parse::<f64>().map_err(|_| {
+            bad(format!(
+                "exp_window `{v}`: \"off\", \"auto\" or the window's value at the block's end"
+            ))
+        })?),
+    };
+    let form = match response_quantity {
+        "displacement" => FrfForm::Receptance,
+        "velocity" => FrfForm::Mobility,
+        "acceleration" => FrfForm::Accelerance,
+        q => {
+            return Err(bad(format!(
+                "response_quantity `{q}`: displacement, velocity or acceleration"
+            )))
+        }
+    };
+    Ok((exp, form))
+}
+
+/// The modes' columns: number, frequency, damping, band, and each interval's u, lo and hi.
+fn ema_modes<'py>(
+    py: Python<'py>,
+    r: &host_harness::analysis::ema::EmaResult,
+) -> PyResult<Bound<'py, PyDict>> {
     let cell = |i: Option<Interval>| i.map_or([f64::NAN; 3], |i| [i.u, i.lo, i.hi]);
     let modes = PyDict::new(py);
     let col = |f: &dyn Fn(&host_harness::analysis::ema::EmaMode) -> f64| -> Vec<f64> {
@@ -1081,8 +1142,15 @@ fn ema<'py>(
             col(&|m| cell(m.damping_interval)[k]).into_pyarray(py),
         )?;
     }
-    d.set_item("modes", modes)?;
-    let k = names.len();
+    Ok(modes)
+}
+
+/// Each mode's shape over the `k` responses, and its modulus's standard uncertainty.
+fn ema_shapes(
+    r: &host_harness::analysis::ema::EmaResult,
+    k: usize,
+) -> (Array2<Complex64>, Array2<f64>) {
+    let n = r.modes.len();
     let mut shapes = Array2::<Complex64>::zeros((n, k));
     let mut abs_u = Array2::<f64>::from_elem((n, k), f64::NAN);
     for (i, m) in r.modes.iter().enumerate() {
@@ -1095,10 +1163,15 @@ fn ema<'py>(
             }
         }
     }
-    d.set_item("shapes", shapes.into_pyarray(py))?;
-    d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
-    d.set_item("responses", names)?;
-    d.set_item("freq_hz", r.freq_hz.clone().into_pyarray(py))?;
+    (shapes, abs_u)
+}
+
+/// H1, H2 and the coherence per response and line, into `d`.
+fn ema_spectra(
+    py: Python<'_>,
+    r: &host_harness::analysis::ema::EmaResult,
+    d: &Bound<'_, PyDict>,
+) -> PyResult<()> {
     let lines = r.freq_hz.len();
     let matrix = |rows: &[Vec<Complex64>]| {
         let mut a = Array2::<Complex64>::zeros((rows.len(), lines));
@@ -1118,22 +1191,7 @@ fn ema<'py>(
         }
     }
     d.set_item("coherence", coh.into_pyarray(py))?;
-    d.set_item("notes", r.notes.clone())?;
-    d.set_item(
-        "hits_left_out",
-        r.hits
-            .as_ref()
-            .map(|h| {
-                h.hits
-                    .iter()
-                    .filter_map(|x| x.left_out.clone())
-                    .collect::<Vec<_>>()
-            })
-            .unwrap_or_default(),
-    )?;
-    d.set_item("report", report)?;
-    d.set_item("html", html)?;
-    Ok(d)
+    Ok(())
 }
 
 /// What the decoder thread of a [`FrameReader`] sends: a labelled frame, or its error (whether

@@ -263,7 +263,7 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
 }
 
 /// The figures: the first four responses' |H1| with the fit, and the stabilisation diagram.
-fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plots::Figure>> {
+pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let (lo, hi) = req.settings.band_hz;
     let k: Vec<usize> = (0..r.freq_hz.len())
         .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)

@@ -105,7 +105,7 @@ pub fn write(
 }
 
 /// The singular values' figure (FDD's picks marked) and the SSI-cov stabilisation diagram.
-fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crate::plots::Figure>> {
+pub fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let mut figures = Vec::new();
     let picks: Vec<(f64, f64, String)> = r
         .modes
