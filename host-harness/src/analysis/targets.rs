@@ -168,29 +168,7 @@ fn band_modes(
     (acc_frf, acc_modes): (&crate::chain::frf::Frf, &[crate::chain::frf::PickedMode]),
     analyses: &[Result<Analysis, String>],
 ) -> Vec<TargetMode> {
-    // the pole: the plain fit's, or with several segments the smoothed fit's of the intervals
-    // (the window's resolution bias removed; the intervals are of it), when the plain fit is
-    // resolvable
-    let fit = |f: &crate::chain::frf::Frf, u: Option<&FrfModeUncertainty>| {
-        let plain = modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
-            .ok()
-            .filter(|m| resolvable(&m.pole, band, &f.freq_hz))?;
-        Some(match u {
-            // enough segments for intervals but none of the damping: the mode is narrower
-            // than a segment's line (or the fit failed), and no fit's damping is to be trusted
-            Some(FrfModeUncertainty {
-                f_fit: Some(fh),
-                damping: None,
-                ..
-            }) if f.segments as usize >= super::frf_uncertainty::MIN_SEGMENTS => (*fh, None),
-            Some(FrfModeUncertainty {
-                f_fit: Some(fh),
-                damping_fit: Some(z),
-                ..
-            }) if f.segments > 1 => (*fh, Some(*z)),
-            _ => (plain.pole.f_hz, Some(plain.pole.damping)),
-        })
-    };
+    let fit = |f: &crate::chain::frf::Frf, u: Option<&FrfModeUncertainty>| band_pole(f, u, band);
     let cells = |i: &Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
     let row_intervals = |u: Option<&FrfModeUncertainty>| {
         u.map_or([None; 3], |u| {
@@ -247,6 +225,34 @@ fn band_modes(
         });
     }
     modes
+}
+
+/// The pole of `band` in one FRF, `(f_hz, damping)`: the plain fit's, or with several segments
+/// the smoothed fit's of the intervals (the window's resolution bias removed; the intervals are
+/// of it), when the plain fit is resolvable; `None` when it is not.
+fn band_pole(
+    f: &crate::chain::frf::Frf,
+    u: Option<&FrfModeUncertainty>,
+    band: (f64, f64),
+) -> Option<(f64, Option<f64>)> {
+    let plain = modal::fit_mode(&f.freq_hz, &f.h1, band, FrfForm::Accelerance)
+        .ok()
+        .filter(|m| resolvable(&m.pole, band, &f.freq_hz))?;
+    Some(match u {
+        // enough segments for intervals but none of the damping: the mode is narrower
+        // than a segment's line (or the fit failed), and no fit's damping is to be trusted
+        Some(FrfModeUncertainty {
+            f_fit: Some(fh),
+            damping: None,
+            ..
+        }) if f.segments as usize >= super::frf_uncertainty::MIN_SEGMENTS => (*fh, None),
+        Some(FrfModeUncertainty {
+            f_fit: Some(fh),
+            damping_fit: Some(z),
+            ..
+        }) if f.segments > 1 => (*fh, Some(*z)),
+        _ => (plain.pole.f_hz, Some(plain.pole.damping)),
+    })
 }
 
 /// The shape in `band`: one pole fitted over every analysed target's FRF, the components of
@@ -354,16 +360,7 @@ pub fn read_shape_reference(
         .records()
         .collect::<Result<_, _>>()
         .map_err(|e| bad_input(format!("{name}: {e}")))?;
-    // a shapes.csv with a `method` column (an output-only analysis gives one shape per mode
-    // and method): the rows of one method, h1 first, then ssi, efdd, fdd, else the first seen
-    let method = col("method").and_then(|c| {
-        let seen: Vec<&str> = records.iter().filter_map(|r| r.get(c)).collect();
-        ["h1", "ssi", "efdd", "fdd"]
-            .into_iter()
-            .find(|m| seen.contains(m))
-            .or(seen.first().copied())
-            .map(|m| (c, m.to_string()))
-    });
+    let method = col("method").and_then(|c| preferred_method(&records, c));
     let mut raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>> = Default::default();
     for record in records {
         if let Some((c, m)) = &method {
@@ -389,6 +386,27 @@ pub fn read_shape_reference(
     if raw.is_empty() {
         return Err(bad_input(format!("{name}: no shape rows")));
     }
+    complete_shapes(raw, k, &name.to_string())
+}
+
+/// In a shapes.csv with a `method` column (an output-only analysis gives one shape per mode
+/// and method), the rows of one method: h1 first, then ssi, efdd, fdd, else the first seen.
+fn preferred_method(records: &[csv::StringRecord], c: usize) -> Option<(usize, String)> {
+    let seen: Vec<&str> = records.iter().filter_map(|r| r.get(c)).collect();
+    ["h1", "ssi", "efdd", "fdd"]
+        .into_iter()
+        .find(|m| seen.contains(m))
+        .or(seen.first().copied())
+        .map(|m| (c, m.to_string()))
+}
+
+/// Every mode's reference shape, complete (a component for each of the `k` targets) and not
+/// all zero.
+fn complete_shapes(
+    raw: std::collections::BTreeMap<usize, Vec<Option<Complex64>>>,
+    k: usize,
+    name: &str,
+) -> anyhow::Result<ShapeReference> {
     raw.into_iter()
         .map(|(mode, v)| {
             let missing: Vec<usize> = (0..k).filter(|&t| v[t].is_none()).map(|t| t + 1).collect();

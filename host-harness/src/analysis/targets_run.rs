@@ -179,36 +179,7 @@ fn page(
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
     let markers = super::track_run::markers(tracks, windows);
-    let iv = |i: Option<(f64, f64, f64)>, d: usize| {
-        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
-    };
-    let rows: Vec<Vec<String>> = a
-        .modes
-        .iter()
-        .map(|m| {
-            vec![
-                m.target.to_string(),
-                m.mode.to_string(),
-                m.f_hz.map_or(String::new(), |f| format!("{f:.4}")),
-                iv(m.intervals[0], 4),
-                format!("{:.4}", m.amplitude),
-                m.damping.map_or(String::new(), |d| format!("{d:.5}")),
-                iv(m.intervals[1], 5),
-            ]
-        })
-        .collect();
-    let head: Vec<String> = [
-        "target",
-        "mode",
-        "f (Hz)",
-        "95 % interval",
-        "|H1|",
-        "damping",
-        "95 % interval",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let (head, rows) = modes_table(a);
     let fitted: Vec<(String, Vec<Complex64>)> = a
         .shapes
         .iter()
@@ -251,6 +222,42 @@ fn page(
         text: text.to_string(),
         references,
     })
+}
+
+/// The page's table of modes: per target and mode, frequency, |H1|, damping and their 95 %
+/// intervals.
+fn modes_table(a: &TargetAnalysis) -> (Vec<String>, Vec<Vec<String>>) {
+    let iv = |i: Option<(f64, f64, f64)>, d: usize| {
+        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
+    };
+    let rows: Vec<Vec<String>> = a
+        .modes
+        .iter()
+        .map(|m| {
+            vec![
+                m.target.to_string(),
+                m.mode.to_string(),
+                m.f_hz.map_or(String::new(), |f| format!("{f:.4}")),
+                iv(m.intervals[0], 4),
+                format!("{:.4}", m.amplitude),
+                m.damping.map_or(String::new(), |d| format!("{d:.5}")),
+                iv(m.intervals[1], 5),
+            ]
+        })
+        .collect();
+    let head: Vec<String> = [
+        "target",
+        "mode",
+        "f (Hz)",
+        "95 % interval",
+        "|H1|",
+        "damping",
+        "95 % interval",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    (head, rows)
 }
 
 /// The CSV files and the UFF of a multi-target analysis.

@@ -82,6 +82,45 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
         along_x,
     )?;
     let tracks = viewed.tracks.clone();
+    let (records, mm, lost) = records_of(req, &viewed)?;
+    let n = records.channels[0].len();
+    let settings = settings(req, n)?;
+    let mut result = super::analyze(&records.channels, &settings)?;
+    if let Some(sc) = &viewed.scales {
+        let u: Vec<f64> = records
+            .targets
+            .iter()
+            .map(|(t, _)| sc.per_target.get(t - 1).map_or(0.0, |p| p.1))
+            .collect();
+        if super::uncertainty::fold_scale(&mut result.modes, &u) {
+            result.notes.push(
+                "the scale's standard uncertainty (each target's, above) is folded into the \
+                 amplitude and shape-magnitude intervals, taken as fully correlated between \
+                 the targets: the amplitude (a power) gets twice the shape-weighted mean"
+                    .to_string(),
+            );
+        }
+    }
+    Ok(Computed {
+        tracks,
+        records,
+        settings,
+        result,
+        displacement: mm,
+        lost,
+        viewed,
+    })
+}
+
+/// Each target's displacement as a record of the analysis, or why it was left out; with each
+/// target's displacement (`None` left out) and lost frames. No target left: an error naming
+/// why each was left out.
+#[allow(clippy::type_complexity)]
+fn records_of(
+    req: &FramesRequest,
+    viewed: &crate::analysis::view::Viewed,
+) -> anyhow::Result<(Records, Vec<Option<Vec<f64>>>, Vec<Vec<bool>>)> {
+    let tracks = &viewed.tracks;
     let mut records = Records {
         fs_hz: req.fps,
         unit: if req.scaled { "mm" } else { "px" }.to_string(),
@@ -132,33 +171,7 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
             why.join("; ")
         )));
     }
-    let n = records.channels[0].len();
-    let settings = settings(req, n)?;
-    let mut result = super::analyze(&records.channels, &settings)?;
-    if let Some(sc) = &viewed.scales {
-        let u: Vec<f64> = records
-            .targets
-            .iter()
-            .map(|(t, _)| sc.per_target.get(t - 1).map_or(0.0, |p| p.1))
-            .collect();
-        if super::uncertainty::fold_scale(&mut result.modes, &u) {
-            result.notes.push(
-                "the scale's standard uncertainty (each target's, above) is folded into the \
-                 amplitude and shape-magnitude intervals, taken as fully correlated between \
-                 the targets: the amplitude (a power) gets twice the shape-weighted mean"
-                    .to_string(),
-            );
-        }
-    }
-    Ok(Computed {
-        tracks,
-        records,
-        settings,
-        result,
-        displacement: mm,
-        lost,
-        viewed,
-    })
+    Ok((records, mm, lost))
 }
 
 /// Tracks the targets and runs the output-only analysis; writes its outputs.
