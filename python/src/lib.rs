@@ -1046,14 +1046,26 @@ fn ema<'py>(
             Ok((r, report, names, html))
         })
         .map_err(py_err)?;
+    ema_dict(py, &r, report, names, html)
+}
+
+/// The dict `ema` returns: modes, shapes, spectra, notes, the hits left out, the report and
+/// the page.
+fn ema_dict<'py>(
+    py: Python<'py>,
+    r: &host_harness::analysis::ema::EmaResult,
+    report: String,
+    names: Vec<String>,
+    html: String,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("modes", ema_modes(py, &r)?)?;
-    let (shapes, abs_u) = ema_shapes(&r, names.len());
+    d.set_item("modes", ema_modes(py, r)?)?;
+    let (shapes, abs_u) = ema_shapes(r, names.len());
     d.set_item("shapes", shapes.into_pyarray(py))?;
     d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
     d.set_item("responses", names)?;
     d.set_item("freq_hz", r.freq_hz.clone().into_pyarray(py))?;
-    ema_spectra(py, &r, &d)?;
+    ema_spectra(py, r, &d)?;
     d.set_item("notes", r.notes.clone())?;
     d.set_item(
         "hits_left_out",

@@ -197,42 +197,50 @@ impl CameraMotion {
         for n in &self.notes {
             let _ = writeln!(s, "  note: {n}");
         }
-        let axis = if along_x { "x" } else { "y" };
-        // whether the references took (nearly) all of every target's motion
-        let mut all_taken = !raw.centroids.is_empty();
-        for (t, (r, c)) in raw.centroids.iter().zip(&compensated.centroids).enumerate() {
-            let (mut raw_v, mut cam_v, mut left_v) = (Vec::new(), Vec::new(), Vec::new());
-            for (a, b) in r.iter().zip(c) {
-                if let (Some(p), Some(q)) = (a.position(), b.position()) {
-                    let (p, q) = if along_x { (p.0, q.0) } else { (p.1, q.1) };
-                    raw_v.push(f64::from(p));
-                    cam_v.push(f64::from(p) - f64::from(q));
-                    left_v.push(f64::from(q));
-                }
-            }
-            let (cam, all) = (centred_rms(&cam_v), centred_rms(&raw_v));
-            all_taken &= all > 0.0 && centred_rms(&left_v) < TAKEN_ALL * all;
-            let _ = writeln!(
-                s,
-                "  target {}: the camera moved it {cam:.3} px RMS along {axis}, {:.0} % of its \
-                 raw motion's RMS ({all:.3} px)",
-                t + 1,
-                if all > 0.0 { 100.0 * cam / all } else { 0.0 }
-            );
-        }
-        if all_taken {
-            let _ = writeln!(
-                s,
-                "  warning: the references move with the targets: the camera's motion found \
-                 from them takes over {:.0} % of every target's motion along {axis}; unless \
-                 the camera shook and the structure stood still, references are on the \
-                 structure (or on parts that move with it) and the structure's own motion was \
-                 removed: place them on parts of the scene that do not move",
-                100.0 * (1.0 - TAKEN_ALL)
-            );
-        }
+        s.push_str(&share_per_target(raw, compensated, along_x));
         s
     }
+}
+
+/// Per target, how much of its raw motion along the axis was the camera's; a warning when the
+/// references took (nearly) all of every target's motion.
+fn share_per_target(raw: &Tracks, compensated: &Tracks, along_x: bool) -> String {
+    let mut s = String::new();
+    let axis = if along_x { "x" } else { "y" };
+    // whether the references took (nearly) all of every target's motion
+    let mut all_taken = !raw.centroids.is_empty();
+    for (t, (r, c)) in raw.centroids.iter().zip(&compensated.centroids).enumerate() {
+        let (mut raw_v, mut cam_v, mut left_v) = (Vec::new(), Vec::new(), Vec::new());
+        for (a, b) in r.iter().zip(c) {
+            if let (Some(p), Some(q)) = (a.position(), b.position()) {
+                let (p, q) = if along_x { (p.0, q.0) } else { (p.1, q.1) };
+                raw_v.push(f64::from(p));
+                cam_v.push(f64::from(p) - f64::from(q));
+                left_v.push(f64::from(q));
+            }
+        }
+        let (cam, all) = (centred_rms(&cam_v), centred_rms(&raw_v));
+        all_taken &= all > 0.0 && centred_rms(&left_v) < TAKEN_ALL * all;
+        let _ = writeln!(
+            s,
+            "  target {}: the camera moved it {cam:.3} px RMS along {axis}, {:.0} % of its \
+             raw motion's RMS ({all:.3} px)",
+            t + 1,
+            if all > 0.0 { 100.0 * cam / all } else { 0.0 }
+        );
+    }
+    if all_taken {
+        let _ = writeln!(
+            s,
+            "  warning: the references move with the targets: the camera's motion found \
+             from them takes over {:.0} % of every target's motion along {axis}; unless \
+             the camera shook and the structure stood still, references are on the \
+             structure (or on parts that move with it) and the structure's own motion was \
+             removed: place them on parts of the scene that do not move",
+            100.0 * (1.0 - TAKEN_ALL)
+        );
+    }
+    s
 }
 
 /// A target is taken over by the references when what is left of its motion after the
@@ -299,6 +307,68 @@ pub fn estimate(
                 .collect()
         })
         .collect();
+    let (avail, mut left_out) = usable_references(refs, &pos);
+    let anchors = anchors(&pos, &avail);
+    let model = match asked {
+        Some(m) => m,
+        None if avail.len() >= 2 => Model::Similarity,
+        None => Model::Translation,
+    };
+    if avail.len() < model.minimum() {
+        return Err(too_few(model, &avail, &left_out, n_refs));
+    }
+    let (kept, tolerance, notes) = consensus(&pos, &anchors, model, &avail, &left_out)?;
+    let all_frames: Vec<usize> = (0..frames).collect();
+    let dev = per_reference_deviation(&pos, &anchors, model, &kept, &all_frames);
+    for &r in &avail {
+        if !kept.contains(&r) {
+            left_out.push((
+                r,
+                format!(
+                    "moves against the others: RMS {:.3} px from the camera's motion they give \
+                     (static below {tolerance:.3} px)",
+                    dev[r]
+                ),
+            ));
+        }
+    }
+    left_out.sort_by_key(|(r, _)| *r);
+    let (mut transforms, mut residual_px, mut seen) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut fallback_frames, mut frames_without) = (0, 0);
+    for k in 0..frames {
+        let (h, res, n) = fit_frame(&pos, &anchors, model, &kept, k);
+        match (h, n) {
+            (None, _) => frames_without += 1,
+            (Some(_), n) if n < model.minimum() => fallback_frames += 1,
+            _ => {}
+        }
+        transforms.push(h);
+        residual_px.push(res);
+        seen.push(n);
+    }
+    Ok(CameraMotion {
+        model,
+        transforms,
+        residual_px,
+        seen,
+        used: kept.iter().map(|r| r + 1).collect(),
+        left_out: left_out.into_iter().map(|(r, w)| (r + 1, w)).collect(),
+        deviation_px: dev,
+        tolerance_px: tolerance,
+        fallback_frames,
+        frames_without,
+        centre: (size.0 as f64 / 2.0 - 0.5, size.1 as f64 / 2.0 - 0.5),
+        notes,
+    })
+}
+
+/// The references lost in at most 5 % of the frames, and those left out (index, why).
+#[allow(clippy::type_complexity)]
+fn usable_references(
+    refs: &Tracks,
+    pos: &[Vec<Option<(f64, f64)>>],
+) -> (Vec<usize>, Vec<(usize, String)>) {
+    let frames = pos.first().map_or(0, Vec::len);
     let mut left_out: Vec<(usize, String)> = Vec::new();
     let mut avail: Vec<usize> = Vec::new();
     for (r, p) in pos.iter().enumerate() {
@@ -316,9 +386,14 @@ pub fn estimate(
             avail.push(r);
         }
     }
-    // the anchors: the references in one frame (positions of one pose are what one map takes
-    // to every other frame), the frame nearest their median positions among those that see
-    // the most of them
+    (avail, left_out)
+}
+
+/// The anchors: the references in one frame (positions of one pose are what one map takes to
+/// every other frame), the frame nearest their median positions among those that see the most
+/// of them.
+fn anchors(pos: &[Vec<Option<(f64, f64)>>], avail: &[usize]) -> Vec<(f64, f64)> {
+    let (n_refs, frames) = (pos.len(), pos.first().map_or(0, Vec::len));
     let medians: Vec<(f64, f64)> = pos
         .iter()
         .map(|p| {
@@ -343,7 +418,7 @@ pub fn estimate(
         })
         .max_by(|a, b| a.1.cmp(&b.1).then(b.2.total_cmp(&a.2)))
         .map_or(0, |(k, _, _)| k);
-    let anchors: Vec<(f64, f64)> = (0..n_refs)
+    (0..n_refs)
         .map(|r| {
             pos[r]
                 .get(anchor_frame)
@@ -351,56 +426,70 @@ pub fn estimate(
                 .flatten()
                 .unwrap_or(medians[r])
         })
+        .collect()
+}
+
+/// References by name: `r1, r3`.
+fn name(rs: &[usize]) -> String {
+    rs.iter()
+        .map(|r| format!("r{}", r + 1))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Too few references stay for `model`: which remain and which were left out, and why.
+fn too_few(
+    model: Model,
+    have: &[usize],
+    left_out: &[(usize, String)],
+    n_refs: usize,
+) -> anyhow::Error {
+    let out: Vec<String> = left_out
+        .iter()
+        .map(|(r, w)| format!("r{} {w}", r + 1))
         .collect();
-    let name = |rs: &[usize]| {
-        rs.iter()
-            .map(|r| format!("r{}", r + 1))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let model = match asked {
-        Some(m) => m,
-        None if avail.len() >= 2 => Model::Similarity,
-        None => Model::Translation,
-    };
-    let too_few = |have: &[usize], left_out: &[(usize, String)]| {
-        let out: Vec<String> = left_out
-            .iter()
-            .map(|(r, w)| format!("r{} {w}", r + 1))
-            .collect();
-        vibcam_readers::bad_input(format!(
-            "the camera's motion as a {} needs {} reference(s) that stay; {} of {n_refs} \
-             remain ({}){}",
-            model.name(),
-            model.minimum(),
-            have.len(),
-            if have.is_empty() {
-                "none".to_string()
-            } else {
-                name(have)
-            },
-            if out.is_empty() {
-                String::new()
-            } else {
-                format!("; left out: {}", out.join("; "))
-            }
-        ))
-    };
-    if avail.len() < model.minimum() {
-        return Err(too_few(&avail, &left_out));
-    }
+    vibcam_readers::bad_input(format!(
+        "the camera's motion as a {} needs {} reference(s) that stay; {} of {n_refs} \
+         remain ({}){}",
+        model.name(),
+        model.minimum(),
+        have.len(),
+        if have.is_empty() {
+            "none".to_string()
+        } else {
+            name(have)
+        },
+        if out.is_empty() {
+            String::new()
+        } else {
+            format!("; left out: {}", out.join("; "))
+        }
+    ))
+}
+
+/// The references kept: the minimal set most references agree with over the record (a
+/// sample of its frames), then those within a tolerance set by the kept ones' own deviation;
+/// with that tolerance and the notes. Two agreements as large are a disagreement: an error.
+fn consensus(
+    pos: &[Vec<Option<(f64, f64)>>],
+    anchors: &[(f64, f64)],
+    model: Model,
+    avail: &[usize],
+    left_out: &[(usize, String)],
+) -> anyhow::Result<(Vec<usize>, f64, Vec<String>)> {
+    let frames = pos.first().map_or(0, Vec::len);
     let mut notes = Vec::new();
     // consensus over the record: the minimal set most references agree with
     let step = (frames / CONSENSUS_FRAMES).max(1);
     let sample: Vec<usize> = (0..frames).step_by(step).collect();
     let deviations = |set: &[usize], k_frames: &[usize]| -> Vec<f64> {
-        per_reference_deviation(&pos, &anchors, model, set, k_frames)
+        per_reference_deviation(pos, anchors, model, set, k_frames)
     };
     let (kept, tolerance) = if avail.len() > model.minimum() {
         // each minimal set's agreeing references; the largest agreement wins, and two
         // different agreements as large are a disagreement nobody can settle
         let mut found: Vec<(Vec<usize>, f64)> = Vec::new();
-        for set in subsets(&avail, model.minimum()) {
+        for set in subsets(avail, model.minimum()) {
             let dev = deviations(&set, &sample);
             let inliers: Vec<usize> = avail
                 .iter()
@@ -443,7 +532,7 @@ pub fn estimate(
         }
         let kept = top.first().map(|t| (*t).clone()).unwrap_or_default();
         if kept.len() < model.minimum() {
-            return Err(too_few(&kept, &left_out));
+            return Err(too_few(model, &kept, left_out, pos.len()));
         }
         // second pass: the kept references' own deviation sets the tolerance
         let dev = deviations(&kept, &sample);
@@ -463,50 +552,9 @@ pub fn estimate(
             model.name(),
             model.minimum() + 2
         ));
-        (avail.clone(), TOLERANCE_PX)
+        (avail.to_vec(), TOLERANCE_PX)
     };
-    let all_frames: Vec<usize> = (0..frames).collect();
-    let dev = deviations(&kept, &all_frames);
-    for &r in &avail {
-        if !kept.contains(&r) {
-            left_out.push((
-                r,
-                format!(
-                    "moves against the others: RMS {:.3} px from the camera's motion they give \
-                     (static below {tolerance:.3} px)",
-                    dev[r]
-                ),
-            ));
-        }
-    }
-    left_out.sort_by_key(|(r, _)| *r);
-    let (mut transforms, mut residual_px, mut seen) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut fallback_frames, mut frames_without) = (0, 0);
-    for k in 0..frames {
-        let (h, res, n) = fit_frame(&pos, &anchors, model, &kept, k);
-        match (h, n) {
-            (None, _) => frames_without += 1,
-            (Some(_), n) if n < model.minimum() => fallback_frames += 1,
-            _ => {}
-        }
-        transforms.push(h);
-        residual_px.push(res);
-        seen.push(n);
-    }
-    Ok(CameraMotion {
-        model,
-        transforms,
-        residual_px,
-        seen,
-        used: kept.iter().map(|r| r + 1).collect(),
-        left_out: left_out.into_iter().map(|(r, w)| (r + 1, w)).collect(),
-        deviation_px: dev,
-        tolerance_px: tolerance,
-        fallback_frames,
-        frames_without,
-        centre: (size.0 as f64 / 2.0 - 0.5, size.1 as f64 / 2.0 - 0.5),
-        notes,
-    })
+    Ok((kept, tolerance, notes))
 }
 
 /// Frame `k`'s map fitted to the references of `set` seen there (a translation when fewer than

@@ -398,6 +398,34 @@ pub fn common_motion_notes(modes: &[OmaMode], svd: &fdd::Svd, s: &OmaSettings) -
     out
 }
 
+/// The nearest intermodulation product `a fa + b fb` of two lower modes (odd order up to 5)
+/// to `hi` within its tolerance `tol`: the two modes, `a`, `b` and its frequency.
+#[allow(clippy::type_complexity)]
+fn nearest_product<'a>(
+    hi: &OmaMode,
+    lower: &[&'a OmaMode],
+    tol: &dyn Fn(f64, &OmaMode) -> f64,
+) -> Option<(&'a OmaMode, &'a OmaMode, i32, i32, f64)> {
+    let mut product: Option<(&OmaMode, &OmaMode, i32, i32, f64)> = None;
+    for (i, fa) in lower.iter().enumerate() {
+        for fb in &lower[i + 1..] {
+            for (a, b) in (-5i32..=5).flat_map(|a| (-5i32..=5).map(move |b| (a, b))) {
+                let order = a.abs() + b.abs();
+                if a == 0 || b == 0 || order % 2 == 0 || order > 5 {
+                    continue;
+                }
+                let f = f64::from(a) * fa.f_hz + f64::from(b) * fb.f_hz;
+                let t = tol(f64::from(a.abs()), fa).max(tol(f64::from(b.abs()), fb));
+                let nearer = product.is_none_or(|p| (hi.f_hz - f).abs() < (hi.f_hz - p.4).abs());
+                if f > 0.0 && (hi.f_hz - f).abs() <= t && nearer {
+                    product = Some((fa, fb, a, b, f));
+                }
+            }
+        }
+    }
+    product
+}
+
 /// Notes on modes that may be harmonics of a lower mode of the same method: a frequency within
 /// `max(1.5 lines, n zeta f)` of `n = 2..=7` times the lower mode's (`zeta` its damping, 1 %
 /// where the method gives none) and, with three or more targets, a shape with MAC >= 0.5 to
@@ -461,25 +489,7 @@ pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64, source: RecordSource) -> Ve
         if source != RecordSource::Blob {
             continue;
         }
-        // the nearest product of two lower modes within its tolerance
-        let mut product: Option<(&OmaMode, &OmaMode, i32, i32, f64)> = None;
-        for (i, fa) in lower.iter().enumerate() {
-            for fb in &lower[i + 1..] {
-                for (a, b) in (-5i32..=5).flat_map(|a| (-5i32..=5).map(move |b| (a, b))) {
-                    let order = a.abs() + b.abs();
-                    if a == 0 || b == 0 || order % 2 == 0 || order > 5 {
-                        continue;
-                    }
-                    let f = f64::from(a) * fa.f_hz + f64::from(b) * fb.f_hz;
-                    let t = tol(f64::from(a.abs()), fa).max(tol(f64::from(b.abs()), fb));
-                    let nearer =
-                        product.is_none_or(|p| (hi.f_hz - f).abs() < (hi.f_hz - p.4).abs());
-                    if f > 0.0 && (hi.f_hz - f).abs() <= t && nearer {
-                        product = Some((fa, fb, a, b, f));
-                    }
-                }
-            }
-        }
+        let product = nearest_product(hi, &lower, &tol);
         if let Some((fa, fb, a, b, f)) = product {
             let term = |c: i32, m: &OmaMode| match c {
                 1 => format!("f{}", m.mode),
