@@ -153,97 +153,14 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         )));
     }
     let above = (0.05 * level).max(6.0 * noise_sd);
-    // runs above the threshold
-    let mut runs: Vec<(usize, usize)> = Vec::new();
-    let mut k = 0;
-    while k < dev.len() {
-        if dev[k] > above {
-            let s = k;
-            while k < dev.len() && dev[k] > above {
-                k += 1;
-            }
-            match runs.last_mut() {
-                Some(last) if s - last.1 < (last.1 - last.0).max(2) => last.1 = k,
-                _ => runs.push((s, k)),
-            }
-        } else {
-            k += 1;
-        }
-    }
+    let runs = runs_above(&dev, above);
     let pulses: Vec<Pulse> = runs
         .iter()
-        .map(|&(s, e)| {
-            let (mut ip, mut peak) = (s, 0.0f64);
-            for (i, v) in force.iter().enumerate().take(e).skip(s) {
-                if (v - baseline).abs() > peak.abs() {
-                    peak = v - baseline;
-                    ip = i;
-                }
-            }
-            let edge = (0.01 * peak.abs()).max(3.0 * noise_sd);
-            let mut start = s;
-            while start > 0 && dev[start - 1] > edge {
-                start -= 1;
-            }
-            let mut end = e;
-            while end < dev.len() && dev[end] > edge {
-                end += 1;
-            }
-            let top = force[ip];
-            let tol = 1e-9 * peak.abs();
-            let (mut flat, mut run) = (0usize, 0usize);
-            for v in &force[start..end] {
-                run = if (v - top).abs() <= tol { run + 1 } else { 0 };
-                flat = flat.max(run);
-            }
-            Pulse {
-                start,
-                end,
-                peak,
-                flat,
-            }
-        })
+        .map(|&run| pulse_of(force, &dev, run, (baseline, noise_sd)))
         .collect();
-    let gap = (rule.double_gap_s * fs_hz).round() as usize;
-    let mut hits: Vec<Hit> = Vec::new();
-    for p in pulses {
-        match hits.last_mut() {
-            Some(h) if p.start <= h.pulses.last().map_or(0, |q| q.end) + gap => h.pulses.push(p),
-            _ => hits.push(Hit {
-                pulses: vec![p],
-                left_out: None,
-            }),
-        }
-    }
+    let mut hits = hits_of(pulses, (rule.double_gap_s * fs_hz).round() as usize);
     let at = |i: usize| format!("{:.4} s", i as f64 / fs_hz);
-    for (i, h) in hits.iter_mut().enumerate() {
-        let first = h.pulses[0];
-        if let Some(second) = h.pulses.get(1) {
-            h.left_out = Some(format!(
-                "hit {} at {}: a double hit (a second pulse {:.1} ms after the first, {:.0} % of \
-                 its peak)",
-                i + 1,
-                at(first.start),
-                (second.start - first.start) as f64 / fs_hz * 1e3,
-                100.0 * second.peak.abs() / first.peak.abs()
-            ));
-        } else if first.start == 0 {
-            h.left_out = Some(format!(
-                "hit {} at {}: the record starts inside its pulse (its rise is not recorded)",
-                i + 1,
-                at(first.start)
-            ));
-        } else if first.flat >= 2 {
-            h.left_out = Some(format!(
-                "hit {} at {}: the force is clipped ({} samples in a row at its peak {:.4}: the \
-                 hammer's transducer or the ADC saturated)",
-                i + 1,
-                at(first.start),
-                first.flat,
-                first.peak + baseline
-            ));
-        }
-    }
+    leave_out_bad_hits(&mut hits, baseline, fs_hz);
     // one block length for every hit: the shortest spacing between hits, and the last used
     // hit's rest of the record, unless that is less than half the spacing: then that hit is
     // left out rather than every block cut short
@@ -312,6 +229,115 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         pre,
         spikes,
     })
+}
+
+/// The runs of `dev` above `above`, `(start, end)`; a run closer to the last than the last's
+/// length (at least 2 samples) joins it.
+fn runs_above(dev: &[f64], above: f64) -> Vec<(usize, usize)> {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut k = 0;
+    while k < dev.len() {
+        if dev[k] > above {
+            let s = k;
+            while k < dev.len() && dev[k] > above {
+                k += 1;
+            }
+            match runs.last_mut() {
+                Some(last) if s - last.1 < (last.1 - last.0).max(2) => last.1 = k,
+                _ => runs.push((s, k)),
+            }
+        } else {
+            k += 1;
+        }
+    }
+    runs
+}
+
+/// The pulse of a run `(s, e)`: its peak (the baseline removed), its edges where the force falls
+/// to 1 % of the peak (at least 3 noise sd), and the longest run of samples at the peak.
+fn pulse_of(
+    force: &[f64],
+    dev: &[f64],
+    (s, e): (usize, usize),
+    (baseline, noise_sd): (f64, f64),
+) -> Pulse {
+    let (mut ip, mut peak) = (s, 0.0f64);
+    for (i, v) in force.iter().enumerate().take(e).skip(s) {
+        if (v - baseline).abs() > peak.abs() {
+            peak = v - baseline;
+            ip = i;
+        }
+    }
+    let edge = (0.01 * peak.abs()).max(3.0 * noise_sd);
+    let mut start = s;
+    while start > 0 && dev[start - 1] > edge {
+        start -= 1;
+    }
+    let mut end = e;
+    while end < dev.len() && dev[end] > edge {
+        end += 1;
+    }
+    let top = force[ip];
+    let tol = 1e-9 * peak.abs();
+    let (mut flat, mut run) = (0usize, 0usize);
+    for v in &force[start..end] {
+        run = if (v - top).abs() <= tol { run + 1 } else { 0 };
+        flat = flat.max(run);
+    }
+    Pulse {
+        start,
+        end,
+        peak,
+        flat,
+    }
+}
+
+/// Pulses closer than `gap` samples after the last one's end are one hit (a double hit).
+fn hits_of(pulses: Vec<Pulse>, gap: usize) -> Vec<Hit> {
+    let mut hits: Vec<Hit> = Vec::new();
+    for p in pulses {
+        match hits.last_mut() {
+            Some(h) if p.start <= h.pulses.last().map_or(0, |q| q.end) + gap => h.pulses.push(p),
+            _ => hits.push(Hit {
+                pulses: vec![p],
+                left_out: None,
+            }),
+        }
+    }
+    hits
+}
+
+/// A double hit, a hit whose rise the record does not hold, a clipped hit: left out, and why.
+fn leave_out_bad_hits(hits: &mut [Hit], baseline: f64, fs_hz: f64) {
+    let at = |i: usize| format!("{:.4} s", i as f64 / fs_hz);
+    for (i, h) in hits.iter_mut().enumerate() {
+        let first = h.pulses[0];
+        if let Some(second) = h.pulses.get(1) {
+            h.left_out = Some(format!(
+                "hit {} at {}: a double hit (a second pulse {:.1} ms after the first, {:.0} % of \
+                 its peak)",
+                i + 1,
+                at(first.start),
+                (second.start - first.start) as f64 / fs_hz * 1e3,
+                100.0 * second.peak.abs() / first.peak.abs()
+            ));
+        } else if first.start == 0 {
+            h.left_out = Some(format!(
+                "hit {} at {}: the record starts inside its pulse (its rise is not recorded)",
+                i + 1,
+                at(first.start)
+            ));
+        } else if first.flat >= 2 {
+            h.left_out = Some(format!(
+                "hit {} at {}: the force is clipped ({} samples in a row at its peak {:.4}: the \
+                 hammer's transducer or the ADC saturated)",
+                i + 1,
+                at(first.start),
+                first.flat,
+                first.peak + baseline
+            ));
+        }
+    }
 }
 
 /// The force window of a block: the force from half a pulse width before the pulse to half a

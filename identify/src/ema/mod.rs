@@ -239,59 +239,16 @@ pub fn analyse(
     let mut notes = Vec::new();
     let top = s.band_hz.1 * 1.05;
     let (spectra, hits, exp): (Spectra, Option<Hits>, Option<ExpWindow>) = match s.excitation {
-        Excitation::Impact { rule, exp } => {
-            let hits = impact::find(force, fs_hz, rule, force_name)?;
-            let block_s = hits.block as f64 / fs_hz;
-            let ratio = undecayed(responses, &hits);
-            let window = match exp {
-                ExpChoice::Off => None,
-                ExpChoice::End(e) => Some(ExpWindow::ending_at(e, block_s)),
-                ExpChoice::Auto if ratio > 0.05 => Some(ExpWindow::ending_at(0.01, block_s)),
-                ExpChoice::Auto => None,
-            };
-            if window.is_none() && ratio > 0.05 {
-                notes.push(format!(
-                    "the responses have not decayed by the blocks' end (the last tenth's RMS is \
-                     {:.0} % of the largest excursion) and no exponential window was applied: \
-                     leakage widens the peaks and raises the damping",
-                    100.0 * ratio
-                ));
-            }
-            let ahead = precursor(responses, &hits);
-            if ahead > 0.1 {
-                notes.push(format!(
-                    "the responses move before the force's pulses (their RMS before a pulse is \
-                     {:.0} % of their largest excursion after it): the records are not aligned; \
-                     give the delay between their starts (--delay-s, delay_s in Python)",
-                    100.0 * ahead
-                ));
-            }
-            let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, top)?;
-            (sp, Some(hits), window)
-        }
+        Excitation::Impact { rule, exp } => impact_spectra(
+            force,
+            responses,
+            fs_hz,
+            (force_name, rule, exp),
+            top,
+            &mut notes,
+        )?,
         Excitation::Continuous { nperseg } => {
-            let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
-            let rms = (force.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-                / force.len().max(1) as f64)
-                .sqrt();
-            let peak = force.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
-            if rms > 0.0 && peak > 10.0 * rms {
-                notes.push(format!(
-                    "the force's peak is {:.0} times its RMS: it looks like hammer hits, not a \
-                     continuous force; an impact test is analysed hit by hit (--impact, \
-                     impact=True in Python)",
-                    peak / rms
-                ));
-            }
-            let sp = spectra::of_segments(
-                force,
-                responses,
-                fs_hz,
-                nperseg,
-                crate::oma::uncertainty::GROUPS,
-                top,
-            )?;
-            (sp, None, None)
+            continuous_spectra(force, responses, fs_hz, nperseg, top, &mut notes)?
         }
     };
     let frfs = spectra.frfs(None);
@@ -328,89 +285,30 @@ pub fn analyse(
     };
     let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
     // the jackknife: every unit left out in turn
-    let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); chosen.len()];
-    if spectra.units.len() >= 3 && !fitted.is_empty() {
-        for g in 0..spectra.units.len() {
-            let f = spectra.frfs(Some(g));
-            let got = select(&freq, &f.h1, s).ok();
-            let matched: Vec<Option<Pole>> = fitted
-                .iter()
-                .map(|p| {
-                    got.as_ref().and_then(|sel| {
-                        sel.modes
-                            .iter()
-                            .filter(|m| (m.f_hz - p.f_hz).abs() <= 0.02 * p.f_hz)
-                            .min_by(|a, b| {
-                                (a.f_hz - p.f_hz).abs().total_cmp(&(b.f_hz - p.f_hz).abs())
-                            })
-                            .map(pole_of)
-                    })
-                })
-                .collect();
-            let rep_poles: Vec<Pole> = matched
-                .iter()
-                .zip(&fitted)
-                .map(|(m, p)| m.unwrap_or(*p))
-                .collect();
-            let rep_shapes = lsfd::fit(&freq, &f.h1, s.band_hz, &rep_poles, s.form).ok();
-            for (r, m) in matched.iter().enumerate() {
-                let shape = rep_shapes
-                    .as_ref()
-                    .map(|c| c.iter().map(|k| k.residues[r]).collect::<Vec<_>>());
-                reps[r].push(m.and_then(|p| shape.map(|sh| (p, sh))));
-            }
+    let reps = if spectra.units.len() >= 3 && !fitted.is_empty() {
+        replicates(&spectra, &freq, &fitted, s)
+    } else {
+        if !fitted.is_empty() {
+            notes.push(format!(
+                "no intervals: {} {} averaged, the jackknife needs at least 3",
+                spectra.units.len(),
+                if hits.is_some() {
+                    "hits"
+                } else {
+                    "segment groups"
+                }
+            ));
         }
-    } else if !fitted.is_empty() {
-        notes.push(format!(
-            "no intervals: {} {} averaged, the jackknife needs at least 3",
-            spectra.units.len(),
-            if hits.is_some() {
-                "hits"
-            } else {
-                "segment groups"
-            }
-        ));
-    }
+        vec![Vec::new(); chosen.len()]
+    };
     let mut modes = Vec::new();
     for (i, ((band, cl), p)) in chosen.into_iter().zip(&fitted).enumerate() {
         let residues: Vec<Complex64> = constants.iter().map(|c| c.residues[i]).collect();
         let shape = normalise_shape(&residues);
         let pole = unwindowed(*p, exp);
-        let (mut fi, mut di, mut su) = (None, None, None);
-        let r = &reps[i];
-        if !r.is_empty() {
-            if r.iter().all(Option::is_some) {
-                let reps: Vec<(Pole, Vec<Complex64>)> = r.iter().flatten().cloned().collect();
-                let fs: Vec<f64> = reps.iter().map(|(q, _)| unwindowed(*q, exp).f_hz).collect();
-                let ds: Vec<f64> = reps
-                    .iter()
-                    .map(|(q, _)| unwindowed(*q, exp).damping)
-                    .collect();
-                // a frequency is positive: an interval reaching 0 Hz determines nothing
-                fi = jackknife_sized(pole.f_hz, &fs, &unit_sizes).and_then(Interval::of_positive);
-                // a damping ratio is not negative: the interval's lower end at 0 at least
-                di = jackknife_sized(pole.damping, &ds, &unit_sizes).map(|i| Interval {
-                    lo: i.lo.max(0.0),
-                    ..i
-                });
-                let reference = residues
-                    .iter()
-                    .enumerate()
-                    .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
-                    .map_or(0, |(k, _)| k);
-                su = Some(
-                    (0..residues.len())
-                        .map(|k| {
-                            let a: Vec<f64> = reps
-                                .iter()
-                                .map(|(_, sh)| (sh[k] / sh[reference]).norm())
-                                .collect();
-                            jackknife_sized(shape[k].norm(), &a, &unit_sizes)
-                                .map_or(f64::NAN, |v| v.u)
-                        })
-                        .collect(),
-                );
-            } else {
+        let (fi, di, su) = match intervals(pole, (&residues, &shape), &reps[i], exp, &unit_sizes) {
+            Some(v) => v,
+            None => {
                 notes.push(format!(
                     "mode {} ({:.4} Hz): no interval, it was not found with every {} left out",
                     i + 1,
@@ -421,8 +319,9 @@ pub fn analyse(
                         "segment group"
                     }
                 ));
+                (None, None, None)
             }
-        }
+        };
         modes.push(EmaMode {
             mode: i + 1,
             band_hz: band,
@@ -462,4 +361,167 @@ pub fn analyse(
         unit_sizes,
         notes,
     })
+}
+
+/// The spectra of an impact test, hit by hit (the hits found, the exponential window chosen);
+/// notes when the responses have not decayed or move before the pulses.
+#[allow(clippy::type_complexity)]
+fn impact_spectra(
+    force: &[f64],
+    responses: &[Vec<f64>],
+    fs_hz: f64,
+    (force_name, rule, exp): (&str, ImpactRule, ExpChoice),
+    top: f64,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<(Spectra, Option<Hits>, Option<ExpWindow>)> {
+    let hits = impact::find(force, fs_hz, rule, force_name)?;
+    let block_s = hits.block as f64 / fs_hz;
+    let ratio = undecayed(responses, &hits);
+    let window = match exp {
+        ExpChoice::Off => None,
+        ExpChoice::End(e) => Some(ExpWindow::ending_at(e, block_s)),
+        ExpChoice::Auto if ratio > 0.05 => Some(ExpWindow::ending_at(0.01, block_s)),
+        ExpChoice::Auto => None,
+    };
+    if window.is_none() && ratio > 0.05 {
+        notes.push(format!(
+            "the responses have not decayed by the blocks' end (the last tenth's RMS is \
+             {:.0} % of the largest excursion) and no exponential window was applied: \
+             leakage widens the peaks and raises the damping",
+            100.0 * ratio
+        ));
+    }
+    let ahead = precursor(responses, &hits);
+    if ahead > 0.1 {
+        notes.push(format!(
+            "the responses move before the force's pulses (their RMS before a pulse is \
+             {:.0} % of their largest excursion after it): the records are not aligned; \
+             give the delay between their starts (--delay-s, delay_s in Python)",
+            100.0 * ahead
+        ));
+    }
+    let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, top)?;
+    Ok((sp, Some(hits), window))
+}
+
+/// The spectra of a continuous excitation over Welch segments in groups; a note when the force
+/// looks like hammer hits.
+#[allow(clippy::type_complexity)]
+fn continuous_spectra(
+    force: &[f64],
+    responses: &[Vec<f64>],
+    fs_hz: f64,
+    nperseg: usize,
+    top: f64,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<(Spectra, Option<Hits>, Option<ExpWindow>)> {
+    let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
+    let rms =
+        (force.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / force.len().max(1) as f64).sqrt();
+    let peak = force.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
+    if rms > 0.0 && peak > 10.0 * rms {
+        notes.push(format!(
+            "the force's peak is {:.0} times its RMS: it looks like hammer hits, not a \
+             continuous force; an impact test is analysed hit by hit (--impact, \
+             impact=True in Python)",
+            peak / rms
+        ));
+    }
+    let sp = spectra::of_segments(
+        force,
+        responses,
+        fs_hz,
+        nperseg,
+        crate::oma::uncertainty::GROUPS,
+        top,
+    )?;
+    Ok((sp, None, None))
+}
+
+/// The jackknife's replicates: with every unit (hit or segment group) left out in turn, each
+/// fitted mode's pole found again (within 2 %) and its LSFD shape, or `None`.
+fn replicates(
+    spectra: &Spectra,
+    freq: &[f64],
+    fitted: &[Pole],
+    s: &EmaSettings,
+) -> Vec<Vec<Replicate>> {
+    let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); fitted.len()];
+    for g in 0..spectra.units.len() {
+        let f = spectra.frfs(Some(g));
+        let got = select(freq, &f.h1, s).ok();
+        let matched: Vec<Option<Pole>> = fitted
+            .iter()
+            .map(|p| {
+                got.as_ref().and_then(|sel| {
+                    sel.modes
+                        .iter()
+                        .filter(|m| (m.f_hz - p.f_hz).abs() <= 0.02 * p.f_hz)
+                        .min_by(|a, b| (a.f_hz - p.f_hz).abs().total_cmp(&(b.f_hz - p.f_hz).abs()))
+                        .map(pole_of)
+                })
+            })
+            .collect();
+        let rep_poles: Vec<Pole> = matched
+            .iter()
+            .zip(fitted)
+            .map(|(m, p)| m.unwrap_or(*p))
+            .collect();
+        let rep_shapes = lsfd::fit(freq, &f.h1, s.band_hz, &rep_poles, s.form).ok();
+        for (r, m) in matched.iter().enumerate() {
+            let shape = rep_shapes
+                .as_ref()
+                .map(|c| c.iter().map(|k| k.residues[r]).collect::<Vec<_>>());
+            reps[r].push(m.and_then(|p| shape.map(|sh| (p, sh))));
+        }
+    }
+    reps
+}
+
+/// A mode's 95 % intervals of frequency and damping and its shape's standard uncertainties from
+/// its replicates `r`; `None` when a replicate lacks it (no replicates: no intervals).
+#[allow(clippy::type_complexity)]
+fn intervals(
+    pole: Pole,
+    (residues, shape): (&[Complex64], &[Complex64]),
+    r: &[Replicate],
+    exp: Option<ExpWindow>,
+    unit_sizes: &[usize],
+) -> Option<(Option<Interval>, Option<Interval>, Option<Vec<f64>>)> {
+    if r.is_empty() {
+        return Some((None, None, None));
+    }
+    if !r.iter().all(Option::is_some) {
+        return None;
+    }
+    let reps: Vec<(Pole, Vec<Complex64>)> = r.iter().flatten().cloned().collect();
+    let fs: Vec<f64> = reps.iter().map(|(q, _)| unwindowed(*q, exp).f_hz).collect();
+    let ds: Vec<f64> = reps
+        .iter()
+        .map(|(q, _)| unwindowed(*q, exp).damping)
+        .collect();
+    // a frequency is positive: an interval reaching 0 Hz determines nothing
+    let fi = jackknife_sized(pole.f_hz, &fs, unit_sizes).and_then(Interval::of_positive);
+    // a damping ratio is not negative: the interval's lower end at 0 at least
+    let di = jackknife_sized(pole.damping, &ds, unit_sizes).map(|i| Interval {
+        lo: i.lo.max(0.0),
+        ..i
+    });
+    let reference = residues
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
+        .map_or(0, |(k, _)| k);
+    let su = Some(
+        (0..residues.len())
+            .map(|k| {
+                let a: Vec<f64> = reps
+                    .iter()
+                    .map(|(_, sh)| (sh[k] / sh[reference]).norm())
+                    .collect();
+                jackknife_sized(shape[k].norm(), &a, unit_sizes).map_or(f64::NAN, |v| v.u)
+            })
+            .collect(),
+    );
+    Some((fi, di, su))
 }
