@@ -362,6 +362,31 @@ pub fn estimate(
     })
 }
 
+/// Two agreements among the references as large as each other: which are static cannot be
+/// told (a hint when the camera's model may be too simple).
+fn disagreement(top: &[&Vec<usize>], model: Model, available: usize) -> anyhow::Error {
+    let mut all: Vec<usize> = top.iter().flat_map(|t| t.iter().copied()).collect();
+    all.sort_unstable();
+    all.dedup();
+    let groups: Vec<String> = top.iter().map(|t| format!("({})", name(t))).collect();
+    let hint = match model {
+        Model::Homography => String::new(),
+        m if available >= 4 => format!(
+            "; or the camera's motion is more than a {}: a camera that pans or tilts \
+             is a homography (--camera-model homography)",
+            m.name()
+        ),
+        _ => String::new(),
+    };
+    vibcam_readers::bad_input(format!(
+        "the references disagree: {} each move together, as many in each; which are \
+         static cannot be told (give more references on parts of the scene that do not \
+         move, or leave out the ones that may move: {}){hint}",
+        groups.join(" and "),
+        name(&all)
+    ))
+}
+
 /// The references lost in at most 5 % of the frames, and those left out (index, why).
 #[allow(clippy::type_complexity)]
 fn usable_references(
@@ -509,26 +534,7 @@ fn consensus(
             .map(|f| &f.0)
             .collect();
         if top.len() > 1 {
-            let mut all: Vec<usize> = top.iter().flat_map(|t| t.iter().copied()).collect();
-            all.sort_unstable();
-            all.dedup();
-            let groups: Vec<String> = top.iter().map(|t| format!("({})", name(t))).collect();
-            let hint = match model {
-                Model::Homography => String::new(),
-                m if avail.len() >= 4 => format!(
-                    "; or the camera's motion is more than a {}: a camera that pans or tilts \
-                     is a homography (--camera-model homography)",
-                    m.name()
-                ),
-                _ => String::new(),
-            };
-            return Err(vibcam_readers::bad_input(format!(
-                "the references disagree: {} each move together, as many in each; which are \
-                 static cannot be told (give more references on parts of the scene that do not \
-                 move, or leave out the ones that may move: {}){hint}",
-                groups.join(" and "),
-                name(&all)
-            )));
+            return Err(disagreement(&top, model, avail.len()));
         }
         let kept = top.first().map(|t| (*t).clone()).unwrap_or_default();
         if kept.len() < model.minimum() {

@@ -159,43 +159,8 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         .map(|&run| pulse_of(force, &dev, run, (baseline, noise_sd)))
         .collect();
     let mut hits = hits_of(pulses, (rule.double_gap_s * fs_hz).round() as usize);
-    let at = |i: usize| format!("{:.4} s", i as f64 / fs_hz);
     leave_out_bad_hits(&mut hits, baseline, fs_hz);
-    // one block length for every hit: the shortest spacing between hits, and the last used
-    // hit's rest of the record, unless that is less than half the spacing: then that hit is
-    // left out rather than every block cut short
-    let starts: Vec<usize> = hits.iter().map(|h| h.pulses[0].start).collect();
-    let between = starts.windows(2).map(|w| w[1] - w[0]).min();
-    let last = starts[starts.len() - 1];
-    let tail = force.len() - last;
-    let others_used = hits[..hits.len() - 1].iter().any(|h| h.left_out.is_none());
-    let mut spacing = between.unwrap_or(tail);
-    if let Some(h) = hits.last_mut().filter(|h| h.left_out.is_none()) {
-        if others_used && between.is_some_and(|b| 2 * tail < b) {
-            h.left_out = Some(format!(
-                "hit {} at {}: the record ends {:.3} s after it, less than half the hits' \
-                 spacing ({:.3} s)",
-                starts.len(),
-                at(last),
-                tail as f64 / fs_hz,
-                spacing as f64 / fs_hz
-            ));
-        } else {
-            spacing = spacing.min(tail);
-        }
-    }
-    if hits.iter().all(|h| h.left_out.is_some()) {
-        let why: Vec<&str> = hits.iter().filter_map(|h| h.left_out.as_deref()).collect();
-        return Err(bad_input(format!(
-            "{name}: no hit can be used: {}",
-            why.join("; ")
-        )));
-    }
-    let pre = (spacing / 50).min(starts[0]);
-    let mut block = spacing;
-    if hits.last().is_some_and(|h| h.left_out.is_none()) {
-        block = block.min(tail + pre);
-    }
+    let (pre, mut block) = spacing_block(&mut hits, force.len(), fs_hz, name)?;
     let width = hits
         .iter()
         .map(|h| h.pulses[0].end - h.pulses[0].start)
@@ -229,6 +194,51 @@ pub fn find(force: &[f64], fs_hz: f64, rule: ImpactRule, name: &str) -> anyhow::
         pre,
         spikes,
     })
+}
+
+/// One block length for every hit: the shortest spacing between hits, and the last used hit's
+/// rest of the record, unless that is less than half the spacing: then that hit is left out
+/// rather than every block cut short. Returns the samples kept before each pulse and the block.
+fn spacing_block(
+    hits: &mut [Hit],
+    len: usize,
+    fs_hz: f64,
+    name: &str,
+) -> anyhow::Result<(usize, usize)> {
+    let at = |i: usize| format!("{:.4} s", i as f64 / fs_hz);
+    let starts: Vec<usize> = hits.iter().map(|h| h.pulses[0].start).collect();
+    let between = starts.windows(2).map(|w| w[1] - w[0]).min();
+    let last = starts[starts.len() - 1];
+    let tail = len - last;
+    let others_used = hits[..hits.len() - 1].iter().any(|h| h.left_out.is_none());
+    let mut spacing = between.unwrap_or(tail);
+    if let Some(h) = hits.last_mut().filter(|h| h.left_out.is_none()) {
+        if others_used && between.is_some_and(|b| 2 * tail < b) {
+            h.left_out = Some(format!(
+                "hit {} at {}: the record ends {:.3} s after it, less than half the hits' \
+                 spacing ({:.3} s)",
+                starts.len(),
+                at(last),
+                tail as f64 / fs_hz,
+                spacing as f64 / fs_hz
+            ));
+        } else {
+            spacing = spacing.min(tail);
+        }
+    }
+    if hits.iter().all(|h| h.left_out.is_some()) {
+        let why: Vec<&str> = hits.iter().filter_map(|h| h.left_out.as_deref()).collect();
+        return Err(bad_input(format!(
+            "{name}: no hit can be used: {}",
+            why.join("; ")
+        )));
+    }
+    let pre = (spacing / 50).min(starts[0]);
+    let mut block = spacing;
+    if hits.last().is_some_and(|h| h.left_out.is_none()) {
+        block = block.min(tail + pre);
+    }
+    Ok((pre, block))
 }
 
 /// The runs of `dev` above `above`, `(start, end)`; a run closer to the last than the last's

@@ -259,24 +259,7 @@ pub fn analyse(
         rejected,
         per_band,
     } = select(&freq, &frfs.h1, s)?;
-    if let Some(bands) = &s.bands {
-        for (b, m) in bands.iter().zip(&per_band) {
-            if m.is_none() {
-                notes.push(format!(
-                    "band {}-{} Hz: no mode (no cluster of stable poles there)",
-                    b.0, b.1
-                ));
-            }
-        }
-    }
-    let chosen: Vec<(Option<(f64, f64)>, SsiMode)> = match &s.bands {
-        None => per_band.into_iter().flatten().map(|m| (None, m)).collect(),
-        Some(bands) => bands
-            .iter()
-            .zip(per_band)
-            .filter_map(|(b, m)| m.map(|m| (Some(*b), m)))
-            .collect(),
-    };
+    let chosen = chosen_modes(per_band, s.bands.as_deref(), &mut notes);
     let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
     let constants = if fitted.is_empty() {
         Vec::new()
@@ -301,39 +284,19 @@ pub fn analyse(
         }
         vec![Vec::new(); chosen.len()]
     };
-    let mut modes = Vec::new();
-    for (i, ((band, cl), p)) in chosen.into_iter().zip(&fitted).enumerate() {
-        let residues: Vec<Complex64> = constants.iter().map(|c| c.residues[i]).collect();
-        let shape = normalise_shape(&residues);
-        let pole = unwindowed(*p, exp);
-        let (fi, di, su) = match intervals(pole, (&residues, &shape), &reps[i], exp, &unit_sizes) {
-            Some(v) => v,
-            None => {
-                notes.push(format!(
-                    "mode {} ({:.4} Hz): no interval, it was not found with every {} left out",
-                    i + 1,
-                    pole.f_hz,
-                    if hits.is_some() {
-                        "hit"
-                    } else {
-                        "segment group"
-                    }
-                ));
-                (None, None, None)
-            }
-        };
-        modes.push(EmaMode {
-            mode: i + 1,
-            band_hz: band,
-            pole,
-            fitted: *p,
-            shape,
-            cluster: cl,
-            f_interval: fi,
-            damping_interval: di,
-            shape_abs_u: su,
-        });
-    }
+    let unit = if hits.is_some() {
+        "hit"
+    } else {
+        "segment group"
+    };
+    let modes = modes_of(
+        chosen,
+        &fitted,
+        &constants,
+        (&reps, &unit_sizes, unit),
+        exp,
+        &mut notes,
+    );
     let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
     if misfit > 0.2 {
         notes.push(format!(
@@ -361,6 +324,75 @@ pub fn analyse(
         unit_sizes,
         notes,
     })
+}
+
+/// The modes chosen: one per band (a band without one noted), or every cluster per band found.
+fn chosen_modes(
+    per_band: Vec<Option<SsiMode>>,
+    bands: Option<&[(f64, f64)]>,
+    notes: &mut Vec<String>,
+) -> Vec<(Option<(f64, f64)>, SsiMode)> {
+    if let Some(bands) = bands {
+        for (b, m) in bands.iter().zip(&per_band) {
+            if m.is_none() {
+                notes.push(format!(
+                    "band {}-{} Hz: no mode (no cluster of stable poles there)",
+                    b.0, b.1
+                ));
+            }
+        }
+    }
+    match bands {
+        None => per_band.into_iter().flatten().map(|m| (None, m)).collect(),
+        Some(bands) => bands
+            .iter()
+            .zip(per_band)
+            .filter_map(|(b, m)| m.map(|m| (Some(*b), m)))
+            .collect(),
+    }
+}
+
+/// Each chosen mode with its pole (the exponential window's damping removed), its shape from
+/// the LSFD residues and its intervals from the replicates (`unit`: what one replicate leaves
+/// out).
+fn modes_of(
+    chosen: Vec<(Option<(f64, f64)>, SsiMode)>,
+    fitted: &[Pole],
+    constants: &[lsfd::Constants],
+    (reps, unit_sizes, unit): (&[Vec<Replicate>], &[usize], &str),
+    exp: Option<ExpWindow>,
+    notes: &mut Vec<String>,
+) -> Vec<EmaMode> {
+    let mut modes = Vec::new();
+    for (i, ((band, cl), p)) in chosen.into_iter().zip(fitted).enumerate() {
+        let residues: Vec<Complex64> = constants.iter().map(|c| c.residues[i]).collect();
+        let shape = normalise_shape(&residues);
+        let pole = unwindowed(*p, exp);
+        let (fi, di, su) = match intervals(pole, (&residues, &shape), &reps[i], exp, unit_sizes) {
+            Some(v) => v,
+            None => {
+                notes.push(format!(
+                    "mode {} ({:.4} Hz): no interval, it was not found with every {} left out",
+                    i + 1,
+                    pole.f_hz,
+                    unit
+                ));
+                (None, None, None)
+            }
+        };
+        modes.push(EmaMode {
+            mode: i + 1,
+            band_hz: band,
+            pole,
+            fitted: *p,
+            shape,
+            cluster: cl,
+            f_interval: fi,
+            damping_interval: di,
+            shape_abs_u: su,
+        });
+    }
+    modes
 }
 
 /// The spectra of an impact test, hit by hit (the hits found, the exponential window chosen);
