@@ -431,100 +431,109 @@ fn resolve_scale(
                 text,
             }
         }
-        ScaleInput::Between(a, b, mm) => {
-            let at = |p: PointRef| -> anyhow::Result<(f64, f64, f64)> {
-                let track = match p {
-                    PointRef::Target(i) => v.tracks.centroids.get(i - 1),
-                    PointRef::Reference(i) => {
-                        v.references.as_ref().and_then(|r| r.centroids.get(i - 1))
-                    }
-                };
-                let track = track.ok_or_else(|| {
-                    bad_input(format!(
-                        "--scale: there is no {} (targets 1 to {k}{})",
-                        p.label(),
-                        match &v.references {
-                            Some(r) => format!(", references r1 to r{}", r.centroids.len()),
-                            None => ", no --reference".to_string(),
-                        }
-                    ))
-                })?;
-                let (x, y) = median_position(track).ok_or_else(|| {
-                    bad_input(format!(
-                        "--scale: {} has no position in any frame",
-                        p.label()
-                    ))
-                })?;
-                Ok((x, y, position_noise(track)))
-            };
-            let (pa, pb) = (at(*a)?, at(*b)?);
-            let d = ((pa.0 - pb.0).powi(2) + (pa.1 - pb.1).powi(2)).sqrt();
-            if d < 1.0 {
-                return Err(bad_input(format!(
-                    "--scale: {} and {} are {d:.2} px apart: too close for a scale",
-                    a.label(),
-                    b.label()
-                )));
-            }
-            let u_rel = (pa.2 * pa.2 + pb.2 * pb.2).sqrt() / d;
-            let m = mm / d;
-            let _ = writeln!(
-                text,
-                "scale: {mm} mm between {} and {} ({d:.3} px apart): {m:.6} mm/px, standard \
-                 uncertainty {:.3} % from their positions' noise per frame; one scale for the \
-                 whole frame (see --world for a structure seen at an angle)",
-                a.label(),
-                b.label(),
-                100.0 * u_rel
-            );
-            Scales {
-                per_target: vec![(m, u_rel); k],
-                world: None,
-                text,
-            }
-        }
-        ScaleInput::TargetSize(mm) => {
-            let mut per = Vec::with_capacity(k);
-            let _ = writeln!(
-                text,
-                "scale: each target {mm} mm across, its size in the image from the blob's \
-                 pixels (2 sqrt(N / pi), the median over the frames):"
-            );
-            for (t, c) in v.tracks.centroids.iter().enumerate() {
-                let d: Vec<f64> = c
-                    .iter()
-                    .filter(|c| c.position().is_some() && c.pixels() > 0)
-                    .map(|c| 2.0 * (c.pixels() as f64 / std::f64::consts::PI).sqrt())
-                    .collect();
-                if d.is_empty() {
-                    return Err(bad_input(format!(
-                        "--target-size-mm: target {} has no blob (its size comes from the \
-                         centroid's pixels above the threshold: Lucas-Kanade has none)",
-                        t + 1
-                    )));
-                }
-                let med = vibcam_common::stats::median(&d).unwrap_or(f64::NAN);
-                let sd = vibcam_common::stats::std_dev(&d).unwrap_or(0.0);
-                let u_rel = sd / med;
-                let m = mm / med;
-                let _ = writeln!(
-                    text,
-                    "  target {}: {med:.3} px across, {m:.6} mm/px, standard uncertainty {:.2} % \
-                     (its size's spread over the frames; the threshold sets the size too)",
-                    t + 1,
-                    100.0 * u_rel
-                );
-                per.push((m, u_rel));
-            }
-            Scales {
-                per_target: per,
-                world: None,
-                text,
-            }
-        }
+        ScaleInput::Between(a, b, mm) => scale_between(v, (*a, *b), *mm)?,
+        ScaleInput::TargetSize(mm) => scale_of_sizes(v, *mm)?,
         ScaleInput::World(points, _) => world_scales(v, points, along_x, size)?,
     };
     Ok(scales)
+}
+
+/// One scale from the known distance `mm` between two tracked points, its uncertainty from
+/// their positions' noise.
+fn scale_between(v: &Viewed, (a, b): (PointRef, PointRef), mm: f64) -> anyhow::Result<Scales> {
+    let k = v.tracks.centroids.len();
+    let mut text = String::new();
+    let at = |p: PointRef| -> anyhow::Result<(f64, f64, f64)> {
+        let track = match p {
+            PointRef::Target(i) => v.tracks.centroids.get(i - 1),
+            PointRef::Reference(i) => v.references.as_ref().and_then(|r| r.centroids.get(i - 1)),
+        };
+        let track = track.ok_or_else(|| {
+            bad_input(format!(
+                "--scale: there is no {} (targets 1 to {k}{})",
+                p.label(),
+                match &v.references {
+                    Some(r) => format!(", references r1 to r{}", r.centroids.len()),
+                    None => ", no --reference".to_string(),
+                }
+            ))
+        })?;
+        let (x, y) = median_position(track).ok_or_else(|| {
+            bad_input(format!(
+                "--scale: {} has no position in any frame",
+                p.label()
+            ))
+        })?;
+        Ok((x, y, position_noise(track)))
+    };
+    let (pa, pb) = (at(a)?, at(b)?);
+    let d = ((pa.0 - pb.0).powi(2) + (pa.1 - pb.1).powi(2)).sqrt();
+    if d < 1.0 {
+        return Err(bad_input(format!(
+            "--scale: {} and {} are {d:.2} px apart: too close for a scale",
+            a.label(),
+            b.label()
+        )));
+    }
+    let u_rel = (pa.2 * pa.2 + pb.2 * pb.2).sqrt() / d;
+    let m = mm / d;
+    let _ = writeln!(
+        text,
+        "scale: {mm} mm between {} and {} ({d:.3} px apart): {m:.6} mm/px, standard \
+         uncertainty {:.3} % from their positions' noise per frame; one scale for the \
+         whole frame (see --world for a structure seen at an angle)",
+        a.label(),
+        b.label(),
+        100.0 * u_rel
+    );
+    Ok(Scales {
+        per_target: vec![(m, u_rel); k],
+        world: None,
+        text,
+    })
+}
+
+/// Each target's scale from its known diameter `mm` and its blob's size in the image.
+fn scale_of_sizes(v: &Viewed, mm: f64) -> anyhow::Result<Scales> {
+    let k = v.tracks.centroids.len();
+    let mut text = String::new();
+    let mut per = Vec::with_capacity(k);
+    let _ = writeln!(
+        text,
+        "scale: each target {mm} mm across, its size in the image from the blob's \
+         pixels (2 sqrt(N / pi), the median over the frames):"
+    );
+    for (t, c) in v.tracks.centroids.iter().enumerate() {
+        let d: Vec<f64> = c
+            .iter()
+            .filter(|c| c.position().is_some() && c.pixels() > 0)
+            .map(|c| 2.0 * (c.pixels() as f64 / std::f64::consts::PI).sqrt())
+            .collect();
+        if d.is_empty() {
+            return Err(bad_input(format!(
+                "--target-size-mm: target {} has no blob (its size comes from the \
+                 centroid's pixels above the threshold: Lucas-Kanade has none)",
+                t + 1
+            )));
+        }
+        let med = vibcam_common::stats::median(&d).unwrap_or(f64::NAN);
+        let sd = vibcam_common::stats::std_dev(&d).unwrap_or(0.0);
+        let u_rel = sd / med;
+        let m = mm / med;
+        let _ = writeln!(
+            text,
+            "  target {}: {med:.3} px across, {m:.6} mm/px, standard uncertainty {:.2} % \
+             (its size's spread over the frames; the threshold sets the size too)",
+            t + 1,
+            100.0 * u_rel
+        );
+        per.push((m, u_rel));
+    }
+    Ok(Scales {
+        per_target: per,
+        world: None,
+        text,
+    })
 }
 
 /// mm per px along the plane's axis (`along_x`: `x_mm`, else `y_mm`) at image point `p` of
@@ -644,33 +653,7 @@ fn world_scales(
         .iter()
         .map(|c| median_position(c))
         .collect();
-    // Monte Carlo over the image positions of the plane's points
-    let noise = vibcam_common::testing::gaussian_noise(0x5ca1e, WORLD_DRAWS * points.len() * 2);
-    let mut draws: Vec<Vec<f64>> = vec![Vec::new(); at.len()];
-    for d in 0..WORLD_DRAWS {
-        let moved: Vec<(f64, f64)> = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let o = 2 * (d * points.len() + i);
-                (p.px.0 + p.u_px * noise[o], p.px.1 + p.u_px * noise[o + 1])
-            })
-            .collect();
-        let Some(hd) = fit(Model::Homography, &moved, &mm) else {
-            // dropping it would narrow the spread: the uncertainty is not known
-            return Err(bad_input(format!(
-                "--world: with the points moved by their stated u_px the plane could not be \
-                 fitted (draw {} of {WORLD_DRAWS}): the uncertainty is too large for these \
-                 points",
-                d + 1
-            )));
-        };
-        for (t, p) in at.iter().enumerate() {
-            if let Some(p) = p {
-                draws[t].push(local_scale(&hd, *p, along_x));
-            }
-        }
-    }
+    let draws = scale_draws(points, &mm, &at, along_x)?;
     let axis = if along_x { "x_mm" } else { "y_mm" };
     let mut text = format!(
         "scale: the structure's plane from {} points (a homography{}), each target's \
@@ -700,6 +683,54 @@ fn world_scales(
         );
         per.push((m, sd / m));
     }
+    text.push_str(&one_scale_spread(&per));
+    Ok(Scales {
+        per_target: per,
+        world: Some(h),
+        text,
+    })
+}
+
+/// Monte Carlo over the image positions of the plane's points (each moved by its `u_px`): per
+/// target at `at`, the local scale of every draw's homography.
+fn scale_draws(
+    points: &[WorldPoint],
+    mm: &[(f64, f64)],
+    at: &[Option<(f64, f64)>],
+    along_x: bool,
+) -> anyhow::Result<Vec<Vec<f64>>> {
+    let noise = vibcam_common::testing::gaussian_noise(0x5ca1e, WORLD_DRAWS * points.len() * 2);
+    let mut draws: Vec<Vec<f64>> = vec![Vec::new(); at.len()];
+    for d in 0..WORLD_DRAWS {
+        let moved: Vec<(f64, f64)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let o = 2 * (d * points.len() + i);
+                (p.px.0 + p.u_px * noise[o], p.px.1 + p.u_px * noise[o + 1])
+            })
+            .collect();
+        let Some(hd) = fit(Model::Homography, &moved, mm) else {
+            // dropping it would narrow the spread: the uncertainty is not known
+            return Err(bad_input(format!(
+                "--world: with the points moved by their stated u_px the plane could not be \
+                 fitted (draw {} of {WORLD_DRAWS}): the uncertainty is too large for these \
+                 points",
+                d + 1
+            )));
+        };
+        for (t, p) in at.iter().enumerate() {
+            if let Some(p) = p {
+                draws[t].push(local_scale(&hd, *p, along_x));
+            }
+        }
+    }
+    Ok(draws)
+}
+
+/// How far one scale for the whole frame (the targets' mean) would be off across the targets.
+fn one_scale_spread(per: &[(f64, f64)]) -> String {
+    let mut text = String::new();
     let finite: Vec<f64> = per.iter().map(|p| p.0).filter(|m| m.is_finite()).collect();
     if finite.len() >= 2 {
         let mean = finite.iter().sum::<f64>() / finite.len() as f64;
@@ -715,11 +746,7 @@ fn world_scales(
              {lo:+.2} % to {hi:+.2} % across the targets (perspective)"
         );
     }
-    Ok(Scales {
-        per_target: per,
-        world: Some(h),
-        text,
-    })
+    text
 }
 
 #[cfg(test)]

@@ -122,35 +122,13 @@ pub fn of_system(
         }
         return Ok(out);
     }
-    // per mode: picked line, damping, |T| at the line, fitted frequency
-    let mut reps: Vec<[Vec<f64>; 4]> = vec![Default::default(); modes.len()];
-    let mut failed = vec![false; modes.len()];
-    let mut sizes = Vec::with_capacity(groups);
-    for g in 0..groups {
-        let part = csd::of_segments(&channels, fs, c, group(g, groups, segments))?;
-        sizes.push(part.segments);
-        let h1 = h1_of(&whole.without(&part), sys.adjust);
-        let frf_g = Frf {
-            freq_hz: whole.freq_hz.clone(),
-            coherence: vec![0.0; h1.len()],
-            h1,
-            config,
-            segments: (segments - part.segments) as u32,
-            skipped: 0,
-        };
-        for (i, m) in modes.iter().enumerate() {
-            let picked = frf::pick_modes(&frf_g, &[m.band_hz], None)?;
-            reps[i][0].extend(picked.first().map(|p| p.f_hz));
-            match smoothed(&whole.freq_hz, &frf_g.h1, m, &kernel) {
-                Some(f) => {
-                    reps[i][1].push(f.damping);
-                    reps[i][2].push(f.at_line);
-                    reps[i][3].push(f.f_hz);
-                }
-                None => failed[i] = true,
-            }
-        }
-    }
+    let (reps, failed, sizes) = replicates(
+        &channels,
+        (c, config),
+        (groups, segments),
+        &whole,
+        (sys, modes, &kernel),
+    )?;
     let df = whole.df_hz();
     let line_hz = fs / c.nperseg as f64;
     for (i, m) in modes.iter().enumerate() {
@@ -174,49 +152,100 @@ pub fn of_system(
             }
             kept
         });
-        match (fits[i], failed[i]) {
-            (Some(Fitted { damping, .. }), false)
-                if 2.0 * damping * m.f_hz < RESOLVED * line_hz =>
-            {
-                notes.push(format!(
-                    "{} mode {}: its half-power bandwidth ({:.3} Hz by the fit) is narrower \
-                     than a segment's line ({line_hz:.3} Hz): not resolved, no interval of its \
-                     damping and amplitude (the fit's damping is then unreliable too); longer \
-                     segments (--nperseg) resolve it",
-                    sys.name,
-                    i + 1,
-                    2.0 * damping * m.f_hz
-                ));
-            }
-            (Some(f), false) => {
-                let damping = f.damping;
-                let z = jackknife_sized(damping, &reps[i][1], &sizes);
-                if z.is_some_and(|z| z.lo > 0.0) {
-                    o.damping = z;
-                    o.amplitude = jackknife_sized(f.at_line, &reps[i][2], &sizes);
-                    o.f_fit_interval = jackknife_sized(f.f_hz, &reps[i][3], &sizes)
-                        .and_then(Interval::of_positive);
-                } else {
-                    notes.push(format!(
-                        "{} mode {}: its damping is not determined (the 95 % interval reaches \
-                         zero): the mode is not resolved by {line_hz:.3} Hz lines, or too weak; \
-                         no interval of its damping and amplitude",
-                        sys.name,
-                        i + 1
-                    ));
-                }
-            }
-            _ => notes.push(format!(
-                "{} mode {}: the modal fit of the band {}-{} Hz failed on the whole record or \
-                 a replicate; no interval of its damping and amplitude",
-                sys.name,
-                i + 1,
-                m.band_hz.0,
-                m.band_hz.1
-            )),
-        }
+        let fitted = fits[i].filter(|_| !failed[i]);
+        let name = format!("{} mode {}", sys.name, i + 1);
+        damping_intervals(o, m, fitted, (&reps[i], &sizes), line_hz, &name, notes);
     }
     Ok(out)
+}
+
+/// The jackknife's replicates: with each group of segments left out in turn, per mode the
+/// picked line, the damping, |T| at the line and the fitted frequency; whether a mode's fit
+/// failed in one; each group's size.
+#[allow(clippy::type_complexity)]
+fn replicates(
+    channels: &[Vec<f64>],
+    (c, config): (CsdConfig, firmware_core::spectrum::WelchConfig),
+    (groups, segments): (usize, usize),
+    whole: &csd::Csd,
+    (sys, modes, kernel): (&System<'_>, &[PickedMode], &Smoothing),
+) -> anyhow::Result<(Vec<[Vec<f64>; 4]>, Vec<bool>, Vec<usize>)> {
+    let fs = f64::from(config.fs_hz);
+    let mut reps: Vec<[Vec<f64>; 4]> = vec![Default::default(); modes.len()];
+    let mut failed = vec![false; modes.len()];
+    let mut sizes = Vec::with_capacity(groups);
+    for g in 0..groups {
+        let part = csd::of_segments(channels, fs, c, group(g, groups, segments))?;
+        sizes.push(part.segments);
+        let h1 = h1_of(&whole.without(&part), sys.adjust);
+        let frf_g = Frf {
+            freq_hz: whole.freq_hz.clone(),
+            coherence: vec![0.0; h1.len()],
+            h1,
+            config,
+            segments: (segments - part.segments) as u32,
+            skipped: 0,
+        };
+        for (i, m) in modes.iter().enumerate() {
+            let picked = frf::pick_modes(&frf_g, &[m.band_hz], None)?;
+            reps[i][0].extend(picked.first().map(|p| p.f_hz));
+            match smoothed(&whole.freq_hz, &frf_g.h1, m, kernel) {
+                Some(f) => {
+                    reps[i][1].push(f.damping);
+                    reps[i][2].push(f.at_line);
+                    reps[i][3].push(f.f_hz);
+                }
+                None => failed[i] = true,
+            }
+        }
+    }
+    Ok((reps, failed, sizes))
+}
+
+/// A mode's intervals of damping, amplitude and fitted frequency from its replicates, when its
+/// fit held on the whole record and every replicate and its bandwidth is resolved; else why not,
+/// in `notes`.
+fn damping_intervals(
+    o: &mut FrfModeUncertainty,
+    m: &PickedMode,
+    fitted: Option<Fitted>,
+    (reps, sizes): (&[Vec<f64>; 4], &[usize]),
+    line_hz: f64,
+    name: &str,
+    notes: &mut Vec<String>,
+) {
+    match fitted {
+        Some(Fitted { damping, .. }) if 2.0 * damping * m.f_hz < RESOLVED * line_hz => {
+            notes.push(format!(
+                "{name}: its half-power bandwidth ({:.3} Hz by the fit) is narrower \
+                 than a segment's line ({line_hz:.3} Hz): not resolved, no interval of its \
+                 damping and amplitude (the fit's damping is then unreliable too); longer \
+                 segments (--nperseg) resolve it",
+                2.0 * damping * m.f_hz
+            ));
+        }
+        Some(f) => {
+            let damping = f.damping;
+            let z = jackknife_sized(damping, &reps[1], sizes);
+            if z.is_some_and(|z| z.lo > 0.0) {
+                o.damping = z;
+                o.amplitude = jackknife_sized(f.at_line, &reps[2], sizes);
+                o.f_fit_interval =
+                    jackknife_sized(f.f_hz, &reps[3], sizes).and_then(Interval::of_positive);
+            } else {
+                notes.push(format!(
+                    "{name}: its damping is not determined (the 95 % interval reaches \
+                     zero): the mode is not resolved by {line_hz:.3} Hz lines, or too weak; \
+                     no interval of its damping and amplitude",
+                ));
+            }
+        }
+        _ => notes.push(format!(
+            "{name}: the modal fit of the band {}-{} Hz failed on the whole record or \
+             a replicate; no interval of its damping and amplitude",
+            m.band_hz.0, m.band_hz.1
+        )),
+    }
 }
 
 /// H1 per line of a two-channel cross-spectral matrix (input first), times `adjust` (per line;
