@@ -267,28 +267,13 @@ pub fn analyse(
         lsfd::fit(&freq, &frfs.h1, s.band_hz, &fitted, s.form)?
     };
     let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
-    // the jackknife: every unit left out in turn
-    let reps = if spectra.units.len() >= 3 && !fitted.is_empty() {
-        replicates(&spectra, &freq, &fitted, s)
-    } else {
-        if !fitted.is_empty() {
-            notes.push(format!(
-                "no intervals: {} {} averaged, the jackknife needs at least 3",
-                spectra.units.len(),
-                if hits.is_some() {
-                    "hits"
-                } else {
-                    "segment groups"
-                }
-            ));
-        }
-        vec![Vec::new(); chosen.len()]
-    };
     let unit = if hits.is_some() {
         "hit"
     } else {
         "segment group"
     };
+    // the jackknife: every unit left out in turn
+    let reps = replicates_or_none(&spectra, &freq, &fitted, s, unit, &mut notes);
     let modes = modes_of(
         chosen,
         &fitted,
@@ -324,6 +309,29 @@ pub fn analyse(
         unit_sizes,
         notes,
     })
+}
+
+/// The jackknife's replicates with every `unit` left out in turn, or none (noted) with fewer than
+/// 3 units.
+fn replicates_or_none(
+    spectra: &Spectra,
+    freq: &[f64],
+    fitted: &[Pole],
+    s: &EmaSettings,
+    unit: &str,
+    notes: &mut Vec<String>,
+) -> Vec<Vec<Replicate>> {
+    if spectra.units.len() >= 3 && !fitted.is_empty() {
+        replicates(spectra, freq, fitted, s)
+    } else {
+        if !fitted.is_empty() {
+            notes.push(format!(
+                "no intervals: {} {unit}s averaged, the jackknife needs at least 3",
+                spectra.units.len()
+            ));
+        }
+        vec![Vec::new(); fitted.len()]
+    }
 }
 
 /// The modes chosen: one per band (a band without one noted), or every cluster per band found.

@@ -181,91 +181,117 @@ pub fn of_modes(
     let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
     let ssi = ssi_replicates(channels, s, modes, groups)?;
     for (m, u) in modes.iter().zip(out.iter_mut()) {
-        // the replicates, and the sizes of the groups they leave out (SSI's blocks of samples
-        // are equal to within one sample: the plain jackknife)
-        let reps: Option<(Vec<Replicate>, Option<&[usize]>)> = match m.method {
-            Method::Fdd | Method::Efdd => {
-                let p = peaks
-                    .iter()
-                    .enumerate()
-                    .position(|(i, p)| p.mode_number(i) == m.mode);
-                p.and_then(|p| {
-                    spectral.as_ref().map(|(r, sizes)| {
-                        (
-                            r.iter().map(|g| g[p].clone()).collect(),
-                            Some(sizes.as_slice()),
-                        )
-                    })
-                })
-            }
-            Method::Ssi => ssi.as_ref().and_then(|r| {
-                let i = modes
-                    .iter()
-                    .filter(|x| x.method == Method::Ssi)
-                    .position(|x| x.mode == m.mode)?;
-                Some((r.iter().map(|g| g[i].clone()).collect(), None))
-            }),
-        };
+        let reps = mode_replicates(m, modes, peaks, (spectral.as_ref(), ssi.as_ref()));
         let Some((reps, sizes)) = reps else {
             continue;
         };
-        let jackknife = |a: f64, v: &[f64]| match sizes {
-            Some(sz) => jackknife_sized(a, v, sz),
-            None => jackknife(a, v),
-        };
-        let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
-            reps.iter().map(f).collect()
-        };
-        let missing = |what: &str| {
-            format!(
-                "{} mode {} ({:.4} Hz): no interval of its {what}: a replicate without a tenth \
-                 of the record did not find the mode",
-                m.method.name(),
-                m.mode,
-                m.f_hz
-            )
-        };
-        match m.method {
-            Method::Fdd => {
+        *u = mode_intervals(m, &reps, sizes, notes);
+    }
+    Ok(out)
+}
+
+/// A mode's intervals from its replicates (`sizes`: the groups' sizes, `None` equal): FDD's
+/// amplitude and shape; EFDD's and SSI's frequency, damping and shape (EFDD's amplitude too).
+fn mode_intervals(
+    m: &OmaMode,
+    reps: &[Replicate],
+    sizes: Option<&[usize]>,
+    notes: &mut Vec<String>,
+) -> Uncertainty {
+    let mut u = Uncertainty::default();
+    let jackknife = |a: f64, v: &[f64]| match sizes {
+        Some(sz) => jackknife_sized(a, v, sz),
+        None => jackknife(a, v),
+    };
+    let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
+        reps.iter().map(f).collect()
+    };
+    let missing = |what: &str| {
+        format!(
+            "{} mode {} ({:.4} Hz): no interval of its {what}: a replicate without a tenth \
+             of the record did not find the mode",
+            m.method.name(),
+            m.mode,
+            m.f_hz
+        )
+    };
+    match m.method {
+        Method::Fdd => {
+            u.amplitude = m
+                .amplitude
+                .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)))
+                .map(non_negative);
+            u.shape_abs = shape_u(&m.shape, reps);
+        }
+        Method::Efdd | Method::Ssi => {
+            match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
+                Some(v) => {
+                    u.f_hz = jackknife(m.f_hz, &v).and_then(|i| {
+                        let kept = i.of_positive();
+                        if kept.is_none() {
+                            notes.push(format!(
+                                "{} mode {} ({:.4} Hz): the 95 % interval of its frequency \
+                                 reaches 0 Hz: its frequency is not determined, no interval",
+                                m.method.name(),
+                                m.mode,
+                                m.f_hz
+                            ));
+                        }
+                        kept
+                    })
+                }
+                None => notes.push(missing("frequency and damping")),
+            }
+            if let (Some(z), Some(v)) = (m.damping, pick(&|r| r.efdd_or_ssi.map(|x| x.1))) {
+                u.damping = jackknife(z, &v).map(non_negative);
+            }
+            if m.method == Method::Efdd {
                 u.amplitude = m
                     .amplitude
                     .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)))
                     .map(non_negative);
-                u.shape_abs = shape_u(&m.shape, &reps);
             }
-            Method::Efdd | Method::Ssi => {
-                match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
-                    Some(v) => {
-                        u.f_hz = jackknife(m.f_hz, &v).and_then(|i| {
-                            let kept = i.of_positive();
-                            if kept.is_none() {
-                                notes.push(format!(
-                                    "{} mode {} ({:.4} Hz): the 95 % interval of its frequency \
-                                     reaches 0 Hz: its frequency is not determined, no interval",
-                                    m.method.name(),
-                                    m.mode,
-                                    m.f_hz
-                                ));
-                            }
-                            kept
-                        })
-                    }
-                    None => notes.push(missing("frequency and damping")),
-                }
-                if let (Some(z), Some(v)) = (m.damping, pick(&|r| r.efdd_or_ssi.map(|x| x.1))) {
-                    u.damping = jackknife(z, &v).map(non_negative);
-                }
-                if m.method == Method::Efdd {
-                    u.amplitude = m
-                        .amplitude
-                        .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)))
-                        .map(non_negative);
-                }
-                u.shape_abs = shape_u(&m.shape, &reps);
-            }
+            u.shape_abs = shape_u(&m.shape, reps);
         }
     }
-    Ok(out)
+    u
+}
+
+/// One mode's replicates and the sizes of the groups they leave out (SSI's blocks of samples
+/// are equal to within one sample: the plain jackknife); `None` when there are none.
+#[allow(clippy::type_complexity)]
+fn mode_replicates<'a>(
+    m: &OmaMode,
+    modes: &[OmaMode],
+    peaks: &[Peak],
+    (spectral, ssi): (
+        Option<&'a (Vec<Vec<Replicate>>, Vec<usize>)>,
+        Option<&'a Vec<Vec<Replicate>>>,
+    ),
+) -> Option<(Vec<Replicate>, Option<&'a [usize]>)> {
+    match m.method {
+        Method::Fdd | Method::Efdd => {
+            let p = peaks
+                .iter()
+                .enumerate()
+                .position(|(i, p)| p.mode_number(i) == m.mode);
+            p.and_then(|p| {
+                spectral.map(|(r, sizes)| {
+                    (
+                        r.iter().map(|g| g[p].clone()).collect(),
+                        Some(sizes.as_slice()),
+                    )
+                })
+            })
+        }
+        Method::Ssi => ssi.and_then(|r| {
+            let i = modes
+                .iter()
+                .filter(|x| x.method == Method::Ssi)
+                .position(|x| x.mode == m.mode)?;
+            Some((r.iter().map(|g| g[i].clone()).collect(), None))
+        }),
+    }
 }
 
 /// Where a peak's EFDD fit starts in the replicates: the whole record's frequency and
