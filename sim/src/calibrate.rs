@@ -531,35 +531,18 @@ pub fn search(
     free: &[Free],
     obs: &[Observation],
     (grid, refine): (usize, usize),
-    mut progress: impl FnMut(&Evaluation),
+    progress: impl FnMut(&Evaluation),
 ) -> anyhow::Result<Fit> {
     let grid = grid.max(2);
-    let mut cache: BTreeMap<Vec<u64>, Evaluation> = BTreeMap::new();
-    let mut order = Vec::new();
-    let mut eval = |x: &[f64]| -> anyhow::Result<Evaluation> {
-        let key: Vec<u64> = x.iter().map(|v| v.to_bits()).collect();
-        if let Some(e) = cache.get(&key) {
-            return Ok(e.clone());
-        }
-        let e = evaluate(base, free, x, obs)?;
-        progress(&e);
-        order.push(e.clone());
-        cache.insert(key, e.clone());
-        Ok(e)
+    let mut ev = Evaluations {
+        base,
+        free,
+        obs,
+        progress,
+        cache: BTreeMap::new(),
+        order: Vec::new(),
     };
-    let whole = |f: &Free, v: f64| if f.knob.integer() { v.round() } else { v };
-    let at = |f: &Free, i: usize| whole(f, f.lo + (f.hi - f.lo) * i as f64 / (grid - 1) as f64);
-    let mut best: Option<Evaluation> = None;
-    for flat in 0..grid.pow(free.len() as u32) {
-        let x: Vec<f64> = (0..free.len())
-            .map(|j| at(&free[j], flat / grid.pow(j as u32) % grid))
-            .collect();
-        let e = eval(&x)?;
-        if best.as_ref().is_none_or(|b| e.objective < b.objective) {
-            best = Some(e);
-        }
-    }
-    let mut best = best.ok_or_else(|| bad_input("calibrate: no free parameter (--free)"))?;
+    let mut best = grid_search(&mut ev, grid)?;
     let mut step: Vec<f64> = free
         .iter()
         .map(|f| {
@@ -572,22 +555,7 @@ pub fn search(
         })
         .collect();
     for _ in 0..refine {
-        let mut improved = false;
-        for j in 0..free.len() {
-            for sign in [-1.0, 1.0] {
-                let mut x = best.x.clone();
-                x[j] = whole(
-                    &free[j],
-                    (x[j] + sign * step[j]).clamp(free[j].lo, free[j].hi),
-                );
-                let e = eval(&x)?;
-                if e.objective < best.objective {
-                    best = e;
-                    improved = true;
-                }
-            }
-        }
-        if !improved {
+        if !pattern_step(&mut ev, &mut best, &step)? {
             for (s, f) in step.iter_mut().zip(free) {
                 *s = if f.knob.integer() {
                     (*s / 2.0).round().max(1.0)
@@ -597,6 +565,102 @@ pub fn search(
             }
         }
     }
+    let u = curvature_u(&mut ev, &best, &step)?;
+    Ok(Fit {
+        best,
+        u,
+        evaluations: ev.order,
+    })
+}
+
+/// The evaluations of a search: each point evaluated once (cached), in the order evaluated,
+/// each reported to `progress`.
+struct Evaluations<'a, P: FnMut(&Evaluation)> {
+    base: &'a StudyConfig,
+    free: &'a [Free],
+    obs: &'a [Observation],
+    progress: P,
+    cache: BTreeMap<Vec<u64>, Evaluation>,
+    order: Vec<Evaluation>,
+}
+
+impl<P: FnMut(&Evaluation)> Evaluations<'_, P> {
+    fn eval(&mut self, x: &[f64]) -> anyhow::Result<Evaluation> {
+        let key: Vec<u64> = x.iter().map(|v| v.to_bits()).collect();
+        if let Some(e) = self.cache.get(&key) {
+            return Ok(e.clone());
+        }
+        let e = evaluate(self.base, self.free, x, self.obs)?;
+        (self.progress)(&e);
+        self.order.push(e.clone());
+        self.cache.insert(key, e.clone());
+        Ok(e)
+    }
+}
+
+/// A value of knob `f`, rounded when the knob is an integer.
+fn whole(f: &Free, v: f64) -> f64 {
+    if f.knob.integer() {
+        v.round()
+    } else {
+        v
+    }
+}
+
+/// The best point of a `grid`-point grid over every free knob's range.
+fn grid_search<P: FnMut(&Evaluation)>(
+    ev: &mut Evaluations<'_, P>,
+    grid: usize,
+) -> anyhow::Result<Evaluation> {
+    let free = ev.free;
+    let at = |f: &Free, i: usize| whole(f, f.lo + (f.hi - f.lo) * i as f64 / (grid - 1) as f64);
+    let mut best: Option<Evaluation> = None;
+    for flat in 0..grid.pow(free.len() as u32) {
+        let x: Vec<f64> = (0..free.len())
+            .map(|j| at(&free[j], flat / grid.pow(j as u32) % grid))
+            .collect();
+        let e = ev.eval(&x)?;
+        if best.as_ref().is_none_or(|b| e.objective < b.objective) {
+            best = Some(e);
+        }
+    }
+    best.ok_or_else(|| bad_input("calibrate: no free parameter (--free)"))
+}
+
+/// One pattern-search step: each knob moved by its step either way; whether `best` improved.
+fn pattern_step<P: FnMut(&Evaluation)>(
+    ev: &mut Evaluations<'_, P>,
+    best: &mut Evaluation,
+    step: &[f64],
+) -> anyhow::Result<bool> {
+    let free = ev.free;
+    let mut improved = false;
+    for j in 0..free.len() {
+        for sign in [-1.0, 1.0] {
+            let mut x = best.x.clone();
+            x[j] = whole(
+                &free[j],
+                (x[j] + sign * step[j]).clamp(free[j].lo, free[j].hi),
+            );
+            let e = ev.eval(&x)?;
+            if e.objective < best.objective {
+                *best = e;
+                improved = true;
+            }
+        }
+    }
+    Ok(improved)
+}
+
+/// Each knob's standard uncertainty from the objective's curvature at `best` over its last
+/// step (none for an integer knob, or where the curvature is not positive or a side is out of
+/// range).
+fn curvature_u<P: FnMut(&Evaluation)>(
+    ev: &mut Evaluations<'_, P>,
+    best: &Evaluation,
+    step: &[f64],
+) -> anyhow::Result<Vec<Option<f64>>> {
+    let free = ev.free;
     let mut u = Vec::with_capacity(free.len());
     for j in 0..free.len() {
         let h = step[j];
@@ -606,7 +670,7 @@ pub fn search(
             if x[j] < free[j].lo || x[j] > free[j].hi {
                 return Ok(None);
             }
-            Ok(Some(eval(&x)?.objective))
+            Ok(Some(ev.eval(&x)?.objective))
         };
         let curvature = match (side(-1.0)?, side(1.0)?) {
             (Some(a), Some(b)) => Some((a - 2.0 * best.objective + b) / (h * h)),
@@ -620,11 +684,7 @@ pub fn search(
                 .map(|c| (2.0 / c).sqrt()),
         );
     }
-    Ok(Fit {
-        best,
-        u,
-        evaluations: order,
-    })
+    Ok(u)
 }
 
 /// The rows of `residuals.csv` of evaluation `e`.

@@ -343,77 +343,32 @@ pub fn tracker_floor(
 ) -> Option<TrackerFloor> {
     let (w, h) = frame.dimensions();
     let (x0, y0, cw, ch) = region(w, h, config.roi);
-    let value = |x: usize, y: usize| -> f64 {
-        let i = (y0 + y) * w + x0 + x;
-        match frame {
-            GreyFrame::U8 { data, .. } => f64::from(data[i]),
-            GreyFrame::U16 { data, .. } => f64::from(data[i]),
-        }
+    let r = Window {
+        frame,
+        w,
+        x0,
+        y0,
+        cw,
+        ch,
     };
     let s = sigma.max((1.0f64 / 12.0).sqrt());
     let t = f64::from(config.threshold);
     // first pass: the centroid itself
-    let (mut sw, mut sx, mut sy, mut n) = (0.0, 0.0, 0.0, 0usize);
-    for y in 0..ch {
-        for x in 0..cw {
-            let v = value(x, y);
-            if v > t {
-                let wt = match config.mode {
-                    Mode::Binary => 1.0,
-                    Mode::Weighted => v - t,
-                };
-                sw += wt;
-                sx += wt * x as f64;
-                sy += wt * y as f64;
-                n += 1;
-            }
-        }
-    }
-    if n == 0 || sw <= 0.0 {
-        return None;
-    }
-    let (cx, cy) = (sx / sw, sy / sw);
-    // central differences inside the region, 0 on its border
-    let gradient = |x: usize, y: usize| -> (f64, f64) {
-        let gx = if x > 0 && x + 1 < cw {
-            0.5 * (value(x + 1, y) - value(x - 1, y))
-        } else {
-            0.0
-        };
-        let gy = if y > 0 && y + 1 < ch {
-            0.5 * (value(x, y + 1) - value(x, y - 1))
-        } else {
-            0.0
-        };
-        (gx, gy)
-    };
+    let (sw, cx, cy, n) = r.centroid(t, config.mode)?;
     let (mut vx, mut vy, mut gx2, mut gy2) = (0.0, 0.0, 0.0, 0.0);
     for y in 0..ch {
         for x in 0..cw {
-            let v = value(x, y);
+            let v = r.value(x, y);
             let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+            let (gx, gy) = r.gradient(x, y);
             let k = match config.mode {
                 Mode::Weighted if v > t => s * s,
                 Mode::Weighted => 0.0,
-                Mode::Binary if sigma > 0.0 => {
-                    // averaged over a shift of the target within a pixel (what a moving
-                    // target does): along the gradient, the value spans v +- |grad| / 2
-                    let g = gradient(x, y).0.hypot(gradient(x, y).1);
-                    (0..16)
-                        .map(|i| {
-                            let u = (i as f64 + 0.5) / 16.0 - 0.5;
-                            let z = (v + g * u - t - 0.5) / (sigma * std::f64::consts::SQRT_2);
-                            let p = 0.5 * libm::erfc(-z);
-                            p * (1.0 - p)
-                        })
-                        .sum::<f64>()
-                        / 16.0
-                }
+                Mode::Binary if sigma > 0.0 => flip_variance(v, gx.hypot(gy), t, sigma),
                 Mode::Binary => 0.0,
             };
             vx += k * dx * dx;
             vy += k * dy * dy;
-            let (gx, gy) = gradient(x, y);
             gx2 += gx * gx;
             gy2 += gy * gy;
         }
@@ -433,6 +388,78 @@ pub fn tracker_floor(
         crb_y_px: crb(gy2),
         pixels: n,
     })
+}
+
+/// The centroid's region of a frame: its values and central differences.
+struct Window<'a> {
+    frame: &'a GreyFrame,
+    w: usize,
+    x0: usize,
+    y0: usize,
+    cw: usize,
+    ch: usize,
+}
+
+impl Window<'_> {
+    fn value(&self, x: usize, y: usize) -> f64 {
+        let i = (self.y0 + y) * self.w + self.x0 + x;
+        match self.frame {
+            GreyFrame::U8 { data, .. } => f64::from(data[i]),
+            GreyFrame::U16 { data, .. } => f64::from(data[i]),
+        }
+    }
+
+    /// Central differences inside the region, 0 on its border.
+    fn gradient(&self, x: usize, y: usize) -> (f64, f64) {
+        let gx = if x > 0 && x + 1 < self.cw {
+            0.5 * (self.value(x + 1, y) - self.value(x - 1, y))
+        } else {
+            0.0
+        };
+        let gy = if y > 0 && y + 1 < self.ch {
+            0.5 * (self.value(x, y + 1) - self.value(x, y - 1))
+        } else {
+            0.0
+        };
+        (gx, gy)
+    }
+
+    /// The centroid above threshold `t`: its weight, position and pixel count (`None`: no
+    /// pixel above it).
+    fn centroid(&self, t: f64, mode: Mode) -> Option<(f64, f64, f64, usize)> {
+        let (mut sw, mut sx, mut sy, mut n) = (0.0, 0.0, 0.0, 0usize);
+        for y in 0..self.ch {
+            for x in 0..self.cw {
+                let v = self.value(x, y);
+                if v > t {
+                    let wt = match mode {
+                        Mode::Binary => 1.0,
+                        Mode::Weighted => v - t,
+                    };
+                    sw += wt;
+                    sx += wt * x as f64;
+                    sy += wt * y as f64;
+                    n += 1;
+                }
+            }
+        }
+        (n > 0 && sw > 0.0).then(|| (sw, sx / sw, sy / sw, n))
+    }
+}
+
+/// The variance of a binary pixel's weight (value `v`, gradient `g`, threshold `t`, noise
+/// `sigma`), averaged over a shift of the target within a pixel (what a moving target does):
+/// along the gradient, the value spans v +- |grad| / 2.
+fn flip_variance(v: f64, g: f64, t: f64, sigma: f64) -> f64 {
+    (0..16)
+        .map(|i| {
+            let u = (i as f64 + 0.5) / 16.0 - 0.5;
+            let z = (v + g * u - t - 0.5) / (sigma * std::f64::consts::SQRT_2);
+            let p = 0.5 * libm::erfc(-z);
+            p * (1.0 - p)
+        })
+        .sum::<f64>()
+        / 16.0
 }
 
 /// What a tracking floor of `floor_m` (m per frame, white) at `fc` frames per second does to
