@@ -169,23 +169,7 @@ pub(super) fn render(
 ) -> anyhow::Result<(usize, usize)> {
     let k = model.points;
     let (targets, refs) = layout(k, view.references);
-    // where the plane lands with the image's centre at 0, then the frame around it
-    let probe = plane_view(view.oblique_deg, DISTANCE_MM, FOCAL_PX, (0.0, 0.0));
-    let reach = DISK_MM + 4.0 * rms_px / (FOCAL_PX / DISTANCE_MM);
-    let corners: Vec<(f64, f64)> = targets
-        .iter()
-        .chain(&refs)
-        .flat_map(|&(x, y)| {
-            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                .map(|(a, b)| probe.apply((x + a * reach, y + b * reach)))
-        })
-        .collect();
-    let xmax = corners.iter().map(|p| p.0.abs()).fold(0.0, f64::max);
-    let ymax = corners.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
-    let slack = MARGIN + 3.0 * view.shake_px + (view.roll_deg * 3.0).to_radians() * xmax;
-    let w = (2.0 * (xmax + slack)).ceil() as usize | 1;
-    let h = (2.0 * (ymax + slack)).ceil() as usize | 1;
-    let centre = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let (w, h, centre) = frame_size(&targets, &refs, view, rms_px);
     let base = plane_view(view.oblique_deg, DISTANCE_MM, FOCAL_PX, centre);
     // the motion, mm along the plane's y, at every fine step
     let fine = field::simulate_fine(model, fps, frames, seed);
@@ -258,30 +242,7 @@ pub(super) fn render(
                     seen[d].1 += p.1 / INSTANTS as f64;
                     seen[d].2 += (y - y0) / INSTANTS as f64;
                 }
-                let jac = h_cam.jacobian((x0, y));
-                let px_per_mm = (jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0]).abs().sqrt();
-                let r_px = DISK_MM * px_per_mm * 1.6 + 2.0;
-                let (x_lo, x_hi) = (
-                    (p.0 - r_px).floor().max(0.0) as usize,
-                    ((p.0 + r_px).ceil() as usize).min(w - 1),
-                );
-                let (y_lo, y_hi) = (
-                    (p.1 - r_px).floor().max(0.0) as usize,
-                    ((p.1 + r_px).ceil() as usize).min(h - 1),
-                );
-                for yy in y_lo..=y_hi {
-                    for xx in x_lo..=x_hi {
-                        let q = inv.apply((xx as f64, yy as f64));
-                        let dist = ((q.0 - x0).powi(2) + (q.1 - y).powi(2)).sqrt() - DISK_MM;
-                        // the edge blurred by a Gaussian of EDGE_SIGMA_PX (a lens's): no
-                        // staircase for the centroid to lock to
-                        let cover = (0.5
-                            * libm::erfc(
-                                dist * px_per_mm / (EDGE_SIGMA_PX * std::f64::consts::SQRT_2),
-                            )) as f32;
-                        frame[yy * w + xx] += LEVEL * cover / INSTANTS as f32;
-                    }
-                }
+                draw_disk(&mut frame, (w, h), &h_cam, &inv, (x0, y));
             }
         }
         let t_s = n as f64 / fps;
@@ -296,6 +257,81 @@ pub(super) fn render(
     sink.finish()?;
     staged.write("truth_motion.csv", truth)?;
     staged.write("camera_truth.csv", cam_truth)?;
+    write_layout(staged, &base, &targets, &refs)?;
+    Ok((w, h))
+}
+
+/// The frame's size, odd both ways, and its centre: the plane's disks (targets and references)
+/// at their largest reach, plus a margin for the camera's shake and roll.
+fn frame_size(
+    targets: &[(f64, f64)],
+    refs: &[(f64, f64)],
+    view: &CameraView,
+    rms_px: f64,
+) -> (usize, usize, (f64, f64)) {
+    // where the plane lands with the image's centre at 0, then the frame around it
+    let probe = plane_view(view.oblique_deg, DISTANCE_MM, FOCAL_PX, (0.0, 0.0));
+    let reach = DISK_MM + 4.0 * rms_px / (FOCAL_PX / DISTANCE_MM);
+    let corners: Vec<(f64, f64)> = targets
+        .iter()
+        .chain(refs)
+        .flat_map(|&(x, y)| {
+            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(a, b)| probe.apply((x + a * reach, y + b * reach)))
+        })
+        .collect();
+    let xmax = corners.iter().map(|p| p.0.abs()).fold(0.0, f64::max);
+    let ymax = corners.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
+    let slack = MARGIN + 3.0 * view.shake_px + (view.roll_deg * 3.0).to_radians() * xmax;
+    let w = (2.0 * (xmax + slack)).ceil() as usize | 1;
+    let h = (2.0 * (ymax + slack)).ceil() as usize | 1;
+    let centre = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    (w, h, centre)
+}
+
+/// Adds one instant's disk at plane point `(x0, y)`, seen through `h_cam` (`inv` its inverse),
+/// to `frame` (`w` x `h`): its edge blurred by a Gaussian of EDGE_SIGMA_PX.
+fn draw_disk(
+    frame: &mut [f32],
+    (w, h): (usize, usize),
+    h_cam: &Homography,
+    inv: &Homography,
+    (x0, y): (f64, f64),
+) {
+    let p = h_cam.apply((x0, y));
+    let jac = h_cam.jacobian((x0, y));
+    let px_per_mm = (jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0]).abs().sqrt();
+    let r_px = DISK_MM * px_per_mm * 1.6 + 2.0;
+    let (x_lo, x_hi) = (
+        (p.0 - r_px).floor().max(0.0) as usize,
+        ((p.0 + r_px).ceil() as usize).min(w - 1),
+    );
+    let (y_lo, y_hi) = (
+        (p.1 - r_px).floor().max(0.0) as usize,
+        ((p.1 + r_px).ceil() as usize).min(h - 1),
+    );
+    for yy in y_lo..=y_hi {
+        for xx in x_lo..=x_hi {
+            let q = inv.apply((xx as f64, yy as f64));
+            let dist = ((q.0 - x0).powi(2) + (q.1 - y).powi(2)).sqrt() - DISK_MM;
+            // the edge blurred by a Gaussian of EDGE_SIGMA_PX (a lens's): no
+            // staircase for the centroid to lock to
+            let cover = (0.5
+                * libm::erfc(dist * px_per_mm / (EDGE_SIGMA_PX * std::f64::consts::SQRT_2)))
+                as f32;
+            frame[yy * w + xx] += LEVEL * cover / INSTANTS as f32;
+        }
+    }
+}
+
+/// `points.csv` (the targets' windows), and with references `references.csv` and `world.csv`
+/// (their plane coordinates).
+fn write_layout(
+    staged: &vibcam_report::outdir::Staged,
+    base: &Homography,
+    targets: &[(f64, f64)],
+    refs: &[(f64, f64)],
+) -> anyhow::Result<()> {
     let windows = |pts: &[(f64, f64)]| {
         let mut s = String::from("target,x,y,w,h\n");
         for (i, p) in pts.iter().enumerate() {
@@ -304,17 +340,17 @@ pub(super) fn render(
         }
         s
     };
-    staged.write("points.csv", windows(&targets))?;
+    staged.write("points.csv", windows(targets))?;
     if !refs.is_empty() {
-        staged.write("references.csv", windows(&refs))?;
+        staged.write("references.csv", windows(refs))?;
         let mut world = String::from("x,y,x_mm,y_mm\n");
-        for p in &refs {
+        for p in refs {
             let (x, y) = base.apply(*p);
             let _ = writeln!(world, "{x:.3},{y:.3},{},{}", p.0, p.1);
         }
         staged.write("world.csv", world)?;
     }
-    Ok((w, h))
+    Ok(())
 }
 
 #[cfg(test)]
