@@ -412,6 +412,68 @@ pub fn pack_10(codes: &[u16]) -> Vec<u8> {
     out
 }
 
+/// One frame's image bytes as a .cine stores them: packed 10-bit, or bottom row first, 8 or
+/// 16 bits per pixel.
+fn cine_image(
+    f: &[u16],
+    (width, height): (usize, usize),
+    (bits, compression): (u16, u32),
+) -> Vec<u8> {
+    match (compression, bits) {
+        (P10, _) => pack_10(f),
+        (_, 8) => (0..height)
+            .rev()
+            .flat_map(|r| f[r * width..(r + 1) * width].iter().map(|&v| v as u8))
+            .collect(),
+        _ => (0..height)
+            .rev()
+            .flat_map(|r| {
+                f[r * width..(r + 1) * width]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+            })
+            .collect(),
+    }
+}
+
+/// The setup block's fields a reader reads (rate, shutter, depth, black and white levels) and
+/// the time block: one timestamp per frame at `fps`.
+fn put_setup_and_times(
+    b: &mut [u8],
+    (s, setup_len): (usize, usize),
+    (bits, compression): (u16, u32),
+    (fps, shutter_ns): (u32, u32),
+    n: usize,
+) {
+    let put = |b: &mut [u8], at: usize, v: &[u8]| b[at..at + v.len()].copy_from_slice(v);
+    let time_block = 8 + 8 * n;
+    put(b, s + 142, &(setup_len as u16).to_le_bytes());
+    put(b, s + SETUP_FRAME_RATE, &fps.to_le_bytes());
+    put(b, s + SETUP_SHUTTER_US, &(shutter_ns / 1000).to_le_bytes());
+    // the sensor's depth, as cameras state it: 10 for packed 10-bit (Phantom's own files,
+    // e.g. pycine's chart1.cine, say 10 there; the linearised values are 12-bit)
+    let real: u32 = if compression == P10 {
+        10
+    } else {
+        u32::from(bits).min(12)
+    };
+    put(b, s + SETUP_REAL_BPP, &real.to_le_bytes());
+    put(b, s + SETUP_SHUTTER_NS, &shutter_ns.to_le_bytes());
+    // BlackLevel 0, WhiteLevel full scale (pycine stretches between them: the identity)
+    put(b, s + 5732, &0u32.to_le_bytes());
+    put(b, s + 5736, &((1u32 << real) - 1).to_le_bytes());
+    let t = s + setup_len;
+    put(b, t, &(time_block as u32).to_le_bytes());
+    put(b, t + 4, &1002u16.to_le_bytes());
+    for k in 0..n {
+        let ticks = (k as u64 * (1u64 << 32)) / u64::from(fps);
+        let v = ((1000 + (ticks >> 32)) << 32) | (ticks & 0xFFFF_FFFF);
+        let at = t + 8 + 8 * k;
+        put(b, at, &((v & 0xFFFF_FFFF) as u32).to_le_bytes());
+        put(b, at + 4, &((v >> 32) as u32).to_le_bytes());
+    }
+}
+
 /// A cine file's frames as stored: `(width, height)`, the bitmap's bit count and compression
 /// (0 with 8 or 16 bits; 256 with codes below 1024, packed), bottom-up rows for uncompressed
 /// frames (as cameras write them), the frame rate and shutter, and a time-stamp block one frame
@@ -429,24 +491,10 @@ pub fn write_cine(
     let (off_bmi, off_setup) = (44usize, 84usize);
     let time_block = 8 + 8 * n;
     let off_offsets = off_setup + setup_len + time_block;
-    let image = |f: &Vec<u16>| -> Vec<u8> {
-        match (compression, bits) {
-            (P10, _) => pack_10(f),
-            (_, 8) => (0..height)
-                .rev()
-                .flat_map(|r| f[r * width..(r + 1) * width].iter().map(|&v| v as u8))
-                .collect(),
-            _ => (0..height)
-                .rev()
-                .flat_map(|r| {
-                    f[r * width..(r + 1) * width]
-                        .iter()
-                        .flat_map(|v| v.to_le_bytes())
-                })
-                .collect(),
-        }
-    };
-    let images: Vec<Vec<u8>> = frames.iter().map(image).collect();
+    let images: Vec<Vec<u8>> = frames
+        .iter()
+        .map(|f| cine_image(f, (width, height), (bits, compression)))
+        .collect();
     let mut b = vec![0u8; off_offsets + 8 * n];
     let put = |b: &mut Vec<u8>, at: usize, v: &[u8]| b[at..at + v.len()].copy_from_slice(v);
     put(&mut b, 0, b"CI");
@@ -474,36 +522,13 @@ pub fn write_cine(
         off_bmi + 20,
         &(images[0].len() as u32).to_le_bytes(),
     );
-    let s = off_setup;
-    put(&mut b, s + 142, &(setup_len as u16).to_le_bytes());
-    put(&mut b, s + SETUP_FRAME_RATE, &fps.to_le_bytes());
-    put(
+    put_setup_and_times(
         &mut b,
-        s + SETUP_SHUTTER_US,
-        &(shutter_ns / 1000).to_le_bytes(),
+        (off_setup, setup_len),
+        (bits, compression),
+        (fps, shutter_ns),
+        n,
     );
-    // the sensor's depth, as cameras state it: 10 for packed 10-bit (Phantom's own files,
-    // e.g. pycine's chart1.cine, say 10 there; the linearised values are 12-bit)
-    let real: u32 = if compression == P10 {
-        10
-    } else {
-        u32::from(bits).min(12)
-    };
-    put(&mut b, s + SETUP_REAL_BPP, &real.to_le_bytes());
-    put(&mut b, s + SETUP_SHUTTER_NS, &shutter_ns.to_le_bytes());
-    // BlackLevel 0, WhiteLevel full scale (pycine stretches between them: the identity)
-    put(&mut b, s + 5732, &0u32.to_le_bytes());
-    put(&mut b, s + 5736, &((1u32 << real) - 1).to_le_bytes());
-    let t = s + setup_len;
-    put(&mut b, t, &(time_block as u32).to_le_bytes());
-    put(&mut b, t + 4, &1002u16.to_le_bytes());
-    for k in 0..n {
-        let ticks = (k as u64 * (1u64 << 32)) / u64::from(fps);
-        let v = ((1000 + (ticks >> 32)) << 32) | (ticks & 0xFFFF_FFFF);
-        let at = t + 8 + 8 * k;
-        put(&mut b, at, &((v & 0xFFFF_FFFF) as u32).to_le_bytes());
-        put(&mut b, at + 4, &((v >> 32) as u32).to_le_bytes());
-    }
     for (k, img) in images.iter().enumerate() {
         let at = b.len() as u64;
         put(&mut b, off_offsets + 8 * k, &at.to_le_bytes());

@@ -181,6 +181,45 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
     Some(x)
 }
 
+/// The longest blur of a sinusoid of amplitude `amp` within an exposure of `e` periods: its
+/// largest excursion, 2 A sin(pi E2PR) up to E2PR 1/2.
+fn blur_px(amp: f64, e: f64) -> f64 {
+    2.0 * amp * (std::f64::consts::PI * e.min(0.5)).sin()
+}
+
+/// The renderer of the sinusoid's `path` (for LK, a frame wide enough for the window to reach
+/// as far as `longest_blur`) and the tracker the setup measures with.
+fn renderer_and_tracker(
+    setup: &TransferSetup,
+    path: &[f64],
+    longest_blur: f64,
+) -> Result<(BlurRenderer, FrameTracker), CompensationError> {
+    let amp = setup.amplitude_px;
+    let mut renderer = if setup.lk {
+        let extra = (longest_blur / 2.0).ceil() + 8.0;
+        let mut r = BlurRenderer::new(&setup.target, -amp - extra, amp + extra);
+        r.set_path(path, 16);
+        r
+    } else {
+        BlurRenderer::for_path(&setup.target, path, 16)
+    };
+    renderer.set_epsa_images(setup.epsa_images);
+    let kind = match (setup.lk, setup.mode) {
+        (true, _) => TrackerKind::Lk,
+        (false, Mode::Binary) => TrackerKind::Blob,
+        (false, Mode::Weighted) => TrackerKind::Weighted,
+    };
+    let tracker = FrameTracker::new(
+        kind,
+        setup.threshold,
+        setup.frame_range_frac,
+        &setup.target,
+        255,
+    )
+    .map_err(|e| CompensationError::Setup(e.to_string()))?;
+    Ok((renderer, tracker))
+}
+
 /// The centroid's transfer at each E2PR of `e2prs` (one renderer for all of them).
 pub fn transfer_curve(
     setup: &TransferSetup,
@@ -198,33 +237,10 @@ pub fn transfer_curve(
             amp * (std::f64::consts::TAU * t).sin()
         })
         .collect();
-    // LK's window reaches as far as the longest blur (the sinusoid's largest excursion
-    // within an exposure, 2 A sin(pi E2PR) up to E2PR 1/2), and the frame holds it
-    let blur = |e: f64| 2.0 * amp * (std::f64::consts::PI * e.min(0.5)).sin();
-    let mut renderer = if setup.lk {
-        let extra = (blur(max_e) / 2.0).ceil() + 8.0;
-        let mut r = BlurRenderer::new(&setup.target, -amp - extra, amp + extra);
-        r.set_path(&path, 16);
-        r
-    } else {
-        BlurRenderer::for_path(&setup.target, &path, 16)
-    };
-    renderer.set_epsa_images(setup.epsa_images);
+    let blur = |e: f64| blur_px(amp, e);
+    let (mut renderer, mut tracker) = renderer_and_tracker(setup, &path, blur(max_e))?;
     let (w, h) = (renderer.width(), renderer.height());
     let mut frame = vec![0u8; w * h];
-    let kind = match (setup.lk, setup.mode) {
-        (true, _) => TrackerKind::Lk,
-        (false, Mode::Binary) => TrackerKind::Blob,
-        (false, Mode::Weighted) => TrackerKind::Weighted,
-    };
-    let mut tracker = FrameTracker::new(
-        kind,
-        setup.threshold,
-        setup.frame_range_frac,
-        &setup.target,
-        255,
-    )
-    .map_err(|e| CompensationError::Setup(e.to_string()))?;
     let k = setup.frames_per_period;
     let mut out = Vec::with_capacity(e2prs.len());
     let (mut ts, mut ys) = (Vec::with_capacity(k), Vec::with_capacity(k));

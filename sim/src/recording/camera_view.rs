@@ -173,36 +173,11 @@ pub(super) fn render(
     let base = plane_view(view.oblique_deg, DISTANCE_MM, FOCAL_PX, centre);
     // the motion, mm along the plane's y, at every fine step
     let fine = field::simulate_fine(model, fps, frames, seed);
-    let at_frames = |f: &Vec<f64>| {
-        let s: f64 = (0..frames).map(|i| f[SUB + i * SUB].powi(2)).sum();
-        (s / frames as f64).sqrt()
-    };
-    let rms = fine.iter().map(at_frames).fold(0.0, f64::max);
-    let scale_mm = if rms > 0.0 {
-        rms_px / (FOCAL_PX / DISTANCE_MM) / rms
-    } else {
-        0.0
-    };
+    let scale_mm = motion_scale(&fine, frames, rms_px);
     let fine_hz = fps * SUB as f64;
     let n_fine = fine.first().map_or(0, Vec::len);
-    let shake: Vec<Vec<f64>> = (0..3)
-        .map(|i| {
-            band_noise(
-                n_fine,
-                fine_hz,
-                view.shake_band_hz,
-                seed ^ (0x5a4e_0000 + i),
-            )
-        })
-        .collect();
-    let sizes = [view.shake_px, view.shake_px, view.roll_deg.to_radians()];
-    let camera_at = |s: f64| -> Homography {
-        // linear interpolation between fine steps
-        let i = (s.floor().max(0.0) as usize).min(n_fine.saturating_sub(2));
-        let f = s - i as f64;
-        let v = |c: usize| sizes[c] * (shake[c][i] * (1.0 - f) + shake[c][i + 1] * f);
-        Homography::similarity(centre, v(2), 1.0, (v(0), v(1)))
-    };
+    let shake = CameraShake::new(view, (n_fine, fine_hz), seed, centre);
+    let camera_at = |s: f64| shake.at(s);
     let target_at = |j: usize, s: f64| -> f64 {
         let i = (s.floor().max(0.0) as usize).min(n_fine.saturating_sub(2));
         let f = s - i as f64;
@@ -259,6 +234,65 @@ pub(super) fn render(
     staged.write("camera_truth.csv", cam_truth)?;
     write_layout(staged, &base, &targets, &refs)?;
     Ok((w, h))
+}
+
+/// mm of the plane per unit of the field's motion: its largest RMS over the points at the
+/// frames' instants is `rms_px` in the image.
+fn motion_scale(fine: &[Vec<f64>], frames: usize, rms_px: f64) -> f64 {
+    let at_frames = |f: &Vec<f64>| {
+        let s: f64 = (0..frames).map(|i| f[SUB + i * SUB].powi(2)).sum();
+        (s / frames as f64).sqrt()
+    };
+    let rms = fine.iter().map(at_frames).fold(0.0, f64::max);
+    if rms > 0.0 {
+        rms_px / (FOCAL_PX / DISTANCE_MM) / rms
+    } else {
+        0.0
+    }
+}
+
+/// The camera's shake and roll: band-limited noise on the fine time base (x, y, roll), scaled
+/// by the view's sizes; its map at any instant.
+struct CameraShake {
+    shake: Vec<Vec<f64>>,
+    sizes: [f64; 3],
+    n_fine: usize,
+    centre: (f64, f64),
+}
+
+impl CameraShake {
+    fn new(
+        view: &CameraView,
+        (n_fine, fine_hz): (usize, f64),
+        seed: u64,
+        centre: (f64, f64),
+    ) -> Self {
+        let shake: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                band_noise(
+                    n_fine,
+                    fine_hz,
+                    view.shake_band_hz,
+                    seed ^ (0x5a4e_0000 + i),
+                )
+            })
+            .collect();
+        CameraShake {
+            shake,
+            sizes: [view.shake_px, view.shake_px, view.roll_deg.to_radians()],
+            n_fine,
+            centre,
+        }
+    }
+
+    /// The camera's map at fine step `s` (linear interpolation between fine steps).
+    fn at(&self, s: f64) -> Homography {
+        let i = (s.floor().max(0.0) as usize).min(self.n_fine.saturating_sub(2));
+        let f = s - i as f64;
+        let v =
+            |c: usize| self.sizes[c] * (self.shake[c][i] * (1.0 - f) + self.shake[c][i + 1] * f);
+        Homography::similarity(self.centre, v(2), 1.0, (v(0), v(1)))
+    }
 }
 
 /// The frame's size, odd both ways, and its centre: the plane's disks (targets and references)

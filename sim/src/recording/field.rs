@@ -96,22 +96,8 @@ pub fn write_field_recording(
         return write_view(rec, v, staged, out, progress);
     }
     let paths = scaled_paths(rec);
-    let (lo, hi) = paths
-        .iter()
-        .flat_map(|p| p.path_px.iter())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
     let target = cantilever::TARGET;
-    let mut renderers: Vec<BlurRenderer> = paths
-        .iter()
-        .map(|p| {
-            let mut r = BlurRenderer::new(&target, lo, hi);
-            // no precomputed blocks: an exposure spans a few fine steps
-            r.set_path(&p.path_px, p.path_px.len() + 1);
-            r
-        })
-        .collect();
+    let mut renderers = strip_renderers(&paths, &target);
     let k = paths.len();
     let (sw, h) = (renderers[0].width(), renderers[0].height());
     let w = sw * k;
@@ -161,6 +147,25 @@ pub fn write_field_recording(
         field::modes_line(&rec.model),
         out.display()
     ))
+}
+
+/// One renderer per target's strip, all over the same span of the paths' motion.
+fn strip_renderers(paths: &[TargetPath], target: &crate::imaging::DiskTarget) -> Vec<BlurRenderer> {
+    let (lo, hi) = paths
+        .iter()
+        .flat_map(|p| p.path_px.iter())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    paths
+        .iter()
+        .map(|p| {
+            let mut r = BlurRenderer::new(target, lo, hi);
+            // no precomputed blocks: an exposure spans a few fine steps
+            r.set_path(&p.path_px, p.path_px.len() + 1);
+            r
+        })
+        .collect()
 }
 
 /// [`write_field_recording`] through [`super::camera_view`].
