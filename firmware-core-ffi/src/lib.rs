@@ -1192,6 +1192,31 @@ mod tests {
         );
     }
 
+    /// Six seconds of a tone of `w` rad/s pushed into the C pipeline and firmware-core's alike:
+    /// the ADC (m/s^2) keeps a frame's worth ahead of the camera (mm), as a driver interleaves
+    /// them.
+    fn feed_a_tone(p: &mut vc_pipeline_t, reference: &mut Pipeline, (fps, fs): (u32, u32), w: f32) {
+        let (frames, mut sent) = (6 * fps as usize, 0usize);
+        for k in 0..frames {
+            let upto = ((k + 1) * fs as usize).div_ceil(fps as usize);
+            let adc: Vec<f32> = (sent..upto)
+                .map(|i| 5.0 * (w * (i as f64 / fs as f64) as f32).sin())
+                .collect();
+            sent = upto;
+            assert_eq!(
+                unsafe { vc_pipeline_push_adc(p, adc.as_ptr(), adc.len()) },
+                VC_OK
+            );
+            reference.push_adc(&adc).unwrap();
+            let t = (k as f64 / fps as f64) as f32;
+            // the vision acceleration leads the ADC's by a quarter period: H1 = i at 7 Hz,
+            // a resonance's phase, so |Im H1| peaks there
+            let mm = -5.0 * (w * t).cos() / (w * w) * 1e3;
+            assert_eq!(unsafe { vc_pipeline_push_frame(p, mm) }, VC_OK);
+            reference.push_frame(mm).unwrap();
+        }
+    }
+
     #[test]
     fn the_c_pipeline_is_firmware_cores_and_finds_the_resonance() {
         println!(
@@ -1230,26 +1255,7 @@ mod tests {
             unsafe { vc_pipeline_peak(&mut *p, 1.0, 20.0, &mut out) },
             VC_ERR_EMPTY
         );
-        // the ADC keeps a frame's worth ahead of the camera, as a driver interleaves them
-        let (frames, mut sent) = (6 * fps as usize, 0usize);
-        for k in 0..frames {
-            let upto = ((k + 1) * fs as usize).div_ceil(fps as usize);
-            let adc: Vec<f32> = (sent..upto)
-                .map(|i| 5.0 * (w * (i as f64 / fs as f64) as f32).sin())
-                .collect();
-            sent = upto;
-            assert_eq!(
-                unsafe { vc_pipeline_push_adc(&mut *p, adc.as_ptr(), adc.len()) },
-                VC_OK
-            );
-            reference.push_adc(&adc).unwrap();
-            let t = (k as f64 / fps as f64) as f32;
-            // the vision acceleration leads the ADC's by a quarter period: H1 = i at 7 Hz,
-            // a resonance's phase, so |Im H1| peaks there
-            let mm = -5.0 * (w * t).cos() / (w * w) * 1e3;
-            assert_eq!(unsafe { vc_pipeline_push_frame(&mut *p, mm) }, VC_OK);
-            reference.push_frame(mm).unwrap();
-        }
+        feed_a_tone(&mut p, &mut reference, (fps, fs), w);
         assert_eq!(
             unsafe { vc_pipeline_peak(&mut *p, 6.0, 8.0, &mut out) },
             VC_OK

@@ -739,27 +739,12 @@ fn track_frame_lk(
                     .map(|tp| (tp, (dx.round() as i64, dy.round() as i64)))
             })
             .collect();
-        // half the members' larger window first; a best offset below 0.5 or at the range's
-        // edge (the motion may be larger) doubles it, up to the frame's size: the nearest
-        // offset that fits the whole group wins, not a far one that puts the group on a row of
-        // look-alikes (another storey), which a search of the whole frame at once could take
-        let (fw, fh) = frame.dimensions();
-        let whole = (fw.max(fh) as i64).max(8);
-        let mut range = members
+        let start = members
             .iter()
             .map(|&t| i64::from(trackers[t].config().width.max(trackers[t].config().height) / 2))
             .max()
-            .unwrap_or(0)
-            .clamp(8, whole);
-        let found = loop {
-            let r = shared_offset(integral, &list, range);
-            let inside = |d: (i64, i64)| d.0.abs().max(d.1.abs()) + 4 < range;
-            match r {
-                Some((d, score)) if score >= 0.5 && inside(d) => break Some(d),
-                _ if range >= whole => break r.filter(|(_, s)| *s >= 0.5).map(|(d, _)| d),
-                _ => range = (range * 2).min(whole),
-            }
-        };
+            .unwrap_or(0);
+        let found = group_offset(integral, &list, start, frame.dimensions());
         let Some(d) = found else {
             continue;
         };
@@ -775,6 +760,30 @@ fn track_frame_lk(
         })?;
     }
     Ok(results)
+}
+
+/// A group's shared offset since the last frame: the search starts at half the members'
+/// larger window (`start`); a best offset below 0.5 or at the range's edge (the motion may be
+/// larger) doubles it, up to the frame's size: the nearest offset that fits the whole group
+/// wins, not a far one that puts the group on a row of look-alikes (another storey), which a
+/// search of the whole frame at once could take.
+fn group_offset(
+    integral: &Integral,
+    list: &[(&BlockTemplate, (i64, i64))],
+    start: i64,
+    (fw, fh): (usize, usize),
+) -> Option<(i64, i64)> {
+    let whole = (fw.max(fh) as i64).max(8);
+    let mut range = start.clamp(8, whole);
+    loop {
+        let r = shared_offset(integral, list, range);
+        let inside = |d: (i64, i64)| d.0.abs().max(d.1.abs()) + 4 < range;
+        match r {
+            Some((d, score)) if score >= 0.5 && inside(d) => break Some(d),
+            _ if range >= whole => break r.filter(|(_, s)| *s >= 0.5).map(|(d, _)| d),
+            _ => range = (range * 2).min(whole),
+        }
+    }
 }
 
 /// A lost result with the tracker's reason beside `empty` (no position).

@@ -282,15 +282,7 @@ pub fn analyse(
         exp,
         &mut notes,
     );
-    let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
-    if misfit > 0.2 {
-        notes.push(format!(
-            "the fitted model leaves {:.0} % of an FRF unexplained (LSFD misfit {misfit:.3}): a \
-             delay between the records, modes the band cuts or not found, or noise; the numbers \
-             above are doubtful",
-            100.0 * misfit
-        ));
-    }
+    notes.extend(misfit_note(&constants));
     let clusters = all
         .iter()
         .map(|m| (m.clone(), true))
@@ -308,6 +300,19 @@ pub fn analyse(
         exp,
         unit_sizes,
         notes,
+    })
+}
+
+/// A note when the fitted model leaves over a fifth of an FRF unexplained.
+fn misfit_note(constants: &[lsfd::Constants]) -> Option<String> {
+    let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
+    (misfit > 0.2).then(|| {
+        format!(
+            "the fitted model leaves {:.0} % of an FRF unexplained (LSFD misfit {misfit:.3}): a \
+             delay between the records, modes the band cuts or not found, or noise; the numbers \
+             above are doubtful",
+            100.0 * misfit
+        )
     })
 }
 

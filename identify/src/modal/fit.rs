@@ -39,45 +39,7 @@ impl Problem {
         smoothing: Option<&Smoothing>,
     ) -> Result<Problem, ModalError> {
         let (lo, hi) = band;
-        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
-            return Err(ModalError::InvalidBand { lo, hi });
-        }
-        if frfs.is_empty() {
-            return Err(ModalError::NoFrf { lo, hi });
-        }
-        for (j, h) in frfs.iter().enumerate() {
-            if h.len() != freq_hz.len() {
-                return Err(ModalError::LengthMismatch {
-                    frf: j,
-                    len: h.len(),
-                    freqs: freq_hz.len(),
-                });
-            }
-        }
-        let idx: Vec<usize> = (0..freq_hz.len())
-            .filter(|&k| freq_hz[k] >= lo && freq_hz[k] <= hi && freq_hz[k] > 0.0)
-            .collect();
-        if idx.len() < MIN_BINS {
-            return Err(ModalError::TooFewBins {
-                lo,
-                hi,
-                bins: idx.len(),
-                needed: MIN_BINS,
-            });
-        }
-        for (j, h) in frfs.iter().enumerate() {
-            for (n, &k) in idx.iter().enumerate() {
-                let increasing = n == 0 || freq_hz[k] > freq_hz[idx[n - 1]];
-                if !(h[k].re.is_finite() && h[k].im.is_finite() && increasing) {
-                    return Err(ModalError::NotFinite {
-                        lo,
-                        hi,
-                        frf: j,
-                        f_hz: freq_hz[k],
-                    });
-                }
-            }
-        }
+        let idx = band_lines(freq_hz, frfs, band)?;
         let wc = PI * (lo + hi);
         let s: Vec<Complex64> = idx
             .iter()
@@ -335,4 +297,53 @@ impl Problem {
             misfit: if norm > 0.0 { (res / norm).sqrt() } else { 0.0 },
         }
     }
+}
+
+/// The lines of `band` (above 0 Hz) every FRF is fitted on, checked: the band valid, the FRFs
+/// as long as the frequencies, enough lines, every value finite and the frequencies increasing.
+fn band_lines(
+    freq_hz: &[f64],
+    frfs: &[&[Complex64]],
+    (lo, hi): (f64, f64),
+) -> Result<Vec<usize>, ModalError> {
+    if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+        return Err(ModalError::InvalidBand { lo, hi });
+    }
+    if frfs.is_empty() {
+        return Err(ModalError::NoFrf { lo, hi });
+    }
+    for (j, h) in frfs.iter().enumerate() {
+        if h.len() != freq_hz.len() {
+            return Err(ModalError::LengthMismatch {
+                frf: j,
+                len: h.len(),
+                freqs: freq_hz.len(),
+            });
+        }
+    }
+    let idx: Vec<usize> = (0..freq_hz.len())
+        .filter(|&k| freq_hz[k] >= lo && freq_hz[k] <= hi && freq_hz[k] > 0.0)
+        .collect();
+    if idx.len() < MIN_BINS {
+        return Err(ModalError::TooFewBins {
+            lo,
+            hi,
+            bins: idx.len(),
+            needed: MIN_BINS,
+        });
+    }
+    for (j, h) in frfs.iter().enumerate() {
+        for (n, &k) in idx.iter().enumerate() {
+            let increasing = n == 0 || freq_hz[k] > freq_hz[idx[n - 1]];
+            if !(h[k].re.is_finite() && h[k].im.is_finite() && increasing) {
+                return Err(ModalError::NotFinite {
+                    lo,
+                    hi,
+                    frf: j,
+                    f_hz: freq_hz[k],
+                });
+            }
+        }
+    }
+    Ok(idx)
 }
