@@ -681,3 +681,88 @@ fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
         );
     }
 }
+
+/// Every function of more than 80 lines outside firmware-core (test modules left out) is one of
+/// the file parsers and numeric kernels ARCHITECTURE.md names ("Long functions, by name"), and
+/// they are at most twelve. A function's lines run from its `fn` line to the `}` at its
+/// indentation.
+#[test]
+fn long_functions_are_the_named_parsers_and_kernels() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let map = std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap();
+    let named = map
+        .split("## Long functions, by name")
+        .nth(1)
+        .and_then(|s| s.split("\n## ").next())
+        .expect("ARCHITECTURE.md has a section \"Long functions, by name\"");
+    let indent = |l: &str| l.len() - l.trim_start().len();
+    let mut long = Vec::new();
+    let mut files = 0;
+    for krate in HOST_CRATES.iter().chain(&["python", "firmware-core-ffi"]) {
+        let src = root.join(krate).join("src").canonicalize().unwrap();
+        for p in workspace_files(&[".rs"]) {
+            let p = p.canonicalize().unwrap();
+            let Ok(rel) = p.strip_prefix(&src) else {
+                continue;
+            };
+            files += 1;
+            let text = std::fs::read_to_string(&p).unwrap();
+            let lines: Vec<&str> = text.lines().collect();
+            let closing = |from: usize, at: usize| {
+                (from..lines.len())
+                    .find(|&k| indent(lines[k]) == at && lines[k].trim_start().starts_with('}'))
+                    .unwrap_or(lines.len() - 1)
+            };
+            let mut i = 0;
+            while i < lines.len() {
+                let l = lines[i].trim_start();
+                if l.starts_with("#[cfg(test)]")
+                    && lines
+                        .get(i + 1)
+                        .is_some_and(|n| n.trim_start().starts_with("mod "))
+                {
+                    i = closing(i + 2, indent(lines[i + 1])) + 1;
+                    continue;
+                }
+                let words: Vec<&str> = l.split_whitespace().collect();
+                let at_fn = words
+                    .iter()
+                    .take_while(|w| w.starts_with("pub") || ["const", "unsafe"].contains(w))
+                    .count();
+                if words.get(at_fn) == Some(&"fn") && !l.ends_with(';') {
+                    let name: String = words[at_fn + 1]
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    let open = (i..lines.len())
+                        .find(|&k| lines[k].trim_end().ends_with('{') || lines[k].ends_with(';'))
+                        .unwrap_or(i);
+                    if lines[open].ends_with(';') {
+                        i = open + 1;
+                        continue;
+                    }
+                    let end = closing(open + 1, indent(lines[i]));
+                    if end + 1 - i > 80 {
+                        long.push((format!("{krate}/src/{}", rel.display()), name, end + 1 - i));
+                    }
+                    i = end + 1;
+                    continue;
+                }
+                i += 1;
+            }
+        }
+    }
+    assert!(files > 150, "only {files} source files read");
+    let unnamed: Vec<String> = long
+        .iter()
+        .filter(|(file, name, _)| !named.contains(&format!("`{file}` `{name}`")))
+        .map(|(file, name, n)| format!("{file} {name}: {n} lines"))
+        .collect();
+    assert!(
+        unnamed.is_empty(),
+        "functions over 80 lines that ARCHITECTURE.md does not name (split them, or name a \
+         parser or a kernel there):\n{}",
+        unnamed.join("\n")
+    );
+    assert!(long.len() <= 12, "{} functions over 80 lines", long.len());
+}
