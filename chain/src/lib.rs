@@ -6,6 +6,7 @@
 //! - [`frf`]: two channels -> Welch H1 and coherence (firmware-core, one settings type, one place
 //!   that centres and scales in `f64` before the `f32` core) -> peaks of |Im H1| in bands;
 //! - [`lk`]: firmware-core's Lucas-Kanade tracker at the host's capacities;
+//! - [`tracker`]: the one tracker enum (blob, weighted, Lucas-Kanade);
 //! - [`resample`]: one column of samples upsampled (the `upsample` command);
 //! - [`vision_acceleration`]: displacement at the frame rate -> acceleration at the transducer
 //!   rate (firmware-core's Fourier upsampling fused with `-omega^2`).
@@ -14,6 +15,7 @@ pub mod displacement;
 pub mod frf;
 pub mod lk;
 pub mod resample;
+pub mod tracker;
 
 /// Runs `job` on a helper thread with a 64 MiB stack: firmware-core's estimators keep their
 /// fixed buffers inline (several MiB at the host's capacities), which would overflow the stack

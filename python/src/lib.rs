@@ -203,7 +203,7 @@ impl Frames {
 /// The tracker named in Python.
 fn tracker_of(tracker: &str) -> PyResult<Tracker> {
     match tracker.to_ascii_lowercase().as_str() {
-        "binary" | "blob" => Ok(Tracker::Binary),
+        "binary" | "blob" => Ok(Tracker::Blob),
         "weighted" => Ok(Tracker::Weighted),
         "lk" => Ok(Tracker::Lk),
         _ => Err(bad(format!(

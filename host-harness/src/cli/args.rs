@@ -149,7 +149,7 @@ impl CentroidArgs {
                 ThresholdArg::Auto => Threshold::Auto,
             }),
             tracker: match self.mode {
-                ModeArg::Binary => Tracker::Binary,
+                ModeArg::Binary => Tracker::Blob,
                 ModeArg::Weighted => Tracker::Weighted,
                 ModeArg::Lk => Tracker::Lk,
             },

@@ -8,16 +8,8 @@ use crate::analysis::track_run::Targets;
 use firmware_core::centroid::{CentroidConfig, Mode, Roi};
 use std::path::PathBuf;
 
-/// The tracker (`--tracker`, Python's `tracker`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Tracker {
-    /// The thresholded centroid, every pixel above the threshold weighted 1 (the paper's).
-    Binary,
-    /// The thresholded centroid, weighted by the level above the threshold.
-    Weighted,
-    /// Lucas-Kanade in each point's window (no threshold).
-    Lk,
-}
+/// The tracker (`--tracker`, Python's `tracker`): the toolkit's one tracker enum.
+pub use crate::chain::tracker::TrackerKind as Tracker;
 
 /// A threshold as given: a grey level, or Otsu's of each window (`auto`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -60,7 +52,7 @@ impl Default for TrackingInput {
     fn default() -> Self {
         TrackingInput {
             threshold: None,
-            tracker: Tracker::Binary,
+            tracker: Tracker::Blob,
             roi: None,
             points: None,
             targets: None,
@@ -175,7 +167,7 @@ impl Tracking {
     /// Whether the tracker is the binary centroid (the exposure compensation is then an
     /// approximation).
     pub fn binary(&self) -> bool {
-        self.tracker == Tracker::Binary
+        self.tracker == Tracker::Blob
     }
 }
 
@@ -242,7 +234,7 @@ pub fn centroid_config(
         mode: match tracker {
             Tracker::Weighted => Mode::Weighted,
             // Lucas-Kanade has no centroid: binary stands in, unused
-            Tracker::Binary | Tracker::Lk => Mode::Binary,
+            Tracker::Blob | Tracker::Lk => Mode::Binary,
         },
         roi,
         saturation: None,

@@ -330,7 +330,7 @@ mod tests {
                     ..Default::default()
                 },
                 Some(0.1),
-                Tracker::Binary,
+                Tracker::Blob,
                 "mm_per_px and target_size_mm: one scale only",
             ),
             (
@@ -339,7 +339,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "reference: 65 references; at most 64",
             ),
             (
@@ -348,7 +348,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "camera_model is the model",
             ),
             (
@@ -358,7 +358,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "needs 4 references or more; reference has 3",
             ),
             (
@@ -368,7 +368,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "reference r2, but reference has 1",
             ),
             (
@@ -377,7 +377,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "target 4, but there are 3",
             ),
             (
@@ -402,7 +402,7 @@ mod tests {
                     ..Default::default()
                 },
                 None,
-                Tracker::Binary,
+                Tracker::Blob,
                 "needs 4 or more",
             ),
         ];

@@ -161,7 +161,7 @@ pub struct Measurement {
 impl Measurement {
     /// Resolves and checks the options; the message names the field.
     pub fn from_options(o: &ImagingOptions) -> anyhow::Result<Measurement> {
-        let tracker = match (o.tracker, o.centroid.map(super::TrackerKind::of_centroid)) {
+        let tracker = match (o.tracker, o.centroid.map(super::CentroidKind::tracker)) {
             (Some(t), Some(c)) if t != c => {
                 return Err(vibcam_readers::bad_input(format!(
                     "imaging.tracker = \"{}\" and imaging.centroid = \"{}\" disagree: give \

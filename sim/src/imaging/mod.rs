@@ -79,49 +79,19 @@ impl CentroidKind {
             CentroidKind::Weighted => "weighted",
         }
     }
-}
-
-/// What the camera's firmware measures in each frame (`[imaging] tracker` of a study file;
-/// [`tracker::FrameTracker`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum TrackerKind {
-    /// The binary centroid above the threshold (the paper's method; the default).
-    #[default]
-    Blob,
-    /// The intensity-weighted centroid above the threshold.
-    Weighted,
-    /// Lucas-Kanade: the displacement of the first frame's window around the target.
-    Lk,
-}
-
-impl TrackerKind {
-    /// `blob`, `weighted` or `lk`.
-    pub fn name(self) -> &'static str {
-        match self {
-            TrackerKind::Blob => "blob",
-            TrackerKind::Weighted => "weighted",
-            TrackerKind::Lk => "lk",
-        }
-    }
 
     /// The tracker a centroid names (`centroid = "binary" | "weighted"`, the older field).
-    pub fn of_centroid(c: CentroidKind) -> TrackerKind {
-        match c {
+    pub fn tracker(self) -> TrackerKind {
+        match self {
             CentroidKind::Binary => TrackerKind::Blob,
             CentroidKind::Weighted => TrackerKind::Weighted,
         }
     }
-
-    /// The centroid's mode: binary for `blob` (and for `lk`, whose window the binary centroid
-    /// places in the first frame), weighted for `weighted`.
-    pub fn mode(self) -> firmware_core::centroid::Mode {
-        match self {
-            TrackerKind::Weighted => firmware_core::centroid::Mode::Weighted,
-            TrackerKind::Blob | TrackerKind::Lk => firmware_core::centroid::Mode::Binary,
-        }
-    }
 }
+
+/// What the camera's firmware measures in each frame: the one tracker enum of the toolkit
+/// (`vibcam_chain::tracker`), here as a study's `[imaging] tracker` names it.
+pub use vibcam_chain::tracker::TrackerKind;
 
 /// What a study's `[imaging]` table resolves to, each part in its own type: the effects on the
 /// image, how the firmware measures it, when the exposure happens, where on the rig the camera
