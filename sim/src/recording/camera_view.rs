@@ -217,7 +217,7 @@ pub(super) fn render(
                     seen[d].1 += p.1 / INSTANTS as f64;
                     seen[d].2 += (y - y0) / INSTANTS as f64;
                 }
-                draw_disk(&mut frame, (w, h), &h_cam, &inv, (x0, y));
+                draw_disk(&mut frame, (w, h), (&h_cam, &inv), (x0, y), p);
             }
         }
         let t_s = n as f64 / fps;
@@ -323,16 +323,15 @@ fn frame_size(
     (w, h, centre)
 }
 
-/// Adds one instant's disk at plane point `(x0, y)`, seen through `h_cam` (`inv` its inverse),
-/// to `frame` (`w` x `h`): its edge blurred by a Gaussian of EDGE_SIGMA_PX.
+/// Adds one instant's disk at plane point `(x0, y)`, seen through `h_cam` (`inv` its inverse)
+/// at image point `p`, to `frame` (`w` x `h`): its edge blurred by a Gaussian of EDGE_SIGMA_PX.
 fn draw_disk(
     frame: &mut [f32],
     (w, h): (usize, usize),
-    h_cam: &Homography,
-    inv: &Homography,
+    (h_cam, inv): (&Homography, &Homography),
     (x0, y): (f64, f64),
+    p: (f64, f64),
 ) {
-    let p = h_cam.apply((x0, y));
     let jac = h_cam.jacobian((x0, y));
     let px_per_mm = (jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0]).abs().sqrt();
     let r_px = DISK_MM * px_per_mm * 1.6 + 2.0;
