@@ -3,7 +3,7 @@
 //! file the user did not ask to replace is touched.
 
 use crate::analyze::{disk, make_recording, position_px, Recording, FPS, H, W};
-use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, stderr};
 use std::path::Path;
 
 /// `analyze` of a hand-made recording (1 s, two modes at 8 and 30 Hz) into `out`, with `extra`.
@@ -395,15 +395,7 @@ fn encode(rec: &Path, rate: &str, codec: &[&str], name: &str) {
 fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--exposure-ms",
-        "2",
-    ]));
+    render_cantilever(&rec, &[]);
     let analyze_with = |frames: &str, fps: &str, out: &str, extra: &[&str]| {
         // one band below the Nyquist frequency of the slowest rate here (15 Hz at 30 fps)
         let bands = if fps.starts_with('3') {

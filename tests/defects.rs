@@ -5,7 +5,9 @@
 //! `daq::npy`, `daq::uff`, `analysis::ema::impact`, `outdir`, `setting`.)
 
 use crate::analyze::{make_recording, Recording};
-use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use crate::util::{
+    analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, stderr,
+};
 use std::path::{Path, PathBuf};
 
 /// `simulate-hammer` into `dir` (a short record: two hits).
@@ -816,37 +818,13 @@ fn an_interval_never_leaves_its_quantitys_domain() {
     // interval reached -0.75 Hz
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--exposure-ms",
-        "2",
-    ]));
+    render_cantilever(&rec, &[]);
     let out = tmp.path().join("a");
-    let o = harness(&[
-        "analyze",
-        "--frames",
-        rec.join("frames").to_str().unwrap(),
-        "--fps",
-        "120",
-        "--accel",
-        rec.join("accel.csv").to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--time-col",
-        "t_s",
-        "--threshold",
-        "127",
-        "--mm-per-px",
-        "0.1266",
-        "--nperseg",
-        "1024",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = analyze_recording(
+        &rec,
+        "frames",
+        &["--nperseg", "1024", "--out", out.to_str().unwrap()],
+    );
     assert_ok(&o);
     let m = cells(&out.join("modes.csv"));
     for name in ["f_hz_lo", "damping_lo", "amplitude_lo"] {

@@ -3,7 +3,7 @@
 //! (FDD, EFDD, SSI-cov) and writes modes.csv, shapes.csv, svd.csv, shapes.uff and the figures;
 //! bad records are named.
 
-use crate::util::{assert_exit_2, assert_ok, harness};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever};
 use std::path::Path;
 
 /// `(method, mode, f_hz, damping)` from modes.csv.
@@ -265,19 +265,7 @@ fn the_cantilever_recording_without_its_accelerometer_gives_the_modes_of_h1() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
     let r = rec.to_str().unwrap();
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        r,
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-        "--read-noise",
-        "2",
-    ]));
+    render_cantilever(Path::new(r), &["--targets", "5", "--read-noise", "2"]);
     let frames = format!("{r}/frames");
     let (h1, oma) = (rec.join("h1"), rec.join("oma"));
     let accel = format!("{r}/accel.csv");

@@ -4,7 +4,7 @@
 //! the model, mode shapes with MAC >= 0.99 against the model's, lost frames per target, bad
 //! target counts named.
 
-use crate::util::{assert_exit_2, assert_ok, harness};
+use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever};
 use std::path::Path;
 
 /// `(system, target, mode) -> (f_hz, damping)` from modes.csv.
@@ -43,21 +43,17 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
     let r = rec.to_str().unwrap();
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        r,
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-        // sensor read noise on (2 grey levels rms), and the same frames as a lossless video
-        "--read-noise",
-        "2",
-        "--video",
-    ]));
+    render_cantilever(
+        Path::new(r),
+        &[
+            "--targets",
+            "5",
+            // sensor read noise on (2 grey levels rms), and the same frames as a lossless video
+            "--read-noise",
+            "2",
+            "--video",
+        ],
+    );
     let out = rec.join("analysis");
     let analyze_with = |frames: &str, out: &Path, k: &str, extra: &[&str]| {
         let accel = format!("{r}/accel.csv");
@@ -880,30 +876,10 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
     }
     assert!(cluttered.join("frames/frame_00000.jpg").is_file());
     let analyze_as = |dir: &Path, frames: &str, out: &str, pick: &[&str]| {
-        let (frames, accel, out) = (dir.join(frames), dir.join("accel.csv"), dir.join(out));
-        let mut args = vec![
-            "analyze",
-            "--frames",
-            frames.to_str().unwrap(),
-            "--fps",
-            "120",
-            "--accel",
-            accel.to_str().unwrap(),
-            "--fs",
-            "2048",
-            "--time-col",
-            "t_s",
-            "--threshold",
-            "127",
-            "--mm-per-px",
-            "0.1266",
-            "--window",
-            "rect",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let out = dir.join(out);
+        let mut args = vec!["--window", "rect", "--out", out.to_str().unwrap()];
         args.extend_from_slice(pick);
-        harness(&args)
+        analyze_recording(dir, frames, &args)
     };
     let analyze = |dir: &Path, pick: &[&str]| analyze_as(dir, "frames", "an", pick);
     assert_ok(&analyze(&clean, &["--targets", "5"]));
@@ -960,38 +936,12 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
 fn one_target_by_the_multi_target_path_agrees_with_the_single_target_analysis() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--exposure-ms",
-        "2",
-    ]));
+    render_cantilever(&rec, &[]);
     let analyze = |out: &str, extra: &[&str]| {
-        let (frames, accel, out) = (rec.join("frames"), rec.join("accel.csv"), rec.join(out));
-        let mut args = vec![
-            "analyze",
-            "--frames",
-            frames.to_str().unwrap(),
-            "--fps",
-            "120",
-            "--accel",
-            accel.to_str().unwrap(),
-            "--fs",
-            "2048",
-            "--time-col",
-            "t_s",
-            "--threshold",
-            "127",
-            "--mm-per-px",
-            "0.1266",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let out = rec.join(out);
+        let mut args = vec!["--out", out.to_str().unwrap()];
         args.extend_from_slice(extra);
-        assert_ok(&harness(&args));
+        assert_ok(&analyze_recording(&rec, "frames", &args));
         std::fs::read_to_string(rec.join(out).join("modes.csv")).unwrap()
     };
     // system -> (amplitude, damping) per mode, from either layout of modes.csv

@@ -2,7 +2,7 @@
 //! Lucas-Kanade (`--tracker lk`), against the exact motion a recording's `truth.csv` states,
 //! and every way Lucas-Kanade loses a target: a flag and a lost frame, never a wrong position.
 
-use crate::util::{assert_exit_2, assert_ok, harness};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -71,21 +71,10 @@ fn rms_errors(rows: &[Row], truth: &HashMap<(usize, usize), (f64, f64)>) -> Vec<
 /// Renders the 5-target cantilever recording (2 ms exposure, read noise 1) of `scene` into
 /// `rec`.
 fn render_noisy_targets(rec: &Path, scene: &str) {
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-        "--read-noise",
-        "1",
-        "--scene",
-        scene,
-    ]));
+    render_cantilever(
+        &rec,
+        &["--targets", "5", "--read-noise", "1", "--scene", scene],
+    );
 }
 
 fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::process::Output {

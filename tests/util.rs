@@ -1,5 +1,6 @@
 //! Helpers shared by the end-to-end tests.
 
+use std::path::Path;
 use std::process::{Command, Output};
 
 /// Runs the `host-harness` binary built for this test run with `args`.
@@ -31,4 +32,46 @@ pub fn assert_exit_2(o: &Output, needle: &str) {
     let e = stderr(o);
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains(needle), "`{needle}` not in {e}");
+}
+
+/// `render --preset cantilever --recording REC --exposure-ms 2` and `extra`, asserted to
+/// succeed: the rendered cantilever most end-to-end tests read.
+pub fn render_cantilever(rec: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "render",
+        "--preset",
+        "cantilever",
+        "--recording",
+        rec.to_str().unwrap(),
+        "--exposure-ms",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    assert_ok(&harness(&args));
+}
+
+/// `analyze` of the frames `frames` (a name inside `rec`, or a whole path) of a recording
+/// `render` wrote in `rec`, with its accelerometer: 120 fps, 2048 Hz by the `t_s` column,
+/// threshold 127, 0.1266 mm/px, then `extra` (`--out` among them).
+pub fn analyze_recording(rec: &Path, frames: &str, extra: &[&str]) -> Output {
+    let (frames, accel) = (rec.join(frames), rec.join("accel.csv"));
+    let mut args = vec![
+        "analyze",
+        "--frames",
+        frames.to_str().unwrap(),
+        "--fps",
+        "120",
+        "--accel",
+        accel.to_str().unwrap(),
+        "--fs",
+        "2048",
+        "--time-col",
+        "t_s",
+        "--threshold",
+        "127",
+        "--mm-per-px",
+        "0.1266",
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
 }

@@ -3,7 +3,7 @@
 //! take the camera's motion out, `--world` converts each target with its own scale, and bad
 //! references are named.
 
-use crate::util::{assert_exit_2, assert_ok, harness};
+use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -454,46 +454,15 @@ fn bad_references_are_named_never_silently_used() {
 fn references_with_an_accelerometer_follow_the_same_rules() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--targets",
-        "5",
-        "--exposure-ms",
-        "2",
-    ]));
+    render_cantilever(&rec, &["--targets", "5"]);
     // a reference on the black background: nothing to follow
     let refs = tmp.path().join("refs.csv");
     std::fs::write(&refs, "target,x,y,w,h\n1,4,4,7,7\n").unwrap();
+    let out = tmp.path().join("out");
     let analyze = |extra: &[&str]| {
-        let mut args = vec![
-            "analyze",
-            "--frames",
-            rec.join("frames").to_str().unwrap(),
-            "--fps",
-            "120",
-            "--accel",
-            rec.join("accel.csv").to_str().unwrap(),
-            "--fs",
-            "2048",
-            "--time-col",
-            "t_s",
-            "--threshold",
-            "127",
-            "--mm-per-px",
-            "0.1266",
-            "--out",
-            tmp.path().join("out").to_str().unwrap(),
-        ]
-        .into_iter()
-        .map(String::from)
-        .collect::<Vec<_>>();
-        args.extend(extra.iter().map(|s| s.to_string()));
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        harness(&args)
+        let mut args = vec!["--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        analyze_recording(&rec, "frames", &args)
     };
     let r = refs.to_str().unwrap();
     let o = analyze(&["--targets", "5", "--reference", r]);
