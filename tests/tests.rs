@@ -640,12 +640,8 @@ fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
     }
     let not_messages = ["dir", "name", "f", "t", "k", "key", "unknown", "e"];
     let mut unknown = Vec::new();
-    let mut cli = String::new();
     for f in &files {
         let text = std::fs::read_to_string(f).unwrap();
-        if f.to_string_lossy().contains("/src/cli/") {
-            cli.push_str(&text);
-        }
         let b = text.as_bytes();
         for (i, _) in text.match_indices('$') {
             if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'$') {
@@ -671,15 +667,135 @@ fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
         unknown.is_empty(),
         "messages name unknown settings: {unknown:?}"
     );
+    // every long flag of every subcommand, as clap knows them (aliases included)
+    use clap::CommandFactory as _;
+    let mut flags = std::collections::BTreeSet::new();
+    for sub in host_harness::cli::Cli::command().get_subcommands() {
+        for arg in sub.get_arguments() {
+            flags.extend(arg.get_long().map(str::to_string));
+            flags.extend(
+                arg.get_all_aliases()
+                    .unwrap_or_default()
+                    .into_iter()
+                    .map(str::to_string),
+            );
+        }
+    }
+    assert!(
+        flags.contains("nperseg") && flags.contains("frames"),
+        "{flags:?}"
+    );
     for key in KEYS {
         let flag = key.replace('_', "-");
         assert!(
-            cli.contains(&format!("pub {key}:"))
-                || cli.contains(&format!("alias = \"{flag}\""))
-                || cli.contains(&format!("aliases = [\"{flag}\"")),
+            flags.contains(&flag),
             "${key} is no flag of the command line"
         );
     }
+}
+
+/// The library names a setting by its key (`$nperseg`); the command line spells it `--nperseg`
+/// and Python `nperseg` (`setting::spell`). So no text of the library spells a flag itself,
+/// except the command lines it writes for the user to run (a recording's README, the command
+/// an analysis was asked with): a literal naming `host-harness`, one that is a whole argument
+/// (`"--fps"`) or a piece of one (`" --reference FILE"`), or a command with its flags
+/// (`"render --recording"`, `track --points`).
+#[test]
+fn no_library_text_spells_a_flag_of_the_command_line() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut spelled = Vec::new();
+    for krate in HOST_CRATES {
+        for f in rust_files(&root.join(krate).join("src")) {
+            if f.to_string_lossy().contains("/src/cli") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&f).unwrap();
+            // the library's code, before its unit tests
+            let code = text.split("\n#[cfg(test)]").next().unwrap_or_default();
+            for (line, lit) in string_literals(code) {
+                let command = lit.contains("host-harness ")
+                    || lit.starts_with("--") && !lit.contains(' ')
+                    || lit.starts_with(" --")
+                    || ["render --", "analyze --", "track --", "ema --"]
+                        .iter()
+                        .any(|c| lit.contains(c));
+                let flag = lit.match_indices("--").any(|(i, _)| {
+                    lit[i + 2..].starts_with(|c: char| c.is_ascii_lowercase())
+                        && (i == 0 || !lit.as_bytes()[i - 1].is_ascii_alphanumeric())
+                });
+                if flag && !command {
+                    spelled.push(format!("{}:{line}: {lit}", f.display()));
+                }
+            }
+        }
+    }
+    assert!(
+        spelled.is_empty(),
+        "library texts that spell a flag (name it `$key`):\n{}",
+        spelled.join("\n")
+    );
+}
+
+/// Every `.rs` file below `dir`.
+fn rust_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(rust_files(&p));
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The string literals of Rust source `code` with the line each starts on (comments, character
+/// literals and raw strings' `#` handled; escapes kept as written).
+fn string_literals(code: &str) -> Vec<(usize, String)> {
+    let b = code.as_bytes();
+    let (mut i, mut line, mut out) = (0, 1, Vec::new());
+    while i < b.len() {
+        match b[i] {
+            b'\n' => line += 1,
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'\'' if b.get(i + 2) == Some(&b'\'') || b.get(i + 1) == Some(&b'\\') => {
+                // a character literal: '"', '\'', '\\'
+                let end = code[i + 2..].find('\'').map_or(b.len(), |k| i + 3 + k);
+                i = end;
+                continue;
+            }
+            b'"' => {
+                let raw = i > 0 && (b[i - 1] == b'r' || b[i - 1] == b'#');
+                let hashes = code[..i].len() - code[..i].trim_end_matches('#').len();
+                let close = format!("\"{}", "#".repeat(hashes));
+                let (start, mut j) = (line, i + 1);
+                while j < b.len() {
+                    if !raw && b[j] == b'\\' {
+                        j += 2;
+                        continue;
+                    }
+                    if code[j..].starts_with(&close) {
+                        break;
+                    }
+                    j += 1;
+                }
+                let lit = &code[i + 1..j.min(b.len())];
+                line += lit.matches('\n').count();
+                out.push((start, lit.to_string()));
+                i = j + close.len();
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    out
 }
 
 /// Every function of more than 80 lines outside firmware-core (test modules left out) is one of

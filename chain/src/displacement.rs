@@ -163,7 +163,7 @@ pub const LOST_REASONS: [(Flags, &str, &str); 6] = [
         "ambiguous",
         "ambiguous (a look-alike within the search range matched nearly as well, or a jump the \
          motion so far does not explain: group the targets that move together, or a smaller \
-         --search-px)",
+         $search_px)",
     ),
     (
         Flags::DIVERGED,
@@ -173,7 +173,7 @@ pub const LOST_REASONS: [(Flags, &str, &str); 6] = [
     (
         Flags::EMPTY,
         "empty",
-        "with no pixel above the threshold (check --threshold and the window or --roi)",
+        "with no pixel above the threshold (check $threshold and the window or $roi)",
     ),
 ];
 

@@ -75,7 +75,7 @@ impl WelchSettings {
     ) -> anyhow::Result<WelchConfig> {
         if !(fs_hz.is_finite() && fs_hz > 0.0 && (fs_hz as f32).is_normal()) {
             return Err(bad_input(format!(
-                "--fs {fs_hz:e}: the sampling rate must be a positive number of Hz within the \
+                "$fs {fs_hz:e}: the sampling rate must be a positive number of Hz within the \
                  f32 range"
             )));
         }
@@ -85,7 +85,7 @@ impl WelchSettings {
         });
         if nperseg == 0 || nperseg > len {
             return Err(bad_input(format!(
-                "--nperseg {nperseg} must be between 1 and the record length ({len} samples)"
+                "$nperseg {nperseg} must be between 1 and the record length ({len} samples)"
             )));
         }
         let noverlap = self.noverlap.unwrap_or(match defaults {
@@ -94,18 +94,18 @@ impl WelchSettings {
         });
         if noverlap >= nperseg {
             return Err(bad_input(format!(
-                "--noverlap {noverlap} must be smaller than --nperseg {nperseg}"
+                "$noverlap {noverlap} must be smaller than $nperseg {nperseg}"
             )));
         }
         let nfft = self.nfft.unwrap_or(nperseg);
         if nfft < nperseg {
             return Err(bad_input(format!(
-                "--nfft {nfft} must be at least --nperseg {nperseg}"
+                "$nfft {nfft} must be at least $nperseg {nperseg}"
             )));
         }
         if nfft > MAX_NFFT {
             return Err(bad_input(format!(
-                "--nfft {nfft} (or the record length) is above the largest supported transform, \
+                "$nfft {nfft} (or the record length) is above the largest supported transform, \
                  {MAX_NFFT}"
             )));
         }
@@ -179,7 +179,7 @@ pub fn estimate(x: &[f64], y: &[f64], config: WelchConfig) -> anyhow::Result<Frf
     let job = move || -> anyhow::Result<Frf> {
         let mut welch = Box::new(HostWelch::try_new(config).map_err(|e| {
             bad_input(format!(
-                "invalid Welch settings (--nperseg/--noverlap/--nfft/--fs): {e}"
+                "invalid Welch settings ($nperseg/$noverlap/$nfft/$fs): {e}"
             ))
         })?);
         welch
@@ -431,7 +431,7 @@ mod tests {
                 ..s
             },
             50.0,
-            "--nperseg",
+            "$nperseg",
         );
         bad(
             WelchSettings {
@@ -440,7 +440,7 @@ mod tests {
                 ..s
             },
             50.0,
-            "--noverlap",
+            "$noverlap",
         );
         bad(
             WelchSettings {
@@ -449,10 +449,10 @@ mod tests {
                 ..s
             },
             50.0,
-            "--nfft",
+            "$nfft",
         );
-        bad(s, 1e308, "--fs 1e308");
-        bad(s, 0.0, "--fs");
+        bad(s, 1e308, "$fs 1e308");
+        bad(s, 0.0, "$fs");
     }
 
     #[test]

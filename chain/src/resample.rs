@@ -42,13 +42,13 @@ pub fn upsample_column(values: &[f64], from_hz: f64, to_hz: f64) -> anyhow::Resu
     let n = values.len();
     let m = output_len(n, from_hz, to_hz).ok_or_else(|| {
         bad_input(format!(
-            "--from {from_hz} / --to {to_hz}: {n} samples at {from_hz} Hz do not make an \
+            "$from {from_hz} / $to {to_hz}: {n} samples at {from_hz} Hz do not make an \
              integer number of samples at {to_hz} Hz"
         ))
     })?;
     if m < n {
         return Err(bad_input(format!(
-            "--to {to_hz} Hz is below --from {from_hz} Hz: this command only upsamples"
+            "$to {to_hz} Hz is below $from {from_hz} Hz: this command only upsamples"
         )));
     }
     if m > MAX_OUTPUT {

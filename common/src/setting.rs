@@ -20,7 +20,7 @@ pub enum Naming {
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
     /// A setting, or a combination of settings; the text names them by `$key`.
-    #[error("{}", render(.0, Naming::Cli))]
+    #[error("{}", spell(.0, Naming::Cli))]
     Setting(String),
     /// An input the spec reads (its error names the file and row).
     #[error(transparent)]
@@ -32,6 +32,7 @@ pub enum SpecError {
 pub const KEYS: &[&str] = &[
     "accel",
     "accel_target",
+    "adaptive_on",
     "axis",
     "bands",
     "block_s",
@@ -44,43 +45,69 @@ pub const KEYS: &[&str] = &[
     "exposure_ms",
     "f_max_hz",
     "f_min_hz",
+    "force",
     "fps",
     "frame_range",
     "frames",
+    "frames_shown",
+    "free",
+    "from",
     "fs",
     "gate_px",
     "impact",
+    "input_col",
     "max_order",
+    "minutes",
     "mm_per_px",
     "nfft",
     "noverlap",
     "nperseg",
+    "oblique_deg",
+    "out",
+    "output_col",
     "points",
     "prominence_db",
+    "read_noise",
     "reference",
+    "references",
+    "render",
     "response_col",
     "response_fs",
     "response_quantity",
+    "resume",
     "retime",
+    "rms_px",
     "roi",
+    "roll_deg",
+    "runs",
+    "saturation",
     "scale",
     "search_px",
+    "shake_hz",
+    "shake_px",
     "shape_reference",
+    "shard",
     "ssi_block_rows",
     "ssi_max_order",
     "target_size_mm",
     "targets",
+    "threads",
     "threshold",
     "tick_hz",
     "tick_offset",
     "time_offset_s",
+    "times",
+    "to",
     "tracker",
     "twin",
     "world",
+    "x",
+    "y",
 ];
 
-/// `template` with each `$key` spelled for `naming` (unknown `$` words stay as written).
-fn render(template: &str, naming: Naming) -> String {
+/// `template` with each `$key` spelled for `naming` (unknown `$` words stay as written): how
+/// every message, note and report of the library reaches its user.
+pub fn spell(template: &str, naming: Naming) -> String {
     let mut out = String::with_capacity(template.len() + 16);
     let mut rest = template;
     while let Some(i) = rest.find('$') {
@@ -120,7 +147,7 @@ impl SpecError {
     /// The message with the settings spelled for `naming`.
     pub fn message(&self, naming: Naming) -> String {
         match self {
-            SpecError::Setting(t) => render(t, naming),
+            SpecError::Setting(t) => spell(t, naming),
             SpecError::Input(e) => message(e, naming),
         }
     }
@@ -142,13 +169,13 @@ pub fn is_bad_input(e: &anyhow::Error) -> bool {
         .any(|c| c.is::<vibcam_readers::BadInput>() || c.is::<SpecError>())
 }
 
-/// `e` as one line, each [`SpecError`] in its chain spelled for `naming` (as `{e:#}` writes
-/// it otherwise: the causes joined by `: `).
+/// `e` as one line, the settings its chain names spelled for `naming` (the causes joined by
+/// `: `, as `{e:#}` writes them).
 pub fn message(e: &anyhow::Error, naming: Naming) -> String {
     e.chain()
         .map(|c| match c.downcast_ref::<SpecError>() {
             Some(s) => s.message(naming),
-            None => c.to_string(),
+            None => spell(&c.to_string(), naming),
         })
         .collect::<Vec<_>>()
         .join(": ")

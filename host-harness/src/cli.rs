@@ -105,6 +105,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 pub fn stdout(text: &str) -> anyhow::Result<()> {
     use std::io::Write as _;
     let mut out = std::io::stdout().lock();
+    // the settings the text names (`$nperseg`), spelled as this command line's flags
+    let text = crate::setting::spell(text, crate::setting::Naming::Cli);
     out.write_all(text.as_bytes())
         .and_then(|()| out.flush())
         .map_err(stdout_error)
@@ -177,7 +179,9 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // the settings the message names, spelled as this command line's flags
+            let message = crate::setting::message(&e, crate::setting::Naming::Cli);
+            eprintln!("error: {message}");
             if crate::setting::is_bad_input(&e) {
                 ExitCode::from(2)
             } else {

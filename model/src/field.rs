@@ -146,7 +146,7 @@ pub fn record_length(
     fs_hz: f64,
     render: bool,
 ) -> anyhow::Result<(usize, Vec<String>)> {
-    for (name, v) in [("--minutes", minutes), ("--fps", fs_hz)] {
+    for (name, v) in [("$minutes", minutes), ("$fps", fs_hz)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(vibcam_readers::bad_input(format!(
                 "{name} must be a positive number, got {v}"
@@ -163,23 +163,23 @@ pub fn record_length(
     let shortest = MIN_PERIODS / f1;
     if seconds < shortest || samples < 2.0 {
         return Err(vibcam_readers::bad_input(format!(
-            "--minutes {minutes} at --fps {fs_hz}: {samples} samples over {seconds:.3} s; the \
+            "$minutes {minutes} at $fps {fs_hz}: {samples} samples over {seconds:.3} s; the \
              record must span at least {MIN_PERIODS} periods of the lowest mode ({f1} Hz): \
-             --minutes {:.3} or more",
+             $minutes {:.3} or more",
             shortest / 60.0
         )));
     }
     let settle = settling_periods(model, fs_hz);
     if samples + settle > MAX_SIMULATED_PERIODS as f64 {
         return Err(vibcam_readers::bad_input(format!(
-            "--minutes {minutes} at --fps {fs_hz}: {samples} samples and {settle} of settling \
+            "$minutes {minutes} at $fps {fs_hz}: {samples} samples and {settle} of settling \
              (ten decay times of the slowest mode) exceed the {MAX_SIMULATED_PERIODS} sample \
              periods simulated at most; shorten the record or lower the rate"
         )));
     }
     if render && samples > MAX_RENDERED_FRAMES as f64 {
         return Err(vibcam_readers::bad_input(format!(
-            "--render --minutes {minutes} at --fps {fs_hz}: {samples} frames, more than the \
+            "$render $minutes {minutes} at $fps {fs_hz}: {samples} frames, more than the \
              {MAX_RENDERED_FRAMES} frames (PNG files) rendered at most"
         )));
     }
@@ -192,7 +192,7 @@ pub fn record_length(
         .map(|(i, m)| {
             format!(
                 "mode {} ({:.4} Hz) is at or above the Nyquist frequency ({nyquist} Hz at \
-                 --fps {fs_hz}): it aliases to {:.4} Hz in the record, and no analysis of it \
+                 $fps {fs_hz}): it aliases to {:.4} Hz in the record, and no analysis of it \
                  can find it where it is",
                 i + 1,
                 m.f_hz,

@@ -53,6 +53,12 @@ fn py_err(e: anyhow::Error) -> PyErr {
     }
 }
 
+/// A text of the library (a report, a page, a note) with the settings it names (`$nperseg`)
+/// spelled as Python's arguments.
+fn spelled(text: &str) -> String {
+    host_harness::setting::spell(text, Naming::Python)
+}
+
 /// A refused spec as Python's [`InputError`], naming Python's arguments.
 fn spec_err(e: SpecError) -> PyErr {
     py_err(e.into_anyhow())
@@ -543,7 +549,7 @@ fn track<'py>(
     d.set_item("raw_positions", raw.map(|r| r.into_pyarray(py)))?;
     d.set_item("camera_motion", camera.into_pyarray(py))?;
     d.set_item("displacement_mm", mm.map(|m| m.into_pyarray(py)))?;
-    d.set_item("view_report", report)?;
+    d.set_item("view_report", spelled(&report))?;
     Ok(d)
 }
 
@@ -723,7 +729,7 @@ fn analyze<'py>(
         .map_err(py_err)?;
     let (c, report, fps, html) = computed;
     let d = analysis_dict(py, (c, report, fps))?;
-    d.set_item("html", html)?;
+    d.set_item("html", spelled(&html))?;
     Ok(d)
 }
 
@@ -820,7 +826,10 @@ fn analysis_dict<'py>(
     d.set_item("lost", lost.into_pyarray(py))?;
     d.set_item("unit", c.records.unit.clone())?;
     d.set_item("left_out", c.records.left_out.clone())?;
-    d.set_item("notes", r.notes.clone())?;
+    d.set_item(
+        "notes",
+        r.notes.iter().map(|n| spelled(n)).collect::<Vec<_>>(),
+    )?;
     d.set_item("rejected", r.rejected.clone())?;
     d.set_item(
         "evidence",
@@ -833,7 +842,7 @@ fn analysis_dict<'py>(
         "camera_motion",
         camera_motion_array(&c.viewed).into_pyarray(py),
     )?;
-    d.set_item("report", report)?;
+    d.set_item("report", spelled(&report))?;
     d.set_item("fps", fps)?;
     Ok(d)
 }
@@ -1066,7 +1075,10 @@ fn ema_dict<'py>(
     d.set_item("responses", names)?;
     d.set_item("freq_hz", r.freq_hz.clone().into_pyarray(py))?;
     ema_spectra(py, r, &d)?;
-    d.set_item("notes", r.notes.clone())?;
+    d.set_item(
+        "notes",
+        r.notes.iter().map(|n| spelled(n)).collect::<Vec<_>>(),
+    )?;
     d.set_item(
         "hits_left_out",
         r.hits
@@ -1079,8 +1091,8 @@ fn ema_dict<'py>(
             })
             .unwrap_or_default(),
     )?;
-    d.set_item("report", report)?;
-    d.set_item("html", html)?;
+    d.set_item("report", spelled(&report))?;
+    d.set_item("html", spelled(&html))?;
     Ok(d)
 }
 

@@ -254,15 +254,15 @@ fn check_target(
     }
     if !force {
         return Err(bad_input(format!(
-            "{}: not empty; choose another --out, or --force to replace an earlier output \
+            "{}: not empty; choose another $out, or $force to replace an earlier output \
              directory of this command as a whole",
             target.display()
         )));
     }
     if let Some(input) = input_inside(target, inputs) {
         return Err(bad_input(format!(
-            "{}: holds {}, an input of this run: not replaced even with --force; choose \
-             another --out",
+            "{}: holds {}, an input of this run: not replaced even with $force; choose \
+             another $out",
             target.display(),
             input.display()
         )));
@@ -270,7 +270,7 @@ fn check_target(
     let refuse = |why: String| {
         bad_input(format!(
             "{}: {why}, so it is not only an earlier output of `{command}`: not replaced even \
-             with --force; choose another --out",
+             with $force; choose another $out",
             target.display()
         ))
     };
@@ -330,8 +330,8 @@ pub fn refuse_output_file_among_inputs(out: &Path, inputs: &[&Path]) -> anyhow::
         .collect();
     if let Some(input) = input_folder_holding(folder, &folders) {
         return Err(bad_input(format!(
-            "--out {}: lies inside {}, an input of this run; the command never writes among \
-             its inputs, choose another --out",
+            "$out {}: lies inside {}, an input of this run; the command never writes among \
+             its inputs, choose another $out",
             out.display(),
             input.display()
         )));
@@ -358,8 +358,8 @@ pub fn refuse_overwriting_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<
         if let Ok(i) = std::fs::metadata(input) {
             if (i.dev(), i.ino()) == (o.dev(), o.ino()) {
                 return Err(bad_input(format!(
-                    "--out {}: is the input {}; the command never writes over one of its \
-                     inputs, choose another --out",
+                    "$out {}: is the input {}; the command never writes over one of its \
+                     inputs, choose another $out",
                     out.display(),
                     input.display()
                 )));
@@ -503,7 +503,7 @@ mod tests {
         );
         // refused without --force
         let e = Staged::new(&out, false, CMD, &[]).unwrap_err().to_string();
-        assert!(e.contains("not empty") && e.contains("--force"), "{e}");
+        assert!(e.contains("not empty") && e.contains("$force"), "{e}");
         // a failed second run (dropped before commit) leaves the first as it was
         {
             let s = Staged::new(&out, true, CMD, &[]).unwrap();

@@ -417,7 +417,7 @@ pub fn evaluate(
                 // a residual over an unknown uncertainty would be a number without meaning
                 return Err(bad_input(format!(
                     "the model's uncertainty of {} (mode {}, {} ms) is undefined with {} runs \
-                     per evaluation; raise --runs",
+                     per evaluation; raise $runs",
                     o.quantity.name(),
                     o.mode,
                     o.exposure_ms,
@@ -624,7 +624,7 @@ fn grid_search<P: FnMut(&Evaluation)>(
             best = Some(e);
         }
     }
-    best.ok_or_else(|| bad_input("calibrate: no free parameter (--free)"))
+    best.ok_or_else(|| bad_input("calibrate: no free parameter ($free)"))
 }
 
 /// One pattern-search step: each knob moved by its step either way; whether `best` improved.
@@ -797,7 +797,7 @@ fn checked_observations(req: &Request) -> anyhow::Result<Vec<Observation>> {
     let needed = vibcam_common::uncertainty::min_values(req.base.coverage).unwrap_or(2) as u64;
     if chi && req.runs < needed {
         return Err(bad_input(format!(
-            "--runs {}: the chi_mu/chi_sigma observations need the model's bootstrap \
+            "$runs {}: the chi_mu/chi_sigma observations need the model's bootstrap \
              uncertainty, which needs at least {needed} runs per evaluation (coverage {})",
             req.runs, req.base.coverage
         )));

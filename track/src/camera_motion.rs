@@ -373,7 +373,7 @@ fn disagreement(top: &[&Vec<usize>], model: Model, available: usize) -> anyhow::
         Model::Homography => String::new(),
         m if available >= 4 => format!(
             "; or the camera's motion is more than a {}: a camera that pans or tilts \
-             is a homography (--camera-model homography)",
+             is a homography ($camera_model homography)",
             m.name()
         ),
         _ => String::new(),
@@ -891,7 +891,7 @@ mod tests {
         // a similarity cannot explain the references: named, with the way out
         let e = estimate(&refs, Some(Model::Similarity), (200, 160)).unwrap_err();
         assert!(
-            format!("{e:#}").contains("--camera-model homography"),
+            format!("{e:#}").contains("$camera_model homography"),
             "{e:#}"
         );
     }

@@ -532,7 +532,7 @@ fn lk_trackers(
             cfg.saturation = config.saturation.unwrap_or(0);
             let t = HostLk::try_new(cfg).map_err(|e| {
                 bad_input(format!(
-                    "target {}: {e} (--tracker lk windows: at most {} pixels wide and \
+                    "target {}: {e} ($tracker lk windows: at most {} pixels wide and \
                      {LK_PIXELS} pixels in all)",
                     p.target,
                     LK_ROW - 7
@@ -870,7 +870,7 @@ fn first_windows(
                 (None, ThresholdRule::Auto) => otsu(frame, roi),
                 (None, ThresholdRule::FromFile) => {
                     return Err(bad_input(format!(
-                        "target {}: no threshold: give --threshold T (or auto), or a \
+                        "target {}: no threshold: give $threshold T (or auto), or a \
                          `threshold` for every row of the points file",
                         p.target
                     )))

@@ -205,8 +205,8 @@ pub fn track(
 fn first_frame(found: Vec<Centroid>, k: usize, label: &str) -> anyhow::Result<Vec<Centroid>> {
     if found.len() != k {
         return Err(bad_input(format!(
-            "{label}: {} targets above the threshold in the first frame, --targets {k} \
-             expected; in a scene with other bright things, choose the targets with --points \
+            "{label}: {} targets above the threshold in the first frame, $targets {k} \
+             expected; in a scene with other bright things, choose the targets with $points \
              FILE.csv (a window per target)",
             found.len()
         )));
@@ -215,7 +215,7 @@ fn first_frame(found: Vec<Centroid>, k: usize, label: &str) -> anyhow::Result<Ve
         return Err(bad_input(format!(
             "{label}: the target at ({:.1}, {:.1}) px touches the frame border in the \
              first frame (its centroid would be biased): every target must be wholly \
-             inside the frame (or --roi) in the first frame",
+             inside the frame (or $roi) in the first frame",
             c.cx, c.cy
         )));
     }
@@ -253,7 +253,7 @@ fn detect(
     let (w, h) = frame.dimensions();
     if w > MAX_WIDTH {
         return Err(bad_input(format!(
-            "{label}: {w} px wide; --targets handles frames up to {MAX_WIDTH} px"
+            "{label}: {w} px wide; $targets handles frames up to {MAX_WIDTH} px"
         )));
     }
     let r = match frame {
@@ -265,7 +265,7 @@ fn detect(
         return Err(bad_input(format!(
             "{label}: more than {MAX_DETECTIONS} components above the threshold at once while \
              labelling the frame ({} kept; a ragged component, e.g. noise near the threshold, \
-             holds several until its parts join): raise --threshold or narrow --roi",
+             holds several until its parts join): raise $threshold or narrow $roi",
             mc.targets().len()
         )));
     }

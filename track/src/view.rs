@@ -256,7 +256,7 @@ pub fn track_view(
         Some(r) => {
             let refs = Targets::Points(r.points.clone(), PointTracker::Lk { search_px: None });
             let (rt, _) = track_targets(source, fps, centroid, &refs)
-                .map_err(|e| e.context("tracking the references (--reference)"))?;
+                .map_err(|e| e.context("tracking the references ($reference)"))?;
             let m = crate::camera_motion::estimate(&rt, r.model, frame_size(source, fps)?)?;
             let comp = m.compensate(&tracks);
             (comp, Some(tracks), Some(rt), Some(m))
@@ -301,7 +301,7 @@ pub fn refuse_targets_never_seen(tracks: &Tracks, targets: &Targets) -> anyhow::
     Err(bad_input(format!(
         "target(s) {} of {} lost in every one of the {frames} frames: nothing is measured of \
          them (target {}: {}); a threshold finds no single bright blob in such windows (a dot on \
-         a tag, a pattern, a dark target?): --tracker lk follows any texture, or give each \
+         a tag, a pattern, a dark target?): $tracker lk follows any texture, or give each \
          window a threshold of its own",
         names.join(", "),
         tracks.centroids.len(),
@@ -450,17 +450,17 @@ fn scale_between(v: &Viewed, (a, b): (PointRef, PointRef), mm: f64) -> anyhow::R
         };
         let track = track.ok_or_else(|| {
             bad_input(format!(
-                "--scale: there is no {} (targets 1 to {k}{})",
+                "$scale: there is no {} (targets 1 to {k}{})",
                 p.label(),
                 match &v.references {
                     Some(r) => format!(", references r1 to r{}", r.centroids.len()),
-                    None => ", no --reference".to_string(),
+                    None => ", no $reference".to_string(),
                 }
             ))
         })?;
         let (x, y) = median_position(track).ok_or_else(|| {
             bad_input(format!(
-                "--scale: {} has no position in any frame",
+                "$scale: {} has no position in any frame",
                 p.label()
             ))
         })?;
@@ -470,7 +470,7 @@ fn scale_between(v: &Viewed, (a, b): (PointRef, PointRef), mm: f64) -> anyhow::R
     let d = ((pa.0 - pb.0).powi(2) + (pa.1 - pb.1).powi(2)).sqrt();
     if d < 1.0 {
         return Err(bad_input(format!(
-            "--scale: {} and {} are {d:.2} px apart: too close for a scale",
+            "$scale: {} and {} are {d:.2} px apart: too close for a scale",
             a.label(),
             b.label()
         )));
@@ -481,7 +481,7 @@ fn scale_between(v: &Viewed, (a, b): (PointRef, PointRef), mm: f64) -> anyhow::R
         text,
         "scale: {mm} mm between {} and {} ({d:.3} px apart): {m:.6} mm/px, standard \
          uncertainty {:.3} % from their positions' noise per frame; one scale for the \
-         whole frame (see --world for a structure seen at an angle)",
+         whole frame (see $world for a structure seen at an angle)",
         a.label(),
         b.label(),
         100.0 * u_rel
@@ -511,7 +511,7 @@ fn scale_of_sizes(v: &Viewed, mm: f64) -> anyhow::Result<Scales> {
             .collect();
         if d.is_empty() {
             return Err(bad_input(format!(
-                "--target-size-mm: target {} has no blob (its size comes from the \
+                "$target_size_mm: target {} has no blob (its size comes from the \
                  centroid's pixels above the threshold: Lucas-Kanade has none)",
                 t + 1
             )));
@@ -569,7 +569,7 @@ fn check_world_fit(
             !(p.px.0 >= -0.5 && p.px.1 >= -0.5 && p.px.0 <= w - 0.5 && p.px.1 <= hgt - 0.5)
         }) {
             return Err(bad_input(format!(
-                "--world: point {} at ({}, {}) px lies outside the {w} x {hgt} frame (measured \
+                "$world: point {} at ({}, {}) px lies outside the {w} x {hgt} frame (measured \
                  on an image of another resolution?)",
                 i + 1,
                 p.px.0,
@@ -579,7 +579,7 @@ fn check_world_fit(
     }
     let back = h
         .inverse()
-        .ok_or_else(|| bad_input("--world: the plane's map cannot be inverted"))?;
+        .ok_or_else(|| bad_input("$world: the plane's map cannot be inverted"))?;
     let errors: Vec<f64> = points
         .iter()
         .map(|p| {
@@ -597,7 +597,7 @@ fn check_world_fit(
                 .enumerate()
                 .fold((0, 0.0), |m, (i, e)| if *e > m.1 { (i, *e) } else { m });
         return Err(bad_input(format!(
-            "--world: the {} points do not lie on one plane seen by the camera: their image \
+            "$world: the {} points do not lie on one plane seen by the camera: their image \
              positions are {rms:.3} px RMS from the fitted plane's, more than {tol:.3} px (3 \
              times their stated uncertainty u_px, at least {WORLD_RESIDUAL_PX} px); the worst \
              is point {} at ({}, {}) px, {e:.3} px off (a point listed twice, or a mistyped \
@@ -617,7 +617,7 @@ fn check_world_fit(
     let u_max = points.iter().map(|p| p.u_px).fold(0.0, f64::max);
     if u_max > 0.1 * spacing {
         return Err(bad_input(format!(
-            "--world: u_px {u_max} beside points {spacing:.1} px apart: an uncertainty above a \
+            "$world: u_px {u_max} beside points {spacing:.1} px apart: an uncertainty above a \
              tenth of the points' spacing is no small error to propagate; the plane is not \
              known from these points"
         )));
@@ -631,7 +631,7 @@ fn world_scales(
     along_x: bool,
     size: (usize, usize),
 ) -> anyhow::Result<Scales> {
-    let h = check_world(points).map_err(|e| bad_input(format!("--world: {e}")))?;
+    let h = check_world(points).map_err(|e| bad_input(format!("$world: {e}")))?;
     let reprojection_px = check_world_fit(points, &h, size)?;
     let (px, mm): (Vec<_>, Vec<_>) = points.iter().map(|p| (p.px, p.mm)).unzip();
     let residual = if points.len() > 4 {
@@ -713,7 +713,7 @@ fn scale_draws(
         let Some(hd) = fit(Model::Homography, &moved, mm) else {
             // dropping it would narrow the spread: the uncertainty is not known
             return Err(bad_input(format!(
-                "--world: with the points moved by their stated u_px the plane could not be \
+                "$world: with the points moved by their stated u_px the plane could not be \
                  fitted (draw {} of {WORLD_DRAWS}): the uncertainty is too large for these \
                  points",
                 d + 1
@@ -742,7 +742,7 @@ fn one_scale_spread(per: &[(f64, f64)]) -> String {
             });
         let _ = writeln!(
             text,
-            "  one --mm-per-px for the whole frame (their mean, {mean:.6}) would be off by \
+            "  one $mm_per_px for the whole frame (their mean, {mean:.6}) would be off by \
              {lo:+.2} % to {hi:+.2} % across the targets (perspective)"
         );
     }

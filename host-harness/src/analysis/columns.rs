@@ -53,8 +53,8 @@ pub fn frf(req: &FrfRequest) -> anyhow::Result<FrfOutcome> {
         _ => anyhow::bail!("internal: expected two columns"),
     };
     let file = req.input.display();
-    super::check_channel(x, &format!("{file}: column `{}` (--x)", req.x))?;
-    super::check_channel(y, &format!("{file}: column `{}` (--y)", req.y))?;
+    super::check_channel(x, &format!("{file}: column `{}` ($x)", req.x))?;
+    super::check_channel(y, &format!("{file}: column `{}` ($y)", req.y))?;
     let config = req.welch.resolve(x.len(), req.fs, Defaults::Scipy)?;
     let frf = frf::estimate(x, y, config)?;
     let picked = req

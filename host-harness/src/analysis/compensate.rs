@@ -87,7 +87,7 @@ pub fn compensate(
     let note = binary.then(|| {
         "binary centroid: divided by sinc(pi f Te), the weighted centroid's transfer; the binary \
          centroid's own transfer depends on the target, threshold and motion amplitude \
-         (host-harness plan), which the recording does not state; --twin N measures it for \
+         (host-harness plan), which the recording does not state; $twin N measures it for \
          this recording's target and motion (the twin's amplitude ratio per mode)"
             .to_string()
     });

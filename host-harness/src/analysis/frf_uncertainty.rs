@@ -220,7 +220,7 @@ fn damping_intervals(
                 "{name}: its half-power bandwidth ({:.3} Hz by the fit) is narrower \
                  than a segment's line ({line_hz:.3} Hz): not resolved, no interval of its \
                  damping and amplitude (the fit's damping is then unreliable too); longer \
-                 segments (--nperseg) resolve it",
+                 segments ($nperseg) resolve it",
                 2.0 * damping * m.f_hz
             ));
         }

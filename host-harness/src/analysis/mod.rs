@@ -91,6 +91,28 @@ pub struct Alignment {
 /// Errors: rates not positive, `N * fa / fc` not an integer, the frames start before the
 /// accelerometer record, or the accelerometer record is too short for the frames (the message
 /// names both counts and durations).
+/// Writes a job's `report.txt` and its `report.html` (`page` makes it from the report's text),
+/// the settings they name spelled as the command line's flags (`$nperseg`: `--nperseg`);
+/// returns the report as written.
+pub fn write_report(
+    out: &vibcam_report::outdir::Staged,
+    report: &str,
+    page: impl FnOnce(&str) -> String,
+) -> anyhow::Result<String> {
+    use crate::setting::{spell, Naming};
+    let report = spell(report, Naming::Cli);
+    out.write("report.txt", &report)?;
+    out.write("report.html", spell(&page(&report), Naming::Cli))?;
+    Ok(report)
+}
+
+/// Prints a warning on standard error beside the progress, with the settings it names spelled
+/// as the command line's flags (`$threshold`: `--threshold`).
+pub fn warn(text: &str) {
+    let text = crate::setting::spell(text, crate::setting::Naming::Cli);
+    eprintln!("warning: {text}");
+}
+
 pub fn align(
     frames: usize,
     fc: f64,
@@ -169,7 +191,7 @@ pub fn check_time_column(t: &[f64], fs: f64, source: &str, first_row: usize) -> 
         }
         if (step - dt).abs() > 0.05 * dt {
             return Err(bad_input(format!(
-                "{source}: row {row}: time step {step} s does not match --fs {fs} Hz \
+                "{source}: row {row}: time step {step} s does not match $fs {fs} Hz \
                  (expected {dt} s)"
             )));
         }
@@ -177,7 +199,7 @@ pub fn check_time_column(t: &[f64], fs: f64, source: &str, first_row: usize) -> 
         if drift.abs() > 0.5 * dt {
             let rate = (i + 1) as f64 / (w[1] - t[0]);
             return Err(bad_input(format!(
-                "{source}: row {row}: time {} s is {drift:+.6} s from the {} s that --fs {fs} \
+                "{source}: row {row}: time {} s is {drift:+.6} s from the {} s that $fs {fs} \
                  Hz gives (more than half a sample): the file's own rate is about {rate:.6} Hz",
                 w[1],
                 t[0] + (i + 1) as f64 * dt
@@ -247,7 +269,7 @@ pub fn usable_frames_or_error(frames: usize, fc: f64, fa: f64) -> anyhow::Result
         bad_input(format!(
             "{frames} frames at {fc} fps: no record of up to {frames} frames spans a whole \
              number of accelerometer samples at {fa} Hz (the Fourier upsampling needs N * fa / \
-             fc to be an integer); check --fps and --fs, or record longer"
+             fc to be an integer); check $fps and $fs, or record longer"
         ))
     })
 }
@@ -271,7 +293,7 @@ pub fn analyze(
     if disp.failed() {
         return Err(bad_input(format!(
             "{} of {} frames ({:.1} %) have no centroid, more than the {} % \
-             allowed (check --threshold, --roi, with --targets --gate-px, the exposure and the \
+             allowed (check $threshold, $roi, with $targets $gate_px, the exposure and the \
              lighting)",
             disp.lost_count,
             disp.mm.len(),
@@ -348,7 +370,7 @@ pub fn load_accel(
     time_col: Option<&str>,
 ) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
     if !(fs.is_finite() && fs > 0.0) {
-        return Err(bad_input(format!("--fs must be a positive rate, got {fs}")));
+        return Err(bad_input(format!("$fs must be a positive rate, got {fs}")));
     }
     let mut wanted = vec![input_col, output_col];
     wanted.extend(time_col);
@@ -362,11 +384,11 @@ pub fn load_accel(
     let file = path.display();
     check_channel(
         &input,
-        &format!("{file}: column `{input_col}` (--input-col)"),
+        &format!("{file}: column `{input_col}` ($input_col)"),
     )?;
     check_channel(
         &output,
-        &format!("{file}: column `{output_col}` (--output-col)"),
+        &format!("{file}: column `{output_col}` ($output_col)"),
     )?;
     Ok((input, output))
 }
@@ -435,7 +457,7 @@ mod tests {
         assert_eq!(usable_frames(1200, ntsc, 2048.0), None);
         assert_eq!(usable_frames(3800, ntsc, 2048.0), Some(3750));
         let e = usable_frames_or_error(1200, ntsc, 2048.0).unwrap_err();
-        assert!(e.to_string().contains("check --fps and --fs"), "{e}");
+        assert!(e.to_string().contains("check $fps and $fs"), "{e}");
     }
 
     use firmware_core::centroid::{Centroid, CentroidConfig};
@@ -533,7 +555,7 @@ mod tests {
             "{:#}",
             check_time_column(&[0.0, 0.5, 1.2], 2.0, "a.csv", 2).unwrap_err()
         );
-        assert!(e.contains("row 4") && e.contains("--fs"), "{e}");
+        assert!(e.contains("row 4") && e.contains("$fs"), "{e}");
         // a rate 2.4 % off passes every step (within 5 %) but drifts by half a sample after
         // 22 samples (2048 Hz data read as 2000 Hz, t[22] on row 24): the row is named
         let t: Vec<f64> = (0..100).map(|i| i as f64 / 2048.0).collect();

@@ -52,7 +52,7 @@ fn reading_rate(req: &PickRequest, source: &crate::frames::FrameSource) -> anyho
                 .map_err(|e| e.into_anyhow())?
                 .ok_or_else(|| {
                     crate::bad_input(format!(
-                        "{}: its frames' times give no rate: give --fps",
+                        "{}: its frames' times give no rate: give $fps",
                         req.frames
                     ))
                 })?
@@ -66,7 +66,7 @@ fn reading_rate(req: &PickRequest, source: &crate::frames::FrameSource) -> anyho
 pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     if !(1..=50).contains(&req.shown) {
         return Err(crate::bad_input(format!(
-            "--frames-shown {}: 1 to 50",
+            "$frames_shown {}: 1 to 50",
             req.shown
         )));
     }
@@ -110,15 +110,15 @@ fn refuse_replacing(req: &PickRequest) -> anyhow::Result<()> {
     crate::outdir::refuse_output_file_among_inputs(&req.out, &inputs)?;
     if req.out.exists() && !req.force {
         return Err(crate::bad_input(format!(
-            "{} exists: --force replaces it",
+            "{} exists: $force replaces it",
             req.out.display()
         )));
     }
     if req.out.exists() && !is_pick_page(&req.out) {
         // a frame, a camera's raw data beside its header, anyone's file: never replaced
         return Err(crate::bad_input(format!(
-            "--out {}: exists and is not a page `pick` wrote: not replaced even with --force; \
-             choose another --out",
+            "$out {}: exists and is not a page `pick` wrote: not replaced even with $force; \
+             choose another $out",
             req.out.display()
         )));
     }

@@ -169,7 +169,7 @@ fn intervals_text(a: &Analysis, i: &super::frf_uncertainty::Intervals) -> String
         let _ = writeln!(
             s,
             "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
-             no spread to measure them from. --nperseg (a quarter of the record or less, \
+             no spread to measure them from. $nperseg (a quarter of the record or less, \
              half-overlapped by default) gives them.",
             i.segments,
             super::frf_uncertainty::MIN_SEGMENTS

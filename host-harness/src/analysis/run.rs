@@ -29,7 +29,7 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     let source = found.source.clone();
     let ignored = crate::frames::ignored_note(&found.ignored);
     if let Some(n) = &ignored {
-        eprintln!("warning: {n}");
+        super::warn(n);
     }
     // remarks on the frames and their rate go into the report with the note on ignored files
     let mut notes: Vec<String> = req.notes.clone();
@@ -66,7 +66,7 @@ fn one_target(
     let template = still.frame();
     let depth_warning = depth.threshold_warning(req.centroid.threshold);
     if let Some(w) = &depth_warning {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     let disp = super::displacement_mm(&centroids, &req.displacement)?;
 
@@ -111,11 +111,9 @@ fn one_target(
         Some(a) => write_results(&out, req, a, &mut report)?,
         None => Vec::new(),
     };
-    out.write("report.txt", &report)?;
-    out.write(
-        "report.html",
-        one_target_page(req, source, &centroids, a, &report, &figures),
-    )?;
+    let mut report = super::write_report(&out, &report, |report| {
+        one_target_page(req, source, &centroids, a, report, &figures)
+    })?;
     if result.is_ok() {
         out.commit()?;
     } else if !out.commit_unless_replacing()? {

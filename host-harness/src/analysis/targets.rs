@@ -317,7 +317,7 @@ fn reference_row(
     if !(1..=bands).contains(&mode) || !(1..=k).contains(&target) {
         return Err(bad_input(format!(
             "{at}: mode {mode}, target {target}: modes count from 1 to {bands} (one per \
-             --bands band) and targets from 1 to {k} (--targets {k})"
+             $bands band) and targets from 1 to {k} ($targets {k})"
         )));
     }
     let im = match ci {
@@ -341,10 +341,10 @@ pub fn read_shape_reference(
         .trim(csv::Trim::All)
         .flexible(true)
         .from_path(path)
-        .map_err(|e| bad_input(format!("--shape-reference {name}: cannot read it: {e}")))?;
+        .map_err(|e| bad_input(format!("$shape_reference {name}: cannot read it: {e}")))?;
     let header: Vec<String> = reader
         .headers()
-        .map_err(|e| bad_input(format!("--shape-reference {name}: {e}")))?
+        .map_err(|e| bad_input(format!("$shape_reference {name}: {e}")))?
         .iter()
         .map(str::to_string)
         .collect();

@@ -102,19 +102,17 @@ fn write(
         report.push_str(&super::points::windows_report(w, tracks));
     }
     let failed = a.failures();
-    out.write("report.txt", &report)?;
-    out.write(
-        "report.html",
+    let report = super::write_report(&out, &report, |report| {
         page(
             req,
             source,
             a,
             tracks,
             (windows, super::view::reference_markers(viewed)),
-            &report,
+            report,
             std::slice::from_ref(&shapes),
-        ),
-    )?;
+        )
+    })?;
     // a run with failed targets exits 2: it never replaces an earlier output
     let written = if failed.is_empty() {
         out.commit().map(|()| true)?
@@ -325,7 +323,7 @@ fn full_report(
         }
     }
     if let Some(w) = tracks.depth.threshold_warning(req.centroid.threshold) {
-        eprintln!("warning: {w}");
+        super::warn(&w);
         report.push_str(&format!("WARNING: {w}\n"));
     }
     for (t, c) in a.compensation.iter().enumerate() {
@@ -487,7 +485,7 @@ fn report(
     shapes_text(&mut s, a, tracks);
     s.push('\n');
     if let Some(m) = macs {
-        s.push_str("\nMAC against --shape-reference:");
+        s.push_str("\nMAC against $shape_reference:");
         for (mode, v) in m {
             let _ = write!(s, " mode {mode}: {v:.6}");
         }
@@ -520,7 +518,7 @@ fn intervals_text(s: &mut String, a: &TargetAnalysis) {
         let _ = writeln!(
             s,
             "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
-             no spread to measure them from. --nperseg (a quarter of the record or less, \
+             no spread to measure them from. $nperseg (a quarter of the record or less, \
              half-overlapped by default) gives them.",
             i.segments,
             super::frf_uncertainty::MIN_SEGMENTS
@@ -598,7 +596,7 @@ fn shapes_text(s: &mut String, a: &TargetAnalysis, tracks: &Tracks) {
 fn colocated(s: &mut String, a: &TargetAnalysis, j: usize) {
     let _ = write!(
         s,
-        "\nvision target {j} (co-located with the accelerometer, --accel-target) / accelerometer:"
+        "\nvision target {j} (co-located with the accelerometer, $accel_target) / accelerometer:"
     );
     if a.analyses[j - 1].is_err() {
         s.push_str(" not analysed\n");

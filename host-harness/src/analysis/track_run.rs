@@ -144,22 +144,20 @@ fn write(
         figures.push(f);
     }
     figures.extend(camera_figure);
-    out.write("report.txt", &report)?;
     let frame = source
         .frame_at(req.fps, 0)
         .ok()
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
-    out.write(
-        "report.html",
+    let report = super::write_report(&out, &report, |report| {
         page(
             req,
             (tracks, windows, super::view::reference_markers(viewed)),
             frame,
-            &report,
+            report,
             &figures,
-        ),
-    )?;
+        )
+    })?;
     out.commit()?;
     Ok(report)
 }
@@ -250,9 +248,7 @@ fn report(
         }
     }
     if req.displacement.is_none() {
-        s.push_str(
-            "disp_mm: empty (no scale: --mm-per-px, --scale, --target-size-mm or --world)\n",
-        );
+        s.push_str("disp_mm: empty (no scale: $mm_per_px, $scale, $target_size_mm or $world)\n");
     }
     for f in failures {
         let _ = writeln!(s, "no displacement for {f}");

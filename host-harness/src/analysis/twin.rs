@@ -221,7 +221,7 @@ fn motion(coord: &[f64], fc: f64, exposure_s: f64) -> anyhow::Result<Vec<f64>> {
     let n = coord.len();
     if n < 4 {
         return Err(crate::bad_input(format!(
-            "--twin: {n} frames are too few to re-render"
+            "$twin: {n} frames are too few to re-render"
         )));
     }
     let (first, last) = (coord[0], coord[n - 1]);
@@ -299,7 +299,7 @@ impl Scene {
         };
         if cols == 0 || rows < 4 {
             return Err(crate::bad_input(format!(
-                "--twin: the centroid's region ({cw} x {ch} px) is too small to re-render"
+                "$twin: the centroid's region ({cw} x {ch} px) is too small to re-render"
             )));
         }
         let mut columns: Vec<Vec<f32>> = (0..cols)

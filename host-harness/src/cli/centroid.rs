@@ -191,7 +191,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         frames += rows.len();
         if let Some(e) = error {
             failed += 1;
-            eprintln!("error: {e:#}");
+            eprintln!(
+                "error: {}",
+                crate::setting::message(&e, crate::setting::Naming::Cli)
+            );
         }
     }
     let total = args.files.len();

@@ -441,7 +441,7 @@ fn impact_spectra(
         notes.push(format!(
             "the responses move before the force's pulses (their RMS before a pulse is \
              {:.0} % of their largest excursion after it): the records are not aligned; \
-             give the delay between their starts (--delay-s, delay_s in Python)",
+             give the delay between their starts ($delay_s, delay_s in Python)",
             100.0 * ahead
         ));
     }
@@ -467,7 +467,7 @@ fn continuous_spectra(
     if rms > 0.0 && peak > 10.0 * rms {
         notes.push(format!(
             "the force's peak is {:.0} times its RMS: it looks like hammer hits, not a \
-             continuous force; an impact test is analysed hit by hit (--impact, \
+             continuous force; an impact test is analysed hit by hit ($impact, \
              impact=True in Python)",
             peak / rms
         ));

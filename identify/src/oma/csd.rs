@@ -128,7 +128,7 @@ pub fn check(channels: &[Vec<f64>], c: CsdConfig) -> anyhow::Result<usize> {
     }
     if n < c.nperseg {
         return Err(bad_input(format!(
-            "the record has {n} samples, fewer than one segment (--nperseg {}): record longer \
+            "the record has {n} samples, fewer than one segment ($nperseg {}): record longer \
              or choose a shorter segment",
             c.nperseg
         )));

@@ -261,7 +261,7 @@ pub fn efdd(
     let count = y.len();
     if count < rule.min_lines {
         return Err(format!(
-            "its bell has {count} lines, fewer than {} (a longer segment, --nperseg, gives it \
+            "its bell has {count} lines, fewer than {} (a longer segment, $nperseg, gives it \
              more)",
             rule.min_lines
         ));

@@ -359,7 +359,7 @@ fn mac_with_all(shape: &[Complex64]) -> f64 {
 /// mode's damping.
 pub fn common_motion_notes(modes: &[OmaMode], svd: &fdd::Svd, s: &OmaSettings) -> Vec<String> {
     const FIX: &str = "the camera's own motion (a tripod in the wind, traffic), not the \
-        structure's, unless the whole structure moves as one; give --reference (windows on \
+        structure's, unless the whole structure moves as one; give $reference (windows on \
         parts of the scene that do not move) to take the camera's motion out";
     let mut out = Vec::new();
     let mut warned: Vec<f64> = Vec::new();
@@ -440,7 +440,7 @@ pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64, source: RecordSource) -> Ve
     let why = match source {
         RecordSource::Blob => {
             "made by the binary centroid's pixel locking (a staircase in the motion), not a \
-             mode: --tracker weighted or lk makes none"
+             mode: $tracker weighted or lk makes none"
                 .to_string()
         }
         RecordSource::Linear(name) => format!(
@@ -449,7 +449,7 @@ pub fn harmonic_notes(modes: &[OmaMode], df_hz: f64, source: RecordSource) -> Ve
              model or a second measurement"
         ),
         RecordSource::File => "made by a tracker or a structure that is not linear in the \
-             motion (the binary centroid's pixel locking makes them; --tracker weighted or lk \
+             motion (the binary centroid's pixel locking makes them; $tracker weighted or lk \
              makes none), not a mode"
             .to_string(),
     };
@@ -593,11 +593,11 @@ mod tests {
         let lk = harmonic_notes(&third, df, RecordSource::Linear("Lucas-Kanade"));
         assert_eq!(lk.len(), 1, "{lk:?}");
         assert!(
-            lk[0].contains("3 x mode 1") && !lk[0].contains("--tracker"),
+            lk[0].contains("3 x mode 1") && !lk[0].contains("$tracker"),
             "{lk:?}"
         );
         let blob = harmonic_notes(&third, df, RecordSource::Blob);
-        assert!(blob[0].contains("--tracker weighted or lk"), "{blob:?}");
+        assert!(blob[0].contains("$tracker weighted or lk"), "{blob:?}");
     }
 
     #[test]

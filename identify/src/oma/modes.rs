@@ -73,8 +73,8 @@ pub fn ssi_modes(
         notes.push(format!(
             "SSI-cov: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
              lowest frequency analysed, {:.4} Hz (0.5 Hz, or two spectral lines of {} samples, \
-             whichever is higher; or --f-min-hz): not reported; a longer --nperseg or a lower \
-             --f-min-hz takes it in",
+             whichever is higher; or $f_min_hz): not reported; a longer $nperseg or a lower \
+             $f_min_hz takes it in",
             c.f_hz, c.damping, c.poles, s.ssi.f_range_hz.0, s.csd.nfft
         ));
     }

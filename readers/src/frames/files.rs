@@ -109,7 +109,7 @@ impl FrameRange {
         let last = self.last.unwrap_or(n);
         if self.first > n || last > n {
             return Err(bad_input(format!(
-                "--frame-range {}: {what} has {n} frames (1..{n})",
+                "$frame_range {}: {what} has {n} frames (1..{n})",
                 self.describe()
             )));
         }
@@ -305,7 +305,7 @@ fn numbered_sequence(
         let seqs: Vec<String> = top.iter().map(|(p, s)| format!("{p}N{s}")).collect();
         return Err(bad_input(format!(
             "{what}: {} numbered sequences of {best} files each ({}); name the frames with a \
-             pattern, e.g. --frames 'DIR/{}*{}'",
+             pattern, e.g. $frames 'DIR/{}*{}'",
             top.len(),
             seqs.join(", "),
             top[0].0,
@@ -378,15 +378,15 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
         };
         if dir.to_string_lossy().contains(['*', '?']) {
             return Err(bad_input(format!(
-                "--frames {spec}: wildcards are only supported in the file name, not in the \
+                "$frames {spec}: wildcards are only supported in the file name, not in the \
                  directory part"
             )));
         }
         let files = sorted_files(dir, |n| wildcard_match(name, n))?;
         if files.is_empty() {
-            return Err(bad_input(format!("--frames {spec}: no file matches")));
+            return Err(bad_input(format!("$frames {spec}: no file matches")));
         }
-        let (files, ignored) = numbered_sequence(files, &format!("--frames {spec}"))?;
+        let (files, ignored) = numbered_sequence(files, &format!("$frames {spec}"))?;
         check_numbering(&files)?;
         return Ok(Discovered {
             source: FrameSource::Files(files),
@@ -419,14 +419,14 @@ pub fn discover_frames(spec: &str) -> anyhow::Result<Discovered> {
             }));
         }
         return Err(bad_input(format!(
-            "--frames {spec}: a single {} file is one frame; give a directory of frames, a \
+            "$frames {spec}: a single {} file is one frame; give a directory of frames, a \
              pattern like dir/frame_*.png, a multi-page TIFF or a video file (.{})",
             path.extension().and_then(|e| e.to_str()).unwrap_or("image"),
             VIDEO_EXTENSIONS.join(", .")
         )));
     }
     Err(bad_input(format!(
-        "--frames {spec}: no such file or directory"
+        "$frames {spec}: no such file or directory"
     )))
 }
 
@@ -708,7 +708,7 @@ impl FrameSource {
                 Ok(FrameSource::Range(Box::new(self), range))
             }
             FrameSource::Range(inner, _) => Err(bad_input(format!(
-                "--frame-range {}: {} is already a range",
+                "$frame_range {}: {} is already a range",
                 range.describe(),
                 inner.describe()
             ))),
@@ -800,8 +800,8 @@ impl FrameSource {
             FrameSource::Video { path, .. } => Ok(FrameSource::Video { path, retime: true }),
             FrameSource::Range(inner, r) => Ok(FrameSource::Range(Box::new(inner.retimed(on)?), r)),
             _ => Err(bad_input(
-                "--retime applies to a video file (its container's rate), not to image files \
-                 or camera files: give their capture rate as --fps",
+                "$retime applies to a video file (its container's rate), not to image files \
+                 or camera files: give their capture rate as $fps",
             )),
         }
     }
@@ -1082,7 +1082,7 @@ impl FrameDepth {
     pub fn threshold_warning(&self, threshold: u16) -> Option<String> {
         (self.bits == 16 && threshold <= 255 && self.max > 1023).then(|| {
             format!(
-                "--threshold {threshold} on 16-bit frames whose values reach {}: a threshold \
+                "$threshold {threshold} on 16-bit frames whose values reach {}: a threshold \
                  for 8-bit frames? On 16-bit frames it is in their own units (x257 maps 8-bit \
                  levels to 16-bit: {})",
                 self.max,

@@ -204,7 +204,7 @@ impl GreyFrame {
         if let (GreyFrame::U8 { .. }, Some(s)) = (self, config.saturation) {
             if s > 255 {
                 return Err(bad_input(format!(
-                    "{label}: --saturation {s} is above 255, the largest level of an 8-bit \
+                    "{label}: $saturation {s} is above 255, the largest level of an 8-bit \
                      frame: no pixel could ever be flagged saturated"
                 )));
             }

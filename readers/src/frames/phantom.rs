@@ -281,7 +281,7 @@ pub fn check_times(h: &CineHeader, range: std::ops::Range<usize>) -> anyhow::Res
     Err(bad_input(format!(
         "{}: frame {} comes {:.3} ms after frame {}, not one frame period ({:.3} ms at {fps} \
          fps): a dropped frame, a damaged time stamp or an irregular recording; frames {}..{} \
-         are regular: analyse them with --frame-range {}..{}",
+         are regular: analyse them with $frame_range {}..{}",
         h.path.display(),
         k + 2,
         dt * 1e3,

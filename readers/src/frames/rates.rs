@@ -33,7 +33,7 @@ pub fn resolve_rates(
         (Some(f), Some((r, _))) => {
             if (f - r).abs() > 1e-9 * r {
                 notes.push(format!(
-                    "--fps {f} overrides the {r} fps that {frames} states"
+                    "$fps {f} overrides the {r} fps that {frames} states"
                 ));
             }
             f
@@ -45,13 +45,13 @@ pub fn resolve_rates(
         }
         (None, None) if source.inner().is_camera_file() => {
             return Err(crate::bad_input(format!(
-                "--fps is needed: the header of {frames} states no usable frame rate (none, \
+                "$fps is needed: the header of {frames} states no usable frame rate (none, \
                  or 0 fps)"
             )))
         }
         (None, None) => {
             return Err(crate::bad_input(format!(
-                "--fps is needed: {frames} does not state the rate the camera recorded at \
+                "$fps is needed: {frames} does not state the rate the camera recorded at \
                  (image files and videos; a video container's rate is often not the capture \
                  rate)"
             )))
@@ -62,7 +62,7 @@ pub fn resolve_rates(
             super::video::check_rate(path, fps, retime).map_err(|e| e.into_anyhow())?
         {
             notes.push(format!(
-                "--fps {fps} retimes {frames}, whose container plays at {}: frames \
+                "$fps {fps} retimes {frames}, whose container plays at {}: frames \
                  are 1/{fps} s apart (a slow-motion or time-lapse file; the timestamps were \
                  checked regular at the container's rate)",
                 super::video::rate_text(rate)

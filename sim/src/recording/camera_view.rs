@@ -72,26 +72,26 @@ impl CameraView {
         let bad = vibcam_readers::bad_input;
         if self.references > 8 {
             return Err(bad(format!(
-                "--references {}: 0 to 8 static disks",
+                "$references {}: 0 to 8 static disks",
                 self.references
             )));
         }
         if !(self.shake_px.is_finite() && (0.0..=20.0).contains(&self.shake_px)) {
-            return Err(bad(format!("--shake-px {}: 0 to 20 px", self.shake_px)));
+            return Err(bad(format!("$shake_px {}: 0 to 20 px", self.shake_px)));
         }
         if !(self.roll_deg.is_finite() && (0.0..=5.0).contains(&self.roll_deg)) {
-            return Err(bad(format!("--roll-deg {}: 0 to 5 degrees", self.roll_deg)));
+            return Err(bad(format!("$roll_deg {}: 0 to 5 degrees", self.roll_deg)));
         }
         let (a, b) = self.shake_band_hz;
         if !(a.is_finite() && b.is_finite() && 0.0 < a && a < b && b < fps / 2.0) {
             return Err(bad(format!(
-                "--shake-hz {a},{b}: a band 0 < A < B below the Nyquist frequency ({} Hz)",
+                "$shake_hz {a},{b}: a band 0 < A < B below the Nyquist frequency ({} Hz)",
                 fps / 2.0
             )));
         }
         if !(self.oblique_deg.is_finite() && (0.0..=60.0).contains(&self.oblique_deg)) {
             return Err(bad(format!(
-                "--oblique-deg {}: 0 to 60 degrees",
+                "$oblique_deg {}: 0 to 60 degrees",
                 self.oblique_deg
             )));
         }

@@ -51,20 +51,20 @@ impl FieldRecording {
         let period_ms = 1000.0 / self.fps;
         if !(self.exposure_ms >= 0.0 && self.exposure_ms < period_ms) {
             return Err(vibcam_readers::bad_input(format!(
-                "--exposure-ms {}: must be >= 0 and shorter than the frame period ({period_ms} \
+                "$exposure_ms {}: must be >= 0 and shorter than the frame period ({period_ms} \
                  ms)",
                 self.exposure_ms
             )));
         }
         if !(self.rms_px.is_finite() && self.rms_px > 0.0 && self.rms_px <= 20.0) {
             return Err(vibcam_readers::bad_input(format!(
-                "--rms-px {}: must be in (0, 20]",
+                "$rms_px {}: must be in (0, 20]",
                 self.rms_px
             )));
         }
         if !(self.read_noise.is_finite() && (0.0..=64.0).contains(&self.read_noise)) {
             return Err(vibcam_readers::bad_input(format!(
-                "--read-noise {}: must be between 0 and 64 grey levels",
+                "$read_noise {}: must be between 0 and 64 grey levels",
                 self.read_noise
             )));
         }
@@ -214,7 +214,7 @@ fn write_view(
          truth_motion.csv (each target's image centre and its displacement along the plane's y \
          in mm), camera_truth.csv (the shake). points.csv and references.csv: a window per \
          disk; world.csv: the references' centres in the image and in the plane (mm), for \
-         --world.\n\nAnalyse the frames (output-only) with:\n\n  {command}\n",
+         `analyze --world`.\n\nAnalyse the frames (output-only) with:\n\n  {command}\n",
         rec.model.points,
         rec.frames,
         rec.fps,

@@ -490,7 +490,7 @@ fn video_readme(video: Option<&Path>, colour: bool) -> String {
     };
     video.map_or(String::new(), |v| {
         format!(
-            "\n{what} are in {} (FFV1 in Matroska): give --frames {} to analyse the video.\n",
+            "\n{what} are in {} (FFV1 in Matroska): `analyze --frames {}` analyses the video.\n",
             v.display(),
             v.display()
         )

@@ -287,7 +287,7 @@ fn readme(dir: &Path, n: usize, tags: usize, video: bool) -> String {
             if video {
                 format!(
                     "\nframes.mkv: the same colour frames before JPEG compression, losslessly \
-                     (RGB FFV1; read as its BT.601 luma): --frames {d}/frames.mkv\n"
+                     (RGB FFV1; read as its BT.601 luma): track --frames {d}/frames.mkv\n"
                 )
             } else {
                 String::new()

@@ -72,7 +72,7 @@ fn write_frames(out: &Path, scene: &Scene, exposure_ms: f64) -> anyhow::Result<V
         let (a, b) = path.window(c, exposure_ms);
         if !(t.is_finite() && a >= 0.0 && b <= (n - 1) as f64) {
             return Err(bad_input(format!(
-                "--times: {t} s is outside the simulated record (0 .. {span:.1} s) with this \
+                "$times: {t} s is outside the simulated record (0 .. {span:.1} s) with this \
                  exposure"
             )));
         }

@@ -44,12 +44,12 @@ pub fn write_targets_recording(
     spec.validate()?;
     if !(2..=16).contains(&targets) {
         return Err(vibcam_readers::bad_input(format!(
-            "--targets {targets}: between 2 and 16 targets"
+            "$targets {targets}: between 2 and 16 targets"
         )));
     }
     let Rig::Cantilever(beam) = &spec.rig else {
         return Err(vibcam_readers::bad_input(
-            "--targets: only the cantilever has targets along it",
+            "$targets: only the cantilever has targets along it",
         ));
     };
     let xis = positions(targets);

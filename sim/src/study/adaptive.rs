@@ -120,7 +120,7 @@ impl AdaptiveConfig {
 pub fn parse_on(s: &str) -> anyhow::Result<(System, usize, bool)> {
     let err = || {
         bad_input(format!(
-            "--adaptive-on: `{s}` is not SYSTEM:MODE:QUANTITY (e.g. vision:2:a; systems \
+            "$adaptive_on: `{s}` is not SYSTEM:MODE:QUANTITY (e.g. vision:2:a; systems \
              transducer, vision, vision_compensated; quantities a, f)"
         ))
     };
@@ -145,7 +145,7 @@ fn watched(cfg: &StudyConfig, modes: usize, on: Option<&str>) -> anyhow::Result<
     if let Some((_, m, _)) = sel {
         if m >= modes {
             return Err(bad_input(format!(
-                "--adaptive-on: mode {} does not exist (the study reports {modes})",
+                "$adaptive_on: mode {} does not exist (the study reports {modes})",
                 m + 1
             )));
         }
@@ -352,7 +352,7 @@ mod tests {
             "vision:1:a:b",
         ] {
             let e = parse_on(bad).unwrap_err().to_string();
-            assert!(e.contains("--adaptive-on"), "{bad}: {e}");
+            assert!(e.contains("$adaptive_on"), "{bad}: {e}");
         }
     }
 }

@@ -194,7 +194,7 @@ pub fn refuse_foreign_entries(dir: &Path) -> anyhow::Result<()> {
         if !own.contains(&name.as_str()) && !temporary {
             return Err(bad_input(format!(
                 "{}: holds {name}, which is not a study's; a new study goes into a new or \
-                 empty --out (nothing in a folder of yours is overwritten)",
+                 empty $out (nothing in a folder of yours is overwritten)",
                 dir.display()
             )));
         }
@@ -228,7 +228,7 @@ pub fn lock_dir(dir: &Path) -> anyhow::Result<DirLock> {
             file.read_to_string(&mut holder).ok();
             return Err(bad_input(format!(
                 "{} is in use by another host-harness process (pid {}); wait for it to finish, \
-                 or use another --out",
+                 or use another $out",
                 dir.display(),
                 holder.trim()
             )));

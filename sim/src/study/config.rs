@@ -211,7 +211,7 @@ impl StudyConfig {
             return Err(bad_input(format!(
                 "runs: {} is more than one study directory holds ({MAX_RUNS}): every run keeps \
                  about 10 kB in memory for the aggregation and 25 kB in runs.jsonl; split larger \
-                 studies into shards (--shard K/N) and merge them",
+                 studies into shards ($shard K/N) and merge them",
                 self.runs
             )));
         }

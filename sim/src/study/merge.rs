@@ -37,7 +37,7 @@ pub fn read_shards(dirs: &[PathBuf]) -> anyhow::Result<Merged> {
             Some((n, d)) if Some(n) != count.as_ref() => {
                 return Err(bad_input(format!(
                     "{} is shard {shard}, but {} is a shard of {n}: merge the shards of one \
-                     layout (--shard K/N with the same N)",
+                     layout ($shard K/N with the same N)",
                     dir.display(),
                     d.display()
                 )));
@@ -93,7 +93,7 @@ pub fn read_shards(dirs: &[PathBuf]) -> anyhow::Result<Merged> {
     if let Some(first_missing) = missing.first() {
         return Err(bad_input(format!(
             "{} of {} runs are missing (first: run {first_missing}); finish the shards (study \
-             --resume) before merging",
+             $resume) before merging",
             missing.len(),
             m.config.runs,
         )));
@@ -107,7 +107,7 @@ pub fn write_merged(out: &Path, m: &Merged) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     if out.join(files::RUNS).exists() {
         return Err(bad_input(format!(
-            "{} already holds a study; choose another --out",
+            "{} already holds a study; choose another $out",
             out.display()
         )));
     }

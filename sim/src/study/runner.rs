@@ -10,6 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::sync::Mutex;
+use vibcam_common::setting::{spell, Naming};
 use vibcam_readers::bad_input;
 
 /// The random stream of run `run`: ChaCha8 keyed by the master seed, one stream per run. It
@@ -35,7 +36,7 @@ impl Shard {
 
     /// Parses `K/N` with 1 <= K <= N.
     pub fn parse(s: &str) -> anyhow::Result<Shard> {
-        let err = || bad_input(format!("--shard: `{s}` is not K/N with 1 <= K <= N"));
+        let err = || bad_input(format!("$shard: `{s}` is not K/N with 1 <= K <= N"));
         let (k, n) = s.split_once('/').ok_or_else(err)?;
         let index: u64 = k.trim().parse().map_err(|_| err())?;
         let count: u64 = n.trim().parse().map_err(|_| err())?;
@@ -95,10 +96,12 @@ pub fn worker_threads(requested: usize, pending: usize) -> usize {
     let want = if requested == 0 { cores } else { requested };
     let n = want.min(max).min(pending.max(1));
     if requested > max {
-        eprintln!(
-            "warning: --threads {requested} capped at {max} ({MAX_THREADS_PER_CORE} per core on \
+        let warning = format!(
+            "warning: $threads {requested} capped at {max} ({MAX_THREADS_PER_CORE} per core on \
              {cores} cores)"
         );
+        // printed here, for the command line (the study's own loop has no caller to return it to)
+        eprintln!("{}", spell(&warning, Naming::Cli));
     }
     n
 }
@@ -113,14 +116,14 @@ fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
         toml::from_str(&old_text).map_err(|e| bad_input(format!("{}: {e}", cfg_path.display())))?;
     if old.runs_key() != cfg.runs_key() {
         return Err(bad_input(format!(
-            "--resume: the configuration differs from the one in {} (resume with the same \
+            "$resume: the configuration differs from the one in {} (resume with the same \
              preset, exposures, seed and options; runs may be raised)",
             cfg_path.display()
         )));
     }
     if cfg.runs < old.runs {
         return Err(bad_input(format!(
-            "--resume: --runs {} is below the {} the study in {} was started with; runs can \
+            "$resume: $runs {} is below the {} the study in {} was started with; runs can \
              be raised on resume (each run has its own random stream), not lowered",
             cfg.runs,
             old.runs,
@@ -130,9 +133,9 @@ fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
     let revision = checkpoint::recorded_revision(&exec.out)?;
     if revision != MODEL_REVISION {
         return Err(bad_input(format!(
-            "--resume: {} holds runs of model revision {revision}, this build computes \
+            "$resume: {} holds runs of model revision {revision}, this build computes \
              revision {MODEL_REVISION}; mixing them would give a study of two code \
-             versions. Start it again in a new --out (without --out, the default directory \
+             versions. Start it again in a new $out (without $out, the default directory \
              already differs)",
             exec.out.display()
         )));
@@ -142,7 +145,7 @@ fn check_resumable(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<()> {
         std::fs::read_to_string(exec.out.join(files::SHARD)).unwrap_or_else(|_| "1/1\n".into());
     if old_shard != shard_text {
         return Err(bad_input(format!(
-            "--resume: {} holds shard {}, not {}",
+            "$resume: {} holds shard {}, not {}",
             exec.out.display(),
             old_shard.trim(),
             shard_text.trim()
@@ -180,7 +183,7 @@ fn open_study(cfg: &StudyConfig, exec: &Execution) -> anyhow::Result<(DirLock, V
     }
     if !exec.resume {
         return Err(bad_input(format!(
-            "{} already holds a study; pass --resume to continue it, or choose another --out",
+            "{} already holds a study; pass $resume to continue it, or choose another $out",
             exec.out.display()
         )));
     }

@@ -265,7 +265,7 @@ fn wanted_channels(
         };
         notes.push(format!(
             "{file}: the points' {} coordinate (it moves more than the other; \
-             --response-col to choose)",
+             $response_col to choose)",
             axis.trim()
         ));
         first
@@ -317,7 +317,7 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
             [one] => one.clone(),
             _ => {
                 return Err(bad_input(format!(
-                    "{file}: {} channels ({}): name the force with --excitation-col",
+                    "{file}: {} channels ({}): name the force with $excitation_col",
                     names.len(),
                     names.join(", ")
                 )))
@@ -330,7 +330,7 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
     if let Some(what) = c.unit.as_deref().and_then(not_a_force) {
         return Err(bad_input(format!(
             "{file}: channel `{name}` is in `{}`, a unit of {what}, not of a force: name the \
-             hammer's or the force transducer's channel with --excitation-col",
+             hammer's or the force transducer's channel with $excitation_col",
             c.unit.as_deref().unwrap_or_default()
         )));
     }
@@ -434,7 +434,7 @@ fn stated_delay(
         Some(d) if given == 0.0 && (d * fs).abs() >= 0.5 => {
             notes.push(format!(
                 "the files state their first samples {} s apart (wf_start_time): the responses \
-                 taken as starting {d:.6} s after the force (a delay given, --delay-s, overrides it)",
+                 taken as starting {d:.6} s after the force (a delay given, $delay_s, overrides it)",
                 d.abs()
             ));
             d

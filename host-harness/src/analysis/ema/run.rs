@@ -104,11 +104,9 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
     for f in &figures {
         f.write_staged(&out)?;
     }
-    out.write("report.txt", &report)?;
-    out.write(
-        "report.html",
-        page(req, &r, &report, crate::plots::page_figures(&figures)),
-    )?;
+    let report = crate::analysis::write_report(&out, &report, |report| {
+        page(req, &r, report, crate::plots::page_figures(&figures))
+    })?;
     out.commit()?;
     Ok(Outcome {
         report,

@@ -265,7 +265,7 @@ fn long_file(
             .map(|(f, time)| {
                 time.ok_or_else(|| {
                     bad_input(format!(
-                        "{}: frame {f} has no time (t_s); give --fps",
+                        "{}: frame {f} has no time (t_s); give $fps",
                         t.path.display()
                     ))
                 })
@@ -308,7 +308,7 @@ fn wide_file(t: &Table<'_>, fps: Option<f64>) -> anyhow::Result<Parsed> {
         None if fps.is_some() => Vec::new(),
         None => {
             return Err(bad_input(format!(
-                "{}: no time column (t_s, time or t) and no --fps",
+                "{}: no time column (t_s, time or t) and no $fps",
                 t.path.display()
             )))
         }
@@ -323,15 +323,15 @@ fn wide_file(t: &Table<'_>, fps: Option<f64>) -> anyhow::Result<Parsed> {
 fn sample_rate(fps: Option<f64>, times: &[f64], path: &Path) -> anyhow::Result<f64> {
     match fps {
         Some(f) if !(f.is_finite() && f > 0.0) => {
-            Err(bad_input(format!("--fps must be positive, got {f}")))
+            Err(bad_input(format!("$fps must be positive, got {f}")))
         }
         Some(f) if times.len() > 1 => {
             let rate = rate_of(times, path)?;
             let drift = (times.len() - 1) as f64 * (1.0 / f - 1.0 / rate).abs() * rate;
             if drift > 0.5 {
                 return Err(bad_input(format!(
-                    "--fps {f} contradicts the time column of {}, whose samples are {} s \
-                     apart ({rate:.6} Hz): leave --fps out, or correct the file",
+                    "$fps {f} contradicts the time column of {}, whose samples are {} s \
+                     apart ({rate:.6} Hz): leave $fps out, or correct the file",
                     path.display(),
                     1.0 / rate
                 )));
@@ -412,7 +412,7 @@ fn rate_of(times: &[f64], path: &Path) -> anyhow::Result<f64> {
     let span = times[n - 1] - times[0];
     if span.is_nan() || span <= 0.0 {
         return Err(bad_input(format!(
-            "{}: the time column does not increase (correct it, or remove it and give --fps)",
+            "{}: the time column does not increase (correct it, or remove it and give $fps)",
             path.display()
         )));
     }

@@ -79,10 +79,8 @@ pub fn write(
         f.write_staged(&out)?;
     }
     let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
-    out.write("report.txt", &report)?;
     let figures = crate::plots::page_figures(&figures);
-    out.write(
-        "report.html",
+    let report = crate::analysis::write_report(&out, &report, |report| {
         page(
             r,
             records,
@@ -94,9 +92,9 @@ pub fn write(
                     .unwrap_or_default(),
             ),
             figures,
-            &report,
-        ),
-    )?;
+            report,
+        )
+    })?;
     out.commit()?;
     Ok(Outcome {
         report,

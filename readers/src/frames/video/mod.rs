@@ -752,7 +752,7 @@ mod tests {
             Err(e @ VideoError::IrregularTimestamps { .. }) => {
                 let text = e.to_string();
                 assert!(text.contains("30.0000 fps (30/1), constant"), "{text}");
-                assert!(text.contains("--retime"), "{text}");
+                assert!(text.contains("$retime"), "{text}");
             }
             other => panic!("{other:?}"),
         }

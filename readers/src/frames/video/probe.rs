@@ -302,7 +302,7 @@ pub(super) fn check_times(
                     fps,
                     what: format!(
                         "the video's frame rate is {own_text}, constant, not {fps}; give that \
-                         as --fps, or add --retime if the camera recorded at {fps} fps and \
+                         as $fps, or add $retime if the camera recorded at {fps} fps and \
                          the file plays it at another rate (slow motion, a time lapse)"
                     ),
                 });
