@@ -450,3 +450,38 @@ pub fn choice<T: Copy + Send + Sync + 'static>(
         },
     )
 }
+
+/// The recording a command reads: its frames, their rate, a retiming and a range; declared
+/// once for `analyze` and `track`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Recording {
+    /// Frames: a directory (its numbered *.png, *.tif, *.tiff, *.jpg sequence in natural name
+    /// order, so frame_2 comes before frame_10; other images beside it are named and ignored),
+    /// a pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, a
+    /// Photron recording named by its .cih/.cihx (8, 12-bit packed or 16 bit; the .mraw beside
+    /// it), a Phantom .cine (8, 16, packed 10-bit linearised to 12, packed 12), or a video file
+    /// (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg` program, luma, its
+    /// timestamps checked against --fps). Grey frames as stored (8 or 16 bits); colour frames
+    /// as their BT.601 luma, 0.299 R + 0.587 G + 0.114 B rounded, alpha ignored. Numbered files
+    /// must be consecutive (a gap is an error).
+    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|REC.cine|VIDEO")]
+    pub frames: String,
+    /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`). Default: the
+    /// rate a camera file states (Photron, Phantom); needed for image files and videos (a
+    /// container's rate is often not the capture rate: phone slow motion stores 30 fps for
+    /// 240). Given with a camera file, it overrides the file's rate (the report names both).
+    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    pub fps: Option<f64>,
+    /// With a video whose container plays at another constant rate than the camera recorded
+    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
+    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
+    /// container's rate, and the report names both rates. Without it a rate other than the
+    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
+    #[arg(long, requires = "fps")]
+    pub retime: bool,
+    /// Frames A..B of the recording only, 1-based and inclusive (as `FILE#N` and the labels
+    /// `frame K of N` count them; `A..` to the end, `..B` from the start): a camera file with a
+    /// damaged time stamp or a bad frame at one end, or one part of a long recording.
+    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
+    pub frame_range: Option<crate::frames::FrameRange>,
+}

@@ -11,26 +11,9 @@ use std::path::PathBuf;
 /// Arguments of `host-harness track`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Frames: as `analyze --frames` (image files, a multi-page TIFF, a Photron .cih/.cihx, a
-    /// Phantom .cine or a video).
-    #[arg(long, value_name = "PATH")]
-    pub frames: String,
-    /// Camera frame rate, Hz (default: the rate a camera file states; needed for image files
-    /// and videos).
-    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
-    pub fps: Option<f64>,
-    /// With a video whose container plays at another constant rate than the camera recorded
-    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
-    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
-    /// container's rate, and the report names both rates. Without it a rate other than the
-    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
-    #[arg(long, requires = "fps")]
-    pub retime: bool,
-    /// Frames A..B of the recording only, 1-based and inclusive (as `FILE#N` and the labels
-    /// `frame K of N` count them; `A..` to the end, `..B` from the start): a camera file with a
-    /// damaged time stamp or a bad frame at one end, or one part of a long recording.
-    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
-    pub frame_range: Option<crate::frames::FrameRange>,
+    /// The recording: its frames, their rate, a retiming and a range (as `analyze`'s).
+    #[command(flatten)]
+    pub recording: super::args::Recording,
     /// Chosen points: CSV `target,x,y,w,h[,threshold]` (as `analyze --points`).
     #[arg(
         long,
@@ -86,13 +69,18 @@ pub struct Args {
 
 /// Runs `host-harness track`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let rates =
-        crate::frames::resolve_rates(&args.frames, args.fps, None, args.retime, args.frame_range)?;
+    let rates = crate::frames::resolve_rates(
+        &args.recording.frames,
+        args.recording.fps,
+        None,
+        args.recording.retime,
+        args.recording.frame_range,
+    )?;
     let input = TrackInput {
         frames: FramesInput {
-            frames: args.frames.clone(),
-            retime: args.retime,
-            frame_range: args.frame_range,
+            frames: args.recording.frames.clone(),
+            retime: args.recording.retime,
+            frame_range: args.recording.frame_range,
         },
         tracking: args.centroid.tracking(
             args.points.as_deref(),
