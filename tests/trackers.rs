@@ -72,7 +72,7 @@ fn rms_errors(rows: &[Row], truth: &HashMap<(usize, usize), (f64, f64)>) -> Vec<
 /// `rec`.
 fn render_noisy_targets(rec: &Path, scene: &str) {
     render_cantilever(
-        &rec,
+        rec,
         &["--targets", "5", "--read-noise", "1", "--scene", scene],
     );
 }
