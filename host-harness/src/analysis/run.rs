@@ -48,13 +48,41 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
     }
 }
 
-/// The single-target analysis of `source` (see [`run`]).
+/// The single-target analysis of `source` (see [`run`]): computed, then written.
 fn one_target(
+    req: &Request,
+    source: &FrameSource,
+    accel: (&[f64], &[f64]),
+    ignored: Option<String>,
+) -> anyhow::Result<Outcome> {
+    // the output directory is checked before the frames are read (a refusal costs nothing)
+    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
+    let c = compute(req, source, accel, ignored)?;
+    write(req, source, out, c)
+}
+
+/// What a one-target analysis computed, before anything is written.
+struct Computed {
+    centroids: Vec<firmware_core::centroid::Centroid>,
+    inputs: Vec<(String, String)>,
+    disp: super::Displacement,
+    result: anyhow::Result<super::Analysis>,
+    compensation: Option<Compensated>,
+    /// The imaging's share (`None`: the stillest frame has no pixel above the threshold),
+    /// when the analysis succeeded and the frames' noise could be measured.
+    share: Option<Option<Share>>,
+    twin: Option<super::twin::Twin>,
+    figure: Option<crate::plots::Figure>,
+}
+
+/// The centroids, the displacement, the analysis, its compensation, the imaging share, the
+/// twin runs and the FRF figure of a one-target analysis; no file written.
+fn compute(
     req: &Request,
     source: &FrameSource,
     (base, tip): (&[f64], &[f64]),
     ignored: Option<String>,
-) -> anyhow::Result<Outcome> {
+) -> anyhow::Result<Computed> {
     let fps = req.settings.frame_rate_hz;
     // the frames' noise and the first frame (the imaging share) seen as they are centroided
     let mut noise = FrameNoise::new(req.centroid.roi, FrameNoise::stride_for(source.count(fps)?));
@@ -69,9 +97,6 @@ fn one_target(
         super::warn(w);
     }
     let disp = super::displacement_mm(&centroids, &req.displacement)?;
-
-    // every output is staged and the directory moved into place at the end (complete or absent)
-    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let mut inputs = describe_inputs(req, source, centroids.len(), base.len());
     if let Some(n) = ignored {
         inputs.push(("note".into(), n));
@@ -80,19 +105,9 @@ fn one_target(
     if let Some(w) = depth_warning {
         inputs.push(("WARNING".into(), w));
     }
-    let time_offset_s = req.settings.time_offset_s;
-    out.write(
-        "displacement.csv",
-        export::displacement_csv(&centroids, (&disp.mm, &disp.lost), fps, time_offset_s),
-    )?;
     let (result, compensation) = analyze_and_compensate(req, &disp, (base, tip))?;
-    let (a, failure) = match &result {
-        Ok(a) => (Some(a), None),
-        Err(e) => (None, Some(format!("{e:#}"))),
-    };
-    let mut report = super::report_text(&inputs, &disp, a, failure.as_deref());
-    append_compensation(&out, compensation.as_ref(), &mut report)?;
-    if let (Some(a), Some((index, first)), Some(noise)) = (a, &template, noise.estimate()) {
+    let (mut share, mut twin) = (None, None);
+    if let (Ok(a), Some((index, first)), Some(noise)) = (&result, &template, noise.estimate()) {
         let rec = super::twin::Recording {
             analysis: a,
             disp: &disp,
@@ -100,21 +115,69 @@ fn one_target(
             noise,
             accel: (base, tip),
         };
-        share_and_twin(req, &out, rec, &mut report)?;
-    } else if req.twin.is_some() {
-        report.push_str(
+        (share, twin) = share_and_twin(req, rec)?;
+    }
+    let figure = match &result {
+        Ok(a) => Some(frf_figure(a, fps)?),
+        Err(_) => None,
+    };
+    Ok(Computed {
+        centroids,
+        inputs,
+        disp,
+        result,
+        compensation,
+        share,
+        twin,
+        figure,
+    })
+}
+
+/// Writes every output of a computed one-target analysis into `out` and commits it (a failed
+/// analysis never replaces an earlier output); returns the report.
+fn write(req: &Request, source: &FrameSource, out: Staged, c: Computed) -> anyhow::Result<Outcome> {
+    let fps = req.settings.frame_rate_hz;
+    out.write(
+        "displacement.csv",
+        export::displacement_csv(
+            &c.centroids,
+            (&c.disp.mm, &c.disp.lost),
+            fps,
+            req.settings.time_offset_s,
+        ),
+    )?;
+    let a = c.result.as_ref().ok();
+    let failure = c.result.as_ref().err().map(|e| format!("{e:#}"));
+    let mut report = super::report_text(&c.inputs, &c.disp, a, failure.as_deref());
+    if let Some(comp) = &c.compensation {
+        let p = out.write("compensation.csv", export::compensation_csv(&comp.rows()))?;
+        report.push_str(&comp.report());
+        report.push_str(&format!("  written: {}\n", p.display()));
+    }
+    match &c.share {
+        Some(share) => report.push_str(&share.as_ref().map_or_else(
+            || "\nimaging share: the stillest frame has no pixel above the threshold\n".into(),
+            Share::report,
+        )),
+        None if req.twin.is_some() => report.push_str(
             "\ntwin: not run (the analysis failed, or the record has fewer than 3 frames to \
              measure the noise from)\n",
-        );
+        ),
+        None => {}
     }
-    let figures = match a {
-        Some(a) => write_results(&out, req, a, &mut report)?,
-        None => Vec::new(),
+    if let Some(twin) = &c.twin {
+        let p = out.write("twin.csv", twin.csv())?;
+        report.push_str(&twin.report());
+        report.push_str(&format!("  written: {}\n", p.display()));
+    }
+    let figures = match (a, c.figure) {
+        (Some(a), Some(figure)) => write_results(&out, req, a, figure, &mut report)?,
+        _ => Vec::new(),
     };
     let mut report = super::write_report(&out, &report, |report| {
-        one_target_page(req, source, &centroids, a, report, &figures)
+        one_target_page(req, source, &c.centroids, a, report, &figures)
     })?;
-    if result.is_ok() {
+    if c.result.is_ok() {
         out.commit()?;
     } else if !out.commit_unless_replacing()? {
         report.push_str(&format!(
@@ -124,18 +187,16 @@ fn one_target(
     }
     Ok(Outcome {
         report,
-        result: result.map(|_| ()),
+        result: c.result.map(|_| ()),
     })
 }
 
 /// The imaging's share of |H1| (from the stillest frame and the frames' noise) and, with
-/// `--twin`, the recording's twin runs (`twin.csv`), both added to the report.
+/// `--twin`, the recording's twin runs.
 fn share_and_twin(
     req: &Request,
-    out: &Staged,
     rec: super::twin::Recording<'_>,
-    report: &mut String,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<(Option<Option<Share>>, Option<super::twin::Twin>)> {
     let (d, fps) = (&req.displacement, req.settings.frame_rate_hz);
     let share = Share::of(
         rec.analysis,
@@ -145,19 +206,16 @@ fn share_and_twin(
         (d.axis, d.mm_per_px),
         fps,
     )?;
-    report.push_str(&share.map_or_else(
-        || "\nimaging share: the stillest frame has no pixel above the threshold\n".into(),
-        |s| s.report(),
-    ));
-    if let Some(t) = req.twin {
-        let bar = crate::study::runner::progress_bar(t.mine().len() as u64, true, "twin runs");
-        let twin = super::twin::run(req, rec, t, &|| bar.inc(1))?;
-        bar.finish_and_clear();
-        let p = out.write("twin.csv", twin.csv())?;
-        report.push_str(&twin.report());
-        report.push_str(&format!("  written: {}\n", p.display()));
-    }
-    Ok(())
+    let twin = match req.twin {
+        Some(t) => {
+            let bar = crate::study::runner::progress_bar(t.mine().len() as u64, true, "twin runs");
+            let twin = super::twin::run(req, rec, t, &|| bar.inc(1))?;
+            bar.finish_and_clear();
+            Some(twin)
+        }
+        None => None,
+    };
+    Ok((Some(share), twin))
 }
 
 /// `report.html` of a one-target analysis: the first frame with the target and its lost
@@ -242,12 +300,12 @@ fn write_results(
     out: &Staged,
     req: &Request,
     a: &super::Analysis,
+    figure: crate::plots::Figure,
     report: &mut String,
 ) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let (acc, vis) = (super::spectrum(&a.acc_frf), super::spectrum(&a.vis_frf));
     out.write("frf.csv", export::frf_csv(acc, vis))?;
     out.write("modes.csv", export::modes_csv(&super::mode_rows(a)))?;
-    let figure = frf_figure(a, req.settings.frame_rate_hz)?;
     figure.write_staged(out)?;
     let mut files = vec!["frf.csv", "modes.csv", "displacement.csv", "report.txt"];
     let names = [
@@ -288,20 +346,6 @@ fn analyze_and_compensate(
         )?);
     }
     Ok((result, compensation))
-}
-
-/// Appends the compensation's section to the report and writes `compensation.csv`.
-fn append_compensation(
-    out: &Staged,
-    c: Option<&Compensated>,
-    report: &mut String,
-) -> anyhow::Result<()> {
-    if let Some(c) = c {
-        let p = out.write("compensation.csv", export::compensation_csv(&c.rows()))?;
-        report.push_str(&c.report());
-        report.push_str(&format!("  written: {}\n", p.display()));
-    }
-    Ok(())
 }
 
 /// `frf.png` / `frf.svg`: |H1| of both systems up to 1.1 x the highest band edge, at most the
