@@ -8,25 +8,9 @@ use std::path::Path;
 
 /// `analyze` of a hand-made recording (1 s, two modes at 8 and 30 Hz) into `out`, with `extra`.
 fn analyze_into(rec: &Recording, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "analyze",
-        "--frames",
-        rec.frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--accel",
-        rec.accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--mm-per-px",
-        "0.1",
-        "--threshold",
-        "100",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let mut args = vec!["--threshold", "100", "--out", out.to_str().unwrap()];
     args.extend_from_slice(extra);
-    harness(&args)
+    crate::analyze::analyze_hand(rec, &rec.frames, &args)
 }
 
 /// Every entry below `dir`, relative, sorted.

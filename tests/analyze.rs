@@ -98,12 +98,13 @@ pub(crate) fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDi
     )
 }
 
-fn analyze(rec: &Recording, frames: &str, extra: &[&str]) -> std::process::Output {
-    let out = rec.dir.join("out");
+/// `analyze` of the hand-made recording `rec` (the frames `frames`, its accelerometer at 2048
+/// Hz, 120 fps, 0.1 mm/px) with `extra` flags.
+pub(crate) fn analyze_hand(rec: &Recording, frames: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "analyze",
         "--frames",
-        frames,
+        frames.to_str().unwrap(),
         "--fps",
         "120",
         "--accel",
@@ -112,16 +113,20 @@ fn analyze(rec: &Recording, frames: &str, extra: &[&str]) -> std::process::Outpu
         "2048",
         "--mm-per-px",
         "0.1",
-        "--out",
-        out.to_str().unwrap(),
-        // the tests analyse one recording several times into the same directory
-        "--force",
     ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+fn analyze(rec: &Recording, frames: &str, extra: &[&str]) -> std::process::Output {
+    let out = rec.dir.join("out");
+    // the tests analyse one recording several times into the same directory
+    let mut args = vec!["--out", out.to_str().unwrap(), "--force"];
     if !extra.contains(&"--threshold") {
         args.extend_from_slice(&["--threshold", "100"]);
     }
     args.extend_from_slice(extra);
-    harness(&args)
+    analyze_hand(rec, Path::new(frames), &args)
 }
 
 fn stderr(o: &std::process::Output) -> String {

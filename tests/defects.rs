@@ -77,6 +77,11 @@ fn npy(path: &Path, descr: &str, shape: &str, values: &[f64]) {
     std::fs::write(path, out).unwrap();
 }
 
+/// `pick --frames FRAMES --out OUT --force`: a page asked to replace `out`.
+fn pick_over(frames: &str, out: &str) -> std::process::Output {
+    harness(&["pick", "--frames", frames, "--out", out, "--force"])
+}
+
 #[test]
 fn pick_never_writes_over_its_inputs_and_its_page_holds_any_file_name_and_large_frames() {
     let tmp = tempfile::tempdir().unwrap();
@@ -108,28 +113,14 @@ fn pick_never_writes_over_its_inputs_and_its_page_holds_any_file_name_and_large_
     assert_eq!(std::fs::read(&points).unwrap(), before);
     let frame = frames.join("f<!--<script>_00001.png");
     let frame_bytes = std::fs::read(&frame).unwrap();
-    let o = harness(&[
-        "pick",
-        "--frames",
-        f,
-        "--out",
-        frame.to_str().unwrap(),
-        "--force",
-    ]);
+    let o = pick_over(f, frame.to_str().unwrap());
     assert_exit_2(&o, "an input of this run");
     assert_eq!(std::fs::read(&frame).unwrap(), frame_bytes);
     // anyone's file elsewhere (a camera's raw data beside its header): only a page `pick`
     // wrote is replaced
     let raw = tmp.path().join("rec.mraw");
     std::fs::write(&raw, [7u8; 64]).unwrap();
-    let o = harness(&[
-        "pick",
-        "--frames",
-        f,
-        "--out",
-        raw.to_str().unwrap(),
-        "--force",
-    ]);
+    let o = pick_over(f, raw.to_str().unwrap());
     assert_exit_2(&o, "is not a page `pick` wrote");
     assert_eq!(std::fs::read(&raw).unwrap(), [7u8; 64]);
     // the page: its data block closes (no `<` inside it), the frames shown at most 2048 px
@@ -560,32 +551,25 @@ fn simulate_hammer_refuses_what_would_give_no_usable_record() {
 
 /// `analyze` of `rec` with an accelerometer into `out`, frames `range`.
 fn analyze_range(rec: &Recording, out: &Path, range: &str) -> std::process::Output {
-    harness(&[
-        "analyze",
-        "--frames",
-        rec.frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--accel",
-        rec.accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--mm-per-px",
-        "0.1",
-        "--threshold",
-        "0",
-        "--mode",
-        "weighted",
-        "--window",
-        "rect",
-        "--no-end-match",
-        "--bands",
-        "6-10,27-33",
-        "--frame-range",
-        range,
-        "--out",
-        out.to_str().unwrap(),
-    ])
+    crate::analyze::analyze_hand(
+        rec,
+        &rec.frames,
+        &[
+            "--threshold",
+            "0",
+            "--mode",
+            "weighted",
+            "--window",
+            "rect",
+            "--no-end-match",
+            "--bands",
+            "6-10,27-33",
+            "--frame-range",
+            range,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    )
 }
 
 #[test]

@@ -100,22 +100,34 @@ fn check_modes(dir: &Path, test: &HammerTest, what: &str) {
     }
 }
 
+/// `ema` of the impact test in `dir` (camera.csv, force.csv) into `dir/out`, replacing it.
 fn ema(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
     let (r, f, o) = (dir.join("camera.csv"), dir.join("force.csv"), dir.join(out));
+    let mut args = vec!["--force"];
+    args.extend_from_slice(extra);
+    ema_of((&r, &f, "force_n"), &o, &args)
+}
+
+/// `ema --impact --f-max-hz 200 --no-plots` of the `response` to the force channel `col` of
+/// `force`, into `out`, with `extra`.
+fn ema_of(
+    (response, force, col): (&Path, &Path, &str),
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
     let mut args = vec![
         "ema",
         "--response",
-        r.to_str().unwrap(),
+        response.to_str().unwrap(),
         "--excitation",
-        f.to_str().unwrap(),
+        force.to_str().unwrap(),
         "--excitation-col",
-        "force_n",
+        col,
         "--impact",
         "--f-max-hz",
         "200",
         "--out",
-        o.to_str().unwrap(),
-        "--force",
+        out.to_str().unwrap(),
         "--no-plots",
     ];
     args.extend_from_slice(extra);
@@ -229,23 +241,11 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
     let late_path = dir.join("late.csv");
     std::fs::write(&late_path, late).unwrap();
     let out = dir.join("lvm");
-    let o = harness(&[
-        "ema",
-        "--response",
-        late_path.to_str().unwrap(),
-        "--excitation",
-        lvm.to_str().unwrap(),
-        "--excitation-col",
-        "Excitation (Trigger)",
-        "--impact",
-        "--delay-s",
-        "0.1",
-        "--f-max-hz",
-        "200",
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ]);
+    let o = ema_of(
+        (&late_path, &lvm, "Excitation (Trigger)"),
+        &out,
+        &["--delay-s", "0.1"],
+    );
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout);
     assert!(report.contains("(Newtons, 50000 Hz)"), "{report}");
@@ -258,21 +258,7 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
     // without the delay the camera's record is 0.1 s ahead of the force: the responses move
     // before the pulses and the model cannot describe the FRFs; both said, not a silent number
     let wrong = dir.join("wrong");
-    let o = harness(&[
-        "ema",
-        "--response",
-        late_path.to_str().unwrap(),
-        "--excitation",
-        lvm.to_str().unwrap(),
-        "--excitation-col",
-        "Excitation (Trigger)",
-        "--impact",
-        "--f-max-hz",
-        "200",
-        "--out",
-        wrong.to_str().unwrap(),
-        "--no-plots",
-    ]);
+    let o = ema_of((&late_path, &lvm, "Excitation (Trigger)"), &wrong, &[]);
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -394,21 +380,7 @@ fn a_displacement_csv_of_track_is_a_response_file() {
     let path = dir.join("displacement.csv");
     std::fs::write(&path, s).unwrap();
     let out = dir.join("out");
-    let o = harness(&[
-        "ema",
-        "--response",
-        path.to_str().unwrap(),
-        "--excitation",
-        dir.join("force.csv").to_str().unwrap(),
-        "--excitation-col",
-        "force_n",
-        "--impact",
-        "--f-max-hz",
-        "200",
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ]);
+    let o = ema_of((&path, &dir.join("force.csv"), "force_n"), &out, &[]);
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout);
     assert!(

@@ -33,6 +33,23 @@ fn cine(dir: &Path, name: &str, frames: &[Vec<u16>]) -> PathBuf {
     p
 }
 
+/// `track --frames FRAMES --targets 1 --threshold 100 --out OUT` and `extra`.
+fn track_one(frames: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "track",
+        "--frames",
+        frames,
+        "--targets",
+        "1",
+        "--threshold",
+        "100",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
 /// Overwrites 4 bytes of `p` at `at` with `v` (little-endian).
 fn patch_u32(p: &Path, at: usize, v: u32) {
     let mut b = std::fs::read(p).unwrap();
@@ -57,17 +74,7 @@ fn header_sizes_past_the_file_are_refused_before_anything_is_allocated() {
         assert_exit_2(&o, needle);
         assert!(stderr(&o).contains(name), "{}", stderr(&o));
         let out = tmp.path().join("out");
-        let o = harness(&[
-            "track",
-            "--frames",
-            name,
-            "--targets",
-            "1",
-            "--threshold",
-            "100",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = track_one(name, &out, &[]);
         assert_exit_2(&o, "damaged header");
         assert!(!out.exists());
     }
@@ -91,20 +98,9 @@ fn a_junk_time_stamp_refuses_only_the_rate_and_a_frame_range_reads_the_rest() {
     // tracking needs the rate: refused, naming the frame and the regular range
     let out = tmp.path().join("track");
     let track = |extra: &[&str]| {
-        let mut args = vec![
-            "track",
-            "--frames",
-            name,
-            "--targets",
-            "1",
-            "--threshold",
-            "100",
-            "--out",
-            out.to_str().unwrap(),
-            "--force",
-        ];
+        let mut args = vec!["--force"];
         args.extend_from_slice(extra);
-        harness(&args)
+        track_one(name, &out, &args)
     };
     let o = track(&[]);
     assert_exit_2(&o, "frame 6 comes");

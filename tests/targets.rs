@@ -56,23 +56,7 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
     );
     let out = rec.join("analysis");
     let analyze_with = |frames: &str, out: &Path, k: &str, extra: &[&str]| {
-        let accel = format!("{r}/accel.csv");
         let mut args = vec![
-            "analyze",
-            "--frames",
-            frames,
-            "--fps",
-            "120",
-            "--accel",
-            &accel,
-            "--fs",
-            "2048",
-            "--time-col",
-            "t_s",
-            "--threshold",
-            "127",
-            "--mm-per-px",
-            "0.1266",
             "--exposure-ms",
             "2",
             "--targets",
@@ -85,7 +69,7 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
             "rect",
         ];
         args.extend_from_slice(extra);
-        harness(&args)
+        analyze_recording(&rec, frames, &args)
     };
     let analyze_from = |frames: &str, out: &Path, k: &str| analyze_with(frames, out, k, &[]);
     let png_frames = format!("{r}/frames");
