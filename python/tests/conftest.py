@@ -2,6 +2,7 @@
 with, and a 5-target synthetic recording rendered by it once per test session."""
 
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -43,3 +44,12 @@ def recording(tmp_path_factory) -> Path:
     )
     assert r.returncode == 0, r.stderr
     return d
+
+
+@pytest.fixture
+def as_python():
+    """The command line's text with each flag spelled as Python's argument (`--response-col`
+    -> `response_col`): the library names a setting to each caller in its own words."""
+    return lambda text: re.sub(
+        r"--([a-z][a-z0-9-]*)", lambda m: m.group(1).replace("-", "_"), text
+    )

@@ -149,22 +149,22 @@ def cli_error(harness, *args):
     return line[len("error: "):]
 
 
-def test_errors_carry_the_command_lines_messages(recording, harness, tmp_path):
+def test_errors_carry_the_command_lines_messages(recording, harness, as_python, tmp_path):
     missing = str(tmp_path / "nowhere")
     msg = cli_error(harness, "track", "--frames", missing, "--fps", "120", "--targets", "1",
                     "--threshold", "9", "--out", str(tmp_path / "o1"))
     with pytest.raises(vibcam.InputError) as e:
         vibcam.track(missing, targets=1, threshold=9, fps=120)
-    assert str(e.value) == msg and missing in msg
+    assert str(e.value) == as_python(msg) and missing in msg and "--frames" in msg
     bad = tmp_path / "bad_points.csv"
     bad.write_text("target,x,y,w,h\n1,10,10,31,31\n2,20,x,31,31\n")
     msg = cli_error(harness, "track", "--frames", str(recording / "frames"), "--fps", "120",
                     "--points", str(bad), "--threshold", "127", "--out", str(tmp_path / "o2"))
     with pytest.raises(vibcam.InputError) as e:
         vibcam.track(recording / "frames", bad, threshold=127)
-    assert str(e.value) == msg and "row 3" in msg
+    assert str(e.value) == as_python(msg) and "row 3" in msg
     msg = cli_error(harness, "analyze", "--frames", str(recording / "frames"), "--targets",
                     "5", "--threshold", "127", "--out", str(tmp_path / "o3"))
     with pytest.raises(vibcam.InputError) as e:
         vibcam.analyze(recording / "frames", targets=5, threshold=127)
-    assert str(e.value) == msg and "--fps is needed" in msg
+    assert str(e.value) == as_python(msg) and "--fps is needed" in msg
