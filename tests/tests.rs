@@ -16,6 +16,7 @@ mod hostile;
 mod modal;
 mod plan;
 mod robustness;
+mod settings;
 mod signal;
 mod study;
 mod targets;

@@ -1,0 +1,209 @@
+//! Every setting the library names in a message is refused in the command line's words: for
+//! each key of `setting::KEYS` a command that the library refuses (exit 2) for that setting,
+//! its message naming `--the-flag` and no `$key` left unspelled. Python's spelling of the same
+//! messages is checked by python/tests (its arguments, never a flag).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// The inputs the refusals below read, written into `dir`: eight 32 x 24 frames of a bright
+/// disk (`fr/`), a points file, displacement and accelerometer CSVs, a two-channel force, two
+/// signals.
+fn inputs(dir: &Path) {
+    let fr = dir.join("fr");
+    std::fs::create_dir(&fr).unwrap();
+    for k in 0..8u32 {
+        let img = image::GrayImage::from_fn(32, 24, |x, y| {
+            let (dx, dy) = (f64::from(x) - 16.0, f64::from(y) - 12.0 - f64::from(k % 2));
+            image::Luma([if dx * dx + dy * dy < 16.0 { 220 } else { 20 }])
+        });
+        img.save(fr.join(format!("frame_{k}.png"))).unwrap();
+    }
+    let rows = |n: usize, line: &dyn Fn(usize) -> String| -> String {
+        (0..n).map(line).collect::<Vec<_>>().concat()
+    };
+    let files = [
+        ("p.csv", "target,x,y,w,h\n1,16,12,9,9\n".to_string()),
+        ("a.csv", "t,a\n0,1\n".to_string()),
+        (
+            "d.csv",
+            format!(
+                "t_s,target,x_px,y_px\n{}",
+                rows(400, &|i| format!(
+                    "{},1,{},{}\n",
+                    i as f64 / 100.0,
+                    i % 3,
+                    (i * 7) % 5
+                ))
+            ),
+        ),
+        (
+            "a2.csv",
+            format!(
+                "t_s,base_acc,tip_acc\n{}",
+                rows(100, &|i| format!(
+                    "{},{},{}\n",
+                    i as f64 / 1024.0,
+                    i % 5,
+                    i % 7
+                ))
+            ),
+        ),
+        (
+            "ac.csv",
+            format!(
+                "t_s,c,tip_acc,d\n{}",
+                rows(200, &|i| format!("{},1,{},2\n", i as f64 / 1024.0, i % 7))
+            ),
+        ),
+        (
+            "xy.csv",
+            format!("x,y\n{}", rows(400, &|i| format!("{},{}\n", i % 5, i % 7))),
+        ),
+        (
+            "f3.csv",
+            format!(
+                "t,a,b\n{}",
+                rows(400, &|i| format!(
+                    "{},{},{}\n",
+                    i as f64 / 1000.0,
+                    i % 5,
+                    i % 7
+                ))
+            ),
+        ),
+    ];
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    std::fs::create_dir(dir.join("empty")).unwrap();
+}
+
+/// The binary with `args`, run in `dir`.
+fn run_in(dir: &Path, args: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-harness"))
+        .current_dir(dir)
+        .args(args.split_whitespace())
+        .output()
+        .unwrap()
+}
+
+/// The refusals, by the key each names: the command's arguments (in the inputs' folder).
+const REFUSALS: &[(&str, &str)] = &[
+    ("accel", "analyze --frames fr --fps 120 --accel a.csv --threshold 100 --out o"),
+    ("accel_target", "analyze --frames fr --fps 120 --targets 2 --accel-target 5 --threshold 100 --out o"),
+    ("adaptive_on", "study --adaptive-on zz --out o"),
+    ("axis", "ema --response d.csv --excitation a.csv --axis x --out o"),
+    ("bands", "modal --displacement d.csv --fps 100 --bands 30-60"),
+    ("block_s", "ema --response a.csv --excitation a.csv --impact --block-s -1 --out o"),
+    ("camera_model", "track --frames fr --fps 120 --targets 1 --threshold 100 --camera-model homography --out o"),
+    ("compensate_exposure", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --compensate-exposure --out o"),
+    ("delay_s", "ema --response a.csv --excitation a.csv --delay-s inf --out o"),
+    ("excitation_col", "ema --response f3.csv --excitation f3.csv --out o"),
+    ("excitation_fs", "ema --response a.csv --excitation a.csv --excitation-fs -1 --out o"),
+    ("exp_window", "ema --response a.csv --excitation a.csv --exp-window 0.5 --out o"),
+    ("exposure_ms", "analyze --frames fr --fps 120 --accel a2.csv --fs 1024 --mm-per-px 0.1 --threshold 100 --exposure-ms 20 --out o"),
+    ("f_max_hz", "modal --displacement a.csv --fps 100 --f-max-hz 80"),
+    ("f_min_hz", "modal --displacement d.csv --fps 100 --f-min-hz 80"),
+    ("force", "track --frames fr --fps 120 --targets 1 --threshold 100 --out fr --force"),
+    ("fps", "track --frames fr --targets 1 --threshold 100 --out o"),
+    ("frame_range", "track --frames fr --fps 120 --targets 1 --threshold 100 --frame-range 5..20 --out o"),
+    ("frames", "track --frames nowhere --fps 120 --targets 1 --threshold 100 --out o"),
+    ("frames_shown", "pick --frames fr --fps 120 --frames-shown 99 --out o.html"),
+    ("free", "calibrate --observed a.csv --out o"),
+    ("from", "upsample --input a.csv --col a --from 10 --to 5 --out o.csv"),
+    ("fs", "analyze --frames fr --fps 120 --accel a.csv --threshold 100 --out o"),
+    ("gate_px", "track --frames fr --fps 120 --points p.csv --gate-px 3 --threshold 10 --out o"),
+    ("impact", "ema --response a.csv --excitation a.csv --exp-window 0.5 --out o"),
+    ("input_col", "analyze --frames fr --fps 120 --accel ac.csv --fs 1024 --mm-per-px 0.1 --threshold 100 --input-col c --out o"),
+    ("max_order", "ema --response a.csv --excitation a.csv --max-order 500 --out o"),
+    ("minutes", "simulate-field --minutes 0 --out o"),
+    ("mm_per_px", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --threshold 100 --out o"),
+    (
+        "nfft",
+        "frf --input xy.csv --x x --y y --fs 100 --nperseg 64 --nfft 32 --out f.csv",
+    ),
+    (
+        "noverlap",
+        "frf --input xy.csv --x x --y y --fs 100 --nperseg 64 --noverlap 64 --out f.csv",
+    ),
+    ("nperseg", "modal --displacement d.csv --fps 100 --nperseg 8"),
+    ("oblique_deg", "simulate-field --render --minutes 0.25 --oblique-deg 80 --out o"),
+    ("out", "track --frames fr --fps 120 --targets 1 --threshold 100 --out fr"),
+    ("output_col", "analyze --frames fr --fps 120 --accel ac.csv --fs 1024 --mm-per-px 0.1 --threshold 100 --input-col tip_acc --output-col d --out o"),
+    ("points", "track --frames fr --fps 120 --points p.csv --gate-px 3 --threshold 10 --out o"),
+    ("prominence_db", "modal --displacement d.csv --fps 100 --prominence-db -1"),
+    ("read_noise", "simulate-field --render --minutes 0.25 --read-noise 100 --out o"),
+    ("reference", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --reference p.csv --out o"),
+    ("references", "simulate-field --render --minutes 0.25 --references 20 --out o"),
+    ("render", "simulate-field --render --minutes 100 --out o"),
+    ("response_col", "ema --response a.csv --excitation a.csv --response-col a --response-col a --out o"),
+    ("response_fs", "ema --response a.csv --excitation a.csv --response-fs -1 --out o"),
+    ("response_quantity", "ema --response a.csv --excitation a.csv --response-quantity zz --out o"),
+    ("retime", "track --frames fr --fps 120 --retime --targets 1 --threshold 100 --out o"),
+    ("rms_px", "simulate-field --render --minutes 0.25 --rms-px 100 --out o"),
+    ("roi", "track --frames fr --fps 120 --points p.csv --roi 0,0,4,4 --threshold 10 --out o"),
+    ("roll_deg", "simulate-field --render --minutes 0.25 --roll-deg 20 --out o"),
+    ("runs", "calibrate --observed a.csv --free gain=1:2 --runs 1 --out o"),
+    ("saturation", "centroid --threshold 100 --saturation 1000 fr/frame_0.png"),
+    ("scale", "track --frames fr --fps 120 --targets 1 --threshold 10 --scale 1,1 --out o"),
+    ("search_px", "track --frames fr --fps 120 --targets 1 --threshold 10 --search-px 20 --out o"),
+    ("shake_hz", "simulate-field --render --minutes 0.25 --shake-hz 5,2 --out o"),
+    ("shake_px", "simulate-field --render --minutes 0.25 --shake-px 50 --out o"),
+    ("shape_reference", "analyze --frames fr --fps 120 --shape-reference a.csv --threshold 100 --out o"),
+    ("shard", "study --shard 3/2 --out o"),
+    ("ssi_block_rows", "modal --displacement a.csv --fps 100 --ssi-block-rows 1000"),
+    ("ssi_max_order", "modal --displacement a.csv --fps 100 --ssi-max-order 1000"),
+    ("target_size_mm", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --target-size-mm 3 --out o"),
+    ("targets", "track --frames fr --fps 120 --targets 40 --threshold 1 --out o"),
+    ("threshold", "track --frames fr --fps 120 --targets 1 --out o"),
+    ("tick_hz", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --tick-hz -1 --out o"),
+    ("tick_offset", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --tick-offset 5 --out o"),
+    ("time_offset_s", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --time-offset-s nan --out o"),
+    ("times", "render --times 99999 --out o"),
+    ("to", "upsample --input a.csv --col a --from 10 --to 15 --out o.csv"),
+    ("tracker", "track --frames fr --fps 120 --targets 2 --tracker lk --out o"),
+    ("twin", "analyze --frames fr --fps 120 --targets 2 --threshold 100 --twin 3 --out o"),
+    ("world", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --world a.csv --out o"),
+    ("x", "centroid --threshold 100 fr/frame_0.png --x zz"),
+    ("y", "centroid --threshold 100 fr/frame_0.png --y zz"),
+];
+
+/// Keys no single command refuses from small inputs, and why; each is checked where it is.
+const NOT_WALKED: &[(&str, &str)] = &[
+    // a warning on standard error (the study runs with fewer threads), not a refusal
+    ("threads", "sim/src/study/runner.rs worker_threads"),
+];
+
+#[test]
+fn every_setting_the_library_names_is_refused_in_the_command_lines_words() {
+    use host_harness::setting::KEYS;
+    let tmp = tempfile::tempdir().unwrap();
+    inputs(tmp.path());
+    // `--resume` needs a study to resume: a two-run one
+    let s = run_in(tmp.path(), "study --runs 2 --out s");
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let resume = ("resume", "study --resume --runs 1 --out s");
+    let mut missing = Vec::new();
+    for key in KEYS {
+        if !REFUSALS.iter().chain([&resume]).any(|(k, _)| k == key)
+            && !NOT_WALKED.iter().any(|(k, _)| k == key)
+        {
+            missing.push(*key);
+        }
+    }
+    assert!(missing.is_empty(), "no refusal walked for {missing:?}");
+    let mut wrong = Vec::new();
+    for (key, args) in REFUSALS.iter().chain([&resume]) {
+        let o = run_in(tmp.path(), args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        let flag = format!("--{}", key.replace('_', "-"));
+        let unspelled = e.contains(&format!("${key}"))
+            || e.match_indices('$')
+                .any(|(i, _)| e[i + 1..].starts_with(|c: char| c.is_ascii_lowercase()));
+        if o.status.code() != Some(2) || !e.contains(&flag) || unspelled {
+            wrong.push(format!("{key}: `{args}`: exit {:?}: {e}", o.status.code()));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
