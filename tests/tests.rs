@@ -695,6 +695,39 @@ fn every_setting_a_message_names_is_a_flag_of_the_command_line() {
     }
 }
 
+/// docs/cli.md documents every flag of every command: each long flag clap knows for a
+/// subcommand is named in that command's section (`## NAME`), so a flag added to the command
+/// line without its documentation fails here.
+#[test]
+fn docs_cli_names_every_flag_of_every_command() {
+    use clap::CommandFactory as _;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let doc = std::fs::read_to_string(root.join("docs/cli.md")).unwrap();
+    let section = |name: &str| -> String {
+        let head = format!("\n## {name}\n");
+        let Some(start) = doc.find(&head) else {
+            return String::new();
+        };
+        let rest = &doc[start + head.len()..];
+        rest[..rest.find("\n## ").unwrap_or(rest.len())].to_string()
+    };
+    let mut missing = Vec::new();
+    for sub in host_harness::cli::Cli::command().get_subcommands() {
+        let text = section(sub.get_name());
+        for arg in sub.get_arguments() {
+            if let Some(long) = arg.get_long().filter(|l| *l != "help") {
+                if !text.contains(&format!("--{long}")) {
+                    missing.push(format!("{} --{long}", sub.get_name()));
+                }
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "flags docs/cli.md does not document: {missing:?}"
+    );
+}
+
 /// The library names a setting by its key (`$nperseg`); the command line spells it `--nperseg`
 /// and Python `nperseg` (`setting::spell`). So no text of the library spells a flag itself,
 /// except the command lines it writes for the user to run (a recording's README, the command
