@@ -511,9 +511,13 @@ fn track<'py>(
         Option<Array3<f64>>,
         Array2<f64>,
         Option<Array2<f64>>,
-        String,
+        (String, String, String),
         f64,
     );
+    let label = match &frames {
+        Frames::Path(p) => p.clone(),
+        Frames::Array(a) => format!("an array of {} frames", a.len()),
+    };
     let tracked = py
         .allow_threads(|| -> anyhow::Result<Tracked> {
             let (source, rates) = frames.resolve(fps, retime, false, None)?;
@@ -521,14 +525,11 @@ fn track<'py>(
             let has_scale = view.has_scale();
             let settings = host_harness::jobs::view::check(view, None, &t.targets, t.tracker)
                 .map_err(SpecError::into_anyhow)?;
-            let v = host_harness::analysis::view::track_view(
-                &source,
-                rates.fps,
-                &t.centroid,
-                &t.targets,
-                &settings,
-                axis == Axis::X,
-            )?;
+            let req = track_request(label, (retime, &rates), t, settings, axis);
+            let v = host_harness::analysis::track_run::compute(&req, &source)?;
+            let o = host_harness::analysis::track_run::outputs(&req, &source, &v)?;
+            let report = spelled(&o.report);
+            let html = spelled(&o.page(&report));
             let raw = v.raw.as_ref().map(|r| positions_of(r).0);
             let mm = has_scale.then(|| scaled_displacements(&v, axis));
             Ok((
@@ -536,12 +537,12 @@ fn track<'py>(
                 raw,
                 camera_motion_array(&v),
                 mm,
-                v.describe(axis == Axis::X),
+                (v.describe(axis == Axis::X), report, html),
                 rates.fps,
             ))
         })
         .map_err(py_err)?;
-    let ((positions, flags), raw, camera, mm, report, fps) = tracked;
+    let ((positions, flags), raw, camera, mm, (view_report, report, html), fps) = tracked;
     let d = PyDict::new(py);
     d.set_item("positions", positions.into_pyarray(py))?;
     d.set_item("flags", flags.into_pyarray(py))?;
@@ -549,7 +550,9 @@ fn track<'py>(
     d.set_item("raw_positions", raw.map(|r| r.into_pyarray(py)))?;
     d.set_item("camera_motion", camera.into_pyarray(py))?;
     d.set_item("displacement_mm", mm.map(|m| m.into_pyarray(py)))?;
-    d.set_item("view_report", spelled(&report))?;
+    d.set_item("view_report", spelled(&view_report))?;
+    d.set_item("report", report)?;
+    d.set_item("html", html)?;
     Ok(d)
 }
 
@@ -574,6 +577,33 @@ fn scaled_displacements(v: &host_harness::analysis::view::Viewed, axis: Axis) ->
         }
     }
     a
+}
+
+/// The command's own `track` request for Python's arguments: the same tracking, report and
+/// page as `track` writes (nothing is written from Python).
+fn track_request(
+    label: String,
+    (retime, rates): (bool, &Rates),
+    t: Tracking,
+    view: host_harness::analysis::view::ViewSettings,
+    axis: Axis,
+) -> host_harness::analysis::track_run::Request {
+    host_harness::analysis::track_run::Request {
+        frames: label,
+        retime,
+        frame_range: None,
+        fps: rates.fps,
+        targets: t.targets,
+        centroid: t.centroid,
+        displacement: None,
+        axis,
+        plots: true,
+        notes: rates.notes.clone(),
+        out: std::path::PathBuf::new(),
+        force: false,
+        inputs: t.points_file.into_iter().collect(),
+        view,
+    }
 }
 
 /// `frf(x, y, fs, ...)`: H1 and coherence by firmware-core's Welch estimator; returns

@@ -87,10 +87,10 @@ def test_analyze_of_an_array_equals_the_files(recording):
     np.testing.assert_array_equal(a.displacement, b.displacement)
 
 
-def test_track_equals_the_command_line(recording, harness, tmp_path):
+def test_track_equals_the_command_line(recording, harness, as_python, tmp_path):
     out = tmp_path / "track"
     r = harness("track", "--frames", str(recording / "frames"), "--fps", "120", "--threshold",
-                "127", "--targets", "5", "--out", str(out), "--no-plots")
+                "127", "--targets", "5", "--out", str(out))
     assert r.returncode == 0, r.stderr
     t = vibcam.track(recording / "frames", targets=5, threshold=127, fps=120,
                      return_flags=True)
@@ -101,6 +101,10 @@ def test_track_equals_the_command_line(recording, harness, tmp_path):
         assert np.float32(t.positions[k, j, 0]) == np.float32(row["cx"])
         assert np.float32(t.positions[k, j, 1]) == np.float32(row["cy"])
         assert t.flags[k, j] == int(row["flags"])
+    # the same report and the same page, with the same figure, settings named Python's way
+    assert t.report == as_python((out / "report.txt").read_text())
+    page, html = (out / "report.html").read_text(), t._repr_html_()
+    assert html.count("<svg") == page.count("<svg") >= 1 and "<title>track: " in html
 
 
 def test_lucas_kanade_points_equal_the_command_line(recording, harness, tmp_path):

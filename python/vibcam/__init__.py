@@ -287,7 +287,9 @@ class Tracks:
     ``camera_motion`` ``(N, 4)`` (the image centre's shift x, y in px, the roll in degrees, the
     scale; NaN where no reference was seen); with a scale: ``displacement_mm`` ``(N, K)`` along
     ``axis`` (positive up for ``y``); ``view_report``: what the references and the scale gave
-    (references left out and why, each target's scale and its uncertainty).
+    (references left out and why, each target's scale and its uncertainty); ``report``: the
+    report ``track`` writes (report.txt), and the page of its ``report.html`` shown inline by
+    notebooks.
     """
 
     positions: _np.ndarray
@@ -297,6 +299,13 @@ class Tracks:
     camera_motion: _Optional[_np.ndarray] = None
     displacement_mm: _Optional[_np.ndarray] = None
     view_report: str = ""
+    report: str = _field(default="", repr=False)
+    html: str = _field(default="", repr=False)
+
+    def _repr_html_(self) -> str:
+        """The page of ``track``'s ``report.html`` (the first frame with the windows, the
+        tracks' figure, the report), shown inline by notebooks."""
+        return self.html
 
     @property
     def lost(self) -> _np.ndarray:
@@ -364,6 +373,8 @@ def track(
             d["camera_motion"] if d["raw_positions"] is not None else None,
             d["displacement_mm"],
             d["view_report"],
+            d["report"],
+            d["html"],
         )
     return d["positions"]
 

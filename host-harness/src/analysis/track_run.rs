@@ -50,18 +50,42 @@ pub struct Request {
 /// Runs `track`: the targets tracked in the camera's view, then every output written; returns
 /// the report (also written to `report.txt`).
 pub fn run(req: &Request) -> anyhow::Result<String> {
+    // the output directory is checked before the frames are read (a refusal costs nothing)
+    let inputs = req.all_inputs();
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let out = Staged::new(&req.out, req.force, "track", &inputs)?;
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
-    let along_x = req.axis == super::Axis::X;
+    let viewed = compute(req, &source)?;
+    let o = outputs(req, &source, &viewed)?;
+    write(out, o)
+}
+
+/// The targets tracked in the camera's view of `source`; a record where no target has a
+/// position is refused.
+pub fn compute(
+    req: &Request,
+    source: &crate::frames::FrameSource,
+) -> anyhow::Result<super::view::Viewed> {
     let viewed = super::view::track_view(
-        &source,
+        source,
         req.fps,
         &req.centroid,
         &req.targets,
         &req.view,
-        along_x,
+        req.axis == super::Axis::X,
     )?;
     refuse_nothing_measured(&viewed.tracks)?;
-    write(req, &source, &viewed)
+    Ok(viewed)
+}
+
+impl Request {
+    /// The frames and every other input file (points, references, world points).
+    fn all_inputs(&self) -> Vec<PathBuf> {
+        let mut inputs = vec![PathBuf::from(&self.frames)];
+        inputs.extend(self.inputs.iter().cloned());
+        inputs.extend(self.view.inputs());
+        inputs
+    }
 }
 
 /// Nothing measured is the user's to fix, as `analyze` says it: exit 2, and why each target
@@ -92,19 +116,57 @@ fn refuse_nothing_measured(tracks: &Tracks) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes every output of `track` into the staged directory and commits it.
-fn write(
+/// Everything `track` writes, in memory: `displacement.csv`, the camera's motion, the figures,
+/// the report (settings named by key) and what `report.html` shows ([`Outputs::page`]).
+#[derive(Debug)]
+pub struct Outputs {
+    /// `displacement.csv`.
+    pub displacement_csv: Vec<u8>,
+    /// `camera_motion.csv`, its figure and its report line.
+    pub camera: super::view::CameraOutputs,
+    /// `tracks.png`/`.svg` (with `plots`).
+    pub tracks_figure: Option<crate::plots::Figure>,
+    /// The report's text.
+    pub report: String,
+    /// The page's title, the first frame, the targets' and the references' markers.
+    title: String,
+    frame: Option<crate::export::html::FrameImage>,
+    markers: Vec<crate::export::html::Marker>,
+    references: Vec<crate::export::html::ReferenceMarker>,
+}
+
+impl Outputs {
+    /// `report.html` with the report `text` as written (its settings spelled for the reader).
+    pub fn page(&self, text: &str) -> String {
+        use crate::export::html::{report_html, Report};
+        let figures: Vec<crate::plots::Figure> = self
+            .tracks_figure
+            .iter()
+            .chain(&self.camera.figure)
+            .cloned()
+            .collect();
+        report_html(&Report {
+            title: self.title.clone(),
+            frame: self.frame.clone(),
+            markers: self.markers.clone(),
+            references: self.references.clone(),
+            direction: (0.0, -1.0),
+            figures: crate::plots::page_figures(&figures),
+            text: text.to_string(),
+            ..Report::default()
+        })
+    }
+}
+
+/// Every output of `track` for the tracks in `viewed`, computed in memory (the command's
+/// writer and Python's `track` both take them from here).
+pub fn outputs(
     req: &Request,
     source: &crate::frames::FrameSource,
     viewed: &super::view::Viewed,
-) -> anyhow::Result<String> {
+) -> anyhow::Result<Outputs> {
     let along_x = req.axis == super::Axis::X;
     let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
-    let mut inputs: Vec<&Path> = vec![Path::new(req.frames.as_str())];
-    inputs.extend(req.inputs.iter().map(PathBuf::as_path));
-    let view_inputs = req.view.inputs();
-    inputs.extend(view_inputs.iter().map(PathBuf::as_path));
-    let out = Staged::new(&req.out, req.force, "track", &inputs)?;
     let (mm, failures) = displacements(viewed, req.displacement.as_ref());
     let rows: Vec<Track<'_>> = tracks
         .centroids
@@ -118,76 +180,47 @@ fn write(
             raw: viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
         })
         .collect();
-    out.write(
-        "displacement.csv",
-        displacement_csv(
-            &rows,
-            req.fps,
-            crate::frames::FrameRange::start_s(req.frame_range, req.fps),
-        ),
-    )?;
+    let start_s = crate::frames::FrameRange::start_s(req.frame_range, req.fps);
+    let displacement_csv = displacement_csv(&rows, req.fps, start_s);
     let mut report = report(req, tracks, windows, &failures);
     report.push_str(&viewed.describe(along_x));
-    let (camera, camera_figure) =
-        super::view::write_camera_outputs(&out, viewed, req.fps, req.plots)?;
-    report.push_str(&camera);
-    let mut figures = Vec::new();
-    if req.plots {
-        let f = plot(
-            tracks,
-            req.fps,
-            crate::frames::FrameRange::start_s(req.frame_range, req.fps),
-            along_x,
-        )?;
-        f.write_staged(&out)?;
+    let camera = super::view::camera_outputs(viewed, req.fps, req.plots)?;
+    report.push_str(&camera.text);
+    let tracks_figure = if req.plots {
+        let f = plot(tracks, req.fps, start_s, along_x)?;
         let _ = writeln!(report, "plots: {0}.png, {0}.svg", f.name);
-        figures.push(f);
-    }
-    figures.extend(camera_figure);
+        Some(f)
+    } else {
+        None
+    };
     let frame = source
         .frame_at(req.fps, 0)
         .ok()
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
-    let report = super::write_report(&out, &report, |report| {
-        page(
-            req,
-            (tracks, windows, super::view::reference_markers(viewed)),
-            frame,
-            report,
-            &figures,
-        )
-    })?;
-    out.commit()?;
-    Ok(report)
-}
-
-/// `report.html` of `track`: the first frame with each target's window, number and lost
-/// frames; the tracks' figure; the report.
-fn page(
-    req: &Request,
-    (tracks, windows, references): (
-        &Tracks,
-        Option<&PointsInfo>,
-        Vec<crate::export::html::ReferenceMarker>,
-    ),
-    frame: Option<crate::export::html::FrameImage>,
-    text: &str,
-    figures: &[crate::plots::Figure],
-) -> String {
-    use crate::export::html::{report_html, Report};
-    let markers = markers(tracks, windows);
-    let figures = crate::plots::page_figures(figures);
-    report_html(&Report {
+    Ok(Outputs {
+        displacement_csv,
+        camera,
+        tracks_figure,
+        report,
         title: format!("track: {}", req.frames),
         frame,
-        markers,
-        references,
-        direction: (0.0, -1.0),
-        figures,
-        text: text.to_string(),
-        ..Report::default()
+        markers: markers(tracks, windows),
+        references: super::view::reference_markers(viewed),
     })
+}
+
+/// Writes the outputs of `track` into the staged directory `out` and commits it; returns the
+/// report as written.
+fn write(out: Staged, o: Outputs) -> anyhow::Result<String> {
+    out.write("displacement.csv", &o.displacement_csv)?;
+    o.camera.write_staged(&out)?;
+    if let Some(f) = &o.tracks_figure {
+        f.write_staged(&out)?;
+    }
+    let report = super::write_report(&out, &o.report, |report| o.page(report))?;
+    out.commit()?;
+    Ok(report)
 }
 
 /// Each target's displacement (mm, lost frames filled by the policy) and lost flags when a

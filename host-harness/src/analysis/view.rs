@@ -23,17 +23,37 @@ pub fn reference_markers(v: &Viewed) -> Vec<crate::export::html::ReferenceMarker
         .collect()
 }
 
-/// Writes `camera_motion.csv` and the camera motion's spectrum (`camera_motion.png`/`.svg`)
-/// into `out` when references were given; returns the report's line naming them (empty
-/// without references) and the spectrum's figure (for `report.html`).
-pub fn write_camera_outputs(
-    out: &crate::outdir::Staged,
-    viewed: &Viewed,
-    fps: f64,
-    plots: bool,
-) -> anyhow::Result<(String, Option<crate::plots::Figure>)> {
+/// The camera's motion outputs of a view, in memory: the report's line, `camera_motion.csv`
+/// and the spectrum's figure (with `plots` and 32 frames or more); all empty without
+/// references.
+#[derive(Debug, Default)]
+pub struct CameraOutputs {
+    /// The report's line naming the files.
+    pub text: String,
+    /// `camera_motion.csv`.
+    pub csv: Option<Vec<u8>>,
+    /// `camera_motion.png`/`.svg`.
+    pub figure: Option<crate::plots::Figure>,
+}
+
+impl CameraOutputs {
+    /// Stages `camera_motion.csv` and the figure in `out`.
+    pub fn write_staged(&self, out: &crate::outdir::Staged) -> anyhow::Result<()> {
+        if let Some(csv) = &self.csv {
+            out.write("camera_motion.csv", csv)?;
+        }
+        if let Some(f) = &self.figure {
+            f.write_staged(out)?;
+        }
+        Ok(())
+    }
+}
+
+/// `camera_motion.csv` and the camera motion's spectrum when references were given, with the
+/// report's line naming them; nothing written.
+pub fn camera_outputs(viewed: &Viewed, fps: f64, plots: bool) -> anyhow::Result<CameraOutputs> {
     let Some(m) = &viewed.motion else {
-        return Ok((String::new(), None));
+        return Ok(CameraOutputs::default());
     };
     let n = m.transforms.len();
     let motion: Vec<Option<vibcam_track::camera_motion::MotionRow>> =
@@ -48,10 +68,7 @@ pub fn write_camera_outputs(
             residual_px: m.residual_px[k],
         })
         .collect();
-    out.write(
-        "camera_motion.csv",
-        crate::export::targets::camera_motion_csv(&rows),
-    )?;
+    let csv = crate::export::targets::camera_motion_csv(&rows);
     let mut line = "camera motion per frame: camera_motion.csv".to_string();
     let mut figure = None;
     if plots && n >= 32 {
@@ -82,10 +99,25 @@ pub fn write_camera_outputs(
             &[("x".to_string(), curve(0)), ("y".to_string(), curve(1))],
             &[],
         )?;
-        f.write_staged(out)?;
         figure = Some(f);
         line.push_str(", its spectrum camera_motion.png");
     }
     line.push('\n');
-    Ok((line, figure))
+    Ok(CameraOutputs {
+        text: line,
+        csv: Some(csv),
+        figure,
+    })
+}
+
+/// [`camera_outputs`] staged in `out`: the report's line and the figure.
+pub fn write_camera_outputs(
+    out: &crate::outdir::Staged,
+    viewed: &Viewed,
+    fps: f64,
+    plots: bool,
+) -> anyhow::Result<(String, Option<crate::plots::Figure>)> {
+    let c = camera_outputs(viewed, fps, plots)?;
+    c.write_staged(out)?;
+    Ok((c.text, c.figure))
 }
