@@ -290,11 +290,13 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
         assert!((ratio / factor - 1.0).abs() < 1e-6, "{row}: ratio {ratio}");
     }
 
-    // a wrong target count is named with the frame
+    // a wrong target count is named with the frame (into a new directory: an earlier output
+    // not asked to be replaced is refused first, before the frames are read)
     assert_exit_2(
-        &analyze("4"),
+        &analyze_from(&png_frames, &rec.join("wrong"), "4"),
         "5 targets above the threshold in the first frame",
     );
+    assert_exit_2(&analyze("4"), "not empty; choose another --out");
 }
 
 /// Frames of the hand-drawn recordings below.

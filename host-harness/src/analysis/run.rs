@@ -14,6 +14,8 @@ pub use super::request::{AccelInput, Outcome, Request, TargetsRequest};
 
 /// Runs the analysis the request describes; see the module documentation.
 pub fn run(req: &Request) -> anyhow::Result<Outcome> {
+    // the output directory is checked before anything is read (a refusal costs nothing)
+    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let settings = &req.settings;
     let time_offset_s = settings.time_offset_s;
     // Inputs first (cheap checks before the frames are decoded).
@@ -43,20 +45,20 @@ pub fn run(req: &Request) -> anyhow::Result<Outcome> {
         super::align(n, fps, base.len(), a.fs, time_offset_s)?;
     }
     match &req.targets {
-        Some(t) => super::targets_run::run(req, t, &source, (&base, &tip), ignored.as_deref()),
-        None => one_target(req, &source, (&base, &tip), ignored),
+        Some(t) => {
+            super::targets_run::run((req, out), t, &source, (&base, &tip), ignored.as_deref())
+        }
+        None => one_target((req, out), &source, (&base, &tip), ignored),
     }
 }
 
 /// The single-target analysis of `source` (see [`run`]): computed, then written.
 fn one_target(
-    req: &Request,
+    (req, out): (&Request, Staged),
     source: &FrameSource,
     accel: (&[f64], &[f64]),
     ignored: Option<String>,
 ) -> anyhow::Result<Outcome> {
-    // the output directory is checked before the frames are read (a refusal costs nothing)
-    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let c = compute(req, source, accel, ignored)?;
     write(req, source, out, c)
 }

@@ -15,14 +15,14 @@ use std::fmt::Write as _;
 
 /// Runs the multi-target analysis `t` of the request.
 pub fn run(
-    req: &Request,
+    (req, out): (&Request, Staged),
     t: &TargetsRequest,
     source: &FrameSource,
     (base, tip): (&[f64], &[f64]),
     ignored: Option<&str>,
 ) -> anyhow::Result<Outcome> {
     let c = compute(req, t, source, (base, tip))?;
-    write(req, t, source, &c, ignored)
+    write((req, out), t, source, &c, ignored)
 }
 
 /// What a multi-target analysis computes before anything is written: the reference shapes,
@@ -80,7 +80,7 @@ fn compute(
 /// Writes every output of a multi-target analysis into the staged directory, and commits it
 /// (a run with failed targets never replaces an earlier output).
 fn write(
-    req: &Request,
+    (req, out): (&Request, Staged),
     t: &TargetsRequest,
     source: &FrameSource,
     c: &Computed,
@@ -89,7 +89,6 @@ fn write(
     let (settings, a, viewed) = (&req.settings, &c.analysis, &c.viewed);
     let (tracks, windows) = (&viewed.tracks, viewed.windows.as_ref());
     let along_x = req.displacement.axis == Axis::X;
-    let out = Staged::new(&req.out, req.force, "analyze", &req.inputs())?;
     let macs = c.reference.as_ref().map(|r| targets::macs(a, r));
     write_tables(&out, req, a, (tracks, viewed.raw.as_ref()), macs.as_deref())?;
     let shapes = shape_plot(&out, a, tracks, c.reference.as_ref(), along_x)?;
