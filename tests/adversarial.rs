@@ -3,12 +3,12 @@
 //! file the user did not ask to replace is touched.
 
 use crate::analyze::{disk, make_recording, position_px, Recording, FPS, H, W};
-use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, stderr};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, stderr, words};
 use std::path::Path;
 
 /// `analyze` of a hand-made recording (1 s, two modes at 8 and 30 Hz) into `out`, with `extra`.
 fn analyze_into(rec: &Recording, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec!["--threshold", "100", "--out", out.to_str().unwrap()];
+    let mut args = words("--threshold 100 --out {}", &[out.to_str().unwrap()]);
     args.extend_from_slice(extra);
     crate::analyze::analyze_hand(rec, &rec.frames, &args)
 }
@@ -112,15 +112,15 @@ fn no_command_writes_over_its_own_input() {
     // the same file by another name, too
     let other_name = format!("{}/./accel.csv", rec.dir.display());
     for out in [accel, other_name.as_str()] {
-        let o = harness(&[
-            "frf", "--input", accel, "--fs", "2048", "--x", "base_acc", "--y", "tip_acc", "--out",
-            out,
-        ]);
+        let o = harness(&words(
+            "frf --input {} --fs 2048 --x base_acc --y tip_acc --out {}",
+            &[accel, out],
+        ));
         assert_exit_2(&o, "is the input");
-        let o = harness(&[
-            "upsample", "--input", accel, "--col", "tip_acc", "--from", "2048", "--to", "4096",
-            "--out", out,
-        ]);
+        let o = harness(&words(
+            "upsample --input {} --col tip_acc --from 2048 --to 4096 --out {}",
+            &[accel, out],
+        ));
         assert_exit_2(&o, "is the input");
     }
     assert_eq!(std::fs::read(&rec.accel).unwrap(), before);
@@ -198,19 +198,13 @@ fn dead_constant_or_vanishing_accelerometer_channels_are_refused() {
         let o = analyze_into(&rec, &rec.dir.join("out"), &[]);
         assert_exit_2(&o, needle);
         assert!(!rec.dir.join("out").exists());
-        let o = harness(&[
-            "frf",
-            "--input",
-            rec.accel.to_str().unwrap(),
-            "--fs",
-            "2048",
-            "--x",
-            "base_acc",
-            "--y",
-            "tip_acc",
-            "--out",
-            rec.dir.join("frf.csv").to_str().unwrap(),
-        ]);
+        let o = harness(&words(
+            "frf --input {} --fs 2048 --x base_acc --y tip_acc --out {}",
+            &[
+                rec.accel.to_str().unwrap(),
+                rec.dir.join("frf.csv").to_str().unwrap(),
+            ],
+        ));
         assert_exit_2(&o, needle);
     }
 }
@@ -235,13 +229,10 @@ fn an_exposure_longer_than_the_frame_period_is_named() {
     // a recording is never rendered with one unless asked, nor with a silent default
     let r = rec.dir.join("r");
     let render = |extra: &[&str]| {
-        let mut a = vec![
-            "render",
-            "--preset",
-            "cantilever",
-            "--recording",
-            r.to_str().unwrap(),
-        ];
+        let mut a = words(
+            "render --preset cantilever --recording {}",
+            &[r.to_str().unwrap()],
+        );
         a.extend_from_slice(extra);
         harness(&a)
     };
@@ -322,17 +313,10 @@ fn calibrate_refuses_observations_and_settings_it_cannot_honour() {
             format!("rig,mode,exposure_ms,quantity,value,u,unit\n{rows}"),
         )
         .unwrap();
-        let mut a = vec![
-            "calibrate",
-            "--preset",
-            "cantilever",
-            "--observed",
-            obs.to_str().unwrap(),
-            "--free",
-            "target_radius_px=5:20",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut a = words(
+            "calibrate --preset cantilever --observed {} --free target_radius_px=5:20 --out {}",
+            &[obs.to_str().unwrap(), out.to_str().unwrap()],
+        );
         a.extend_from_slice(extra);
         harness(&a)
     };
@@ -447,15 +431,10 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
     let o = analyze_with("frames", "120", "a7", &["--retime"]);
     assert_exit_2(&o, "--retime applies to a video file");
     let png = rec.join("frames/frame_00000.png");
-    let o = harness(&[
-        "centroid",
-        "--threshold",
-        "127",
-        "--fps",
-        "120",
-        "--retime",
-        png.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "centroid --threshold 127 --fps 120 --retime {}",
+        &[png.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "--retime applies to a video file");
     encode(&rec, "30000/1001", &["-c:v", "ffv1"], "ntsc.mkv");
     let o = analyze("ntsc.mkv", "30", "a4");
@@ -470,18 +449,10 @@ fn videos_as_cameras_write_them_are_read_or_their_rate_is_named() {
 fn a_study_resumed_with_more_runs_keeps_its_runs_and_equals_a_fresh_one() {
     let tmp = tempfile::tempdir().unwrap();
     let study = |out: &Path, runs: &str, extra: &[&str]| {
-        let mut a = vec![
-            "study",
-            "--runs",
-            runs,
-            "--exposures-ms",
-            "40",
-            "--seed",
-            "5",
-            "--no-plots",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut a = words(
+            "study --runs {} --exposures-ms 40 --seed 5 --no-plots --out {}",
+            &[runs, out.to_str().unwrap()],
+        );
         a.extend_from_slice(extra);
         harness(&a)
     };
@@ -531,16 +502,10 @@ fn a_new_study_never_writes_into_a_folder_of_someone_elses() {
     let mine = tmp.path().join("mine");
     std::fs::create_dir(&mine).unwrap();
     std::fs::write(mine.join("summary.csv"), "my own table").unwrap();
-    let o = harness(&[
-        "study",
-        "--runs",
-        "2",
-        "--exposures-ms",
-        "40",
-        "--no-plots",
-        "--out",
-        mine.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "study --runs 2 --exposures-ms 40 --no-plots --out {}",
+        &[mine.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "holds summary.csv, which is not a study's");
     assert_eq!(
         std::fs::read_to_string(mine.join("summary.csv")).unwrap(),

@@ -1,7 +1,7 @@
 //! End-to-end tests of `host-harness analyze`: a hand-made recording with a closed-form answer,
 //! the frame formats (PNG directory, glob, multi-page TIFF), and one test per bad input.
 
-use crate::util::harness;
+use crate::util::{harness, words};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -101,19 +101,10 @@ pub(crate) fn make_recording(frames: usize, samples: usize) -> (tempfile::TempDi
 /// `analyze` of the hand-made recording `rec` (the frames `frames`, its accelerometer at 2048
 /// Hz, 120 fps, 0.1 mm/px) with `extra` flags.
 pub(crate) fn analyze_hand(rec: &Recording, frames: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "analyze",
-        "--frames",
-        frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--accel",
-        rec.accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--mm-per-px",
-        "0.1",
-    ];
+    let mut args = words(
+        "analyze --frames {} --fps 120 --accel {} --fs 2048 --mm-per-px 0.1",
+        &[frames.to_str().unwrap(), rec.accel.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }

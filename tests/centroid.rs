@@ -1,7 +1,7 @@
 //! End-to-end tests of `host-harness centroid`: grey PNG/TIFF frames written to a temporary
 //! directory, centroids checked against naive sums computed here, bad files reported by name.
 
-use crate::util::{assert_exit_2, harness};
+use crate::util::{assert_exit_2, harness, words};
 use image::{ImageBuffer, Luma};
 use std::path::{Path, PathBuf};
 
@@ -217,9 +217,9 @@ fn invalid_settings_exit_with_code_2() {
     let dir = tempfile::tempdir().unwrap();
     let p = write_u8(dir.path(), "a.png", 4, 4, |_, _| 0);
     let p = p.to_str().unwrap();
-    let out = harness(&["centroid", "--threshold", "100", "--saturation", "90", p]);
+    let out = harness(&words("centroid --threshold 100 --saturation 90 {}", &[p]));
     assert_exit_2(&out, "saturation");
-    let out = harness(&["centroid", "--threshold", "1", "--roi", "0,0,0,3", p]);
+    let out = harness(&words("centroid --threshold 1 --roi 0,0,0,3 {}", &[p]));
     assert_eq!(out.status.code(), Some(2));
     let out = harness(&["centroid", "--threshold", "1"]);
     assert_eq!(out.status.code(), Some(2), "files are required");

@@ -5,6 +5,7 @@
 //! `daq::npy`, `daq::uff`, `analysis::ema::impact`, `outdir`, `setting`.)
 
 use crate::analyze::{make_recording, Recording};
+use crate::util::words;
 use crate::util::{
     analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, stderr,
 };
@@ -12,31 +13,23 @@ use std::path::{Path, PathBuf};
 
 /// `simulate-hammer` into `dir` (a short record: two hits).
 fn hammer(dir: &Path) {
-    assert_ok(&harness(&[
-        "simulate-hammer",
-        "--out",
-        dir.to_str().unwrap(),
-        "--seconds",
-        "6.2",
-        "--peaks-n",
-        "150,120",
-    ]));
+    assert_ok(&harness(&words(
+        "simulate-hammer --out {} --seconds 6.2 --peaks-n 150,120",
+        &[dir.to_str().unwrap()],
+    )));
 }
 
 /// `ema` of `response` over `excitation` (column `force_n` unless `extra` names one) into
 /// `out`, an impact test below 200 Hz.
 fn ema(response: &Path, excitation: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "ema",
-        "--response",
-        response.to_str().unwrap(),
-        "--excitation",
-        excitation.to_str().unwrap(),
-        "--impact",
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-    ];
+    let mut args = words(
+        "ema --response {} --excitation {} --impact --out {} --force",
+        &[
+            response.to_str().unwrap(),
+            excitation.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    );
     if !extra.contains(&"--exp-window") {
         args.extend_from_slice(&["--exp-window", "off"]);
     }
@@ -79,7 +72,7 @@ fn npy(path: &Path, descr: &str, shape: &str, values: &[f64]) {
 
 /// `pick --frames FRAMES --out OUT --force`: a page asked to replace `out`.
 fn pick_over(frames: &str, out: &str) -> std::process::Output {
-    harness(&["pick", "--frames", frames, "--out", out, "--force"])
+    harness(&words("pick --frames {} --out {} --force", &[frames, out]))
 }
 
 #[test]
@@ -99,16 +92,10 @@ fn pick_never_writes_over_its_inputs_and_its_page_holds_any_file_name_and_large_
     std::fs::write(&points, "target,x,y,w,h\n1,100,100,21,21\n").unwrap();
     let before = std::fs::read(&points).unwrap();
     let f = frames.to_str().unwrap();
-    let o = harness(&[
-        "pick",
-        "--frames",
-        f,
-        "--points",
-        points.to_str().unwrap(),
-        "--out",
-        points.to_str().unwrap(),
-        "--force",
-    ]);
+    let o = harness(&words(
+        "pick --frames {} --points {} --out {} --force",
+        &[f, points.to_str().unwrap(), points.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "is the input");
     assert_eq!(std::fs::read(&points).unwrap(), before);
     let frame = frames.join("f<!--<script>_00001.png");
@@ -126,13 +113,10 @@ fn pick_never_writes_over_its_inputs_and_its_page_holds_any_file_name_and_large_
     // the page: its data block closes (no `<` inside it), the frames shown at most 2048 px
     // wide, the clicks' coordinates the frame's own (3000 x 2400)
     let page = tmp.path().join("pick.html");
-    assert_ok(&harness(&[
-        "pick",
-        "--frames",
-        f,
-        "--out",
-        page.to_str().unwrap(),
-    ]));
+    assert_ok(&harness(&words(
+        "pick --frames {} --out {}",
+        &[f, page.to_str().unwrap()],
+    )));
     let html = std::fs::read_to_string(&page).unwrap();
     let start = html.find("id=\"pick-data\">").unwrap() + "id=\"pick-data\">".len();
     let data = &html[start..start + html[start..].find("</script>").unwrap()];
@@ -278,17 +262,10 @@ fn hammer_files_as_careless_users_give_them_are_refused_named_or_read() {
 
     // times rounded to fewer digits than the rate needs: read, and a rate given exactly wins
     let h3 = tmp.path().join("h3");
-    assert_ok(&harness(&[
-        "simulate-hammer",
-        "--out",
-        h3.to_str().unwrap(),
-        "--seconds",
-        "3.7",
-        "--peaks-n",
-        "150",
-        "--camera-hz",
-        "3000",
-    ]));
+    assert_ok(&harness(&words(
+        "simulate-hammer --out {} --seconds 3.7 --peaks-n 150 --camera-hz 3000",
+        &[h3.to_str().unwrap()],
+    )));
     let rounded: String = std::fs::read_to_string(h3.join("camera.csv"))
         .unwrap()
         .lines()
@@ -601,21 +578,10 @@ fn a_frame_range_keeps_the_recordings_own_times() {
     }
     // track: t_s of the range's first frame is its time in the recording
     let t = rec.dir.join("t");
-    assert_ok(&harness(&[
-        "track",
-        "--frames",
-        rec.frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--threshold",
-        "100",
-        "--frame-range",
-        "61..120",
-        "--targets",
-        "1",
-        "--out",
-        t.to_str().unwrap(),
-    ]));
+    assert_ok(&harness(&words(
+        "track --frames {} --fps 120 --threshold 100 --frame-range 61..120 --targets 1 --out {}",
+        &[rec.frames.to_str().unwrap(), t.to_str().unwrap()],
+    )));
     let d = cells(&t.join("displacement.csv"));
     assert_eq!(d[1][1].parse::<f64>().unwrap(), 0.5);
     assert_eq!(d.len(), 61);
@@ -632,18 +598,10 @@ fn stray_files_are_named_and_a_point_lost_in_every_frame_is_an_error() {
     std::fs::write(&points, "target,x,y,w,h\n1,12,24,21,41\n2,3,3,5,5\n").unwrap();
     let out = rec.dir.join("t");
     let track = |extra: &[&str]| {
-        let mut args = vec![
-            "track",
-            "--frames",
-            rec.frames.to_str().unwrap(),
-            "--fps",
-            "120",
-            "--threshold",
-            "100",
-            "--out",
-            out.to_str().unwrap(),
-            "--force",
-        ];
+        let mut args = words(
+            "track --frames {} --fps 120 --threshold 100 --out {} --force",
+            &[rec.frames.to_str().unwrap(), out.to_str().unwrap()],
+        );
         args.extend_from_slice(extra);
         harness(&args)
     };
@@ -671,18 +629,10 @@ fn stray_files_are_named_and_a_point_lost_in_every_frame_is_an_error() {
 fn references_and_plane_points_the_camera_model_cannot_use_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    assert_ok(&harness(&[
-        "simulate-field",
-        "--render",
-        "--minutes",
-        "0.25",
-        "--references",
-        "4",
-        "--oblique-deg",
-        "30",
-        "--out",
-        rec.to_str().unwrap(),
-    ]));
+    assert_ok(&harness(&words(
+        "simulate-field --render --minutes 0.25 --references 4 --oblique-deg 30 --out {}",
+        &[rec.to_str().unwrap()],
+    )));
     let out = tmp.path().join("out");
     let track = |extra: &[&str]| crate::view::track(&rec, &out, extra);
     let write = |name: &str, text: String| -> PathBuf {

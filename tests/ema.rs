@@ -4,7 +4,7 @@
 //! `ema` must find the modes (frequency within 0.1 %, damping within 5 %, shapes MAC >= 0.99)
 //! with and without the exponential window, and name a double hit and a clipped hit.
 
-use crate::util::{assert_exit_2, assert_ok, harness};
+use crate::util::{assert_exit_2, assert_ok, harness, words};
 use host_harness::model::hammer::HammerTest;
 use host_harness::recording::hammer::HammerRecording;
 use std::path::Path;
@@ -14,7 +14,7 @@ const POINTS: usize = 5;
 /// `simulate-hammer` into `dir` with `extra` flags; the test it wrote.
 fn write_test(dir: &Path, extra: &[&str]) -> HammerTest {
     let d = dir.to_str().unwrap();
-    let mut args = vec!["simulate-hammer", "--out", d, "--force"];
+    let mut args = words("simulate-hammer --out {} --force", &[d]);
     args.extend_from_slice(extra);
     assert_ok(&harness(&args));
     // the same structure as the command's (its own truth.csv is checked below)
@@ -115,21 +115,7 @@ fn ema_of(
     out: &Path,
     extra: &[&str],
 ) -> std::process::Output {
-    let mut args = vec![
-        "ema",
-        "--response",
-        response.to_str().unwrap(),
-        "--excitation",
-        force.to_str().unwrap(),
-        "--excitation-col",
-        col,
-        "--impact",
-        "--f-max-hz",
-        "200",
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ];
+    let mut args = words("ema --response {} --excitation {} --excitation-col {} --impact --f-max-hz 200 --out {} --no-plots", &[response.to_str().unwrap(), force.to_str().unwrap(), col, out.to_str().unwrap()]);
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -335,20 +321,7 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     std::fs::write(dir.join("force.csv"), f).unwrap();
     std::fs::write(dir.join("camera.csv"), r).unwrap();
     let out = dir.join("out");
-    let o = harness(&[
-        "ema",
-        "--response",
-        dir.join("camera.csv").to_str().unwrap(),
-        "--excitation",
-        dir.join("force.csv").to_str().unwrap(),
-        "--excitation-col",
-        "force_n",
-        "--f-max-hz",
-        "200",
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ]);
+    let o = harness(&words("ema --response {} --excitation {} --excitation-col force_n --f-max-hz 200 --out {} --no-plots", &[dir.join("camera.csv").to_str().unwrap(), dir.join("force.csv").to_str().unwrap(), out.to_str().unwrap()]));
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout);
     assert!(

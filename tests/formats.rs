@@ -4,7 +4,7 @@
 //! comparison with pyMRAW and PIL is `scripts/check_frames.py`, run by CI.
 
 use crate::analyze::{disk, make_recording, position_px, FPS, H, W};
-use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
 use host_harness::frames::photron::write_recording;
 use std::path::Path;
 
@@ -30,19 +30,14 @@ fn photron(dir: &Path, bits: u32, scale: u16) -> std::path::PathBuf {
 }
 
 fn analyze(frames: &Path, accel: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "analyze",
-        "--frames",
-        frames.to_str().unwrap(),
-        "--accel",
-        accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--mm-per-px",
-        "0.1",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let mut args = words(
+        "analyze --frames {} --accel {} --fs 2048 --mm-per-px 0.1 --out {}",
+        &[
+            frames.to_str().unwrap(),
+            accel.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -107,7 +102,10 @@ fn a_photron_recording_gives_the_modes_of_its_png_frames_at_the_header_rate() {
 fn centroid_reads_every_frame_of_a_photron_recording() {
     let (_tmp, rec) = make_recording(2, 64);
     let cih = photron(&rec.dir, 12, 16);
-    let o = harness(&["centroid", "--threshold", "1600", cih.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 1600 {}",
+        &[cih.to_str().unwrap()],
+    ));
     assert_ok(&o);
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
     let rows: Vec<&str> = out.lines().skip(1).collect();
@@ -123,21 +121,14 @@ fn damaged_or_mismatched_photron_files_are_named() {
     let cih = photron(&rec.dir, 16, 256);
     let mraw = cih.with_extension("mraw");
     let args = |f: &Path| {
-        harness(&[
-            "analyze",
-            "--frames",
-            f.to_str().unwrap(),
-            "--accel",
-            rec.accel.to_str().unwrap(),
-            "--fs",
-            "2048",
-            "--threshold",
-            "100",
-            "--mm-per-px",
-            "0.1",
-            "--out",
-            rec.dir.join("out").to_str().unwrap(),
-        ])
+        harness(&words(
+            "analyze --frames {} --accel {} --fs 2048 --threshold 100 --mm-per-px 0.1 --out {}",
+            &[
+                f.to_str().unwrap(),
+                rec.accel.to_str().unwrap(),
+                rec.dir.join("out").to_str().unwrap(),
+            ],
+        ))
     };
     // the frames file named instead of the header
     assert_exit_2(&args(&mraw), "named by its header: give");
@@ -213,7 +204,10 @@ fn colour_png_and_jpeg_frames_are_read_as_their_luma() {
     // a file named .jpg that is not one
     let bad = dir.path().join("bad.jpg");
     std::fs::write(&bad, b"GIF89a not a jpeg").unwrap();
-    let o = harness(&["centroid", "--threshold", "60", bad.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 60 {}",
+        &[bad.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "bad.jpg");
 }
 
@@ -262,7 +256,10 @@ fn a_phantom_cine_gives_the_modes_of_its_png_frames_at_its_own_rate() {
         );
     }
     let p = rec.dir.join("rec8_0.cine");
-    let o = harness(&["centroid", "--threshold", "100", p.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 100 {}",
+        &[p.to_str().unwrap()],
+    ));
     assert_ok(&o);
     assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 121);
 }
@@ -271,7 +268,12 @@ fn a_phantom_cine_gives_the_modes_of_its_png_frames_at_its_own_rate() {
 fn damaged_phantom_files_are_named() {
     let (_tmp, rec) = make_recording(2, 64);
     let p = cine(&rec.dir, 16, 0, 1);
-    let centroid = |f: &Path| harness(&["centroid", "--threshold", "100", f.to_str().unwrap()]);
+    let centroid = |f: &Path| {
+        harness(&words(
+            "centroid --threshold 100 {}",
+            &[f.to_str().unwrap()],
+        ))
+    };
     let bytes = std::fs::read(&p).unwrap();
     // truncated: the last frame beyond the end
     std::fs::write(&p, &bytes[..bytes.len() - 10]).unwrap();
@@ -296,17 +298,10 @@ fn damaged_phantom_files_are_named() {
     // what needs the rate names the frame and the regular frames (1..50 and 51..120: the
     // longer); a centroid of each frame needs none
     let out = rec.dir.join("track");
-    let o = harness(&[
-        "track",
-        "--frames",
-        p.to_str().unwrap(),
-        "--targets",
-        "1",
-        "--threshold",
-        "100",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "track --frames {} --targets 1 --threshold 100 --out {}",
+        &[p.to_str().unwrap(), out.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "frame 51 comes 16.667 ms after frame 50");
     assert!(
         stderr(&o).contains("--frame-range 51..120"),
@@ -336,7 +331,7 @@ fn centroid_reads_a_video_at_its_rate_and_needs_one() {
     }
     w.finish().unwrap();
     let v = video.to_str().unwrap();
-    let o = harness(&["centroid", "--threshold", "100", "--fps", "120", v]);
+    let o = harness(&words("centroid --threshold 100 --fps 120 {}", &[v]));
     assert_ok(&o);
     let rows: Vec<String> = String::from_utf8_lossy(&o.stdout)
         .lines()
@@ -347,7 +342,10 @@ fn centroid_reads_a_video_at_its_rate_and_needs_one() {
     // the same pixels as the PNG frames (FFV1 is lossless): the same centroids
     for (k, row) in rows.iter().enumerate() {
         let png = rec.frames.join(format!("frame_{k}.png"));
-        let p = harness(&["centroid", "--threshold", "100", png.to_str().unwrap()]);
+        let p = harness(&words(
+            "centroid --threshold 100 {}",
+            &[png.to_str().unwrap()],
+        ));
         let want = String::from_utf8_lossy(&p.stdout)
             .lines()
             .nth(1)
@@ -358,7 +356,7 @@ fn centroid_reads_a_video_at_its_rate_and_needs_one() {
         assert_eq!(strip(row), strip(&want));
     }
     assert_exit_2(
-        &harness(&["centroid", "--threshold", "100", v]),
+        &harness(&words("centroid --threshold 100 {}", &[v])),
         "a video needs --fps",
     );
 }

@@ -2,7 +2,7 @@
 //! checked before it is allocated, every bound is named, and nothing that is wrong comes out as
 //! a number. Each test here failed before its fix (crash, hang or silent wrong answer).
 
-use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
 use std::path::{Path, PathBuf};
 
 /// `n` frames of `w x h` 8-bit pixels with a bright disk of radius 4 px at `(cx, cy + k)`.
@@ -35,17 +35,10 @@ fn cine(dir: &Path, name: &str, frames: &[Vec<u16>]) -> PathBuf {
 
 /// `track --frames FRAMES --targets 1 --threshold 100 --out OUT` and `extra`.
 fn track_one(frames: &str, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "track",
-        "--frames",
-        frames,
-        "--targets",
-        "1",
-        "--threshold",
-        "100",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let mut args = words(
+        "track --frames {} --targets 1 --threshold 100 --out {}",
+        &[frames, out.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -70,7 +63,7 @@ fn header_sizes_past_the_file_are_refused_before_anything_is_allocated() {
     patch_u32(&huge_width, 48, 0x7fff_ffff);
     for (p, needle) in [(&huge_count, "frames"), (&huge_width, "pixels")] {
         let name = p.to_str().unwrap();
-        let o = harness(&["centroid", "--threshold", "100", name]);
+        let o = harness(&words("centroid --threshold 100 {}", &[name]));
         assert_exit_2(&o, needle);
         assert!(stderr(&o).contains(name), "{}", stderr(&o));
         let out = tmp.path().join("out");
@@ -91,7 +84,7 @@ fn a_junk_time_stamp_refuses_only_the_rate_and_a_frame_range_reads_the_rest() {
     patch_u32(&p, 84 + 13_484 + 8 + 8 * 5 + 4, 987_654);
     let name = p.to_str().unwrap();
     // a centroid needs no time stamps: every frame is measured
-    let o = harness(&["centroid", "--threshold", "100", name]);
+    let o = harness(&words("centroid --threshold 100 {}", &[name]));
     assert_ok(&o);
     let rows = String::from_utf8_lossy(&o.stdout).lines().count();
     assert_eq!(rows, 7, "header and 6 frames");
@@ -109,14 +102,10 @@ fn a_junk_time_stamp_refuses_only_the_rate_and_a_frame_range_reads_the_rest() {
     assert_ok(&track(&["--frame-range", "1..5"]));
     let disp = std::fs::read_to_string(out.join("displacement.csv")).unwrap();
     assert_eq!(disp.lines().count(), 1 + 5, "{disp}");
-    let o = harness(&[
-        "centroid",
-        "--threshold",
-        "100",
-        "--frame-range",
-        "2..3",
-        name,
-    ]);
+    let o = harness(&words(
+        "centroid --threshold 100 --frame-range 2..3 {}",
+        &[name],
+    ));
     assert_ok(&o);
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     let labels: Vec<&str> = text
@@ -137,7 +126,7 @@ fn simulate_field_names_its_bounds_and_the_modes_it_cannot_sample() {
     let out = tmp.path().join("field");
     let o = out.to_str().unwrap();
     let sim = |extra: &[&str]| {
-        let mut args = vec!["simulate-field", "--out", o, "--force"];
+        let mut args = words("simulate-field --out {} --force", &[o]);
         args.extend_from_slice(extra);
         harness(&args)
     };
@@ -175,15 +164,7 @@ fn negative_numbers_are_values_refused_by_their_range_and_dot_is_bad_input() {
     let name = p.to_str().unwrap();
     let out = tmp.path().join("o");
     for flags in [["--fps", "-60"], ["--fps=-60", "--force"]] {
-        let mut args = vec![
-            "track",
-            "--frames",
-            name,
-            "--targets",
-            "1",
-            "--threshold",
-            "9",
-        ];
+        let mut args = words("track --frames {} --targets 1 --threshold 9", &[name]);
         args.extend_from_slice(&flags);
         args.extend(["--out", out.to_str().unwrap()]);
         let o = harness(&args);
@@ -213,17 +194,13 @@ fn negative_numbers_are_values_refused_by_their_range_and_dot_is_bad_input() {
     // a camera file stating a rate of 0 is named as such
     let zero = cine(tmp.path(), "zero.cine", &frames);
     patch_u32(&zero, 84 + 768, 0);
-    let o = harness(&[
-        "track",
-        "--frames",
-        zero.to_str().unwrap(),
-        "--targets",
-        "1",
-        "--threshold",
-        "100",
-        "--out",
-        tmp.path().join("z").to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "track --frames {} --targets 1 --threshold 100 --out {}",
+        &[
+            zero.to_str().unwrap(),
+            tmp.path().join("z").to_str().unwrap(),
+        ],
+    ));
     assert_exit_2(&o, "no usable frame rate (none, or 0 fps)");
 }
 
@@ -248,27 +225,18 @@ fn modal_modes(dir: &Path) -> Vec<(String, usize, f64, Option<f64>)> {
 /// A ten-minute shear-frame record (`simulate-field`), and `modal` run on `file` with `extra`.
 fn field(dir: &Path) -> PathBuf {
     let out = dir.join("field");
-    assert_ok(&harness(&[
-        "simulate-field",
-        "--minutes",
-        "10",
-        "--seed",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    assert_ok(&harness(&words(
+        "simulate-field --minutes 10 --seed 3 --out {}",
+        &[out.to_str().unwrap()],
+    )));
     out.join("displacement.csv")
 }
 
 fn modal(file: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "modal",
-        "--displacement",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-    ];
+    let mut args = words(
+        "modal --displacement {} --out {} --force",
+        &[file.to_str().unwrap(), out.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -412,16 +380,10 @@ fn write_frames(dir: &Path, frames: &[Vec<u16>], (w, h): (u32, u32), ext: &str) 
 }
 
 fn track_into(frames: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "track",
-        "--frames",
-        frames.to_str().unwrap(),
-        "--fps",
-        "60",
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-    ];
+    let mut args = words(
+        "track --frames {} --fps 60 --out {} --force",
+        &[frames.to_str().unwrap(), out.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -441,7 +403,10 @@ fn a_truncated_jpeg_or_a_frame_of_another_depth_is_named_not_measured() {
     std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
     let o = track_into(&dir, &out, &flags);
     assert_exit_2(&o, "f_003.jpg: a JPEG frame that is not whole");
-    let o = harness(&["centroid", "--threshold", "100", cut.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 100 {}",
+        &[cut.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "truncated");
     // a 16-bit PNG among 8-bit ones was a silent lost frame, and the report called the
     // sequence 16-bit
@@ -474,7 +439,7 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
     assert!(!stderr(&o).contains("no pixel above"), "{}", stderr(&o));
     let analyze = |extra: &[&str]| {
         let out = tmp.path().join("a");
-        let mut args = vec!["analyze", "--frames", dir.to_str().unwrap(), "--fps", "60"];
+        let mut args = words("analyze --frames {} --fps 60", &[dir.to_str().unwrap()]);
         args.extend(["--points", p, "--out", out.to_str().unwrap()]);
         args.extend_from_slice(extra);
         harness(&args)
@@ -483,14 +448,10 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
         &analyze(&["--threshold", "10"]),
         "at the edge of its window",
     );
-    let c = harness(&[
-        "centroid",
-        "--threshold",
-        "10",
-        "--roi",
-        "25,17,15,15",
-        dir.join("f_000.png").to_str().unwrap(),
-    ]);
+    let c = harness(&words(
+        "centroid --threshold 10 --roi 25,17,15,15 {}",
+        &[dir.join("f_000.png").to_str().unwrap()],
+    ));
     assert_ok(&c);
     assert!(String::from_utf8_lossy(&c.stdout).ends_with(",2\n"));
     // the file's threshold column is each window's threshold: no --threshold needed

@@ -3,7 +3,7 @@
 //! (FDD, EFDD, SSI-cov) and writes modes.csv, shapes.csv, svd.csv, shapes.uff and the figures;
 //! bad records are named.
 
-use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::path::Path;
 
 /// `(method, mode, f_hz, damping)` from modes.csv.
@@ -61,24 +61,17 @@ fn truth(dir: &Path) -> Vec<(f64, f64, Vec<f64>)> {
 fn the_shear_frame_is_identified_without_an_accelerometer() {
     let tmp = tempfile::tempdir().unwrap();
     let (field, out) = (tmp.path().join("field"), tmp.path().join("modal"));
-    assert_ok(&harness(&[
-        "simulate-field",
-        "--minutes",
-        "60",
-        "--seed",
-        "3",
-        "--out",
-        field.to_str().unwrap(),
-    ]));
-    let o = harness(&[
-        "modal",
-        "--displacement",
-        field.join("displacement.csv").to_str().unwrap(),
-        "--nperseg",
-        "2048",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    assert_ok(&harness(&words(
+        "simulate-field --minutes 60 --seed 3 --out {}",
+        &[field.to_str().unwrap()],
+    )));
+    let o = harness(&words(
+        "modal --displacement {} --nperseg 2048 --out {}",
+        &[
+            field.join("displacement.csv").to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    ));
     assert_ok(&o);
     for f in [
         "modes.csv",
@@ -163,13 +156,10 @@ fn bad_records_are_named_and_bad_targets_left_out() {
         p
     };
     let run = |p: &Path, out: &str| {
-        harness(&[
-            "modal",
-            "--displacement",
-            p.to_str().unwrap(),
-            "--out",
-            tmp.path().join(out).to_str().unwrap(),
-        ])
+        harness(&words(
+            "modal --displacement {} --out {}",
+            &[p.to_str().unwrap(), tmp.path().join(out).to_str().unwrap()],
+        ))
     };
     let wave = |i: usize, f: f64| (2.0 * std::f64::consts::PI * f * i as f64 / 50.0).sin();
     // fewer samples than one segment
@@ -186,15 +176,13 @@ fn bad_records_are_named_and_bad_targets_left_out() {
         1000,
         "t_s,a\n",
     );
-    let o = harness(&[
-        "modal",
-        "--displacement",
-        p.to_str().unwrap(),
-        "--nperseg",
-        "2048",
-        "--out",
-        tmp.path().join("o1b").to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "modal --displacement {} --nperseg 2048 --out {}",
+        &[
+            p.to_str().unwrap(),
+            tmp.path().join("o1b").to_str().unwrap(),
+        ],
+    ));
     assert_exit_2(&o, "--nperseg 2048: the record has only 1000 samples");
     // NaN in a cell
     let p = write(
@@ -333,7 +321,7 @@ fn a_rendered_field_recording_gives_the_modes_through_the_whole_chain() {
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
     let r = rec.to_str().unwrap();
-    let o = harness(&["simulate-field", "--render", "--minutes", "3", "--out", r]);
+    let o = harness(&words("simulate-field --render --minutes 3 --out {}", &[r]));
     assert_ok(&o);
     for f in ["displacement.csv", "truth.csv", "points.csv", "README.txt"] {
         assert!(rec.join(f).exists(), "{f}");
@@ -350,31 +338,17 @@ fn a_rendered_field_recording_gives_the_modes_through_the_whole_chain() {
         "{readme}"
     );
     let exact = rec.join("exact");
-    assert_ok(&harness(&[
-        "modal",
-        "--displacement",
-        &format!("{r}/displacement.csv"),
-        "--out",
-        exact.to_str().unwrap(),
-    ]));
+    assert_ok(&harness(&words(
+        "modal --displacement {} --out {}",
+        &[&format!("{r}/displacement.csv"), exact.to_str().unwrap()],
+    )));
     let frames = format!("{r}/frames");
     let analyze = |tracker: &str| {
         let out = rec.join(tracker);
-        let o = harness(&[
-            "analyze",
-            "--frames",
-            &frames,
-            "--fps",
-            "60",
-            "--targets",
-            "5",
-            "--threshold",
-            "127",
-            "--tracker",
-            tracker,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = harness(&words(
+            "analyze --frames {} --fps 60 --targets 5 --threshold 127 --tracker {} --out {}",
+            &[&frames, tracker, out.to_str().unwrap()],
+        ));
         assert_ok(&o);
         (out, String::from_utf8_lossy(&o.stdout).to_string())
     };
@@ -423,7 +397,7 @@ fn a_rendered_field_recording_gives_the_modes_through_the_whole_chain() {
     let (_, report) = analyze("blob");
     assert!(report.contains("5 x mode 1"), "{report}");
     // the displacement record's noise is not the camera's
-    let o = harness(&["simulate-field", "--render", "--noise", "0.1", "--out", r]);
+    let o = harness(&words("simulate-field --render --noise 0.1 --out {}", &[r]));
     assert_exit_2(&o, "--read-noise");
 }
 

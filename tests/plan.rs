@@ -2,7 +2,7 @@
 //! closed-form sinc, the longest exposure at `1 - tolerance`, the warnings, the preset, and
 //! bad flags refused with exit code 2 naming the flag.
 
-use crate::util::harness;
+use crate::util::{harness, words};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -152,17 +152,10 @@ fn binary_rows_cross_the_tolerance_at_their_longest_exposure() {
 
 #[test]
 fn aliasing_and_long_exposures_are_warned() {
-    let o = harness(&[
-        "plan",
-        "--freqs-hz",
-        "2,30",
-        "--amplitude-px",
-        "3",
-        "--fps",
-        "50",
-        "--centroid",
-        "weighted",
-    ]);
+    let o = harness(&words(
+        "plan --freqs-hz 2,30 --amplitude-px 3 --fps 50 --centroid weighted",
+        &[],
+    ));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
     assert!(
@@ -181,19 +174,10 @@ fn aliasing_and_long_exposures_are_warned() {
     );
     assert!(!out.contains("exposure 125.2 ms is longer"), "{out}");
     // an exposure given longer than the frame is warned as such
-    let o = harness(&[
-        "plan",
-        "--freqs-hz",
-        "2",
-        "--amplitude-px",
-        "3",
-        "--fps",
-        "50",
-        "--exposure-ms",
-        "60",
-        "--centroid",
-        "weighted",
-    ]);
+    let o = harness(&words(
+        "plan --freqs-hz 2 --amplitude-px 3 --fps 50 --exposure-ms 60 --centroid weighted",
+        &[],
+    ));
     assert!(
         text(&o.stdout).contains("warning: mode 1: exposure 60.0 ms is longer than the frame"),
         "{}",
@@ -270,15 +254,10 @@ fn compensation_brings_the_weighted_vision_amplitude_back_to_the_accelerometer()
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("rec");
     let rec_s = rec.to_str().unwrap();
-    let o = harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec_s,
-        "--exposure-ms",
-        "8",
-    ]);
+    let o = harness(&words(
+        "render --preset cantilever --recording {} --exposure-ms 8",
+        &[rec_s],
+    ));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let analyze = |out: &str, extra: &[&str]| {
         let frames = rec.join("frames");

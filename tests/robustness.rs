@@ -2,20 +2,13 @@
 //! locked, its checkpoint is never emptied or double counted, sizes are bounded, undefined
 //! statistics are empty cells.
 
-use crate::util::{assert_exit_2, assert_ok, harness, stderr};
+use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
 /// `host-harness study --runs runs --exposures-ms 40 --no-plots --out out` and `extra`.
 fn study_of(runs: &str, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "study",
-        "--runs",
-        runs,
-        "--exposures-ms",
-        "40",
-        "--no-plots",
-    ];
+    let mut args = words("study --runs {} --exposures-ms 40 --no-plots", &[runs]);
     args.extend(["--out", out.to_str().unwrap()]);
     args.extend(extra);
     harness(&args)
@@ -110,17 +103,14 @@ fn sizes_from_one_flag_are_bounded_and_the_bound_is_named() {
             "longer than the simulated record",
         ),
     ] {
-        let mut a = vec!["study", "--no-plots", "--out", out.to_str().unwrap()];
+        let mut a = words("study --no-plots --out {}", &[out.to_str().unwrap()]);
         a.extend(args);
         assert_exit_2(&harness(&a), needle);
     }
-    let o = harness(&[
-        "render",
-        "--exposure-ms",
-        "1e9",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "render --exposure-ms 1e9 --out {}",
+        &[out.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "longer than the simulated record");
     // an absurd thread count is capped with a warning, and the study runs
     let o = study(&dir.path().join("t"), &["--threads", "100000"]);
@@ -158,14 +148,14 @@ fn one_run_gives_empty_cells_not_nan() {
     let first = dir.path().join("first");
     assert_ok(&study_of("1", &first, &["--shard", "1/2"]));
     let merged = dir.path().join("merged");
-    assert_ok(&harness(&[
-        "merge",
-        first.to_str().unwrap(),
-        empty.to_str().unwrap(),
-        "--out",
-        merged.to_str().unwrap(),
-        "--no-plots",
-    ]));
+    assert_ok(&harness(&words(
+        "merge {} {} --out {} --no-plots",
+        &[
+            first.to_str().unwrap(),
+            empty.to_str().unwrap(),
+            merged.to_str().unwrap(),
+        ],
+    )));
     for f in [
         "summary.csv",
         "coverage.csv",
@@ -259,7 +249,10 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
         enc.write_image::<colortype::Gray32Float>(16, 16, &[0f32; 256])
             .unwrap();
     }
-    let o = harness(&["centroid", "--threshold", "100", good.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 100 {}",
+        &[good.to_str().unwrap()],
+    ));
     assert_ok(&o);
     let rows: Vec<String> = String::from_utf8_lossy(&o.stdout)
         .lines()
@@ -276,7 +269,10 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
         ]
     );
     // page 2 (another size, no target) is measured on its own; page 3 is colour: named
-    let o = harness(&["centroid", "--threshold", "100", bad.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 100 {}",
+        &[bad.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "bad.tif page 3: unsupported colour type");
     let out = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
@@ -286,7 +282,10 @@ fn centroid_measures_every_page_of_a_multi_page_tiff_and_names_a_bad_one() {
     // a truncated TIFF: the page that cannot be read is named
     let bytes = std::fs::read(&good).unwrap();
     std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
-    let o = harness(&["centroid", "--threshold", "100", bad.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 100 {}",
+        &[bad.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "bad.tif page");
 }
 
@@ -295,16 +294,15 @@ fn an_8_bit_saturation_above_255_and_a_1_bit_png_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let frame = square_png(dir.path());
     let f = frame.to_str().unwrap();
-    let o = harness(&["centroid", "--threshold", "100", "--saturation", "1000", f]);
+    let o = harness(&words(
+        "centroid --threshold 100 --saturation 1000 {}",
+        &[f],
+    ));
     assert_exit_2(&o, "--saturation 1000 is above 255");
-    assert_ok(&harness(&[
-        "centroid",
-        "--threshold",
-        "100",
-        "--saturation",
-        "250",
-        f,
-    ]));
+    assert_ok(&harness(&words(
+        "centroid --threshold 100 --saturation 250 {}",
+        &[f],
+    )));
     // a 1-bit grey PNG (one byte holds 8 pixels)
     let one_bit = dir.path().join("bits.png");
     {
@@ -315,7 +313,10 @@ fn an_8_bit_saturation_above_255_and_a_1_bit_png_are_refused() {
         let mut w = enc.write_header().unwrap();
         w.write_image_data(&[0x0f; 32]).unwrap();
     }
-    let o = harness(&["centroid", "--threshold", "0", one_bit.to_str().unwrap()]);
+    let o = harness(&words(
+        "centroid --threshold 0 {}",
+        &[one_bit.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "a 1-bit grey PNG; 8- or 16-bit grey images are needed");
 }
 
@@ -330,8 +331,8 @@ fn a_full_standard_output_is_an_error_naming_it_not_a_crash() {
             .unwrap()
     };
     for args in [
-        vec!["plan", "--preset", "grandstand", "--tolerance", "0.1"],
-        vec!["centroid", "--threshold", "100", frame.to_str().unwrap()],
+        words("plan --preset grandstand --tolerance 0.1", &[]),
+        words("centroid --threshold 100 {}", &[frame.to_str().unwrap()]),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_host-harness"))
             .args(&args)
@@ -486,16 +487,10 @@ fn outputs_are_complete_or_absent_and_never_mixed_with_an_earlier_run() {
     let other = tmp.path().join("thesis");
     std::fs::create_dir(&other).unwrap();
     std::fs::write(other.join("chapter1.tex"), "").unwrap();
-    let o = harness(&[
-        "render",
-        "--preset",
-        "cantilever",
-        "--exposure-ms",
-        "2",
-        "--recording",
-        other.to_str().unwrap(),
-        "--force",
-    ]);
+    let o = harness(&words(
+        "render --preset cantilever --exposure-ms 2 --recording {} --force",
+        &[other.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "not only an earlier output");
     assert_eq!(names(&other), ["chapter1.tex"]);
 
@@ -567,14 +562,10 @@ fn all_failed_vision_rows_are_empty_not_nan() {
     )
     .unwrap();
     let out = dir.path().join("dark");
-    let o = harness(&[
-        "study",
-        "--config",
-        config.to_str().unwrap(),
-        "--no-plots",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "study --config {} --no-plots --out {}",
+        &[config.to_str().unwrap(), out.to_str().unwrap()],
+    ));
     assert_ok(&o);
     let printed = String::from_utf8_lossy(&o.stdout);
     assert!(!printed.contains("NaN"), "{printed}");

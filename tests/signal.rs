@@ -5,7 +5,7 @@ mod frf {
     //! `host-harness frf`: H1 of a known gain and of a known resonator, peaks in bands, and the
     //! bad-input cases (exit code 2, message naming row and column).
 
-    use crate::util::harness;
+    use crate::util::{harness, words};
     use host_harness::testing::uniform_noise as noise;
     use std::f64::consts::PI;
     use std::path::{Path, PathBuf};
@@ -47,15 +47,10 @@ mod frf {
         out: &Path,
         extra: &[&str],
     ) -> (i32, String, String) {
-        let mut args = vec![
-            "frf",
-            "--input",
-            input.to_str().unwrap(),
-            "--x",
-            x,
-            "--y",
-            y,
-        ];
+        let mut args = words(
+            "frf --input {} --x {} --y {}",
+            &[input.to_str().unwrap(), x, y],
+        );
         args.extend_from_slice(&["--out", out.to_str().unwrap()]);
         args.extend_from_slice(extra);
         let out = harness(&args);
@@ -282,25 +277,16 @@ mod upsample {
     //! `host-harness upsample`: a band-limited sinusoid matches its analytic values; bad input
     //! exits with code 2 naming the row, column or rates.
 
-    use crate::util::harness;
+    use crate::util::{harness, words};
     use std::path::Path;
     use std::process::Output;
 
     /// `host-harness upsample --input input --col col --from 120 --to 2048 --out out`.
     fn upsample(input: &Path, col: &str, out: &Path) -> Output {
-        harness(&[
-            "upsample",
-            "--input",
-            input.to_str().unwrap(),
-            "--col",
-            col,
-            "--from",
-            "120",
-            "--to",
-            "2048",
-            "--out",
-            out.to_str().unwrap(),
-        ])
+        harness(&words(
+            "upsample --input {} --col {} --from 120 --to 2048 --out {}",
+            &[input.to_str().unwrap(), col, out.to_str().unwrap()],
+        ))
     }
 
     /// A 7 Hz sinusoid of amplitude `amp` (whole cycles in 1 s at 120 fps) upsampled to
@@ -359,10 +345,10 @@ mod upsample {
             ("x\n1\n2\n", "y", &["no column named `y`"]),
             ("x\n1\n2\n3\n", "x", &["integer number of samples"]),
         ];
-        let o = harness(&[
-            "upsample", "--input", "x.csv", "--col", "x", "--from", "0", "--to", "2048", "--out",
-            "y.csv",
-        ]);
+        let o = harness(&words(
+            "upsample --input x.csv --col x --from 0 --to 2048 --out y.csv",
+            &[],
+        ));
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(

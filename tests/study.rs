@@ -2,7 +2,7 @@
 //! shards merged byte-identically, resume after an interruption, refusal to overwrite or to mix
 //! runs of two model revisions.
 
-use crate::util::{assert_exit_2, assert_ok as ok, harness};
+use crate::util::{assert_exit_2, assert_ok as ok, harness, words};
 use std::path::Path;
 
 const SMALL: &[&str] = &[
@@ -30,14 +30,10 @@ fn read(p: &Path) -> String {
 
 /// `host-harness study --config cfg --out out --no-plots`.
 fn study_config(cfg: &Path, out: &Path) -> std::process::Output {
-    harness(&[
-        "study",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ])
+    harness(&words(
+        "study --config {} --out {} --no-plots",
+        &[cfg.to_str().unwrap(), out.to_str().unwrap()],
+    ))
 }
 
 /// Writes the study file `text` into a new temporary directory and runs it into its `out`;
@@ -83,14 +79,14 @@ fn two_shards(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
 
 /// `host-harness merge s1 s2 --out out --no-plots`.
 fn merge(s1: &Path, s2: &Path, out: &Path) -> std::process::Output {
-    harness(&[
-        "merge",
-        s1.to_str().unwrap(),
-        s2.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ])
+    harness(&words(
+        "merge {} {} --out {} --no-plots",
+        &[
+            s1.to_str().unwrap(),
+            s2.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    ))
 }
 
 #[test]
@@ -205,7 +201,7 @@ fn bad_arguments_exit_2_and_name_the_field() {
         "--shard",
     );
     let y = dir.path().join("y");
-    let out = harness(&["study", "--runs", "0", "--out", y.to_str().unwrap()]);
+    let out = harness(&words("study --runs 0 --out {}", &[y.to_str().unwrap()]));
     assert_exit_2(&out, "runs");
     let cfg = dir.path().join("s.toml");
     std::fs::write(&cfg, "preset = \"grandstand\"\nrunz = 3\n").unwrap();
@@ -218,15 +214,10 @@ fn bad_arguments_exit_2_and_name_the_field() {
 fn render_writes_sharp_and_blurred_frames() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("frames");
-    let o = harness(&[
-        "render",
-        "--exposure-ms",
-        "180",
-        "--times",
-        "33.4",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "render --exposure-ms 180 --times 33.4 --out {}",
+        &[out.to_str().unwrap()],
+    ));
     ok(&o);
     let sharp = image::open(out.join("frame_t33.4_sharp.png"))
         .unwrap()
@@ -243,16 +234,15 @@ fn render_writes_sharp_and_blurred_frames() {
     let sum = |im: &image::GrayImage| im.pixels().map(|p| p.0[0] as f64).sum::<f64>();
     assert!((sum(&sharp) / sum(&blurred) - 1.0).abs() < 0.01);
     // a second render into the same directory is refused without --force
-    let again = harness(&["render", "--times", "33.4", "--out", out.to_str().unwrap()]);
+    let again = harness(&words(
+        "render --times 33.4 --out {}",
+        &[out.to_str().unwrap()],
+    ));
     assert_exit_2(&again, "--force");
-    let o = harness(&[
-        "render",
-        "--times",
-        "1e6",
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-    ]);
+    let o = harness(&words(
+        "render --times 1e6 --out {} --force",
+        &[out.to_str().unwrap()],
+    ));
     assert_exit_2(&o, "--times");
 }
 

@@ -4,7 +4,7 @@
 //! the model, mode shapes with MAC >= 0.99 against the model's, lost frames per target, bad
 //! target counts named.
 
-use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever};
+use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::path::Path;
 
 /// `(system, target, mode) -> (f_hz, damping)` from modes.csv.
@@ -56,18 +56,12 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
     );
     let out = rec.join("analysis");
     let analyze_with = |frames: &str, out: &Path, k: &str, extra: &[&str]| {
-        let mut args = vec![
-            "--exposure-ms",
-            "2",
-            "--targets",
-            k,
-            "--out",
-            out.to_str().unwrap(),
-            // the synthetic record is periodic: a rectangular window has no leakage, so the
-            // fitted damping is the model's (a Hann segment widens the peak)
-            "--window",
-            "rect",
-        ];
+        // the synthetic record is periodic: a rectangular window has no leakage, so the
+        // fitted damping is the model's (a Hann segment widens the peak)
+        let mut args = words(
+            "--exposure-ms 2 --targets {} --out {} --window rect",
+            &[k, out.to_str().unwrap()],
+        );
         args.extend_from_slice(extra);
         analyze_recording(&rec, frames, &args)
     };
@@ -386,28 +380,7 @@ fn analyze_hand(dir: &Path, frames: &str) -> std::process::Output {
 fn analyze_hand_with(dir: &Path, frames: &str, extra: &[&str]) -> std::process::Output {
     let accel = dir.join("accel.csv");
     let out = dir.join("out");
-    let mut args = vec![
-        "analyze",
-        "--frames",
-        frames,
-        "--fps",
-        "120",
-        "--accel",
-        accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--time-col",
-        "t_s",
-        "--threshold",
-        "127",
-        "--mm-per-px",
-        "0.1",
-        "--targets",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-        "--force",
-    ];
+    let mut args = words("analyze --frames {} --fps 120 --accel {} --fs 2048 --time-col t_s --threshold 127 --mm-per-px 0.1 --targets 3 --out {} --force", &[frames, accel.to_str().unwrap(), out.to_str().unwrap()]);
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -687,24 +660,7 @@ fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
         // analyze_hand_with passes --targets 3: drop it for --points
         let accel = cluttered.join("accel.csv");
         let out = cluttered.join("out");
-        let mut all = vec![
-            "analyze",
-            "--frames",
-            frames(&cluttered).leak(),
-            "--fps",
-            "120",
-            "--accel",
-            accel.to_str().unwrap().to_string().leak(),
-            "--fs",
-            "2048",
-            "--time-col",
-            "t_s",
-            "--mm-per-px",
-            "0.1",
-            "--out",
-            out.to_str().unwrap().to_string().leak(),
-            "--force",
-        ];
+        let mut all = words("analyze --frames {} --fps 120 --accel {} --fs 2048 --time-col t_s --mm-per-px 0.1 --out {} --force", &[frames(&cluttered).leak(), accel.to_str().unwrap().to_string().leak(), out.to_str().unwrap().to_string().leak()]);
         all.extend_from_slice(&args);
         harness(&all)
     };
@@ -765,16 +721,10 @@ fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
     .unwrap();
     let track = |frames: &Path, out: &Path, extra: &[&str]| {
         let f = frames.join("frames");
-        let mut args = vec![
-            "track",
-            "--frames",
-            f.to_str().unwrap(),
-            "--threshold",
-            "127",
-            "--out",
-            out.to_str().unwrap(),
-            "--no-plots",
-        ];
+        let mut args = words(
+            "track --frames {} --threshold 127 --out {} --no-plots",
+            &[f.to_str().unwrap(), out.to_str().unwrap()],
+        );
         args.extend_from_slice(extra);
         harness(&args)
     };
@@ -839,21 +789,7 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
     let tmp = tempfile::tempdir().unwrap();
     let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
     for (dir, scene) in [(&clean, "plain"), (&cluttered, "cluttered")] {
-        let mut args = vec![
-            "render",
-            "--preset",
-            "cantilever",
-            "--recording",
-            dir.to_str().unwrap(),
-            "--targets",
-            "5",
-            "--exposure-ms",
-            "2",
-            "--read-noise",
-            "1",
-            "--scene",
-            scene,
-        ];
+        let mut args = words("render --preset cantilever --recording {} --targets 5 --exposure-ms 2 --read-noise 1 --scene {}", &[dir.to_str().unwrap(), scene]);
         if scene == "cluttered" {
             // also the same colour frames, losslessly, as a video
             args.push("--video");
@@ -863,7 +799,7 @@ fn the_cluttered_scene_with_chosen_points_gives_the_clean_scenes_modes() {
     assert!(cluttered.join("frames/frame_00000.jpg").is_file());
     let analyze_as = |dir: &Path, frames: &str, out: &str, pick: &[&str]| {
         let out = dir.join(out);
-        let mut args = vec!["--window", "rect", "--out", out.to_str().unwrap()];
+        let mut args = words("--window rect --out {}", &[out.to_str().unwrap()]);
         args.extend_from_slice(pick);
         analyze_recording(dir, frames, &args)
     };

@@ -2,7 +2,7 @@
 //! Lucas-Kanade (`--tracker lk`), against the exact motion a recording's `truth.csv` states,
 //! and every way Lucas-Kanade loses a target: a flag and a lost frame, never a wrong position.
 
-use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever};
+use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -78,18 +78,14 @@ fn render_noisy_targets(rec: &Path, scene: &str) {
 }
 
 fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "track",
-        "--frames",
-        frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--points",
-        points.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--no-plots",
-    ];
+    let mut args = words(
+        "track --frames {} --fps 120 --points {} --out {} --no-plots",
+        &[
+            frames.to_str().unwrap(),
+            points.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    );
     args.extend_from_slice(extra);
     harness(&args)
 }
@@ -108,10 +104,7 @@ fn lucas_kanade_follows_the_rendered_targets_closer_than_the_centroids() {
     let mut rms = HashMap::new();
     for (name, extra) in [
         ("blob", vec!["--threshold", "127"]),
-        (
-            "weighted",
-            vec!["--tracker", "weighted", "--threshold", "127"],
-        ),
+        ("weighted", words("--tracker weighted --threshold 127", &[])),
         ("lk", vec!["--tracker", "lk"]),
     ] {
         let out = tmp.path().join(name);
@@ -254,19 +247,10 @@ fn lucas_kanade_flags_are_checked() {
     frames(dir, 2, |_, x, y| 20.0 + speckle(x, y, (30.0, 32.0), 180.0));
     let out = dir.join("out").to_string_lossy().into_owned();
     let f = dir.join("frames").to_string_lossy().into_owned();
-    let o = harness(&[
-        "track",
-        "--frames",
-        &f,
-        "--fps",
-        "120",
-        "--targets",
-        "1",
-        "--tracker",
-        "lk",
-        "--out",
-        &out,
-    ]);
+    let o = harness(&words(
+        "track --frames {} --fps 120 --targets 1 --tracker lk --out {}",
+        &[&f, &out],
+    ));
     assert_exit_2(&o, "--tracker lk follows the windows of --points");
     std::fs::write(dir.join("p.csv"), "target,x,y,w,h\n1,30,32,21,21\n").unwrap();
     let o = track(
@@ -329,33 +313,16 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
     let r = rec.to_str().unwrap();
-    assert_ok(&harness(&[
-        "render",
-        "--recording",
-        r,
-        "--scene",
-        "cluttered",
-        "--motion",
-        "release",
-        "--video",
-    ]));
+    assert_ok(&harness(&words(
+        "render --recording {} --scene cluttered --motion release --video",
+        &[r],
+    )));
     let truth = truth(&rec);
     let track_frames = |frames: &str, points: &Path, out: &Path| {
-        assert_ok(&harness(&[
-            "track",
-            "--frames",
-            frames,
-            "--fps",
-            "23",
-            "--points",
-            points.to_str().unwrap(),
-            "--tracker",
-            "lk",
-            "--search-px",
-            "130",
-            "--out",
-            out.to_str().unwrap(),
-        ]));
+        assert_ok(&harness(&words(
+            "track --frames {} --fps 23 --points {} --tracker lk --search-px 130 --out {}",
+            &[frames, points.to_str().unwrap(), out.to_str().unwrap()],
+        )));
         displacement(out)
     };
     let frames = format!("{r}/frames");
@@ -391,15 +358,7 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         let out = tmp
             .path()
             .join(format!("alone_{}", search.unwrap_or("default")));
-        let mut args = vec![
-            "track",
-            "--frames",
-            &frames,
-            "--fps",
-            "23",
-            "--tracker",
-            "lk",
-        ];
+        let mut args = words("track --frames {} --fps 23 --tracker lk", &[&frames]);
         args.extend(["--points", alone_csv.to_str().unwrap()]);
         args.extend(["--out", out.to_str().unwrap()]);
         if let Some(s) = search {
@@ -432,21 +391,10 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     let single_csv = tmp.path().join("single.csv");
     std::fs::write(&single_csv, single).unwrap();
     let out = tmp.path().join("single");
-    let o = harness(&[
-        "track",
-        "--frames",
-        &frames,
-        "--fps",
-        "23",
-        "--tracker",
-        "lk",
-        "--search-px",
-        "130",
-        "--points",
-        single_csv.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = harness(&words(
+        "track --frames {} --fps 23 --tracker lk --search-px 130 --points {} --out {}",
+        &[&frames, single_csv.to_str().unwrap(), out.to_str().unwrap()],
+    ));
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(

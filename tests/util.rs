@@ -11,6 +11,24 @@ pub fn harness(args: &[&str]) -> Output {
         .expect("host-harness runs")
 }
 
+/// The words of a command line written as one would type it: `line` split at whitespace, each
+/// `{}` taking the next of `slots` whole (a path with spaces stays one word).
+pub fn words<'a>(line: &'a str, slots: &[&'a str]) -> Vec<&'a str> {
+    let mut slots = slots.iter();
+    let words: Vec<&str> = line
+        .split_whitespace()
+        .map(|w| {
+            if w == "{}" {
+                slots.next().expect("a slot for every {}")
+            } else {
+                w
+            }
+        })
+        .collect();
+    assert!(slots.next().is_none(), "more slots than {{}} in `{line}`");
+    words
+}
+
 /// The process's standard error as text.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -37,15 +55,10 @@ pub fn assert_exit_2(o: &Output, needle: &str) {
 /// `render --preset cantilever --recording REC --exposure-ms 2` and `extra`, asserted to
 /// succeed: the rendered cantilever most end-to-end tests read.
 pub fn render_cantilever(rec: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "render",
-        "--preset",
-        "cantilever",
-        "--recording",
-        rec.to_str().unwrap(),
-        "--exposure-ms",
-        "2",
-    ];
+    let mut args = words(
+        "render --preset cantilever --recording {} --exposure-ms 2",
+        &[rec.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     assert_ok(&harness(&args));
 }
@@ -55,23 +68,7 @@ pub fn render_cantilever(rec: &Path, extra: &[&str]) {
 /// threshold 127, 0.1266 mm/px, then `extra` (`--out` among them).
 pub fn analyze_recording(rec: &Path, frames: &str, extra: &[&str]) -> Output {
     let (frames, accel) = (rec.join(frames), rec.join("accel.csv"));
-    let mut args = vec![
-        "analyze",
-        "--frames",
-        frames.to_str().unwrap(),
-        "--fps",
-        "120",
-        "--accel",
-        accel.to_str().unwrap(),
-        "--fs",
-        "2048",
-        "--time-col",
-        "t_s",
-        "--threshold",
-        "127",
-        "--mm-per-px",
-        "0.1266",
-    ];
+    let mut args = words("analyze --frames {} --fps 120 --accel {} --fs 2048 --time-col t_s --threshold 127 --mm-per-px 0.1266", &[frames.to_str().unwrap(), accel.to_str().unwrap()]);
     args.extend_from_slice(extra);
     harness(&args)
 }

@@ -3,20 +3,16 @@
 //! take the camera's motion out, `--world` converts each target with its own scale, and bad
 //! references are named.
 
-use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever};
+use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Renders a field record of `minutes` into `dir` with `extra` flags.
 fn render(dir: &Path, minutes: &str, extra: &[&str]) {
-    let mut args = vec![
-        "simulate-field",
-        "--render",
-        "--minutes",
-        minutes,
-        "--out",
-        dir.to_str().unwrap(),
-    ];
+    let mut args = words(
+        "simulate-field --render --minutes {} --out {}",
+        &[minutes, dir.to_str().unwrap()],
+    );
     args.extend_from_slice(extra);
     assert_ok(&harness(&args));
 }
@@ -279,21 +275,14 @@ fn an_oblique_view_is_measured_in_millimetres_through_the_planes_points() {
     let a = tmp.path().join("analyze");
     let wfile = rec.join("world.csv");
     let run = |out: &Path, scale: &[&str]| {
-        let mut args = vec![
-            "analyze",
-            "--frames",
-            rec.join("frames").to_str().unwrap(),
-            "--fps",
-            "60",
-            "--points",
-            rec.join("points.csv").to_str().unwrap(),
-            "--threshold",
-            "127",
-            "--tracker",
-            "weighted",
-            "--out",
-            out.to_str().unwrap(),
-        ]
+        let mut args = words(
+            "analyze --frames {} --fps 60 --points {} --threshold 127 --tracker weighted --out {}",
+            &[
+                rec.join("frames").to_str().unwrap(),
+                rec.join("points.csv").to_str().unwrap(),
+                out.to_str().unwrap(),
+            ],
+        )
         .into_iter()
         .map(String::from)
         .collect::<Vec<_>>();
