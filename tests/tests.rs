@@ -189,6 +189,7 @@ const ROOMS: [(&str, &[&[&str]]); 6] = [
         "track",
         &[
             &["tracks"],
+            &["verify"],
             &["shared_motion"],
             &["points"],
             &["follow"],

@@ -29,14 +29,28 @@ type Row = (usize, usize, f64, f64, u8, bool);
 fn displacement(out: &Path) -> Vec<Row> {
     let text = std::fs::read_to_string(out.join("displacement.csv")).unwrap();
     let mut lines = text.lines();
-    assert_eq!(
-        lines.next(),
-        Some("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost")
+    let header = lines.next().unwrap();
+    // Lucas-Kanade writes each position's evidence: score, forward-backward, the check
+    let evidence = header == "frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost,score,fb_px,check";
+    assert!(
+        evidence || header == "frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost",
+        "{header}"
     );
     lines
         .map(|l| {
             let c: Vec<&str> = l.split(',').collect();
             let num = |s: &str| s.parse::<f64>().unwrap_or(f64::NAN);
+            if evidence {
+                // a position the checks took away is a lost frame without a position; a score
+                // is a ZNCC, a forward-backward disagreement within its bound where it stands
+                let (score, fb, check) = (num(c[9]), num(c[10]), c[11]);
+                assert!(check.is_empty() || (c[3].is_empty() && c[8] == "1"), "{l}");
+                assert!(score.is_nan() || (-1.0..=1.0).contains(&score), "{l}");
+                assert!(
+                    fb.is_nan() || fb <= 1.0 || check == "forward-backward",
+                    "{l}"
+                );
+            }
             (
                 c[0].parse().unwrap(),
                 c[2].parse().unwrap(),

@@ -9,8 +9,10 @@
 //! | [`lost_frames`] | the one policy for a frame without a position, and the 5 % rule |
 //! | [`geometry`] | homographies: fitted to point pairs (translation, similarity, normalised DLT), a plane seen obliquely |
 //! | [`testing`] | seeded noise for tests, examples and benchmarks |
+//! | [`evidence`] | what supports a tracked position (score, forward-backward, the check that took it away) |
 //! | [`failpoint`] | `VIBCAM_FAILPOINT`: abort at a named point, for crash tests |
 
+pub mod evidence;
 pub mod failpoint;
 pub mod geometry;
 pub mod lost_frames;

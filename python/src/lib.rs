@@ -486,6 +486,27 @@ fn positions_of(tracks: &host_harness::analysis::targets::Tracks) -> (Array3<f64
     (pos, flags)
 }
 
+/// Each position's evidence (frame by target): the score against the first frame's template
+/// and the forward-backward disagreement (NaN where none), and the check that took it away
+/// (`""`: none), row by row.
+type EvidenceArrays = (Array2<f64>, Array2<f64>, Vec<String>);
+
+fn evidence_of(tracks: &host_harness::analysis::targets::Tracks) -> EvidenceArrays {
+    let n = tracks.centroids.first().map_or(0, Vec::len);
+    let k = tracks.centroids.len();
+    let mut score = Array2::<f64>::from_elem((n, k), f64::NAN);
+    let mut fb = Array2::<f64>::from_elem((n, k), f64::NAN);
+    let mut check = vec![String::new(); n * k];
+    for (t, ev) in tracks.evidence.iter().enumerate() {
+        for (i, e) in ev.iter().enumerate().take(n) {
+            score[[i, t]] = e.score.map_or(f64::NAN, f64::from);
+            fb[[i, t]] = e.fb_px.map_or(f64::NAN, f64::from);
+            check[i * k + t] = e.doubt.map_or("", |d| d.word()).to_string();
+        }
+    }
+    (score, fb, check)
+}
+
 /// `track(frames, tracking)`: every target's position per frame, `(N, K, 2)` pixels (NaN where
 /// lost), and the firmware's flags `(N, K)`; also the frame rate used.
 #[pyfunction]
@@ -513,6 +534,7 @@ fn track<'py>(
         Option<Array2<f64>>,
         (String, String, String),
         f64,
+        EvidenceArrays,
     );
     let label = match &frames {
         Frames::Path(p) => p.clone(),
@@ -539,10 +561,11 @@ fn track<'py>(
                 mm,
                 (v.describe(axis == Axis::X), report, html),
                 rates.fps,
+                evidence_of(&v.tracks),
             ))
         })
         .map_err(py_err)?;
-    let ((positions, flags), raw, camera, mm, (view_report, report, html), fps) = tracked;
+    let ((positions, flags), raw, camera, mm, (view_report, report, html), fps, evidence) = tracked;
     let d = PyDict::new(py);
     d.set_item("positions", positions.into_pyarray(py))?;
     d.set_item("flags", flags.into_pyarray(py))?;
@@ -553,6 +576,10 @@ fn track<'py>(
     d.set_item("view_report", spelled(&view_report))?;
     d.set_item("report", report)?;
     d.set_item("html", html)?;
+    let (score, fb, check) = evidence;
+    d.set_item("score", score.into_pyarray(py))?;
+    d.set_item("fb_px", fb.into_pyarray(py))?;
+    d.set_item("check", check)?;
     Ok(d)
 }
 

@@ -124,6 +124,20 @@ def test_lucas_kanade_points_equal_the_command_line(recording, harness, tmp_path
         else:
             assert np.float32(from_file[k, j, 0]) == np.float32(row["cx"])
             assert np.float32(from_file[k, j, 1]) == np.float32(row["cy"])
+    # every position's evidence as the CSV gives it: score, forward-backward, the check
+    t = vibcam.track(recording / "frames", points, tracker="lk", return_flags=True)
+    assert t.score.shape == t.fb_px.shape == t.check.shape == t.flags.shape
+    measured = 0
+    for row in rows(out / "displacement.csv"):
+        k, j = int(row["frame"]), int(row["target"]) - 1
+        for got, cell in ((t.score[k, j], row["score"]), (t.fb_px[k, j], row["fb_px"])):
+            if cell == "":
+                assert np.isnan(got)
+            else:
+                assert abs(got - float(cell)) <= 5e-5
+                measured += 1
+        assert t.check[k, j] == row["check"]
+    assert measured > 0
 
 
 def test_study_equals_the_command_line(harness, tmp_path):

@@ -289,7 +289,10 @@ class Tracks:
     ``axis`` (positive up for ``y``); ``view_report``: what the references and the scale gave
     (references left out and why, each target's scale and its uncertainty); ``report``: the
     report ``track`` writes (report.txt), and the page of its ``report.html`` shown inline by
-    notebooks.
+    notebooks. Each position's evidence, ``(N, K)`` (Lucas-Kanade; NaN and ``""`` for the
+    centroids): ``score``, its match against the first frame's template (ZNCC); ``fb_px``, the
+    forward-backward disagreement in px; ``check``, the check that took the position away
+    (``"forward-backward"``, ``"score"``, ``"group"``; ``""``: none), as ``displacement.csv``.
     """
 
     positions: _np.ndarray
@@ -301,6 +304,9 @@ class Tracks:
     view_report: str = ""
     report: str = _field(default="", repr=False)
     html: str = _field(default="", repr=False)
+    score: _Optional[_np.ndarray] = _field(default=None, repr=False)
+    fb_px: _Optional[_np.ndarray] = _field(default=None, repr=False)
+    check: _Optional[_np.ndarray] = _field(default=None, repr=False)
 
     def _repr_html_(self) -> str:
         """The page of ``track``'s ``report.html`` (the first frame with the windows, the
@@ -375,6 +381,9 @@ def track(
             d["view_report"],
             d["report"],
             d["html"],
+            d["score"],
+            d["fb_px"],
+            _np.array(d["check"], dtype=str).reshape(d["score"].shape),
         )
     return d["positions"]
 

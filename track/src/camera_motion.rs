@@ -125,6 +125,7 @@ impl CameraMotion {
             first,
             refused: tracks.refused.clone(),
             depth: tracks.depth,
+            evidence: tracks.evidence.clone(),
         }
     }
 
@@ -736,6 +737,7 @@ mod tests {
             first: at.to_vec(),
             refused: vec![0; at.len()],
             depth: FrameDepth::default(),
+            evidence: Vec::new(),
         };
         (tracks, truth)
     }
@@ -765,6 +767,7 @@ mod tests {
             first: vec![(60.0, 90.0)],
             refused: vec![0],
             depth: FrameDepth::default(),
+            evidence: Vec::new(),
         };
         let all = with(0.0);
         let text = m.describe(&all, &m.compensate(&all), false);
@@ -800,6 +803,7 @@ mod tests {
             first: vec![(60.0, 90.0)],
             refused: vec![0],
             depth: FrameDepth::default(),
+            evidence: Vec::new(),
         };
         let c = m.compensate(&target);
         let xs: Vec<f64> = c.centroids[0].iter().map(|c| f64::from(c.cx)).collect();
@@ -867,12 +871,14 @@ mod tests {
             first: at.to_vec(),
             refused: vec![0; at.len()],
             depth: FrameDepth::default(),
+            evidence: Vec::new(),
         };
         let target = Tracks {
             centroids: vec![track((150.0, 60.0))],
             first: vec![(150.0, 60.0)],
             refused: vec![0],
             depth: FrameDepth::default(),
+            evidence: Vec::new(),
         };
         let spread = |m: &CameraMotion| {
             let c = m.compensate(&target);

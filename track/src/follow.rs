@@ -51,6 +51,7 @@ pub fn track_targets(
                 first: vec![first],
                 refused: vec![0],
                 depth,
+                evidence: Vec::new(),
             };
             (tracks, None)
         }

@@ -9,6 +9,8 @@
 //! - [`shared_motion`]: a group's shared offset (block templates, integral images);
 //! - [`follow`]: the one tracking dispatcher ([`follow::Targets`]: the whole frame, K blobs or
 //!   chosen points);
+//! - [`verify`]: each position's evidence (score, forward-backward) and the record's checks
+//!   (the target's own score, its group's geometry) that take away what it does not support;
 //! - [`camera_motion`]: the camera's motion per frame from static references, by consensus;
 //! - [`view`]: the targets tracked, the camera's motion removed, the scale from the scene (one,
 //!   between two points, each target's size, the plane's homography).
@@ -18,4 +20,5 @@ pub mod follow;
 pub mod points;
 pub mod shared_motion;
 pub mod tracks;
+pub mod verify;
 pub mod view;

@@ -23,6 +23,7 @@
 
 use crate::shared_motion::{shared_offset, BlockTemplate, Integral};
 use crate::tracks::{lost, Tracks};
+use crate::verify::{forward_backward, Doubt, Evidence, FB_BOUND_PX};
 use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Roi};
 use std::path::Path;
 use vibcam_readers::bad_input;
@@ -465,36 +466,43 @@ pub fn track_points_lk(
         .iter()
         .map(|t| t.config().width.max(t.config().height) / 2)
         .collect();
+    let mut checks = Checks::new(points, config)?;
+    tracks.evidence = vec![Vec::new(); k];
     source.for_each(fps, |label, frame| {
         tracks.depth.add(frame);
         if is_first(&mut size0, frame, &label)? {
             refused = set_templates(&mut trackers, points, frame, &label)?;
+            checks.origins = points
+                .iter()
+                .map(|p| first_window(p, frame.dimensions(), &label).map(|r| (r.x, r.y)))
+                .collect::<anyhow::Result<_>>()?;
             alike = look_alikes(frame, points);
             if !groups.is_empty() || finding.is_some() {
                 templates = block_templates(points, frame, &label)?;
             }
         }
         let deciding = finding.as_ref().is_some_and(|f| f.found_in.is_none());
-        let results = track_frame_lk(
+        let checked = track_frame_lk(
             frame,
-            &mut trackers,
+            (&mut trackers, &mut checks),
             &refused,
             (&groups, &templates),
             deciding.then_some(caps.as_slice()),
         )?;
         if let (true, Some(f)) = (deciding, finding.as_mut()) {
-            if let Some(found) = f.observe(&results) {
+            if let Some(found) = f.observe(checked.iter().map(|(r, e)| (r, e.doubt.is_none()))) {
                 groups = found;
             }
         }
         for (t, p) in points.iter().enumerate() {
-            tracks.centroids[t].push(match refused[t] {
-                Some(why) => lost_because(why),
-                None => lk_centroid(p, &results[t]),
-            });
+            let (c, e) = checks.take(t, p, refused[t], &checked[t]);
+            tracks.centroids[t].push(c);
+            tracks.evidence[t].push(e);
         }
+        checks.prev = Some(frame.clone());
         Ok(())
     })?;
+    crate::verify::verify_record(&mut tracks, &groups);
     let warnings = alone_warning(points, &alike, &groups);
     let grouping = Grouping {
         groups,
@@ -624,10 +632,14 @@ impl MotionGroups {
         }
     }
 
-    /// Takes one frame's results; the groups once the motion is large enough.
-    fn observe(&mut self, results: &[firmware_core::lk::LkResult]) -> Option<Vec<Vec<usize>>> {
-        for (h, r) in self.history.iter_mut().zip(results) {
-            h.push(r.displacement());
+    /// Takes one frame's results (each with whether its position stands); the groups once the
+    /// motion is large enough.
+    fn observe<'a>(
+        &mut self,
+        results: impl Iterator<Item = (&'a firmware_core::lk::LkResult, bool)>,
+    ) -> Option<Vec<Vec<usize>>> {
+        for (h, (r, stands)) in self.history.iter_mut().zip(results) {
+            h.push(r.displacement().filter(|_| stands));
         }
         let moved = self
             .history
@@ -684,25 +696,97 @@ fn alone_warning(points: &[Point], alike: &[(usize, usize)], groups: &[Vec<usize
     )]
 }
 
-/// One frame of LK for every target: alone with its own prediction and search, or, in a
-/// group, first from its own prediction without a search; when a member does not settle there,
-/// the group's shared offset from where each member was ([`shared_offset`] over the members'
-/// search range) is the start of every member that did not, with a search of a quarter of its
-/// window around it (fine differences between the members' motions; well short of a
-/// neighbouring look-alike). The shared offset is sought within half the members' larger
-/// window, the range doubled while its best is below a mean ZNCC of 0.5 or on its edge, up to
-/// the frame's size (whatever `--search-px`, which is each target's own search); a best mean
-/// ZNCC below 0.5 there leaves those members lost.
+/// The forward-backward check's state across frames: a tracker per target for the window at
+/// its new position, the previous frame, per target its verified displacement there, its last
+/// verified one, whether its last position was taken away, and its window's origin in the
+/// first frame.
+struct Checks {
+    back: Vec<Box<HostLk>>,
+    prev: Option<GreyFrame>,
+    verified: Vec<Option<(f32, f32)>>,
+    last_good: Vec<Option<(f32, f32)>>,
+    doubted: Vec<bool>,
+    origins: Vec<(u32, u32)>,
+}
+
+impl Checks {
+    fn new(points: &[Point], config: &CentroidConfig) -> anyhow::Result<Checks> {
+        let k = points.len();
+        Ok(Checks {
+            back: lk_trackers(points, config, Some(0))?,
+            prev: None,
+            verified: vec![None; k],
+            last_good: vec![None; k],
+            doubted: vec![false; k],
+            origins: Vec::new(),
+        })
+    }
+
+    /// Target `t`'s (point `p`'s) position and evidence in this frame from its checked result
+    /// (lost when its template was refused, or a check took the position away), kept for the
+    /// next frame's checks.
+    fn take(
+        &mut self,
+        t: usize,
+        p: &Point,
+        refused: Option<Flags>,
+        (r, e): &(firmware_core::lk::LkResult, Evidence),
+    ) -> (Centroid, Evidence) {
+        let (c, e) = match refused {
+            Some(why) => (lost_because(why), Evidence::default()),
+            None if e.doubt.is_some() => (lost(), *e),
+            None => (lk_centroid(p, r), *e),
+        };
+        self.doubted[t] = e.doubt.is_some();
+        self.verified[t] = match (c.position(), e.doubt) {
+            (Some(_), None) => r.displacement(),
+            _ => None,
+        };
+        self.last_good[t] = self.verified[t].or(self.last_good[t]);
+        (c, e)
+    }
+
+    /// Result `r` of target `t` in `frame`, with its evidence ([`forward_backward_check`]).
+    fn check(
+        &mut self,
+        frame: &GreyFrame,
+        t: usize,
+        r: firmware_core::lk::LkResult,
+    ) -> anyhow::Result<(firmware_core::lk::LkResult, Evidence)> {
+        let e = forward_backward_check(
+            (frame, self.prev.as_ref()),
+            &mut self.back[t],
+            (&r, self.verified[t]),
+            self.origins[t],
+        )?;
+        Ok((r, e))
+    }
+}
+
+/// The state of one frame's Lucas-Kanade: per target its result and its evidence.
+type Checked = Vec<(firmware_core::lk::LkResult, Evidence)>;
+
+/// One frame of LK for every target: alone with its own prediction and search (from its last
+/// verified displacement when its previous position was taken away), or, in a group, first
+/// from its own prediction without a search. Every position is checked forward-backward
+/// against the previous frame (`prev`; [`forward_backward_check`]). When a group member does
+/// not settle, or fails the check, the group's shared offset from where each member was
+/// ([`shared_offset`] over the members' search range) is the start of every such member, with
+/// a search of a quarter of its window around it (fine differences between the members'
+/// motions; well short of a neighbouring look-alike), and the check runs again. The shared
+/// offset is sought within half the members' larger window, the range doubled while its best
+/// is below a mean ZNCC of 0.5 or on its edge, up to the frame's size (whatever
+/// `--search-px`, which is each target's own search); a best mean ZNCC below 0.5 there leaves
+/// those members lost.
 fn track_frame_lk(
     frame: &GreyFrame,
-    trackers: &mut [Box<HostLk>],
+    (trackers, checks): (&mut [Box<HostLk>], &mut Checks),
     refused: &[Option<Flags>],
     (groups, templates): (&[Vec<usize>], &[BlockTemplate]),
     search_cap: Option<&[u16]>,
-) -> anyhow::Result<Vec<firmware_core::lk::LkResult>> {
+) -> anyhow::Result<Checked> {
     let k = trackers.len();
     let in_group = |t: usize| groups.iter().any(|m| m.contains(&t));
-    let before: Vec<(f32, f32)> = trackers.iter().map(|t| t.displacement()).collect();
     let mut results = Vec::with_capacity(k);
     with_frame(frame, |f| {
         for (t, tracker) in trackers.iter_mut().enumerate() {
@@ -712,54 +796,150 @@ fn track_frame_lk(
                 (false, Some(&cap)) => own.min(cap),
                 (false, None) => own,
             };
+            let start = if checks.doubted[t] {
+                checks.last_good[t]
+            } else {
+                None
+            };
             results.push(match &f {
-                AnyFrame::U8(f) => tracker.track_from(f, None, search),
-                AnyFrame::U16(f) => tracker.track_from(f, None, search),
+                AnyFrame::U8(f) => tracker.track_from(f, start, search),
+                AnyFrame::U16(f) => tracker.track_from(f, start, search),
             });
         }
     })?;
+    let mut checked: Checked = Vec::with_capacity(k);
+    for (t, r) in results.into_iter().enumerate() {
+        checked.push(checks.check(frame, t, r)?);
+    }
     let mut integral: Option<Integral> = None;
     for members in groups {
         let failed: Vec<usize> = members
             .iter()
             .copied()
-            .filter(|&t| refused[t].is_none() && results[t].displacement().is_none())
+            .filter(|&t| {
+                let (r, e) = &checked[t];
+                refused[t].is_none() && (r.displacement().is_none() || e.doubt.is_some())
+            })
             .collect();
         if failed.is_empty() {
             continue;
         }
         let integral = integral.get_or_insert_with(|| Integral::of(frame));
-        let list: Vec<(&BlockTemplate, (i64, i64))> = members
-            .iter()
-            .filter(|&&t| refused[t].is_none())
-            .filter_map(|&t| {
-                let (dx, dy) = before[t];
-                templates
-                    .get(t)
-                    .map(|tp| (tp, (dx.round() as i64, dy.round() as i64)))
-            })
-            .collect();
-        let start = members
-            .iter()
-            .map(|&t| i64::from(trackers[t].config().width.max(trackers[t].config().height) / 2))
-            .max()
-            .unwrap_or(0);
-        let found = group_offset(integral, &list, start, frame.dimensions());
-        let Some(d) = found else {
-            continue;
-        };
-        with_frame(frame, |f| {
-            for &t in &failed {
-                let local = trackers[t].config().width.max(trackers[t].config().height) / 4;
-                let start = Some((before[t].0 + d.0 as f32, before[t].1 + d.1 as f32));
-                results[t] = match &f {
-                    AnyFrame::U8(f) => trackers[t].track_from(f, start, local),
-                    AnyFrame::U16(f) => trackers[t].track_from(f, start, local),
-                };
-            }
-        })?;
+        let again = recover(
+            frame,
+            integral,
+            trackers,
+            checks,
+            (members, &failed),
+            (refused, templates),
+        )?;
+        for (&t, r) in failed.iter().zip(again) {
+            checked[t] = checks.check(frame, t, r)?;
+        }
     }
-    Ok(results)
+    Ok(checked)
+}
+
+/// The members of a group (`members`) that did not settle or failed a check (`failed`), tracked
+/// again from the group's shared offset since where each member was last verified, with a
+/// search of a quarter of its window (none when no shared offset is found: their results stay).
+fn recover(
+    frame: &GreyFrame,
+    integral: &Integral,
+    trackers: &mut [Box<HostLk>],
+    checks: &Checks,
+    (members, failed): (&[usize], &[usize]),
+    (refused, templates): (&[Option<Flags>], &[BlockTemplate]),
+) -> anyhow::Result<Vec<firmware_core::lk::LkResult>> {
+    let before = |t: usize| checks.last_good[t].unwrap_or_else(|| trackers[t].displacement());
+    let list: Vec<(&BlockTemplate, (i64, i64))> = members
+        .iter()
+        .filter(|&&t| refused[t].is_none())
+        .filter_map(|&t| {
+            let (dx, dy) = before(t);
+            templates
+                .get(t)
+                .map(|tp| (tp, (dx.round() as i64, dy.round() as i64)))
+        })
+        .collect();
+    let start = members
+        .iter()
+        .map(|&t| i64::from(trackers[t].config().width.max(trackers[t].config().height) / 2))
+        .max()
+        .unwrap_or(0);
+    let Some(d) = group_offset(integral, &list, start, frame.dimensions()) else {
+        return Ok(Vec::new());
+    };
+    let starts: Vec<(f32, f32)> = failed
+        .iter()
+        .map(|&t| (before(t).0 + d.0 as f32, before(t).1 + d.1 as f32))
+        .collect();
+    with_frame(frame, |f| {
+        failed
+            .iter()
+            .zip(starts)
+            .map(|(&t, start)| {
+                let local = trackers[t].config().width.max(trackers[t].config().height) / 4;
+                match &f {
+                    AnyFrame::U8(f) => trackers[t].track_from(f, Some(start), local),
+                    AnyFrame::U16(f) => trackers[t].track_from(f, Some(start), local),
+                }
+            })
+            .collect()
+    })
+}
+
+/// A result's evidence: its score, and the forward-backward check against the previous frame
+/// `prev` when the target was verified there at `before` (its displacement): the window at the
+/// result's position, taken from `frame` by `back`, is tracked into `prev` from where a
+/// consistent track puts it (no search); a disagreement above [`FB_BOUND_PX`], or no match
+/// there, takes the position away. A window at the frame's edge (no template) is no evidence
+/// either way. Target `t` (0-based) names it in errors.
+fn forward_backward_check(
+    (frame, prev): (&GreyFrame, Option<&GreyFrame>),
+    back: &mut HostLk,
+    (r, before): (&firmware_core::lk::LkResult, Option<(f32, f32)>),
+    origin: (u32, u32),
+) -> anyhow::Result<Evidence> {
+    let mut e = Evidence {
+        score: r.displacement().map(|_| r.score),
+        ..Default::default()
+    };
+    let (Some(now), Some(before), Some(prev)) = (r.displacement(), before, prev) else {
+        return Ok(e);
+    };
+    // the window's top-left pixel now: its first-frame origin moved by the whole pixels of the
+    // displacement; displacements from there are the target's own (the fraction left over
+    // moves with it), so a consistent track finds it at `before - now`
+    let x0 = i64::from(origin.0) + now.0.round() as i64;
+    let y0 = i64::from(origin.1) + now.1.round() as i64;
+    let (Ok(x0), Ok(y0)) = (i32::try_from(x0), i32::try_from(y0)) else {
+        return Ok(e);
+    };
+    let taken = with_frame(frame, |f| match f {
+        AnyFrame::U8(f) => back.set_template(&f, x0, y0),
+        AnyFrame::U16(f) => back.set_template(&f, x0, y0),
+    })?;
+    if taken.is_err() {
+        return Ok(e);
+    }
+    let start = (before.0 - now.0, before.1 - now.1);
+    let b = with_frame(prev, |f| match f {
+        AnyFrame::U8(f) => back.track_from(&f, Some(start), 0),
+        AnyFrame::U16(f) => back.track_from(&f, Some(start), 0),
+    })?;
+    match b.displacement() {
+        Some(d) => {
+            let fb = forward_backward(now, before, d);
+            e.fb_px = Some(fb);
+            if fb > FB_BOUND_PX {
+                e.doubt = Some(Doubt::ForwardBackward);
+            }
+        }
+        None if b.flags.contains(Flags::BORDER) => {}
+        None => e.doubt = Some(Doubt::ForwardBackward),
+    }
+    Ok(e)
 }
 
 /// A group's shared offset since the last frame: the search starts at half the members'
@@ -818,6 +998,7 @@ fn empty_tracks(points: &[Point]) -> Tracks {
         first: points.iter().map(|p| p.xy).collect(),
         refused: vec![0; k],
         depth: Default::default(),
+        evidence: Vec::new(),
     }
 }
 
@@ -940,6 +1121,19 @@ pub fn windows_report(w: &PointsInfo, tracks: &crate::tracks::Tracks) -> String 
             "  {}",
             g.describe(&(1..=w.sizes.len()).collect::<Vec<_>>())
         );
+    }
+    if !tracks.evidence.is_empty() {
+        let _ = writeln!(
+            s,
+            "  every position checked: tracked back into the frame before (forward-backward, \
+             within {} px), its score against the target's own over the record, its offset \
+             from its group's shared motion; positions the checks take away are lost frames",
+            crate::verify::FB_BOUND_PX
+        );
+        let names: Vec<usize> = (1..=w.sizes.len()).collect();
+        for line in crate::verify::describe(tracks, &names) {
+            let _ = writeln!(s, "  {line}");
+        }
     }
     for warning in &w.warnings {
         let _ = writeln!(s, "WARNING: {warning}");

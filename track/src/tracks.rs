@@ -31,6 +31,9 @@ pub struct Tracks {
     pub refused: Vec<usize>,
     /// The frames' bit depth and largest value.
     pub depth: vibcam_readers::frames::FrameDepth,
+    /// `evidence[t][k]`: what supports target `t`'s position in frame `k`
+    /// (`verify`); empty for a tracker that gathers none (the centroids).
+    pub evidence: Vec<Vec<vibcam_common::evidence::Evidence>>,
 }
 
 /// Pixel counts of a target's accepted detections this many frames back are its reference.
@@ -149,6 +152,7 @@ pub fn track(
         first: Vec::new(),
         refused: vec![0; k],
         depth: Default::default(),
+        evidence: Vec::new(),
     };
     let mut history = vec![History::default(); k];
     let mut last: Vec<(f64, f64)> = Vec::new();

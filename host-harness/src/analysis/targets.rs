@@ -472,6 +472,7 @@ pub fn track_rows<'a>(
             mm: Some(&d.mm),
             lost: Some(&d.lost),
             raw: raw.map(|r| r.centroids[t].as_slice()),
+            evidence: tracks.evidence.get(t).map(Vec::as_slice),
         })
         .collect()
 }

@@ -178,6 +178,7 @@ pub fn outputs(
             mm: m.as_ref().map(|d| d.0.as_slice()),
             lost: m.as_ref().map(|d| d.1.as_slice()),
             raw: viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
+            evidence: tracks.evidence.get(t).map(Vec::as_slice),
         })
         .collect();
     let start_s = crate::frames::FrameRange::start_s(req.frame_range, req.fps);

@@ -103,6 +103,7 @@ pub fn displacement_csv(
         mm: Some(mm),
         lost: Some(lost),
         raw: None,
+        evidence: None,
     };
     tracks_displacement_csv(&[track], frame_rate_hz, time_offset_s)
 }
@@ -177,6 +178,8 @@ pub struct Track<'a> {
     pub lost: Option<&'a [bool]>,
     /// The centroid as measured, when `centroids` has the camera's motion removed.
     pub raw: Option<&'a [Centroid]>,
+    /// Per frame, what supports the position (a tracker that gathers evidence: Lucas-Kanade).
+    pub evidence: Option<&'a [vibcam_common::evidence::Evidence]>,
 }
 
 /// `displacement.csv` of `analyze` (one target or several) and `track`:
@@ -185,15 +188,24 @@ pub struct Track<'a> {
 /// frame, empty where the target was lost; `flags` the firmware-core flag byte; `disp_mm` empty
 /// where it was not computed; `lost` 0 or 1. When the camera's motion was removed (`raw`
 /// given), `cx`, `cy` are the compensated position and `cx_raw,cy_raw` end each row with the
-/// position as measured.
+/// position as measured. When a tracker gave evidence, `score,fb_px,check` end each row: the
+/// match score against the first frame's template, the forward-backward disagreement (px) and
+/// the check that took the position away (`forward-backward`, `score`, `group`; empty: none),
+/// each empty where there is none.
 pub fn tracks_displacement_csv(
     tracks: &[Track<'_>],
     frame_rate_hz: f64,
     time_offset_s: f64,
 ) -> Vec<u8> {
     let raw = tracks.iter().any(|t| t.raw.is_some());
+    let evidence = tracks.iter().any(|t| t.evidence.is_some());
     let mut s = String::from("frame,t_s,target,cx,cy,pixels,flags,disp_mm,lost");
-    s.push_str(if raw { ",cx_raw,cy_raw\n" } else { "\n" });
+    s.push_str(if raw { ",cx_raw,cy_raw" } else { "" });
+    s.push_str(if evidence {
+        ",score,fb_px,check\n"
+    } else {
+        "\n"
+    });
     let frames = tracks.first().map_or(0, |t| t.centroids.len());
     for k in 0..frames {
         let t_s = time_offset_s + k as f64 / frame_rate_hz;
@@ -215,6 +227,10 @@ pub fn tracks_displacement_csv(
                     .raw
                     .map_or((String::new(), String::new()), |r| position(&r[k]));
                 let _ = write!(s, ",{x},{y}");
+            }
+            if evidence {
+                let cells = vibcam_common::evidence::cells(tr.evidence.and_then(|e| e.get(k)));
+                let _ = write!(s, ",{cells}");
             }
             s.push('\n');
         }

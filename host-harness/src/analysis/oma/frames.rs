@@ -192,6 +192,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
             mm: m.as_deref().filter(|_| req.scaled),
             lost: Some(l),
             raw: c.viewed.raw.as_ref().map(|r| r.centroids[t].as_slice()),
+            evidence: c.tracks.evidence.get(t).map(Vec::as_slice),
         })
         .collect();
     let displacement = export::displacement_csv(
