@@ -525,6 +525,17 @@ fn lk_trackers(
     config: &CentroidConfig,
     search_px: Option<u16>,
 ) -> anyhow::Result<Vec<Box<HostLk>>> {
+    lk_trackers_sampled(points, config, search_px, None)
+}
+
+/// [`lk_trackers`] sampling between pixels by `interpolation` (`None`: the default, the
+/// template's spline).
+fn lk_trackers_sampled(
+    points: &[Point],
+    config: &CentroidConfig,
+    search_px: Option<u16>,
+    interpolation: Option<firmware_core::lk::Interpolation>,
+) -> anyhow::Result<Vec<Box<HostLk>>> {
     use firmware_core::lk::LkConfig;
     points
         .iter()
@@ -536,6 +547,9 @@ fn lk_trackers(
             let mut cfg = LkConfig::new(w, h);
             if let Some(r) = search_px {
                 cfg.search = r;
+            }
+            if let Some(i) = interpolation {
+                cfg.interpolation = i;
             }
             cfg.saturation = config.saturation.unwrap_or(0);
             let t = HostLk::try_new(cfg).map_err(|e| {
@@ -713,7 +727,15 @@ impl Checks {
     fn new(points: &[Point], config: &CentroidConfig) -> anyhow::Result<Checks> {
         let k = points.len();
         Ok(Checks {
-            back: lk_trackers(points, config, Some(0))?,
+            // a template a frame: Keys' cubic convolution needs none of the spline's per-template
+            // moments (most of a template's cost), and its bias of a few hundredths of a pixel
+            // is far below the check's bound
+            back: lk_trackers_sampled(
+                points,
+                config,
+                Some(0),
+                Some(firmware_core::lk::Interpolation::Bicubic),
+            )?,
             prev: None,
             verified: vec![None; k],
             last_good: vec![None; k],
