@@ -605,9 +605,19 @@ fn stray_files_are_named_and_a_point_lost_in_every_frame_is_an_error() {
         args.extend_from_slice(extra);
         harness(&args)
     };
-    let o = track(&["--points", points.to_str().unwrap()]);
+    let p = points.to_str().unwrap();
+    // a threshold names what tracks a window it cannot separate
+    let o = track(&["--points", p, "--tracker", "blob"]);
     assert_exit_2(&o, "target(s) 2 of 2 lost in every one of the 30 frames");
     assert!(stderr(&o).contains("--tracker lk"), "{}", stderr(&o));
+    // the default hands the window to Lucas-Kanade, which finds it flat: named, exit 2
+    let o = track(&["--points", p]);
+    assert_exit_2(&o, "target(s) 2 of 2 lost in every one of the 30 frames");
+    assert!(
+        stderr(&o).contains("(flat)") && stderr(&o).contains("Lucas-Kanade"),
+        "{}",
+        stderr(&o)
+    );
     for stray in ["notes.txt", "Thumbs.db", "frame_3 (copy).png"] {
         assert!(
             stderr(&o).contains(stray),

@@ -434,9 +434,24 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
     // a threshold below the background fills the window: the target is "at its edge", as
     // `centroid` says, not "no pixel above the threshold"; and nothing measured is exit 2,
     // for `track` as for `analyze`
-    let o = track_into(&dir, &out, &["--points", p, "--threshold", "10"]);
+    let o = track_into(
+        &dir,
+        &out,
+        &["--points", p, "--threshold", "10", "--tracker", "blob"],
+    );
     assert_exit_2(&o, "at the edge of its window");
     assert!(!stderr(&o).contains("no pixel above"), "{}", stderr(&o));
+    // the default tracker sees the filled window and follows it by Lucas-Kanade, saying why
+    assert_ok(&track_into(
+        &dir,
+        &out,
+        &["--points", p, "--threshold", "10"],
+    ));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("tracker (auto): Lucas-Kanade:") && report.contains("fills it"),
+        "{report}"
+    );
     let analyze = |extra: &[&str]| {
         let out = tmp.path().join("a");
         let mut args = words("analyze --frames {} --fps 60", &[dir.to_str().unwrap()]);
@@ -445,7 +460,7 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
         harness(&args)
     };
     assert_exit_2(
-        &analyze(&["--threshold", "10"]),
+        &analyze(&["--threshold", "10", "--tracker", "blob"]),
         "at the edge of its window",
     );
     let c = harness(&words(
@@ -462,14 +477,14 @@ fn windows_filled_above_the_threshold_say_so_and_file_thresholds_need_no_flag() 
         report.contains("threshold 100, 0 of 30 frames lost"),
         "{report}"
     );
-    // a row without one, and no flag: named
+    // a row without one, and no flag: named (the default tracker takes Otsu's there)
     std::fs::write(
         &points,
         "target,x,y,w,h,threshold\n1,32,24,15,15,100\n2,10,10,7,7,\n",
     )
     .unwrap();
     assert_exit_2(
-        &track_into(&dir, &out, &["--points", p]),
+        &track_into(&dir, &out, &["--points", p, "--tracker", "blob"]),
         "target 2: no threshold",
     );
     // Lucas-Kanade has no threshold, and a window does not take a blob's gate

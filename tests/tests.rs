@@ -190,6 +190,7 @@ const ROOMS: [(&str, &[&[&str]]); 6] = [
         &[
             &["tracks"],
             &["verify"],
+            &["choose"],
             &["shared_motion"],
             &["points"],
             &["follow"],

@@ -271,14 +271,21 @@ fn lucas_kanade_flags_are_checked() {
         &dir.join("frames"),
         &dir.join("p.csv"),
         &dir.join("o2"),
-        &["--threshold", "100", "--search-px", "9"],
+        &[
+            "--threshold",
+            "100",
+            "--search-px",
+            "9",
+            "--tracker",
+            "blob",
+        ],
     );
     assert_exit_2(&o, "--search-px: the coarse search of --tracker lk");
     let o = track(
         &dir.join("frames"),
         &dir.join("p.csv"),
         &dir.join("o3"),
-        &[],
+        &["--tracker", "blob"],
     );
     assert_exit_2(&o, "--threshold T");
 }

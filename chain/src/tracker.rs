@@ -16,6 +16,11 @@ pub enum TrackerKind {
     Weighted,
     /// Lucas-Kanade: the displacement of the first frame's window around the target.
     Lk,
+    /// Chosen for the user: with chosen points, per target the blob centroid where a threshold
+    /// separates the target in its first-frame window, Lucas-Kanade otherwise; without points
+    /// (one target, or the K blobs of the frame), the blob centroid. The default of `track`,
+    /// `analyze` and Python.
+    Auto,
 }
 
 impl TrackerKind {
@@ -25,6 +30,16 @@ impl TrackerKind {
             TrackerKind::Blob => "blob",
             TrackerKind::Weighted => "weighted",
             TrackerKind::Lk => "lk",
+            TrackerKind::Auto => "auto",
+        }
+    }
+
+    /// The tracker of targets that are not chosen points (the one target of the frame, the K
+    /// blobs, a study's simulated disk): `auto` is the blob centroid there.
+    pub fn without_points(self) -> TrackerKind {
+        match self {
+            TrackerKind::Auto => TrackerKind::Blob,
+            t => t,
         }
     }
 
@@ -33,7 +48,9 @@ impl TrackerKind {
     pub fn mode(self) -> firmware_core::centroid::Mode {
         match self {
             TrackerKind::Weighted => firmware_core::centroid::Mode::Weighted,
-            TrackerKind::Blob | TrackerKind::Lk => firmware_core::centroid::Mode::Binary,
+            TrackerKind::Blob | TrackerKind::Lk | TrackerKind::Auto => {
+                firmware_core::centroid::Mode::Binary
+            }
         }
     }
 }

@@ -209,11 +209,12 @@ impl Frames {
 /// The tracker named in Python.
 fn tracker_of(tracker: &str) -> PyResult<Tracker> {
     match tracker.to_ascii_lowercase().as_str() {
+        "auto" => Ok(Tracker::Auto),
         "binary" | "blob" => Ok(Tracker::Blob),
         "weighted" => Ok(Tracker::Weighted),
         "lk" => Ok(Tracker::Lk),
         _ => Err(bad(format!(
-            "tracker `{tracker}`: one of binary (alias blob), weighted, lk"
+            "tracker `{tracker}`: one of auto, binary (alias blob), weighted, lk"
         ))),
     }
 }

@@ -178,7 +178,9 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
     t, auto = _threshold(threshold)
     pts, pfile = _points(points)
     if not isinstance(tracker, str):
-        raise InputError(f"tracker = {tracker!r}: one of 'binary' (alias 'blob'), 'weighted', 'lk'")
+        raise InputError(
+            f"tracker = {tracker!r}: one of 'auto', 'binary' (alias 'blob'), 'weighted', 'lk'"
+        )
     return {
         "fps": _number("fps", fps, positive=True, optional=True),
         "retime": bool(retime),
@@ -324,7 +326,7 @@ def track(
     points: _Any = None,
     *,
     targets: _Optional[int] = None,
-    tracker: str = "binary",
+    tracker: str = "auto",
     threshold: _Union[int, str, None] = None,
     fps: _Optional[float] = None,
     retime: bool = False,
@@ -347,8 +349,10 @@ def track(
     (``(N, H, W, 3|4)``: colour). Targets: ``points`` (a list of ``(x, y, w, h[, threshold[,
     group]])`` windows, or a points CSV file ``target,x,y,w,h[,threshold][,group]``), or
     ``targets=K`` (the K blobs of the first frame, numbered left to right), or neither (the one
-    target of the frame or ``roi``). ``tracker``: ``"binary"``/``"blob"``, ``"weighted"``, or
-    ``"lk"`` (Lucas-Kanade; with points, no threshold). ``threshold``: a grey level, or
+    target of the frame or ``roi``). ``tracker``: ``"auto"`` (the default: with points, per target
+    the blob centroid where a threshold separates it, Lucas-Kanade otherwise, said in
+    ``Tracks.report``; without points the binary centroid), ``"binary"``/``"blob"``,
+    ``"weighted"``, or ``"lk"`` (Lucas-Kanade; with points, no threshold). ``threshold``: a grey level, or
     ``"auto"`` with points (Otsu's of each window). ``search_px``: with ``lk``, the largest
     motion between frames to catch. With ``return_flags``: a :class:`Tracks`.
 
@@ -559,7 +563,7 @@ def analyze(
     *,
     targets: _Optional[int] = None,
     fps: _Optional[float] = None,
-    tracker: str = "binary",
+    tracker: str = "auto",
     threshold: _Union[int, str, None] = None,
     retime: bool = False,
     search_px: _Optional[int] = None,

@@ -6,6 +6,8 @@
 //! - [`points`]: chosen points, a window each: firmware-core's centroid at the window's
 //!   threshold (Otsu) or its Lucas-Kanade tracker; groups from the file or found from the first
 //!   frames' motion; look-alikes named;
+//! - [`choose`]: `--tracker auto`, per target the blob centroid where a threshold separates
+//!   it, Lucas-Kanade otherwise, with the reason;
 //! - [`shared_motion`]: a group's shared offset (block templates, integral images);
 //! - [`follow`]: the one tracking dispatcher ([`follow::Targets`]: the whole frame, K blobs or
 //!   chosen points);
@@ -16,6 +18,7 @@
 //!   between two points, each target's size, the plane's homography).
 
 pub mod camera_motion;
+pub mod choose;
 pub mod follow;
 pub mod points;
 pub mod shared_motion;

@@ -249,6 +249,14 @@ pub enum PointTracker {
         /// `--search-px`.
         search_px: Option<u16>,
     },
+    /// Per target, the centroid where its first-frame window holds a blob at its threshold,
+    /// Lucas-Kanade otherwise ([`crate::choose`]).
+    Auto {
+        /// The blob's threshold (the file's `threshold` column overrides it per target).
+        rule: ThresholdRule,
+        /// `--search-px` of the Lucas-Kanade targets.
+        search_px: Option<u16>,
+    },
 }
 
 use vibcam_chain::lk::{HostLk, LK_PIXELS, LK_ROW};
@@ -256,8 +264,11 @@ use vibcam_chain::lk::{HostLk, LK_PIXELS, LK_ROW};
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointsInfo {
-    /// Each target's threshold, as used (empty with Lucas-Kanade, which has none).
-    pub thresholds: Vec<u16>,
+    /// Each target's threshold, as used (`None` for a target Lucas-Kanade followed: it has
+    /// none; empty when Lucas-Kanade followed every target).
+    pub thresholds: Vec<Option<u16>>,
+    /// With `--tracker auto`: each target's tracker and why (empty when the tracker was named).
+    pub chosen: Vec<String>,
     /// Each target's window size, px.
     pub sizes: Vec<(u32, u32)>,
     /// The groups of targets that moved together (0-based target indices; Lucas-Kanade), and
@@ -400,6 +411,9 @@ pub fn track_points(
         PointTracker::Lk { search_px } => {
             return track_points_lk(source, fps, points, config, search_px)
         }
+        PointTracker::Auto { rule, search_px } => {
+            return track_points_auto(source, fps, points, config, (rule, search_px))
+        }
     };
     let mut tracks = empty_tracks(points);
     let mut last: Vec<(f64, f64)> = tracks.first.clone();
@@ -430,10 +444,11 @@ pub fn track_points(
     Ok((
         tracks,
         PointsInfo {
-            thresholds,
+            thresholds: thresholds.into_iter().map(Some).collect(),
             sizes: points.iter().map(|p| p.size).collect(),
             groups: None,
             warnings: Vec::new(),
+            chosen: Vec::new(),
         },
     ))
 }
@@ -515,6 +530,110 @@ pub fn track_points_lk(
             sizes: points.iter().map(|p| p.size).collect(),
             groups: (k > 1).then_some(grouping),
             warnings,
+            chosen: Vec::new(),
+        },
+    ))
+}
+
+/// Per target, the tracker its first-frame window asks for (at its threshold in `levels`): the
+/// reasons in words, and the targets the blob centroid follows.
+fn choose_trackers(
+    points: &[Point],
+    frame: &GreyFrame,
+    levels: &[u16],
+    label: &str,
+) -> anyhow::Result<(Vec<String>, Vec<usize>)> {
+    let mut chosen = Vec::with_capacity(points.len());
+    let mut blob = Vec::new();
+    for (t, p) in points.iter().enumerate() {
+        let roi = first_window(p, frame.dimensions(), label)?;
+        chosen.push(match crate::choose::separates(frame, roi, levels[t]) {
+            Ok(why) => {
+                blob.push(t);
+                format!("blob centroid: {why}")
+            }
+            Err(why) => format!("Lucas-Kanade: {why}"),
+        });
+    }
+    Ok((chosen, blob))
+}
+
+/// [`track_points`] with `--tracker auto`: each target's first-frame window decides
+/// ([`crate::choose::separates`]); the blob targets are followed by the centroid, and those
+/// whose blob does not hold through the record ([`crate::choose::blob_holds`]) join the rest,
+/// followed by Lucas-Kanade with its checks and groups. `chosen` says per target which and why.
+fn track_points_auto(
+    source: &FrameSource,
+    fps: f64,
+    points: &[Point],
+    config: &CentroidConfig,
+    (rule, search_px): (ThresholdRule, Option<u16>),
+) -> anyhow::Result<(Tracks, PointsInfo)> {
+    let k = points.len();
+    let (label, frame) = source
+        .frame_at(fps, 0)?
+        .ok_or_else(|| bad_input("the recording has no frame to choose the trackers in"))?;
+    let levels = first_windows(points, &frame, rule, &label)?;
+    let (mut chosen, blob) = choose_trackers(points, &frame, &levels, &label)?;
+    let mut tracks = empty_tracks(points);
+    tracks.evidence = vec![Vec::new(); k];
+    let mut thresholds = vec![None; k];
+    let mut by_lk: Vec<usize> = (0..k).filter(|t| !blob.contains(t)).collect();
+    if !blob.is_empty() {
+        let sub: Vec<Point> = blob
+            .iter()
+            .map(|&t| Point {
+                threshold: Some(levels[t]),
+                ..points[t].clone()
+            })
+            .collect();
+        let centroid = PointTracker::Centroid(ThresholdRule::FromFile);
+        let (bt, _) = track_points(source, fps, &sub, config, centroid)?;
+        for (i, &t) in blob.iter().enumerate() {
+            match crate::choose::blob_holds(&bt.centroids[i]) {
+                Ok(()) => {
+                    tracks.evidence[t] = vec![Evidence::default(); bt.centroids[i].len()];
+                    tracks.centroids[t] = bt.centroids[i].clone();
+                    tracks.first[t] = bt.first[i];
+                    thresholds[t] = Some(levels[t]);
+                }
+                Err(e) => {
+                    chosen[t] = format!("Lucas-Kanade: the blob at threshold {} {e}", levels[t]);
+                    by_lk.push(t);
+                }
+            }
+        }
+        tracks.depth = bt.depth;
+    }
+    by_lk.sort_unstable();
+    let (mut groups, mut warnings) = (None, Vec::new());
+    if !by_lk.is_empty() {
+        let sub: Vec<Point> = by_lk.iter().map(|&t| points[t].clone()).collect();
+        let (lt, li) = track_points_lk(source, fps, &sub, config, search_px)?;
+        for (i, &t) in by_lk.iter().enumerate() {
+            tracks.centroids[t] = lt.centroids[i].clone();
+            tracks.evidence[t] = lt.evidence[i].clone();
+            tracks.refused[t] = lt.refused[i];
+        }
+        tracks.depth = lt.depth;
+        groups = li.groups.map(|g| Grouping {
+            groups: g
+                .groups
+                .iter()
+                .map(|grp| grp.iter().map(|&i| by_lk[i]).collect())
+                .collect(),
+            found_in: g.found_in,
+        });
+        warnings = li.warnings;
+    }
+    Ok((
+        tracks,
+        PointsInfo {
+            thresholds,
+            sizes: points.iter().map(|p| p.size).collect(),
+            groups,
+            warnings,
+            chosen,
         },
     ))
 }
@@ -1124,7 +1243,7 @@ pub fn windows_report(w: &PointsInfo, tracks: &crate::tracks::Tracks) -> String 
     let mut s = String::from("\npoints (each target in its own window):\n");
     for (t, (size, c)) in w.sizes.iter().zip(&tracks.centroids).enumerate() {
         let lost = c.iter().filter(|c| c.position().is_none()).count();
-        let how = match w.thresholds.get(t) {
+        let how = match w.thresholds.get(t).copied().flatten() {
             Some(th) => format!("threshold {th}"),
             None => "Lucas-Kanade".to_string(),
         };
@@ -1136,6 +1255,9 @@ pub fn windows_report(w: &PointsInfo, tracks: &crate::tracks::Tracks) -> String 
             size.1,
             c.len()
         );
+        if let Some(why) = w.chosen.get(t) {
+            let _ = writeln!(s, "    tracker (auto): {why}");
+        }
     }
     if let Some(g) = &w.groups {
         let _ = writeln!(
@@ -1144,7 +1266,9 @@ pub fn windows_report(w: &PointsInfo, tracks: &crate::tracks::Tracks) -> String 
             g.describe(&(1..=w.sizes.len()).collect::<Vec<_>>())
         );
     }
-    if !tracks.evidence.is_empty() {
+    // the checks are Lucas-Kanade's: said when it followed a target
+    let lk_followed = w.thresholds.is_empty() || w.thresholds.iter().any(Option::is_none);
+    if !tracks.evidence.is_empty() && lk_followed {
         let _ = writeln!(
             s,
             "  every position checked: tracked back into the frame before (forward-backward, \

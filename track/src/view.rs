@@ -14,6 +14,7 @@ use firmware_core::centroid::{Centroid, CentroidConfig};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use vibcam_chain::displacement::{displacement_mm, Displacement, DisplacementSettings};
+use vibcam_common::evidence::Doubt;
 use vibcam_common::geometry::{fit, Homography, Model};
 use vibcam_readers::bad_input;
 use vibcam_readers::frames::FrameSource;
@@ -278,12 +279,16 @@ pub fn track_view(
     Ok(viewed)
 }
 
-/// A chosen point a threshold loses in every frame measured nothing: an error naming it, why
-/// (its frames' flags) and what tracks a point a threshold cannot separate, not a run that
-/// ends well with empty columns. (Lucas-Kanade flags each frame's loss and goes on: a window
-/// it cannot follow is named per frame in the report.)
+/// A chosen point a threshold or `--tracker auto` loses in every frame measured nothing: an
+/// error naming it, why (its frames' flags, the check that took its positions away) and what
+/// to do, not a run that ends well with empty columns.
 pub fn refuse_targets_never_seen(tracks: &Tracks, targets: &Targets) -> anyhow::Result<()> {
-    let Targets::Points(_, crate::points::PointTracker::Centroid(_)) = targets else {
+    // `--tracker lk`, named by the user, flags each frame's loss and goes on (the report
+    // names the target); a threshold, or the tracker chosen for the user, must not end well
+    // with nothing measured
+    let Targets::Points(_, tracker @ (PointTracker::Centroid(_) | PointTracker::Auto { .. })) =
+        targets
+    else {
         return Ok(());
     };
     let never: Vec<usize> = tracks
@@ -298,15 +303,41 @@ pub fn refuse_targets_never_seen(tracks: &Tracks, targets: &Targets) -> anyhow::
     };
     let frames = tracks.centroids[first].len();
     let names: Vec<String> = never.iter().map(|t| (t + 1).to_string()).collect();
+    let checks: Vec<&str> = tracks
+        .evidence
+        .get(first)
+        .map(|e| e.iter().filter_map(|e| e.doubt.map(Doubt::word)).collect())
+        .unwrap_or_default();
+    let why = if checks.is_empty() {
+        vibcam_chain::displacement::why_lost(&tracks.centroids[first])
+    } else {
+        let mut words = checks.clone();
+        words.sort_unstable();
+        words.dedup();
+        format!(
+            "{} position(s) taken away by the {} check(s)",
+            checks.len(),
+            words.join(", ")
+        )
+    };
+    let advice = match tracker {
+        PointTracker::Centroid(_) => {
+            "a threshold finds no single bright blob in such windows (a dot on a tag, a \
+             pattern, a dark target?): $tracker lk follows any texture, or give each window a \
+             threshold of its own"
+        }
+        _ => {
+            "Lucas-Kanade found no trustworthy match for the window (a flat or saturated \
+             window, one at the frame's edge, or a motion beyond $search_px): move the window \
+             onto the target's texture, widen $search_px, or leave the target out"
+        }
+    };
     Err(bad_input(format!(
         "target(s) {} of {} lost in every one of the {frames} frames: nothing is measured of \
-         them (target {}: {}); a threshold finds no single bright blob in such windows (a dot on \
-         a tag, a pattern, a dark target?): $tracker lk follows any texture, or give each \
-         window a threshold of its own",
+         them (target {}: {why}); {advice}",
         names.join(", "),
         tracks.centroids.len(),
         first + 1,
-        vibcam_chain::displacement::why_lost(&tracks.centroids[first])
     )))
 }
 

@@ -71,6 +71,11 @@ impl WelchArgs {
 /// Weighting of the pixels above the threshold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ModeArg {
+    /// Chosen for you (the default): with --points, per target the blob centroid where a
+    /// threshold separates the target in its first-frame window (a compact spot clearly
+    /// brighter than the rest, not filling the window), Lucas-Kanade otherwise, the report
+    /// saying which and why; without --points the binary centroid.
+    Auto,
     /// Weight 1 for every pixel with value > T (the paper's method; also `blob`).
     #[value(alias = "blob")]
     Binary,
@@ -85,7 +90,7 @@ impl ModeArg {
     /// The firmware's centroid mode (`lk` has none: binary stands in, unused).
     pub fn mode(self) -> Mode {
         match self {
-            ModeArg::Binary | ModeArg::Lk => Mode::Binary,
+            ModeArg::Auto | ModeArg::Binary | ModeArg::Lk => Mode::Binary,
             ModeArg::Weighted => Mode::Weighted,
         }
     }
@@ -97,13 +102,16 @@ pub struct CentroidArgs {
     /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
     /// frames a T of 255 or more selects nothing. With --points also `auto`: Otsu's threshold
     /// of each window in the first frame.
-    /// Needed except with `--tracker lk`.
+    /// Needed without --points; with them `--tracker auto` (the default) and `binary` take
+    /// Otsu's of each window when none is given (or the file's `threshold` column), and `lk`
+    /// uses none.
     #[arg(long, value_name = "T|auto", value_parser = parse_threshold)]
     pub threshold: Option<ThresholdArg>,
-    /// The tracker: pixel weighting of the centroid (`binary`, also called `blob`, or
-    /// `weighted`), or `lk` (Lucas-Kanade in `--points` windows, `track` and `analyze` only);
-    /// `--mode` is the same flag.
-    #[arg(long, alias = "tracker", value_enum, default_value_t = ModeArg::Binary)]
+    /// The tracker: `auto` (with --points each target's own choice of blob or Lucas-Kanade,
+    /// said in the report; without, the binary centroid), pixel weighting of the centroid
+    /// (`binary`, also called `blob`, or `weighted`), or `lk` (Lucas-Kanade in `--points`
+    /// windows, `track` and `analyze` only); `--mode` is the same flag.
+    #[arg(long, alias = "tracker", value_enum, default_value_t = ModeArg::Auto)]
     pub mode: ModeArg,
     /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
     /// the frame; W, H >= 1); coordinates stay those of the full frame. Must lie inside every
@@ -149,6 +157,7 @@ impl CentroidArgs {
                 ThresholdArg::Auto => Threshold::Auto,
             }),
             tracker: match self.mode {
+                ModeArg::Auto => Tracker::Auto,
                 ModeArg::Binary => Tracker::Blob,
                 ModeArg::Weighted => Tracker::Weighted,
                 ModeArg::Lk => Tracker::Lk,

@@ -52,7 +52,7 @@ impl Default for TrackingInput {
     fn default() -> Self {
         TrackingInput {
             threshold: None,
-            tracker: Tracker::Blob,
+            tracker: Tracker::Auto,
             roi: None,
             points: None,
             targets: None,
@@ -125,10 +125,12 @@ impl Tracking {
                 )));
             }
         }
-        if search_px.is_some() && (points.is_none() || tracker != Tracker::Lk) {
+        if search_px.is_some()
+            && (points.is_none() || !matches!(tracker, Tracker::Lk | Tracker::Auto))
+        {
             return Err(SpecError::setting(
-                "$search_px: the coarse search of $tracker lk with $points (a centroid window \
-                 re-centres itself on a partial target, about half a window per frame)",
+                "$search_px: the coarse search of $tracker lk (or auto) with $points (a centroid \
+                 window re-centres itself on a partial target, about half a window per frame)",
             ));
         }
         let centroid = centroid_config(threshold, tracker, roi, points.is_some())?;
@@ -140,19 +142,9 @@ impl Tracking {
             None => (None, None),
         };
         let targets = match (points, targets) {
-            (Some(points), _) => Targets::Points(
-                points,
-                match (tracker, threshold) {
-                    (Tracker::Lk, _) => PointTracker::Lk { search_px },
-                    (_, Some(Threshold::Level(t))) => {
-                        PointTracker::Centroid(ThresholdRule::Level(t))
-                    }
-                    (_, Some(Threshold::Auto)) => PointTracker::Centroid(ThresholdRule::Auto),
-                    // each window's own, from the file's `threshold` column (checked on the
-                    // first frame)
-                    (_, None) => PointTracker::Centroid(ThresholdRule::FromFile),
-                },
-            ),
+            (Some(points), _) => {
+                Targets::Points(points, point_tracker(tracker, threshold, search_px))
+            }
             (None, Some(k)) => Targets::Blobs(k, gate_px.unwrap_or(DEFAULT_GATE_PX)),
             (None, None) => Targets::Whole,
         };
@@ -165,9 +157,31 @@ impl Tracking {
     }
 
     /// Whether the tracker is the binary centroid (the exposure compensation is then an
-    /// approximation).
+    /// approximation): `blob`, or `auto` with targets that are not chosen points.
     pub fn binary(&self) -> bool {
-        self.tracker == Tracker::Blob
+        let points = matches!(self.targets, Targets::Points(..));
+        self.tracker == Tracker::Blob || (self.tracker == Tracker::Auto && !points)
+    }
+}
+
+/// How chosen points are followed, from the tracker and threshold given.
+fn point_tracker(
+    tracker: Tracker,
+    threshold: Option<Threshold>,
+    search_px: Option<u16>,
+) -> PointTracker {
+    let rule = match threshold {
+        Some(Threshold::Level(t)) => ThresholdRule::Level(t),
+        Some(Threshold::Auto) => ThresholdRule::Auto,
+        // each window's own, from the file's `threshold` column (checked on the first frame);
+        // `auto` takes Otsu's of each window where the file gives none
+        None if tracker == Tracker::Auto => ThresholdRule::Auto,
+        None => ThresholdRule::FromFile,
+    };
+    match tracker {
+        Tracker::Lk => PointTracker::Lk { search_px },
+        Tracker::Auto => PointTracker::Auto { rule, search_px },
+        Tracker::Blob | Tracker::Weighted => PointTracker::Centroid(rule),
     }
 }
 
@@ -234,7 +248,7 @@ pub fn centroid_config(
         mode: match tracker {
             Tracker::Weighted => Mode::Weighted,
             // Lucas-Kanade has no centroid: binary stands in, unused
-            Tracker::Blob | Tracker::Lk => Mode::Binary,
+            Tracker::Blob | Tracker::Lk | Tracker::Auto => Mode::Binary,
         },
         roi,
         saturation: None,
@@ -303,6 +317,7 @@ mod tests {
             (
                 TrackingInput {
                     threshold: Some(Threshold::Level(3)),
+                    tracker: Tracker::Blob,
                     search_px: Some(4),
                     points: Some(PointsInput::List(vec![point()])),
                     ..Default::default()

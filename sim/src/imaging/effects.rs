@@ -170,7 +170,7 @@ impl Measurement {
                     c.name()
                 )))
             }
-            (t, c) => t.or(c).unwrap_or_default(),
+            (t, c) => t.or(c).unwrap_or_default().without_points(),
         };
         let m = Measurement {
             tracker,

@@ -84,7 +84,7 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
     let tracks = viewed.tracks.clone();
     let (records, mm, lost) = records_of(req, &viewed)?;
     let n = records.channels[0].len();
-    let settings = settings(req, n)?;
+    let settings = settings(req, n, &viewed)?;
     let mut result = super::analyze(&records.channels, &settings)?;
     if let Some(sc) = &viewed.scales {
         let u: Vec<f64> = records
@@ -237,13 +237,22 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
 }
 
 /// The analysis settings of a record of `n` frames.
-fn settings(req: &FramesRequest, n: usize) -> anyhow::Result<OmaSettings> {
+fn settings(
+    req: &FramesRequest,
+    n: usize,
+    viewed: &crate::analysis::view::Viewed,
+) -> anyhow::Result<OmaSettings> {
     let mut s = super::segment_settings(req.fps, n, &req.welch, "the record of the frames")?;
     s.bands = req.bands.clone();
-    let lk = matches!(
-        req.targets,
-        Targets::Points(_, crate::analysis::points::PointTracker::Lk { .. })
-    );
+    // `auto`: Lucas-Kanade when it followed every target (no target kept a threshold)
+    let lk = match &req.targets {
+        Targets::Points(_, crate::analysis::points::PointTracker::Lk { .. }) => true,
+        Targets::Points(_, crate::analysis::points::PointTracker::Auto { .. }) => viewed
+            .windows
+            .as_ref()
+            .is_some_and(|w| w.thresholds.iter().all(Option::is_none)),
+        _ => false,
+    };
     s.source = match (lk, req.centroid.mode) {
         (true, _) => super::RecordSource::Linear("Lucas-Kanade"),
         (false, firmware_core::centroid::Mode::Weighted) => {
