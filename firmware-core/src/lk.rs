@@ -420,6 +420,19 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         self.take(frame, x0, y0)
     }
 
+    /// The template's gradient structure tensor `[sxx, sxy, syy]` (the Hessian of the fit,
+    /// summed over the window; zeros before a template): its eigenvectors are the directions
+    /// the window's texture measures, its eigenvalues how well.
+    pub fn structure(&self) -> [f32; 3] {
+        let [a, b, c] = self.h_inv;
+        let det = a * c - b * b;
+        if det > 0.0 && det.is_finite() {
+            [c / det, -b / det, a / det]
+        } else {
+            [0.0; 3]
+        }
+    }
+
     /// The displacement since the reference frame at the last result that was not lost.
     pub fn displacement(&self) -> (f32, f32) {
         (self.base.0 + self.p.0, self.base.1 + self.p.1)

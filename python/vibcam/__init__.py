@@ -258,14 +258,15 @@ class Centroid:
 def centroid(
     frame: _np.ndarray,
     threshold: int,
-    mode: str = "binary",
+    mode: str = "auto",
     roi: _Optional[_Sequence[int]] = None,
 ) -> Centroid:
     """The centroid of one frame by firmware-core (as ``host-harness centroid``).
 
     ``frame``: ``uint8``/``uint16`` array ``(H, W)`` (or ``(H, W, 3|4)`` colour: its BT.601
     luma); ``threshold``: grey level (pixels above it count); ``mode``: ``"binary"`` (alias
-    ``"blob"``: every pixel above weighs 1) or ``"weighted"`` (weights ``pixel - threshold``);
+    ``"blob"``: every pixel above weighs 1; ``"auto"``, the default, is binary for one frame) or
+    ``"weighted"`` (weights ``pixel - threshold``);
     ``roi``: ``(x, y, w, h)``.
     """
     a = _np.asarray(frame)

@@ -23,7 +23,7 @@
 
 use crate::shared_motion::{shared_offset, BlockTemplate, Integral};
 use crate::tracks::{lost, Tracks};
-use crate::verify::{forward_backward, Doubt, Evidence, FB_BOUND_PX};
+use crate::verify::{forward_backward_textured, Doubt, Evidence, FB_BOUND_PX};
 use firmware_core::centroid::{Centroid, CentroidConfig, Flags, Roi};
 use std::path::Path;
 use vibcam_readers::bad_input;
@@ -518,7 +518,8 @@ pub fn track_points_lk(
         Ok(())
     })?;
     crate::verify::verify_record(&mut tracks, &groups);
-    let warnings = alone_warning(points, &alike, &groups);
+    let mut warnings = alone_warning(points, &alike, &groups);
+    warnings.extend(aperture_warning(points, &trackers, &refused));
     let grouping = Grouping {
         groups,
         found_in: finding.map(|f| f.found_in.unwrap_or(0)),
@@ -803,6 +804,57 @@ fn lk_centroid(p: &Point, r: &firmware_core::lk::LkResult) -> Centroid {
     }
 }
 
+/// The least ratio of a window's weaker to stronger gradient energy (the eigenvalues of its
+/// structure tensor) for its position to be measured in both directions: below it the
+/// position along the edges is at least ten times less precise than across them, and
+/// wanders (the aperture).
+pub const APERTURE_RATIO: f64 = 0.01;
+
+/// The warning on windows whose texture is edges in one direction only (a stripe, a beam's
+/// edge): they measure the motion across the edges, not along them.
+fn aperture_warning(
+    points: &[Point],
+    trackers: &[Box<HostLk>],
+    refused: &[Option<Flags>],
+) -> Vec<String> {
+    // per image axis measured: the targets whose window measures that axis only
+    let mut only: [Vec<String>; 2] = [Vec::new(), Vec::new()];
+    let mut worst = 1.0f64;
+    for ((p, tr), no) in points.iter().zip(trackers).zip(refused) {
+        if no.is_some() {
+            continue;
+        }
+        let [a, b, c] = tr.structure().map(f64::from);
+        let half_tr = 0.5 * (a + c);
+        let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
+        let (l1, l2) = (half_tr + disc, half_tr - disc);
+        if !(l1 > 0.0) || l2 / l1 >= APERTURE_RATIO {
+            continue;
+        }
+        worst = worst.min(l2 / l1);
+        // the strong direction: gradients mostly along y measure y
+        let y_axis = (l1 - a).abs() > (l1 - c).abs();
+        only[usize::from(y_axis)].push(p.target.to_string());
+    }
+    let mut out = Vec::new();
+    for (axis, names) in only.iter().enumerate() {
+        if names.is_empty() {
+            continue;
+        }
+        let (measured, along) = if axis == 1 { ("y", "x") } else { ("x", "y") };
+        out.push(format!(
+            "targets {}: the window's texture is edges along {along} only (the weaker \
+             direction's gradient energy down to {worst:.4} of the stronger, below {}): it \
+             measures the motion in {measured}; its {along} position is not measured and \
+             wanders (the aperture): read {measured} only (--axis {measured}), or move the \
+             window onto texture in both directions",
+            names.join(" "),
+            APERTURE_RATIO
+        ));
+    }
+    out
+}
+
 /// The warning on look-alike targets (`alike`, pairs of indices) followed in no group.
 fn alone_warning(points: &[Point], alike: &[(usize, usize)], groups: &[Vec<usize>]) -> Vec<String> {
     let grouped = |t: usize| groups.iter().any(|g| g.contains(&t));
@@ -1071,7 +1123,7 @@ fn forward_backward_check(
     })?;
     match b.displacement() {
         Some(d) => {
-            let fb = forward_backward(now, before, d);
+            let fb = forward_backward_textured(now, before, d, back.structure());
             e.fb_px = Some(fb);
             if fb > FB_BOUND_PX {
                 e.doubt = Some(Doubt::ForwardBackward);

@@ -158,6 +158,42 @@ pub fn forward_backward(d_now: (f32, f32), d_before: (f32, f32), back: (f32, f32
     (d_now.0 + back.0 - d_before.0).hypot(d_now.1 + back.1 - d_before.1)
 }
 
+/// [`forward_backward`] measured along what the window's texture measures: `structure` is the
+/// window's gradient structure tensor `[sxx, sxy, syy]` (eigenvalues `l1 >= l2`); the
+/// disagreement's component along the weaker direction counts by `sqrt(l2 / l1)`. A window
+/// of edges in one direction only (a stripe, a beam's edge) does not fix its position along
+/// the edge: a disagreement there is the aperture, not a wrong match (it is zero weight for a
+/// pure edge, full weight for texture alike in every direction).
+pub fn forward_backward_textured(
+    d_now: (f32, f32),
+    d_before: (f32, f32),
+    back: (f32, f32),
+    structure: [f32; 3],
+) -> f32 {
+    let e = (d_now.0 + back.0 - d_before.0, d_now.1 + back.1 - d_before.1);
+    let [a, b, c] = structure.map(f64::from);
+    let half_tr = 0.5 * (a + c);
+    let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
+    let (l1, l2) = (half_tr + disc, (half_tr - disc).max(0.0));
+    if !(l1 > 0.0 && l1.is_finite()) {
+        return e.0.hypot(e.1);
+    }
+    // the strong direction's unit vector (of the larger eigenvalue)
+    let v1 = if b.abs() > 1e-12 * l1 {
+        let (x, y) = (l1 - c, b);
+        let n = x.hypot(y);
+        (x / n, y / n)
+    } else if a >= c {
+        (1.0, 0.0)
+    } else {
+        (0.0, 1.0)
+    };
+    let (ex, ey) = (f64::from(e.0), f64::from(e.1));
+    let along = ex * v1.0 + ey * v1.1;
+    let across = -ex * v1.1 + ey * v1.0;
+    (along.powi(2) + across.powi(2) * l2 / l1).sqrt() as f32
+}
+
 /// Per target, the frames (1-based) whose positions were taken away, by reason: the report's
 /// lines (`names[t]` the target's number).
 pub fn describe(tracks: &Tracks, names: &[usize]) -> Vec<String> {
@@ -220,6 +256,28 @@ fn at(x: f32, y: f32) -> firmware_core::centroid::Centroid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_disagreement_along_an_edge_only_window_is_its_aperture() {
+        // texture alike in x and y: the plain distance
+        let iso = forward_backward_textured((1.0, 0.0), (0.0, 0.0), (0.0, 0.0), [4.0, 0.0, 4.0]);
+        assert!((iso - 1.0).abs() < 1e-6);
+        // edges along x only (gradients in y): 1 px along x is the aperture
+        let edge =
+            forward_backward_textured((1.0, 0.0), (0.0, 0.0), (0.0, 0.0), [0.04, 0.0, 400.0]);
+        assert!((edge - 0.01).abs() < 1e-4, "{edge}");
+        // the same window's disagreement across its edges counts in full
+        let across =
+            forward_backward_textured((0.0, 1.0), (0.0, 0.0), (0.0, 0.0), [0.04, 0.0, 400.0]);
+        assert!((across - 1.0).abs() < 1e-6);
+        // a diagonal edge (gradients along (1, 1)): along (1, -1) weighs little
+        let d =
+            forward_backward_textured((0.7, -0.7), (0.0, 0.0), (0.0, 0.0), [200.0, 199.9, 200.0]);
+        assert!(d < 0.05, "{d}");
+        let d =
+            forward_backward_textured((0.7, 0.7), (0.0, 0.0), (0.0, 0.0), [200.0, 199.9, 200.0]);
+        assert!((d - 0.99).abs() < 0.01, "{d}");
+    }
 
     /// Tracks of `k` targets 100 px apart moving together by `motion(f)`, with scores `0.98`.
     fn group(k: usize, frames: usize, motion: impl Fn(usize) -> (f32, f32)) -> Tracks {
