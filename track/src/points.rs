@@ -828,7 +828,7 @@ fn aperture_warning(
         let half_tr = 0.5 * (a + c);
         let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
         let (l1, l2) = (half_tr + disc, half_tr - disc);
-        if !(l1 > 0.0) || l2 / l1 >= APERTURE_RATIO {
+        if l1.is_nan() || l1 <= 0.0 || l2 / l1 >= APERTURE_RATIO {
             continue;
         }
         worst = worst.min(l2 / l1);
