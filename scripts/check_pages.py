@@ -109,6 +109,69 @@ def check_report(drv, path, markers, modes, what, rows=None):
     check(drv.find_element(By.ID, "report-text").text.strip() != "", f"{what}: the report")
 
 
+def check_scrubber(drv, path, targets, lost_target, lost_frames, what):
+    """The frame scrubber: one window per target; moving the slider shows another frame and
+    moves the windows; a frame where `lost_target` is lost (0-based frame in `lost_frames`)
+    draws it as lost."""
+    from selenium.webdriver.common.by import By
+
+    open_page(drv, path)
+    gs = drv.find_elements(By.CSS_SELECTOR, "svg#scrub g.scrub-target")
+    check(len(gs) == targets, f"{what}: scrubber has {len(gs)} windows, {targets} targets")
+    slider = drv.find_element(By.ID, "frame-slider")
+    data = json.loads(drv.find_element(By.ID, "scrub-data").get_attribute("textContent"))
+    frames = [f["index"] for f in data["frames"]]
+
+    def show(i):
+        drv.execute_script(
+            "arguments[0].value=arguments[1];arguments[0].dispatchEvent(new Event('input'));",
+            slider, i)
+        img = drv.find_element(By.ID, "scrub-image").get_attribute("href")
+        where = [(g.get_attribute("data-x"), g.get_attribute("data-y")) for g in gs]
+        lost = [g.find_element(By.CSS_SELECTOR, "rect").get_attribute("class") == "lost"
+                for g in gs]
+        return img, where, lost
+
+    img0, where0, lost0 = show(0)
+    check(not any(lost0), f"{what}: nothing lost in the first frame")
+    img1, where1, _ = show(len(frames) - 1)
+    check(img1 != img0, f"{what}: the slider shows another frame")
+    check(where1 != where0, f"{what}: the slider moves the windows")
+    check(drv.find_element(By.ID, "frame-label").text.startswith(f"frame {frames[-1] + 1}"),
+          f"{what}: the label names the frame")
+    inside = [i for i, f in enumerate(frames) if f in lost_frames]
+    check(bool(inside), f"{what}: a frame of the loss is among the scrubber's")
+    if inside:
+        _, _, lost = show(inside[0])
+        check(lost[lost_target] and sum(lost) == 1,
+              f"{what}: frame {frames[inside[0]] + 1} draws target {lost_target + 1} as lost")
+    check(len(drv.find_elements(By.CSS_SELECTOR, "svg#scores polyline.score-line")) == targets,
+          f"{what}: a score line per target")
+    check(console_errors(drv) == [], f"{what}: no console error {console_errors(drv)}")
+
+
+def occluded(rec, work, target, frames):
+    """A copy of `rec`'s frames with `target`'s window (0-based, points.csv) painted black in
+    `frames` (0-based): a loss anyone can see."""
+    from PIL import Image
+
+    with open(rec / "points.csv", newline="") as f:
+        p = list(csv.DictReader(f))[target]
+    x, y, w, h = (float(p[k]) for k in ("x", "y", "w", "h"))
+    out = work / "occluded"
+    if out.exists():
+        shutil.rmtree(out)
+    out.mkdir(parents=True)
+    for k, src in enumerate(sorted((rec / "frames").iterdir())):
+        im = Image.open(src)
+        if k in frames:
+            im = im.copy()
+            im.paste(0, (int(x - w // 2 - 2), int(y - h // 2 - 2), int(x + w // 2 + 3),
+                         int(y + h // 2 + 3)))
+        im.save(out / src.name)
+    return out
+
+
 def click_at(drv, svg, x_px, y_px):
     """A real mouse click at image pixel (x, y) (origin at the top-left pixel's centre)."""
     from selenium.webdriver.common.action_chains import ActionChains
@@ -224,6 +287,9 @@ def main():
     run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
         "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
         "--exposure-ms", "2", "--window", "rect", "--out", work / "accel1", "--force")
+    occluded_frames = occluded(rec, work, 1, set(range(300, 330)))
+    run(h, "track", "--frames", occluded_frames, "--fps", "120", "--points", rec / "points.csv",
+        "--tracker", "lk", "--out", work / "track-occluded", "--force")
     shaken = work / "shaken"
     run(h, "simulate-field", "--render", "--minutes", "0.5", "--references", "4",
         "--shake-px", "0.5", "--roll-deg", "0.2", "--out", shaken, "--force")
@@ -244,6 +310,8 @@ def main():
     drv = browser(work)
     try:
         check_report(drv, work / "track" / "report.html", 5, None, "track")
+        check_scrubber(drv, work / "track-occluded" / "report.html", 5, 1, set(range(300, 330)),
+                       "track, scrubber")
         check_report(drv, work / "analyze" / "report.html", 5, mode_rows(work / "analyze"),
                      "analyze")
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),

@@ -819,6 +819,7 @@ fn analyze_page(
         (
             frame,
             host_harness::analysis::view::reference_markers(&c.viewed),
+            host_harness::analysis::track_run::scrubber(source, req.fps, &c.viewed),
         ),
         host_harness::plots::page_figures(&figures),
         &report,

@@ -217,6 +217,7 @@ fn page(
             })
             .collect(),
         text: text.to_string(),
+        scrub: None,
         references,
     })
 }

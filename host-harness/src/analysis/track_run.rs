@@ -133,6 +133,7 @@ pub struct Outputs {
     frame: Option<crate::export::html::FrameImage>,
     markers: Vec<crate::export::html::Marker>,
     references: Vec<crate::export::html::ReferenceMarker>,
+    scrub: Option<crate::export::scrub::Scrubber>,
 }
 
 impl Outputs {
@@ -150,6 +151,7 @@ impl Outputs {
             frame: self.frame.clone(),
             markers: self.markers.clone(),
             references: self.references.clone(),
+            scrub: self.scrub.clone(),
             direction: (0.0, -1.0),
             figures: crate::plots::page_figures(&figures),
             text: text.to_string(),
@@ -208,6 +210,7 @@ pub fn outputs(
         frame,
         markers: markers(tracks, windows),
         references: super::view::reference_markers(viewed),
+        scrub: scrubber(source, req.fps, viewed),
     })
 }
 
@@ -366,4 +369,94 @@ pub fn markers(tracks: &Tracks, windows: Option<&PointsInfo>) -> Vec<crate::expo
                 .count(),
         })
         .collect()
+}
+
+/// The most frames the scrubber spreads through the record, and the most first frames of a
+/// loss it adds.
+const SCRUB_SPREAD: usize = 16;
+const SCRUB_LOSSES: usize = 8;
+/// The longer side of a scrubber frame's image, px.
+const SCRUB_SIDE: u32 = 480;
+
+/// The frames of `report.html`'s scrubber: [`SCRUB_SPREAD`] spread through the record and the
+/// first frame of up to [`SCRUB_LOSSES`] losses, each target where the tracker put it in the
+/// image (before the camera's motion is removed) or lost with its reason; `None` when the
+/// frames cannot be read again (the page then has no scrubber).
+pub fn scrubber(
+    source: &crate::frames::FrameSource,
+    fps: f64,
+    viewed: &super::view::Viewed,
+) -> Option<crate::export::scrub::Scrubber> {
+    use crate::export::scrub::{ScrubFrame, Scrubber};
+    let tracks = viewed.raw.as_ref().unwrap_or(&viewed.tracks);
+    let n = tracks.centroids.first().map_or(0, Vec::len);
+    if n == 0 {
+        return None;
+    }
+    let mut wanted: Vec<usize> = (0..SCRUB_SPREAD.min(n))
+        .map(|i| i * (n - 1) / (SCRUB_SPREAD.min(n) - 1).max(1))
+        .collect();
+    let mut losses: Vec<usize> = (1..n)
+        .filter(|&f| {
+            tracks
+                .centroids
+                .iter()
+                .any(|c| c[f].position().is_none() && c[f - 1].position().is_some())
+        })
+        .collect();
+    losses.truncate(SCRUB_LOSSES);
+    wanted.extend(losses);
+    wanted.sort_unstable();
+    wanted.dedup();
+    let frames = source.frames_at(fps, &wanted).ok()?;
+    let (w, h) = frames.first()?.1.dimensions();
+    let why = |t: usize, f: usize| -> String {
+        let c = &tracks.centroids[t][f];
+        if c.position().is_some() {
+            return String::new();
+        }
+        let checked = viewed.tracks.evidence.get(t).and_then(|e| e.get(f)?.doubt);
+        match checked {
+            Some(d) => format!("{} check", d.word()),
+            None => {
+                let words = crate::chain::displacement::lost_flags(std::slice::from_ref(c));
+                words.trim_start_matches("1 ").to_string()
+            }
+        }
+    };
+    let scrub_frames = frames
+        .iter()
+        .map(|(f, frame)| {
+            Some(ScrubFrame {
+                index: *f,
+                png: frame.to_image_within(SCRUB_SIDE).ok()?.png,
+                positions: tracks
+                    .centroids
+                    .iter()
+                    .map(|c| c[*f].position().map(|(x, y)| (f64::from(x), f64::from(y))))
+                    .collect(),
+                why: (0..tracks.centroids.len()).map(|t| why(t, *f)).collect(),
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    let windows = viewed.windows.as_ref();
+    Some(Scrubber {
+        size: (w as u32, h as u32),
+        targets: (0..tracks.centroids.len())
+            .map(|t| {
+                let size = windows
+                    .and_then(|w| w.sizes.get(t))
+                    .map_or((15.0, 15.0), |(a, b)| (f64::from(*a), f64::from(*b)));
+                (t + 1, size)
+            })
+            .collect(),
+        first: tracks.first.clone(),
+        frames: scrub_frames,
+        scores: viewed
+            .tracks
+            .evidence
+            .iter()
+            .map(|e| e.iter().map(|e| e.score).collect())
+            .collect(),
+    })
 }

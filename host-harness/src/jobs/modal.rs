@@ -132,6 +132,7 @@ impl ModalSpec {
                 extra: Vec::new(),
                 frame: None,
                 view: None,
+                scrub: None,
             },
         )
     }

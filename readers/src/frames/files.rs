@@ -844,6 +844,52 @@ impl FrameSource {
         }
     }
 
+    /// The frames of `indices` (0-based, ascending), each with its index: files and frames in
+    /// memory are read alone, other sources decoded in order up to the last one wanted; indices
+    /// past the source's end are left out.
+    pub fn frames_at(
+        &self,
+        fps: f64,
+        indices: &[usize],
+    ) -> anyhow::Result<Vec<(usize, GreyFrame)>> {
+        match self {
+            FrameSource::Files(files) => {
+                return indices
+                    .iter()
+                    .filter_map(|&i| files.get(i).map(|p| (i, p)))
+                    .map(|(i, p)| Ok((i, load_frame(p)?)))
+                    .collect()
+            }
+            FrameSource::Memory(frames) => {
+                return Ok(indices
+                    .iter()
+                    .filter_map(|&i| frames.get(i).map(|f| (i, f.clone())))
+                    .collect())
+            }
+            _ => {}
+        }
+        let Some(&last) = indices.last() else {
+            return Ok(Vec::new());
+        };
+        let mut k = 0usize;
+        let mut got = Vec::with_capacity(indices.len());
+        let r = self.for_each(fps, |_, frame| {
+            if indices.binary_search(&k).is_ok() {
+                got.push((k, frame.clone()));
+            }
+            k += 1;
+            if k > last {
+                return Err(anyhow::Error::new(PastTheRange));
+            }
+            Ok(())
+        });
+        match r {
+            Err(e) if e.is::<PastTheRange>() => Ok(got),
+            Err(e) => Err(e),
+            Ok(()) => Ok(got),
+        }
+    }
+
     /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time (a
     /// video's frames decoded into one reused buffer); a video is opened with its timestamps
     /// checked against `fps`. Labels name the file (and page, or 0-based video frame). Frames

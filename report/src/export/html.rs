@@ -94,6 +94,8 @@ pub struct Report {
     pub shapes: Vec<ShapeAnimation>,
     /// The text report.
     pub text: String,
+    /// The frame scrubber (`track`, `analyze` with frames).
+    pub scrub: Option<super::scrub::Scrubber>,
 }
 
 /// `s` with `&`, `<`, `>` and `"` escaped for HTML text and attributes.
@@ -216,6 +218,9 @@ pub fn report_html(r: &Report) -> String {
     });
     if let Some(img) = &frame_image {
         frame_section(&mut s, r, &view, img);
+    }
+    if let Some(sc) = &r.scrub {
+        super::scrub::section(&mut s, sc, base64);
     }
     if let Some((head, rows)) = &r.modes {
         modes_section(&mut s, head, rows);

@@ -34,6 +34,7 @@ pub mod oma;
 pub mod pick;
 pub mod plan;
 pub mod recording;
+pub mod scrub;
 pub mod signals;
 pub mod study;
 pub mod targets;

@@ -232,6 +232,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
                 .flatten()
                 .and_then(|(_, f)| f.to_image().ok()),
             view: Some((&c.viewed, req.fps)),
+            scrub: crate::analysis::track_run::scrubber(&source, req.fps, &c.viewed),
         },
     )
 }

@@ -37,6 +37,8 @@ pub struct Output<'a> {
     pub frame: Option<crate::export::html::FrameImage>,
     /// The camera's view (references, scale) and the frame rate, from frames.
     pub view: Option<(&'a crate::analysis::view::Viewed, f64)>,
+    /// The frame scrubber, from frames.
+    pub scrub: Option<crate::export::scrub::Scrubber>,
 }
 
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
@@ -90,6 +92,7 @@ pub fn write(
                 o.view
                     .map(|v| crate::analysis::view::reference_markers(v.0))
                     .unwrap_or_default(),
+                o.scrub.clone(),
             ),
             figures,
             report,
@@ -145,9 +148,10 @@ pub fn page(
     r: &OmaResult,
     records: &Records,
     (command, along_x): (&str, bool),
-    (frame, references): (
+    (frame, references, scrub): (
         Option<crate::export::html::FrameImage>,
         Vec<crate::export::html::ReferenceMarker>,
+        Option<crate::export::scrub::Scrubber>,
     ),
     figures: Vec<(String, String)>,
     text: &str,
@@ -180,6 +184,7 @@ pub fn page(
             })
             .collect(),
         text: text.to_string(),
+        scrub,
     })
 }
 
