@@ -349,8 +349,9 @@ impl Grouping {
                  no look-alike could be reached)"
                 .to_string(),
             Some(n) => format!(
-                "groups found from the motion of the first {n} frames (targets whose tracks \
-                 differed by at most 5 % of their motion and 0.2 px; each group's shared \
+                "groups found from the motion of the first {n} frames (each target's track \
+                 within 5 % of its motion and 0.2 px of a member's, the group moving as one \
+                 rigid part, turning allowed, within the same bound; each group's shared \
                  motion catches its members' large jumps; a `group` column in the points file \
                  sets them instead): {list}"
             ),
@@ -359,12 +360,17 @@ impl Grouping {
 }
 
 /// Groups of targets that moved together over the tracks so far (`history[t][f]`: target
-/// `t`'s displacement in frame `f`, `None` when lost), by complete linkage: a target joins a
-/// group when its track differs from every member's by an RMS of at most 5 % of their motion's
-/// RMS plus 0.2 px (tracking noise), over at least three frames both were tracked in. Targets
-/// of one rigid part (a storey, a beam) move alike; parts that move differently (two storeys
-/// of one mode, at 75 % of each other's amplitude) stay apart. Groups of one are left out.
-pub fn motion_groups(history: &[Vec<Option<(f32, f32)>>]) -> Vec<Vec<usize>> {
+/// `t`'s displacement in frame `f`, `None` when lost; `at[t]` its first-frame position, px):
+/// a target joins a group when its track differs from some member's by an RMS of at most 5 %
+/// of their motion's RMS plus 0.2 px (tracking noise; over at least three frames both were
+/// tracked in), and the group with it still moves as one rigid part: per frame a translation
+/// and a small rotation about the members' centre explain every member's displacement within
+/// the same bound ([`rigid_misfit`]). So a beam that turns as it moves (its ends apart by more
+/// than the bound, each tag close to its neighbour) stays one group, and parts that move
+/// differently (two storeys of one mode, at 75 % of each other's amplitude; storeys one above
+/// the other, whose difference a turn of one tag pair could explain but not of a whole row)
+/// stay apart. Groups of one are left out.
+pub fn motion_groups(history: &[Vec<Option<(f32, f32)>>], at: &[(f64, f64)]) -> Vec<Vec<usize>> {
     let close = |a: usize, b: usize| {
         let (mut d2, mut m2, mut n) = (0.0f64, 0.0f64, 0usize);
         for (p, q) in history[a].iter().zip(&history[b]) {
@@ -388,13 +394,69 @@ pub fn motion_groups(history: &[Vec<Option<(f32, f32)>>]) -> Vec<Vec<usize>> {
     };
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for t in 0..history.len() {
-        match groups.iter_mut().find(|g| g.iter().all(|&m| close(m, t))) {
-            Some(g) => g.push(t),
+        let joins = |g: &Vec<usize>| {
+            if !g.iter().any(|&m| close(m, t)) {
+                return false;
+            }
+            let mut with = g.clone();
+            with.push(t);
+            let (misfit, motion) = rigid_misfit(history, at, &with);
+            misfit <= 0.05 * motion + 0.2
+        };
+        match groups.iter().position(joins) {
+            Some(g) => groups[g].push(t),
             None => groups.push(vec![t]),
         }
     }
     groups.retain(|g| g.len() > 1);
     groups
+}
+
+/// How far `members` are from moving as one rigid part: per frame, the least-squares
+/// translation and small rotation (about the members' centre in `at`) of the members tracked
+/// there (two or more); the RMS of what they leave, and the RMS of the motion, px, over every
+/// member-frame fitted.
+pub fn rigid_misfit(
+    history: &[Vec<Option<(f32, f32)>>],
+    at: &[(f64, f64)],
+    members: &[usize],
+) -> (f64, f64) {
+    let frames = members.iter().map(|&m| history[m].len()).min().unwrap_or(0);
+    let (mut r2, mut m2, mut n) = (0.0f64, 0.0f64, 0usize);
+    for f in 0..frames {
+        let seen: Vec<((f64, f64), (f64, f64))> = members
+            .iter()
+            .filter_map(|&m| history[m][f].map(|d| (at[m], (f64::from(d.0), f64::from(d.1)))))
+            .collect();
+        if seen.len() < 2 {
+            continue;
+        }
+        let k = seen.len() as f64;
+        let c = seen
+            .iter()
+            .fold((0.0, 0.0), |a, (p, _)| (a.0 + p.0 / k, a.1 + p.1 / k));
+        let t = seen
+            .iter()
+            .fold((0.0, 0.0), |a, (_, d)| (a.0 + d.0 / k, a.1 + d.1 / k));
+        // a small rotation w moves (x, y) about c by w (-(y - cy), x - cx)
+        let (mut num, mut den) = (0.0, 0.0);
+        for ((x, y), (dx, dy)) in &seen {
+            let (rx, ry) = (x - c.0, y - c.1);
+            num += rx * (dy - t.1) - ry * (dx - t.0);
+            den += rx * rx + ry * ry;
+        }
+        let w = if den > 0.0 { num / den } else { 0.0 };
+        for ((x, y), (dx, dy)) in &seen {
+            let (rx, ry) = (x - c.0, y - c.1);
+            r2 += (dx - t.0 + w * ry).powi(2) + (dy - t.1 - w * rx).powi(2);
+            m2 += dx * dx + dy * dy;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return (f64::INFINITY, 0.0);
+    }
+    ((r2 / n as f64).sqrt(), (m2 / n as f64).sqrt())
 }
 
 /// Follows every point through `source` (see the module documentation). `config` gives the
@@ -749,6 +811,8 @@ fn block_templates(
 /// motion reaches a quarter of the smallest window ([`motion_groups`]).
 struct MotionGroups {
     history: Vec<Vec<Option<(f32, f32)>>>,
+    /// Each target's first-frame position, px.
+    at: Vec<(f64, f64)>,
     quarter: f32,
     /// The frames the groups were found in, once they are.
     found_in: Option<usize>,
@@ -758,6 +822,7 @@ impl MotionGroups {
     fn new(points: &[Point]) -> MotionGroups {
         MotionGroups {
             history: vec![Vec::new(); points.len()],
+            at: points.iter().map(|p| p.xy).collect(),
             quarter: points
                 .iter()
                 .map(|p| p.size.0.min(p.size.1) as f32 / 4.0)
@@ -784,7 +849,7 @@ impl MotionGroups {
             return None;
         }
         self.found_in = Some(self.history.first().map_or(0, Vec::len));
-        Some(motion_groups(&self.history))
+        Some(motion_groups(&self.history, &self.at))
     }
 }
 
@@ -1352,6 +1417,72 @@ mod tests {
                 .map(|(x, y)| f(x, y))
                 .collect(),
         }
+    }
+
+    /// Tracks of targets at `at` moving by `f(frame, position)` over `frames` frames.
+    fn moving(
+        at: &[(f64, f64)],
+        frames: usize,
+        f: impl Fn(usize, (f64, f64)) -> (f64, f64),
+    ) -> Vec<Vec<Option<(f32, f32)>>> {
+        at.iter()
+            .map(|&p| {
+                (0..frames)
+                    .map(|k| {
+                        let d = f(k, p);
+                        Some((d.0 as f32, d.1 as f32))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_beam_that_turns_as_it_moves_is_one_group_and_storeys_stay_apart() {
+        // two storeys of seven tags, 150 px apart along x, 300 px apart in y; the upper one
+        // sways 10 px per frame step, the lower 75 % of it; both turn by 0.1 mrad per px of
+        // sway (at 50 px the ends of a row 900 px long are 4.5 px apart in y, 9 % of the
+        // motion: beyond 5 % + 0.2 px; neighbours 0.75 px)
+        let mut at = Vec::new();
+        for row in 0..2 {
+            for i in 0..7 {
+                at.push((100.0 + 150.0 * i as f64, 100.0 + 300.0 * row as f64));
+            }
+        }
+        let sway = |k: usize, y: f64| {
+            let a = 10.0 * k as f64;
+            if y < 200.0 {
+                a
+            } else {
+                0.75 * a
+            }
+        };
+        let h = moving(&at, 6, |k, (x, y)| {
+            let s = sway(k, y);
+            let w = 1e-4 * s;
+            let c = (550.0, if y < 200.0 { 100.0 } else { 400.0 });
+            (s - w * (y - c.1), w * (x - c.0))
+        });
+        let g = motion_groups(&h, &at);
+        assert_eq!(g, vec![(0..7).collect::<Vec<_>>(), (7..14).collect()]);
+        // numbered by column (upper, lower, upper, ...): a vertical pair alone could pass for
+        // one part turning; the rows do not
+        let order: Vec<usize> = (0..7).flat_map(|i| [i, i + 7]).collect();
+        let at2: Vec<(f64, f64)> = order.iter().map(|&i| at[i]).collect();
+        let h2: Vec<_> = order.iter().map(|&i| h[i].clone()).collect();
+        let g2 = motion_groups(&h2, &at2);
+        assert_eq!(
+            g2,
+            vec![
+                (0..7).map(|i| 2 * i).collect::<Vec<_>>(),
+                (0..7).map(|i| 2 * i + 1).collect()
+            ]
+        );
+        // the rigid misfit of a turning row is nil, of the two rows together large
+        let (m, motion) = rigid_misfit(&h, &at, &(0..7).collect::<Vec<_>>());
+        assert!(m < 1e-3 && motion > 10.0, "{m} {motion}");
+        let (m, motion) = rigid_misfit(&h, &at, &(0..14).collect::<Vec<_>>());
+        assert!(m > 0.05 * motion + 0.2, "{m} {motion}");
     }
 
     #[test]
