@@ -423,6 +423,8 @@ pub fn rigid_misfit(
 ) -> (f64, f64) {
     let frames = members.iter().map(|&m| history[m].len()).min().unwrap_or(0);
     let (mut r2, mut m2, mut n) = (0.0f64, 0.0f64, 0usize);
+    // frame `f` of every member's track
+    #[allow(clippy::needless_range_loop)]
     for f in 0..frames {
         let seen: Vec<((f64, f64), (f64, f64))> = members
             .iter()
