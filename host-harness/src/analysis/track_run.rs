@@ -378,8 +378,8 @@ const SCRUB_LOSSES: usize = 8;
 /// The longer side of a scrubber frame's image, px.
 const SCRUB_SIDE: u32 = 480;
 
-/// The frames of `report.html`'s scrubber: [`SCRUB_SPREAD`] spread through the record and the
-/// first frame of up to [`SCRUB_LOSSES`] losses, each target where the tracker put it in the
+/// The frames of `report.html`'s scrubber: 16 (`SCRUB_SPREAD`) spread through the record and the
+/// first frame of up to 8 (`SCRUB_LOSSES`) losses, each target where the tracker put it in the
 /// image (before the camera's motion is removed) or lost with its reason; `None` when the
 /// frames cannot be read again (the page then has no scrubber).
 pub fn scrubber(
