@@ -1,4 +1,4 @@
-//! The frame scrubber of `report.html` (`track`, `analyze`): frames spread through the record
+//! The frame scrubber of `report.html` (`track`, `analyze` without an accelerometer): frames spread through the record
 //! (and the first frame of each loss), each with every target's window drawn where it was
 //! tracked, or marked lost (red, dashed, at its last position seen, with the check or flag
 //! that took it away); a slider over them; and each target's match score over every frame. A
@@ -208,7 +208,7 @@ function show(i){
   gs[t].setAttribute('data-x',at[0]);gs[t].setAttribute('data-y',at[1]);
   var name=gs[t].getAttribute('data-target');
   if(p){r.setAttribute('class','');r.setAttribute('stroke','#00c8ff');r.removeAttribute('stroke-dasharray');tx.setAttribute('fill','#ffe000');tx.textContent=name;}
-  else{lost++;r.setAttribute('class','lost');r.setAttribute('stroke','#ff2020');r.setAttribute('stroke-dasharray','4 3');tx.setAttribute('fill','#ff4040');tx.textContent=name+' lost'+(f.why[t]?' ('+f.why[t]+')':'');}
+  else{lost++;tx.setAttribute('x',at[0]+0.5-w[0]/2);tx.setAttribute('y',at[1]+0.5+w[1]/2+parseFloat(tx.getAttribute('font-size')));r.setAttribute('class','lost');r.setAttribute('stroke','#ff2020');r.setAttribute('stroke-dasharray','4 3');tx.setAttribute('fill','#ff4040');tx.textContent=name+' lost'+(f.why[t]?' ('+f.why[t]+')':'');}
  }
  label.textContent='frame '+(f.index+1)+(lost?', '+lost+' lost':'');
  slider.setAttribute('data-frame',f.index);
