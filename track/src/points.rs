@@ -913,7 +913,7 @@ fn aperture_warning(
             "targets {}: the window's texture is edges along {along} only (the weaker \
              direction's gradient energy down to {worst:.4} of the stronger, below {}): it \
              measures the motion in {measured}; its {along} position is not measured and \
-             wanders (the aperture): read {measured} only (--axis {measured}), or move the \
+             wanders (the aperture): read {measured} only ($axis {measured}), or move the \
              window onto texture in both directions",
             names.join(" "),
             APERTURE_RATIO
