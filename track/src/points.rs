@@ -653,12 +653,12 @@ fn track_points_auto(
             })
             .collect();
         let centroid = PointTracker::Centroid(ThresholdRule::FromFile);
-        let (bt, _) = track_points(source, fps, &sub, config, centroid)?;
+        let (mut bt, _) = track_points(source, fps, &sub, config, centroid)?;
         for (i, &t) in blob.iter().enumerate() {
             match crate::choose::blob_holds(&bt.centroids[i]) {
                 Ok(()) => {
                     tracks.evidence[t] = vec![Evidence::default(); bt.centroids[i].len()];
-                    tracks.centroids[t] = bt.centroids[i].clone();
+                    tracks.centroids[t] = std::mem::take(&mut bt.centroids[i]);
                     tracks.first[t] = bt.first[i];
                     thresholds[t] = Some(levels[t]);
                 }
@@ -674,10 +674,10 @@ fn track_points_auto(
     let (mut groups, mut warnings) = (None, Vec::new());
     if !by_lk.is_empty() {
         let sub: Vec<Point> = by_lk.iter().map(|&t| points[t].clone()).collect();
-        let (lt, li) = track_points_lk(source, fps, &sub, config, search_px)?;
+        let (mut lt, li) = track_points_lk(source, fps, &sub, config, search_px)?;
         for (i, &t) in by_lk.iter().enumerate() {
-            tracks.centroids[t] = lt.centroids[i].clone();
-            tracks.evidence[t] = lt.evidence[i].clone();
+            tracks.centroids[t] = std::mem::take(&mut lt.centroids[i]);
+            tracks.evidence[t] = std::mem::take(&mut lt.evidence[i]);
             tracks.refused[t] = lt.refused[i];
         }
         tracks.depth = lt.depth;
@@ -891,10 +891,8 @@ fn aperture_warning(
         if no.is_some() {
             continue;
         }
-        let [a, b, c] = tr.structure().map(f64::from);
-        let half_tr = 0.5 * (a + c);
-        let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
-        let (l1, l2) = (half_tr + disc, half_tr - disc);
+        let [a, _, c] = tr.structure().map(f64::from);
+        let (l1, l2) = crate::verify::eigenvalues(tr.structure());
         if l1.is_nan() || l1 <= 0.0 || l2 / l1 >= APERTURE_RATIO {
             continue;
         }

@@ -158,6 +158,16 @@ pub fn forward_backward(d_now: (f32, f32), d_before: (f32, f32), back: (f32, f32
     (d_now.0 + back.0 - d_before.0).hypot(d_now.1 + back.1 - d_before.1)
 }
 
+/// The eigenvalues `(l1, l2)`, `l1 >= l2 >= 0`, of a window's gradient structure tensor
+/// `[sxx, sxy, syy]`: how well its texture fixes its position in its strongest and weakest
+/// direction.
+pub fn eigenvalues(structure: [f32; 3]) -> (f64, f64) {
+    let [a, b, c] = structure.map(f64::from);
+    let half_tr = 0.5 * (a + c);
+    let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
+    (half_tr + disc, (half_tr - disc).max(0.0))
+}
+
 /// [`forward_backward`] measured along what the window's texture measures: `structure` is the
 /// window's gradient structure tensor `[sxx, sxy, syy]` (eigenvalues `l1 >= l2`); the
 /// disagreement's component along the weaker direction counts by `sqrt(l2 / l1)`. A window
@@ -172,9 +182,7 @@ pub fn forward_backward_textured(
 ) -> f32 {
     let e = (d_now.0 + back.0 - d_before.0, d_now.1 + back.1 - d_before.1);
     let [a, b, c] = structure.map(f64::from);
-    let half_tr = 0.5 * (a + c);
-    let disc = (0.25 * (a - c).powi(2) + b * b).sqrt();
-    let (l1, l2) = (half_tr + disc, (half_tr - disc).max(0.0));
+    let (l1, l2) = eigenvalues(structure);
     if !(l1 > 0.0 && l1.is_finite()) {
         return e.0.hypot(e.1);
     }
