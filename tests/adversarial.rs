@@ -249,9 +249,9 @@ fn gate_and_lost_frame_flags_are_checked_and_reported_as_used() {
     let (_tmp, rec) = make_recording(120, 2048);
     let out = rec.dir.join("out");
     for (gate, needle) in [
-        ("0", "--gate-px 0"),
-        ("NaN", "--gate-px NaN"),
-        ("-1", "--gate-px -1"),
+        ("0", "'0' for '--gate-px"),
+        ("NaN", "'NaN' for '--gate-px"),
+        ("-1", "'-1' for '--gate-px"),
     ] {
         let o = analyze_into(&rec, &out, &["--targets", "2", "--gate-px", gate]);
         assert_exit_2(&o, needle);

@@ -193,7 +193,7 @@ fn hammer_files_as_careless_users_give_them_are_refused_named_or_read() {
     );
     assert_exit_2(
         &ema(&camera, &force, &out, &["--exp-window", "1e-300"]),
-        "--exp-window 1e-300",
+        "'1e-300' for '--exp-window",
     );
     assert_exit_2(
         &ema(

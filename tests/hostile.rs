@@ -168,7 +168,7 @@ fn negative_numbers_are_values_refused_by_their_range_and_dot_is_bad_input() {
         args.extend_from_slice(&flags);
         args.extend(["--out", out.to_str().unwrap()]);
         let o = harness(&args);
-        assert_exit_2(&o, "positive rate");
+        assert_exit_2(&o, "'-60' for '--fps <HZ>': a number > 0 is needed");
         assert!(
             !stderr(&o).contains("unexpected argument"),
             "{}",

@@ -98,6 +98,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("block_s", "ema --response a.csv --excitation a.csv --impact --block-s -1 --out o"),
     ("camera_model", "track --frames fr --fps 120 --targets 1 --threshold 100 --camera-model homography --out o"),
     ("compensate_exposure", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --compensate-exposure --out o"),
+    ("detrend", "frf --input xy.csv --x x --y y --fs 100 --detrend linear --out f.csv"),
     ("delay_s", "ema --response a.csv --excitation a.csv --delay-s inf --out o"),
     ("excitation_col", "ema --response f3.csv --excitation f3.csv --out o"),
     ("excitation_fs", "ema --response a.csv --excitation a.csv --excitation-fs -1 --out o"),
@@ -116,6 +117,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("gate_px", "track --frames fr --fps 120 --points p.csv --gate-px 3 --threshold 10 --out o"),
     ("impact", "ema --response a.csv --excitation a.csv --exp-window 0.5 --out o"),
     ("input_col", "analyze --frames fr --fps 120 --accel ac.csv --fs 1024 --mm-per-px 0.1 --threshold 100 --input-col c --out o"),
+    ("lost_frames", "track --frames fr --fps 120 --targets 1 --threshold 100 --lost-frames drop --out o"),
     ("max_order", "ema --response a.csv --excitation a.csv --max-order 500 --out o"),
     ("minutes", "simulate-field --minutes 0 --out o"),
     ("mm_per_px", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --threshold 100 --out o"),
@@ -164,6 +166,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("to", "upsample --input a.csv --col a --from 10 --to 15 --out o.csv"),
     ("tracker", "track --frames fr --fps 120 --targets 2 --tracker lk --out o"),
     ("twin", "analyze --frames fr --fps 120 --targets 2 --threshold 100 --twin 3 --out o"),
+    ("window", "frf --input xy.csv --x x --y y --fs 100 --window tukey --out f.csv"),
     ("world", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --world a.csv --out o"),
     ("x", "centroid --threshold 100 fr/frame_0.png --x zz"),
     ("y", "centroid --threshold 100 fr/frame_0.png --y zz"),
@@ -206,4 +209,127 @@ fn every_setting_the_library_names_is_refused_in_the_command_lines_words() {
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// The settings table declares each shared setting once; every flag of a command that the
+/// table has a row for takes its help, its default and its range from that row (a flag
+/// declared by hand beside the table fails here): clap's help is the row's, its default the
+/// row's `Given`, its choices the row's, and a value just past either end of the row's range
+/// is refused while the ends themselves (where closed) are taken.
+#[test]
+fn every_flag_the_settings_table_declares_takes_its_row() {
+    use clap::CommandFactory as _;
+    use host_harness::setting::table::{self, Bound, DefaultValue, Values};
+    use host_harness::setting::Naming;
+    let cli = host_harness::cli::Cli::command();
+    let mut checked = 0;
+    let mut wrong = Vec::new();
+    for sub in cli.get_subcommands() {
+        for arg in sub.get_arguments() {
+            let Some(long) = arg.get_long() else { continue };
+            let names: Vec<String> = std::iter::once(long.to_string())
+                .chain(
+                    arg.get_all_aliases()
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(str::to_string),
+                )
+                .collect();
+            let Some(row) = names
+                .iter()
+                .find_map(|n| table::find(sub.get_name(), &n.replace('-', "_")))
+            else {
+                continue;
+            };
+            let at = format!("{} --{long}", sub.get_name());
+            let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+            if help != row.help_for(Naming::Cli) {
+                wrong.push(format!("{at}: help is not its row's: {help}"));
+            }
+            let defaults: Vec<String> = arg
+                .get_default_values()
+                .iter()
+                .map(|d| d.to_string_lossy().into_owned())
+                .collect();
+            let want: Vec<String> = match row.default {
+                DefaultValue::Given(d) => vec![d.to_string()],
+                _ => vec![],
+            };
+            if defaults != want {
+                wrong.push(format!("{at}: default {defaults:?}, the row says {want:?}"));
+            }
+            if let Values::Choice(choices) = row.values {
+                let got: Vec<String> = arg
+                    .get_possible_values()
+                    .iter()
+                    .map(|p| p.get_name().to_string())
+                    .collect();
+                if got != choices {
+                    wrong.push(format!("{at}: choices {got:?}, the row says {choices:?}"));
+                }
+            }
+            // the range: ends taken, just past them refused (clap's own value check)
+            let parse = |v: String| {
+                cli.clone()
+                    .try_get_matches_from([
+                        "host-harness",
+                        sub.get_name(),
+                        &format!("--{long}={v}"),
+                    ])
+                    .map_err(|e| e.kind())
+            };
+            let refused =
+                |v: String| parse(v).err() == Some(clap::error::ErrorKind::ValueValidation);
+            let mut ends: Vec<(f64, bool)> = Vec::new();
+            match row.values {
+                Values::Whole { min, max } => {
+                    ends.extend([(min as f64, true), (max as f64, true)]);
+                    if min > 0 {
+                        ends.push((min as f64 - 1.0, false));
+                    }
+                    ends.push((max as f64 + 1.0, false));
+                }
+                Values::Number { min, max } => {
+                    for (b, step) in [(min, -1e-9), (max, 1e-9)] {
+                        match b {
+                            Bound::Closed(x) => {
+                                ends.extend([(x, true), (x + step * x.abs().max(1.0), false)])
+                            }
+                            Bound::Open(x) => ends.push((x, false)),
+                            Bound::Free => {}
+                        }
+                    }
+                    ends.push((f64::NAN, false));
+                }
+                _ => {}
+            }
+            for (v, taken) in ends {
+                if refused(format!("{v}")) == taken {
+                    wrong.push(format!(
+                        "{at}={v}: {} (row: {})",
+                        if taken { "refused" } else { "taken" },
+                        row.range()
+                    ));
+                }
+            }
+            checked += 1;
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert!(checked >= 50, "only {checked} flags checked");
+}
+
+/// docs/settings.md is the settings table written out (`VIBCAM_BLESS=1` writes it).
+#[test]
+fn docs_settings_md_is_the_settings_table() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/settings.md");
+    let want = host_harness::setting::table::markdown();
+    if std::env::var_os("VIBCAM_BLESS").is_some() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let got = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        got == want,
+        "docs/settings.md is not the settings table: VIBCAM_BLESS=1 cargo test --test settings"
+    );
 }

@@ -1397,6 +1397,57 @@ fn flag_table() -> Vec<(u8, &'static str)> {
     Flags::NAMES.iter().map(|(f, n)| (f.bits(), *n)).collect()
 }
 
+/// The settings table (`vibcam-common`'s `setting::table`) as Python checks its arguments by
+/// it: one dict per row (`key`, `commands`, `kind`, `choices`, `words`, `min`, `max`,
+/// `min_open`, `max_open`, `range`, `unit`, `default`, `given`, `help`).
+fn settings_table(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    use host_harness::setting::table::{Bound as End, DefaultValue, Values, SETTINGS};
+    let end = |b: End| match b {
+        End::Free => (None, false),
+        End::Closed(v) => (Some(v), false),
+        End::Open(v) => (Some(v), true),
+    };
+    SETTINGS
+        .iter()
+        .map(|s| {
+            let d = PyDict::new(py);
+            d.set_item("key", s.key)?;
+            d.set_item("commands", s.commands.to_vec())?;
+            let (kind, choices, (min, min_open), (max, max_open)) = match s.values {
+                Values::Switch => ("switch", &[][..], (None, false), (None, false)),
+                Values::Path => ("path", &[][..], (None, false), (None, false)),
+                Values::Text(_) => ("text", &[][..], (None, false), (None, false)),
+                Values::Choice(c) => ("choice", c, (None, false), (None, false)),
+                Values::Whole { min, max } => (
+                    "whole",
+                    &[][..],
+                    (Some(min as f64), false),
+                    (Some(max as f64), false),
+                ),
+                Values::Number { min, max } => ("number", &[][..], end(min), end(max)),
+            };
+            d.set_item("kind", kind)?;
+            d.set_item("choices", choices.to_vec())?;
+            d.set_item("words", s.words.to_vec())?;
+            d.set_item("min", min)?;
+            d.set_item("min_open", min_open)?;
+            d.set_item("max", max)?;
+            d.set_item("max_open", max_open)?;
+            d.set_item("range", s.range())?;
+            d.set_item("unit", s.unit)?;
+            let (default, given) = match s.default {
+                DefaultValue::None => (None, false),
+                DefaultValue::Given(v) => (Some(v), true),
+                DefaultValue::Job(v) => (Some(v), false),
+            };
+            d.set_item("default", default)?;
+            d.set_item("given", given)?;
+            d.set_item("help", s.help_for(Naming::Python))?;
+            Ok(d)
+        })
+        .collect()
+}
+
 /// The native module.
 #[pymodule]
 fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -1406,6 +1457,7 @@ fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MODEL_REVISION", host_harness::study::MODEL_REVISION)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MAX_TARGETS", host_harness::jobs::tracking::MAX_TARGETS)?;
+    m.add("SETTINGS", settings_table(m.py())?)?;
     m.add_function(wrap_pyfunction!(centroid, m)?)?;
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_function(wrap_pyfunction!(frf, m)?)?;

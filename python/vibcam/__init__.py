@@ -103,6 +103,32 @@ def _number(name: str, v: _Any, positive: bool = False, optional: bool = False) 
     return float(v)
 
 
+_SETTINGS = _vibcam.SETTINGS
+
+
+def _setting(command: str, name: str, v: _Any, optional: bool = False) -> _Any:
+    """``v`` checked against ``command``'s row of ``name`` in the settings table (the one the
+    command line's flags are declared by): its range, its words (``auto``), its choices."""
+    row = next(r for r in _SETTINGS if r["key"] == name and command in r["commands"])
+    if v is None and optional:
+        return None
+    if isinstance(v, str) and v in row["words"]:
+        return v
+    if row["kind"] == "choice":
+        if v not in row["choices"]:
+            raise InputError(f"{name} = {v!r}: {row['range']}")
+        return v
+    if row["kind"] == "whole":
+        return _whole(name, v, int(row["min"]), int(row["max"]))
+    x = _number(name, v)
+    lo, hi = row["min"], row["max"]
+    below = lo is not None and (x <= lo if row["min_open"] else x < lo)
+    above = hi is not None and (x >= hi if row["max_open"] else x > hi)
+    if below or above:
+        raise InputError(f"{name} = {v!r}: {row['range']} is needed")
+    return x
+
+
 def _vector(name: str, x: _Any) -> _np.ndarray:
     """``x`` as a 1-D array of finite float64 values."""
     try:
@@ -136,7 +162,7 @@ def _threshold(threshold: _Union[int, str, None]) -> tuple:
         if threshold.strip().lower() == "auto":
             return None, True
         raise InputError(f"threshold `{threshold}`: a grey level 0-65535, or 'auto' (with points)")
-    return _whole("threshold", threshold, 0, 65535), False
+    return _setting("track", "threshold", threshold), False
 
 
 def _points(points: _Any) -> tuple:
@@ -182,16 +208,16 @@ def _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_
             f"tracker = {tracker!r}: one of 'auto', 'binary' (alias 'blob'), 'weighted', 'lk'"
         )
     return {
-        "fps": _number("fps", fps, positive=True, optional=True),
+        "fps": _setting("track", "fps", fps, optional=True),
         "retime": bool(retime),
         "points": pts,
         "points_file": pfile,
-        "targets": _whole("targets", targets, 1, _vibcam.MAX_TARGETS, optional=True),
-        "gate_px": _number("gate_px", gate_px, positive=True, optional=True),
+        "targets": _setting("track", "targets", targets, optional=True),
+        "gate_px": _setting("track", "gate_px", gate_px, optional=True),
         "threshold": t,
         "auto_threshold": auto,
         "tracker": tracker,
-        "search_px": _whole("search_px", search_px, 0, 65535, optional=True),
+        "search_px": _setting("track", "search_px", search_px, optional=True),
         "roi": _roi(roi),
     }
 
@@ -233,7 +259,7 @@ def _view(reference, camera_model, scale, target_size_mm, world) -> _Optional[di
         "reference_file": rfile,
         "camera_model": camera_model,
         "scale": sc,
-        "target_size_mm": _number("target_size_mm", target_size_mm, positive=True, optional=True),
+        "target_size_mm": _setting("track", "target_size_mm", target_size_mm, optional=True),
         "world": w,
         "world_file": wfile,
     }
@@ -274,7 +300,10 @@ def centroid(
         a = a[_np.newaxis]  # one colour frame
     if not isinstance(mode, str):
         raise InputError(f"mode = {mode!r}: 'binary' (alias 'blob') or 'weighted'")
-    level = _whole("threshold", threshold, 0, 65535)
+    level = _setting("centroid", "threshold", threshold)
+    if isinstance(level, str):
+        raise InputError("threshold 'auto' is Otsu's of each window (track with points); "
+                         "centroid needs a grey level")
     x, y, pixels, flags = _vibcam.centroid(a, level, mode, _roi(roi))
     return Centroid(x, y, pixels, tuple(flags))
 
@@ -416,11 +445,11 @@ def frf(
     f, h, c, _segments = _vibcam.frf(
         _vector("x", x),
         _vector("y", y),
-        _number("fs", fs, positive=True),
+        _setting("frf", "fs", fs),
         window=window,
-        nperseg=_whole("nperseg", nperseg, 1, 65536, optional=True),
-        noverlap=_whole("noverlap", noverlap, 0, 65535, optional=True),
-        nfft=_whole("nfft", nfft, 1, 65536, optional=True),
+        nperseg=_setting("frf", "nperseg", nperseg, optional=True),
+        noverlap=_setting("frf", "noverlap", noverlap, optional=True),
+        nfft=_setting("frf", "nfft", nfft, optional=True),
         detrend=str(detrend),
     )
     return f, h, c
@@ -602,14 +631,14 @@ def analyze(
     d = _vibcam.analyze(
         _frames(frames),
         _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
-        mm_per_px=_number("mm_per_px", mm_per_px, positive=True, optional=True),
+        mm_per_px=_setting("analyze", "mm_per_px", mm_per_px, optional=True),
         axis=axis,
         invert=invert,
         lost_frames=lost_frames,
         window=window,
-        nperseg=_whole("nperseg", nperseg, 1, 65536, optional=True),
-        noverlap=_whole("noverlap", noverlap, 0, 65535, optional=True),
-        nfft=_whole("nfft", nfft, 1, 65536, optional=True),
+        nperseg=_setting("analyze", "nperseg", nperseg, optional=True),
+        noverlap=_setting("analyze", "noverlap", noverlap, optional=True),
+        nfft=_setting("analyze", "nfft", nfft, optional=True),
         detrend=detrend,
         bands=None if bands is None else _bands(bands),
         view=_view(reference, camera_model, scale, target_size_mm, world),
@@ -707,35 +736,28 @@ def ema(
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
     (``force`` replaces an earlier ``ema`` output).
     """
-    if isinstance(exp_window, _numbers.Real) and not isinstance(exp_window, bool):
-        e = float(exp_window)
-        if not 0 < e < 1:
-            raise InputError(f"exp_window {e}: the window's value at the block's end, 0 to 1")
-        exp_window = repr(e)
-    elif exp_window not in ("off", "auto"):
-        raise InputError(f"exp_window {exp_window!r}: \"off\", \"auto\" or a number in (0, 1)")
-    if response_quantity not in ("displacement", "velocity", "acceleration"):
-        raise InputError(
-            f"response_quantity {response_quantity!r}: displacement, velocity or acceleration"
-        )
+    exp_window = _setting("ema", "exp_window", exp_window)
+    if not isinstance(exp_window, str):
+        exp_window = repr(exp_window)
+    _setting("ema", "response_quantity", response_quantity)
     cols = [] if response_cols is None else [str(c) for c in response_cols]
     d = _vibcam.ema(
         _os.fspath(response),
         _os.fspath(excitation),
         response_cols=cols,
-        response_fs=_number("response_fs", response_fs, positive=True, optional=True),
+        response_fs=_setting("ema", "response_fs", response_fs, optional=True),
         excitation_col=None if excitation_col is None else str(excitation_col),
-        excitation_fs=_number("excitation_fs", excitation_fs, positive=True, optional=True),
+        excitation_fs=_setting("ema", "excitation_fs", excitation_fs, optional=True),
         impact=bool(impact),
         exp_window=exp_window,
-        block_s=_number("block_s", block_s, positive=True, optional=True),
-        delay_s=_number("delay_s", delay_s),
+        block_s=_setting("ema", "block_s", block_s, optional=True),
+        delay_s=_setting("ema", "delay_s", delay_s),
         response_quantity=response_quantity,
         bands=None if bands is None else _bands(bands),
-        f_min_hz=_number("f_min_hz", f_min_hz, optional=True),
-        f_max_hz=_number("f_max_hz", f_max_hz, positive=True, optional=True),
-        max_order=_whole("max_order", max_order, 2, 200),
-        nperseg=_whole("nperseg", nperseg, 64, 1 << 20, optional=True),
+        f_min_hz=_setting("ema", "f_min_hz", f_min_hz, optional=True),
+        f_max_hz=_setting("ema", "f_max_hz", f_max_hz, optional=True),
+        max_order=_setting("ema", "max_order", max_order),
+        nperseg=_setting("ema", "nperseg", nperseg, optional=True),
         out=None if out is None else _os.fspath(out),
         force=bool(force),
     )
@@ -830,7 +852,7 @@ def study(
             if exposures_ms is None
             else [_number(f"exposures_ms[{i}]", e, positive=True) for i, e in enumerate(exposures_ms)],
             seed=_whole("seed", seed, 0, 2**64 - 1, optional=True),
-            threads=_whole("threads", threads, 0, 4096),
+            threads=_setting("study", "threads", threads),
             progress=progress,
             plots=plots,
         )
@@ -867,7 +889,7 @@ def open_frames(
         raise InputError(f"frame_range = {frame_range!r}: 'A..B' (frames A to B, 1-based)")
     return FrameReader(
         _os.fspath(path),
-        fps=_number("fps", fps, positive=True, optional=True),
+        fps=_setting("open_frames", "fps", fps, optional=True),
         retime=retime,
         frame_range=frame_range,
     )

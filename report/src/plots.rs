@@ -166,7 +166,7 @@ const PANEL: Layout = Layout {
     labels: 13,
 };
 
-/// The single chart of a figure ([`frf_figure`]).
+/// The single chart of a figure ([`lines_figure`]).
 const SINGLE: Layout = Layout {
     caption: 24,
     margin: 10,
@@ -534,60 +534,29 @@ where
     Ok(())
 }
 
-/// One FRF magnitude figure with several labelled curves `(label, freq_hz, |H|)`, drawn as
-/// `NAME.png` and `NAME.svg`.
-pub fn frf_figure(
+/// Labelled curves `(label, x, y)` drawn as `lines` says (an FRF's magnitude, an FRF in dB,
+/// tracks over time), as `NAME.png` and `NAME.svg`.
+pub fn lines_figure(
     name: &str,
     title: &str,
     y_label: &str,
     curves: &[(&str, &[f64], &[f64])],
+    lines: Lines,
 ) -> anyhow::Result<Figure> {
     register_font();
-    figure!(name, |r| draw_lines(r, title, y_label, curves, Lines::Frf))
+    figure!(name, |r| draw_lines(r, title, y_label, curves, lines))
 }
 
-/// FRFs in decibels: one curve per `(label, freq_hz, dB)`, the values' own range (negative
-/// included), written as `NAME.png` and `NAME.svg`.
-pub fn frf_db_figure(
-    name: &str,
-    title: &str,
-    y_label: &str,
-    curves: &[(&str, &[f64], &[f64])],
-) -> anyhow::Result<Figure> {
-    register_font();
-    figure!(name, |r| draw_lines(
-        r,
-        title,
-        y_label,
-        curves,
-        Lines::FrfDb
-    ))
-}
-
-/// Tracks over time: one curve per `(label, t_s, value)`, as `NAME.png` and `NAME.svg` (the value's axis spans the curves' range, negative values included).
-pub fn tracks_figure(
-    name: &str,
-    title: &str,
-    y_label: &str,
-    curves: &[(&str, &[f64], &[f64])],
-) -> anyhow::Result<Figure> {
-    register_font();
-    figure!(name, |r| draw_lines(
-        r,
-        title,
-        y_label,
-        curves,
-        Lines::Tracks
-    ))
-}
-
-/// How [`draw_lines`] draws a figure: an FRF (frequency axis, values from 0, the first curve
+/// How [`lines_figure`] draws a figure: an FRF (frequency axis, values from 0, the first curve
 /// the transducer's, thick lines), an FRF in dB (frequency axis, the values' own range) or
 /// tracks (time axis, the values' own range, thin lines in the exposure colours).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Lines {
+pub enum Lines {
+    /// An FRF's magnitude: frequency axis, values from 0, the first curve the transducer's.
     Frf,
+    /// An FRF in decibels: frequency axis, the values' own range (negative included).
     FrfDb,
+    /// Tracks over time: time axis, the values' own range, thin lines.
     Tracks,
 }
 
@@ -740,7 +709,14 @@ mod tests {
     fn an_frf_figure_is_drawn_in_memory() {
         let f: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
         let a: Vec<f64> = f.iter().map(|x| 1.0 / (1.0 + (x - 5.0).powi(2))).collect();
-        let fig = frf_figure("frf", "t", "|H|", &[("acc", &f, &a), ("vis", &f, &a)]).unwrap();
+        let fig = lines_figure(
+            "frf",
+            "t",
+            "|H|",
+            &[("acc", &f, &a), ("vis", &f, &a)],
+            Lines::Frf,
+        )
+        .unwrap();
         assert_eq!(fig.name, "frf");
         assert!(fig.png.starts_with(b"\x89PNG"));
         assert!(fig.svg.contains("vis"));

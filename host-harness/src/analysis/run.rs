@@ -369,11 +369,12 @@ fn frf_figure(a: &super::Analysis, fps: f64) -> anyhow::Result<crate::plots::Fig
     let abs = |h: &[num_complex::Complex64]| h[..keep].iter().map(|v| v.norm()).collect();
     let acc: Vec<f64> = abs(&a.acc_frf.h1);
     let vis: Vec<f64> = abs(&a.vis_frf.h1);
-    crate::plots::frf_figure(
+    crate::plots::lines_figure(
         "frf",
         "H1 of the recording: accelerometer and vision",
         "|H1|",
         &[("accelerometer", freq, &acc), ("vision", freq, &vis)],
+        crate::plots::Lines::Frf,
     )
 }
 

@@ -339,7 +339,7 @@ fn plot(
         .iter()
         .map(|(l, t, d)| (l.as_str(), t.as_slice(), d.as_slice()))
         .collect();
-    crate::plots::tracks_figure(
+    crate::plots::lines_figure(
         "tracks",
         if along_x {
             "Tracks: x - x(first frame), image x right"
@@ -348,6 +348,7 @@ fn plot(
         },
         "px",
         &curves,
+        crate::plots::Lines::Tracks,
     )
 }
 

@@ -4,7 +4,7 @@
 use super::args::{parse_bands, Bands, CentroidArgs, WelchArgs};
 use crate::analysis::twin::TwinSettings;
 use crate::analysis::Axis;
-use crate::jobs::{AccelSettings, AnalyzeInput, AnalyzeSpec, FramesInput, SpecError, TimeOffset};
+use crate::jobs::{AccelSettings, AnalyzeInput, AnalyzeSpec, SpecError, TimeOffset};
 use crate::lost_frames::LostFramePolicy;
 use crate::study::runner::Shard;
 use std::path::PathBuf;
@@ -62,12 +62,11 @@ pub struct Args {
     /// Static references, the camera's motion model and the scale from the scene.
     #[command(flatten)]
     pub view: super::args::ViewArgs,
-    /// Scale, millimetres per pixel (needed with --accel; without it the output-only analysis
-    /// stays in pixels).
-    #[arg(long, value_name = "MM")]
+    /// `$mm_per_px`.
+    #[arg(long, value_name = "MM", value_parser = super::args::number("mm_per_px"), help = super::args::help("mm_per_px"))]
     pub mm_per_px: Option<f64>,
-    /// Image axis of the motion (`y`: positive up in the image; `x`: positive right).
-    #[arg(long, value_enum, default_value_t = AxisArg::Y)]
+    /// `$axis`.
+    #[arg(long, value_enum, default_value = super::args::given("axis"), help = super::args::help("axis"))]
     pub axis: AxisArg,
     /// Flip the sign of the displacement.
     #[arg(long)]
@@ -91,9 +90,8 @@ pub struct Args {
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
-    /// What a lost frame's value becomes: `interpolate` (linearly between its valid
-    /// neighbours) or `hold` (the last valid value, as firmware repeating its last output).
-    #[arg(long, default_value = "interpolate", value_parser = super::args::choice(&LostFramePolicy::ALL, LostFramePolicy::name))]
+    /// `$lost_frames`.
+    #[arg(long, default_value = super::args::given("lost_frames"), value_parser = super::args::choice(&LostFramePolicy::ALL, LostFramePolicy::name), help = super::args::help("lost_frames"))]
     pub lost_frames: LostFramePolicy,
     /// Take the displacement record as periodic in the Fourier upsampling (no end matching):
     /// by default the line through its first and last samples is subtracted first, since a
@@ -104,35 +102,9 @@ pub struct Args {
     /// it, and it holds no input of this run), as a whole. A failed run replaces nothing.
     #[arg(long)]
     pub force: bool,
-    /// Targets (1-32): numbered left to right (then top to bottom) in the first frame
-    /// and followed frame to frame; writes modes.csv with a target column and the fitted
-    /// damping, shapes.csv and frf.uff (docs/cli.md).
-    #[arg(long, value_name = "K", value_parser = super::args::int_range(1..=crate::jobs::tracking::MAX_TARGETS as u64))]
-    pub targets: Option<usize>,
-    /// With --targets: how far a target may move between frames and still be the same, px
-    /// (> 0; default 10).
-    #[arg(
-        long,
-        value_name = "PX",
-        requires = "targets",
-        allow_negative_numbers = true,
-        value_parser = super::args::parse_gate_px
-    )]
-    pub gate_px: Option<f64>,
-    /// Chosen points (a cluttered scene): CSV `target,x,y,w,h[,threshold]`, target 1..K, the
-    /// centre (px) in the first frame and a window (px, >= 3) that follows each target; the
-    /// threshold per window from the column, --threshold T, or --threshold auto (Otsu's of the
-    /// window in the first frame). A target lost in its window (or a window at the frame edge)
-    /// is a lost frame of it; the window stays where the target was last seen. Outputs as with
-    /// --targets.
-    #[arg(long, value_name = "FILE.csv", conflicts_with = "targets")]
-    pub points: Option<PathBuf>,
-    /// With --points and --tracker lk: the largest motion between two frames to catch, px (a
-    /// coarse search over +-R before the sub-pixel refinement, when the refinement from the
-    /// last position finds no match; default: half the window's larger side). A best match on
-    /// the edge of the range is a lost frame (the motion may be larger).
-    #[arg(long, value_name = "R", requires = "points")]
-    pub search_px: Option<u16>,
+    /// The targets: `$targets` blobs or `$points` windows.
+    #[command(flatten)]
+    pub targets: super::args::TargetArgs,
     /// With --targets or --points: the target (1..K) co-located with the output accelerometer,
     /// compared with it in the report (default: the last, K).
     #[arg(long, value_name = "J")]
@@ -179,13 +151,7 @@ impl AxisArg {
 /// Runs `host-harness analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let out = args.out.clone();
-    let rates = crate::frames::resolve_rates(
-        &args.recording.frames,
-        args.recording.fps,
-        args.exposure_ms,
-        args.recording.retime,
-        args.recording.frame_range,
-    )?;
+    let rates = args.recording.rates(args.exposure_ms)?;
     let (spec, warnings) = AnalyzeSpec::new(input(args)?, rates).map_err(SpecError::into_anyhow)?;
     for w in warnings {
         eprintln!("warning: {}", crate::jobs::SpecError::setting(w));
@@ -210,17 +176,8 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
         None => Shard::ALL,
     };
     Ok(AnalyzeInput {
-        frames: FramesInput {
-            frames: args.recording.frames.clone(),
-            retime: args.recording.retime,
-            frame_range: args.recording.frame_range,
-        },
-        tracking: args.centroid.tracking(
-            args.points.as_deref(),
-            args.targets,
-            args.gate_px,
-            args.search_px,
-        ),
+        frames: args.recording.input(),
+        tracking: args.centroid.tracking(&args.targets),
         mm_per_px: args.mm_per_px,
         view: args.view.view(),
         axis: args.axis.axis(),

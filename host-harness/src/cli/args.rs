@@ -3,6 +3,8 @@
 //! ([`WelchArgs`]), the centroid settings ([`CentroidArgs`]), `--bands` and `--roi`.
 
 use crate::chain::frf::WelchSettings;
+use crate::setting::table::{self, DefaultValue};
+use crate::setting::Naming;
 use firmware_core::centroid::{CentroidConfig, Mode, Roi};
 use firmware_core::spectrum::{Detrend, Window};
 
@@ -29,22 +31,20 @@ pub enum DetrendArg {
 /// The Welch estimator's flags (`frf`, `analyze`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct WelchArgs {
-    /// Segment window (periodic).
-    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    /// `$window`.
+    #[arg(long, value_enum, default_value = given("window"), help = help("window"))]
     pub window: WindowArg,
-    /// Samples per segment, 1..=65536 [default: `frf` min(256, record length) as scipy;
-    /// `analyze` the whole record, one segment].
-    #[arg(long, value_name = "N")]
+    /// `$nperseg`.
+    #[arg(long, value_name = "N", value_parser = whole::<usize>("nperseg"), help = help("nperseg"))]
     pub nperseg: Option<usize>,
-    /// Samples shared by consecutive segments, < nperseg [default: nperseg / 2; 0 for one
-    /// whole-record segment].
-    #[arg(long, value_name = "N")]
+    /// `$noverlap`.
+    #[arg(long, value_name = "N", value_parser = whole::<usize>("noverlap"), help = help("noverlap"))]
     pub noverlap: Option<usize>,
-    /// Transform length (zero padding), nperseg..=65536 [default: nperseg].
-    #[arg(long, value_name = "N")]
+    /// `$nfft`.
+    #[arg(long, value_name = "N", value_parser = whole::<usize>("nfft"), help = help("nfft"))]
     pub nfft: Option<usize>,
-    /// Segment detrending.
-    #[arg(long, value_enum, default_value_t = DetrendArg::Constant)]
+    /// `$detrend`.
+    #[arg(long, value_enum, default_value = given("detrend"), help = help("detrend"))]
     pub detrend: DetrendArg,
 }
 
@@ -99,25 +99,40 @@ impl ModeArg {
 /// The centroid's flags (`centroid`, `analyze`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct CentroidArgs {
-    /// Threshold T in grey levels (0-65535): a pixel counts when its value is > T. For 8-bit
-    /// frames a T of 255 or more selects nothing. With --points also `auto`: Otsu's threshold
-    /// of each window in the first frame.
-    /// Needed without --points; with them `--tracker auto` (the default) and `binary` take
-    /// Otsu's of each window when none is given (or the file's `threshold` column), and `lk`
-    /// uses none.
-    #[arg(long, value_name = "T|auto", value_parser = parse_threshold)]
+    /// `$threshold`: a grey level or `auto`.
+    #[arg(long, value_name = "T|auto", value_parser = parse_threshold, help = help("threshold"))]
     pub threshold: Option<ThresholdArg>,
-    /// The tracker: `auto` (with --points each target's own choice of blob or Lucas-Kanade,
-    /// said in the report; without, the binary centroid), pixel weighting of the centroid
-    /// (`binary`, also called `blob`, or `weighted`), or `lk` (Lucas-Kanade in `--points`
-    /// windows, `track` and `analyze` only); `--mode` is the same flag.
-    #[arg(long, alias = "tracker", value_enum, default_value_t = ModeArg::Auto)]
+    /// `$tracker` (also `--mode`).
+    #[arg(long, alias = "tracker", value_enum, default_value = given("tracker"), help = help("tracker"))]
     pub mode: ModeArg,
-    /// Region of interest X,Y,W,H in pixels (X, Y of the top-left pixel, from the top-left of
-    /// the frame; W, H >= 1); coordinates stay those of the full frame. Must lie inside every
-    /// frame.
-    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_roi)]
+    /// `$roi`.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_roi, help = help("roi"))]
     pub roi: Option<Roi>,
+}
+
+/// The targets of a recording (`track`, `analyze`): `$targets` blobs or `$points` windows,
+/// and how far each may move.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct TargetArgs {
+    /// `$points`: chosen windows.
+    #[arg(long, value_name = "FILE.csv", conflicts_with = "targets", help = help("points"))]
+    pub points: Option<std::path::PathBuf>,
+    /// `$targets`: the K blobs of the first frame.
+    #[arg(long, value_name = "K", value_parser = whole::<usize>("targets"), help = help("targets"))]
+    pub targets: Option<usize>,
+    /// `$gate_px`.
+    #[arg(
+        long,
+        value_name = "PX",
+        requires = "targets",
+        allow_negative_numbers = true,
+        value_parser = number("gate_px"),
+        help = help("gate_px")
+    )]
+    pub gate_px: Option<f64>,
+    /// `$search_px`.
+    #[arg(long, value_name = "R", requires = "points", value_parser = whole::<u16>("search_px"), help = help("search_px"))]
+    pub search_px: Option<u16>,
 }
 
 /// `--threshold`: a grey level, or `auto` (Otsu's threshold of each `--points` window).
@@ -129,27 +144,100 @@ pub enum ThresholdArg {
     Auto,
 }
 
-/// Parses `--threshold`: 0-65535 or `auto`.
+/// Parses `--threshold`: a grey level in its row's range, or `auto`.
 pub fn parse_threshold(s: &str) -> Result<ThresholdArg, String> {
     if s.trim().eq_ignore_ascii_case("auto") {
         return Ok(ThresholdArg::Auto);
     }
-    s.trim()
-        .parse::<u16>()
-        .map(ThresholdArg::Level)
-        .map_err(|_| format!("`{s}`: a grey level 0-65535, or `auto` (with --points)"))
+    whole::<u16>("threshold")(s).map(ThresholdArg::Level)
+}
+
+/// The help of `key`'s row of the settings table (the first row that names it: the row of a
+/// group of flags several commands share), as the command line spells it.
+pub fn help(key: &str) -> String {
+    table::row(key).help_for(Naming::Cli)
+}
+
+/// The help of `command`'s own row of `key`.
+pub fn help_in(command: &str, key: &str) -> String {
+    table::find(command, key)
+        .unwrap_or_else(|| panic!("no setting `{key}` for `{command}`"))
+        .help_for(Naming::Cli)
+}
+
+/// The default the command line fills in for `key` (its row's `Given`).
+pub fn given(key: &str) -> &'static str {
+    match table::row(key).default {
+        DefaultValue::Given(d) => d,
+        d => panic!("`{key}` has no default the command line fills in: {d:?}"),
+    }
+}
+
+/// Why `s` is refused by `row`: the range it needs, in the row's unit (clap names the flag).
+fn refusal(row: &table::Setting, s: &str) -> String {
+    let unit = match row.unit {
+        "" => String::new(),
+        u => format!(" ({u})"),
+    };
+    let _ = s;
+    format!("{} is needed{unit}", row.range())
+}
+
+/// `command`'s row of `key` (`None`: the first row naming it).
+fn row_of(command: Option<&str>, key: &str) -> &'static table::Setting {
+    match command {
+        Some(c) => table::find(c, key).unwrap_or_else(|| panic!("no `{key}` for `{c}`")),
+        None => table::row(key),
+    }
+}
+
+/// A whole-number flag checked against `key`'s row.
+pub fn whole<T: TryFrom<u64>>(
+    key: &'static str,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    whole_in(None, key)
+}
+
+/// A whole-number flag checked against `command`'s row of `key` (`None`: its first row).
+pub fn whole_in<T: TryFrom<u64>>(
+    command: Option<&'static str>,
+    key: &'static str,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    let row = row_of(command, key);
+    move |s: &str| {
+        s.trim()
+            .parse::<u64>()
+            .ok()
+            .filter(|v| row.admits(*v as f64))
+            .and_then(|v| T::try_from(v).ok())
+            .ok_or_else(|| refusal(row, s))
+    }
+}
+
+/// A number flag checked against `key`'s row; a positive one may be a ratio (`30000/1001`).
+pub fn number(key: &'static str) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    number_in(None, key)
+}
+
+/// A number flag checked against `command`'s row of `key` (`None`: its first row).
+pub fn number_in(
+    command: Option<&'static str>,
+    key: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    let row = row_of(command, key);
+    move |s: &str| {
+        let v = match s.contains('/') {
+            true => parse_rate(s).ok(),
+            false => s.trim().parse::<f64>().ok(),
+        };
+        v.filter(|v| row.admits(*v)).ok_or_else(|| refusal(row, s))
+    }
 }
 
 impl CentroidArgs {
     /// The tracking settings these flags give, with the targets' flags (checked by
     /// [`crate::jobs::Tracking::new`]).
-    pub fn tracking(
-        &self,
-        points: Option<&std::path::Path>,
-        targets: Option<usize>,
-        gate_px: Option<f64>,
-        search_px: Option<u16>,
-    ) -> crate::jobs::TrackingInput {
+    pub fn tracking(&self, t: &TargetArgs) -> crate::jobs::TrackingInput {
         use crate::jobs::{PointsInput, Threshold, Tracker, TrackingInput};
         TrackingInput {
             threshold: self.threshold.map(|t| match t {
@@ -163,17 +251,17 @@ impl CentroidArgs {
                 ModeArg::Lk => Tracker::Lk,
             },
             roi: self.roi,
-            points: points.map(|p| PointsInput::File(p.to_path_buf())),
-            targets,
-            gate_px,
-            search_px,
+            points: t.points.clone().map(PointsInput::File),
+            targets: t.targets,
+            gate_px: t.gate_px,
+            search_px: t.search_px,
         }
     }
 
     /// The firmware configuration of a single target (`centroid`), with an optional
     /// saturation level.
     pub fn config(&self, saturation: Option<u16>) -> anyhow::Result<CentroidConfig> {
-        let t = self.tracking(None, None, None, None);
+        let t = self.tracking(&TargetArgs::default());
         let mut c = crate::jobs::tracking::centroid_config(t.threshold, t.tracker, t.roi, false)
             .map_err(crate::jobs::SpecError::into_anyhow)?;
         c.saturation = saturation;
@@ -289,17 +377,6 @@ pub fn parse_bands(s: &str) -> Result<Bands, String> {
     Ok(Bands(out))
 }
 
-/// `--gate-px`: how far a target may move between two frames, a positive number of pixels.
-pub fn parse_gate_px(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!(
-            "--gate-px {s}: must be a positive number of pixels (how far a target may move \
-             between two frames and still be the same)"
-        )),
-    }
-}
-
 /// An integer flag's range, checked by clap (the message names the flag and the range).
 pub fn int_range(
     range: std::ops::RangeInclusive<u64>,
@@ -368,32 +445,20 @@ mod tests {
 /// The camera's view: static references and the scale from the scene (`track`, `analyze`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct ViewArgs {
-    /// Windows on parts of the scene that do not move (a wall, the ground, another building):
-    /// CSV `target,x,y,w,h` as --points, numbered r1, r2, ... in the report. Followed by
-    /// Lucas-Kanade; from them the camera's own motion per frame is estimated (a robust fit:
-    /// a reference that moves or is lost is left out and named) and removed from every
-    /// target; camera_motion.csv holds it, displacement.csv the raw position too.
-    #[arg(long, value_name = "FILE.csv")]
+    /// `$reference`: static windows.
+    #[arg(long, value_name = "FILE.csv", help = help("reference"))]
     pub reference: Option<std::path::PathBuf>,
-    /// With --reference: the camera's motion in the image: `translation` (one reference or
-    /// more), `similarity` (rotation, scale and shift: two or more; the default with two or
-    /// more) or `homography` (four or more: a camera that pans or tilts).
-    #[arg(long, value_enum, requires = "reference")]
+    /// `$camera_model`.
+    #[arg(long, value_enum, requires = "reference", help = help("camera_model"))]
     pub camera_model: Option<CameraModelArg>,
-    /// The scale from a known distance: `A,B,MM`, the distance in mm between two tracked
-    /// points, A and B a target (`3`) or a reference (`r2`); one scale for the whole frame.
-    #[arg(long, value_name = "A,B,MM", value_parser = parse_scale)]
+    /// `$scale`: `A,B,MM`.
+    #[arg(long, value_name = "A,B,MM", value_parser = parse_scale, help = help("scale"))]
     pub scale: Option<(String, String, f64)>,
-    /// The scale from each target's known diameter, mm (its blob's area in the image; a
-    /// centroid tracker): each target its own scale.
-    #[arg(long, value_name = "MM")]
+    /// `$target_size_mm`.
+    #[arg(long, value_name = "MM", value_parser = number("target_size_mm"), help = help("target_size_mm"))]
     pub target_size_mm: Option<f64>,
-    /// The structure's plane: CSV `x,y,x_mm,y_mm[,u_px]`, four or more points with their
-    /// image position (px) and their position in the plane (mm; `u_px` the image position's
-    /// standard uncertainty, default 0.5). A homography converts each target's motion with
-    /// its own local scale and direction (a structure seen at an angle); the displacement is
-    /// along the plane's y_mm (or x_mm with --axis x).
-    #[arg(long, value_name = "FILE.csv")]
+    /// `$world`: the structure's plane.
+    #[arg(long, value_name = "FILE.csv", help = help("world"))]
     pub world: Option<std::path::PathBuf>,
 }
 
@@ -464,33 +529,39 @@ pub fn choice<T: Copy + Send + Sync + 'static>(
 /// once for `analyze` and `track`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Recording {
-    /// Frames: a directory (its numbered *.png, *.tif, *.tiff, *.jpg sequence in natural name
-    /// order, so frame_2 comes before frame_10; other images beside it are named and ignored),
-    /// a pattern with `*`/`?` in the file name part (`rec/frame_*.png`), one multi-page TIFF, a
-    /// Photron recording named by its .cih/.cihx (8, 12-bit packed or 16 bit; the .mraw beside
-    /// it), a Phantom .cine (8, 16, packed 10-bit linearised to 12, packed 12), or a video file
-    /// (.avi, .mkv, .mp4, .mov, .m4v, .webm, .mxf; decoded by the `ffmpeg` program, luma, its
-    /// timestamps checked against --fps). Grey frames as stored (8 or 16 bits); colour frames
-    /// as their BT.601 luma, 0.299 R + 0.587 G + 0.114 B rounded, alpha ignored. Numbered files
-    /// must be consecutive (a gap is an error).
-    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|REC.cine|VIDEO")]
+    /// The frames (`$frames` in the settings table).
+    #[arg(long, value_name = "DIR|GLOB|FILE.tif|REC.cih|REC.cine|VIDEO", help = help("frames"))]
     pub frames: String,
-    /// Camera frame rate, frames per second: a number or a ratio (`30000/1001`). Default: the
-    /// rate a camera file states (Photron, Phantom); needed for image files and videos (a
-    /// container's rate is often not the capture rate: phone slow motion stores 30 fps for
-    /// 240). Given with a camera file, it overrides the file's rate (the report names both).
-    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    /// The camera's frame rate, Hz (`$fps`).
+    #[arg(long, value_name = "HZ", value_parser = number("fps"), help = help("fps"))]
     pub fps: Option<f64>,
-    /// With a video whose container plays at another constant rate than the camera recorded
-    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
-    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
-    /// container's rate, and the report names both rates. Without it a rate other than the
-    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
-    #[arg(long, requires = "fps")]
+    /// Read a slow-motion video's frames 1/fps apart (`$retime`).
+    #[arg(long, requires = "fps", help = help("retime"))]
     pub retime: bool,
-    /// Frames A..B of the recording only, 1-based and inclusive (as `FILE#N` and the labels
-    /// `frame K of N` count them; `A..` to the end, `..B` from the start): a camera file with a
-    /// damaged time stamp or a bad frame at one end, or one part of a long recording.
-    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse)]
+    /// Frames A..B only (`$frame_range`).
+    #[arg(long, value_name = "A..B", value_parser = crate::frames::FrameRange::parse, help = help("frame_range"))]
     pub frame_range: Option<crate::frames::FrameRange>,
+}
+
+impl Recording {
+    /// The frames as the library's [`crate::jobs::FramesInput`].
+    pub fn input(&self) -> crate::jobs::FramesInput {
+        crate::jobs::FramesInput {
+            frames: self.frames.clone(),
+            retime: self.retime,
+            frame_range: self.frame_range,
+        }
+    }
+
+    /// The frame rate and exposure resolved against the recording's own (with `exposure_ms`,
+    /// the user's).
+    pub fn rates(&self, exposure_ms: Option<f64>) -> anyhow::Result<crate::frames::Rates> {
+        crate::frames::resolve_rates(
+            &self.frames,
+            self.fps,
+            exposure_ms,
+            self.retime,
+            self.frame_range,
+        )
+    }
 }

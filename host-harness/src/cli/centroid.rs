@@ -30,12 +30,8 @@ pub struct Args {
     /// With a video file: its frame rate, Hz (the timestamps are checked against it).
     #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
     pub fps: Option<f64>,
-    /// With a video whose container plays at another constant rate than the camera recorded
-    /// at (phone slow motion: 240 fps stored as 30; a high-speed camera's AVI export at 25 fps):
-    /// read its frames 1/--fps apart. The timestamps are still checked regular, at the
-    /// container's rate, and the report names both rates. Without it a rate other than the
-    /// container's is an error (29.97 read as 30 is a mistake, not a retiming).
-    #[arg(long, requires = "fps")]
+    /// `$retime`.
+    #[arg(long, requires = "fps", help = super::args::help("retime"))]
     pub retime: bool,
     /// Frames A..B of each recording only (a camera file, a video or a multi-page TIFF),
     /// 1-based and inclusive, as the rows' `FILE#N` count them (`A..` to the end, `..B` from

@@ -18,17 +18,12 @@ pub enum QuantityArg {
     Acceleration,
 }
 
-/// `--exp-window`: `off`, `auto` or the window's value at the block's end.
+/// `--exp-window`: `off`, `auto` or the window's value at the block's end (its row's range).
 fn parse_exp(s: &str) -> Result<ExpChoice, String> {
     match s {
         "off" => Ok(ExpChoice::Off),
         "auto" => Ok(ExpChoice::Auto),
-        v => v
-            .parse::<f64>()
-            .ok()
-            .filter(|e| *e > 0.0 && *e < 1.0)
-            .map(ExpChoice::End)
-            .ok_or_else(|| format!("`{v}`: off, auto, or the value at the block's end (0 to 1)")),
+        v => super::args::number_in(Some("ema"), "exp_window")(v).map(ExpChoice::End),
     }
 }
 
@@ -44,52 +39,48 @@ pub struct Args {
     /// `.npy`'s coordinate that moves more; in a `displacement.csv`, `target N` or `N`).
     #[arg(long = "response-col", value_name = "NAME")]
     pub response_col: Vec<String>,
-    /// The responses' sample rate, Hz, when the file states none.
-    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    /// `$response_fs`.
+    #[arg(long, value_name = "HZ", value_parser = super::args::number("response_fs"), help = super::args::help("response_fs"))]
     pub response_fs: Option<f64>,
     /// The force: a DAQ file or CSV.
     #[arg(long, value_name = "FILE")]
     pub excitation: PathBuf,
-    /// The force's channel (default: the file's only channel).
-    #[arg(long, value_name = "NAME")]
+    /// `$excitation_col`.
+    #[arg(long, value_name = "NAME", help = super::args::help("excitation_col"))]
     pub excitation_col: Option<String>,
-    /// The force's sample rate, Hz, when the file states none.
-    #[arg(long, value_name = "HZ", value_parser = super::args::parse_rate)]
+    /// `$excitation_fs`.
+    #[arg(long, value_name = "HZ", value_parser = super::args::number("excitation_fs"), help = super::args::help("excitation_fs"))]
     pub excitation_fs: Option<f64>,
-    /// An impact test: hits found in the force, double hits and clipped hits left out and
-    /// named, the rest averaged (default: a continuous force, Welch segments).
-    #[arg(long)]
+    /// `$impact`.
+    #[arg(long, help = super::args::help("impact"))]
     pub impact: bool,
-    /// Impact: the exponential window (`off`, `auto`: when a response has not decayed by the
-    /// block's end, or its value at the block's end, e.g. 0.01); its damping is removed.
-    #[arg(long, value_name = "off|auto|END", default_value = "auto", value_parser = parse_exp)]
+    /// `$exp_window`.
+    #[arg(long, value_name = "off|auto|END", default_value = super::args::given("exp_window"), value_parser = parse_exp, help = super::args::help("exp_window"))]
     pub exp_window: ExpChoice,
-    /// Impact: the longest block after a hit, s (default: the hits' spacing).
-    #[arg(long, value_name = "S")]
+    /// `$block_s`.
+    #[arg(long, value_name = "S", value_parser = super::args::number("block_s"), help = super::args::help("block_s"))]
     pub block_s: Option<f64>,
-    /// The responses' first sample came this long after the force's, s (negative: before).
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    /// `$delay_s`.
+    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value = super::args::given("delay_s"), value_parser = super::args::number("delay_s"), help = super::args::help("delay_s"))]
     pub delay_s: f64,
-    /// What the responses measure (sets the FRF's residual terms).
-    #[arg(long, value_enum, default_value_t = QuantityArg::Displacement)]
+    /// `$response_quantity`.
+    #[arg(long, value_enum, default_value = super::args::given("response_quantity"), help = super::args::help("response_quantity"))]
     pub response_quantity: QuantityArg,
     /// Frequency bands, Hz: one mode per band (default: every mode the stabilisation
     /// diagram shows between --f-min-hz and --f-max-hz).
     #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
     pub bands: Option<Bands>,
-    /// Lowest frequency fitted, Hz (default: the bands', else 1 % of the top, at least 0.5).
-    #[arg(long, value_name = "HZ")]
+    /// `$f_min_hz`.
+    #[arg(long, value_name = "HZ", value_parser = super::args::number_in(Some("ema"), "f_min_hz"), help = super::args::help_in("ema", "f_min_hz"))]
     pub f_min_hz: Option<f64>,
-    /// Highest frequency fitted, Hz (default: the bands', else 0.8 x the slower record's
-    /// Nyquist frequency).
-    #[arg(long, value_name = "HZ")]
+    /// `$f_max_hz`.
+    #[arg(long, value_name = "HZ", value_parser = super::args::number("f_max_hz"), help = super::args::help("f_max_hz"))]
     pub f_max_hz: Option<f64>,
-    /// LSCF's highest model order.
-    #[arg(long, value_name = "N", default_value_t = 48)]
+    /// `$max_order`.
+    #[arg(long, value_name = "N", default_value = super::args::given("max_order"), value_parser = super::args::whole::<usize>("max_order"), help = super::args::help("max_order"))]
     pub max_order: usize,
-    /// Continuous force: samples per Welch segment (default: the largest power of two with
-    /// at least 8 half-overlapping segments, up to 65536).
-    #[arg(long, value_name = "N")]
+    /// `$nperseg`: a continuous force's Welch segment.
+    #[arg(long, value_name = "N", value_parser = super::args::whole_in::<usize>(Some("ema"), "nperseg"), help = super::args::help_in("ema", "nperseg"))]
     pub nperseg: Option<usize>,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "ema")]

@@ -19,8 +19,8 @@ pub struct Args {
     /// Input CSV file with a header row.
     #[arg(long, value_name = "FILE.csv")]
     pub input: PathBuf,
-    /// Sampling rate of both columns, in Hz (> 0).
-    #[arg(long, value_name = "HZ")]
+    /// `$fs`: both columns' sampling rate.
+    #[arg(long, value_name = "HZ", value_parser = super::args::number_in(Some("frf"), "fs"), help = super::args::help_in("frf", "fs"))]
     pub fs: f64,
     /// Header name of the input (excitation) column.
     #[arg(long, value_name = "COL")]

@@ -29,8 +29,8 @@ pub struct Args {
     /// transducer noise vary (paper section 4.4).
     #[arg(long)]
     pub fixed_structure: bool,
-    /// Worker threads (default: all cores).
-    #[arg(long, default_value_t = 0)]
+    /// `$threads`.
+    #[arg(long, default_value = super::args::given("threads"), value_parser = super::args::whole::<usize>("threads"), help = super::args::help("threads"))]
     pub threads: usize,
     /// Output directory. Default: `out/<preset>-<config hash>`, resumed automatically when
     /// it exists (running the same command twice re-reports the finished study).

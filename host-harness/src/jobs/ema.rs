@@ -8,10 +8,8 @@ use crate::analysis::ema::run::EmaRequest;
 use crate::analysis::ema::{EmaSettings, Excitation, ExpChoice};
 use crate::analysis::modal::FrfForm;
 use crate::analysis::oma::cluster::ClusterRule;
+use crate::setting::table;
 use std::path::PathBuf;
-
-/// The smallest value at a block's end an exponential window may have (`$exp_window`).
-pub const MIN_EXP_END: f64 = 1e-3;
 
 /// `ema`'s settings as given.
 #[derive(Debug, Clone, PartialEq)]
@@ -188,21 +186,9 @@ fn check_alone(input: &EmaInput) -> SpecResult<()> {
         )));
     }
     if let ExpChoice::End(e) = input.exp_window {
-        // below 0.1 % the window adds a damping that swamps every mode's own
-        if !(MIN_EXP_END..1.0).contains(&e) {
-            return Err(SpecError::setting(format!(
-                "$exp_window {e:?}: the window's value at the block's end, from \
-                 {MIN_EXP_END} to below 1 (or off, auto); a smaller end value damps the \
-                 modes away"
-            )));
-        }
+        table::number("ema", "exp_window", e)?;
     }
-    if !(2..=200).contains(&input.max_order) {
-        return Err(SpecError::setting(format!(
-            "$max_order {}: 2 to 200",
-            input.max_order
-        )));
-    }
+    table::whole("ema", "max_order", input.max_order as u64)?;
     if let Some(b) = input.block_s {
         super::positive("$block_s", b, "seconds")?;
     }

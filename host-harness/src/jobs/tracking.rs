@@ -5,6 +5,7 @@
 use super::{SpecError, SpecResult};
 use crate::analysis::points::{read_points, Point, PointTracker, ThresholdRule};
 use crate::analysis::track_run::Targets;
+use crate::setting::table;
 use firmware_core::centroid::{CentroidConfig, Mode, Roi};
 use std::path::PathBuf;
 
@@ -62,11 +63,15 @@ impl Default for TrackingInput {
     }
 }
 
-/// The blobs' gate when none is given, px.
-pub const DEFAULT_GATE_PX: f64 = 10.0;
+/// The blobs' gate when none is given, px (the settings table's default of `$gate_px`).
+fn default_gate_px() -> f64 {
+    table::row("gate_px")
+        .job_default()
+        .expect("the table states the gate's default")
+}
 
-/// The most blobs followed (`$targets`).
-pub const MAX_TARGETS: usize = 32;
+/// The most blobs followed (`$targets`, the settings table's range).
+pub const MAX_TARGETS: usize = table::MAX_TARGETS as usize;
 
 /// Checked tracking: which targets, and the centroid's configuration.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,18 +117,10 @@ impl Tracking {
             ));
         }
         if let Some(g) = gate_px {
-            super::positive(
-                "gate_px",
-                g,
-                "pixels: how far a target may move between two frames and still be the same",
-            )?;
+            table::number("track", "gate_px", g)?;
         }
         if let Some(k) = targets {
-            if !(1..=MAX_TARGETS).contains(&k) {
-                return Err(SpecError::setting(format!(
-                    "$targets {k}: 1 to {MAX_TARGETS} targets"
-                )));
-            }
+            table::whole("track", "targets", k as u64)?;
         }
         if search_px.is_some()
             && (points.is_none() || !matches!(tracker, Tracker::Lk | Tracker::Auto))
@@ -145,7 +142,7 @@ impl Tracking {
             (Some(points), _) => {
                 Targets::Points(points, point_tracker(tracker, threshold, search_px))
             }
-            (None, Some(k)) => Targets::Blobs(k, gate_px.unwrap_or(DEFAULT_GATE_PX)),
+            (None, Some(k)) => Targets::Blobs(k, gate_px.unwrap_or_else(default_gate_px)),
             (None, None) => Targets::Whole,
         };
         Ok(Tracking {
@@ -339,7 +336,7 @@ mod tests {
             ..Default::default()
         })
         .unwrap();
-        assert_eq!(t.targets, Targets::Blobs(3, DEFAULT_GATE_PX));
+        assert_eq!(t.targets, Targets::Blobs(3, 10.0));
         let t = Tracking::new(TrackingInput {
             tracker: Tracker::Lk,
             points: Some(PointsInput::List(vec![point()])),

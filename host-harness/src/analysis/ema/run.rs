@@ -289,7 +289,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
             .iter()
             .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
             .collect();
-        crate::plots::frf_db_figure(stem, title, y_label, &curves)
+        crate::plots::lines_figure(stem, title, y_label, &curves, crate::plots::Lines::FrfDb)
     };
     let magnitude = draw(
         "frf",

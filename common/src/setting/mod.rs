@@ -5,6 +5,8 @@
 //! rules of each job live in the jobs (`host_harness::jobs`). Also the rules several jobs share: a positive
 //! number, ordered bands, the Nyquist frequency.
 
+pub mod table;
+
 /// How a [`SpecError`] spells a setting.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Naming {
@@ -39,6 +41,7 @@ pub const KEYS: &[&str] = &[
     "camera_model",
     "compensate_exposure",
     "delay_s",
+    "detrend",
     "excitation_col",
     "excitation_fs",
     "exp_window",
@@ -56,6 +59,7 @@ pub const KEYS: &[&str] = &[
     "gate_px",
     "impact",
     "input_col",
+    "lost_frames",
     "max_order",
     "minutes",
     "mm_per_px",
@@ -100,6 +104,7 @@ pub const KEYS: &[&str] = &[
     "to",
     "tracker",
     "twin",
+    "window",
     "world",
     "x",
     "y",
