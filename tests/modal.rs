@@ -8,17 +8,10 @@ use std::path::Path;
 
 /// `(method, mode, f_hz, damping)` from modes.csv.
 fn modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
-    let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
-    let mut lines = text.lines();
-    assert_eq!(
-        lines.next().unwrap(),
-        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method,\
-         f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,amplitude_u,amplitude_lo,\
-         amplitude_hi"
-    );
-    lines
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
+    crate::util::modes_csv_rows(dir)
+        .into_iter()
+        .map(|c| {
+            let l = c.join(",");
             assert_eq!(c[0], "vision");
             assert_eq!(c[1], "", "a mode belongs to all targets");
             // an interval, where given, is around its estimate, its u positive

@@ -72,3 +72,19 @@ pub fn analyze_recording(rec: &Path, frames: &str, extra: &[&str]) -> Output {
     args.extend_from_slice(extra);
     harness(&args)
 }
+
+/// The rows of `modes.csv` in `dir`, each a row of cells, its header checked to be the
+/// multi-target one with the interval columns.
+pub fn modes_csv_rows(dir: &std::path::Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("modes.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "system,target,mode,band_lo_hz,band_hi_hz,f_hz,amplitude,damping,e2pr,method,\
+         f_hz_u,f_hz_lo,f_hz_hi,damping_u,damping_lo,damping_hi,amplitude_u,amplitude_lo,\
+         amplitude_hi"
+    );
+    lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}

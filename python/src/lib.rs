@@ -345,12 +345,7 @@ struct TrackingArgs {
 impl TrackingArgs {
     /// The tracking settings as the library takes them (checked by [`Tracking::new`]).
     fn input(self) -> PyResult<TrackingInput> {
-        let points = match (self.points, self.points_file) {
-            (Some(p), None) => Some(PointsInput::List(points_of(p))),
-            (None, Some(f)) => Some(PointsInput::File(f.into())),
-            (None, None) => None,
-            (Some(_), Some(_)) => return Err(bad("give points or a points file, not both")),
-        };
+        let points = points_input(self.points, self.points_file, "points")?;
         Ok(TrackingInput {
             threshold: match (self.auto_threshold, self.threshold) {
                 (true, _) => Some(Threshold::Auto),
@@ -363,6 +358,20 @@ impl TrackingArgs {
             gate_px: self.gate_px,
             search_px: self.search_px,
         })
+    }
+}
+
+/// Windows given as a list or as a file (`what` names them in the error when both are).
+fn points_input(
+    list: Option<Vec<PointTuple>>,
+    file: Option<String>,
+    what: &str,
+) -> PyResult<Option<PointsInput>> {
+    match (list, file) {
+        (Some(p), None) => Ok(Some(PointsInput::List(points_of(p)))),
+        (None, Some(f)) => Ok(Some(PointsInput::File(f.into()))),
+        (None, None) => Ok(None),
+        (Some(_), Some(_)) => Err(bad(format!("give {what} or a file, not both"))),
     }
 }
 
@@ -409,12 +418,7 @@ impl ViewArgs {
     fn input(self) -> PyResult<ViewInput> {
         use host_harness::analysis::view::WorldPoint;
         use host_harness::geometry::Model;
-        let reference = match (self.reference, self.reference_file) {
-            (Some(p), None) => Some(PointsInput::List(points_of(p))),
-            (None, Some(f)) => Some(PointsInput::File(f.into())),
-            (None, None) => None,
-            (Some(_), Some(_)) => return Err(bad("give reference points or a file, not both")),
-        };
+        let reference = points_input(self.reference, self.reference_file, "reference points")?;
         let world = match (self.world, self.world_file) {
             (Some(p), None) => Some(WorldInput::List(
                 p.into_iter()

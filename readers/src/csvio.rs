@@ -16,6 +16,27 @@ pub struct Columns {
     pub values: Vec<Vec<f64>>,
 }
 
+/// A CSV file opened for reading, cells trimmed (`flexible`: rows may differ in length), and
+/// its header row; errors name the file as `name`.
+pub fn open_with_header(
+    path: &Path,
+    name: &str,
+    flexible: bool,
+) -> anyhow::Result<(csv::Reader<std::fs::File>, Vec<String>)> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .flexible(flexible)
+        .from_path(path)
+        .map_err(|e| bad_input(format!("{name}: cannot read: {e}")))?;
+    let header = rdr
+        .headers()
+        .map_err(|e| bad_input(format!("{name}: cannot read the header: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    Ok((rdr, header))
+}
+
 /// Reads the columns `wanted` (by header name) from the CSV file at `path`.
 ///
 /// Errors (all [`crate::BadInput`]): the file cannot be opened, a column is missing from the

@@ -60,16 +60,7 @@ pub enum ThresholdRule {
 /// Reads and checks a points file; errors name the file and row (the header is row 1).
 pub fn read_points(path: &Path) -> anyhow::Result<Vec<Point>> {
     let name = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| bad_input(format!("{name}: cannot read: {e}")))?;
-    let header: Vec<String> = rdr
-        .headers()
-        .map_err(|e| bad_input(format!("{name}: cannot read the header: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
+    let (mut rdr, header) = vibcam_readers::csvio::open_with_header(path, &name, false)?;
     let cols = PointColumns::of(&header, &name)?;
     let mut points: Vec<Point> = Vec::new();
     for (i, rec) in rdr.records().enumerate() {

@@ -114,16 +114,7 @@ impl ViewSettings {
 /// position's standard uncertainty); errors name the file and row.
 pub fn read_world(path: &Path) -> anyhow::Result<Vec<WorldPoint>> {
     let name = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| bad_input(format!("{name}: cannot read: {e}")))?;
-    let header: Vec<String> = rdr
-        .headers()
-        .map_err(|e| bad_input(format!("{name}: cannot read the header: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
+    let (mut rdr, header) = vibcam_readers::csvio::open_with_header(path, &name, false)?;
     let col = |c: &str| header.iter().position(|h| h == c);
     let need = ["x", "y", "x_mm", "y_mm"];
     let mut idx = [0usize; 4];

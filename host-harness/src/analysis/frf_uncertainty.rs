@@ -313,6 +313,20 @@ struct Fitted {
     at_line: f64,
 }
 
+impl Intervals {
+    /// Why there are no intervals (a report's line), when the H1 has too few segments.
+    pub fn none_why(&self) -> Option<String> {
+        (self.groups == 0).then(|| {
+            format!(
+                "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there \
+                 is no spread to measure them from. $nperseg (a quarter of the record or less, \
+                 half-overlapped by default) gives them.",
+                self.segments, MIN_SEGMENTS
+            )
+        })
+    }
+}
+
 /// The intervals of an analysis's two systems, per mode in band order.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Intervals {

@@ -135,30 +135,12 @@ fn spread_frames(
     let count = source.count(fps)?;
     let step = count.map_or(1, |n| (n / req.shown).max(1));
     let mut frames = Vec::new();
-    let mut k = 0usize;
-    #[derive(Debug)]
-    struct Enough;
-    impl std::fmt::Display for Enough {
-        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-            f.write_str("enough frames")
-        }
-    }
-    impl std::error::Error for Enough {}
-    let r = source.for_each(fps, |label, frame| {
+    source.decode_while(fps, |k, label, frame| {
         if k.is_multiple_of(step) {
             frames.push((label, frame.to_image_within(SHOWN_MAX_SIDE)?));
         }
-        k += 1;
-        if frames.len() >= req.shown {
-            return Err(anyhow::Error::new(Enough));
-        }
-        Ok(())
-    });
-    if let Err(e) = r {
-        if !e.is::<Enough>() {
-            return Err(e);
-        }
-    }
+        Ok(frames.len() < req.shown)
+    })?;
     Ok(frames)
 }
 

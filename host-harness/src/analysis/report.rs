@@ -165,15 +165,8 @@ fn modes_table(a: &Analysis) -> String {
 fn intervals_text(a: &Analysis, i: &super::frf_uncertainty::Intervals) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
-    if i.groups == 0 {
-        let _ = writeln!(
-            s,
-            "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
-             no spread to measure them from. $nperseg (a quarter of the record or less, \
-             half-overlapped by default) gives them.",
-            i.segments,
-            super::frf_uncertainty::MIN_SEGMENTS
-        );
+    if let Some(why) = i.none_why() {
+        let _ = writeln!(s, "{why}");
     } else {
         let _ = writeln!(
             s,

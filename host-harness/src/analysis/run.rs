@@ -250,7 +250,7 @@ fn one_target_page(
         .into_iter()
         .collect();
     let iv = |i: Option<(f64, f64, f64)>, d: usize| {
-        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
+        crate::export::html::range_cell(i.map(|(_, lo, hi)| (lo, hi)), d)
     };
     let rows: Vec<Vec<String>> = a
         .map(|a| {
@@ -271,7 +271,7 @@ fn one_target_page(
                 .collect()
         })
         .unwrap_or_default();
-    let head: Vec<String> = [
+    let head = crate::export::html::header(&[
         "system",
         "mode",
         "f (Hz)",
@@ -280,10 +280,7 @@ fn one_target_page(
         "95 % interval",
         "damping",
         "95 % interval",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    ]);
     let figures = crate::plots::page_figures(figures);
     report_html(&Report {
         title: format!("analyze: {}", req.frames),

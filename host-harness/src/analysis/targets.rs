@@ -337,17 +337,8 @@ pub fn read_shape_reference(
     bands: usize,
 ) -> anyhow::Result<ShapeReference> {
     let name = path.display();
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .flexible(true)
-        .from_path(path)
-        .map_err(|e| bad_input(format!("$shape_reference {name}: cannot read it: {e}")))?;
-    let header: Vec<String> = reader
-        .headers()
-        .map_err(|e| bad_input(format!("$shape_reference {name}: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
+    let (mut reader, header) =
+        crate::csvio::open_with_header(path, &format!("$shape_reference {name}"), true)?;
     let col = |c: &str| header.iter().position(|h| h == c);
     let (Some(cm), Some(ct), Some(cr)) = (col("mode"), col("target"), col("re")) else {
         return Err(bad_input(format!(

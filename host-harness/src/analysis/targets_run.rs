@@ -226,7 +226,7 @@ fn page(
 /// intervals.
 fn modes_table(a: &TargetAnalysis) -> (Vec<String>, Vec<Vec<String>>) {
     let iv = |i: Option<(f64, f64, f64)>, d: usize| {
-        i.map_or(String::new(), |(_, lo, hi)| format!("{lo:.d$} .. {hi:.d$}"))
+        crate::export::html::range_cell(i.map(|(_, lo, hi)| (lo, hi)), d)
     };
     let rows: Vec<Vec<String>> = a
         .modes
@@ -243,7 +243,7 @@ fn modes_table(a: &TargetAnalysis) -> (Vec<String>, Vec<Vec<String>>) {
             ]
         })
         .collect();
-    let head: Vec<String> = [
+    let head = crate::export::html::header(&[
         "target",
         "mode",
         "f (Hz)",
@@ -251,10 +251,7 @@ fn modes_table(a: &TargetAnalysis) -> (Vec<String>, Vec<Vec<String>>) {
         "|H1|",
         "damping",
         "95 % interval",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    ]);
     (head, rows)
 }
 
@@ -514,15 +511,8 @@ fn intervals_text(s: &mut String, a: &TargetAnalysis) {
         .flatten()
         .find_map(|an| an.intervals.as_ref());
     let Some(i) = first else { return };
-    if i.groups == 0 {
-        let _ = writeln!(
-            s,
-            "\n95 % intervals: none. The H1 averages {} segment(s): with fewer than {} there is \
-             no spread to measure them from. $nperseg (a quarter of the record or less, \
-             half-overlapped by default) gives them.",
-            i.segments,
-            super::frf_uncertainty::MIN_SEGMENTS
-        );
+    if let Some(why) = i.none_why() {
+        let _ = writeln!(s, "{why}");
         return;
     }
     let _ = writeln!(

@@ -337,19 +337,10 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
             "{flag} needs $accel (without it the analysis is output-only)"
         )));
     }
-    if let Some(s) = input.mm_per_px {
-        super::positive("mm_per_px", s, "millimetres per pixel")?;
-    }
     let bands = input.bands.unwrap_or_default();
     super::bands_below_nyquist(&bands, rates.fps, "the camera's")?;
-    let tracking = Tracking::new(input.tracking)?;
-    let scaled = input.mm_per_px.is_some() || input.view.has_scale();
-    let view = super::view::check(
-        input.view,
-        input.mm_per_px,
-        &tracking.targets,
-        tracking.tracker,
-    )?;
+    let (tracking, view, scaled) =
+        super::view::tracking_and_view(input.tracking, input.view, input.mm_per_px)?;
     Ok(FramesRequest {
         frames: input.frames.frames,
         retime: input.frames.retime,

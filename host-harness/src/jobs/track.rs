@@ -1,6 +1,6 @@
 //! `track`: frames in, each target's position per frame out.
 
-use super::{FramesInput, Rates, SpecResult, Tracking, TrackingInput};
+use super::{FramesInput, Rates, SpecResult, TrackingInput};
 use crate::analysis::track_run::Request;
 use crate::analysis::{Axis, DisplacementSettings};
 use crate::lost_frames::LostFramePolicy;
@@ -38,20 +38,10 @@ pub struct TrackSpec {
 impl TrackSpec {
     /// Checks `input` at `rates` (from [`crate::frames::resolve_rates`]).
     pub fn new(input: TrackInput, rates: Rates) -> SpecResult<Self> {
-        let tracking = Tracking::new(input.tracking)?;
-        let has_scale = input.view.has_scale();
-        let view = super::view::check(
-            input.view,
-            input.mm_per_px,
-            &tracking.targets,
-            tracking.tracker,
-        )?;
-        let mm_per_px = match input.mm_per_px {
-            Some(s) => Some(super::positive("mm_per_px", s, "millimetres per pixel")?),
-            // the scene's scale, per target: 1 stands in
-            None if has_scale => Some(1.0),
-            None => None,
-        };
+        let (tracking, view, scaled) =
+            super::view::tracking_and_view(input.tracking, input.view, input.mm_per_px)?;
+        // the scene's scale, per target: 1 stands in
+        let mm_per_px = input.mm_per_px.or(scaled.then_some(1.0));
         let displacement = mm_per_px.map(|mm_per_px| DisplacementSettings {
             lost_frames: input.lost_frames,
             mm_per_px,

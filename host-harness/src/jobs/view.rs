@@ -45,6 +45,22 @@ impl ViewInput {
     }
 }
 
+/// The targets and the view checked together (`track`, `analyze`): `$mm_per_px` in its range,
+/// the targets, then the view against them and the one scale; with whether a scale was given.
+pub fn tracking_and_view(
+    tracking: super::TrackingInput,
+    view: ViewInput,
+    mm_per_px: Option<f64>,
+) -> SpecResult<(super::Tracking, ViewSettings, bool)> {
+    if let Some(s) = mm_per_px {
+        crate::setting::table::number("track", "mm_per_px", s)?;
+    }
+    let tracking = super::Tracking::new(tracking)?;
+    let scaled = mm_per_px.is_some() || view.has_scale();
+    let view = check(view, mm_per_px, &tracking.targets, tracking.tracker)?;
+    Ok((tracking, view, scaled))
+}
+
 /// Checks `input` against the targets and the tracker; `mm_per_px` the one scale given.
 pub fn check(
     input: ViewInput,

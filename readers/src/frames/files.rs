@@ -816,32 +816,39 @@ impl FrameSource {
         }
     }
 
+    /// Calls `f(index, label, frame)` for the frames in order (as [`FrameSource::for_each`])
+    /// until it returns `false`: no frame after that one is decoded.
+    pub fn decode_while(
+        &self,
+        fps: f64,
+        mut f: impl FnMut(usize, String, &GreyFrame) -> anyhow::Result<bool>,
+    ) -> anyhow::Result<()> {
+        let mut k = 0usize;
+        let r = self.for_each(fps, |label, frame| {
+            let go_on = f(k, label, frame)?;
+            k += 1;
+            match go_on {
+                true => Ok(()),
+                false => Err(anyhow::Error::new(PastTheRange)),
+            }
+        });
+        match r {
+            Err(e) if e.is::<PastTheRange>() => Ok(()),
+            r => r,
+        }
+    }
+
     /// The `index`-th frame (0-based) and its label, decoding no further; `None` when the
     /// source has fewer frames.
     pub fn frame_at(&self, fps: f64, index: usize) -> anyhow::Result<Option<(String, GreyFrame)>> {
-        #[derive(Debug)]
-        struct Found;
-        impl std::fmt::Display for Found {
-            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("found")
-            }
-        }
-        impl std::error::Error for Found {}
-        let mut k = 0usize;
         let mut got = None;
-        let r = self.for_each(fps, |label, frame| {
+        self.decode_while(fps, |k, label, frame| {
             if k == index {
                 got = Some((label, frame.clone()));
-                return Err(anyhow::Error::new(Found));
             }
-            k += 1;
-            Ok(())
-        });
-        match r {
-            Err(e) if e.is::<Found>() => Ok(got),
-            Err(e) => Err(e),
-            Ok(()) => Ok(None),
-        }
+            Ok(k < index)
+        })?;
+        Ok(got)
     }
 
     /// The frames of `indices` (0-based, ascending), each with its index: files and frames in
@@ -871,23 +878,14 @@ impl FrameSource {
         let Some(&last) = indices.last() else {
             return Ok(Vec::new());
         };
-        let mut k = 0usize;
         let mut got = Vec::with_capacity(indices.len());
-        let r = self.for_each(fps, |_, frame| {
+        self.decode_while(fps, |k, _, frame| {
             if indices.binary_search(&k).is_ok() {
                 got.push((k, frame.clone()));
             }
-            k += 1;
-            if k > last {
-                return Err(anyhow::Error::new(PastTheRange));
-            }
-            Ok(())
-        });
-        match r {
-            Err(e) if e.is::<PastTheRange>() => Ok(got),
-            Err(e) => Err(e),
-            Ok(()) => Ok(got),
-        }
+            Ok(k < last)
+        })?;
+        Ok(got)
     }
 
     /// Calls `f(label, frame)` for every frame in order, one frame in memory at a time (a

@@ -3,8 +3,7 @@
 //! and `frf.uff` (datasets 58, function type 4). Typed rows in, bytes out;
 //! `analysis::ema::run` builds the rows.
 
-use super::targets::MODES_HEADER;
-use super::{opt, push_intervals, INTERVAL_COLUMNS};
+use super::targets::{modes_lines, ModesLine};
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
@@ -49,26 +48,18 @@ pub struct EmaModeRow {
 /// `modes.csv`: the multi-target columns (`target`, `amplitude` and `e2pr` empty), method
 /// `lscf`; then the interval columns (amplitude's empty).
 pub fn modes_csv(rows: &[EmaModeRow]) -> Vec<u8> {
-    let mut s = String::from(MODES_HEADER.trim_end());
-    s.push(',');
-    s.push_str(INTERVAL_COLUMNS);
-    s.push('\n');
-    for m in rows {
-        let (lo, hi) = m.band_hz.map_or((None, None), |b| (Some(b.0), Some(b.1)));
-        let _ = write!(
-            s,
-            "{},,{},{},{},{},,{},,lscf",
-            m.system,
-            m.mode,
-            opt(lo),
-            opt(hi),
-            m.f_hz,
-            m.damping
-        );
-        push_intervals(&mut s, &[m.intervals[0], m.intervals[1], None]);
-        s.push('\n');
-    }
-    s.into_bytes()
+    modes_lines(rows.iter().map(|m| ModesLine {
+        system: m.system,
+        target: None,
+        mode: m.mode,
+        band_hz: m.band_hz,
+        f_hz: Some(m.f_hz),
+        amplitude: None,
+        damping: Some(m.damping),
+        e2pr: None,
+        method: "lscf",
+        intervals: [m.intervals[0], m.intervals[1], None],
+    }))
 }
 
 #[cfg(test)]

@@ -17,6 +17,18 @@ use std::fmt::Write as _;
 /// A grey frame for the page (made by the readers: [`vibcam_readers::frames::GreyFrame::to_image`]).
 pub use vibcam_readers::frames::FrameImage;
 
+/// A table's header row from its column names.
+pub fn header(names: &[&str]) -> Vec<String> {
+    names.iter().map(|s| s.to_string()).collect()
+}
+
+/// An interval `(lo, hi)` as a table cell, `lo .. hi` to `decimals` places (empty without one).
+pub fn range_cell(range: Option<(f64, f64)>, decimals: usize) -> String {
+    range.map_or(String::new(), |(lo, hi)| {
+        format!("{lo:.decimals$} .. {hi:.decimals$}")
+    })
+}
+
 /// A target on the frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {

@@ -2,9 +2,9 @@
 //! `modes.csv` and `shapes.csv` in the multi-target columns, `svd.csv`, `shapes.uff`. Typed
 //! rows in, bytes out; `analysis::oma::run` builds the rows from its results.
 
-use super::targets::{MODES_HEADER, SHAPES_HEADER};
+use super::opt;
+use super::targets::{modes_lines, ModesLine, SHAPES_HEADER};
 use super::uff::{write_dataset55, Shape55};
-use super::{opt, push_intervals, INTERVAL_COLUMNS};
 use num_complex::Complex64;
 use std::fmt::Write as _;
 
@@ -31,27 +31,18 @@ pub struct OmaModeRow {
 /// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
 /// `target` and `e2pr` empty; then [`INTERVAL_COLUMNS`] (empty where not estimated).
 pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
-    let mut s = String::from(MODES_HEADER.trim_end());
-    s.push(',');
-    s.push_str(INTERVAL_COLUMNS);
-    s.push('\n');
-    for m in rows {
-        let (lo, hi) = m.band_hz.map_or((None, None), |b| (Some(b.0), Some(b.1)));
-        let _ = write!(
-            s,
-            "vision,,{},{},{},{},{},{},,{}",
-            m.mode,
-            opt(lo),
-            opt(hi),
-            m.f_hz,
-            opt(m.amplitude),
-            opt(m.damping),
-            m.method
-        );
-        push_intervals(&mut s, &m.intervals);
-        s.push('\n');
-    }
-    s.into_bytes()
+    modes_lines(rows.iter().map(|m| ModesLine {
+        system: "vision",
+        target: None,
+        mode: m.mode,
+        band_hz: m.band_hz,
+        f_hz: Some(m.f_hz),
+        amplitude: m.amplitude,
+        damping: m.damping,
+        e2pr: None,
+        method: m.method,
+        intervals: m.intervals,
+    }))
 }
 
 /// One target's coefficient in one mode of one method.

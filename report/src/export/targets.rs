@@ -47,27 +47,70 @@ pub struct ModeRow {
 /// `h1`: the modes of the FRFs; output-only analysis writes the same columns), then
 /// [`INTERVAL_COLUMNS`] (empty where not estimated).
 pub fn modes_csv(rows: &[ModeRow]) -> Vec<u8> {
+    modes_lines(rows.iter().map(|m| ModesLine {
+        system: if m.target == 0 {
+            "accelerometer"
+        } else {
+            "vision"
+        },
+        target: Some(m.target),
+        mode: m.mode,
+        band_hz: Some(m.band_hz),
+        f_hz: m.f_hz,
+        amplitude: Some(m.amplitude),
+        damping: m.damping,
+        e2pr: m.e2pr.map(round_e2pr),
+        method: "h1",
+        intervals: m.intervals,
+    }))
+}
+
+/// One line of the multi-target `modes.csv`, as every analysis writes it (an empty cell for
+/// each `None`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModesLine<'a> {
+    /// `accelerometer` or `vision`.
+    pub system: &'a str,
+    /// Target number.
+    pub target: Option<usize>,
+    /// Mode, 1-based.
+    pub mode: usize,
+    /// The band searched, Hz.
+    pub band_hz: Option<(f64, f64)>,
+    /// Natural frequency, Hz.
+    pub f_hz: Option<f64>,
+    /// Amplitude.
+    pub amplitude: Option<f64>,
+    /// Damping ratio.
+    pub damping: Option<f64>,
+    /// E2PR.
+    pub e2pr: Option<f64>,
+    /// The method (`h1`, `fdd`, `efdd`, `ssi`, `lscf`).
+    pub method: &'a str,
+    /// `(u, lo, hi)` of the frequency, the damping and the amplitude.
+    pub intervals: [Option<(f64, f64, f64)>; 3],
+}
+
+/// `modes.csv` of `lines`: [`MODES_HEADER`], then [`INTERVAL_COLUMNS`].
+pub fn modes_lines<'a>(lines: impl IntoIterator<Item = ModesLine<'a>>) -> Vec<u8> {
     let mut s = String::from(MODES_HEADER.trim_end());
     s.push(',');
     s.push_str(INTERVAL_COLUMNS);
     s.push('\n');
-    for m in rows {
-        let system = if m.target == 0 {
-            "accelerometer"
-        } else {
-            "vision"
-        };
+    for m in lines {
         let _ = write!(
             s,
-            "{system},{},{},{},{},{},{},{},{},h1",
-            m.target,
+            "{},{},{},{},{},{},{},{},{},{}",
+            m.system,
+            opt(m.target),
             m.mode,
-            m.band_hz.0,
-            m.band_hz.1,
+            opt(m.band_hz.map(|b| b.0)),
+            opt(m.band_hz.map(|b| b.1)),
             opt(m.f_hz),
-            m.amplitude,
+            opt(m.amplitude),
             opt(m.damping),
-            opt(m.e2pr.map(round_e2pr))
+            opt(m.e2pr),
+            m.method
         );
         push_intervals(&mut s, &m.intervals);
         s.push('\n');

@@ -119,9 +119,8 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
 /// the figures (caption, SVG), the report `text`.
 pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, String)>) -> String {
     use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
-    let iv = |i: Option<Interval>, d: usize| {
-        i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
-    };
+    let iv =
+        |i: Option<Interval>, d: usize| crate::export::html::range_cell(i.map(|i| (i.lo, i.hi)), d);
     let rows: Vec<Vec<String>> = r
         .modes
         .iter()
@@ -135,16 +134,13 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
             ]
         })
         .collect();
-    let head: Vec<String> = [
+    let head = crate::export::html::header(&[
         "mode",
         "f (Hz)",
         "95 % interval",
         "damping",
         "95 % interval",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    ]);
     let labels: Vec<String> = r
         .modes
         .iter()

@@ -216,9 +216,8 @@ fn markers(records: &Records) -> Vec<crate::export::html::Marker> {
 /// The page's table of modes: method, frequency, damping and their 95 % intervals.
 fn modes_table(r: &OmaResult) -> (Vec<String>, Vec<Vec<String>>) {
     let fmt = |v: Option<f64>, d: usize| v.map_or(String::new(), |v| format!("{v:.d$}"));
-    let range = |i: Option<Interval>, d: usize| {
-        i.map_or(String::new(), |i| format!("{:.d$} .. {:.d$}", i.lo, i.hi))
-    };
+    let range =
+        |i: Option<Interval>, d: usize| crate::export::html::range_cell(i.map(|i| (i.lo, i.hi)), d);
     let rows: Vec<Vec<String>> = r
         .modes
         .iter()
@@ -233,17 +232,14 @@ fn modes_table(r: &OmaResult) -> (Vec<String>, Vec<Vec<String>>) {
             ]
         })
         .collect();
-    let head: Vec<String> = [
+    let head = crate::export::html::header(&[
         "mode",
         "method",
         "f (Hz)",
         "95 % interval",
         "damping",
         "95 % interval",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    ]);
     (head, rows)
 }
 
