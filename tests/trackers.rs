@@ -354,6 +354,37 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     assert_eq!(lost, 0);
     // measured 0.063 px (the JPEG, the blur, the wall in the windows' margins)
     assert!(worst < 1.0, "worst {worst} px");
+    // the free decays of that track give the structure's mode by default (3.6 Hz, damping
+    // 10 %; before the decay method, no mode): measured 3.6000 Hz, 0.1000
+    let modal = tmp.path().join("modal");
+    let o = harness(&words(
+        "modal --displacement {} --axis x --out {}",
+        &[
+            tmp.path()
+                .join("grouped/displacement.csv")
+                .to_str()
+                .unwrap(),
+            modal.to_str().unwrap(),
+        ],
+    ));
+    assert_ok(&o);
+    let report = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(report.contains("regime: 2 free decay(s)"), "{report}");
+    let decay: Vec<Vec<String>> = crate::util::modes_csv_rows(&modal)
+        .into_iter()
+        .filter(|c| c[9] == "decay")
+        .collect();
+    assert_eq!(decay.len(), 1, "{report}");
+    let (f, z): (f64, f64) = (decay[0][5].parse().unwrap(), decay[0][7].parse().unwrap());
+    assert!(
+        (f - 3.6).abs() < 0.01 * 3.6 && (z - 0.1).abs() < 0.01,
+        "{f} Hz, {z}"
+    );
+    // no FDD line far from the mode (the pull's quasi-static line is no mode)
+    for c in crate::util::modes_csv_rows(&modal) {
+        let f: f64 = c[5].parse().unwrap();
+        assert!((f - 3.6).abs() < 0.5, "{} at {f} Hz: {report}", c[9]);
+    }
     // the colour video (lossless, before the JPEG) as the frames
     let rows = track_frames(
         &format!("{r}/frames.mkv"),

@@ -479,7 +479,7 @@ class AnalysisResult:
     """What an output-only analysis found (``host-harness analyze`` without ``--accel``).
 
     ``modes``: dict of arrays, one entry per mode and method (``method``: ``fdd``, ``efdd``,
-    ``ssi``; ``mode``, ``band_lo_hz``, ``band_hi_hz``, ``f_hz``, ``amplitude``, ``damping``,
+    ``ssi``, and ``decay`` when the record holds free decays; ``mode``, ``band_lo_hz``, ``band_hi_hz``, ``f_hz``, ``amplitude``, ``damping``,
     NaN where a method gives none; and each estimate's standard uncertainty and 95 % interval,
     ``f_hz_u``, ``f_hz_lo``, ``f_hz_hi`` and the same of ``damping`` and ``amplitude``, NaN
     where not estimated); ``shapes``: complex ``(modes, K)``, the row of each mode,

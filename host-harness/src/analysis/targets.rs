@@ -381,10 +381,10 @@ pub fn read_shape_reference(
 }
 
 /// In a shapes.csv with a `method` column (an output-only analysis gives one shape per mode
-/// and method), the rows of one method: h1 first, then ssi, efdd, fdd, else the first seen.
+/// and method), the rows of one method: h1 first, then ssi, decay, efdd, fdd, else the first seen.
 fn preferred_method(records: &[csv::StringRecord], c: usize) -> Option<(usize, String)> {
     let seen: Vec<&str> = records.iter().filter_map(|r| r.get(c)).collect();
-    ["h1", "ssi", "efdd", "fdd"]
+    ["h1", "ssi", "decay", "efdd", "fdd"]
         .into_iter()
         .find(|m| seen.contains(m))
         .or(seen.first().copied())

@@ -13,6 +13,7 @@
 pub mod bell;
 pub mod cluster;
 pub mod csd;
+pub mod decay;
 pub mod fdd;
 pub mod modes;
 pub mod ssi;
@@ -33,6 +34,8 @@ pub enum Method {
     Efdd,
     /// Covariance-driven stochastic subspace identification.
     Ssi,
+    /// The record's free decays identified together in the time domain ([`decay`]).
+    Decay,
 }
 
 impl Method {
@@ -42,6 +45,7 @@ impl Method {
             Method::Fdd => "fdd",
             Method::Efdd => "efdd",
             Method::Ssi => "ssi",
+            Method::Decay => "decay",
         }
     }
 }
@@ -177,6 +181,8 @@ pub struct OmaMode {
 /// Everything an output-only analysis found.
 #[derive(Debug, Clone)]
 pub struct OmaResult {
+    /// The record's free decays (none for a stationary response).
+    pub decays: Vec<decay::Decay>,
     /// The cross-spectral matrix.
     pub csd: Csd,
     /// Its singular values per line.
@@ -282,7 +288,10 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
         .iter()
         .map(|c| c.iter().map(|v| v / scale).collect())
         .collect();
-    let mut r = analyze_scaled(&scaled, s)?;
+    // found on the records as given (the decays' amplitudes in their unit; the rule is one
+    // of ratios)
+    let decays = decay::find_decays(channels);
+    let mut r = analyze_scaled(&scaled, &decays, s)?;
     let power = scale * scale;
     for line in &mut r.csd.g {
         for v in line.iter_mut() {
@@ -303,11 +312,19 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
 
 /// [`analyze`] of records of RMS near 1: SSI-cov first (its modes support the peaks that
 /// stand less than 10 dB), then the peaks, FDD and EFDD.
-fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResult> {
+fn analyze_scaled(
+    channels: &[Vec<f64>],
+    decays: &[decay::Decay],
+    s: &OmaSettings,
+) -> anyhow::Result<OmaResult> {
     let csd = csd::csd_matrix(channels, s.fs_hz, s.csd)?;
     let svd = fdd::decompose(&csd)?;
     let (mut notes, mut rejected) = (Vec::new(), Vec::new());
     let ssi = modes::ssi_modes(channels, s, &mut notes, &mut rejected)?;
+    let decay_modes = match decays.is_empty() {
+        true => Vec::new(),
+        false => decay::decay_modes(channels, decays, s, &mut notes, &mut rejected)?,
+    };
     let peaks = if s.bands.is_empty() {
         modes::automatic_peaks(&svd, s, &ssi.modes, &mut rejected)
     } else {
@@ -321,9 +338,13 @@ fn analyze_scaled(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaR
     for (m, u) in found.iter_mut().zip(intervals) {
         m.uncertainty = u;
     }
+    // the decays' own intervals (the jackknife over the decays)
+    found.extend(decay_modes);
+    found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
     notes.extend(common_motion_notes(&found, &svd, s));
     Ok(OmaResult {
+        decays: decays.to_vec(),
         csd,
         svd,
         peaks: peaks.iter().map(|p| p.line).collect(),
@@ -622,7 +643,7 @@ mod tests {
                 // within half the half-power bandwidth (the bell's top is flat over several
                 // lines, and the noisy maximum wanders on it)
                 let tolerance = match method {
-                    Method::Ssi => df,
+                    Method::Ssi | Method::Decay => df,
                     Method::Efdd => 2.0 * df,
                     Method::Fdd => m.damping * m.f_hz,
                 };

@@ -131,7 +131,7 @@ pub fn ssi_modes(
 }
 
 /// A cluster's size and spread, for the report.
-fn cluster_evidence(c: &SsiMode) -> String {
+pub fn cluster_evidence(c: &SsiMode) -> String {
     format!(
         "{} poles (orders {}-{}), spread f {:.2} % damping {:.0} %, MPC {:.3}, MPD {:.1} deg",
         c.poles,
@@ -308,6 +308,11 @@ fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
             continue;
         };
         let line = a + top;
+        // a bell whose top is not at SSI-cov's mode (a free-decay record's bell reaching down
+        // to the pull's quasi-static line) gives no frequency of it
+        if (svd.freq_hz[line] - m.f_hz).abs() > reach {
+            continue;
+        }
         let b = a + values.len() - 1;
         let inside = taken.iter().any(|t| {
             (t.bell.0..=t.bell.1).contains(&line)

@@ -253,6 +253,8 @@ fn mode_intervals(
             }
             u.shape_abs = shape_u(&m.shape, reps);
         }
+        // the jackknife over the decays, computed with them (`decay::decay_modes`)
+        Method::Decay => {}
     }
     u
 }
@@ -291,6 +293,7 @@ fn mode_replicates<'a>(
                 .position(|x| x.mode == m.mode)?;
             Some((r.iter().map(|g| g[i].clone()).collect(), None))
         }),
+        Method::Decay => None,
     }
 }
 

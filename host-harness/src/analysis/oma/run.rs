@@ -315,7 +315,7 @@ fn shape_rows(r: &OmaResult, records: &Records) -> Vec<OmaShapeRow> {
 }
 
 /// The datasets of `shapes.uff`: each target a node, the shape in the motion's direction (x
-/// or y); load case 1 FDD, 2 EFDD, 3 SSI.
+/// or y); load case 1 FDD, 2 EFDD, 3 SSI, 4 the free decays.
 fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSet> {
     let zero = Complex64::new(0.0, 0.0);
     r.modes
@@ -326,6 +326,7 @@ fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSe
                 Method::Fdd => 1,
                 Method::Efdd => 2,
                 Method::Ssi => 3,
+                Method::Decay => 4,
             },
             mode: m.mode,
             f_hz: m.f_hz,
@@ -446,6 +447,46 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         c.mpc_min,
         c.mpd_max_deg
     );
+    decays_text(o, r, s);
+}
+
+/// The report's line on the record's regime: a stationary response, or free decays (each with
+/// its samples and amplitude) and how they are identified.
+fn decays_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
+    use crate::analysis::oma::decay;
+    if r.decays.is_empty() {
+        let _ = writeln!(
+            o,
+            "regime: a stationary response (no free decay: no rise of the motion 20 dB above its \
+             quiet level followed by a fall of 20 dB)"
+        );
+        return;
+    }
+    let list: Vec<String> = r
+        .decays
+        .iter()
+        .map(|d| {
+            format!(
+                "samples {}-{} ({:.2} s from {:.2} s, amplitude {:.3e})",
+                d.start + 1,
+                d.end,
+                (d.end - d.start) as f64 / s.fs_hz,
+                d.start as f64 / s.fs_hz,
+                d.amplitude
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        o,
+        "regime: {} free decay(s) after a pull, release or hit: {}; identified together in the \
+         time domain (method decay: the decays' correlations over fixed times, {} block rows, \
+         orders 2 to 20, stable and clustered as SSI-cov's, damping up to 30 %), each decay also \
+         alone (its frequency and damping in the evidence), intervals from the jackknife over \
+         the decays",
+        r.decays.len(),
+        list.join(", "),
+        decay::block_rows(&r.decays)
+    );
 }
 
 /// The report's table of modes and their 95 % intervals.
@@ -475,7 +516,8 @@ fn modes_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         let _ = writeln!(
             o,
             "\n95 % intervals (statistical, from the record: the jackknife over {} groups of its \
-             segments or time; the imaging's own share is not in them):",
+             segments or time, the decay method's over its decays; the imaging's own share is \
+             not in them):",
             s.groups
         );
         for m in with {
