@@ -457,7 +457,7 @@ fn decays_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
     if r.decays.is_empty() {
         let _ = writeln!(
             o,
-            "regime: a stationary response (no free decay: no rise of the motion 20 dB above its \
+            "regime: a stationary response (no free decay: no rise of the motion 30 dB above its \
              quiet level followed by a fall of 20 dB)"
         );
         return;
