@@ -55,8 +55,9 @@ impl ModalSpec {
         let fs_hz = records.fs_hz;
         let n = records.channels.first().map_or(0, Vec::len);
         let record = input.displacement.display().to_string();
-        let mut s = crate::analysis::oma::segment_settings(fs_hz, n, &input.welch, &record)
-            .map_err(SpecError::Input)?;
+        let mut s =
+            crate::analysis::oma::segment_settings(fs_hz, &records.channels, &input.welch, &record)
+                .map_err(SpecError::Input)?;
         let df = fs_hz / s.csd.nfft as f64;
         if let Some(f) = input.f_min_hz {
             if !(f.is_finite() && f >= 0.0 && f < fs_hz / 2.0) {

@@ -404,6 +404,40 @@ mod tests {
     }
 
     #[test]
+    fn a_decay_alone_shorter_than_a_segment_is_analysed_and_a_short_stationary_record_refused() {
+        let fs = 23.0;
+        let welch = vibcam_chain::frf::WelchSettings::default();
+        // 54 samples: one release (before: refused as shorter than one segment of 64)
+        let ch = decays_of(
+            &[(3.6, 0.08, vec![1.0, 0.6, 0.3])],
+            &[(3, 100.0)],
+            fs,
+            54,
+            0.1,
+        );
+        let s = super::super::segment_settings(fs, &ch, &welch, "the record").unwrap();
+        let r = super::super::analyze(&ch, &s).unwrap();
+        assert_eq!(r.decays.len(), 1);
+        let m = r
+            .modes
+            .iter()
+            .find(|m| m.method == super::super::Method::Decay)
+            .unwrap_or_else(|| panic!("{:?}", r.modes));
+        assert!((m.f_hz - 3.6).abs() < 0.01 * 3.6, "{}", m.f_hz);
+        assert!(
+            (m.damping.unwrap() - 0.08).abs() < 0.1 * 0.08,
+            "{:?}",
+            m.damping
+        );
+        // 54 samples of noise: no decay, and too short for the spectra
+        let noise: Vec<Vec<f64>> = (0..3)
+            .map(|j| vibcam_common::testing::gaussian_noise(11 + j, 54))
+            .collect();
+        let e = super::super::segment_settings(fs, &noise, &welch, "the record").unwrap_err();
+        assert!(e.to_string().contains("no free decay"), "{e}");
+    }
+
+    #[test]
     fn a_stationary_response_holds_no_decay() {
         // a random response: white noise through a 5 Hz resonator (damping 0.5 %) at 50 Hz,
         // 200 minutes: the energy's largest excursion grows with the record's length (such a

@@ -204,23 +204,28 @@ pub struct OmaResult {
 /// The shortest segment (`--nperseg`) an output-only analysis takes, samples.
 pub const MIN_SEGMENT: usize = 64;
 
-/// The analysis settings of a record of `n` samples at `fs_hz` with the Welch settings as given:
-/// the one place the segment rules live (`modal` and `analyze` without an accelerometer). A
-/// record shorter than [`MIN_SEGMENT`], a segment given shorter than it or longer than the
+/// The analysis settings of `channels` at `fs_hz` with the Welch settings as given: the one
+/// place the segment rules live (`modal` and `analyze` without an accelerometer). A record
+/// shorter than [`MIN_SEGMENT`] without a free decay, a segment given shorter than it or longer than the
 /// record, an overlap not below the segment, a transform shorter than it: refused, naming the
 /// setting (`record`: how the message names the record).
 pub fn segment_settings(
     fs_hz: f64,
-    n: usize,
+    channels: &[Vec<f64>],
     welch: &vibcam_chain::frf::WelchSettings,
     record: &str,
 ) -> anyhow::Result<OmaSettings> {
     use vibcam_common::setting::SpecError;
     let refuse = |t: String| Err(SpecError::setting(t).into_anyhow());
-    if n < MIN_SEGMENT {
+    let n = channels.first().map_or(0, Vec::len);
+    // a record of free decays is identified in the time domain ([`decay`]): one decay is
+    // enough, however short the record; the spectra then have few lines
+    if n < MIN_SEGMENT && decay::find_decays(channels).is_empty() {
         return refuse(format!(
             "{record} has {n} samples, fewer than one segment of {MIN_SEGMENT} (the shortest \
-             analysed)"
+             analysed), and no free decay (a decay alone, of {} samples or more, is analysed \
+             however short)",
+            decay::MIN_DECAY_SAMPLES
         ));
     }
     if let Some(given) = welch.nperseg.filter(|g| *g < MIN_SEGMENT) {

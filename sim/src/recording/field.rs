@@ -101,13 +101,7 @@ pub fn write_field_recording(
     let k = paths.len();
     let (sw, h) = (renderers[0].width(), renderers[0].height());
     let w = sw * k;
-    let camera = SinkCamera {
-        fps: rec.fps,
-        video: rec.video,
-        read_noise: rec.read_noise,
-        seed: rec.seed,
-        cluttered: false,
-    };
+    let camera = camera_of(rec);
     let mut sink = FrameSink::open(&camera, (staged.dir(), out), (w, h))?;
     let (mut strip, mut frame) = (vec![0f32; sw * h], vec![0f32; w * h]);
     let mut seen = vec![Vec::with_capacity(rec.frames); k];
@@ -176,13 +170,7 @@ fn write_view(
     out: &Path,
     progress: impl FnMut(usize),
 ) -> anyhow::Result<String> {
-    let camera = SinkCamera {
-        fps: rec.fps,
-        video: rec.video,
-        read_noise: rec.read_noise,
-        seed: rec.seed,
-        cluttered: false,
-    };
+    let camera = camera_of(rec);
     let (w, h) = super::camera_view::render(
         &rec.model,
         (rec.fps, rec.frames, rec.seed, rec.exposure_ms),
@@ -242,6 +230,17 @@ fn write_view(
         field::modes_line(&rec.model),
         out.display()
     ))
+}
+
+/// The camera that films `rec` (plain frames).
+fn camera_of(rec: &FieldRecording) -> SinkCamera {
+    SinkCamera {
+        fps: rec.fps,
+        video: rec.video,
+        read_noise: rec.read_noise,
+        seed: rec.seed,
+        cluttered: false,
+    }
 }
 
 /// Each point's motion at the simulation's fine steps as an image path, px: scaled so that the

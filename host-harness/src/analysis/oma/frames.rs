@@ -83,8 +83,7 @@ pub fn compute(req: &FramesRequest, source: &FrameSource) -> anyhow::Result<Comp
     )?;
     let tracks = viewed.tracks.clone();
     let (records, mm, lost) = records_of(req, &viewed)?;
-    let n = records.channels[0].len();
-    let settings = settings(req, n, &viewed)?;
+    let settings = settings(req, &records.channels, &viewed)?;
     let mut result = super::analyze(&records.channels, &settings)?;
     if let Some(sc) = &viewed.scales {
         let u: Vec<f64> = records
@@ -237,13 +236,14 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     )
 }
 
-/// The analysis settings of a record of `n` frames.
+/// The analysis settings of the records of the frames.
 fn settings(
     req: &FramesRequest,
-    n: usize,
+    channels: &[Vec<f64>],
     viewed: &crate::analysis::view::Viewed,
 ) -> anyhow::Result<OmaSettings> {
-    let mut s = super::segment_settings(req.fps, n, &req.welch, "the record of the frames")?;
+    let mut s = super::segment_settings(req.fps, channels, &req.welch, "the record of the frames")?;
+    let n = channels.first().map_or(0, Vec::len);
     s.bands = req.bands.clone();
     // `auto`: Lucas-Kanade when it followed every target (no target kept a threshold)
     let lk = match &req.targets {
