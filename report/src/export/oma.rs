@@ -29,7 +29,7 @@ pub struct OmaModeRow {
 }
 
 /// `modes.csv`: the multi-target columns, one row per mode and method, `system` `vision`,
-/// `target` and `e2pr` empty; then [`INTERVAL_COLUMNS`] (empty where not estimated).
+/// `target` and `e2pr` empty; then [`super::INTERVAL_COLUMNS`] (empty where not estimated).
 pub fn modes_csv(rows: &[OmaModeRow]) -> Vec<u8> {
     modes_lines(rows.iter().map(|m| ModesLine {
         system: "vision",
