@@ -480,7 +480,7 @@ fn decays_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         o,
         "regime: {} free decay(s) after a pull, release or hit: {}; identified together in the \
          time domain (method decay: the decays' correlations over fixed times, {} block rows, \
-         orders 2 to 20, stable and clustered as SSI-cov's, damping up to 30 %), each decay also \
+         orders 2 to 40, stable and clustered as SSI-cov's, damping up to 30 %), each decay also \
          alone (its frequency and damping in the evidence), intervals from the jackknife over \
          the decays",
         r.decays.len(),
