@@ -173,13 +173,12 @@ pub fn given(key: &str) -> &'static str {
     }
 }
 
-/// Why `s` is refused by `row`: the range it needs, in the row's unit (clap names the flag).
-fn refusal(row: &table::Setting, s: &str) -> String {
+/// Why a value is refused by `row`: the range it needs, in the row's unit (clap names the flag).
+fn refusal(row: &table::Setting) -> String {
     let unit = match row.unit {
         "" => String::new(),
         u => format!(" ({u})"),
     };
-    let _ = s;
     format!("{} is needed{unit}", row.range())
 }
 
@@ -210,7 +209,7 @@ pub fn whole_in<T: TryFrom<u64>>(
             .ok()
             .filter(|v| row.admits(*v as f64))
             .and_then(|v| T::try_from(v).ok())
-            .ok_or_else(|| refusal(row, s))
+            .ok_or_else(|| refusal(row))
     }
 }
 
@@ -230,7 +229,7 @@ pub fn number_in(
             true => parse_rate(s).ok(),
             false => s.trim().parse::<f64>().ok(),
         };
-        v.filter(|v| row.admits(*v)).ok_or_else(|| refusal(row, s))
+        v.filter(|v| row.admits(*v)).ok_or_else(|| refusal(row))
     }
 }
 
