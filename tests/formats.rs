@@ -3,7 +3,7 @@
 //! luma), and the errors a damaged or mismatched camera file gives. The pixel-for-pixel
 //! comparison with pyMRAW and PIL is `scripts/check_frames.py`, run by CI.
 
-use crate::analyze::{disk, make_recording, position_px, FPS, H, W};
+use crate::analyze::{disk, make_recording, position_px, Recording, FPS, H, W};
 use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
 use host_harness::frames::photron::write_recording;
 use std::path::Path;
@@ -68,14 +68,7 @@ fn a_photron_recording_gives_the_modes_of_its_png_frames_at_the_header_rate() {
         let cih = photron(&rec.dir, bits, scale);
         let out = rec.dir.join(format!("ph{bits}"));
         // no --fps, no --exposure-ms: the header's 120 fps and 1/500 s
-        let o = analyze(&cih, &rec.accel, &out, &["--threshold", threshold]);
-        assert_ok(&o);
-        assert_eq!(modes(&out), want, "{bits} bits");
-        let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
-        assert!(
-            report.contains("frame rate 120 fps, as") && report.contains("exposure 2 ms, as"),
-            "{report}"
-        );
+        header_gives_the_modes(&cih, &rec, &out, threshold, &want, bits);
     }
     // --fps overrides the header's rate, and the report says so
     let cih = rec.dir.join("rec8.cih");
@@ -246,14 +239,7 @@ fn a_phantom_cine_gives_the_modes_of_its_png_frames_at_its_own_rate() {
     {
         let p = cine(&rec.dir, bits, comp, scale);
         let out = rec.dir.join(format!("cine{bits}"));
-        let o = analyze(&p, &rec.accel, &out, &["--threshold", threshold]);
-        assert_ok(&o);
-        assert_eq!(modes(&out), want, "{bits} bits");
-        let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
-        assert!(
-            report.contains("frame rate 120 fps, as") && report.contains("exposure 2 ms, as"),
-            "{report}"
-        );
+        header_gives_the_modes(&p, &rec, &out, threshold, &want, bits.into());
     }
     let p = rec.dir.join("rec8_0.cine");
     let o = harness(&words(
@@ -358,5 +344,25 @@ fn centroid_reads_a_video_at_its_rate_and_needs_one() {
     assert_exit_2(
         &harness(&words("centroid --threshold 100 {}", &[v])),
         "a video needs --fps",
+    );
+}
+
+/// `analyze` of the camera file `frames` with no `--fps` or `--exposure-ms` gives the modes
+/// `want` and reports the header's 120 fps and 2 ms.
+fn header_gives_the_modes(
+    frames: &Path,
+    rec: &Recording,
+    out: &Path,
+    threshold: &str,
+    want: &[String],
+    bits: u32,
+) {
+    let o = analyze(frames, &rec.accel, out, &["--threshold", threshold]);
+    assert_ok(&o);
+    assert_eq!(modes(out), want, "{bits} bits");
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(
+        report.contains("frame rate 120 fps, as") && report.contains("exposure 2 ms, as"),
+        "{report}"
     );
 }

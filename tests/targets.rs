@@ -5,7 +5,7 @@
 //! target counts named.
 
 use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, words};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `(system, target, mode) -> (f_hz, damping)` from modes.csv.
 fn modes(dir: &Path) -> Vec<(String, usize, usize, f64, f64)> {
@@ -603,6 +603,16 @@ fn a_merged_or_jumping_blob_within_the_gate_is_refused_not_taken() {
 
 /// Paints clutter into the frames of the hand recording in `dir`: a wall patch as bright as
 /// the tags at the right (columns 145..160) and, with `hand`, a blob drifting along the bottom.
+/// The resting scene's recording with `samples` accelerometer samples in `dir/clean` and again,
+/// cluttered (with the hand when `hand`), in `dir/cluttered`.
+fn clean_and_cluttered(dir: &Path, samples: usize, hand: bool) -> (PathBuf, PathBuf) {
+    let (clean, cluttered) = (dir.join("clean"), dir.join("cluttered"));
+    hand_recording(&clean, &resting, samples);
+    hand_recording(&cluttered, &resting, samples);
+    add_clutter(&cluttered, hand);
+    (clean, cluttered)
+}
+
 fn add_clutter(dir: &Path, hand: bool) {
     for k in 0..FRAMES {
         let p = dir.join("frames").join(format!("f_{k:05}.png"));
@@ -631,10 +641,7 @@ fn add_clutter(dir: &Path, hand: bool) {
 #[test]
 fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
     let tmp = tempfile::tempdir().unwrap();
-    let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
-    hand_recording(&clean, &resting, 2048);
-    hand_recording(&cluttered, &resting, 2048);
-    add_clutter(&cluttered, true);
+    let (clean, cluttered) = clean_and_cluttered(tmp.path(), 2048, true);
     let frames = |d: &Path| d.join("frames").to_str().unwrap().to_string();
     assert_ok(&analyze_hand(&clean, &frames(&clean)));
     let o = analyze_hand(&cluttered, &frames(&cluttered));
@@ -701,10 +708,7 @@ fn chosen_points_follow_their_targets_in_a_cluttered_scene() {
 #[test]
 fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
     let tmp = tempfile::tempdir().unwrap();
-    let (clean, cluttered) = (tmp.path().join("clean"), tmp.path().join("cluttered"));
-    hand_recording(&clean, &resting, 64);
-    hand_recording(&cluttered, &resting, 64);
-    add_clutter(&cluttered, false);
+    let (clean, cluttered) = clean_and_cluttered(tmp.path(), 64, false);
     let points = tmp.path().join("points.csv");
     std::fs::write(
         &points,

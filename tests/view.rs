@@ -5,7 +5,15 @@
 
 use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// [`render`] into `rec` of a new temporary directory: (the directory, `rec`).
+fn rendered(minutes: &str, extra: &[&str]) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    render(&rec, minutes, extra);
+    (tmp, rec)
+}
 
 /// Renders a field record of `minutes` into `dir` with `extra` flags.
 fn render(dir: &Path, minutes: &str, extra: &[&str]) {
@@ -102,18 +110,8 @@ fn the_cameras_shake_is_taken_out_by_static_references() {
     let (still, shaken) = (tmp.path().join("still"), tmp.path().join("shaken"));
     render(&still, "1", &["--references", "4"]);
     // 0.5 px RMS along each axis over 1-5 Hz and a roll of 0.2 deg RMS
-    render(
-        &shaken,
-        "1",
-        &[
-            "--references",
-            "4",
-            "--shake-px",
-            "0.5",
-            "--roll-deg",
-            "0.2",
-        ],
-    );
+    let shake = "--references 4 --shake-px 0.5 --roll-deg 0.2";
+    render(&shaken, "1", &shake.split(' ').collect::<Vec<_>>());
     let scale = ["--mm-per-px", "2"];
     let base = tmp.path().join("base");
     assert_ok(&track(&still, &base, &scale));
@@ -182,24 +180,10 @@ fn modes(out: &Path) -> Vec<(String, f64)> {
 
 #[test]
 fn a_shake_that_looks_like_a_mode_is_named_and_gone_with_references() {
-    let tmp = tempfile::tempdir().unwrap();
-    let rec = tmp.path().join("rec");
     // a tripod's sway at 2.8-3.2 Hz (inside the 1-5 Hz), between the shear frame's
     // first two modes (1.50 and 4.38 Hz)
-    render(
-        &rec,
-        "2",
-        &[
-            "--references",
-            "4",
-            "--shake-px",
-            "0.5",
-            "--roll-deg",
-            "0.2",
-            "--shake-hz",
-            "2.8,3.2",
-        ],
-    );
+    let shake = "--references 4 --shake-px 0.5 --roll-deg 0.2 --shake-hz 2.8,3.2";
+    let (tmp, rec) = rendered("2", &shake.split(' ').collect::<Vec<_>>());
     let analyze = |out: &Path, refs: bool| {
         let mut args = vec![
             "analyze".to_string(),
@@ -250,11 +234,8 @@ fn a_shake_that_looks_like_a_mode_is_named_and_gone_with_references() {
 
 #[test]
 fn an_oblique_view_is_measured_in_millimetres_through_the_planes_points() {
-    let tmp = tempfile::tempdir().unwrap();
-    let rec = tmp.path().join("rec");
     // 2 px RMS: the motion well above the centroid's noise, so that the scale is what is seen
-    render(
-        &rec,
+    let (tmp, rec) = rendered(
         "1",
         &["--references", "4", "--oblique-deg", "30", "--rms-px", "2"],
     );
@@ -359,9 +340,7 @@ fn an_oblique_view_is_measured_in_millimetres_through_the_planes_points() {
 
 #[test]
 fn bad_references_are_named_never_silently_used() {
-    let tmp = tempfile::tempdir().unwrap();
-    let rec = tmp.path().join("rec");
-    render(&rec, "0.5", &["--references", "4", "--shake-px", "0.5"]);
+    let (tmp, rec) = rendered("0.5", &["--references", "4", "--shake-px", "0.5"]);
     let refs = std::fs::read_to_string(rec.join("references.csv")).unwrap();
     let points = std::fs::read_to_string(rec.join("points.csv")).unwrap();
     // a fifth "reference" on the top target (it moves) and a sixth on black (lost)

@@ -925,14 +925,7 @@ fn modes_dict<'py>(
         "method",
         r.modes.iter().map(|m| m.method.name()).collect::<Vec<_>>(),
     )?;
-    modes.set_item(
-        "mode",
-        r.modes
-            .iter()
-            .map(|m| m.mode as i64)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    set_numbers(py, &modes, r.modes.iter().map(|m| m.mode))?;
     let nan = f64::NAN;
     for (name, v) in [
         ("band_lo_hz", col(&|m| m.band_hz.map_or(nan, |b| b.0))),
@@ -951,16 +944,37 @@ fn modes_dict<'py>(
         ("amplitude", |m| m.uncertainty.amplitude),
     ];
     for (name, pick) in quantities {
-        for (suffix, part) in [
-            ("u", (|i: Interval| i.u) as fn(Interval) -> f64),
-            ("lo", |i: Interval| i.lo),
-            ("hi", |i: Interval| i.hi),
-        ] {
-            let v = col(&|m| pick(m).map_or(nan, part));
-            modes.set_item(format!("{name}_{suffix}"), v.into_pyarray(py))?;
-        }
+        set_intervals(py, &modes, name, r.modes.iter().map(pick))?;
     }
     Ok(modes)
+}
+
+/// The column `mode` of a table of modes: the numbers `modes`.
+fn set_numbers(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    modes: impl Iterator<Item = usize>,
+) -> PyResult<()> {
+    let v: Vec<i64> = modes.map(|m| m as i64).collect();
+    d.set_item("mode", v.into_pyarray(py))
+}
+
+/// The columns `{name}_u`, `{name}_lo` and `{name}_hi` of a table of modes: each estimate's
+/// standard uncertainty and 95 % interval (NaN where not estimated).
+fn set_intervals(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    name: &str,
+    intervals: impl Iterator<Item = Option<Interval>>,
+) -> PyResult<()> {
+    let cells: Vec<[f64; 3]> = intervals
+        .map(|i| i.map_or([f64::NAN; 3], |i| [i.u, i.lo, i.hi]))
+        .collect();
+    for (k, suffix) in ["u", "lo", "hi"].iter().enumerate() {
+        let v: Vec<f64> = cells.iter().map(|c| c[k]).collect();
+        d.set_item(format!("{name}_{suffix}"), v.into_pyarray(py))?;
+    }
+    Ok(())
 }
 
 /// Each target's displacement `(N, K)` (NaN for a target left out) and lost flags.
@@ -1196,19 +1210,11 @@ fn ema_modes<'py>(
     py: Python<'py>,
     r: &host_harness::analysis::ema::EmaResult,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let cell = |i: Option<Interval>| i.map_or([f64::NAN; 3], |i| [i.u, i.lo, i.hi]);
     let modes = PyDict::new(py);
     let col = |f: &dyn Fn(&host_harness::analysis::ema::EmaMode) -> f64| -> Vec<f64> {
         r.modes.iter().map(f).collect()
     };
-    modes.set_item(
-        "mode",
-        r.modes
-            .iter()
-            .map(|m| m.mode as i64)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    set_numbers(py, &modes, r.modes.iter().map(|m| m.mode))?;
     modes.set_item("f_hz", col(&|m| m.pole.f_hz).into_pyarray(py))?;
     modes.set_item("damping", col(&|m| m.pole.damping).into_pyarray(py))?;
     modes.set_item(
@@ -1219,16 +1225,13 @@ fn ema_modes<'py>(
         "band_hi_hz",
         col(&|m| m.band_hz.map_or(f64::NAN, |b| b.1)).into_pyarray(py),
     )?;
-    for (k, name) in ["u", "lo", "hi"].iter().enumerate() {
-        modes.set_item(
-            format!("f_hz_{name}"),
-            col(&|m| cell(m.f_interval)[k]).into_pyarray(py),
-        )?;
-        modes.set_item(
-            format!("damping_{name}"),
-            col(&|m| cell(m.damping_interval)[k]).into_pyarray(py),
-        )?;
-    }
+    set_intervals(py, &modes, "f_hz", r.modes.iter().map(|m| m.f_interval))?;
+    set_intervals(
+        py,
+        &modes,
+        "damping",
+        r.modes.iter().map(|m| m.damping_interval),
+    )?;
     Ok(modes)
 }
 

@@ -59,15 +59,9 @@ pub struct Args {
     /// Centroid settings.
     #[command(flatten)]
     pub centroid: CentroidArgs,
-    /// Static references, the camera's motion model and the scale from the scene.
+    /// Static references, the camera's motion model, the scale and the axis measured.
     #[command(flatten)]
     pub view: super::args::ViewArgs,
-    /// `$mm_per_px`.
-    #[arg(long, value_name = "MM", value_parser = super::args::number("mm_per_px"), help = super::args::help("mm_per_px"))]
-    pub mm_per_px: Option<f64>,
-    /// `$axis`.
-    #[arg(long, value_enum, default_value = super::args::given("axis"), help = super::args::help("axis"))]
-    pub axis: AxisArg,
     /// Flip the sign of the displacement.
     #[arg(long)]
     pub invert: bool,
@@ -178,9 +172,9 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
     Ok(AnalyzeInput {
         frames: args.recording.input(),
         tracking: args.centroid.tracking(&args.targets),
-        mm_per_px: args.mm_per_px,
+        mm_per_px: args.view.mm_per_px,
         view: args.view.view(),
-        axis: args.axis.axis(),
+        axis: args.view.axis.axis(),
         invert: args.invert,
         lost_frames: args.lost_frames,
         welch: args.welch.settings(),

@@ -441,9 +441,16 @@ mod tests {
     }
 }
 
-/// The camera's view: static references and the scale from the scene (`track`, `analyze`).
+/// The camera's view: static references, the scale (given or from the scene) and the image
+/// axis measured (`track`, `analyze`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct ViewArgs {
+    /// `$mm_per_px`.
+    #[arg(long, value_name = "MM", value_parser = number("mm_per_px"), help = help("mm_per_px"))]
+    pub mm_per_px: Option<f64>,
+    /// `$axis`.
+    #[arg(long, value_enum, default_value = given("axis"), help = help("axis"))]
+    pub axis: super::analyze::AxisArg,
     /// `$reference`: static windows.
     #[arg(long, value_name = "FILE.csv", help = help("reference"))]
     pub reference: Option<std::path::PathBuf>,

@@ -2,7 +2,6 @@
 //! needed; the flags translated into a
 //! [`TrackSpec`], which checks them and runs the job.
 
-use super::analyze::AxisArg;
 use super::args::CentroidArgs;
 use crate::jobs::{SpecError, TrackInput, TrackSpec};
 use crate::lost_frames::LostFramePolicy;
@@ -21,15 +20,9 @@ pub struct Args {
     /// Centroid settings (`--threshold T|auto`, `--tracker binary|blob|weighted`, `--roi`).
     #[command(flatten)]
     pub centroid: CentroidArgs,
-    /// Static references, the camera's motion model and the scale from the scene.
+    /// Static references, the camera's motion model, the scale and the axis measured.
     #[command(flatten)]
     pub view: super::args::ViewArgs,
-    /// `$mm_per_px`.
-    #[arg(long, value_name = "MM", value_parser = super::args::number("mm_per_px"), help = super::args::help("mm_per_px"))]
-    pub mm_per_px: Option<f64>,
-    /// `$axis`.
-    #[arg(long, value_enum, default_value = super::args::given("axis"), help = super::args::help("axis"))]
-    pub axis: AxisArg,
     /// `$lost_frames`.
     #[arg(long, default_value = super::args::given("lost_frames"), value_parser = super::args::choice(&LostFramePolicy::ALL, LostFramePolicy::name), help = super::args::help("lost_frames"))]
     pub lost_frames: LostFramePolicy,
@@ -50,9 +43,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let input = TrackInput {
         frames: args.recording.input(),
         tracking: args.centroid.tracking(&args.targets),
-        mm_per_px: args.mm_per_px,
+        mm_per_px: args.view.mm_per_px,
         view: args.view.view(),
-        axis: args.axis.axis(),
+        axis: args.view.axis.axis(),
         lost_frames: args.lost_frames,
         plots: !args.no_plots,
         out: args.out.clone(),

@@ -27,8 +27,7 @@
 //! diagram of `modal`, so that [`crate::oma::cluster`] groups LSCF's stable poles into
 //! modes by the same rules.
 
-use crate::modal::mac;
-use crate::oma::ssi::Pole;
+use crate::oma::ssi::{Pole, Stability};
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -200,18 +199,17 @@ pub fn poles(
                     v * scale
                 })
                 .collect();
-            let stable = below.iter().any(|p: &Pole| {
-                (p.f_hz - f_hz).abs() <= rule.df_max * f_hz
-                    && (p.damping - damping).abs() <= rule.dz_max * damping
-                    && mac(&p.shape, &shape) >= rule.mac_min
-            });
-            here.push(Pole {
-                order,
-                f_hz,
-                damping,
+            let stability = Stability {
+                df_max: rule.df_max,
+                dz_max: rule.dz_max,
+                mac_min: rule.mac_min,
+            };
+            here.push(Pole::judged(
+                (order, f_hz, damping),
                 shape,
-                stable,
-            });
+                &below,
+                stability,
+            ));
         }
         all.extend(here.iter().cloned());
         below = here;
@@ -241,6 +239,7 @@ fn roots(c: &[f64]) -> Vec<Complex64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::modal::mac;
 
     /// Receptance of a mass-normalised modal model at `f`: sum over modes of
     /// `phi_o phi_in / (w_r^2 - w^2 + 2 i zeta_r w_r w)`.

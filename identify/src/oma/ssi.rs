@@ -27,6 +27,17 @@ pub struct SsiRule {
     pub f_range_hz: (f64, f64),
 }
 
+impl SsiRule {
+    /// The rule's stability criteria.
+    pub fn stability(&self) -> Stability {
+        Stability {
+            df_max: self.df_max,
+            dz_max: self.dz_max,
+            mac_min: self.mac_min,
+        }
+    }
+}
+
 /// One pole of one model order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pole {
@@ -40,6 +51,43 @@ pub struct Pole {
     pub shape: Vec<Complex64>,
     /// Stable with a pole of the order below (frequency, damping and shape).
     pub stable: bool,
+}
+
+/// The stability rule of a stabilisation diagram: a pole is stable when one of the order
+/// below lies within `df_max` in frequency and `dz_max` in damping (relative) and their
+/// shapes' MAC is at least `mac_min`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stability {
+    /// Relative change of frequency at most this.
+    pub df_max: f64,
+    /// Relative change of damping at most this.
+    pub dz_max: f64,
+    /// MAC of the shapes at least this.
+    pub mac_min: f64,
+}
+
+impl Pole {
+    /// The pole of `order` at `f_hz` with `damping` and `shape`, marked stable by `rule`
+    /// against the poles `below` of the order below.
+    pub fn judged(
+        (order, f_hz, damping): (usize, f64, f64),
+        shape: Vec<Complex64>,
+        below: &[Pole],
+        rule: Stability,
+    ) -> Pole {
+        let stable = below.iter().any(|p| {
+            (p.f_hz - f_hz).abs() <= rule.df_max * f_hz
+                && (p.damping - damping).abs() <= rule.dz_max * damping
+                && mac(&p.shape, &shape) >= rule.mac_min
+        });
+        Pole {
+            order,
+            f_hz,
+            damping,
+            shape,
+            stable,
+        }
+    }
 }
 
 /// The poles of every order of the records `channels` (mean removed here) sampled at
@@ -212,18 +260,12 @@ pub fn poles_of(
             } else {
                 (&mut here, &below)
             };
-            let stable = previous.iter().any(|p: &Pole| {
-                (p.f_hz - f_hz).abs() <= rule.df_max * f_hz
-                    && (p.damping - damping).abs() <= rule.dz_max * damping
-                    && mac(&p.shape, &shape) >= rule.mac_min
-            });
-            list.push(Pole {
-                order: ord,
-                f_hz,
-                damping,
+            list.push(Pole::judged(
+                (ord, f_hz, damping),
                 shape,
-                stable,
-            });
+                previous,
+                rule.stability(),
+            ));
         }
         all.extend(here.iter().cloned());
         below = here;

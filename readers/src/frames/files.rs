@@ -524,47 +524,29 @@ pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
         .decode()
         .map_err(|e| bad_input(format!("{}: cannot decode the frame: {e}", path.display())))?;
     let (width, height) = (img.width() as usize, img.height() as usize);
+    let u8 = |data: Vec<u8>| {
+        Ok(GreyFrame::U8 {
+            width,
+            height,
+            data,
+        })
+    };
+    let u16 = |data: Vec<u16>| {
+        Ok(GreyFrame::U16 {
+            width,
+            height,
+            data,
+        })
+    };
     match img {
-        image::DynamicImage::ImageLuma8(b) => Ok(GreyFrame::U8 {
-            width,
-            height,
-            data: b.into_raw(),
-        }),
-        image::DynamicImage::ImageLuma16(b) => Ok(GreyFrame::U16 {
-            width,
-            height,
-            data: b.into_raw(),
-        }),
-        image::DynamicImage::ImageLumaA8(b) => Ok(GreyFrame::U8 {
-            width,
-            height,
-            data: b.pixels().map(|p| p.0[0]).collect(),
-        }),
-        image::DynamicImage::ImageLumaA16(b) => Ok(GreyFrame::U16 {
-            width,
-            height,
-            data: b.pixels().map(|p| p.0[0]).collect(),
-        }),
-        image::DynamicImage::ImageRgb8(b) => Ok(GreyFrame::U8 {
-            width,
-            height,
-            data: luma(b.as_raw(), 3),
-        }),
-        image::DynamicImage::ImageRgba8(b) => Ok(GreyFrame::U8 {
-            width,
-            height,
-            data: luma(b.as_raw(), 4),
-        }),
-        image::DynamicImage::ImageRgb16(b) => Ok(GreyFrame::U16 {
-            width,
-            height,
-            data: luma(b.as_raw(), 3),
-        }),
-        image::DynamicImage::ImageRgba16(b) => Ok(GreyFrame::U16 {
-            width,
-            height,
-            data: luma(b.as_raw(), 4),
-        }),
+        image::DynamicImage::ImageLuma8(b) => u8(b.into_raw()),
+        image::DynamicImage::ImageLuma16(b) => u16(b.into_raw()),
+        image::DynamicImage::ImageLumaA8(b) => u8(b.pixels().map(|p| p.0[0]).collect()),
+        image::DynamicImage::ImageLumaA16(b) => u16(b.pixels().map(|p| p.0[0]).collect()),
+        image::DynamicImage::ImageRgb8(b) => u8(luma(b.as_raw(), 3)),
+        image::DynamicImage::ImageRgba8(b) => u8(luma(b.as_raw(), 4)),
+        image::DynamicImage::ImageRgb16(b) => u16(luma(b.as_raw(), 3)),
+        image::DynamicImage::ImageRgba16(b) => u16(luma(b.as_raw(), 4)),
         other => Err(bad_input(format!(
             "{}: unsupported pixel format {:?}; 8- or 16-bit grey or colour images are needed",
             path.display(),

@@ -29,6 +29,46 @@ pub fn range_cell(range: Option<(f64, f64)>, decimals: usize) -> String {
     })
 }
 
+/// One mode as a row of the page's table of modes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeCells<'a> {
+    /// Mode number.
+    pub mode: usize,
+    /// The method that found it, when the table has a method column.
+    pub method: Option<&'a str>,
+    /// Natural frequency, Hz, and its 95 % interval.
+    pub f_hz: (f64, Option<(f64, f64)>),
+    /// Damping ratio (when the method gives one) and its 95 % interval.
+    pub damping: (Option<f64>, Option<(f64, f64)>),
+}
+
+/// The page's table of modes (header, rows): mode, method (`with_method`), frequency to 4
+/// places, damping to 5, each with its 95 % interval.
+pub fn modes_table(modes: &[ModeCells], with_method: bool) -> (Vec<String>, Vec<Vec<String>>) {
+    let rows = modes
+        .iter()
+        .map(|m| {
+            let mut row = vec![m.mode.to_string()];
+            if with_method {
+                row.push(m.method.unwrap_or_default().to_string());
+            }
+            row.extend([
+                format!("{:.4}", m.f_hz.0),
+                range_cell(m.f_hz.1, 4),
+                m.damping.0.map_or(String::new(), |z| format!("{z:.5}")),
+                range_cell(m.damping.1, 5),
+            ]);
+            row
+        })
+        .collect();
+    let mut names = vec!["mode"];
+    if with_method {
+        names.push("method");
+    }
+    names.extend(["f (Hz)", "95 % interval", "damping", "95 % interval"]);
+    (header(&names), rows)
+}
+
 /// A target on the frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {

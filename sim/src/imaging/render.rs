@@ -129,8 +129,6 @@ impl BlurRenderer {
     pub fn new(target: &DiskTarget, lo: f64, hi: f64) -> BlurRenderer {
         let ext = target.extent();
         let half_cols = ext.ceil() as usize;
-        let width = 2 * half_cols + 5;
-        let rest_x = half_cols + 2;
         let pad = ext.ceil() + 3.0;
         let span = (hi - lo).max(0.0);
         let height = (((span + 2.0 * pad) / 16.0).ceil() as usize * 16).max(32);
@@ -158,14 +156,34 @@ impl BlurRenderer {
                 .expect("buffer sizes from the same plan");
             spectra.push(s);
         }
+        BlurRenderer::of_spectra(
+            (half_cols, height),
+            rest_y,
+            target.is_symmetric(),
+            spectra,
+            ifft,
+        )
+    }
+
+    /// The renderer of the column spectra `spectra` (a target of `2 half_cols + 1` columns at
+    /// rest at (`half_cols + 2`, `rest_y`) in a frame two columns wider on either side, `height`
+    /// rows), their inverse transform `ifft` of length `height`, and empty work buffers.
+    fn of_spectra(
+        (half_cols, height): (usize, usize),
+        rest_y: f64,
+        symmetric: bool,
+        spectra: Vec<Vec<Complex32>>,
+        ifft: Arc<dyn ComplexToReal<f32>>,
+    ) -> BlurRenderer {
+        let bins = height / 2 + 1;
         let scratch = vec![Complex32::new(0.0, 0.0); ifft.get_scratch_len()];
         BlurRenderer {
-            width,
+            width: 2 * half_cols + 5,
             height,
-            rest_x,
+            rest_x: half_cols + 2,
             rest_y,
             half_cols,
-            symmetric: target.is_symmetric(),
+            symmetric,
             spectra,
             ifft,
             ramp: vec![Complex32::new(0.0, 0.0); bins],
@@ -210,27 +228,13 @@ impl BlurRenderer {
                 s
             })
             .collect();
-        let scratch = vec![Complex32::new(0.0, 0.0); ifft.get_scratch_len()];
-        Some(BlurRenderer {
-            width: 2 * half_cols + 5,
-            height,
-            rest_x: half_cols + 2,
-            rest_y: 0.0,
-            half_cols,
-            symmetric: false,
+        Some(BlurRenderer::of_spectra(
+            (half_cols, height),
+            0.0,
+            false,
             spectra,
             ifft,
-            ramp: vec![Complex32::new(0.0, 0.0); bins],
-            spec: vec![Complex32::new(0.0, 0.0); bins],
-            column: vec![0.0; height],
-            scratch,
-            seg: Segments::default(),
-            path: Vec::new(),
-            block: 1,
-            blocks: Vec::new(),
-            block_range: Vec::new(),
-            epsa_images: None,
-        })
+        ))
     }
 
     /// A renderer sized for the displacement range of `path` (px, positive down) with `path`

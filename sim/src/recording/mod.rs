@@ -355,12 +355,7 @@ pub fn toml_of(spec: &RecordingSpec, frame_size: (usize, usize)) -> RecordingTom
             t.modes = r
                 .modes
                 .iter()
-                .map(|m| ModeRow {
-                    f_hz: m.f_hz,
-                    zeta: m.zeta,
-                    g_phi: Some(m.g_phi),
-                    mass_kg: None,
-                })
+                .map(|m| mode_row(m.f_hz, m.zeta, Some(m.g_phi), None))
                 .collect();
         }
         Rig::Grandstand(g) => {
@@ -373,16 +368,22 @@ pub fn toml_of(spec: &RecordingSpec, frame_size: (usize, usize)) -> RecordingTom
             t.modes = g
                 .modes
                 .iter()
-                .map(|m| ModeRow {
-                    f_hz: m.f_hz,
-                    zeta: m.zeta,
-                    g_phi: None,
-                    mass_kg: Some(m.mass_kg),
-                })
+                .map(|m| mode_row(m.f_hz, m.zeta, None, Some(m.mass_kg)))
                 .collect();
         }
     }
     t
+}
+
+/// A mode of `recording.toml`: frequency, damping ratio, and the cantilever's tip gain or the
+/// grandstand's modal mass.
+fn mode_row(f_hz: f64, zeta: f64, g_phi: Option<f64>, mass_kg: Option<f64>) -> ModeRow {
+    ModeRow {
+        f_hz,
+        zeta,
+        g_phi,
+        mass_kg,
+    }
 }
 
 /// `recording.toml` of a one-target recording of `spec` ([`RecordingToml`]).

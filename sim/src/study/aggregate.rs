@@ -7,7 +7,7 @@ use crate::imaging::exposure::ExposureCorrection;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use vibcam_common::stats;
-use vibcam_common::uncertainty::coverage_summary;
+use vibcam_common::uncertainty::{coverage_summary, CoverageSummary};
 use vibcam_readers::bad_input;
 use vibcam_report::export::study::{CoverageRow, FrfBandRow, RealizationRow, SummaryRow, System};
 
@@ -41,6 +41,24 @@ pub struct Outputs {
     pub coverage: Vec<CoverageRow>,
     /// What the `vision_compensated` rows divide by.
     pub correction: String,
+}
+
+impl Outputs {
+    /// A `coverage.csv` row of `system` at `exposure_ms`, mode index `m` (from 0).
+    fn push_coverage(
+        &mut self,
+        (system, exposure_ms, m): (System, f64, usize),
+        quantity: &'static str,
+        coverage: CoverageSummary,
+    ) {
+        self.coverage.push(CoverageRow {
+            system,
+            exposure_ms,
+            mode: m + 1,
+            quantity,
+            coverage,
+        });
+    }
 }
 
 fn peak_of(sys: &SystemRecord, mode: usize) -> Option<PeakRecord> {
@@ -169,13 +187,7 @@ fn summary_at(
             }
             for (quantity, values) in quantities {
                 if let Ok(coverage) = coverage_summary(&values, cfg.coverage) {
-                    out.coverage.push(CoverageRow {
-                        system,
-                        exposure_ms,
-                        mode: m + 1,
-                        quantity,
-                        coverage,
-                    });
+                    out.push_coverage((system, exposure_ms, m), quantity, coverage);
                 }
             }
             out.summary.push(row);
@@ -236,13 +248,7 @@ fn chi_coverage(
         .collect();
     if let Ok((mu, sigma)) = vibcam_common::uncertainty::bootstrap_chi(&pairs, p, seed) {
         for (quantity, coverage) in [("chi_mu", mu), ("chi_sigma", sigma)] {
-            out.coverage.push(CoverageRow {
-                system,
-                exposure_ms,
-                mode: m + 1,
-                quantity,
-                coverage,
-            });
+            out.push_coverage((system, exposure_ms, m), quantity, coverage);
         }
     }
 }

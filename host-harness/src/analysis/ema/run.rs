@@ -118,29 +118,21 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
 /// animated along the responses (in their order: a camera's targets have no positions here),
 /// the figures (caption, SVG), the report `text`.
 pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, String)>) -> String {
-    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
-    let iv =
-        |i: Option<Interval>, d: usize| crate::export::html::range_cell(i.map(|i| (i.lo, i.hi)), d);
-    let rows: Vec<Vec<String>> = r
+    use crate::export::html::{
+        mac_matrix, modes_table, report_html, ModeCells, Report, ShapeAnimation,
+    };
+    let iv = |i: Option<Interval>| i.map(|i| (i.lo, i.hi));
+    let cells: Vec<ModeCells> = r
         .modes
         .iter()
-        .map(|m| {
-            vec![
-                m.mode.to_string(),
-                format!("{:.4}", m.pole.f_hz),
-                iv(m.f_interval, 4),
-                format!("{:.5}", m.pole.damping),
-                iv(m.damping_interval, 5),
-            ]
+        .map(|m| ModeCells {
+            mode: m.mode,
+            method: None,
+            f_hz: (m.pole.f_hz, iv(m.f_interval)),
+            damping: (Some(m.pole.damping), iv(m.damping_interval)),
         })
         .collect();
-    let head = crate::export::html::header(&[
-        "mode",
-        "f (Hz)",
-        "95 % interval",
-        "damping",
-        "95 % interval",
-    ]);
+    let (head, rows) = modes_table(&cells, false);
     let labels: Vec<String> = r
         .modes
         .iter()

@@ -215,32 +215,18 @@ fn markers(records: &Records) -> Vec<crate::export::html::Marker> {
 
 /// The page's table of modes: method, frequency, damping and their 95 % intervals.
 fn modes_table(r: &OmaResult) -> (Vec<String>, Vec<Vec<String>>) {
-    let fmt = |v: Option<f64>, d: usize| v.map_or(String::new(), |v| format!("{v:.d$}"));
-    let range =
-        |i: Option<Interval>, d: usize| crate::export::html::range_cell(i.map(|i| (i.lo, i.hi)), d);
-    let rows: Vec<Vec<String>> = r
+    let iv = |i: Option<Interval>| i.map(|i| (i.lo, i.hi));
+    let cells: Vec<crate::export::html::ModeCells> = r
         .modes
         .iter()
-        .map(|m| {
-            vec![
-                m.mode.to_string(),
-                m.method.name().to_string(),
-                format!("{:.4}", m.f_hz),
-                range(m.uncertainty.f_hz, 4),
-                fmt(m.damping, 5),
-                range(m.uncertainty.damping, 5),
-            ]
+        .map(|m| crate::export::html::ModeCells {
+            mode: m.mode,
+            method: Some(m.method.name()),
+            f_hz: (m.f_hz, iv(m.uncertainty.f_hz)),
+            damping: (m.damping, iv(m.uncertainty.damping)),
         })
         .collect();
-    let head = crate::export::html::header(&[
-        "mode",
-        "method",
-        "f (Hz)",
-        "95 % interval",
-        "damping",
-        "95 % interval",
-    ]);
-    (head, rows)
+    crate::export::html::modes_table(&cells, true)
 }
 
 /// Every pole of the stabilisation diagram and what it is: in a cluster reported or
