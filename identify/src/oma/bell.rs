@@ -17,12 +17,15 @@ use realfft::{RealFftPlanner, RealToComplex};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
+/// The least damping ratio the fit takes.
+pub const ZETA_MIN: f64 = 1e-5;
+
 /// A fitted bell.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BellFit {
     /// Undamped natural frequency, Hz.
     pub f_hz: f64,
-    /// Damping ratio.
+    /// Damping ratio (at [`ZETA_MIN`] when the bell is narrower than the fit can tell).
     pub damping: f64,
     /// The floor `c`, relative to the bell's largest value.
     pub floor: f64,
@@ -127,7 +130,7 @@ pub fn fit(
         [
             p[0],
             p[1].clamp(f_lo, f_hi),
-            p[2].clamp((1e-5f64).ln(), (0.5f64).ln()),
+            p[2].clamp(ZETA_MIN.ln(), (0.5f64).ln()),
             p[3].clamp(floor_min, top.ln()),
         ]
     };
@@ -211,8 +214,10 @@ pub fn fit(
         }
     }
     let (f_hz, damping) = (p[1], p[2].exp());
-    // a fit on the bell's edge or at the damping's bounds is no mode of the bell
-    let inside = f_hz > f_lo && f_hz < f_hi && damping > 1.0001e-5 && damping < 0.4999;
+    // a fit on the bell's edge or at the damping's upper bound is no mode of the bell; at the
+    // lower bound the bell is narrower than the fit can tell (a struck fork ringing through
+    // the record): its frequency stands, its damping is not determined
+    let inside = f_hz > f_lo && f_hz < f_hi && damping < 0.4999;
     (inside && c.is_finite()).then_some(BellFit {
         f_hz,
         damping,

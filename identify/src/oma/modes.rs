@@ -392,25 +392,35 @@ pub fn fdd_modes(
             (&lag, None),
             s.efdd,
         ) {
-            Ok(e) => modes.push(OmaMode {
-                method: Method::Efdd,
-                mode,
-                band_hz,
-                f_hz: e.f_hz,
-                amplitude: Some(p.value),
-                damping: Some(e.damping),
-                shape,
-                evidence: format!(
+            Ok(e) => {
+                if resolved_damping(&e, s.fs_hz / s.csd.nfft as f64).is_none() {
+                    notes.push(format!(
+                        "efdd mode {mode} ({:.4} Hz): no damping (its bell is narrower than the \
+                         lines: a longer segment, $nperseg, resolves it)",
+                        e.f_hz
+                    ));
+                }
+                modes.push(OmaMode {
+                    method: Method::Efdd,
+                    mode,
+                    band_hz,
+                    f_hz: e.f_hz,
+                    amplitude: Some(p.value),
+                    damping: resolved_damping(&e, s.fs_hz / s.csd.nfft as f64),
+                    shape,
+                    evidence: format!(
                     "bell of {} lines ({:.4}-{:.4} Hz) fitted, residual {:.2} (ln), floor {:.1} % \
-                     of the peak",
+                     of the peak{}",
                     e.lines,
                     svd.freq_hz[e.range.0],
                     svd.freq_hz[e.range.1],
                     e.rms_log,
-                    100.0 * e.floor
+                    100.0 * e.floor,
+                    unresolved_why(&e, s.fs_hz / s.csd.nfft as f64)
                 ),
-                uncertainty: Default::default(),
-            }),
+                    uncertainty: Default::default(),
+                })
+            }
             Err(why) => notes.push(format!(
                 "EFDD of mode {mode} ({:.4} Hz) not reported: {why}",
                 svd.freq_hz[p.line]
@@ -418,4 +428,29 @@ pub fn fdd_modes(
         }
     }
     modes
+}
+
+/// The narrowest half-power band, in lines, whose width an EFDD fit determines: a bell
+/// narrower than half a line is the estimate's spectral window, whatever the damping under
+/// it (a struck fork's 0.001 came out 0.00003 from a slowly decaying record, 0.0028 from
+/// one with two strikes).
+const MIN_BAND_LINES: f64 = 0.5;
+
+/// EFDD's damping when the fitted half-power band `2 zeta f` is at least
+/// [`MIN_BAND_LINES`] of the line spacing `df` (and the fit's damping is not at its least).
+fn resolved_damping(e: &fdd::Efdd, df: f64) -> Option<f64> {
+    let floor = e.damping <= 1.0001 * super::bell::ZETA_MIN;
+    (!floor && 2.0 * e.damping * e.f_hz >= MIN_BAND_LINES * df).then_some(e.damping)
+}
+
+/// Why EFDD gives no damping (empty when it does): its band is narrower than the lines.
+fn unresolved_why(e: &fdd::Efdd, df: f64) -> String {
+    match resolved_damping(e, df) {
+        Some(_) => String::new(),
+        None => format!(
+            "; no damping: the fitted half-power band ({:.4} Hz) is narrower than half a line \
+             ({df:.4} Hz), so the bell is the spectral window's",
+            2.0 * e.damping * e.f_hz
+        ),
+    }
 }
