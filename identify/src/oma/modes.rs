@@ -393,33 +393,14 @@ pub fn fdd_modes(
             s.efdd,
         ) {
             Ok(e) => {
-                if resolved_damping(&e, s.fs_hz / s.csd.nfft as f64).is_none() {
-                    notes.push(format!(
-                        "efdd mode {mode} ({:.4} Hz): no damping (its bell is narrower than the \
-                         lines: a longer segment, $nperseg, resolves it)",
-                        e.f_hz
-                    ));
-                }
-                modes.push(OmaMode {
-                    method: Method::Efdd,
-                    mode,
-                    band_hz,
-                    f_hz: e.f_hz,
-                    amplitude: Some(p.value),
-                    damping: resolved_damping(&e, s.fs_hz / s.csd.nfft as f64),
+                let df = s.fs_hz / s.csd.nfft as f64;
+                modes.push(efdd_mode(
+                    &e,
+                    (mode, band_hz, p.value),
                     shape,
-                    evidence: format!(
-                    "bell of {} lines ({:.4}-{:.4} Hz) fitted, residual {:.2} (ln), floor {:.1} % \
-                     of the peak{}",
-                    e.lines,
-                    svd.freq_hz[e.range.0],
-                    svd.freq_hz[e.range.1],
-                    e.rms_log,
-                    100.0 * e.floor,
-                    unresolved_why(&e, s.fs_hz / s.csd.nfft as f64)
-                ),
-                    uncertainty: Default::default(),
-                })
+                    (svd, df),
+                    notes,
+                ));
             }
             Err(why) => notes.push(format!(
                 "EFDD of mode {mode} ({:.4} Hz) not reported: {why}",
@@ -443,14 +424,48 @@ fn resolved_damping(e: &fdd::Efdd, df: f64) -> Option<f64> {
     (!floor && 2.0 * e.damping * e.f_hz >= MIN_BAND_LINES * df).then_some(e.damping)
 }
 
-/// Why EFDD gives no damping (empty when it does): its band is narrower than the lines.
-fn unresolved_why(e: &fdd::Efdd, df: f64) -> String {
-    match resolved_damping(e, df) {
-        Some(_) => String::new(),
-        None => format!(
+/// The EFDD mode of the fit `e` (mode number, band and FDD's amplitude as given; `df` the line
+/// spacing of `svd`), its damping withheld with a note when the bell cannot give it
+/// ([`resolved_damping`]).
+fn efdd_mode(
+    e: &fdd::Efdd,
+    (mode, band_hz, amplitude): (usize, Option<(f64, f64)>, f64),
+    shape: Vec<Complex64>,
+    (svd, df): (&Svd, f64),
+    notes: &mut Vec<String>,
+) -> OmaMode {
+    let damping = resolved_damping(e, df);
+    let why = if damping.is_none() {
+        notes.push(format!(
+            "efdd mode {mode} ({:.4} Hz): no damping (its bell is narrower than the lines: a \
+             longer segment, $nperseg, resolves it)",
+            e.f_hz
+        ));
+        format!(
             "; no damping: the fitted half-power band ({:.4} Hz) is narrower than half a line \
              ({df:.4} Hz), so the bell is the spectral window's",
             2.0 * e.damping * e.f_hz
+        )
+    } else {
+        String::new()
+    };
+    OmaMode {
+        method: Method::Efdd,
+        mode,
+        band_hz,
+        f_hz: e.f_hz,
+        amplitude: Some(amplitude),
+        damping,
+        shape,
+        evidence: format!(
+            "bell of {} lines ({:.4}-{:.4} Hz) fitted, residual {:.2} (ln), floor {:.1} % of the \
+             peak{why}",
+            e.lines,
+            svd.freq_hz[e.range.0],
+            svd.freq_hz[e.range.1],
+            e.rms_log,
+            100.0 * e.floor,
         ),
+        uncertainty: Default::default(),
     }
 }
