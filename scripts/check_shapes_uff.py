@@ -21,19 +21,7 @@ import check_uff  # noqa: E402  (its pins: pyuff)
 
 def ensure_venv():
     """Re-executes this script with the venv's python (check_uff.py's venv and pins)."""
-    if os.environ.get(check_uff.MARK) == "1":
-        return
-    import subprocess
-    import venv
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("CHECK_UFF_VENV", root / ".venv"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        venv.create(env_dir, with_pip=True)
-    if subprocess.run([str(py), "-c", "import pyuff"], capture_output=True).returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *check_uff.PINS], check=True)
-    os.environ[check_uff.MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
+    check_uff.ensure_venv_for(__file__)
 
 
 def main():

@@ -11,11 +11,10 @@ $CHECK_UFF_VENV, else .venv at the repository root (created, and the packages in
 pip, when missing). Exit status 0 when every check passes, 1 otherwise.
 """
 import argparse
-import os
-import subprocess
 import sys
-import venv
 from pathlib import Path
+
+from pinned_venv import rerun_in_venv
 
 PINS = ["pyuff==2.5.8", "sdypy-EMA==0.31.0"]
 MARK = "CHECK_UFF_IN_VENV"
@@ -29,19 +28,7 @@ def ensure_venv():
 def ensure_venv_for(script):
     """Re-executes `script` (with this process's arguments) with the venv's python, creating
     the venv if needed."""
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("CHECK_UFF_VENV", root / ".venv"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        print(f"creating a virtual environment in {env_dir}", flush=True)
-        venv.create(env_dir, with_pip=True)
-    have = subprocess.run([str(py), "-c", "import pyuff, sdypy.EMA"], capture_output=True)
-    if have.returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(script).resolve()), *sys.argv[1:]])
+    rerun_in_venv(script, MARK, "CHECK_UFF_VENV", ".venv", "pyuff, sdypy.EMA", PINS)
 
 
 def main():

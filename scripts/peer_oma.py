@@ -20,13 +20,13 @@ docs/method.md §3.12).
 """
 import argparse
 import csv
-import os
 import subprocess
 import sys
 import tempfile
 import time
-import venv
 from pathlib import Path
+
+from pinned_venv import rerun_in_venv
 
 PINS = ["pyOMA-2==1.4.3"]
 MARK = "PEER_OMA_IN_VENV"
@@ -36,20 +36,7 @@ def ensure_venv(script=__file__, env=None):
     """Re-runs `script` (this one, or another peer script that imports this function) in the
     virtual environment with pinned pyOMA-2, with `env` added to its environment (set before
     numpy is imported there); returns at once when already in it."""
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("PEER_OMA_VENV", root / ".venv-peer-oma"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        print(f"creating a virtual environment in {env_dir}", flush=True)
-        venv.create(env_dir, with_pip=True)
-    if subprocess.run([str(py), "-c", "import pyoma2"], capture_output=True).returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    os.environ.update(env or {})
-    script = str(Path(script).resolve())
-    os.execv(str(py), [str(py), script, *sys.argv[1:]])
+    rerun_in_venv(script, MARK, "PEER_OMA_VENV", ".venv-peer-oma", "pyoma2", PINS, env)
 
 
 def read_wide(path):
@@ -71,6 +58,17 @@ def simulate_field(harness, case, minutes, noise, seed, rec):
     for r in csv.DictReader(open(Path(rec) / "truth.csv")):
         truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
     return truth
+
+
+def ensemble_parser(doc, records=20):
+    """The flags of a study over simulated records: the harness, how many records, how long,
+    how noisy (the callers add their own)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--harness", default="target/release/host-harness")
+    ap.add_argument("--records", type=int, default=records)
+    ap.add_argument("--minutes", type=float, default=10.0)
+    ap.add_argument("--noise", type=float, default=0.03)
+    return ap
 
 
 def mac(a, b):

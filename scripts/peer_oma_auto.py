@@ -23,13 +23,12 @@ virtual environment of scripts/peer_oma.py (pinned pyOMA-2: $PEER_OMA_VENV, else
 at the repository root, created with pip when missing). Writes DIR/peer-oma-auto.md (default
 target/peer-oma-auto).
 """
-import argparse
 import csv
 import subprocess
 import time
 from pathlib import Path
 
-from peer_oma import ensure_venv, read_wide, simulate_field
+from peer_oma import ensemble_parser, ensure_venv, read_wide, simulate_field
 
 THREADS = ["OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"]
 
@@ -54,11 +53,7 @@ def exact(truth, found, df):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--harness", default="target/release/host-harness")
-    ap.add_argument("--records", type=int, default=20)
-    ap.add_argument("--minutes", type=float, default=10.0)
-    ap.add_argument("--noise", type=float, default=0.03)
+    ap = ensemble_parser(__doc__)
     ap.add_argument("--cases", default="shear-frame,close-modes,weak-high-mode")
     ap.add_argument("--threads", choices=["1", "default"], default="1")
     ap.add_argument("--out", default="target/peer-oma-auto")

@@ -16,19 +16,14 @@ deviation of each side's estimates over the records (what a standard uncertainty
 the mean of our `u` and of pyOMA-2's std. Runs in the virtual environment of
 scripts/peer_oma.py ($PEER_OMA_VENV, else .venv-peer-oma). Writes DIR/peer-oma-unc.md.
 """
-import argparse
 import csv
 import subprocess
 from pathlib import Path
 
-from peer_oma import ensure_venv, read_wide, simulate_field
+from peer_oma import ensemble_parser, ensure_venv, read_wide, simulate_field
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--harness", default="target/release/host-harness")
-    ap.add_argument("--records", type=int, default=20)
-    ap.add_argument("--minutes", type=float, default=10.0)
-    ap.add_argument("--noise", type=float, default=0.03)
+    ap = ensemble_parser(__doc__)
     ap.add_argument("--case", default="shear-frame")
     ap.add_argument("--out", default="target/peer-oma-unc")
     args = ap.parse_args()

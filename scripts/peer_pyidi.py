@@ -29,12 +29,11 @@ resampling and pyFRF). Runs in a virtual environment with pinned packages: $PEER
 DIR/peer.md (default REC/peer).
 """
 import argparse
-import os
 import subprocess
-import sys
 import time
-import venv
 from pathlib import Path
+
+from pinned_venv import rerun_in_venv
 
 PINS = ["pyidi==1.4.0", "pyFRF==1.5.0", "numpy", "scipy"]
 MARK = "PEER_PYIDI_IN_VENV"
@@ -42,19 +41,7 @@ MARK = "PEER_PYIDI_IN_VENV"
 
 def ensure_venv():
     """Re-executes this script with the venv's python, creating the venv if needed."""
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("PEER_VENV", root / ".venv-peer"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        print(f"creating a virtual environment in {env_dir}", flush=True)
-        venv.create(env_dir, with_pip=True)
-    have = subprocess.run([str(py), "-c", "import pyidi, pyFRF, scipy"], capture_output=True)
-    if have.returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
+    rerun_in_venv(__file__, MARK, "PEER_VENV", ".venv-peer", "pyidi, pyFRF, scipy", PINS)
 
 
 def mac(a, b):

@@ -34,13 +34,13 @@ with pip when missing). Writes REC/peer-trackers.md (an existing one is replaced
 them).
 """
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
 import time
-import venv
 from pathlib import Path
+
+from pinned_venv import rerun_in_venv
 
 PINS = ["pyidi==1.4.0", "opencv-python-headless", "scikit-image", "numpy", "pillow"]
 MARK = "PEER_TRACKERS_IN_VENV"
@@ -48,19 +48,8 @@ MARK = "PEER_TRACKERS_IN_VENV"
 
 def ensure_venv():
     """Re-executes this script with the venv's python, creating the venv if needed."""
-    if os.environ.get(MARK) == "1":
-        return
-    root = Path(__file__).resolve().parent.parent
-    env_dir = Path(os.environ.get("PEER_VENV", root / ".venv-peer-trackers"))
-    py = env_dir / "bin" / "python"
-    if not py.exists():
-        print(f"creating a virtual environment in {env_dir}", flush=True)
-        venv.create(env_dir, with_pip=True)
-    have = subprocess.run([str(py), "-c", "import pyidi, cv2, skimage, PIL"], capture_output=True)
-    if have.returncode != 0:
-        subprocess.run([str(py), "-m", "pip", "install", "-q", *PINS], check=True)
-    os.environ[MARK] = "1"
-    os.execv(str(py), [str(py), str(Path(__file__).resolve()), *sys.argv[1:]])
+    probe = "pyidi, cv2, skimage, PIL"
+    rerun_in_venv(__file__, MARK, "PEER_VENV", ".venv-peer-trackers", probe, PINS)
 
 
 def read_csv(path):

@@ -1,6 +1,7 @@
 //! End-to-end tests of `host-harness analyze`: a hand-made recording with a closed-form answer,
 //! the frame formats (PNG directory, glob, multi-page TIFF), and one test per bad input.
 
+use crate::util::assert_contains;
 use crate::util::{harness, words};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -548,10 +549,12 @@ fn synthetic_cantilever_recording_round_trip() {
         &["--nperseg", "4096"],
         &tmp.path().join("segments"),
     );
-    assert!(report.contains("jackknife over 9 groups"), "{report}");
-    assert!(
-        report.contains("mode 1: its half-power bandwidth"),
-        "{report}"
+    assert_contains(
+        &report,
+        &[
+            "jackknife over 9 groups",
+            "mode 1: its half-power bandwidth",
+        ],
     );
     let text = std::fs::read_to_string(tmp.path().join("segments/modes.csv")).unwrap();
     for (row, line) in text.lines().skip(1).enumerate() {

@@ -5,6 +5,7 @@
 //! `daq::npy`, `daq::uff`, `analysis::ema::impact`, `outdir`, `setting`.)
 
 use crate::analyze::{make_recording, Recording};
+use crate::util::assert_says;
 use crate::util::words;
 use crate::util::{
     analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, stderr,
@@ -321,12 +322,7 @@ fn hammer_files_as_careless_users_give_them_are_refused_named_or_read() {
         "its only channel is the force",
     );
     let o = ema(&both, &both, &tmp.path().join("both"), &[]);
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        report.contains("the force's channel `force_n` left out"),
-        "{report}"
-    );
+    assert_says(&o, &["the force's channel `force_n` left out"]);
     assert_exit_2(
         &ema(&both, &both, &out, &["--response-col", "force_n"]),
         "the force's own channel",
@@ -477,12 +473,7 @@ fn an_ni_waveform_with_timestamps_and_a_long_unit_is_analysed() {
     tdms_force(&tdms, &force, "N (load cell 208C02, calibrated)");
     let out = tmp.path().join("e");
     let o = ema(&h.join("camera.csv"), &tdms, &out, &[]);
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        report.contains("is cut to its first 20 characters in frf.uff"),
-        "{report}"
-    );
+    assert_says(&o, &["is cut to its first 20 characters in frf.uff"]);
     let uff = std::fs::read_to_string(out.join("frf.uff")).unwrap();
     assert!(
         uff.contains("N (load cell 208C02,"),

@@ -4,6 +4,7 @@
 //! `ema` must find the modes (frequency within 0.1 %, damping within 5 %, shapes MAC >= 0.99)
 //! with and without the exponential window, and name a double hit and a clipped hit.
 
+use crate::util::assert_says;
 use crate::util::{assert_exit_2, assert_ok, harness, words};
 use host_harness::model::hammer::HammerTest;
 use host_harness::recording::hammer::HammerRecording;
@@ -130,10 +131,7 @@ fn a_hammer_test_at_two_rates_gives_the_modes_with_and_without_the_exponential_w
         "{truth}"
     );
     let plain = ema(&dir, "plain", &["--exp-window", "off"]);
-    assert_ok(&plain);
-    let report = String::from_utf8_lossy(&plain.stdout);
-    assert!(report.contains("3 hits found, 3 used"), "{report}");
-    assert!(report.contains("upsampled"), "{report}");
+    assert_says(&plain, &["3 hits found, 3 used", "upsampled"]);
     check_modes(&dir.join("plain"), &test, "no window");
     // the exponential window adds 0.3 to 1.4 % damping here: removed again
     let windowed = ema(&dir, "windowed", &["--exp-window", "0.01"]);
@@ -156,16 +154,13 @@ fn a_double_hit_and_a_clipped_hit_are_named_and_left_out() {
         &["--peaks-n", "80,70,100", "--double-hit", "--clip-n", "90"],
     );
     let out = ema(&dir, "bad", &[]);
-    assert_ok(&out);
-    let report = String::from_utf8_lossy(&out.stdout);
-    assert!(report.contains("3 hits found, 1 used"), "{report}");
-    assert!(
-        report.contains("hit 2 at 3.2000 s: a double hit"),
-        "{report}"
-    );
-    assert!(
-        report.contains("hit 3 at 6.2000 s: the force is clipped"),
-        "{report}"
+    assert_says(
+        &out,
+        &[
+            "3 hits found, 1 used",
+            "hit 2 at 3.2000 s: a double hit",
+            "hit 3 at 6.2000 s: the force is clipped",
+        ],
     );
     // all hits bad: refused, each named
     let short = dir.join("short");
@@ -232,12 +227,12 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
         &out,
         &["--delay-s", "0.1"],
     );
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(report.contains("(Newtons, 50000 Hz)"), "{report}");
-    assert!(
-        report.contains("a delay of 0.1 s: the first 5000 samples of the force dropped"),
-        "{report}"
+    let report = assert_says(
+        &o,
+        &[
+            "(Newtons, 50000 Hz)",
+            "a delay of 0.1 s: the first 5000 samples of the force dropped",
+        ],
     );
     check_modes(&out, &test, "LabVIEW force, late camera");
     assert!(!report.contains("note:"), "{report}");
@@ -245,15 +240,12 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
     // before the pulses and the model cannot describe the FRFs; both said, not a silent number
     let wrong = dir.join("wrong");
     let o = ema_of((&late_path, &lvm, "Excitation (Trigger)"), &wrong, &[]);
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        report.contains("the responses move before the force's pulses"),
-        "{report}"
-    );
-    assert!(
-        report.contains("the numbers above are doubtful"),
-        "{report}"
+    assert_says(
+        &o,
+        &[
+            "the responses move before the force's pulses",
+            "the numbers above are doubtful",
+        ],
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -322,11 +314,9 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     std::fs::write(dir.join("camera.csv"), r).unwrap();
     let out = dir.join("out");
     let o = harness(&words("ema --response {} --excitation {} --excitation-col force_n --f-max-hz 200 --out {} --no-plots", &[dir.join("camera.csv").to_str().unwrap(), dir.join("force.csv").to_str().unwrap(), out.to_str().unwrap()]));
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        report.contains("continuous excitation: Welch H1, Hann segments of 16384"),
-        "{report}"
+    assert_says(
+        &o,
+        &["continuous excitation: Welch H1, Hann segments of 16384"],
     );
     // measured: 23.0082 Hz (+0.036 %), damping 0.01512 (+0.8 %) and closer for the others
     check_modes(&out, &test, "random force");
@@ -354,15 +344,12 @@ fn a_displacement_csv_of_track_is_a_response_file() {
     std::fs::write(&path, s).unwrap();
     let out = dir.join("out");
     let o = ema_of((&path, &dir.join("force.csv"), "force_n"), &out, &[]);
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        report.contains("(5 channels, mm, 2000 Hz, a camera's)"),
-        "{report}"
-    );
-    assert!(
-        report.contains("target 3: 1 lost samples filled"),
-        "{report}"
+    assert_says(
+        &o,
+        &[
+            "(5 channels, mm, 2000 Hz, a camera's)",
+            "target 3: 1 lost samples filled",
+        ],
     );
     check_modes(&out, &test, "displacement.csv");
     let modes = std::fs::read_to_string(out.join("modes.csv")).unwrap();
@@ -378,11 +365,9 @@ fn bands_give_one_mode_each_and_an_empty_band_is_named() {
     let dir = std::env::temp_dir().join(format!("vibcam-ema-bands-{}", std::process::id()));
     let test = write_test(&dir, &[]);
     let out = ema(&dir, "bands", &["--bands", "15-30,50-70,100-130,150-160"]);
-    assert_ok(&out);
-    let report = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        report.contains("band 150-160 Hz: no mode (no cluster of stable poles there)"),
-        "{report}"
+    assert_says(
+        &out,
+        &["band 150-160 Hz: no mode (no cluster of stable poles there)"],
     );
     check_modes(&dir.join("bands"), &test, "bands");
     let modes = std::fs::read_to_string(dir.join("bands/modes.csv")).unwrap();

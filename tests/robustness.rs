@@ -2,6 +2,7 @@
 //! locked, its checkpoint is never emptied or double counted, sizes are bounded, undefined
 //! statistics are empty cells.
 
+use crate::util::assert_contains;
 use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -72,8 +73,7 @@ fn duplicated_and_torn_checkpoint_lines_are_neither_counted_twice_nor_fatal() {
     let o = study(&b, &["--resume"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("recorded more than once"), "{e}");
-    assert!(e.contains("cut short"), "{e}");
+    assert_contains(&e, &["recorded more than once", "cut short"]);
     let read = |d: &Path| std::fs::read_to_string(d.join("summary.csv")).unwrap();
     assert_eq!(read(&a), read(&b), "the duplicate was counted");
     // the torn line is gone, the file was cut back, not emptied
@@ -580,8 +580,7 @@ fn all_failed_vision_rows_are_empty_not_nan() {
         assert!(!s.to_lowercase().contains("nan"), "{f}: {s}");
     }
     let s = std::fs::read_to_string(out.join("summary.csv")).unwrap();
-    assert!(s.contains("\nvision,40,1,0,,,,,"), "{s}");
-    assert!(s.contains("\ntransducer,40,1,2,"), "{s}");
+    assert_contains(&s, &["\nvision,40,1,0,,,,,", "\ntransducer,40,1,2,"]);
 }
 
 /// A reader that stops early (`host-harness centroid ... | head -1`) closes the pipe: the

@@ -5,6 +5,7 @@ mod frf {
     //! `host-harness frf`: H1 of a known gain and of a known resonator, peaks in bands, and the
     //! bad-input cases (exit code 2, message naming row and column).
 
+    use crate::util::assert_contains;
     use crate::util::{harness, words};
     use host_harness::testing::uniform_noise as noise;
     use std::f64::consts::PI;
@@ -118,10 +119,9 @@ mod frf {
         let (code, _, stderr) = run(&input, ("a", "b"), &out, &["--fs", "256"]);
         assert_eq!(code, 0, "{stderr}");
         // nperseg 256, noverlap 128, nfft 256: (1000 - 256) / 128 + 1 = 6 segments, 129 bins
-        assert!(stderr.contains("6 segment"), "{stderr}");
-        assert!(
-            stderr.contains("nperseg 256, noverlap 128, nfft 256"),
-            "{stderr}"
+        assert_contains(
+            &stderr,
+            &["6 segment", "nperseg 256, noverlap 128, nfft 256"],
         );
         let rows = read_out(&out);
         assert_eq!(rows.len(), 129);

@@ -4,6 +4,7 @@
 //! the model, mode shapes with MAC >= 0.99 against the model's, lost frames per target, bad
 //! target counts named.
 
+use crate::util::assert_contains;
 use crate::util::{analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::path::{Path, PathBuf};
 
@@ -215,8 +216,13 @@ fn five_targets_give_the_model_frequencies_damping_and_shapes() {
     assert_eq!(macs.len(), 2);
     assert!(macs.iter().all(|m| *m >= 0.99), "{macs:?}");
     let report = std::fs::read_to_string(with_ref.join("report.txt")).unwrap();
-    assert!(report.contains("MAC against --shape-reference"), "{report}");
-    assert!(report.contains("vision target 3 (co-located"), "{report}");
+    assert_contains(
+        &report,
+        &[
+            "MAC against --shape-reference",
+            "vision target 3 (co-located",
+        ],
+    );
     // a reference missing a target, naming a target beyond K, all zero or for a mode --bands
     // does not have is refused, naming the row or the mode
     for (text, needle) in [

@@ -2,6 +2,7 @@
 //! Lucas-Kanade (`--tracker lk`), against the exact motion a recording's `truth.csv` states,
 //! and every way Lucas-Kanade loses a target: a flag and a lost frame, never a wrong position.
 
+use crate::util::{assert_contains, assert_says};
 use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::collections::HashMap;
 use std::path::Path;
@@ -248,9 +249,14 @@ fn lucas_kanade_losses_are_flags_and_lost_frames_never_wrong_positions() {
     }
     // the report counts them
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
-    assert!(report.contains("target 1: window 21x21 px"), "{report}");
-    assert!(report.contains("1 of 10 frames lost"), "{report}");
-    assert!(report.contains("10 of 10 frames lost"), "{report}");
+    assert_contains(
+        &report,
+        &[
+            "target 1: window 21x21 px",
+            "1 of 10 frames lost",
+            "10 of 10 frames lost",
+        ],
+    );
 }
 
 /// `--tracker lk` needs `--points`; `--search-px` belongs to it.
@@ -335,20 +341,21 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     let rec = tmp.path().join("rec");
     let r = rec.to_str().unwrap();
     assert_ok(&harness(&words(
-        "render --recording {} --scene cluttered --motion release --video",
+        "render --recording {} --scene cluttered --motion release",
         &[r],
     )));
     let truth = truth(&rec);
-    let track_frames = |frames: &str, points: &Path, out: &Path| {
-        assert_ok(&harness(&words(
-            "track --frames {} --fps 23 --points {} --tracker lk --search-px 130 --out {}",
-            &[frames, points.to_str().unwrap(), out.to_str().unwrap()],
-        )));
-        displacement(out)
-    };
     let frames = format!("{r}/frames");
-    let track = |points: &Path, out: &Path| track_frames(&frames, points, out);
-    let rows = track(&rec.join("points.csv"), &tmp.path().join("grouped"));
+    let grouped = tmp.path().join("grouped");
+    assert_ok(&harness(&words(
+        "track --frames {} --fps 23 --points {} --tracker lk --search-px 130 --out {}",
+        &[
+            &frames,
+            rec.join("points.csv").to_str().unwrap(),
+            grouped.to_str().unwrap(),
+        ],
+    )));
+    let rows = displacement(&grouped);
     assert_eq!(rows.len(), 184 * 28);
     let (worst, lost) = worst_and_lost(&rows, &truth);
     assert_eq!(lost, 0);
@@ -367,9 +374,7 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
             modal.to_str().unwrap(),
         ],
     ));
-    assert_ok(&o);
-    let report = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(report.contains("regime: 2 free decay(s)"), "{report}");
+    let report = assert_says(&o, &["regime: 2 free decay(s)"]);
     let decay: Vec<Vec<String>> = crate::util::modes_csv_rows(&modal)
         .into_iter()
         .filter(|c| c[9] == "decay")
@@ -385,15 +390,6 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         let f: f64 = c[5].parse().unwrap();
         assert!((f - 3.6).abs() < 0.5, "{} at {f} Hz: {report}", c[9]);
     }
-    // the colour video (lossless, before the JPEG) as the frames
-    let rows = track_frames(
-        &format!("{r}/frames.mkv"),
-        &rec.join("points.csv"),
-        &tmp.path().join("video"),
-    );
-    let (worst, lost) = worst_and_lost(&rows, &truth);
-    assert_eq!((rows.len(), lost), (184 * 28, 0));
-    assert!(worst < 1.0, "video: worst {worst} px");
     // the same windows without the storeys, as a new user writes them: the groups are found
     // from the first frames' motion, and every tag is followed through every frame (before,
     // 7 tags took their neighbours), with the default search and with a search of the whole

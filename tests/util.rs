@@ -45,6 +45,22 @@ pub fn assert_ok(o: &Output) {
     );
 }
 
+/// Asserts that the process succeeded and that its standard output contains every one of
+/// `needles`; gives that output back.
+pub fn assert_says(o: &Output, needles: &[&str]) -> String {
+    assert_ok(o);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_contains(&out, needles);
+    out
+}
+
+/// Asserts that `text` contains every one of `needles`, naming the first missing one.
+pub fn assert_contains(text: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(text.contains(needle), "`{needle}` not in {text}");
+    }
+}
+
 /// Asserts exit code 2 (bad input) and that standard error contains `needle`.
 pub fn assert_exit_2(o: &Output, needle: &str) {
     let e = stderr(o);

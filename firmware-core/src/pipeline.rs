@@ -700,12 +700,9 @@ impl<const CAM: usize, const HIST: usize, const WORK: usize, const SCRATCH: usiz
                     // what the compensation did is the same for every block: see
                     // `exposure_compensation`
                     self.plan.run_part(
-                        input,
-                        out,
-                        m / 4,
+                        (input, out, m / 4),
                         options,
-                        &mut self.work,
-                        &mut self.scratch,
+                        (&mut self.work, &mut self.scratch),
                     );
                 }
                 self.vis_fill += keep;

@@ -289,20 +289,18 @@ impl UpsamplePlan {
                 got: scratch.len(),
             });
         }
-        Ok(self.run_part(input, output, first, options, work, scratch))
+        Ok(self.run_part((input, output, first), options, (work, scratch)))
     }
 
     /// [`process`](Self::process) for the crate's own callers, whose buffers follow
     /// from a validated configuration: infallible (a buffer of the wrong length, impossible
-    /// there, leaves `output` untouched and reports no compensation).
+    /// there, leaves `output` untouched and reports no compensation). The arguments are
+    /// `process`'s, grouped as what is read and written and the transform's buffers.
     pub(crate) fn run_part(
         &self,
-        input: &[f32],
-        output: &mut [f32],
-        first: usize,
+        (input, output, first): (&[f32], &mut [f32], usize),
         options: UpsampleOptions,
-        work: &mut [Complex32],
-        scratch: &mut [Complex32],
+        (work, scratch): (&mut [Complex32], &mut [Complex32]),
     ) -> Compensation {
         let none = Compensation::default();
         let UpsampleOptions {

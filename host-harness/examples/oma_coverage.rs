@@ -56,14 +56,7 @@ fn main() -> anyhow::Result<()> {
                         let df = r.csd.df_hz();
                         for (i, m) in model.modes.iter().enumerate() {
                             let tol = model.match_window(i, df);
-                            let Some(got) = r
-                                .modes
-                                .iter()
-                                .filter(|x| x.method == method && (x.f_hz - m.f_hz).abs() <= tol)
-                                .min_by(|a, b| {
-                                    (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs())
-                                })
-                            else {
+                            let Some(got) = r.nearest(method, m.f_hz, tol) else {
                                 continue;
                             };
                             let (tf, tz) = &mut t[i];

@@ -66,14 +66,7 @@ fn main() -> anyhow::Result<()> {
                             .filter(|o| o.f_hz != m.f_hz)
                             .map(|o| (o.f_hz - m.f_hz).abs() / 2.0)
                             .fold(3.0 * df, f64::min);
-                        let Some(got) = r
-                            .modes
-                            .iter()
-                            .filter(|x| x.method == method && (x.f_hz - m.f_hz).abs() <= gap)
-                            .min_by(|a, b| {
-                                (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs())
-                            })
-                        else {
+                        let Some(got) = r.nearest(method, m.f_hz, gap) else {
                             continue;
                         };
                         let s = &mut stats[mi][i];

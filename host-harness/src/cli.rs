@@ -124,6 +124,19 @@ pub fn outputs_in(dir: &std::path::Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The end of a job that writes an output directory: its report on standard output, where its
+/// outputs are when it succeeded, and its result (a failure's report is printed too).
+pub fn finish(
+    outcome: crate::analysis::request::Outcome,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    stdout(&outcome.report)?;
+    if outcome.result.is_ok() {
+        outputs_in(out)?;
+    }
+    outcome.result
+}
+
 /// A failed write to standard output, named as such, the `io::Error` kept as its source (a
 /// closed pipe is recognised by [`main`]).
 fn stdout_error(e: std::io::Error) -> anyhow::Error {

@@ -462,39 +462,36 @@ mod tests {
             y: &y,
             adjust: &[],
         };
-        // the rig's default: one segment over the record
-        let c = config(x.len(), None);
-        let frf = frf::estimate(&x, &y, c).unwrap();
-        let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
+        // the intervals with segments of `nperseg` (the rig's default: one over the record)
         let mut notes = Vec::new();
-        let u = of_system(&sys, c, &modes, 10, &mut notes).unwrap();
+        let mut at = |nperseg: Option<usize>| {
+            let c = config(x.len(), nperseg);
+            let frf = frf::estimate(&x, &y, c).unwrap();
+            let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
+            of_system(&sys, c, &modes, 10, &mut notes).unwrap()
+        };
+        let u = at(None);
         assert!(
             u.iter().all(|m| m == &FrfModeUncertainty::default()),
             "{u:?}"
         );
         // 1 s segments: 1 Hz lines, mode 1 (0.16 Hz wide) is not resolved; 0.5 Hz lines: mode 2
         // (0.71 Hz) is
-        let c = config(x.len(), Some(2048));
-        let frf = frf::estimate(&x, &y, c).unwrap();
-        let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
-        let u = of_system(&sys, c, &modes, 10, &mut notes).unwrap();
+        let u1 = at(Some(2048));
+        let u2 = at(Some(4096));
         assert!(
-            u[0].damping.is_none() && u[0].amplitude.is_none(),
+            u1[0].damping.is_none() && u1[0].amplitude.is_none(),
             "{:?}",
-            u[0]
+            u1[0]
         );
-        assert!(u[0].f_hz.is_some());
+        assert!(u1[0].f_hz.is_some());
         assert!(notes
             .iter()
             .any(|n| n.contains("mode 1") && n.contains("not resolved")));
-        let c = config(x.len(), Some(4096));
-        let frf = frf::estimate(&x, &y, c).unwrap();
-        let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
-        let u = of_system(&sys, c, &modes, 10, &mut notes).unwrap();
         assert!(
-            u[1].damping.is_some() && u[1].amplitude.is_some(),
+            u2[1].damping.is_some() && u2[1].amplitude.is_some(),
             "{:?} {notes:?}",
-            u[1]
+            u2[1]
         );
     }
 
@@ -504,43 +501,57 @@ mod tests {
         // resolved but only 1.3 and 5.7 lines wide, so the estimate's |H1| is the FRF smoothed
         // by the window. Where an interval is given it must hold the closed form.
         let rig = cantilever::Rig::nominal();
-        // per mode: [given, |FRF| held, damping held]
-        let mut count = [[0; 3]; 2];
-        // mode 1's damping by the plain and the smoothed fit, over the truth
-        let (mut plain_err, mut smoothed_err) = (Vec::new(), Vec::new());
         let records = 24;
-        for seed in 0..records {
-            let (x, y) = rig_record(30, 1000 + seed);
-            let c = config(x.len(), Some(16384));
-            let frf = frf::estimate(&x, &y, c).unwrap();
-            let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
-            let sys = System {
-                name: "accelerometer",
-                x: &x,
-                y: &y,
-                adjust: &[],
-            };
-            let u = of_system(&sys, c, &modes, 10, &mut Vec::new()).unwrap();
-            for (i, (m, u)) in modes.iter().zip(&u).enumerate() {
-                let (Some(a), Some(z)) = (u.amplitude, u.damping) else {
-                    continue;
+        // per record: per mode [given, |FRF| held, damping held], and mode 1's damping by the
+        // plain and the smoothed fit over the truth; the records analysed side by side
+        use rayon::prelude::*;
+        type Record = ([[usize; 3]; 2], Option<(f64, f64)>);
+        let per_record: Vec<Record> = (0..records)
+            .into_par_iter()
+            .map(|seed| {
+                let (x, y) = rig_record(30, 1000 + seed);
+                let c = config(x.len(), Some(16384));
+                let frf = frf::estimate(&x, &y, c).unwrap();
+                let modes = frf::pick_modes(&frf, &BANDS, None).unwrap();
+                let sys = System {
+                    name: "accelerometer",
+                    x: &x,
+                    y: &y,
+                    adjust: &[],
                 };
-                let truth = Rig::Cantilever(rig.clone()).frf(m.f_hz).norm();
-                let zeta = rig.modes[i].zeta;
-                count[i][0] += 1;
-                count[i][1] += usize::from(a.lo <= truth && truth <= a.hi);
-                count[i][2] += usize::from(z.lo <= zeta && zeta <= z.hi);
-                if i == 0 {
-                    let plain =
-                        modal::fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
-                            .unwrap()
-                            .pole
-                            .damping;
-                    plain_err.push(plain / zeta - 1.0);
-                    smoothed_err.push(u.damping_fit.unwrap() / zeta - 1.0);
+                let u = of_system(&sys, c, &modes, 10, &mut Vec::new()).unwrap();
+                let (mut count, mut errs) = ([[0; 3]; 2], None);
+                for (i, (m, u)) in modes.iter().zip(&u).enumerate() {
+                    let (Some(a), Some(z)) = (u.amplitude, u.damping) else {
+                        continue;
+                    };
+                    let truth = Rig::Cantilever(rig.clone()).frf(m.f_hz).norm();
+                    let zeta = rig.modes[i].zeta;
+                    count[i][0] += 1;
+                    count[i][1] += usize::from(a.lo <= truth && truth <= a.hi);
+                    count[i][2] += usize::from(z.lo <= zeta && zeta <= z.hi);
+                    if i == 0 {
+                        let plain =
+                            modal::fit_mode(&frf.freq_hz, &frf.h1, m.band_hz, FrfForm::Accelerance)
+                                .unwrap()
+                                .pole
+                                .damping;
+                        errs = Some((plain / zeta - 1.0, u.damping_fit.unwrap() / zeta - 1.0));
+                    }
+                }
+                (count, errs)
+            })
+            .collect();
+        let mut count = [[0; 3]; 2];
+        for (c, _) in &per_record {
+            for (total, one) in count.iter_mut().zip(c) {
+                for (t, o) in total.iter_mut().zip(one) {
+                    *t += o;
                 }
             }
         }
+        let plain_err: Vec<f64> = per_record.iter().filter_map(|r| r.1.map(|e| e.0)).collect();
+        let smoothed_err: Vec<f64> = per_record.iter().filter_map(|r| r.1.map(|e| e.1)).collect();
         for (i, [given, a, z]) in count.iter().enumerate() {
             assert!(*given >= 16, "mode {}: {given} of {records} given", i + 1);
             assert!(

@@ -150,12 +150,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in warnings {
         eprintln!("warning: {}", crate::jobs::SpecError::setting(w));
     }
-    let outcome = spec.run()?;
-    super::stdout(&outcome.report)?;
-    if outcome.result.is_ok() {
-        super::outputs_in(&out)?;
-    }
-    outcome.result
+    super::finish(spec.run()?, &out)
 }
 
 /// The flags as the library's [`AnalyzeInput`].

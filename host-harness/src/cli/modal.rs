@@ -74,10 +74,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         plots: !args.no_plots,
     })
     .map_err(SpecError::into_anyhow)?;
-    let outcome = spec.run()?;
-    super::stdout(&outcome.report)?;
-    if outcome.result.is_ok() {
-        super::outputs_in(&out)?;
-    }
-    outcome.result
+    super::finish(spec.run()?, &out)
 }

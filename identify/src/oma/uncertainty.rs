@@ -564,28 +564,34 @@ mod tests {
         let model = FieldCase::ShearFrame.model();
         let fs = 60.0;
         let n = (fs * 180.0) as usize;
-        let (mut held, mut counted) = (0usize, 0usize);
-        for seed in 0..16 {
-            let rec = simulate(&model, fs, n, 0.02, 700 + seed);
-            let r = analyze(&rec, &OmaSettings::new(fs, n, None)).unwrap();
-            for m in r.modes.iter().filter(|m| m.method != Method::Fdd) {
-                let Some(t) = model
-                    .modes
-                    .iter()
-                    .find(|t| (t.f_hz - m.f_hz).abs() < 3.0 * t.damping * t.f_hz)
-                else {
-                    continue;
-                };
-                for (i, truth) in [
-                    (m.uncertainty.f_hz, t.f_hz),
-                    (m.uncertainty.damping, t.damping),
-                ] {
-                    let i = i.unwrap_or_else(|| panic!("no interval: {m:?}"));
-                    held += usize::from(i.lo <= truth && truth <= i.hi);
-                    counted += 1;
+        use rayon::prelude::*;
+        // (held, counted) per record, the records analysed side by side
+        let (held, counted) = (0..16u64)
+            .into_par_iter()
+            .map(|seed| {
+                let rec = simulate(&model, fs, n, 0.02, 700 + seed);
+                let r = analyze(&rec, &OmaSettings::new(fs, n, None)).unwrap();
+                let (mut held, mut counted) = (0usize, 0usize);
+                for m in r.modes.iter().filter(|m| m.method != Method::Fdd) {
+                    let Some(t) = model
+                        .modes
+                        .iter()
+                        .find(|t| (t.f_hz - m.f_hz).abs() < 3.0 * t.damping * t.f_hz)
+                    else {
+                        continue;
+                    };
+                    for (i, truth) in [
+                        (m.uncertainty.f_hz, t.f_hz),
+                        (m.uncertainty.damping, t.damping),
+                    ] {
+                        let i = i.unwrap_or_else(|| panic!("no interval: {m:?}"));
+                        held += usize::from(i.lo <= truth && truth <= i.hi);
+                        counted += 1;
+                    }
                 }
-            }
-        }
+                (held, counted)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         assert!(counted >= 16 * 5 * 2 * 2 - 8, "{counted} intervals");
         assert!(
             held as f64 >= 0.85 * counted as f64,

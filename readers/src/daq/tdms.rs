@@ -101,21 +101,19 @@ impl Cur<'_> {
         self.at = end;
         Ok(s)
     }
+    /// `N` bytes in little-endian order (reversed when the segment is big endian).
+    fn le<const N: usize>(&mut self) -> anyhow::Result<[u8; N]> {
+        let mut b: [u8; N] = self.take(N)?.try_into().unwrap_or([0; N]);
+        if self.big {
+            b.reverse();
+        }
+        Ok(b)
+    }
     fn u32(&mut self) -> anyhow::Result<u32> {
-        let b: [u8; 4] = self.take(4)?.try_into().unwrap_or([0; 4]);
-        Ok(if self.big {
-            u32::from_be_bytes(b)
-        } else {
-            u32::from_le_bytes(b)
-        })
+        self.le().map(u32::from_le_bytes)
     }
     fn u64(&mut self) -> anyhow::Result<u64> {
-        let b: [u8; 8] = self.take(8)?.try_into().unwrap_or([0; 8]);
-        Ok(if self.big {
-            u64::from_be_bytes(b)
-        } else {
-            u64::from_le_bytes(b)
-        })
+        self.le().map(u64::from_le_bytes)
     }
     fn string(&mut self) -> anyhow::Result<String> {
         let n = self.u32()? as usize;

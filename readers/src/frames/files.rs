@@ -555,6 +555,16 @@ pub fn load_frame(path: &Path) -> anyhow::Result<GreyFrame> {
     }
 }
 
+/// `samples` of `channels` interleaved channels as grey: as they are with one channel, else
+/// their [`luma`].
+fn grey<T: Copy + Into<f64> + LumaLevel>(samples: Vec<T>, channels: usize) -> Vec<T> {
+    if channels == 1 {
+        samples
+    } else {
+        luma(&samples, channels)
+    }
+}
+
 /// Grey levels of interleaved colour pixels of `channels` samples (R, G, B first; alpha
 /// ignored): the BT.601 luma `0.299 R + 0.587 G + 0.114 B`, rounded to the nearest level
 /// (what PIL's `convert("L")` and most JPEG viewers show, within one level).
@@ -617,20 +627,12 @@ pub fn for_each_tiff_page(
             DecodingResult::U8(data) => GreyFrame::U8 {
                 width,
                 height,
-                data: if channels == 1 {
-                    data
-                } else {
-                    luma(&data, channels)
-                },
+                data: grey(data, channels),
             },
             DecodingResult::U16(data) => GreyFrame::U16 {
                 width,
                 height,
-                data: if channels == 1 {
-                    data
-                } else {
-                    luma(&data, channels)
-                },
+                data: grey(data, channels),
             },
             _ => {
                 return Err(bad_input(format!(

@@ -146,47 +146,27 @@ impl GreyFrame {
     /// The frame made an 8-bit `width x height` one, its buffer reused (resized, contents
     /// unspecified): the pixels to fill, row 0 first.
     pub fn u8_pixels(&mut self, width: usize, height: usize) -> &mut [u8] {
-        if !matches!(self, GreyFrame::U8 { .. }) {
-            *self = GreyFrame::U8 {
-                width,
-                height,
-                data: Vec::new(),
-            };
-        }
-        match self {
-            GreyFrame::U8 {
-                width: w,
-                height: h,
-                data,
-            } => {
-                (*w, *h) = (width, height);
-                data.resize(width * height, 0);
-                data
-            }
-            GreyFrame::U16 { .. } => &mut [],
-        }
+        self.pixels(width, height)
     }
 
     /// [`u8_pixels`](Self::u8_pixels) for a 16-bit frame.
     pub fn u16_pixels(&mut self, width: usize, height: usize) -> &mut [u16] {
-        if !matches!(self, GreyFrame::U16 { .. }) {
-            *self = GreyFrame::U16 {
-                width,
-                height,
-                data: Vec::new(),
-            };
+        self.pixels(width, height)
+    }
+
+    /// The frame made a `width x height` one of depth `P`, its buffer reused when it had that
+    /// depth.
+    fn pixels<P: Depth>(&mut self, width: usize, height: usize) -> &mut [P] {
+        if P::buffer(self).is_none() {
+            *self = P::frame(width, height, Vec::new());
         }
-        match self {
-            GreyFrame::U16 {
-                width: w,
-                height: h,
-                data,
-            } => {
+        match P::buffer(self) {
+            Some((w, h, data)) => {
                 (*w, *h) = (width, height);
-                data.resize(width * height, 0);
+                data.resize(width * height, P::default());
                 data
             }
-            GreyFrame::U8 { .. } => &mut [],
+            None => &mut [],
         }
     }
 
@@ -216,3 +196,38 @@ impl GreyFrame {
         r.map_err(|e| bad_input(format!("{label}: cannot centroid the frame: {e}")))
     }
 }
+
+/// A grey depth a [`GreyFrame`] holds: its variant made and opened.
+trait Depth: Copy + Default {
+    /// A frame of this depth.
+    fn frame(width: usize, height: usize, data: Vec<Self>) -> GreyFrame;
+    /// The frame's size and buffer if it has this depth.
+    fn buffer(f: &mut GreyFrame) -> Option<(&mut usize, &mut usize, &mut Vec<Self>)>;
+}
+
+/// [`Depth`] for the pixel type `$T` of the variant `$Variant` (`$Other` the other one).
+macro_rules! depth {
+    ($T:ty, $Variant:ident, $Other:ident) => {
+        impl Depth for $T {
+            fn frame(width: usize, height: usize, data: Vec<$T>) -> GreyFrame {
+                GreyFrame::$Variant {
+                    width,
+                    height,
+                    data,
+                }
+            }
+            fn buffer(f: &mut GreyFrame) -> Option<(&mut usize, &mut usize, &mut Vec<$T>)> {
+                match f {
+                    GreyFrame::$Variant {
+                        width,
+                        height,
+                        data,
+                    } => Some((width, height, data)),
+                    GreyFrame::$Other { .. } => None,
+                }
+            }
+        }
+    };
+}
+depth!(u8, U8, U16);
+depth!(u16, U16, U8);

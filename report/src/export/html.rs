@@ -141,7 +141,7 @@ pub struct Report {
     /// The table of modes: header and rows.
     pub modes: Option<(Vec<String>, Vec<Vec<String>>)>,
     /// The MAC matrix of the shapes: labels and values.
-    pub mac: Option<(Vec<String>, Vec<Vec<f64>>)>,
+    pub mac: Option<MacMatrix>,
     /// Mode shapes to animate.
     pub shapes: Vec<ShapeAnimation>,
     /// The text report.
@@ -530,6 +530,28 @@ fn mac_section(s: &mut String, labels: &[String], m: &[Vec<f64>]) {
         );
     }
     s.push_str("</svg>\n");
+}
+
+/// The modes' labels and the MAC matrix of their shapes, row by row.
+pub type MacMatrix = (Vec<String>, Vec<Vec<f64>>);
+
+/// The page's MAC matrix and animations of `modes` (each its label and shape, in the order of
+/// the table), each animation labelled `prefix` and the mode's label; no MAC without modes.
+pub fn mac_and_animations(
+    modes: &[(String, &[Complex64])],
+    prefix: &str,
+) -> (Option<MacMatrix>, Vec<ShapeAnimation>) {
+    let labels: Vec<String> = modes.iter().map(|(l, _)| l.clone()).collect();
+    let shapes: Vec<&[Complex64]> = modes.iter().map(|(_, s)| *s).collect();
+    let animations = modes
+        .iter()
+        .map(|(l, s)| ShapeAnimation {
+            label: format!("{prefix}{l}"),
+            shape: s.to_vec(),
+        })
+        .collect();
+    let mac = (!labels.is_empty()).then(|| (labels, mac_matrix(&shapes)));
+    (mac, animations)
 }
 
 /// The MAC matrix of `shapes` (each a complex vector of one length).

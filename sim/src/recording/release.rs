@@ -231,6 +231,16 @@ fn draw_storey(img: &mut [[f32; 3]], tags: &[(f64, f64)], disp: &[(f64, f64)]) {
             let under = img[py * w + px];
             for &(dx, dy) in disp {
                 let (u, v) = (fx - dx, fy - dy);
+                if !(y - TAG_HALF - 0.5..y + 24.5).contains(&v)
+                    || !(x_lo - 0.5..x_hi + 0.5).contains(&u)
+                {
+                    // neither the beam nor a tag reaches the pixel here: the wall (as the sum
+                    // below gives it, with nothing covering it)
+                    for (o, ch) in acc.iter_mut().zip(under) {
+                        *o += ch as f64 / SUBSAMPLES as f64;
+                    }
+                    continue;
+                }
                 // the floor beam under the tags (dark grey-blue), then the tags on it
                 let beam = cover(u, x_lo, x_hi) * cover(v, y + 14.0, y + 24.0);
                 let mut c = [
@@ -239,6 +249,10 @@ fn draw_storey(img: &mut [[f32; 3]], tags: &[(f64, f64)], disp: &[(f64, f64)]) {
                     under[2] as f64 * (1.0 - beam) + 104.0 * beam,
                 ];
                 for &(tx, ty) in tags {
+                    if (u - tx).abs() >= TAG_HALF + 0.5 {
+                        // the tags are 150 px apart: at most one covers the pixel
+                        continue;
+                    }
                     let a = cover(u, tx - TAG_HALF, tx + TAG_HALF)
                         * cover(v, ty - TAG_HALF, ty + TAG_HALF);
                     if a > 0.0 {

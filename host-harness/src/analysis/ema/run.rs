@@ -118,9 +118,7 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
 /// animated along the responses (in their order: a camera's targets have no positions here),
 /// the figures (caption, SVG), the report `text`.
 pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, String)>) -> String {
-    use crate::export::html::{
-        mac_matrix, modes_table, report_html, ModeCells, Report, ShapeAnimation,
-    };
+    use crate::export::html::{mac_and_animations, modes_table, report_html, ModeCells, Report};
     let iv = |i: Option<Interval>| i.map(|i| (i.lo, i.hi));
     let cells: Vec<ModeCells> = r
         .modes
@@ -133,13 +131,17 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         })
         .collect();
     let (head, rows) = modes_table(&cells, false);
-    let labels: Vec<String> = r
+    let modes: Vec<(String, &[num_complex::Complex64])> = r
         .modes
         .iter()
-        .map(|m| format!("{} {:.2} Hz", m.mode, m.pole.f_hz))
+        .map(|m| {
+            (
+                format!("{} {:.2} Hz", m.mode, m.pole.f_hz),
+                m.shape.as_slice(),
+            )
+        })
         .collect();
-    let shapes: Vec<&[num_complex::Complex64]> =
-        r.modes.iter().map(|m| m.shape.as_slice()).collect();
+    let (mac, shapes) = mac_and_animations(&modes, "mode ");
     report_html(&Report {
         title: format!(
             "ema: {} over {}",
@@ -149,16 +151,8 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         direction: (0.0, -1.0),
         figures,
         modes: (!rows.is_empty()).then_some((head, rows)),
-        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
-        shapes: r
-            .modes
-            .iter()
-            .zip(&labels)
-            .map(|(m, l)| ShapeAnimation {
-                label: format!("mode {l}"),
-                shape: m.shape.clone(),
-            })
-            .collect(),
+        mac,
+        shapes,
         text: text.to_string(),
         ..Report::default()
     })

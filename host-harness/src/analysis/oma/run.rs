@@ -156,15 +156,18 @@ pub fn page(
     figures: Vec<(String, String)>,
     text: &str,
 ) -> String {
-    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
+    use crate::export::html::{mac_and_animations, report_html, Report};
     let markers = markers(records);
     let (head, rows) = modes_table(r);
-    let labels: Vec<String> = r
+    let modes: Vec<(String, &[Complex64])> = r
         .modes
         .iter()
-        .map(|m| format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz))
+        .map(|m| {
+            let label = format!("{} {} {:.2} Hz", m.method.name(), m.mode, m.f_hz);
+            (label, m.shape.as_slice())
+        })
         .collect();
-    let shapes: Vec<&[Complex64]> = r.modes.iter().map(|m| m.shape.as_slice()).collect();
+    let (mac, shapes) = mac_and_animations(&modes, "");
     report_html(&Report {
         title: format!("{command}: output-only modal analysis"),
         frame,
@@ -173,16 +176,8 @@ pub fn page(
         direction: if along_x { (1.0, 0.0) } else { (0.0, -1.0) },
         figures,
         modes: (!rows.is_empty()).then_some((head, rows)),
-        mac: (!labels.is_empty()).then(|| (labels.clone(), mac_matrix(&shapes))),
-        shapes: r
-            .modes
-            .iter()
-            .zip(&labels)
-            .map(|(m, l)| ShapeAnimation {
-                label: l.clone(),
-                shape: m.shape.clone(),
-            })
-            .collect(),
+        mac,
+        shapes,
         text: text.to_string(),
         scrub,
     })
