@@ -52,18 +52,21 @@ fn modes(out: &Path) -> Vec<String> {
         .collect()
 }
 
+/// The 120-frame recording and the modes of its PNG frames at 120 fps, threshold 100, and
+/// `extra`: what a camera file of the same frames must give.
+fn png_modes(extra: &[&str]) -> (tempfile::TempDir, Recording, Vec<String>) {
+    let (tmp, rec) = make_recording(120, 2048);
+    let png_out = rec.dir.join("png");
+    let mut args = vec!["--fps", "120", "--threshold", "100"];
+    args.extend_from_slice(extra);
+    assert_ok(&analyze(&rec.frames, &rec.accel, &png_out, &args));
+    let want = modes(&png_out);
+    (tmp, rec, want)
+}
+
 #[test]
 fn a_photron_recording_gives_the_modes_of_its_png_frames_at_the_header_rate() {
-    let (_tmp, rec) = make_recording(120, 2048);
-    let png_out = rec.dir.join("png");
-    let o = analyze(
-        &rec.frames,
-        &rec.accel,
-        &png_out,
-        &["--fps", "120", "--threshold", "100", "--exposure-ms", "2"],
-    );
-    assert_ok(&o);
-    let want = modes(&png_out);
+    let (_tmp, rec, want) = png_modes(&["--exposure-ms", "2"]);
     for (bits, scale, threshold) in [(8, 1, "100"), (12, 16, "1600"), (16, 256, "25600")] {
         let cih = photron(&rec.dir, bits, scale);
         let out = rec.dir.join(format!("ph{bits}"));
@@ -221,16 +224,7 @@ fn cine(dir: &Path, bits: u16, compression: u32, scale: u16) -> std::path::PathB
 
 #[test]
 fn a_phantom_cine_gives_the_modes_of_its_png_frames_at_its_own_rate() {
-    let (_tmp, rec) = make_recording(120, 2048);
-    let png_out = rec.dir.join("png");
-    let o = analyze(
-        &rec.frames,
-        &rec.accel,
-        &png_out,
-        &["--fps", "120", "--threshold", "100"],
-    );
-    assert_ok(&o);
-    let want = modes(&png_out);
+    let (_tmp, rec, want) = png_modes(&[]);
     // 8 and 16 bits (stored bottom-up), and packed 10-bit codes 4 v (through the monotonic
     // 10-to-12-bit table, LIN_LUT[400] = 623 < LIN_LUT[401] = 626: a pixel is above 623 exactly
     // when v is above 100, the same binary mask as the PNG frames at 100)

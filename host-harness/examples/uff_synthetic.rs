@@ -12,7 +12,7 @@
 //! ```
 
 use host_harness::analysis::modal::{self, FrfForm};
-use host_harness::export::uff::{self, Dataset58, Dof};
+use host_harness::export::uff;
 use host_harness::model::Rig;
 use host_harness::recording::RecordingSpec;
 use num_complex::Complex64;
@@ -52,39 +52,9 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
 
-    let base = Dof {
-        node: 100,
-        direction: 3,
-    };
-    let mut datasets = vec![Dataset58::acceleration_frf(
-        "tip accelerometer / base acceleration",
-        1,
-        Dof {
-            node: 101,
-            direction: 3,
-        },
-        base,
-        0.0,
-        df,
-        &tip,
-    )];
-    let names: Vec<String> = (1..=5)
-        .map(|j| format!("vision target {j} / base acceleration"))
-        .collect();
-    for (j, h) in targets.iter().enumerate() {
-        datasets.push(Dataset58::acceleration_frf(
-            &names[j],
-            j as u32 + 2,
-            Dof {
-                node: j as u32 + 1,
-                direction: 3,
-            },
-            base,
-            0.0,
-            df,
-            h,
-        ));
-    }
+    let frfs: Vec<_> = targets.iter().map(|h| Some((0.0, h.as_slice()))).collect();
+    let accel = ("tip accelerometer / base acceleration", 101, 0.0, &tip[..]);
+    let datasets = uff::vision_frfs(100, accel, &frfs, df);
     let bytes = uff::write_file(&datasets)?;
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;

@@ -195,27 +195,40 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         };
         let (kernel, taps) = self.config.smoothing.kernel();
         let half = taps / 2;
-        let at = |x: usize, y: usize| -> f32 {
-            let row = |y: usize| -> f32 {
-                let mut v = 0.0;
-                for (k, w) in kernel.iter().take(taps).enumerate() {
-                    v += w * raw(x + k - half, y);
-                }
-                v
-            };
-            let mut v = 0.0;
-            for (k, w) in kernel.iter().take(taps).enumerate() {
-                v += w * row(y + k - half);
-            }
-            v
-        };
         let spline = self.config.interpolation == Interpolation::Spline;
         let (pw, ph) = (tw + 2 * SPLINE_MARGIN, th + 2 * SPLINE_MARGIN);
         if spline {
+            // `at` over the padded window, separably: each source row smoothed along x once
+            // into a ring of `taps` rows (in `g`, which a new template invalidates anyway), then
+            // the rows combined along y, in `at`'s order of operations (the same values)
+            let (x_first, y_first) = (x0u - SPLINE_MARGIN, y0u - SPLINE_MARGIN);
+            let ring = &mut self.g;
+            let slot = |y: usize| (y % taps) * pw;
+            // the next source row not yet in the ring
+            let mut next = y_first - half;
             for j in 0..ph {
+                let y = y_first + j;
+                while next <= y + half {
+                    let base = slot(next);
+                    for i in 0..pw {
+                        let x = x_first + i;
+                        let mut v = 0.0;
+                        for (k, w) in kernel.iter().take(taps).enumerate() {
+                            v += w * raw(x + k - half, next);
+                        }
+                        if let Some(r) = ring.get_mut(base + i) {
+                            *r = v;
+                        }
+                    }
+                    next += 1;
+                }
                 for i in 0..pw {
+                    let mut v = 0.0;
+                    for (k, w) in kernel.iter().take(taps).enumerate() {
+                        v += w * ring.get(slot(y + k - half) + i).copied().unwrap_or(0.0);
+                    }
                     if let Some(c) = self.coef.get_mut(j * pw + i) {
-                        *c = at(x0u + i - SPLINE_MARGIN, y0u + j - SPLINE_MARGIN);
+                        *c = v;
                     }
                 }
             }
@@ -238,19 +251,59 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 (dy(i - 1) + 4.0 * dy(i) + dy(i + 1)) / 6.0,
             )
         };
+        // `at` over the window and one pixel around it, a row at a time: the frame's rows
+        // smoothed along x once each (a ring of `taps` rows), combined along y into a ring of
+        // three smoothed rows, in `at`'s order of operations (the same values)
+        let (h_ring, s_ring) = self.ring.split_at_mut(5);
+        let (x_first, width) = (x0u - 1, tw + 2);
+        let mut h_next = y0u - 1 - half;
+        let mut s_next = y0u - 1;
         let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for j in 0..th {
+            let y = y0u + j;
+            while s_next <= y + 1 {
+                while h_next <= s_next + half {
+                    if let Some(r) = h_ring.get_mut(h_next % taps) {
+                        for (i, o) in r.iter_mut().take(width).enumerate() {
+                            let mut v = 0.0;
+                            for (k, w) in kernel.iter().take(taps).enumerate() {
+                                v += w * raw(x_first + i + k - half, h_next);
+                            }
+                            *o = v;
+                        }
+                    }
+                    h_next += 1;
+                }
+                if let Some(r) = s_ring.get_mut(s_next % 3) {
+                    for (i, o) in r.iter_mut().take(width).enumerate() {
+                        let mut v = 0.0;
+                        for (k, w) in kernel.iter().take(taps).enumerate() {
+                            let h = h_ring.get((s_next + k - half) % taps);
+                            v += w * h.and_then(|h| h.get(i)).copied().unwrap_or(0.0);
+                        }
+                        *o = v;
+                    }
+                }
+                s_next += 1;
+            }
+            // the smoothed frame at (x0u + i - 1 + d, y + e), d = 0..=2, e = -1..=1
+            let sm = |d: usize, e: usize| -> f32 {
+                s_ring
+                    .get((y + e - 1) % 3)
+                    .and_then(|r| r.get(d))
+                    .copied()
+                    .unwrap_or(0.0)
+            };
             for i in 0..tw {
-                let (x, y) = (x0u + i, y0u + j);
                 let (gx, gy) = if spline {
                     spline_grad(i as i64, j as i64)
                 } else {
                     (
-                        0.5 * (at(x + 1, y) - at(x - 1, y)),
-                        0.5 * (at(x, y + 1) - at(x, y - 1)),
+                        0.5 * (sm(i + 2, 1) - sm(i, 1)),
+                        0.5 * (sm(i + 1, 2) - sm(i + 1, 0)),
                     )
                 };
-                let v = at(x, y);
+                let v = sm(i + 1, 1);
                 let k = j * tw + i;
                 if let (Some(t), Some(a), Some(b)) =
                     (self.t.get_mut(k), self.gx.get_mut(k), self.gy.get_mut(k))

@@ -8,7 +8,7 @@ use super::request::{Outcome, Request, TargetsRequest};
 use crate::analysis::targets::{self, TargetAnalysis, Tracks};
 use crate::analysis::Axis;
 use crate::export::targets as export;
-use crate::export::uff::{self, Dataset58, Dof};
+use crate::export::uff;
 use crate::frames::FrameSource;
 use crate::outdir::Staged;
 use std::fmt::Write as _;
@@ -335,42 +335,24 @@ fn full_report(
 /// One dataset 58 per FRF: the accelerometer (node 100) and each analysed target (node
 /// 1..K), all over the base acceleration (node 1000), direction +Z (image up).
 fn uff_bytes(a: &TargetAnalysis) -> anyhow::Result<Vec<u8>> {
-    let base = Dof {
-        node: 1000,
-        direction: 3,
-    };
     let acc = &a.acc_frf;
     let df = acc.freq_hz.get(1).copied().unwrap_or(0.0) - acc.freq_hz[0];
-    let mut sets = vec![Dataset58::acceleration_frf(
-        "accelerometer / base acceleration",
-        1,
-        Dof {
-            node: 100,
-            direction: 3,
-        },
-        base,
-        acc.freq_hz[0],
-        df,
-        &acc.h1,
-    )];
-    let names: Vec<String> = (1..=a.analyses.len())
-        .map(|t| format!("vision target {t} / base acceleration"))
+    let targets: Vec<_> = a
+        .analyses
+        .iter()
+        .map(|an| {
+            an.as_ref()
+                .ok()
+                .map(|an| (an.vis_frf.freq_hz[0], an.vis_frf.h1.as_slice()))
+        })
         .collect();
-    for (t, an) in a.analyses.iter().enumerate() {
-        let Ok(an) = an else { continue };
-        sets.push(Dataset58::acceleration_frf(
-            &names[t],
-            t as u32 + 2,
-            Dof {
-                node: t as u32 + 1,
-                direction: 3,
-            },
-            base,
-            an.vis_frf.freq_hz[0],
-            df,
-            &an.vis_frf.h1,
-        ));
-    }
+    let accel = (
+        "accelerometer / base acceleration",
+        100,
+        acc.freq_hz[0],
+        &acc.h1[..],
+    );
+    let sets = uff::vision_frfs(1000, accel, &targets, df);
     Ok(uff::write_file(&sets)?)
 }
 

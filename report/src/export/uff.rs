@@ -230,6 +230,45 @@ pub enum UffError {
     },
 }
 
+/// The accelerance FRFs of a rig seen by its accelerometer and by camera targets, each over
+/// the base acceleration (node `base_node`, direction +Z): the accelerometer's `(name, node,
+/// first line's frequency, H)` as function 1, then target `t`'s `(first line's frequency, H)`
+/// as node `t + 1`, function `t + 2`, named `vision target t / base acceleration` (a target
+/// without an FRF left out); lines `df_hz` apart.
+pub fn vision_frfs<'a>(
+    base_node: u32,
+    accel: (&str, u32, f64, &'a [Complex64]),
+    targets: &[Option<(f64, &'a [Complex64])>],
+    df_hz: f64,
+) -> Vec<Dataset58<'a>> {
+    let z = |node: u32| Dof { node, direction: 3 };
+    let (name, node, f0, h) = accel;
+    let mut sets = vec![Dataset58::acceleration_frf(
+        name,
+        1,
+        z(node),
+        z(base_node),
+        f0,
+        df_hz,
+        h,
+    )];
+    for (t, frf) in targets.iter().enumerate() {
+        let Some((f0, h)) = frf else { continue };
+        let name = format!("vision target {} / base acceleration", t + 1);
+        let (node, function) = (t as u32 + 1, t as u32 + 2);
+        sets.push(Dataset58::acceleration_frf(
+            &name,
+            function,
+            z(node),
+            z(base_node),
+            *f0,
+            df_hz,
+            h,
+        ));
+    }
+    sets
+}
+
 /// Several datasets 58, one after the other, as the bytes of a `.uff` file.
 pub fn write_file(datasets: &[Dataset58<'_>]) -> Result<Vec<u8>, UffError> {
     let mut out = Vec::new();
