@@ -18,7 +18,7 @@ import math as _math
 import numbers as _numbers
 import os as _os
 import tempfile as _tempfile
-from dataclasses import dataclass as _dataclass, field as _field
+from dataclasses import dataclass as _dataclass, field as _field, fields as _fields
 from typing import Any as _Any, Optional as _Optional, Sequence as _Sequence, Union as _Union
 
 import numpy as _np
@@ -643,26 +643,8 @@ def analyze(
         bands=None if bands is None else _bands(bands),
         view=_view(reference, camera_model, scale, target_size_mm, world),
     )
-    return AnalysisResult(
-        modes=d["modes"],
-        shapes=d["shapes"],
-        targets=d["targets"],
-        first_xy=d["first_xy"],
-        svd_freq_hz=d["svd_freq_hz"],
-        svd=d["svd"],
-        displacement=d["displacement"],
-        lost=d["lost"],
-        unit=d["unit"],
-        fps=d["fps"],
-        report=d["report"],
-        left_out=list(d["left_out"]),
-        notes=list(d["notes"]),
-        shapes_abs_u=d["shapes_abs_u"],
-        evidence=list(d["evidence"]),
-        rejected=list(d["rejected"]),
-        html=d["html"],
-        camera_motion=d["camera_motion"] if reference is not None else None,
-    )
+    motion = d["camera_motion"] if reference is not None else None
+    return _result(AnalysisResult, d, camera_motion=motion)
 
 
 @_dataclass
@@ -761,20 +743,19 @@ def ema(
         out=None if out is None else _os.fspath(out),
         force=bool(force),
     )
-    return EmaResult(
-        modes=d["modes"],
-        shapes=d["shapes"],
-        shapes_abs_u=d["shapes_abs_u"],
-        responses=list(d["responses"]),
-        freq_hz=d["freq_hz"],
-        h1=d["h1"],
-        h2=d["h2"],
-        coherence=d["coherence"],
-        report=d["report"],
-        notes=list(d["notes"]),
-        hits_left_out=list(d["hits_left_out"]),
-        html=d["html"],
-    )
+    return _result(EmaResult, d)
+
+
+def _result(cls, d: dict, **given: _Any):
+    """The result dataclass ``cls`` from the binding's dict ``d``: each field its entry (a
+    ``list`` field as a Python list), or as ``given``."""
+    kw = {}
+    for f in _fields(cls):
+        if f.name in given:
+            kw[f.name] = given[f.name]
+        elif f.name in d:
+            kw[f.name] = list(d[f.name]) if f.type == "list" else d[f.name]
+    return cls(**kw)
 
 
 def _bands(bands: _Any) -> list:
