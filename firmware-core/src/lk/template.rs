@@ -4,6 +4,24 @@
 
 use super::*;
 
+/// Row `y` of the frame read by `raw` smoothed along x by the first `taps` of `kernel`
+/// (centred), at `x_first + i` into `out[i]`: the taps summed in order.
+fn smooth_x(
+    raw: &impl Fn(usize, usize) -> f32,
+    (kernel, taps): ([f32; 5], usize),
+    (x_first, y): (usize, usize),
+    out: &mut [f32],
+) {
+    let half = taps / 2;
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut v = 0.0;
+        for (k, w) in kernel.iter().take(taps).enumerate() {
+            v += w * raw(x_first + i + k - half, y);
+        }
+        *o = v;
+    }
+}
+
 /// Cubic B-spline interpolation coefficients of the `w x h` image in `c` (row-major), in place:
 /// the causal and anticausal recursive filters of Unser (1999) along the rows, then the
 /// columns, pole `sqrt(3) - 2`, mirror-symmetric ends (the causal start summed over the first
@@ -198,9 +216,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let spline = self.config.interpolation == Interpolation::Spline;
         let (pw, ph) = (tw + 2 * SPLINE_MARGIN, th + 2 * SPLINE_MARGIN);
         if spline {
-            // `at` over the padded window, separably: each source row smoothed along x once
-            // into a ring of `taps` rows (in `g`, which a new template invalidates anyway), then
-            // the rows combined along y, in `at`'s order of operations (the same values)
+            // the smoothed frame over the padded window, separably: each source row smoothed
+            // along x once into a ring of `taps` rows (in `g`, which a new template
+            // invalidates anyway), then the rows combined along y
             let (x_first, y_first) = (x0u - SPLINE_MARGIN, y0u - SPLINE_MARGIN);
             let ring = &mut self.g;
             let slot = |y: usize| (y % taps) * pw;
@@ -209,16 +227,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             for j in 0..ph {
                 let y = y_first + j;
                 while next <= y + half {
-                    let base = slot(next);
-                    for i in 0..pw {
-                        let x = x_first + i;
-                        let mut v = 0.0;
-                        for (k, w) in kernel.iter().take(taps).enumerate() {
-                            v += w * raw(x + k - half, next);
-                        }
-                        if let Some(r) = ring.get_mut(base + i) {
-                            *r = v;
-                        }
+                    if let Some(r) = ring.get_mut(slot(next)..slot(next) + pw) {
+                        smooth_x(&raw, (kernel, taps), (x_first, next), r);
                     }
                     next += 1;
                 }
@@ -251,9 +261,9 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 (dy(i - 1) + 4.0 * dy(i) + dy(i + 1)) / 6.0,
             )
         };
-        // `at` over the window and one pixel around it, a row at a time: the frame's rows
-        // smoothed along x once each (a ring of `taps` rows), combined along y into a ring of
-        // three smoothed rows, in `at`'s order of operations (the same values)
+        // the smoothed frame over the window and one pixel around it, a row at a time: the
+        // frame's rows smoothed along x once each (a ring of `taps` rows), combined along y
+        // into a ring of three smoothed rows
         let (h_ring, s_ring) = self.ring.split_at_mut(5);
         let (x_first, width) = (x0u - 1, tw + 2);
         let mut h_next = y0u - 1 - half;
@@ -263,14 +273,11 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             let y = y0u + j;
             while s_next <= y + 1 {
                 while h_next <= s_next + half {
-                    if let Some(r) = h_ring.get_mut(h_next % taps) {
-                        for (i, o) in r.iter_mut().take(width).enumerate() {
-                            let mut v = 0.0;
-                            for (k, w) in kernel.iter().take(taps).enumerate() {
-                                v += w * raw(x_first + i + k - half, h_next);
-                            }
-                            *o = v;
-                        }
+                    if let Some(r) = h_ring
+                        .get_mut(h_next % taps)
+                        .and_then(|r| r.get_mut(..width))
+                    {
+                        smooth_x(&raw, (kernel, taps), (x_first, h_next), r);
                     }
                     h_next += 1;
                 }
