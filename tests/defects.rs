@@ -56,19 +56,9 @@ fn cells(path: &Path) -> Vec<Vec<String>> {
 /// A little NumPy `.npy` (version 1) of little-endian f8 `values` with `shape`, its `descr`
 /// given.
 fn npy(path: &Path, descr: &str, shape: &str, values: &[f64]) {
-    let mut h =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}").into_bytes();
-    while !(10 + h.len() + 1).is_multiple_of(64) {
-        h.push(b' ');
-    }
-    h.push(b'\n');
-    let mut out = b"\x93NUMPY\x01\x00".to_vec();
-    out.extend((h.len() as u16).to_le_bytes());
-    out.extend(h);
-    for v in values {
-        out.extend(v.to_le_bytes());
-    }
-    std::fs::write(path, out).unwrap();
+    let h = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(path, vibcam_readers::daq::npy::encode_v1(&h, &data)).unwrap();
 }
 
 /// `pick --frames FRAMES --out OUT --force`: a page asked to replace `out`.
@@ -414,48 +404,27 @@ fn a_force_in_g_and_a_labview_file_cut_short_are_named() {
 /// A TDMS file of one segment: a float64 channel `force_n` at 50 kHz with `wf_start_time`, a
 /// unit longer than a universal file's field, and a timestamp property on the root.
 fn tdms_force(path: &Path, values: &[f64], unit: &str) {
-    let s = |m: &mut Vec<u8>, t: &str| {
-        m.extend((t.len() as u32).to_le_bytes());
-        m.extend(t.as_bytes());
-    };
     let stamp = |secs: i64| {
         let mut v = 0u64.to_le_bytes().to_vec();
         v.extend(secs.to_le_bytes());
         v
     };
-    let mut meta = Vec::new();
-    meta.extend(2u32.to_le_bytes());
-    s(&mut meta, "/");
-    meta.extend(0xFFFF_FFFFu32.to_le_bytes());
-    meta.extend(1u32.to_le_bytes());
-    s(&mut meta, "DateTime");
-    meta.extend(0x44u32.to_le_bytes());
-    meta.extend(stamp(3_800_000_000));
-    s(&mut meta, "/'Untitled'/'force_n'");
-    meta.extend(20u32.to_le_bytes());
-    meta.extend(10u32.to_le_bytes());
-    meta.extend(1u32.to_le_bytes());
-    meta.extend((values.len() as u64).to_le_bytes());
-    meta.extend(3u32.to_le_bytes());
-    s(&mut meta, "wf_increment");
-    meta.extend(10u32.to_le_bytes());
-    meta.extend(2e-5f64.to_le_bytes());
-    s(&mut meta, "wf_start_time");
-    meta.extend(0x44u32.to_le_bytes());
-    meta.extend(stamp(3_800_000_000));
-    s(&mut meta, "unit_string");
-    meta.extend(0x20u32.to_le_bytes());
-    s(&mut meta, unit);
+    let mut unit_bytes = (unit.len() as u32).to_le_bytes().to_vec();
+    unit_bytes.extend(unit.as_bytes());
+    let objects = [
+        ("/", None, vec![("DateTime", 0x44, stamp(3_800_000_000))]),
+        (
+            "/'Untitled'/'force_n'",
+            Some((10, values.len() as u64)),
+            vec![
+                ("wf_increment", 10, 2e-5f64.to_le_bytes().to_vec()),
+                ("wf_start_time", 0x44, stamp(3_800_000_000)),
+                ("unit_string", 0x20, unit_bytes),
+            ],
+        ),
+    ];
     let raw: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-    let toc: u32 = (1 << 1) | (1 << 2) | (1 << 3);
-    let mut out = b"TDSm".to_vec();
-    out.extend(toc.to_le_bytes());
-    out.extend(4713u32.to_le_bytes());
-    out.extend(((meta.len() + raw.len()) as u64).to_le_bytes());
-    out.extend((meta.len() as u64).to_le_bytes());
-    out.extend(meta);
-    out.extend(raw);
-    std::fs::write(path, out).unwrap();
+    std::fs::write(path, vibcam_readers::daq::tdms::encode_le(&objects, &raw)).unwrap();
 }
 
 #[test]

@@ -751,23 +751,16 @@ fn track_writes_the_positions_of_chosen_points_without_an_accelerometer() {
     assert_eq!(cols(&ta, 7), cols(&tb, 7));
     // disp_mm: empty without a scale, -(y - y0) * 0.1 with it (the first frame's is 0 only if
     // the track starts at its own mean: just check that it is filled and finite)
-    let first_a = ta
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(7)
-        .unwrap()
-        .to_string();
-    let first_b: f64 = tb
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(7)
-        .unwrap()
-        .parse()
-        .unwrap();
+    let disp_mm = |t: &str| {
+        t.lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(7)
+            .unwrap()
+            .to_string()
+    };
+    let (first_a, first_b) = (disp_mm(&ta), disp_mm(&tb).parse::<f64>().unwrap());
     assert!(first_a.is_empty() && first_b.is_finite());
     let o = track(&clean, &tmp.path().join("c"), &["--targets", "3"]);
     assert_exit_2(&o, "--fps is needed");

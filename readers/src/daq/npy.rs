@@ -177,23 +177,27 @@ pub fn parse(bytes: &[u8], file: &str) -> anyhow::Result<Record> {
     })
 }
 
+/// The bytes of an `.npy` file of version 1: the magic, the header dictionary `header` (e.g.
+/// `{'descr': '<f8', 'fortran_order': False, 'shape': (3,), }`) padded with spaces and a
+/// newline to a multiple of 64 bytes as NumPy pads it, then `data` as given. What this
+/// crate's tests and the command line's tests give the reader (a file it did not write).
+pub fn encode_v1(header: &str, data: &[u8]) -> Vec<u8> {
+    let mut h = header.as_bytes().to_vec();
+    while !(10 + h.len() + 1).is_multiple_of(64) {
+        h.push(b' ');
+    }
+    h.push(b'\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend((h.len() as u16).to_le_bytes());
+    out.extend(h);
+    out.extend(data);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// An `.npy` (version 1) with `header` (padded) and `data`.
-    fn npy(header: &str, data: &[u8]) -> Vec<u8> {
-        let mut h = header.as_bytes().to_vec();
-        while !(10 + h.len() + 1).is_multiple_of(64) {
-            h.push(b' ');
-        }
-        h.push(b'\n');
-        let mut out = b"\x93NUMPY\x01\x00".to_vec();
-        out.extend((h.len() as u16).to_le_bytes());
-        out.extend(h);
-        out.extend(data);
-        out
-    }
+    use encode_v1 as npy;
 
     #[test]
     fn a_non_ascii_type_and_empty_or_huge_empty_arrays_are_refused() {

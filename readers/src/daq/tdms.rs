@@ -485,6 +485,71 @@ fn split_path(p: &str) -> Vec<String> {
     out
 }
 
+/// The bytes of one TDMS segment: the lead-in (`TDSm`, the table of contents `toc`, version
+/// 4713, the lengths; little-endian unless `toc` says big-endian) followed by `meta` and
+/// `raw` as given. What this crate's tests and the command line's tests give the reader.
+pub fn segment(toc: u32, meta: &[u8], raw: &[u8]) -> Vec<u8> {
+    let big = toc & TOC_BIG_ENDIAN != 0;
+    let u32b = |v: u32| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let u64b = |v: u64| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let mut out = b"TDSm".to_vec();
+    out.extend(toc.to_le_bytes());
+    out.extend(u32b(4713));
+    out.extend(u64b((meta.len() + raw.len()) as u64));
+    out.extend(u64b(meta.len() as u64));
+    out.extend(meta);
+    out.extend(raw);
+    out
+}
+
+/// A property of a TDMS object: its name, its type code and its value's bytes as stored.
+pub type Property<'a> = (&'a str, u32, Vec<u8>);
+/// A TDMS object: its path, its raw-data index (type code, count of values) or none, and its
+/// properties.
+pub type ObjectBytes<'a> = (&'a str, Option<(u32, u64)>, Vec<Property<'a>>);
+
+/// The bytes of a little-endian TDMS segment with a new object list: `objects`, then `raw`
+/// (contiguous). What this crate's tests and the command line's tests give the reader.
+pub fn encode_le(objects: &[ObjectBytes<'_>], raw: &[u8]) -> Vec<u8> {
+    let s = |m: &mut Vec<u8>, t: &str| {
+        m.extend((t.len() as u32).to_le_bytes());
+        m.extend(t.as_bytes());
+    };
+    let mut meta = Vec::new();
+    meta.extend((objects.len() as u32).to_le_bytes());
+    for (path, index, props) in objects {
+        s(&mut meta, path);
+        match index {
+            Some((t, n)) => {
+                meta.extend(20u32.to_le_bytes());
+                meta.extend(t.to_le_bytes());
+                meta.extend(1u32.to_le_bytes());
+                meta.extend(n.to_le_bytes());
+            }
+            None => meta.extend(0xFFFF_FFFFu32.to_le_bytes()),
+        }
+        meta.extend((props.len() as u32).to_le_bytes());
+        for (name, t, v) in props {
+            s(&mut meta, name);
+            meta.extend(t.to_le_bytes());
+            meta.extend(v);
+        }
+    }
+    segment(TOC_META | TOC_NEW_LIST | TOC_RAW, &meta, raw)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -497,19 +562,19 @@ mod tests {
             m.extend((t.len() as u32).to_be_bytes());
             m.extend(t.as_bytes());
         };
+        // a channel: its path, a raw-data index of 20 bytes (type, dimension 1, two values)
+        // and the count of its properties
+        let channel = |m: &mut Vec<u8>, path: &str, dtype: u32, properties: u32| {
+            s(m, path);
+            for w in [20, dtype, 1] {
+                m.extend(w.to_be_bytes());
+            }
+            m.extend(2u64.to_be_bytes());
+            m.extend(properties.to_be_bytes());
+        };
         meta.extend(2u32.to_be_bytes());
-        s(&mut meta, "/'g'/'a'");
-        meta.extend(20u32.to_be_bytes());
-        meta.extend(3u32.to_be_bytes());
-        meta.extend(1u32.to_be_bytes());
-        meta.extend(2u64.to_be_bytes());
-        meta.extend(0u32.to_be_bytes());
-        s(&mut meta, "/'g'/'b''s'");
-        meta.extend(20u32.to_be_bytes());
-        meta.extend(10u32.to_be_bytes());
-        meta.extend(1u32.to_be_bytes());
-        meta.extend(2u64.to_be_bytes());
-        meta.extend(1u32.to_be_bytes());
+        channel(&mut meta, "/'g'/'a'", 3, 0);
+        channel(&mut meta, "/'g'/'b''s'", 10, 1);
         s(&mut meta, "wf_increment");
         meta.extend(10u32.to_be_bytes());
         meta.extend(0.5f64.to_be_bytes());
@@ -519,14 +584,7 @@ mod tests {
             raw.extend(b.to_be_bytes());
         }
         let toc = TOC_META | TOC_NEW_LIST | TOC_RAW | TOC_INTERLEAVED | TOC_BIG_ENDIAN;
-        let mut out = b"TDSm".to_vec();
-        out.extend(toc.to_le_bytes());
-        out.extend(4713u32.to_be_bytes());
-        out.extend(((meta.len() + raw.len()) as u64).to_be_bytes());
-        out.extend((meta.len() as u64).to_be_bytes());
-        out.extend(meta);
-        out.extend(raw);
-        out
+        segment(toc, &meta, &raw)
     }
 
     #[test]
@@ -542,49 +600,6 @@ mod tests {
         cut.truncate(cut.len() - 3);
         let e = format!("{:#}", parse(&cut, "cut.tdms").unwrap_err());
         assert!(e.contains("cut.tdms: segment 1 states"), "{e}");
-    }
-
-    /// A property: name, type, value bytes.
-    type Prop<'a> = (&'a str, u32, Vec<u8>);
-    /// An object: path, raw index (type, count) or none, properties.
-    type Object<'a> = (&'a str, Option<(u32, u64)>, Vec<Prop<'a>>);
-
-    /// A little-endian segment: `objects` as (path, raw index (type, count) or none,
-    /// properties (name, type, value bytes)), then `raw`.
-    fn segment(objects: &[Object<'_>], raw: &[u8]) -> Vec<u8> {
-        let s = |m: &mut Vec<u8>, t: &str| {
-            m.extend((t.len() as u32).to_le_bytes());
-            m.extend(t.as_bytes());
-        };
-        let mut meta = Vec::new();
-        meta.extend((objects.len() as u32).to_le_bytes());
-        for (path, index, props) in objects {
-            s(&mut meta, path);
-            match index {
-                Some((t, n)) => {
-                    meta.extend(20u32.to_le_bytes());
-                    meta.extend(t.to_le_bytes());
-                    meta.extend(1u32.to_le_bytes());
-                    meta.extend(n.to_le_bytes());
-                }
-                None => meta.extend(0xFFFF_FFFFu32.to_le_bytes()),
-            }
-            meta.extend((props.len() as u32).to_le_bytes());
-            for (name, t, v) in props {
-                s(&mut meta, name);
-                meta.extend(t.to_le_bytes());
-                meta.extend(v);
-            }
-        }
-        let toc = TOC_META | TOC_NEW_LIST | TOC_RAW;
-        let mut out = b"TDSm".to_vec();
-        out.extend(toc.to_le_bytes());
-        out.extend(4713u32.to_le_bytes());
-        out.extend(((meta.len() + raw.len()) as u64).to_le_bytes());
-        out.extend((meta.len() as u64).to_le_bytes());
-        out.extend(meta);
-        out.extend(raw);
-        out
     }
 
     /// A timestamp: `secs` since 1904 and `frac` of a second (little endian: fraction first).
@@ -605,7 +620,7 @@ mod tests {
         for k in 0..3 {
             raw.extend(stamp(3_800_000_000 + k, 0.25));
         }
-        let f = segment(
+        let f = encode_le(
             &[
                 (
                     "/",
@@ -640,7 +655,7 @@ mod tests {
     #[test]
     fn raw_data_of_an_unknown_type_is_refused_not_read_without_end() {
         // type 0 (void) with 2^36 values beside one float: no size to step over them
-        let f = segment(
+        let f = encode_le(
             &[
                 ("/'g'/'void'", Some((0, 1 << 36)), vec![]),
                 ("/'g'/'x'", Some((10, 1)), vec![]),
