@@ -336,7 +336,7 @@ fn analyze_scaled(
     let csd = csd::csd_matrix(channels, s.fs_hz, s.csd)?;
     let svd = fdd::decompose(&csd)?;
     let (mut notes, mut rejected) = (Vec::new(), Vec::new());
-    let ssi = modes::ssi_modes(channels, s, &mut notes, &mut rejected)?;
+    let ssi = modes::ssi_modes((channels, &svd), s, &mut notes, &mut rejected)?;
     let decay_modes = match decays.is_empty() {
         true => Vec::new(),
         false => decay::decay_modes(channels, decays, s, &mut notes, &mut rejected)?,
@@ -349,8 +349,14 @@ fn analyze_scaled(
     let mut found = modes::fdd_modes(&svd, &peaks, s, &mut notes);
     found.extend(ssi.modes);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
-    let intervals =
-        uncertainty::of_modes((channels, &csd), s, &found, &peaks, s.groups, &mut notes)?;
+    let intervals = uncertainty::of_modes(
+        (channels, &csd),
+        s,
+        (&found, &ssi.lone),
+        &peaks,
+        s.groups,
+        &mut notes,
+    )?;
     for (m, u) in found.iter_mut().zip(intervals) {
         m.uncertainty = u;
     }

@@ -9,7 +9,8 @@
 //! within its bell with a like shape. An SSI-cov mode that no peak took (a mode hidden in the
 //! second singular value beside a close stronger one, or a weak mode without 6 dB of
 //! prominence) gives FDD and EFDD its bell: the lines whose first or second singular vector
-//! has its shape.
+//! has its shape. An SSI-cov cluster rejected for its size alone is kept when it is the only
+//! explanation of a strong peak ([`lone_explanations`]; docs/method.md §3.12).
 
 use super::cluster::{self, SsiMode};
 use super::fdd::{self, Svd};
@@ -55,6 +56,9 @@ pub struct SsiFound {
     pub poles: Vec<Pole>,
     /// The clusters reported (as modes) and the ones rejected, for the stabilisation plot.
     pub clusters: Vec<(SsiMode, bool)>,
+    /// The frequencies of the modes kept with fewer poles than a mode needs, as the only
+    /// explanation of a strong peak ([`lone_explanations`]).
+    pub lone: Vec<f64>,
 }
 
 /// SSI-cov's modes: the clusters of stable poles that pass [`cluster::cluster`]'s rules
@@ -62,13 +66,17 @@ pub struct SsiFound {
 /// `rejected` with their reason; a stable mode below the range analysed is noted, never
 /// dropped in silence.
 pub fn ssi_modes(
-    channels: &[Vec<f64>],
+    (channels, svd): (&[Vec<f64>], &Svd),
     s: &OmaSettings,
     notes: &mut Vec<String>,
     rejected: &mut Vec<String>,
 ) -> anyhow::Result<SsiFound> {
     let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
-    let (kept, dropped) = cluster::cluster(&poles, s.cluster);
+    let (mut kept, mut dropped) = cluster::cluster(&poles, s.cluster);
+    let lone = match s.bands.is_empty() {
+        true => keep_lone(svd, s, &mut kept, &mut dropped),
+        false => Vec::new(),
+    };
     for c in cluster::cluster(&cut, s.cluster).0 {
         notes.push(format!(
             "SSI-cov: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
@@ -86,7 +94,10 @@ pub fn ssi_modes(
         amplitude: None,
         damping: Some(c.damping),
         shape: normalise_shape(&c.shape),
-        evidence: cluster_evidence(c),
+        evidence: match lone.iter().find(|l| l.0 == c.f_hz) {
+            Some((_, why)) => format!("{}; {why}", cluster_evidence(c)),
+            None => cluster_evidence(c),
+        },
         uncertainty: Default::default(),
     };
     let mut modes = Vec::new();
@@ -127,7 +138,102 @@ pub fn ssi_modes(
         modes,
         poles,
         clusters,
+        lone: lone.into_iter().map(|l| l.0).collect(),
     })
+}
+
+/// Moves the clusters of `dropped` that [`lone_explanations`] keeps into `kept` (ascending
+/// frequency); their frequencies and why each was kept.
+fn keep_lone(
+    svd: &Svd,
+    s: &OmaSettings,
+    kept: &mut Vec<SsiMode>,
+    dropped: &mut Vec<cluster::Rejected>,
+) -> Vec<(f64, String)> {
+    let mut found = lone_explanations(svd, s, kept, dropped);
+    found.sort_by_key(|x| std::cmp::Reverse(x.0));
+    let mut lone = Vec::new();
+    for (i, why) in found {
+        let c = dropped.remove(i).cluster;
+        lone.push((c.f_hz, why));
+        kept.push(c);
+    }
+    kept.sort_by(|a, b| a.f_hz.total_cmp(&b.f_hz));
+    lone
+}
+
+/// Fewest stable poles of a cluster kept as the only explanation of a strong peak
+/// ([`lone_explanations`]): two model orders in a row that agree.
+pub const LONE_MIN_POLES: usize = 2;
+
+/// The clusters of `dropped` (by index, with the reason they are kept) that were rejected for
+/// their size alone and are the only explanation of a strong peak: a peak of the first
+/// singular value that stands [`STRONG_PEAK_DB`] or more, whose bell (its singular vector held,
+/// MAC >= the EFDD rule's) holds no mode of `kept` with a like shape (MAC >= [`AGREE_MAC`]),
+/// and within half a line of which one cluster alone has the peak's shape (MAC >=
+/// [`AGREE_MAC`]): that cluster, when it has at least [`LONE_MIN_POLES`] poles and shares a
+/// phase (the MPC and MPD rules). Several small clusters there explain nothing: none is kept. A short or lightly damped record (a struck fork filmed for a second or two)
+/// gives few stable orders; the peak says the mode is there, and the poles give its frequency
+/// finer than the line and its damping.
+pub fn lone_explanations(
+    svd: &Svd,
+    s: &OmaSettings,
+    kept: &[SsiMode],
+    dropped: &[cluster::Rejected],
+) -> Vec<(usize, String)> {
+    let lines = svd.freq_hz.len();
+    let f = |l: usize| svd.freq_hz[l];
+    let df = svd.freq_hz.get(1).copied().unwrap_or(1.0);
+    let rule = s.cluster;
+    let mut out: Vec<(usize, String)> = Vec::new();
+    for (l, prominence) in fdd::pick_peaks(svd, s.peaks) {
+        if prominence < STRONG_PEAK_DB {
+            continue;
+        }
+        let reference = &svd.u1[l];
+        let (a, values) = fdd::bell(svd, reference, l, (0, lines), s.efdd.mac_min);
+        let (lo, hi) = (f(a), f(a + values.len().max(1) - 1));
+        let agrees = |c: &SsiMode| mac(&c.shape, reference) >= AGREE_MAC;
+        if kept
+            .iter()
+            .any(|c| c.f_hz >= lo && c.f_hz <= hi && agrees(c))
+        {
+            continue;
+        }
+        // the line nearest a mode's frequency is its peak: a cluster of the peak's shape within
+        // half a line of it, and no other there (several small clusters are no explanation)
+        let near: Vec<(usize, &cluster::Rejected)> = dropped
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| (r.cluster.f_hz - f(l)).abs() <= 0.5 * df && agrees(&r.cluster))
+            .collect();
+        let best = match near.as_slice() {
+            [(i, r)] => {
+                let c = &r.cluster;
+                let fits = (LONE_MIN_POLES..rule.min_poles).contains(&c.poles)
+                    && c.mpc >= rule.mpc_min
+                    && c.mpd_deg <= rule.mpd_max_deg
+                    && !out.iter().any(|o| o.0 == *i);
+                fits.then_some((*i, *r))
+            }
+            _ => None,
+        };
+        if let Some((i, r)) = best {
+            out.push((
+                i,
+                format!(
+                    "kept with {} stable poles (a mode needs {} otherwise): the only explanation \
+                     of the {prominence:.1} dB peak of the first singular value at {:.4} Hz (MAC \
+                     {:.3} with its singular vector; no fuller SSI-cov mode in its bell)",
+                    r.cluster.poles,
+                    rule.min_poles,
+                    f(l),
+                    mac(&r.cluster.shape, reference)
+                ),
+            ));
+        }
+    }
+    out
 }
 
 /// A cluster's size and spread, for the report.
@@ -467,5 +573,104 @@ fn efdd_mode(
             100.0 * e.floor,
         ),
         uncertainty: Default::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 64 lines of 1 Hz, two channels: a peak of 30 dB at line 20 with the shape (1, 0.6)
+    /// over a floor of the other shape.
+    fn svd() -> Svd {
+        let norm = (1.0f64 + 0.36).sqrt();
+        let a = vec![
+            Complex64::new(1.0 / norm, 0.0),
+            Complex64::new(0.6 / norm, 0.0),
+        ];
+        let b = vec![
+            Complex64::new(-0.6 / norm, 0.0),
+            Complex64::new(1.0 / norm, 0.0),
+        ];
+        let lines = 64;
+        let s1 = |l: usize| 1.0 + 1000.0 / (1.0 + ((l as f64 - 20.0) / 1.5).powi(2));
+        Svd {
+            freq_hz: (0..lines).map(|l| l as f64).collect(),
+            s: (0..lines).map(|l| vec![s1(l), 0.5]).collect(),
+            u1: (0..lines)
+                .map(|l| {
+                    if (l as f64 - 20.0).abs() <= 6.0 {
+                        a.clone()
+                    } else {
+                        b.clone()
+                    }
+                })
+                .collect(),
+            u2: (0..lines).map(|_| b.clone()).collect(),
+        }
+    }
+
+    fn cluster_at(f_hz: f64, poles: usize, shape: &[f64]) -> SsiMode {
+        SsiMode {
+            f_hz,
+            damping: 0.002,
+            shape: shape.iter().map(|&x| Complex64::new(x, 0.0)).collect(),
+            poles,
+            f_spread: 0.0,
+            damping_spread: 0.0,
+            mpc: 1.0,
+            mpd_deg: 0.0,
+            orders: (10, 10 + 2 * poles),
+            members: Vec::new(),
+        }
+    }
+
+    fn dropped(clusters: &[SsiMode]) -> Vec<cluster::Rejected> {
+        clusters
+            .iter()
+            .map(|c| cluster::Rejected {
+                cluster: c.clone(),
+                reason: "few poles".into(),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_small_cluster_is_kept_only_as_the_one_explanation_of_a_strong_peak() {
+        let (svd, s) = (svd(), OmaSettings::new(128.0, 8192, Some(128)));
+        let shape = [1.0, 0.6];
+        // one cluster of 3 poles within half a line of the 30 dB peak: kept, and said why
+        let one = dropped(&[cluster_at(20.3, 3, &shape), cluster_at(40.0, 3, &shape)]);
+        let got = lone_explanations(&svd, &s, &[], &one);
+        assert_eq!(got.len(), 1, "{got:?}");
+        assert_eq!(got[0].0, 0);
+        assert!(
+            got[0].1.contains("kept with 3 stable poles") && got[0].1.contains("at 20.0000 Hz"),
+            "{}",
+            got[0].1
+        );
+        // a single pole, another shape, or one line and a half away: nothing
+        for c in [
+            cluster_at(20.3, 1, &shape),
+            cluster_at(20.3, 3, &[-0.6, 1.0]),
+            cluster_at(21.5, 3, &shape),
+        ] {
+            assert!(
+                lone_explanations(&svd, &s, &[], &dropped(std::slice::from_ref(&c))).is_empty(),
+                "{c:?}"
+            );
+        }
+        // two small clusters beside the peak explain nothing (the true one is not known)
+        let two = dropped(&[cluster_at(19.7, 3, &shape), cluster_at(20.4, 2, &shape)]);
+        assert!(lone_explanations(&svd, &s, &[], &two).is_empty());
+        // a full mode in the peak's bell already explains it
+        let kept = [cluster_at(20.1, 12, &shape)];
+        assert!(lone_explanations(&svd, &s, &kept, &one).is_empty());
+        // a peak of less than 10 dB is no strong peak
+        let mut weak = svd.clone();
+        for v in &mut weak.s {
+            v[0] = 1.0 + (v[0] - 1.0) * 0.005;
+        }
+        assert!(lone_explanations(&weak, &s, &[], &one).is_empty());
     }
 }

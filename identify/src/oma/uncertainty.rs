@@ -12,7 +12,7 @@
 //! interval is given (and a note says so): an interval from the replicates that did would be
 //! too narrow.
 
-use super::cluster;
+use super::cluster::{self, ClusterRule};
 use super::csd::{self, Csd};
 use super::fdd::{self, Svd};
 use super::modes::Peak;
@@ -154,11 +154,14 @@ pub fn jackknife_sized(estimate: f64, replicates: &[f64], sizes: &[usize]) -> Op
 
 /// Per mode of `modes` (in their order), its uncertainty by the jackknife over `groups`
 /// groups; `peaks` are the FDD peaks the FDD and EFDD modes came from (in mode order), the
-/// records, their cross-spectral matrix (`whole`) and the settings those of the analysis. Notes name the modes left without an interval.
+/// records, their cross-spectral matrix (`whole`) and the settings those of the analysis;
+/// `lone` the frequencies of the SSI modes kept with fewer poles than a mode needs (their
+/// replicates are sought among clusters as small). Notes name the modes left without an
+/// interval.
 pub fn of_modes(
     (channels, whole): (&[Vec<f64>], &Csd),
     s: &OmaSettings,
-    modes: &[OmaMode],
+    (modes, lone): (&[OmaMode], &[f64]),
     peaks: &[Peak],
     groups: usize,
     notes: &mut Vec<String>,
@@ -179,7 +182,7 @@ pub fn of_modes(
         })
         .collect();
     let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
-    let ssi = ssi_replicates(channels, s, modes, groups)?;
+    let ssi = ssi_replicates(channels, s, (modes, lone), groups)?;
     for (m, u) in modes.iter().zip(out.iter_mut()) {
         let reps = mode_replicates(m, modes, peaks, (spectral.as_ref(), ssi.as_ref()));
         let Some((reps, sizes)) = reps else {
@@ -402,12 +405,14 @@ fn spectral_replicates(
 }
 
 /// Per block of the record left out, per SSI mode of `modes` (in their order): the replicate's
-/// mode nearest it (within three half-power bandwidths or 1 %, whichever is wider, and MAC
-/// >= 0.8 with its shape), `None` fields where there is none.
+/// mode nearest it (within three half-power bandwidths or 1 %, whichever is wider, and a MAC
+/// of 0.8 or more with its shape), `None` fields where there is none; for a mode of `lone`
+/// (kept with fewer poles than a mode needs), among the clusters of at least
+/// [`super::modes::LONE_MIN_POLES`] poles.
 fn ssi_replicates(
     channels: &[Vec<f64>],
     s: &OmaSettings,
-    modes: &[OmaMode],
+    (modes, lone): (&[OmaMode], &[f64]),
     groups: usize,
 ) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
     let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
@@ -420,15 +425,28 @@ fn ssi_replicates(
         let r = sums.without(Some(g));
         let (poles, _) = ssi::poles_of(&r, s.fs_hz, s.ssi)?;
         let (kept, _) = cluster::cluster(&poles, s.cluster);
+        let small = match lone.is_empty() {
+            true => Vec::new(),
+            false => {
+                let rule = ClusterRule {
+                    min_poles: super::modes::LONE_MIN_POLES,
+                    ..s.cluster
+                };
+                cluster::cluster(&poles, rule).0
+            }
+        };
         let reps = ssi
             .iter()
             .map(|m| {
                 let z = m.damping.unwrap_or(0.01);
                 let reach = (3.0 * 2.0 * z * m.f_hz).max(0.01 * m.f_hz);
-                let near = kept
-                    .iter()
-                    .filter(|c| (c.f_hz - m.f_hz).abs() <= reach && mac(&c.shape, &m.shape) >= 0.8)
-                    .min_by(|a, b| (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs()));
+                let near = match lone.contains(&m.f_hz) {
+                    true => &small,
+                    false => &kept,
+                }
+                .iter()
+                .filter(|c| (c.f_hz - m.f_hz).abs() <= reach && mac(&c.shape, &m.shape) >= 0.8)
+                .min_by(|a, b| (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs()));
                 near.map_or_else(Replicate::default, |c| Replicate {
                     efdd_or_ssi: Some((c.f_hz, c.damping)),
                     amplitude: None,

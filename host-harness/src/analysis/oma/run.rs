@@ -417,7 +417,7 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         "SSI-cov: {} block rows, orders 2 to {}; stable: frequency within {} %, damping within \
          {} %, MAC >= {}; stable poles clustered (average linkage, distance df/f + 1 - MAC up to \
          {}, one pole per order); a mode from {} poles, median MPC >= {}, MPD <= {} deg, and \
-         no fuller cluster of its shape nearby",
+         no fuller cluster of its shape nearby{}",
         s.ssi.block_rows,
         s.ssi.max_order,
         100.0 * s.ssi.df_max,
@@ -426,7 +426,16 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         c.distance_max,
         c.min_poles,
         c.mpc_min,
-        c.mpd_max_deg
+        c.mpd_max_deg,
+        match s.bands.is_empty() {
+            true => format!(
+                " (from {} poles when it is the only cluster within half a line of a peak of {} dB \
+                 that no mode explains)",
+                super::modes::LONE_MIN_POLES,
+                super::modes::STRONG_PEAK_DB
+            ),
+            false => String::new(),
+        }
     );
     decays_text(o, r, s);
 }
