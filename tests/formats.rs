@@ -302,9 +302,8 @@ fn damaged_phantom_files_are_named() {
 fn centroid_reads_a_video_at_its_rate_and_needs_one() {
     let (_tmp, rec) = make_recording(6, 128);
     let video = rec.dir.join("v.mkv");
-    let mut w =
-        host_harness::frames::video::Ffv1Writer::create(&video, W as usize, H as usize, FPS)
-            .unwrap();
+    use host_harness::frames::video::{Ffv1Writer, Pixels};
+    let mut w = Ffv1Writer::create(&video, W as usize, H as usize, FPS, Pixels::Grey8).unwrap();
     for k in 0..6 {
         w.write_frame(&disk(position_px(k as f64 / FPS), W, H))
             .unwrap();

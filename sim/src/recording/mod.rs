@@ -193,12 +193,12 @@ impl FrameSink {
             .cluttered
             .then(|| cluttered::Clutter::new(size, camera.seed));
         let video = if camera.video {
-            use vibcam_readers::frames::video::Ffv1Writer;
+            use vibcam_readers::frames::video::{Ffv1Writer, Pixels};
             let (file, fps) = (write_to.join("frames.mkv"), camera.fps);
             let w = match &clutter {
                 // the colour frames the JPEGs hold, losslessly
-                Some(c) => Ffv1Writer::create_rgb(&file, c.outer().0, c.outer().1, fps),
-                None => Ffv1Writer::create(&file, size.0, size.1, fps),
+                Some(c) => Ffv1Writer::create(&file, c.outer().0, c.outer().1, fps, Pixels::Rgb8),
+                None => Ffv1Writer::create(&file, size.0, size.1, fps, Pixels::Grey8),
             }
             .map_err(|e| e.into_anyhow())?;
             Some((w, dir.join("frames.mkv")))

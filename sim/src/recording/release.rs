@@ -127,11 +127,12 @@ pub fn write_release_recording(
     let (w, h) = SIZE;
     let mut mkv = if video {
         Some(
-            vibcam_readers::frames::video::Ffv1Writer::create_rgb(
+            vibcam_readers::frames::video::Ffv1Writer::create(
                 &write_to.join("frames.mkv"),
                 w,
                 h,
                 FPS,
+                vibcam_readers::frames::video::Pixels::Rgb8,
             )
             .map_err(|e| e.into_anyhow())?,
         )

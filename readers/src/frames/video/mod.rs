@@ -62,7 +62,7 @@ mod writer;
 
 pub use probe::rate_text;
 pub use reader::VideoFrames;
-pub use writer::Ffv1Writer;
+pub use writer::{Ffv1Writer, Pixels};
 
 /// Properties of an opened video.
 #[derive(Debug, Clone, PartialEq)]
@@ -434,7 +434,7 @@ mod tests {
     /// Writes the test frames with [`Ffv1Writer`] to `dir/name` at 120 fps.
     fn write_ffv1(dir: &Path, name: &str) -> PathBuf {
         let path = dir.join(name);
-        let mut w = Ffv1Writer::create(&path, W, H, 120.0).unwrap();
+        let mut w = Ffv1Writer::create(&path, W, H, 120.0, Pixels::Grey8).unwrap();
         for k in 0..N {
             w.write_frame(&frame(k)).unwrap();
         }
@@ -515,7 +515,7 @@ mod tests {
                 .map(|i| ((i * 2477 + k * 40_503) % 65_536) as u16)
                 .collect()
         };
-        let mut w = Ffv1Writer::create_u16(&path, W, H, 120.0).unwrap();
+        let mut w = Ffv1Writer::create(&path, W, H, 120.0, Pixels::Grey16).unwrap();
         for k in 0..5 {
             w.write_frame_u16(&f16(k)).unwrap();
         }
@@ -611,7 +611,7 @@ mod tests {
         irregular_at(&good, 100.0, 1);
         // 119.88 fps (NTSC-style) read as 120: intervals pass one by one, the drift does not.
         let ntsc = dir.path().join("ntsc.mkv");
-        let mut w = Ffv1Writer::create(&ntsc, W, H, 120_000.0 / 1001.0).unwrap();
+        let mut w = Ffv1Writer::create(&ntsc, W, H, 120_000.0 / 1001.0, Pixels::Grey8).unwrap();
         for _ in 0..200 {
             w.write_frame(&frame(0)).unwrap();
         }

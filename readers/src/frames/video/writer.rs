@@ -21,7 +21,7 @@ pub struct Ffv1Writer {
 
 /// What a frame given to an [`Ffv1Writer`] holds per pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Pixels {
+pub enum Pixels {
     /// One 8-bit grey value.
     Grey8,
     /// One 16-bit grey value.
@@ -58,32 +58,10 @@ impl Pixels {
 }
 
 impl Ffv1Writer {
-    /// Starts an 8-bit (`gray`) video of `width x height` frames at `fps` frames per second.
-    pub fn create(path: &Path, width: usize, height: usize, fps: f64) -> Result<Self, VideoError> {
-        Self::start(path, width, height, fps, Pixels::Grey8)
-    }
-
-    /// Starts a colour video of 8-bit RGB frames (stored as planar RGB, lossless).
-    pub fn create_rgb(
-        path: &Path,
-        width: usize,
-        height: usize,
-        fps: f64,
-    ) -> Result<Self, VideoError> {
-        Self::start(path, width, height, fps, Pixels::Rgb8)
-    }
-
-    /// Starts a 16-bit (`gray16le`) video.
-    pub fn create_u16(
-        path: &Path,
-        width: usize,
-        height: usize,
-        fps: f64,
-    ) -> Result<Self, VideoError> {
-        Self::start(path, width, height, fps, Pixels::Grey16)
-    }
-
-    fn start(
+    /// Starts a video of `width x height` frames at `fps` frames per second, each pixel as
+    /// `kind` says: 8-bit grey (`gray`), 16-bit grey (`gray16le`) or 8-bit RGB (stored as
+    /// planar RGB); lossless in every case.
+    pub fn create(
         path: &Path,
         width: usize,
         height: usize,
@@ -142,14 +120,14 @@ impl Ffv1Writer {
         self.send_frame(|bytes| bytes.extend_from_slice(frame))
     }
 
-    /// Appends a colour frame (a writer from [`Ffv1Writer::create_rgb`]): `width * height`
+    /// Appends a colour frame (a writer of [`Pixels::Rgb8`]): `width * height`
     /// pixels of R, G, B, row 0 first.
     pub fn write_frame_rgb(&mut self, frame: &[u8]) -> Result<(), VideoError> {
         self.check(frame.len(), Pixels::Rgb8)?;
         self.send_frame(|bytes| bytes.extend_from_slice(frame))
     }
 
-    /// Appends a 16-bit frame (a writer from [`Ffv1Writer::create_u16`]).
+    /// Appends a 16-bit frame (a writer of [`Pixels::Grey16`]).
     pub fn write_frame_u16(&mut self, frame: &[u16]) -> Result<(), VideoError> {
         self.check(frame.len(), Pixels::Grey16)?;
         self.send_frame(|bytes| bytes.extend(frame.iter().flat_map(|v| v.to_le_bytes())))
