@@ -23,7 +23,7 @@
 //! # Stability
 //!
 //! A pole of order `n` is stable when a pole of order `n - 1` lies within 1 % in frequency,
-//! 5 % in damping and has a shape with a MAC of at least 0.98 with it: the rules of the SSI-cov
+//! 5 % in damping (of [`crate::oma::ssi::DAMPING_FLOOR`] below it) and has a shape with a MAC of at least 0.98 with it: the rules of the SSI-cov
 //! diagram of `modal`, so that [`crate::oma::cluster`] groups LSCF's stable poles into
 //! modes by the same rules.
 
@@ -39,7 +39,7 @@ pub struct LscfRule {
     pub max_order: usize,
     /// Stable: frequency within this fraction of the order below's pole.
     pub df_max: f64,
-    /// Stable: damping within this fraction.
+    /// Stable: damping within this fraction (of [`crate::oma::ssi::DAMPING_FLOOR`] below it).
     pub dz_max: f64,
     /// Stable: shapes' MAC at least this.
     pub mac_min: f64,
