@@ -23,9 +23,9 @@
 //! # Stability
 //!
 //! A pole of order `n` is stable when a pole of order `n - 1` lies within 1 % in frequency,
-//! 5 % in damping (of [`crate::oma::ssi::DAMPING_FLOOR`] below it) and has a shape with a MAC of at least 0.98 with it: the rules of the SSI-cov
-//! diagram of `modal`, so that [`crate::oma::cluster`] groups LSCF's stable poles into
-//! modes by the same rules.
+//! 5 % in damping (of [`crate::oma::ssi::DAMPING_FLOOR`] below it) and has a shape with a MAC
+//! of at least 0.98 with it: the rules of the SSI-cov diagram of `modal`, so that
+//! [`crate::oma::cluster`] groups LSCF's stable poles into modes by the same rules.
 
 use crate::oma::ssi::{Pole, Stability};
 use nalgebra::DMatrix;

@@ -172,9 +172,10 @@ pub const LONE_MIN_POLES: usize = 2;
 /// MAC >= the EFDD rule's) holds no mode of `kept` with a like shape (MAC >= [`AGREE_MAC`]),
 /// and within half a line of which one cluster alone has the peak's shape (MAC >=
 /// [`AGREE_MAC`]): that cluster, when it has at least [`LONE_MIN_POLES`] poles and shares a
-/// phase (the MPC and MPD rules). Several small clusters there explain nothing: none is kept. A short or lightly damped record (a struck fork filmed for a second or two)
-/// gives few stable orders; the peak says the mode is there, and the poles give its frequency
-/// finer than the line and its damping.
+/// phase (the MPC and MPD rules). Several small clusters there explain nothing: none is
+/// kept. A short or lightly damped record (a struck fork filmed for a second or two) gives
+/// few stable orders; the peak says the mode is there, and the poles give its frequency finer
+/// than the line and its damping.
 pub fn lone_explanations(
     svd: &Svd,
     s: &OmaSettings,

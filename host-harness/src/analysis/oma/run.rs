@@ -415,9 +415,9 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
     let _ = writeln!(
         o,
         "SSI-cov: {} block rows, orders 2 to {}; stable: frequency within {} %, damping within \
-         {} % (of {} below that), MAC >= {}; stable poles clustered (average linkage, distance df/f + 1 - MAC up to \
-         {}, one pole per order); a mode from {} poles, median MPC >= {}, MPD <= {} deg, and \
-         no fuller cluster of its shape nearby{}",
+         {} % (of {} below that), MAC >= {}; stable poles clustered (average linkage, distance \
+         df/f + 1 - MAC up to {}, one pole per order); a mode from {} poles, median MPC >= {}, \
+         MPD <= {} deg, and no fuller cluster of its shape nearby{}",
         s.ssi.block_rows,
         s.ssi.max_order,
         100.0 * s.ssi.df_max,
