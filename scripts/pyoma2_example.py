@@ -7,7 +7,7 @@ through scripts/peer_oma.py. Run on demand; the table goes to docs/validation.md
 
     python3 scripts/pyoma2_example.py OUT --harness target/release/host-harness [--nperseg 1024]
 
-Writes OUT/displacement.csv (`t_s,1,...,5`: the example's accelerations; `modal` takes any
+Writes (an earlier run's files replaced only with --force) OUT/displacement.csv (`t_s,1,...,5`: the example's accelerations; `modal` takes any
 unit), OUT/truth.csv (`mode,f_hz,damping,target,shape`, as `simulate-field` writes it) and
 OUT/peer-oma.md. Both sides single-threaded (OMP/OpenBLAS/MKL threads 1), in pyOMA-2's pinned
 virtual environment (scripts/peer_oma.py).
@@ -28,12 +28,15 @@ def main():
     ap.add_argument("out", help="directory to write (created)")
     ap.add_argument("--harness", default="target/release/host-harness")
     ap.add_argument("--nperseg", type=int, default=1024)
+    ap.add_argument("--force", action="store_true", help="replace the files of an earlier run")
     args = ap.parse_args()
+    out = Path(args.out)
+    if (out / "displacement.csv").exists() and not args.force:
+        sys.exit(f"{out / 'displacement.csv'} exists: --force to replace it")
     ensure_venv(__file__, ONE_THREAD)
     import numpy as np
     from pyoma2.functions.gen import example_data
 
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     y, _u, (fn, xi, phi) = example_data()
     dt = 0.01
