@@ -3,6 +3,7 @@
 //! picked on the first singular value, and per peak the single-degree-of-freedom bell back to
 //! a correlation function for damping and frequency.
 
+use super::bell::Quantity;
 use super::csd::Csd;
 use crate::modal::mac;
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -140,14 +141,22 @@ pub struct EfddRule {
     pub mac_min: f64,
     /// Fewest lines a bell must have to be fitted.
     pub min_lines: usize,
+    /// What the records measure (the bell's model, [`super::bell::Quantity`]); `None`: the
+    /// quantity whose model fits the bells best ([`super::modes::choose_quantity`]).
+    pub quantity: Option<Quantity>,
+    /// Whether a bell's tilt beyond the quantity's is fitted ([`super::bell::TILT_WEIGHT`]).
+    pub tilt: bool,
 }
 
 impl Default for EfddRule {
-    /// MAC 0.85 (pyOMA-2's default for EFDD), at least 5 lines.
+    /// MAC 0.85 (pyOMA-2's default for EFDD), at least 5 lines, the quantity from the bells,
+    /// the tilt fitted.
     fn default() -> Self {
         EfddRule {
             mac_min: 0.85,
             min_lines: 5,
+            quantity: None,
+            tilt: true,
         }
     }
 }
@@ -168,6 +177,8 @@ pub struct Efdd {
     /// RMS of the fit's residuals, natural log of the singular value (about
     /// `1 / sqrt(segments)` for a fit that describes the bell).
     pub rms_log: f64,
+    /// The fitted tilt beyond the quantity's ([`super::bell::BellFit::tilt`]).
+    pub tilt: f64,
 }
 
 /// The lag window of a Welch estimate with `window` segments of `nperseg` at every lag
@@ -294,7 +305,15 @@ pub fn efdd(
     let top = (0..count)
         .max_by(|&i, &j| y[i].total_cmp(&y[j]))
         .unwrap_or(0);
-    let fit = super::bell::fit(&y, (a, a + top), (nfft, fs_hz), lag, start).ok_or_else(|| {
+    let quantity = rule.quantity.unwrap_or(Quantity::Displacement);
+    let fit = super::bell::fit(
+        &y,
+        (a, a + top),
+        (nfft, fs_hz),
+        (lag, quantity, rule.tilt),
+        start,
+    )
+    .ok_or_else(|| {
         format!("the fit of its bell ({count} lines) did not settle on a damped mode inside it")
     })?;
     if fit.damping <= 1.0001 * super::bell::ZETA_MIN && fit.rms_log > NARROW_RMS_MAX {
@@ -319,5 +338,6 @@ pub fn efdd(
         range: (a, a + count - 1),
         floor: fit.floor,
         rms_log: fit.rms_log,
+        tilt: fit.tilt,
     })
 }

@@ -12,6 +12,7 @@
 //! has its shape. An SSI-cov cluster rejected for its size alone is kept when it is the only
 //! explanation of a strong peak ([`lone_explanations`]; docs/method.md §3.12).
 
+use super::bell::Quantity;
 use super::cluster::{self, SsiMode};
 use super::fdd::{self, Svd};
 use super::ssi::{self, Pole};
@@ -460,6 +461,90 @@ fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
     }
 }
 
+/// The fraction by which another quantity's model must lower the RMS residual of the bells'
+/// fits below the displacement's to be taken ([`choose_quantity`]): a camera measures
+/// displacements, and on narrow bells the three models fit alike (their residuals then differ
+/// by a few per cent either way, and any of them gives the same frequency).
+pub const QUANTITY_MARGIN: f64 = 0.05;
+
+/// The quantity EFDD's bells were fitted as, and how it was chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuantityChoice {
+    /// The quantity taken.
+    pub quantity: Quantity,
+    /// Each quantity's RMS residual (natural log) over the bells fitted by all three, in the
+    /// order of [`Quantity::ALL`]; `None` when the quantity was given or no bell was resolved.
+    pub rms_log: Option<[f64; 3]>,
+    /// Whether the quantity was given (not chosen from the bells).
+    pub given: bool,
+}
+
+/// The record's quantity as EFDD's bells tell it, when it was not given: each peak's bell
+/// fitted as a displacement's, a velocity's and an acceleration's spectrum
+/// ([`super::bell::Quantity`]); the quantity whose fits leave the least squared residual over
+/// the bells that all three fit with a half-power band of
+/// [`super::bell::RESOLVED_LINES`] or more, the displacement unless another's RMS residual is lower by
+/// [`QUANTITY_MARGIN`]. A velocity's bell fitted as a displacement's is tilted: its frequency
+/// came out 0.2-0.6 % high, its damping up to 37 % low.
+pub fn choose_quantity(svd: &Svd, peaks: &[Peak], s: &OmaSettings) -> QuantityChoice {
+    if let Some(quantity) = s.efdd.quantity {
+        return QuantityChoice {
+            quantity,
+            rms_log: None,
+            given: true,
+        };
+    }
+    let lines = svd.freq_hz.len();
+    let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
+    let (mut cost, mut count) = ([0.0f64; 3], 0usize);
+    for (n, p) in peaks.iter().enumerate() {
+        let fence = (
+            if n > 0 { peaks[n - 1].line } else { 0 },
+            peaks.get(n + 1).map_or(lines, |q| q.line),
+        );
+        let fits: Vec<fdd::Efdd> = Quantity::ALL
+            .iter()
+            .filter_map(|q| {
+                // the tilt held: free, it would carry a velocity's bell as a displacement's
+                let rule = fdd::EfddRule {
+                    quantity: Some(*q),
+                    tilt: false,
+                    ..s.efdd
+                };
+                let at = (&p.reference[..], p.line);
+                fdd::efdd(svd, at, fence, (s.csd.nfft, s.fs_hz), (&lag, None), rule).ok()
+            })
+            .collect();
+        // a bell of the spectral window (a half-power band of a line or two) is alike in
+        // every quantity's model: its residuals only say how badly the window fits (on a
+        // short rendered record of 8 segments they chose accelerations for displacements)
+        let df = s.fs_hz / s.csd.nfft as f64;
+        let resolved = |e: &fdd::Efdd| 2.0 * e.damping * e.f_hz >= super::bell::RESOLVED_LINES * df;
+        if fits.len() == 3 && fits.iter().all(resolved) {
+            for (c, e) in cost.iter_mut().zip(&fits) {
+                *c += e.rms_log * e.rms_log * e.lines as f64;
+            }
+            count += fits[0].lines;
+        }
+    }
+    if count == 0 {
+        return QuantityChoice {
+            quantity: Quantity::Displacement,
+            rms_log: None,
+            given: false,
+        };
+    }
+    let best = (1..3)
+        .min_by(|&i, &j| cost[i].total_cmp(&cost[j]))
+        .filter(|&i| cost[i] < (1.0 - QUANTITY_MARGIN).powi(2) * cost[0])
+        .unwrap_or(0);
+    QuantityChoice {
+        quantity: Quantity::ALL[best],
+        rms_log: Some(cost.map(|c| (c / count as f64).sqrt())),
+        given: false,
+    }
+}
+
 /// The FDD mode at each peak and its EFDD refinement (frequency and damping from the bell
 /// fitted; a bell too narrow or a fit that fails is noted).
 pub fn fdd_modes(
@@ -566,12 +651,13 @@ fn efdd_mode(
         shape,
         evidence: format!(
             "bell of {} lines ({:.4}-{:.4} Hz) fitted, residual {:.2} (ln), floor {:.1} % of the \
-             peak{why}",
+             peak, tilt f^{:+.2}{why}",
             e.lines,
             svd.freq_hz[e.range.0],
             svd.freq_hz[e.range.1],
             e.rms_log,
             100.0 * e.floor,
+            e.tilt,
         ),
         uncertainty: Default::default(),
     }

@@ -373,6 +373,33 @@ fn records_text(o: &mut String, records: &Records, s: &OmaSettings) {
     }
 }
 
+/// The report's line on EFDD: the bell, the model and the quantity it was fitted as.
+fn efdd_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
+    let q = r.quantity;
+    let how = match q.rms_log {
+        Some([d, v, a]) => format!(
+            ", the quantity whose model fits the bells best (RMS residual of ln: displacement \
+             {d:.3}, velocity {v:.3}, acceleration {a:.3}; another than the displacement when \
+             {:.0} % lower)",
+            100.0 * super::modes::QUANTITY_MARGIN
+        ),
+        None if q.given => " (as given)".to_string(),
+        None => format!(
+            " (the default: no bell's half-power band spans {} lines or more to tell the \
+             quantity by)",
+            super::bell::RESOLVED_LINES
+        ),
+    };
+    let _ = writeln!(
+        o,
+        "EFDD: the bell (lines whose first or second singular vector has the mode's shape, MAC \
+         >= {}) fitted by one mode's spectrum of {} in this estimate (its Welch lag window \
+         included){how}",
+        s.efdd.mac_min,
+        q.quantity.name()
+    );
+}
+
 /// The report's lines on the methods and their settings: the cross-spectra, the peaks, EFDD,
 /// SSI-cov.
 fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
@@ -405,12 +432,7 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
             super::modes::AGREE_MAC
         );
     }
-    let _ = writeln!(
-        o,
-        "EFDD: the bell (lines whose first or second singular vector has the mode's shape, MAC \
-         >= {}) fitted by one mode's spectrum in this estimate (its Welch lag window included)",
-        s.efdd.mac_min
-    );
+    efdd_text(o, r, s);
     let c = &s.cluster;
     let _ = writeln!(
         o,
