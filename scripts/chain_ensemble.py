@@ -8,7 +8,7 @@ of the estimates. Run on demand; the figures go to docs/validation.md §3.
         [--records 40] [--minutes 10] [--fs 50] [--noise 0.05] [--quantity displacement] \\
         [--out DIR] [--force]
 
-The model (independent of `vibcam-sim`'s modal superposition): six masses on springs in a row,
+The model (independent of `vibcam-model`'s modal superposition): six masses on springs in a row,
 the first tied to the ground, stiffnesses found so that the first four natural frequencies are
 2.3, 5.9, 9.4 and 13.1 Hz; modal damping 0.8, 1.2, 2.5 and 1.6 % (2 % for the two upper modes);
 every mass driven by its own white force. The state `[x, v]` is sampled exactly at `fs` (Van
@@ -104,7 +104,7 @@ def record(np, a, ad, lq, m, k, samples, quantity, noise, rng):
     return y
 
 
-def accelerations(np, expm, a, m, samples, rng):
+def accelerations(np, expm, a, m, fs, samples, rng):
     """The masses' accelerations under white forces held over each sample (zero-order hold,
     sampled exactly): `x[k+1] = Ad x[k] + Bd u[k]`, `y[k] = Ca x[k] + M^-1 u[k]`, so the spectrum
     is the accelerance's, force term included (white forces in continuous time have no sampled
@@ -115,7 +115,7 @@ def accelerations(np, expm, a, m, samples, rng):
     big = np.zeros((3 * n, 3 * n))
     big[:2 * n, :2 * n] = a
     big[:2 * n, 2 * n:] = b
-    e = expm(big / FS_HOLD[0])
+    e = expm(big / fs)
     ad, bd = e[:2 * n, :2 * n], e[:2 * n, 2 * n:]
     p = solve_discrete_lyapunov(ad, bd @ bd.T)
     x = np.linalg.cholesky(0.5 * (p + p.T) + 1e-15 * np.trace(p) * np.eye(2 * n)) @ \
@@ -128,8 +128,6 @@ def accelerations(np, expm, a, m, samples, rng):
         x = ad @ x + drive[i]
     return states @ a[n:, :].T + u @ np.diag(1 / m)
 
-
-FS_HOLD = [50.0]
 
 
 def read_modes(path):
@@ -167,13 +165,12 @@ def main():
     harness = str(Path(args.harness).resolve())
     m, k, f_true, phi = chain(np, least_squares)
     a, ad, lq = sampled_system(np, expm, m, k, f_true, phi, args.fs)
-    FS_HOLD[0] = args.fs
     samples = int(round(args.minutes * 60 * args.fs))
     rng = np.random.default_rng(args.seed)
     found = {}  # (method, mode) -> list of (f, f_u, d, d_u)
     for rec in range(args.records):
         if args.quantity == "acceleration":
-            y = accelerations(np, expm, a, m, samples, rng)
+            y = accelerations(np, expm, a, m, args.fs, samples, rng)
             y = y + args.noise * y.std(axis=0) * rng.standard_normal(y.shape)
         else:
             y = record(np, a, ad, lq, m, k, samples, args.quantity, args.noise, rng)
