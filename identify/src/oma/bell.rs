@@ -9,9 +9,9 @@
 //! on the transform length: `K(f) = DFT[r(t) w_c(t)]`. The bell's values `y_l` are fitted by
 //! `A K(f_l) + c` (`c >= 0` the floor under it: noise, other modes' tails) in the least
 //! squares of `ln y_l` (each line's estimate scatters by a constant fraction), by
-//! Levenberg-Marquardt on `(ln A, f0, ln zeta, ln c)` (and the tilt below). The inverse transform of a cut bell
-//! (the classic EFDD) loses the tails beyond the cut and rings at its edges: on a weak mode
-//! whose bell ends at a tenth of its peak the damping came out 44 % low.
+//! Levenberg-Marquardt on `(ln A, f0, ln zeta, ln c)` (and the tilt below). The inverse
+//! transform of a cut bell (the classic EFDD) loses the tails beyond the cut and rings at its
+//! edges: on a weak mode whose bell ends at a tenth of its peak the damping came out 44 % low.
 //!
 //! A velocity's or an acceleration's spectrum is the displacement's times `(2 pi f)^2` or
 //! `(2 pi f)^4`; fitted with the displacement's model such a bell's tilt moved the frequency

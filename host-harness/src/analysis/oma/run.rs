@@ -418,8 +418,9 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
             o,
             "peaks: local maxima of the first singular value from {:.3} to {:.3} Hz with {} dB \
              of prominence{}; a mode when its singular vector holds over a bell of {} lines \
-             (MAC >= {}), it is no ripple on a stronger peak's bell, and it stands {} dB or SSI-cov \
-             finds a mode in its bell (MAC >= {}); an SSI-cov mode no peak took gives its bell",
+             (MAC >= {}), it is no ripple on a stronger peak's bell, and it stands {} dB or \
+             SSI-cov finds a mode in its half-power band (MAC >= {}); an SSI-cov mode no peak \
+             took gives its bell",
             s.peaks.f_min_hz,
             s.peaks.f_max_hz,
             s.peaks.prominence_db,
