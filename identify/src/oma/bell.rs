@@ -41,6 +41,12 @@ pub const TILT_WEIGHT: f64 = 0.3;
 /// make: only such a bell tells a tilt or a quantity.
 pub const RESOLVED_LINES: f64 = 3.0;
 
+/// Whether a mode at `f_hz` with `damping` has a half-power band of [`RESOLVED_LINES`] lines
+/// of `df` or more.
+pub fn resolved(f_hz: f64, damping: f64, df: f64) -> bool {
+    2.0 * damping * f_hz >= RESOLVED_LINES * df
+}
+
 /// The least damping ratio the fit takes.
 pub const ZETA_MIN: f64 = 1e-5;
 
@@ -237,7 +243,7 @@ pub fn fit(
     // standard deviations of a one-parameter improvement): a bell that says little of it
     // keeps the plain model's frequency (on a short record's bells the tilt went to +-3.3)
     let (p0, r0, c0) = settle(&mut residuals, &clamp, p, (df, false))?;
-    let resolved = 2.0 * p0[2].exp() * p0[1] >= RESOLVED_LINES * df;
+    let resolved = resolved(p0[1], p0[2].exp(), df);
     let (p, r, c) = match tilt && resolved {
         true => {
             let (p1, r1, c1) = settle(&mut residuals, &clamp, p0, (df, true))?;

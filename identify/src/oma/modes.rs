@@ -485,6 +485,15 @@ fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
     }
 }
 
+/// The lines between which peak `n`'s bell may run: the neighbouring peaks' (the spectrum's
+/// ends for the first and the last; `lines` the spectrum's count).
+pub fn fence(peaks: &[Peak], n: usize, lines: usize) -> (usize, usize) {
+    (
+        if n > 0 { peaks[n - 1].line } else { 0 },
+        peaks.get(n + 1).map_or(lines, |q| q.line),
+    )
+}
+
 /// The fraction by which another quantity's model must lower the RMS residual of the bells'
 /// fits below the displacement's to be taken ([`choose_quantity`]): a camera measures
 /// displacements, and on narrow bells the three models fit alike (their residuals then differ
@@ -520,12 +529,10 @@ pub fn choose_quantity(svd: &Svd, peaks: &[Peak], s: &OmaSettings) -> QuantityCh
     }
     let lines = svd.freq_hz.len();
     let lag = fdd::lag_window(s.csd.window, s.csd.nperseg);
+    let df = s.fs_hz / s.csd.nfft as f64;
     let (mut cost, mut count) = ([0.0f64; 3], 0usize);
     for (n, p) in peaks.iter().enumerate() {
-        let fence = (
-            if n > 0 { peaks[n - 1].line } else { 0 },
-            peaks.get(n + 1).map_or(lines, |q| q.line),
-        );
+        let fence = fence(peaks, n, lines);
         let fits: Vec<fdd::Efdd> = Quantity::ALL
             .iter()
             .filter_map(|q| {
@@ -542,8 +549,7 @@ pub fn choose_quantity(svd: &Svd, peaks: &[Peak], s: &OmaSettings) -> QuantityCh
         // a bell of the spectral window (a half-power band of a line or two) is alike in
         // every quantity's model: its residuals only say how badly the window fits (on a
         // short rendered record of 8 segments they chose accelerations for displacements)
-        let df = s.fs_hz / s.csd.nfft as f64;
-        let resolved = |e: &fdd::Efdd| 2.0 * e.damping * e.f_hz >= super::bell::RESOLVED_LINES * df;
+        let resolved = |e: &fdd::Efdd| super::bell::resolved(e.f_hz, e.damping, df);
         if fits.len() == 3 && fits.iter().all(resolved) {
             for (c, e) in cost.iter_mut().zip(&fits) {
                 *c += e.rms_log * e.rms_log * e.lines as f64;
@@ -596,10 +602,7 @@ pub fn fdd_modes(
             uncertainty: Default::default(),
         });
         // the bell stops at the neighbouring peaks
-        let fence = (
-            if n > 0 { peaks[n - 1].line } else { 0 },
-            peaks.get(n + 1).map_or(lines, |q| q.line),
-        );
+        let fence = fence(peaks, n, lines);
         match fdd::efdd(
             svd,
             (&p.reference, p.line),

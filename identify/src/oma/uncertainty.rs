@@ -374,10 +374,7 @@ fn spectral_replicates(
                     (p.line.saturating_sub(1), p.line + 1),
                     0.0,
                 );
-                let fence = (
-                    if n > 0 { peaks[n - 1].line } else { 0 },
-                    peaks.get(n + 1).map_or(lines, |q| q.line),
-                );
+                let fence = super::modes::fence(peaks, n, lines);
                 let e = fdd::efdd(
                     &svd,
                     (&p.reference, p.line),
