@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Our output-only modal analysis (`host-harness modal`) beside pyOMA-2's on the same
-displacement file: frequencies, damping and shapes per method (FDD, EFDD, SSI-cov), the
+displacement file: frequencies, damping and shapes per method (FDD, EFDD, SSI-cov, SSI-dat), the
 differences, and the wall time of each side. Run on demand; the figures go to
 docs/performance.md and docs/method.md §3.12.
 
@@ -9,12 +9,13 @@ docs/performance.md and docs/method.md §3.12.
 
 FIELD/displacement.csv is a wide file (`t_s,1,...,K`; `simulate-field` writes one); with
 FIELD/truth.csv the true modes are printed beside. Both sides get the same Welch segments
-(Hann, half overlap), 30 block rows and orders up to 40 for SSI-cov; pyOMA-2's modal
-parameters are extracted at our SSI frequencies (its `mpe` with `sel_freq`; `order_in`
+(Hann, half overlap), 30 block rows and orders up to 40 for SSI-cov and SSI-dat (ours: `modal
+--ssi dat`, a second run); pyOMA-2's modal parameters are extracted at our SSI frequencies (its `mpe` with `sel_freq`; `order_in`
 'find_min' for SSI). Runs in a virtual environment with pinned pyOMA-2: $PEER_OMA_VENV, else
 .venv-peer-oma at the repository root (created with pip when missing). Writes
 FIELD/peer-oma.md (an existing one is replaced only with --force). Exit status 1 when a check
-of --check fails (SSI frequencies within one line and damping within 10 %, MAC >= 0.99 for
+of --check fails (SSI-cov's and SSI-dat's frequencies within one line and damping within 10 %,
+MAC >= 0.99 for
 every method; FDD and EFDD frequencies and EFDD damping are compared, not checked: see
 docs/method.md §3.12).
 """
@@ -102,22 +103,28 @@ def main():
     data, fs = read_wide(field / "displacement.csv")
     df = fs / args.nperseg
 
-    # ours
-    with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
-        subprocess.run([harness, "modal", "--displacement", str(field / "displacement.csv"),
-                        "--nperseg", str(args.nperseg), "--no-plots", "--out",
-                        str(Path(tmp) / "m")], check=True, capture_output=True)
-        ours_s = time.perf_counter() - t0
-        modes = list(csv.DictReader(open(Path(tmp) / "m" / "modes.csv")))
-        shapes = list(csv.DictReader(open(Path(tmp) / "m" / "shapes.csv")))
+    # ours: SSI-cov (with FDD and EFDD), then SSI-dat (its SSI modes only)
     ours = {}
-    for m in modes:
-        shape = [complex(float(r["re"]), float(r["im"])) for r in shapes
-                 if r["method"] == m["method"] and r["mode"] == m["mode"]]
-        ours.setdefault(m["method"], []).append(
-            (float(m["f_hz"]), float(m["damping"]) if m["damping"] else None, shape))
+    ours_s = {}
+    for ssi in ("cov", "dat"):
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            subprocess.run([harness, "modal", "--displacement", str(field / "displacement.csv"),
+                            "--nperseg", str(args.nperseg), "--ssi", ssi, "--no-plots", "--out",
+                            str(Path(tmp) / "m")], check=True, capture_output=True)
+            ours_s[ssi] = time.perf_counter() - t0
+            modes = list(csv.DictReader(open(Path(tmp) / "m" / "modes.csv")))
+            shapes = list(csv.DictReader(open(Path(tmp) / "m" / "shapes.csv")))
+        for m in modes:
+            if ssi == "dat" and m["method"] != "ssi":
+                continue
+            shape = [complex(float(r["re"]), float(r["im"])) for r in shapes
+                     if r["method"] == m["method"] and r["mode"] == m["mode"]]
+            name = "ssi-dat" if ssi == "dat" else m["method"]
+            ours.setdefault(name, []).append(
+                (float(m["f_hz"]), float(m["damping"]) if m["damping"] else None, shape))
     sel = [f for f, _, _ in ours.get("ssi", [])]
+    sel_dat = [f for f, _, _ in ours.get("ssi-dat", [])]
 
     # pyOMA-2 on the same records
     t0 = time.perf_counter()
@@ -126,12 +133,14 @@ def main():
         "fdd": FDD(name="FDD", nxseg=args.nperseg, method_SD="per", pov=0.5),
         "efdd": EFDD(name="EFDD", nxseg=args.nperseg, method_SD="per", pov=0.5),
         "ssi": SSI(name="SSI", br=30, ordmax=40, method="cov"),
+        "ssi-dat": SSI(name="SSIdat", br=30, ordmax=40, method="dat"),
     }
     setup.add_algorithms(*algs.values())
     setup.run_all()
     setup.mpe("FDD", sel_freq=sel)
     setup.mpe("EFDD", sel_freq=sel)
     setup.mpe("SSI", sel_freq=sel, order_in="find_min")
+    setup.mpe("SSIdat", sel_freq=sel_dat, order_in="find_min")
     peer_s = time.perf_counter() - t0
 
     truth = {}
@@ -140,8 +149,9 @@ def main():
             truth.setdefault(int(r["mode"]), (float(r["f_hz"]), float(r["damping"])))
 
     lines = [f"Same file: {len(data)} samples at {fs:g} Hz, {data.shape[1]} targets; segments of "
-             f"{args.nperseg} (lines {df:.4f} Hz). Wall time: ours {ours_s:.2f} s (the `modal` "
-             f"process, no figures), pyOMA-2 {peer_s:.2f} s (setup, run, mpe).", "",
+             f"{args.nperseg} (lines {df:.4f} Hz). Wall time: ours {ours_s['cov']:.2f} s (the `modal` "
+             f"process with SSI-cov, no figures; {ours_s['dat']:.2f} s with SSI-dat), pyOMA-2 "
+             f"{peer_s:.2f} s (setup, run, mpe of its four methods).", "",
              "| method | mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "
              "| pyOMA-2 damping | ratio | MAC ours/pyOMA-2 |",
              "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
@@ -169,12 +179,12 @@ def main():
                 f"| {mc:.5f} |")
             # FDD's and EFDD's frequencies are compared, not checked: FDD picks a line on the
             # flat top of a damped bell, pyOMA-2's EFDD is biased (docs/method.md §3.12)
-            if method == "ssi" and dl > 1.0:
+            if method.startswith("ssi") and dl > 1.0:
                 failures.append(f"{method} mode {i + 1}: {dl:.2f} lines apart")
             if mc < 0.99:
                 failures.append(f"{method} mode {i + 1}: MAC {mc:.4f}")
-            if method == "ssi" and ratio is not None and abs(ratio - 1) > 0.10:
-                failures.append(f"ssi mode {i + 1}: damping ratio {ratio:.3f}")
+            if method.startswith("ssi") and ratio is not None and abs(ratio - 1) > 0.10:
+                failures.append(f"{method} mode {i + 1}: damping ratio {ratio:.3f}")
     text = "\n".join(lines)
     print(text)
     for f in failures:

@@ -91,6 +91,7 @@ pub const KEYS: &[&str] = &[
     "shake_px",
     "shape_reference",
     "shard",
+    "ssi",
     "ssi_block_rows",
     "ssi_max_order",
     "target_size_mm",

@@ -517,6 +517,16 @@ pub const SETTINGS: &[Setting] = &[
                with at least 8 half-overlapping segments, up to 65536).",
     },
     Setting {
+        key: "ssi",
+        commands: &["modal"],
+        values: Values::Choice(&["cov", "dat"]),
+        words: &[],
+        unit: "",
+        default: DefaultValue::Given("cov"),
+        help: "Stochastic subspace identification from the outputs' correlations (`cov`) or \
+               from the projection of their future on their past (`dat`, data-driven).",
+    },
+    Setting {
         key: "threads",
         commands: &["study"],
         values: Values::Whole {

@@ -1,11 +1,21 @@
-//! `host-harness modal`: output-only modal analysis (FDD, EFDD, SSI-cov) of a displacement
+//! `host-harness modal`: output-only modal analysis (FDD, EFDD, SSI-cov or -dat) of a displacement
 //! file ([`crate::analysis::oma`]): `track`'s `displacement.csv`, or a wide CSV from another
 //! tool.
 
 use super::args::{parse_bands, Bands, WelchArgs};
 use crate::analysis::oma::input::PixelAxis;
+use crate::analysis::oma::ssi::SsiKind;
 use crate::jobs::{ModalInput, ModalSpec, SpecError};
 use std::path::PathBuf;
+
+/// Which SSI.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SsiArg {
+    /// Covariance-driven.
+    Cov,
+    /// Data-driven.
+    Dat,
+}
 
 /// Arguments of `host-harness modal`.
 #[derive(Debug, clap::Args)]
@@ -36,10 +46,14 @@ pub struct Args {
     /// Lowest frequency analysed, Hz (default: 0.5 Hz or two spectral lines, the higher).
     #[arg(long, value_name = "HZ")]
     pub f_min_hz: Option<f64>,
-    /// SSI-cov: block rows of the Toeplitz matrix (default 30, fewer for short records).
+    /// `$ssi`.
+    #[arg(long, value_enum, default_value = super::args::given("ssi"), help = super::args::help("ssi"))]
+    pub ssi: SsiArg,
+    /// SSI: block rows of the Toeplitz matrix, or of the past and of the future in the
+    /// Hankel matrix (default 30, fewer for short records).
     #[arg(long, value_name = "N", value_parser = super::args::int_range(2..=500))]
     pub ssi_block_rows: Option<usize>,
-    /// SSI-cov: highest model order (even; default 40).
+    /// SSI: highest model order (even; default 40).
     #[arg(long, value_name = "N", value_parser = super::args::int_range(2..=400))]
     pub ssi_max_order: Option<usize>,
     /// Output directory (created).
@@ -67,6 +81,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bands: args.bands.as_ref().map(Bands::pairs),
         prominence_db: args.prominence_db,
         f_min_hz: args.f_min_hz,
+        ssi: match args.ssi {
+            SsiArg::Cov => SsiKind::Cov,
+            SsiArg::Dat => SsiKind::Dat,
+        },
         ssi_block_rows: args.ssi_block_rows,
         ssi_max_order: args.ssi_max_order,
         out: args.out,

@@ -24,6 +24,8 @@ pub struct ModalInput {
     pub prominence_db: f64,
     /// `$f_min_hz`: the lowest frequency searched.
     pub f_min_hz: Option<f64>,
+    /// `$ssi`: covariance- or data-driven.
+    pub ssi: crate::analysis::oma::ssi::SsiKind,
     /// `$ssi_block_rows`.
     pub ssi_block_rows: Option<usize>,
     /// `$ssi_max_order`.
@@ -80,6 +82,7 @@ impl ModalSpec {
             super::bands_below_nyquist(b, fs_hz, "the record's")?;
             s.bands = b.clone();
         }
+        s.ssi.kind = input.ssi;
         if let Some(i) = input.ssi_block_rows {
             if !(2..=500).contains(&i) {
                 return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));

@@ -220,6 +220,7 @@ pub fn rule(decays: &[Decay], fs_hz: f64, f_min_hz: f64) -> SsiRule {
         mac_min: 0.98,
         zeta_max: 0.3,
         f_range_hz: (f_min_hz, fs_hz / 2.0),
+        kind: ssi::SsiKind::Cov,
     }
 }
 

@@ -17,6 +17,7 @@ pub mod decay;
 pub mod fdd;
 pub mod modes;
 pub mod ssi;
+pub mod ssi_dat;
 pub mod uncertainty;
 
 use cluster::{ClusterRule, SsiMode};
@@ -128,6 +129,7 @@ impl OmaSettings {
                 mac_min: 0.98,
                 zeta_max: 0.2,
                 f_range_hz: ((0.5f64).max(2.0 * df), fs_hz / 2.0),
+                kind: ssi::SsiKind::Cov,
             },
             cluster: ClusterRule::default(),
             groups: uncertainty::GROUPS,

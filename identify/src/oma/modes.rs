@@ -73,6 +73,7 @@ pub fn ssi_modes(
     rejected: &mut Vec<String>,
 ) -> anyhow::Result<SsiFound> {
     let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
+    let kind = s.ssi.kind.label();
     let (mut kept, mut dropped) = cluster::cluster(&poles, s.cluster);
     let lone = match s.bands.is_empty() {
         true => keep_lone(svd, s, &mut kept, &mut dropped),
@@ -80,7 +81,7 @@ pub fn ssi_modes(
     };
     for c in cluster::cluster(&cut, s.cluster).0 {
         notes.push(format!(
-            "SSI-cov: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
+            "{kind}: a stable mode at {:.4} Hz (damping {:.4}, {} stable poles) lies below the \
              lowest frequency analysed, {:.4} Hz (0.5 Hz, or two spectral lines of {} samples, \
              whichever is higher; or $f_min_hz): not reported; a longer $nperseg or a lower \
              $f_min_hz takes it in",
@@ -124,7 +125,7 @@ pub fn ssi_modes(
             {
                 Some(c) => modes.push(mode(b + 1, Some(b), c)),
                 None => notes.push(format!(
-                    "SSI-cov: no stable mode in band {}-{} Hz",
+                    "{kind}: no stable mode in band {}-{} Hz",
                     band.0, band.1
                 )),
             }
@@ -291,6 +292,7 @@ pub fn automatic_peaks(
     rejected: &mut Vec<String>,
 ) -> Vec<Peak> {
     let lines = svd.freq_hz.len();
+    let kind = s.ssi.kind.label();
     let f = |l: usize| svd.freq_hz[l];
     let mut candidates = fdd::pick_peaks(svd, s.peaks);
     candidates.sort_by(|a, b| svd.s[b.0][0].total_cmp(&svd.s[a.0][0]));
@@ -328,15 +330,15 @@ pub fn automatic_peaks(
         let agree = agreeing(ssi, &reference, (f(c), f(d)));
         if agree.is_none() && prominence < STRONG_PEAK_DB {
             rejected.push(format!(
-                "{name}: no SSI-cov mode within its half-power band ({:.4}-{:.4} Hz, a line \
+                "{name}: no {kind} mode within its half-power band ({:.4}-{:.4} Hz, a line \
                  wider either side) with a like shape (MAC >= {AGREE_MAC}); a peak of less \
-                 than {STRONG_PEAK_DB} dB is taken only with SSI-cov's support",
+                 than {STRONG_PEAK_DB} dB is taken only with {kind}'s support",
                 f(c),
                 f(d)
             ));
             continue;
         }
-        let evidence = peak_evidence(prominence, values.len(), agree);
+        let evidence = peak_evidence(prominence, values.len(), agree, kind);
         taken.push(Taken {
             peak: Peak {
                 line: l,
@@ -354,16 +356,22 @@ pub fn automatic_peaks(
     peaks
 }
 
-/// A peak's evidence: its prominence, its bell's lines and the SSI-cov mode that agrees.
-fn peak_evidence(prominence: f64, lines: usize, agree: Option<(&OmaMode, f64)>) -> String {
+/// A peak's evidence: its prominence, its bell's lines and the SSI mode (of the kind `ssi`
+/// names) that agrees.
+fn peak_evidence(
+    prominence: f64,
+    lines: usize,
+    agree: Option<(&OmaMode, f64)>,
+    ssi: &str,
+) -> String {
     match agree {
         Some((m, c)) => format!(
-            "first singular value, {prominence:.1} dB, bell of {lines} lines; SSI-cov's {:.4} Hz \
+            "first singular value, {prominence:.1} dB, bell of {lines} lines; {ssi}'s {:.4} Hz \
              mode agrees (MAC {c:.3})",
             m.f_hz
         ),
         None => format!(
-            "first singular value, {prominence:.1} dB, bell of {lines} lines; no SSI-cov mode \
+            "first singular value, {prominence:.1} dB, bell of {lines} lines; no {ssi} mode \
              agrees"
         ),
     }
@@ -474,9 +482,10 @@ fn rescue(svd: &Svd, s: &OmaSettings, ssi: &[OmaMode], taken: &mut Vec<Taken>) {
                 reference,
                 value: values[top],
                 evidence: format!(
-                    "{which} singular value, bell of {} lines, found from SSI-cov's {:.4} Hz mode \
+                    "{which} singular value, bell of {} lines, found from {}'s {:.4} Hz mode \
                      (MAC {c:.3}): no peak of 6 dB stood for it",
                     values.len(),
+                    s.ssi.kind.label(),
                     m.f_hz
                 ),
             },

@@ -3,6 +3,7 @@
 //! a state-space model per order, the model's poles and shapes, and poles stable from one order
 //! to the next (clustered into modes by [`super::cluster`]).
 
+use super::ssi_dat::{centred, grams, projection, HankelGrams};
 use crate::modal::mac;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
@@ -25,6 +26,28 @@ pub struct SsiRule {
     pub zeta_max: f64,
     /// Frequency range of the poles kept, Hz.
     pub f_range_hz: (f64, f64),
+    /// Covariance- or data-driven.
+    pub kind: SsiKind,
+}
+
+/// Which matrix of the records SSI takes its model's column space from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SsiKind {
+    /// SSI-cov: the block Toeplitz matrix of the output correlations.
+    #[default]
+    Cov,
+    /// SSI-dat: the projection of the future outputs on the past ones ([`super::ssi_dat`]).
+    Dat,
+}
+
+impl SsiKind {
+    /// Its name in the report (`SSI-cov`, `SSI-dat`).
+    pub fn label(self) -> &'static str {
+        match self {
+            SsiKind::Cov => "SSI-cov",
+            SsiKind::Dat => "SSI-dat",
+        }
+    }
 }
 
 impl SsiRule {
@@ -100,14 +123,49 @@ impl Pole {
 /// The poles of every order of the records `channels` (mean removed here) sampled at
 /// `fs_hz`, each marked stable or not; then the poles that only the lower end of
 /// `rule.f_range_hz` left out (physical, below it), marked stable among themselves: what the
-/// range cut, for the report.
+/// range cut, for the report. SSI-cov or SSI-dat as `rule.kind` says.
 pub fn poles(
     channels: &[Vec<f64>],
     fs_hz: f64,
     rule: SsiRule,
 ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
-    let sums = correlation_sums(channels, rule.block_rows, 1)?;
-    poles_of(&sums.all(), fs_hz, rule)
+    Parts::of(channels, rule, 1)?.poles(None, fs_hz, rule)
+}
+
+/// What SSI's matrix is made of, per block of the record, for either kind: the whole record's
+/// poles, or those of the record without one block (the jackknife).
+#[derive(Debug, Clone)]
+pub enum Parts {
+    /// SSI-cov's correlation sums.
+    Cov(CorrelationSums),
+    /// SSI-dat's Hankel Gram matrices.
+    Dat(HankelGrams),
+}
+
+impl Parts {
+    /// The parts of `channels` in `blocks` blocks for `rule` (its kind and block rows).
+    pub fn of(channels: &[Vec<f64>], rule: SsiRule, blocks: usize) -> anyhow::Result<Parts> {
+        Ok(match rule.kind {
+            SsiKind::Cov => Parts::Cov(correlation_sums(channels, rule.block_rows, blocks)?),
+            SsiKind::Dat => Parts::Dat(grams(channels, rule.block_rows, blocks)?),
+        })
+    }
+
+    /// The poles of every order of the record without block `left_out` (all with `None`).
+    pub fn poles(
+        &self,
+        left_out: Option<usize>,
+        fs_hz: f64,
+        rule: SsiRule,
+    ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+        match self {
+            Parts::Cov(sums) => poles_of(&sums.without(left_out), fs_hz, rule),
+            Parts::Dat(grams) => {
+                let l21 = projection(&grams.without(left_out), grams.block_rows, grams.channels)?;
+                poles_from(l21, grams.channels, fs_hz, rule)
+            }
+        }
+    }
 }
 
 /// The output correlations' sums `sum_t y(t + l) y(t)^T` (means removed) for the lags
@@ -159,22 +217,8 @@ pub fn correlation_sums(
     block_rows: usize,
     blocks: usize,
 ) -> anyhow::Result<CorrelationSums> {
-    let k = channels.len();
-    let n = channels.first().map_or(0, Vec::len);
-    let i = block_rows;
-    if k == 0 || i < 2 || n < 4 * i {
-        return Err(vibcam_readers::bad_input(format!(
-            "SSI-cov: {n} samples are too few for {i} block rows (at least {})",
-            4 * i
-        )));
-    }
-    let y: Vec<Vec<f64>> = channels
-        .iter()
-        .map(|c| {
-            let m = c.iter().sum::<f64>() / n as f64;
-            c.iter().map(|v| v - m).collect()
-        })
-        .collect();
+    let y = centred(channels, block_rows, "SSI-cov")?;
+    let (k, n, i) = (y.len(), y[0].len(), block_rows);
     let lags = 2 * i;
     let blocks = blocks.max(1);
     let edge = |b: usize| b * n / blocks;
@@ -219,8 +263,21 @@ pub fn poles_of(
             t.view_mut((a * k, b * k), (k, k)).copy_from(&r[lag]);
         }
     }
+    poles_from(t, k, fs_hz, rule)
+}
+
+/// The poles of every order from `t`, a matrix of `i` block rows of `k` channels whose column
+/// space is the observability matrix's (SSI-cov's block Toeplitz matrix, SSI-dat's projection
+/// factor), for records sampled at `fs_hz`, as [`poles`] returns them.
+pub fn poles_from(
+    t: DMatrix<f64>,
+    k: usize,
+    fs_hz: f64,
+    rule: SsiRule,
+) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+    let i = t.nrows() / k.max(1);
     let svd = nalgebra::SVD::try_new(t, true, false, f64::EPSILON, super::MAX_ITERATIONS)
-        .ok_or_else(|| not_converged("the block Toeplitz matrix's SVD", 0))?;
+        .ok_or_else(|| not_converged("the block matrix's SVD", 0))?;
     let (u, sv) = (
         svd.u
             .ok_or_else(|| anyhow::anyhow!("internal: SVD without U"))?,
@@ -291,7 +348,7 @@ fn not_converged(what: &str, order: usize) -> anyhow::Error {
         String::new()
     };
     anyhow::anyhow!(
-        "SSI-cov: {what}{at} did not converge in {} iterations (degenerate or non-finite \
+        "SSI: {what}{at} did not converge in {} iterations (degenerate or non-finite \
          values)",
         super::MAX_ITERATIONS
     )

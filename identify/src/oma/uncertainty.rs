@@ -16,7 +16,7 @@ use super::cluster::{self, ClusterRule};
 use super::csd::{self, Csd};
 use super::fdd::{self, Svd};
 use super::modes::Peak;
-use super::ssi::{self, CorrelationSums};
+use super::ssi;
 use super::{Method, OmaMode, OmaSettings};
 use crate::modal::{mac, normalise_shape};
 
@@ -416,11 +416,10 @@ fn ssi_replicates(
     if ssi.is_empty() {
         return Ok(None);
     }
-    let sums: CorrelationSums = ssi::correlation_sums(channels, s.ssi.block_rows, groups)?;
+    let parts = ssi::Parts::of(channels, s.ssi, groups)?;
     let mut out = Vec::with_capacity(groups);
     for g in 0..groups {
-        let r = sums.without(Some(g));
-        let (poles, _) = ssi::poles_of(&r, s.fs_hz, s.ssi)?;
+        let (poles, _) = parts.poles(Some(g), s.fs_hz, s.ssi)?;
         let (kept, _) = cluster::cluster(&poles, s.cluster);
         let small = match lone.is_empty() {
             true => Vec::new(),

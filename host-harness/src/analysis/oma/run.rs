@@ -133,7 +133,7 @@ pub fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crat
         .collect();
     figures.push(crate::plots::stabilisation_figure(
         "stabilisation",
-        "SSI-cov stabilisation diagram",
+        &format!("{} stabilisation diagram", settings.ssi.kind.label()),
         &poles,
         &ssi,
         settings.fs_hz / 2.0,
@@ -437,10 +437,11 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
     let c = &s.cluster;
     let _ = writeln!(
         o,
-        "SSI-cov: {} block rows, orders 2 to {}; stable: frequency within {} %, damping within \
+        "{}: {} block rows, orders 2 to {}; stable: frequency within {} %, damping within \
          {} % (of {} below that), MAC >= {}; stable poles clustered (average linkage, distance \
          df/f + 1 - MAC up to {}, one pole per order); a mode from {} poles, median MPC >= {}, \
          MPD <= {} deg, and no fuller cluster of its shape nearby{}",
+        s.ssi.kind.label(),
         s.ssi.block_rows,
         s.ssi.max_order,
         100.0 * s.ssi.df_max,
