@@ -185,12 +185,18 @@ def main():
                 failures.append(f"{method} mode {i + 1}: MAC {mc:.4f}")
             if method.startswith("ssi") and ratio is not None and abs(ratio - 1) > 0.10:
                 failures.append(f"{method} mode {i + 1}: damping ratio {ratio:.3f}")
+    finish(lines, failures, out_md, args.check)
+
+
+def finish(lines, failures, md, check):
+    """Prints the table `lines` and each failure, writes the table to `md`; exit status 1 when
+    `check` and anything failed."""
     text = "\n".join(lines)
     print(text)
     for f in failures:
         print("FAIL:", f)
-    out_md.write_text(text + "\n")
-    if args.check and failures:
+    md.write_text(text + "\n")
+    if check and failures:
         sys.exit(1)
 
 

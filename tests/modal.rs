@@ -499,3 +499,84 @@ fn the_hosts_fdd_and_the_cameras_agree_on_one_record() {
         assert!(mac > 0.99999, "mode at {} Hz: MAC {mac}", m.f_hz);
     }
 }
+
+/// Two setups of the shear frame (two records of other seeds): setup 1 sees storeys 1-3,
+/// setup 2 storeys 4, 1 and 5 (storey 1, its second column, the reference): merged by PoSER,
+/// the five storeys' shapes are the true ones and the setups' parts are in `setups.csv`; a
+/// setup without references, a reference that is not in its file and a setup with another
+/// count of references are refused naming the flag.
+#[test]
+fn two_setups_sharing_a_reference_give_the_global_shapes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for (seed, keep) in [(21, [1, 2, 3]), (22, [4, 1, 5])] {
+        let rec = tmp.path().join(format!("r{seed}"));
+        assert_ok(&harness(&words(
+            "simulate-field --minutes 5 --seed {} --out {}",
+            &[&seed.to_string(), rec.to_str().unwrap()],
+        )));
+        let text = std::fs::read_to_string(rec.join("displacement.csv")).unwrap();
+        let mut out = String::from("t_s,1,2,3\n");
+        for l in text.lines().skip(1) {
+            let c: Vec<&str> = l.split(',').collect();
+            out.push_str(&format!(
+                "{},{},{},{}\n",
+                c[0], c[keep[0]], c[keep[1]], c[keep[2]]
+            ));
+        }
+        let f = tmp.path().join(format!("s{seed}.csv"));
+        std::fs::write(&f, out).unwrap();
+        files.push(f);
+    }
+    let (s1, s2) = (files[0].to_str().unwrap(), files[1].to_str().unwrap());
+    let out = tmp.path().join("m");
+    let setup2 = format!("{s2}:2");
+    assert_ok(&harness(&words(
+        "modal --displacement {} --references 1 --setup {} --no-plots --out {}",
+        &[s1, &setup2, out.to_str().unwrap()],
+    )));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains("2 setups merged by PoSER"), "{report}");
+    assert!(
+        report.contains("4 = setup 2 target 1; 5 = setup 2 target 3"),
+        "{report}"
+    );
+    let truth = truth(&tmp.path().join("r21"));
+    let found: Vec<_> = modes(&out).into_iter().filter(|m| m.0 == "ssi").collect();
+    assert_eq!(found.len(), 5, "{found:?}");
+    let shapes = std::fs::read_to_string(out.join("shapes.csv")).unwrap();
+    for (m, (f, _, shape)) in found.iter().zip(&truth) {
+        assert!((m.2 - f).abs() < 0.005 * f, "mode {}: {} vs {f}", m.1, m.2);
+        let got: Vec<f64> = shapes
+            .lines()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|c| c[7] == "ssi" && c[0] == m.1.to_string())
+            .map(|c| c[4].parse().unwrap())
+            .collect();
+        assert_eq!(got.len(), 5);
+        let ab: f64 = got.iter().zip(shape).map(|(a, b)| a * b).sum();
+        let mac = ab * ab
+            / (got.iter().map(|a| a * a).sum::<f64>() * shape.iter().map(|b| b * b).sum::<f64>());
+        assert!(mac >= 0.99, "mode {}: MAC {mac}", m.1);
+    }
+    let parts = std::fs::read_to_string(out.join("setups.csv")).unwrap();
+    assert!(parts.starts_with("method,mode,setup,f_hz,damping,scale_re,scale_im,reference_mac\n"));
+    assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 10);
+    // refusals
+    let o = harness(&words(
+        "modal --displacement {} --setup {} --out {}",
+        &[s1, &setup2, tmp.path().join("x1").to_str().unwrap()],
+    ));
+    assert_exit_2(&o, "--setup needs --references");
+    let o = harness(&words(
+        "modal --displacement {} --references 7 --setup {} --out {}",
+        &[s1, &setup2, tmp.path().join("x2").to_str().unwrap()],
+    ));
+    assert_exit_2(&o, "--references: target 7 of");
+    let two = format!("{s2}:2,1");
+    let o = harness(&words(
+        "modal --displacement {} --references 1 --setup {} --out {}",
+        &[s1, &two, tmp.path().join("x3").to_str().unwrap()],
+    ));
+    assert_exit_2(&o, "2 reference targets, --references has 1");
+}

@@ -90,6 +90,7 @@ pub const KEYS: &[&str] = &[
     "shake_hz",
     "shake_px",
     "shape_reference",
+    "setup",
     "shard",
     "ssi",
     "ssi_block_rows",

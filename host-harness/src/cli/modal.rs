@@ -8,6 +8,33 @@ use crate::analysis::oma::ssi::SsiKind;
 use crate::jobs::{ModalInput, ModalSpec, SpecError};
 use std::path::PathBuf;
 
+/// Target numbers (1-based), as given.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Targets(pub Vec<usize>);
+
+/// `T,...`: target numbers, each at least 1.
+fn parse_targets(s: &str) -> Result<Targets, String> {
+    let out: Vec<usize> = s
+        .split(',')
+        .map(|t| match t.trim().parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(n),
+            _ => Err(format!("`{t}` is not a target number (1, 2, ...)")),
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(Targets(out))
+}
+
+/// `FILE:T,...`: a setup's file and its reference targets (split at the last `:`).
+fn parse_setup(s: &str) -> Result<(PathBuf, Targets), String> {
+    let (file, targets) = s
+        .rsplit_once(':')
+        .ok_or_else(|| format!("`{s}`: FILE.csv:T,... (the file, then its reference targets)"))?;
+    if file.is_empty() {
+        return Err(format!("`{s}`: no file before `:`"));
+    }
+    Ok((PathBuf::from(file), parse_targets(targets)?))
+}
+
 /// Which SSI.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SsiArg {
@@ -56,6 +83,16 @@ pub struct Args {
     /// SSI: highest model order (even; default 40).
     #[arg(long, value_name = "N", value_parser = super::args::int_range(2..=400))]
     pub ssi_max_order: Option<usize>,
+    /// Several setups: the targets of --displacement that every setup shares (the
+    /// references), in a common order, e.g. `1,2`.
+    #[arg(long, value_name = "T,...", value_parser = parse_targets)]
+    pub references: Option<Targets>,
+    /// Another setup of the same structure: its displacement file and its reference targets
+    /// in --references' order (`FILE.csv:T,...`); repeat for each. Each setup is analysed
+    /// alone and the modes merged by PoSER into global shapes (outputs on the global points,
+    /// `setups.csv` each setup's part).
+    #[arg(long, value_name = "FILE.csv:T,...", value_parser = parse_setup)]
+    pub setup: Vec<(PathBuf, Targets)>,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "modal")]
     pub out: PathBuf,
@@ -87,6 +124,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         ssi_block_rows: args.ssi_block_rows,
         ssi_max_order: args.ssi_max_order,
+        references: args.references.map(|t| t.0),
+        setups: args.setup.into_iter().map(|(p, t)| (p, t.0)).collect(),
         out: args.out,
         force: args.force,
         plots: !args.no_plots,

@@ -2,6 +2,7 @@
 
 use super::{SpecError, SpecResult};
 use crate::analysis::oma::input::{self, PixelAxis, Records};
+use crate::analysis::oma::multi_setup::SetupRecords;
 use crate::analysis::oma::run::Output;
 use crate::analysis::oma::OmaSettings;
 use crate::analysis::WelchSettings;
@@ -30,6 +31,11 @@ pub struct ModalInput {
     pub ssi_block_rows: Option<usize>,
     /// `$ssi_max_order`.
     pub ssi_max_order: Option<usize>,
+    /// `$references`: the first file's targets that every setup shares (with `$setup`).
+    pub references: Option<Vec<usize>>,
+    /// `$setup`: the other setups, each a file and its reference targets (in
+    /// `$references`' order).
+    pub setups: Vec<(PathBuf, Vec<usize>)>,
     /// Output directory.
     pub out: PathBuf,
     /// Replace an earlier `modal` output there.
@@ -44,68 +50,163 @@ pub struct ModalSpec {
     input: ModalInput,
     records: Records,
     settings: OmaSettings,
+    /// With `$setup`: every setup, the first file's first.
+    others: Vec<SetupRecords>,
+}
+
+/// The settings of `records` (read from `file`) as `input` gives them, checked against it.
+fn settings_for(
+    input: &ModalInput,
+    records: &Records,
+    file: &std::path::Path,
+) -> SpecResult<OmaSettings> {
+    let fs_hz = records.fs_hz;
+    let n = records.channels.first().map_or(0, Vec::len);
+    let record = file.display().to_string();
+    let mut s =
+        crate::analysis::oma::segment_settings(fs_hz, &records.channels, &input.welch, &record)
+            .map_err(SpecError::Input)?;
+    let df = fs_hz / s.csd.nfft as f64;
+    if let Some(f) = input.f_min_hz {
+        if !(f.is_finite() && f >= 0.0 && f < fs_hz / 2.0) {
+            return Err(SpecError::setting(format!(
+                "$f_min_hz {f} must be between 0 and the Nyquist frequency ({} Hz) of {record}",
+                fs_hz / 2.0
+            )));
+        }
+        s.peaks.f_min_hz = f.max(df);
+        s.ssi.f_range_hz.0 = f;
+    }
+    let p = input.prominence_db;
+    if !(p.is_finite() && p >= 0.0) {
+        return Err(SpecError::setting(format!(
+            "$prominence_db must be >= 0, got {p}"
+        )));
+    }
+    s.peaks.prominence_db = p;
+    if let Some(b) = &input.bands {
+        super::bands_below_nyquist(b, fs_hz, "the record's")?;
+        s.bands = b.clone();
+    }
+    s.ssi.kind = input.ssi;
+    if let Some(i) = input.ssi_block_rows {
+        if !(2..=500).contains(&i) {
+            return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));
+        }
+        s.ssi.block_rows = i;
+    }
+    if let Some(m) = input.ssi_max_order {
+        if !(2..=400).contains(&m) {
+            return Err(SpecError::setting(format!("$ssi_max_order {m}: 2 to 400")));
+        }
+        s.ssi.max_order = m;
+    }
+    if n < 4 * s.ssi.block_rows {
+        return Err(SpecError::setting(format!(
+            "$ssi_block_rows {}: {record} has {n} samples, at least {} are needed",
+            s.ssi.block_rows,
+            4 * s.ssi.block_rows
+        )));
+    }
+    Ok(s)
+}
+
+/// The channels of `records` (read from `file`) that are the reference targets `refs`.
+fn reference_channels(records: &Records, refs: &[usize], file: &str) -> SpecResult<Vec<usize>> {
+    let mut out = Vec::with_capacity(refs.len());
+    for &t in refs {
+        let Some(c) = records.targets.iter().position(|(n, _)| *n == t) else {
+            let why = records
+                .left_out
+                .iter()
+                .find(|(n, _)| *n == t)
+                .map_or("not in the file".to_string(), |(_, w)| {
+                    format!("left out: {w}")
+                });
+            return Err(SpecError::setting(format!(
+                "$references: target {t} of {file}: {why}"
+            )));
+        };
+        if out.contains(&c) {
+            return Err(SpecError::setting(format!(
+                "$references: target {t} of {file} named twice"
+            )));
+        }
+        out.push(c);
+    }
+    Ok(out)
+}
+
+/// `$setup` and `$references` go together.
+fn setup_flags(input: &ModalInput) -> SpecResult<()> {
+    match (input.setups.is_empty(), input.references.is_some()) {
+        (true, true) => Err(SpecError::setting(
+            "$references names the reference targets of several setups: give the other setups \
+             with $setup",
+        )),
+        (false, false) => Err(SpecError::setting(
+            "$setup needs $references: the targets of the first file that every setup shares",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Every setup (the first file's first) when `$setup` is given: read, their settings
+/// resolved, their references found; none without it.
+fn setups(input: &ModalInput, first: &Records) -> SpecResult<Vec<SetupRecords>> {
+    let Some(refs) = &input.references else {
+        return Ok(Vec::new());
+    };
+    let name = input.displacement.display().to_string();
+    let mut out = vec![SetupRecords {
+        records: first.clone(),
+        settings: settings_for(input, first, &input.displacement)?,
+        references: reference_channels(first, refs, &name)?,
+        file: name,
+    }];
+    for (path, theirs) in &input.setups {
+        let file = path.display().to_string();
+        if theirs.len() != refs.len() {
+            return Err(SpecError::setting(format!(
+                "$setup {file}: {} reference targets, $references has {}",
+                theirs.len(),
+                refs.len()
+            )));
+        }
+        let records = input::read(path, input.axis, input.fps).map_err(SpecError::Input)?;
+        if records.unit != first.unit {
+            return Err(SpecError::setting(format!(
+                "$setup {file}: values in {}, the first file's in {}",
+                records.unit, first.unit
+            )));
+        }
+        out.push(SetupRecords {
+            settings: settings_for(input, &records, path)?,
+            references: reference_channels(&records, theirs, &file)?,
+            records,
+            file,
+        });
+    }
+    Ok(out)
 }
 
 impl ModalSpec {
-    /// Reads the displacement file and checks the settings against it.
+    /// Reads the displacement file (and every other setup's) and checks the settings against
+    /// it.
     pub fn new(input: ModalInput) -> SpecResult<Self> {
         if let Some(b) = &input.bands {
             super::bands_ordered(b)?;
         }
+        setup_flags(&input)?;
         let records =
             input::read(&input.displacement, input.axis, input.fps).map_err(SpecError::Input)?;
-        let fs_hz = records.fs_hz;
-        let n = records.channels.first().map_or(0, Vec::len);
-        let record = input.displacement.display().to_string();
-        let mut s =
-            crate::analysis::oma::segment_settings(fs_hz, &records.channels, &input.welch, &record)
-                .map_err(SpecError::Input)?;
-        let df = fs_hz / s.csd.nfft as f64;
-        if let Some(f) = input.f_min_hz {
-            if !(f.is_finite() && f >= 0.0 && f < fs_hz / 2.0) {
-                return Err(SpecError::setting(format!(
-                    "$f_min_hz {f} must be between 0 and the Nyquist frequency ({} Hz)",
-                    fs_hz / 2.0
-                )));
-            }
-            s.peaks.f_min_hz = f.max(df);
-            s.ssi.f_range_hz.0 = f;
-        }
-        let p = input.prominence_db;
-        if !(p.is_finite() && p >= 0.0) {
-            return Err(SpecError::setting(format!(
-                "$prominence_db must be >= 0, got {p}"
-            )));
-        }
-        s.peaks.prominence_db = p;
-        if let Some(b) = &input.bands {
-            super::bands_below_nyquist(b, fs_hz, "the record's")?;
-            s.bands = b.clone();
-        }
-        s.ssi.kind = input.ssi;
-        if let Some(i) = input.ssi_block_rows {
-            if !(2..=500).contains(&i) {
-                return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));
-            }
-            s.ssi.block_rows = i;
-        }
-        if let Some(m) = input.ssi_max_order {
-            if !(2..=400).contains(&m) {
-                return Err(SpecError::setting(format!("$ssi_max_order {m}: 2 to 400")));
-            }
-            s.ssi.max_order = m;
-        }
-        if n < 4 * s.ssi.block_rows {
-            return Err(SpecError::setting(format!(
-                "$ssi_block_rows {}: the record has {n} samples, at least {} are needed",
-                s.ssi.block_rows,
-                4 * s.ssi.block_rows
-            )));
-        }
+        let settings = settings_for(&input, &records, &input.displacement)?;
+        let others = setups(&input, &records)?;
         Ok(ModalSpec {
             input,
             records,
-            settings: s,
+            settings,
+            others,
         })
     }
 
@@ -122,22 +223,24 @@ impl ModalSpec {
     /// Runs the job: the report, and whether it succeeded.
     pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
         let i = &self.input;
-        crate::analysis::oma::run::run(
-            &self.records,
-            &self.settings,
-            &Output {
-                out: &i.out,
-                force: i.force,
-                command: "modal",
-                inputs: vec![i.displacement.clone()],
-                plots: i.plots,
-                along_x: i.axis == PixelAxis::X,
-                preamble: format!("input: {}\n", i.displacement.display()),
-                extra: Vec::new(),
-                frame: None,
-                view: None,
-                scrub: None,
-            },
-        )
+        let mut inputs = vec![i.displacement.clone()];
+        inputs.extend(i.setups.iter().map(|(p, _)| p.clone()));
+        let output = Output {
+            out: &i.out,
+            force: i.force,
+            command: "modal",
+            inputs,
+            plots: i.plots,
+            along_x: i.axis == PixelAxis::X,
+            preamble: format!("input: {}\n", i.displacement.display()),
+            extra: Vec::new(),
+            frame: None,
+            view: None,
+            scrub: None,
+        };
+        if !self.others.is_empty() {
+            return crate::analysis::oma::multi_setup::run(&self.others, &output);
+        }
+        crate::analysis::oma::run::run(&self.records, &self.settings, &output)
     }
 }

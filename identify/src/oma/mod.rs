@@ -16,6 +16,7 @@ pub mod csd;
 pub mod decay;
 pub mod fdd;
 pub mod modes;
+pub mod setups;
 pub mod ssi;
 pub mod ssi_dat;
 pub mod uncertainty;

@@ -87,6 +87,46 @@ pub fn shapes_csv(rows: &[OmaShapeRow]) -> Vec<u8> {
     s.into_bytes()
 }
 
+/// One setup's part in one merged mode of several setups.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OmaSetupRow {
+    /// `fdd`, `efdd`, `ssi` or `decay`.
+    pub method: &'static str,
+    /// The merged mode's number.
+    pub mode: usize,
+    /// The setup, 1-based.
+    pub setup: usize,
+    /// Its frequency, Hz.
+    pub f_hz: f64,
+    /// Its damping ratio, where its method gives one.
+    pub damping: Option<f64>,
+    /// The factor its shape was scaled by onto the first setup's at the references.
+    pub scale: Complex64,
+    /// MAC at the references with the first setup's (two references or more).
+    pub reference_mac: Option<f64>,
+}
+
+/// `setups.csv`: `method,mode,setup,f_hz,damping,scale_re,scale_im,reference_mac`, one row per
+/// merged mode and setup.
+pub fn setups_csv(rows: &[OmaSetupRow]) -> Vec<u8> {
+    let mut s = String::from("method,mode,setup,f_hz,damping,scale_re,scale_im,reference_mac\n");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{}",
+            r.method,
+            r.mode,
+            r.setup,
+            r.f_hz,
+            opt(r.damping),
+            r.scale.re,
+            r.scale.im,
+            opt(r.reference_mac)
+        );
+    }
+    s.into_bytes()
+}
+
 /// `svd.csv`: `freq_hz,s1,...,sK`, one row per line of the cross-spectral matrix.
 pub fn svd_csv(freq_hz: &[f64], s: &[Vec<f64>]) -> Vec<u8> {
     let k = s.first().map_or(0, Vec::len);

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Several setups merged by PoSER: ours (`host-harness modal --references --setup`) beside
+pyOMA-2's `MultiSetup_PoSER` on the same files, and both beside the truth. Run on demand (and
+in CI with --check); the table goes to docs/validation.md §10.
+
+    python3 scripts/peer_multisetup.py OUT --harness target/release/host-harness [--check]
+
+Three `simulate-field` records of the five-storey shear frame (seeds 11, 12, 13; 10 minutes;
+3 % noise) play three setups of one structure: each keeps storeys 1 and 2 (the references)
+and one other (setup 1 storey 3, setup 2 storey 4 in the first column, setup 3 storey 5 in the
+last), so that each setup's reference columns are elsewhere in its file. Both sides run
+SSI-cov with 30 block rows and orders up to 40; pyOMA-2's parameters are taken at our merged
+SSI frequencies (`mpe` with `sel_freq`, `order_in="find_min"`) and merged by its PoSER. The
+global points of both are the references, then each setup's other point (storeys 1 to 5).
+Writes OUT/s1.csv, s2.csv, s3.csv, truth.csv and peer-multisetup.md (replaced only with
+--force). Exit status 1 with --check when a merged SSI mode of ours is more than one line from
+pyOMA-2's or the truth's, or a global shape's MAC with the truth is under 0.99.
+"""
+import argparse
+import csv
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from peer_oma import ensure_venv, finish, mac, read_wide
+
+ONE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                "RAYON_NUM_THREADS")}
+# per setup: the storeys kept (1-based), the references (storeys 1 and 2) among them
+SETUPS = [[1, 2, 3], [4, 2, 1], [2, 1, 5]]
+NPERSEG = 2048
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", help="directory to write (created)")
+    ap.add_argument("--harness", default="target/release/host-harness")
+    ap.add_argument("--check", action="store_true", help="exit 1 when a check fails")
+    ap.add_argument("--force", action="store_true", help="replace the files of an earlier run")
+    args = ap.parse_args()
+    out = Path(args.out)
+    md = out / "peer-multisetup.md"
+    if md.exists() and not args.force:
+        sys.exit(f"{md} exists: --force to replace it")
+    ensure_venv(__file__, ONE_THREAD)
+    import logging
+    import warnings
+    import numpy as np
+    logging.disable(logging.CRITICAL)
+    warnings.filterwarnings("ignore")
+    from pyoma2.algorithms import SSI
+    from pyoma2.setup import MultiSetup_PoSER, SingleSetup
+
+    harness = str(Path(args.harness).resolve())
+    out.mkdir(parents=True, exist_ok=True)
+    files, refs = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, keep in enumerate(SETUPS):
+            rec = Path(tmp) / f"r{i}"
+            subprocess.run([harness, "simulate-field", "--minutes", "10", "--noise", "0.03",
+                            "--seed", str(11 + i), "--out", str(rec)], check=True,
+                           capture_output=True)
+            rows = list(csv.reader(open(rec / "displacement.csv")))
+            cols = [0] + keep
+            f = out / f"s{i + 1}.csv"
+            with open(f, "w") as w:
+                w.write("t_s," + ",".join(str(c + 1) for c in range(len(keep))) + "\n")
+                for r in rows[1:]:
+                    w.write(",".join(r[c] for c in cols) + "\n")
+            files.append(f)
+            refs.append([keep.index(1), keep.index(2)])
+            if i == 0:
+                (out / "truth.csv").write_text((rec / "truth.csv").read_text())
+    truth = {}
+    for r in csv.DictReader(open(out / "truth.csv")):
+        m = truth.setdefault(int(r["mode"]), [float(r["f_hz"]), float(r["damping"]), []])
+        m[2].append(float(r["shape"]))
+
+    # ours
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [harness, "modal", "--displacement", str(files[0]), "--references",
+               ",".join(str(c + 1) for c in refs[0]), "--nperseg", str(NPERSEG), "--no-plots",
+               "--out", str(Path(tmp) / "m")]
+        for f, r in zip(files[1:], refs[1:]):
+            cmd += ["--setup", f"{f}:{','.join(str(c + 1) for c in r)}"]
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True)
+        ours_s = time.perf_counter() - t0
+        modes = [m for m in csv.DictReader(open(Path(tmp) / "m" / "modes.csv"))
+                 if m["method"] == "ssi"]
+        shapes = [r for r in csv.DictReader(open(Path(tmp) / "m" / "shapes.csv"))
+                  if r["method"] == "ssi"]
+    ours = []
+    for m in modes:
+        shape = [complex(float(r["re"]), float(r["im"])) for r in shapes if r["mode"] == m["mode"]]
+        ours.append((float(m["f_hz"]), float(m["damping"]), shape))
+    sel = [f for f, _, _ in ours]
+
+    # pyOMA-2
+    t0 = time.perf_counter()
+    singles = []
+    for f in files:
+        data, fs = read_wide(f)
+        ss = SingleSetup(data, fs=fs)
+        ss.add_algorithms(SSI(name="SSI", br=30, ordmax=40, method="cov"))
+        ss.run_all()
+        ss.mpe("SSI", sel_freq=sel, order_in="find_min")
+        singles.append(ss)
+    msp = MultiSetup_PoSER(ref_ind=refs, single_setups=singles, names=["SSI"])
+    res = msp.merge_results()["SSI"]
+    peer_s = time.perf_counter() - t0
+    fn, xi, phi = np.atleast_1d(res.Fn), np.atleast_1d(res.Xi), np.asarray(res.Phi)
+
+    fs = read_wide(files[0])[1]
+    df = fs / NPERSEG
+    lines = [f"Three setups of {len(read_wide(files[0])[0])} samples at {fs:g} Hz (lines of "
+             f"{df:.4f} Hz); references storeys 1 and 2. Wall time: ours {ours_s:.2f} s (the "
+             f"`modal` process, three setups, no figures), pyOMA-2 {peer_s:.2f} s (three "
+             "setups' SSI-cov, mpe and PoSER).", "",
+             "| mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "
+             "| pyOMA-2 damping | MAC ours/pyOMA-2 | MAC ours/truth | MAC pyOMA-2/truth |",
+             "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    failures = []
+    for i, (f, z, shape) in enumerate(ours):
+        k = int(np.argmin(np.abs(fn - f)))
+        t = min(truth.values(), key=lambda v: abs(v[0] - f))
+        m_peer, m_true, m_peer_true = mac(shape, phi[:, k]), mac(shape, t[2]), mac(phi[:, k], t[2])
+        lines.append(f"| {i + 1} | {t[0]:.4f}, {t[1]:.4f} | {f:.4f} | {fn[k]:.4f} | "
+                     f"{abs(f - fn[k]) / df:.2f} | {z:.4f} | {xi[k]:.4f} | {m_peer:.5f} | "
+                     f"{m_true:.5f} | {m_peer_true:.5f} |")
+        if abs(f - fn[k]) > df or abs(f - t[0]) > df:
+            failures.append(f"mode {i + 1}: {f:.4f} Hz, pyOMA-2 {fn[k]:.4f}, truth {t[0]:.4f}")
+        if m_true < 0.99:
+            failures.append(f"mode {i + 1}: MAC with the truth {m_true:.4f}")
+    if len(ours) != len(truth):
+        failures.append(f"{len(ours)} merged SSI modes, the truth has {len(truth)}")
+    finish(lines, failures, md, args.check)
+
+
+if __name__ == "__main__":
+    main()
