@@ -184,7 +184,7 @@ def main():
                        check=True, capture_output=True)
         (d / "record.csv").unlink()
         for r in read_modes(d / "modal" / "modes.csv"):
-            if r["method"] not in ("efdd", "ssi") or not r.get("f_hz_u"):
+            if r["method"] not in ("efdd", "ssi", "plscf") or not r.get("f_hz_u"):
                 continue
             f = float(r["f_hz"])
             j = int(np.argmin(abs(f_true - f) / f_true))

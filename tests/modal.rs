@@ -135,10 +135,11 @@ fn the_shear_frame_is_identified_without_an_accelerometer() {
     // the UFF: one dataset 55 per mode and method
     let uff = std::fs::read_to_string(out.join("shapes.uff")).unwrap();
     assert_eq!(uff.matches("\n    55").count(), 15);
-    // SSI-dat on the same record: the same five modes, within a line and 25 % in damping
+    // SSI-dat and pLSCF on the same record: the same five modes, within a line (pLSCF two)
+    // and 25 % in damping
     let dat = tmp.path().join("dat");
     assert_ok(&harness(&words(
-        "modal --displacement {} --nperseg 2048 --ssi dat --no-plots --out {}",
+        "modal --displacement {} --nperseg 2048 --ssi dat --plscf --no-plots --out {}",
         &[
             field.join("displacement.csv").to_str().unwrap(),
             dat.to_str().unwrap(),
@@ -155,8 +156,23 @@ fn the_shear_frame_is_identified_without_an_accelerometer() {
             m.3
         );
     }
+    let found: Vec<_> = modes(&dat).into_iter().filter(|m| m.0 == "plscf").collect();
+    assert_eq!(found.len(), 5, "{found:?}");
+    for (m, (f, z, _)) in found.iter().zip(&truth) {
+        assert!((m.2 - f).abs() <= 2.0 * df, "plscf {}: {} vs {f}", m.1, m.2);
+        assert!(
+            (m.3 / z - 1.0).abs() <= 0.25,
+            "plscf {}: {} vs {z}",
+            m.1,
+            m.3
+        );
+    }
     let report = std::fs::read_to_string(dat.join("report.txt")).unwrap();
     assert!(report.contains("SSI-dat: 30 block rows"), "{report}");
+    assert!(
+        report.contains("pLSCF: LSCF (a common denominator"),
+        "{report}"
+    );
 }
 
 #[test]

@@ -69,6 +69,7 @@ pub const KEYS: &[&str] = &[
     "oblique_deg",
     "out",
     "output_col",
+    "plscf",
     "points",
     "prominence_db",
     "read_noise",

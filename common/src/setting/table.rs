@@ -517,6 +517,16 @@ pub const SETTINGS: &[Setting] = &[
                with at least 8 half-overlapping segments, up to 65536).",
     },
     Setting {
+        key: "plscf",
+        commands: &["modal"],
+        values: Values::Switch,
+        words: &[],
+        unit: "",
+        default: DefaultValue::None,
+        help: "Also identify by LSCF on the half-spectra of up to four reference channels (modes \
+               `plscf`, with intervals from the jackknife over segments).",
+    },
+    Setting {
         key: "ssi",
         commands: &["modal"],
         values: Values::Choice(&["cov", "dat"]),

@@ -73,6 +73,9 @@ pub struct Args {
     /// Lowest frequency analysed, Hz (default: 0.5 Hz or two spectral lines, the higher).
     #[arg(long, value_name = "HZ")]
     pub f_min_hz: Option<f64>,
+    /// `$plscf`.
+    #[arg(long, help = super::args::help("plscf"))]
+    pub plscf: bool,
     /// `$ssi`.
     #[arg(long, value_enum, default_value = super::args::given("ssi"), help = super::args::help("ssi"))]
     pub ssi: SsiArg,
@@ -122,6 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             SsiArg::Cov => SsiKind::Cov,
             SsiArg::Dat => SsiKind::Dat,
         },
+        plscf: args.plscf,
         ssi_block_rows: args.ssi_block_rows,
         ssi_max_order: args.ssi_max_order,
         references: args.references.map(|t| t.0),

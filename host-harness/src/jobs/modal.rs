@@ -25,6 +25,8 @@ pub struct ModalInput {
     pub prominence_db: f64,
     /// `$f_min_hz`: the lowest frequency searched.
     pub f_min_hz: Option<f64>,
+    /// `$plscf`: also LSCF on half-spectra.
+    pub plscf: bool,
     /// `$ssi`: covariance- or data-driven.
     pub ssi: crate::analysis::oma::ssi::SsiKind,
     /// `$ssi_block_rows`.
@@ -53,6 +55,9 @@ pub struct ModalSpec {
     /// With `$setup`: every setup, the first file's first.
     others: Vec<SetupRecords>,
 }
+
+/// pLSCF's highest order (`$plscf`): as SSI's default, 20 pole pairs.
+pub const PLSCF_MAX_ORDER: usize = 40;
 
 /// The settings of `records` (read from `file`) as `input` gives them, checked against it.
 fn settings_for(
@@ -100,6 +105,23 @@ fn settings_for(
             return Err(SpecError::setting(format!("$ssi_max_order {m}: 2 to 400")));
         }
         s.ssi.max_order = m;
+    }
+    if input.plscf {
+        let rule = crate::analysis::ema::lscf::LscfRule {
+            max_order: PLSCF_MAX_ORDER,
+            ..Default::default()
+        };
+        let lines = ((fs_hz / 2.0 - s.ssi.f_range_hz.0) / df).floor() as usize + 1;
+        if lines < rule.max_order + 2 {
+            return Err(SpecError::setting(format!(
+                "$plscf: {lines} spectral lines of {record} from {} Hz to the Nyquist frequency, \
+                 LSCF of orders up to {} needs {}: a longer $nperseg",
+                s.ssi.f_range_hz.0,
+                rule.max_order,
+                rule.max_order + 2
+            )));
+        }
+        s.plscf = Some(rule);
     }
     if n < 4 * s.ssi.block_rows {
         return Err(SpecError::setting(format!(

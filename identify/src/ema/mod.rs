@@ -7,7 +7,7 @@
 //! segment groups.
 
 pub mod impact;
-pub mod lscf;
+pub use crate::oma::lscf;
 pub mod lsfd;
 pub mod spectra;
 

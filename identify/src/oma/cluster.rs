@@ -75,6 +75,52 @@ pub struct Rejected {
     pub reason: String,
 }
 
+/// The clusters reported, each with its mode number and band: without `bands` every kept
+/// cluster (each rejected one to `rejected`, named `"{name} cluster at ..."` with its reason),
+/// with bands the fullest kept cluster in each (a band without one noted as `"{label}: no
+/// stable mode in band ..."`).
+pub fn chosen<'a>(
+    (kept, dropped): (&'a [SsiMode], &[Rejected]),
+    bands: &[(f64, f64)],
+    (name, label): (&str, &str),
+    notes: &mut Vec<String>,
+    rejected: &mut Vec<String>,
+) -> Vec<(usize, Option<usize>, &'a SsiMode)> {
+    if bands.is_empty() {
+        for r in dropped {
+            rejected.push(format!(
+                "{name} cluster at {:.4} Hz (damping {:.4}, {} poles, orders {}-{}): {}",
+                r.cluster.f_hz,
+                r.cluster.damping,
+                r.cluster.poles,
+                r.cluster.orders.0,
+                r.cluster.orders.1,
+                r.reason
+            ));
+        }
+        return kept
+            .iter()
+            .enumerate()
+            .map(|(n, c)| (n + 1, None, c))
+            .collect();
+    }
+    let mut out = Vec::new();
+    for (b, band) in bands.iter().enumerate() {
+        match kept
+            .iter()
+            .filter(|c| c.f_hz >= band.0 && c.f_hz <= band.1)
+            .max_by_key(|c| c.poles)
+        {
+            Some(c) => out.push((b + 1, Some(b), c)),
+            None => notes.push(format!(
+                "{label}: no stable mode in band {}-{} Hz",
+                band.0, band.1
+            )),
+        }
+    }
+    out
+}
+
 /// Modal phase collinearity of a shape: `((Sxx - Syy)^2 + 4 Sxy^2) / (Sxx + Syy)^2` of its
 /// real and imaginary parts (Pappa, Elliott & Schenk 1993); 1 for a shape whose components
 /// share one phase (or its opposite), 0 for a circle.

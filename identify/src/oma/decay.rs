@@ -244,7 +244,13 @@ pub fn decay_modes(
     };
     let rule = rule(decays, s.fs_hz, s.ssi.f_range_hz.0);
     let (_, kept, dropped) = modes(channels, decays, s.fs_hz, rule, s.cluster)?;
-    let chosen = chosen(&kept, &dropped, s, notes, rejected);
+    let chosen = cluster::chosen(
+        (&kept, &dropped),
+        &s.bands,
+        ("decay", "free decays"),
+        notes,
+        rejected,
+    );
     // what each decay alone gives, and the decays without each one (the jackknife)
     let alone: Vec<Vec<SsiMode>> = decays.iter().map(|d| of(std::slice::from_ref(d))).collect();
     let without: Vec<Vec<SsiMode>> = match decays.len() {
@@ -270,45 +276,6 @@ pub fn decay_modes(
             uncertainty: jackknife(c, &without),
         })
         .collect())
-}
-
-/// The clusters reported: every kept one without bands (the rejected named), else the
-/// fullest in each band (a band without one noted); with their numbers and bands.
-fn chosen<'a>(
-    kept: &'a [SsiMode],
-    dropped: &[cluster::Rejected],
-    s: &super::OmaSettings,
-    notes: &mut Vec<String>,
-    rejected: &mut Vec<String>,
-) -> Vec<(usize, Option<usize>, &'a SsiMode)> {
-    if s.bands.is_empty() {
-        for r in dropped {
-            rejected.push(format!(
-                "decay cluster at {:.4} Hz (damping {:.4}, {} poles): {}",
-                r.cluster.f_hz, r.cluster.damping, r.cluster.poles, r.reason
-            ));
-        }
-        return kept
-            .iter()
-            .enumerate()
-            .map(|(n, c)| (n + 1, None, c))
-            .collect();
-    }
-    let mut out = Vec::new();
-    for (b, &band) in s.bands.iter().enumerate() {
-        match kept
-            .iter()
-            .filter(|c| c.f_hz >= band.0 && c.f_hz <= band.1)
-            .max_by_key(|c| c.poles)
-        {
-            Some(c) => out.push((b + 1, Some(b), c)),
-            None => notes.push(format!(
-                "free decays: no stable mode in band {}-{} Hz",
-                band.0, band.1
-            )),
-        }
-    }
-    out
 }
 
 /// The frequency and damping of the cluster in `list` nearest `f` (within 5 %).

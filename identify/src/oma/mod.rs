@@ -15,10 +15,14 @@ pub mod cluster;
 pub mod csd;
 pub mod decay;
 pub mod fdd;
+pub mod lscf;
 pub mod modes;
+pub mod plscf;
 pub mod setups;
 pub mod ssi;
 pub mod ssi_dat;
+#[cfg(test)]
+pub(crate) mod test_records;
 pub mod uncertainty;
 
 use cluster::{ClusterRule, SsiMode};
@@ -38,6 +42,8 @@ pub enum Method {
     Ssi,
     /// The record's free decays identified together in the time domain ([`decay`]).
     Decay,
+    /// LSCF on the half-spectra of a few reference channels ([`plscf`]).
+    Plscf,
 }
 
 impl Method {
@@ -48,6 +54,7 @@ impl Method {
             Method::Efdd => "efdd",
             Method::Ssi => "ssi",
             Method::Decay => "decay",
+            Method::Plscf => "plscf",
         }
     }
 }
@@ -82,6 +89,8 @@ pub struct OmaSettings {
     pub ssi: SsiRule,
     /// The rules that make clusters of SSI-cov's stable poles modes.
     pub cluster: ClusterRule,
+    /// LSCF on half-spectra, when asked ([`plscf`]; its clusters by `cluster`).
+    pub plscf: Option<lscf::LscfRule>,
     /// Groups of the jackknife that gives each estimate its uncertainty (0: none).
     pub groups: usize,
     /// What measured the records (the notes on harmonics).
@@ -133,6 +142,7 @@ impl OmaSettings {
                 kind: ssi::SsiKind::Cov,
             },
             cluster: ClusterRule::default(),
+            plscf: None,
             groups: uncertainty::GROUPS,
             source: RecordSource::File,
         }
@@ -374,8 +384,10 @@ fn analyze_scaled(
     for (m, u) in found.iter_mut().zip(intervals) {
         m.uncertainty = u;
     }
-    // the decays' own intervals (the jackknife over the decays)
+    // the decays' and pLSCF's own intervals (the jackknife over the decays, over segments)
     found.extend(decay_modes);
+    let plscf = plscf::plscf_modes((channels, &csd), s, &found, &mut notes, &mut rejected)?;
+    found.extend(plscf);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
     notes.extend(common_motion_notes(&found, &svd, s));
@@ -774,7 +786,7 @@ mod tests {
                 // lines, and the noisy maximum wanders on it)
                 let tolerance = match method {
                     Method::Ssi | Method::Decay => df,
-                    Method::Efdd => 2.0 * df,
+                    Method::Efdd | Method::Plscf => 2.0 * df,
                     Method::Fdd => m.damping * m.f_hz,
                 };
                 assert!(

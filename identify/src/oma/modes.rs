@@ -102,35 +102,11 @@ pub fn ssi_modes(
         },
         uncertainty: Default::default(),
     };
-    let mut modes = Vec::new();
-    if s.bands.is_empty() {
-        for r in &dropped {
-            rejected.push(format!(
-                "ssi cluster at {:.4} Hz (damping {:.4}, {} poles, orders {}-{}): {}",
-                r.cluster.f_hz,
-                r.cluster.damping,
-                r.cluster.poles,
-                r.cluster.orders.0,
-                r.cluster.orders.1,
-                r.reason
-            ));
-        }
-        modes.extend(kept.iter().enumerate().map(|(n, c)| mode(n + 1, None, c)));
-    } else {
-        for (b, &band) in s.bands.iter().enumerate() {
-            match kept
-                .iter()
-                .filter(|c| c.f_hz >= band.0 && c.f_hz <= band.1)
-                .max_by_key(|c| c.poles)
-            {
-                Some(c) => modes.push(mode(b + 1, Some(b), c)),
-                None => notes.push(format!(
-                    "{kind}: no stable mode in band {}-{} Hz",
-                    band.0, band.1
-                )),
-            }
-        }
-    }
+    let modes: Vec<OmaMode> =
+        cluster::chosen((&kept, &dropped), &s.bands, ("ssi", kind), notes, rejected)
+            .into_iter()
+            .map(|(n, band, c)| mode(n, band, c))
+            .collect();
     let clusters = kept
         .into_iter()
         .map(|c| (c, true))

@@ -289,27 +289,13 @@ mod tests {
             (6.3, 0.015, [0.5, -0.9, 0.2, 1.0, 0.7, -0.6]),
         ];
         let record = |points: [usize; 4], seed: u64, gain: f64| -> Vec<Vec<f64>> {
-            let mut ch = vec![vec![0.0; n]; 4];
-            for (m, (f, z, shape)) in truth.iter().enumerate() {
-                let w = 2.0 * std::f64::consts::PI * f / fs;
-                let (r, th) = ((-z * w).exp(), w * (1.0 - z * z).sqrt());
-                let e = vibcam_common::testing::gaussian_noise(seed + m as u64, n);
-                let mut x = vec![0.0; n];
-                for t in 2..n {
-                    x[t] = 2.0 * r * th.cos() * x[t - 1] - r * r * x[t - 2] + e[t];
-                }
-                for (c, &p) in points.iter().enumerate() {
-                    ch[c]
-                        .iter_mut()
-                        .zip(&x)
-                        .for_each(|(y, v)| *y += gain * shape[p] * v);
-                }
-            }
-            for (c, y) in ch.iter_mut().enumerate() {
-                let e = vibcam_common::testing::gaussian_noise(seed + 10 + c as u64, n);
-                y.iter_mut().zip(&e).for_each(|(v, e)| *v += 0.3 * gain * e);
-            }
-            ch
+            let of: Vec<(f64, f64, &[f64])> =
+                truth.iter().map(|(f, z, v)| (*f, *z, &v[..])).collect();
+            let all = crate::oma::test_records::oscillators(fs, n, &of, (seed, 0.3));
+            points
+                .iter()
+                .map(|&p| all[p].iter().map(|v| gain * v).collect())
+                .collect()
         };
         // setup 2 lists its references in another place and order: channels 3 and 1
         let one = record([0, 1, 2, 3], 100, 1.0);

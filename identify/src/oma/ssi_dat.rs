@@ -232,27 +232,8 @@ mod tests {
             (3.1, 0.015, [1.0, 0.6, -0.4]),
             (7.7, 0.03, [0.3, -1.0, 0.8]),
         ];
-        let mut channels = vec![vec![0.0; n]; 3];
-        for (m, (f, z, shape)) in modes.iter().enumerate() {
-            let w = 2.0 * std::f64::consts::PI * f / fs;
-            let (r, th) = ((-z * w).exp(), w * (1.0 - z * z).sqrt());
-            let e = vibcam_common::testing::gaussian_noise(40 + m as u64, n);
-            let mut x = vec![0.0; n];
-            for t in 2..n {
-                x[t] = 2.0 * r * th.cos() * x[t - 1] - r * r * x[t - 2] + e[t];
-            }
-            for (c, a) in shape.iter().enumerate() {
-                channels[c]
-                    .iter_mut()
-                    .zip(&x)
-                    .for_each(|(y, v)| *y += a * v);
-            }
-        }
-        let rms = (channels[0].iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-        for (c, y) in channels.iter_mut().enumerate() {
-            let e = vibcam_common::testing::gaussian_noise(50 + c as u64, n);
-            y.iter_mut().zip(&e).for_each(|(v, e)| *v += 0.05 * rms * e);
-        }
+        let of: Vec<(f64, f64, &[f64])> = modes.iter().map(|(f, z, v)| (*f, *z, &v[..])).collect();
+        let channels = super::super::test_records::oscillators(fs, n, &of, (40, 0.05));
         let rule = ssi::SsiRule {
             block_rows: 10,
             max_order: 20,

@@ -256,8 +256,9 @@ fn mode_intervals(
             }
             u.shape_abs = shape_u(&m.shape, reps);
         }
-        // the jackknife over the decays, computed with them (`decay::decay_modes`)
-        Method::Decay => {}
+        // the jackknife over the decays (`decay::decay_modes`), over segments
+        // (`plscf::plscf_modes`), computed with them
+        Method::Decay | Method::Plscf => {}
     }
     u
 }
@@ -296,7 +297,7 @@ fn mode_replicates<'a>(
                 .position(|x| x.mode == m.mode)?;
             Some((r.iter().map(|g| g[i].clone()).collect(), None))
         }),
-        Method::Decay => None,
+        Method::Decay | Method::Plscf => None,
     }
 }
 

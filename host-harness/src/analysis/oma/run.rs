@@ -296,7 +296,7 @@ fn shape_rows(r: &OmaResult, records: &Records) -> Vec<OmaShapeRow> {
 }
 
 /// The datasets of `shapes.uff`: each target a node, the shape in the motion's direction (x
-/// or y); load case 1 FDD, 2 EFDD, 3 SSI, 4 the free decays.
+/// or y); load case 1 FDD, 2 EFDD, 3 SSI, 4 the free decays, 5 pLSCF.
 fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSet> {
     let zero = Complex64::new(0.0, 0.0);
     r.modes
@@ -308,6 +308,7 @@ fn shape_sets(r: &OmaResult, records: &Records, along_x: bool) -> Vec<OmaShapeSe
                 Method::Efdd => 2,
                 Method::Ssi => 3,
                 Method::Decay => 4,
+                Method::Plscf => 5,
             },
             mode: m.mode,
             f_hz: m.f_hz,
@@ -462,7 +463,46 @@ fn methods_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
             false => String::new(),
         }
     );
+    plscf_text(o, r, s);
     decays_text(o, r, s);
+}
+
+/// The report's line on pLSCF, when it ran: orders, band, references, windows.
+fn plscf_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
+    let Some(rule) = s.plscf else {
+        return;
+    };
+    let l = s.csd.nperseg / 2;
+    let others: Vec<super::OmaMode> = r
+        .modes
+        .iter()
+        .filter(|m| m.method != Method::Plscf)
+        .cloned()
+        .collect();
+    let band = super::plscf::band(s, &others);
+    let lines = r
+        .csd
+        .freq_hz
+        .iter()
+        .filter(|f| **f >= band.0 && **f <= band.1)
+        .count();
+    let _ = writeln!(
+        o,
+        "pLSCF: LSCF (a common denominator, orders 2 to {}, stable as SSI's) over {:.3}-{:.3} \
+         Hz on the half-spectra of references {} (the cross-spectral matrix's correlations \
+         at lags 0 to {} over the Welch lag window, times an exponential window falling to \
+         {} %, its decay taken off the poles); its stable poles clustered as SSI's",
+        rule.max_order.min(lines.saturating_sub(2)) & !1,
+        band.0,
+        band.1,
+        super::plscf::references(&r.csd)
+            .iter()
+            .map(|c| (c + 1).to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        l.saturating_sub(1),
+        100.0 * super::plscf::EXP_WINDOW_END
+    );
 }
 
 /// The report's line on the record's regime: a stationary response, or free decays (each with

@@ -1,7 +1,9 @@
 //! Poles of a set of FRFs by the least-squares complex frequency-domain method (LSCF; Guillaume,
 //! Verboven, Vanlanduit, Van der Auweraer & Peeters, IMAC 2003; with one reference it is the
 //! poly-reference method's single-input case), at every model order up to the highest, each
-//! pole marked stable or not against the order below (docs/method.md §3.13).
+//! pole marked stable or not against the order below (docs/method.md §3.13). One kernel for
+//! both families of functions with a common denominator: `ema`'s FRFs (re-exported there as
+//! `ema::lscf`) and the output-only half-spectra of [`super::plscf`] (§3.12).
 //!
 //! # The model
 //!
@@ -27,7 +29,7 @@
 //! of at least 0.98 with it: the rules of the SSI-cov diagram of `modal`, so that
 //! [`crate::oma::cluster`] groups LSCF's stable poles into modes by the same rules.
 
-use crate::oma::ssi::{Pole, Stability};
+use super::ssi::{Pole, Stability};
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -45,10 +47,13 @@ pub struct LscfRule {
     pub mac_min: f64,
     /// Physical poles only: damping in `(0, zeta_max)`.
     pub zeta_max: f64,
+    /// Added to every pole's real part, 1/s, before its frequency and damping are taken: an
+    /// exponential window's decay (`1 / tau`) undone (0: none).
+    pub decay_per_s: f64,
 }
 
 impl Default for LscfRule {
-    /// Orders to 48, stability 1 % / 5 % / MAC 0.98, damping below 0.2.
+    /// Orders to 48, stability 1 % / 5 % / MAC 0.98, damping below 0.2, no window's decay.
     fn default() -> Self {
         LscfRule {
             max_order: 48,
@@ -56,6 +61,7 @@ impl Default for LscfRule {
             dz_max: 0.05,
             mac_min: 0.98,
             zeta_max: 0.2,
+            decay_per_s: 0.0,
         }
     }
 }
@@ -180,7 +186,7 @@ pub fn poles(
             if !(z.norm() < 1.0 && z.im > 0.0) {
                 continue;
             }
-            let s = z.ln() / ts;
+            let s = z.ln() / ts + rule.decay_per_s;
             let wn = s.norm();
             let (f_hz, damping) = (wn / (2.0 * PI), -s.re / wn);
             if !(damping > 0.0 && damping < rule.zeta_max && f_hz >= lo && f_hz <= hi) {

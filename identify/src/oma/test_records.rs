@@ -1,0 +1,38 @@
+//! Records of known modes for the tests (test builds only): exact discrete oscillators.
+
+/// Each mode `(f_hz, damping, shape)` as a second-order autoregression whose poles are
+/// `exp(s / fs_hz)` of that frequency and damping, driven by white noise (seed `seed + mode`),
+/// mixed into the channels by its shape; then white noise of `noise` times the first
+/// channel's RMS on each channel (seed `seed + 10 + channel`). `n` samples.
+pub fn oscillators(
+    fs_hz: f64,
+    n: usize,
+    modes: &[(f64, f64, &[f64])],
+    (seed, noise): (u64, f64),
+) -> Vec<Vec<f64>> {
+    let k = modes.first().map_or(0, |m| m.2.len());
+    let mut channels = vec![vec![0.0; n]; k];
+    for (m, (f, z, shape)) in modes.iter().enumerate() {
+        let w = 2.0 * std::f64::consts::PI * f / fs_hz;
+        let (r, th) = ((-z * w).exp(), w * (1.0 - z * z).sqrt());
+        let e = vibcam_common::testing::gaussian_noise(seed + m as u64, n);
+        let mut x = vec![0.0; n];
+        for t in 2..n {
+            x[t] = 2.0 * r * th.cos() * x[t - 1] - r * r * x[t - 2] + e[t];
+        }
+        for (c, a) in shape.iter().enumerate() {
+            channels[c]
+                .iter_mut()
+                .zip(&x)
+                .for_each(|(y, v)| *y += a * v);
+        }
+    }
+    let rms = (channels[0].iter().map(|v| v * v).sum::<f64>() / n.max(1) as f64).sqrt();
+    for (c, y) in channels.iter_mut().enumerate() {
+        let e = vibcam_common::testing::gaussian_noise(seed + 10 + c as u64, n);
+        y.iter_mut()
+            .zip(&e)
+            .for_each(|(v, e)| *v += noise * rms * e);
+    }
+    channels
+}
