@@ -139,7 +139,8 @@ fn the_shear_frame_is_identified_without_an_accelerometer() {
     // and 25 % in damping
     let dat = tmp.path().join("dat");
     assert_ok(&harness(&words(
-        "modal --displacement {} --nperseg 2048 --ssi dat --plscf --no-plots --out {}",
+        "modal --displacement {} --nperseg 2048 --ssi dat --plscf --efdd-quantity displacement \
+         --no-plots --out {}",
         &[
             field.join("displacement.csv").to_str().unwrap(),
             dat.to_str().unwrap(),

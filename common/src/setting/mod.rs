@@ -42,6 +42,7 @@ pub const KEYS: &[&str] = &[
     "compensate_exposure",
     "delay_s",
     "detrend",
+    "efdd_quantity",
     "excitation_col",
     "excitation_fs",
     "exp_window",

@@ -517,6 +517,16 @@ pub const SETTINGS: &[Setting] = &[
                with at least 8 half-overlapping segments, up to 65536).",
     },
     Setting {
+        key: "efdd_quantity",
+        commands: &["modal"],
+        values: Values::Choice(&["auto", "displacement", "velocity", "acceleration"]),
+        words: &[],
+        unit: "",
+        default: DefaultValue::Given("auto"),
+        help: "What the records measure, for EFDD's bell model (`auto`: the quantity whose model \
+               fits the resolved bells best, said in the report).",
+    },
+    Setting {
         key: "plscf",
         commands: &["modal"],
         values: Values::Switch,

@@ -3,6 +3,7 @@
 //! tool.
 
 use super::args::{parse_bands, Bands, WelchArgs};
+use crate::analysis::oma::bell::Quantity;
 use crate::analysis::oma::input::PixelAxis;
 use crate::analysis::oma::ssi::SsiKind;
 use crate::jobs::{ModalInput, ModalSpec, SpecError};
@@ -33,6 +34,19 @@ fn parse_setup(s: &str) -> Result<(PathBuf, Targets), String> {
         return Err(format!("`{s}`: no file before `:`"));
     }
     Ok((PathBuf::from(file), parse_targets(targets)?))
+}
+
+/// What the records measure, for EFDD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum EfddQuantityArg {
+    /// Chosen from the bells.
+    Auto,
+    /// Displacement.
+    Displacement,
+    /// Velocity.
+    Velocity,
+    /// Acceleration.
+    Acceleration,
 }
 
 /// Which SSI.
@@ -73,6 +87,9 @@ pub struct Args {
     /// Lowest frequency analysed, Hz (default: 0.5 Hz or two spectral lines, the higher).
     #[arg(long, value_name = "HZ")]
     pub f_min_hz: Option<f64>,
+    /// `$efdd_quantity`.
+    #[arg(long, value_enum, default_value = super::args::given("efdd_quantity"), help = super::args::help("efdd_quantity"))]
+    pub efdd_quantity: EfddQuantityArg,
     /// `$plscf`.
     #[arg(long, help = super::args::help("plscf"))]
     pub plscf: bool,
@@ -124,6 +141,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ssi: match args.ssi {
             SsiArg::Cov => SsiKind::Cov,
             SsiArg::Dat => SsiKind::Dat,
+        },
+        efdd_quantity: match args.efdd_quantity {
+            EfddQuantityArg::Auto => None,
+            EfddQuantityArg::Displacement => Some(Quantity::Displacement),
+            EfddQuantityArg::Velocity => Some(Quantity::Velocity),
+            EfddQuantityArg::Acceleration => Some(Quantity::Acceleration),
         },
         plscf: args.plscf,
         ssi_block_rows: args.ssi_block_rows,

@@ -25,6 +25,8 @@ pub struct ModalInput {
     pub prominence_db: f64,
     /// `$f_min_hz`: the lowest frequency searched.
     pub f_min_hz: Option<f64>,
+    /// `$efdd_quantity`: what the records measure (`None`: chosen from the bells).
+    pub efdd_quantity: Option<crate::analysis::oma::bell::Quantity>,
     /// `$plscf`: also LSCF on half-spectra.
     pub plscf: bool,
     /// `$ssi`: covariance- or data-driven.
@@ -94,6 +96,7 @@ fn settings_for(
         s.bands = b.clone();
     }
     s.ssi.kind = input.ssi;
+    s.efdd.quantity = input.efdd_quantity;
     if let Some(i) = input.ssi_block_rows {
         if !(2..=500).contains(&i) {
             return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));

@@ -140,12 +140,12 @@ pub fn poles(
     Ok(poles)
 }
 
-/// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without
-/// it) over [`band`] (of the modes `found` by the other methods): every stable cluster ([`super::cluster`], the rules of SSI's) without bands (those
-/// rejected go to `rejected`), or the fullest in each band; each mode's 95 % intervals of
-/// frequency and damping from the jackknife over groups of Welch segments (each left out in
-/// turn, the replicate's cluster nearest the mode within three half-power bandwidths or 1 %
-/// and a MAC of 0.8 taken), as EFDD's.
+/// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without it)
+/// over [`band`] (of the modes `found` by the other methods): every stable cluster
+/// ([`super::cluster`], the rules of SSI's) without bands (those rejected go to `rejected`), or the
+/// fullest in each band; each mode's 95 % intervals of frequency and damping from the jackknife
+/// over groups of Welch segments (each left out in turn, the replicate's cluster nearest the mode
+/// within three half-power bandwidths or 1 % and a MAC of 0.8 taken), as EFDD's.
 pub fn plscf_modes(
     (channels, csd): (&[Vec<f64>], &Csd),
     s: &super::OmaSettings,

@@ -384,7 +384,7 @@ fn efdd_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
              {:.0} % lower)",
             100.0 * super::modes::QUANTITY_MARGIN
         ),
-        None if q.given => " (as given)".to_string(),
+        None if q.given => " (as given by $efdd_quantity)".to_string(),
         None => format!(
             " (the default: no bell's half-power band spans {} lines or more to tell the \
              quantity by)",
