@@ -156,7 +156,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("shard", "study --shard 3/2 --out o"),
     ("ssi", "modal --displacement a.csv --fps 100 --ssi ref"),
     ("efdd_quantity", "modal --displacement a.csv --fps 100 --efdd-quantity jerk"),
-    ("plscf", "modal --displacement d.csv --fps 100 --nperseg 64 --plscf --out m"),
+    ("plscf", "modal --displacement d.csv --fps 100 --nperseg 64 --f-min-hz 48 --plscf --out m"),
     ("setup", "modal --displacement a.csv --fps 100 --setup a.csv:1 --out m"),
     ("ssi_block_rows", "modal --displacement a.csv --fps 100 --ssi-block-rows 1000"),
     ("ssi_max_order", "modal --displacement a.csv --fps 100 --ssi-max-order 1000"),

@@ -114,14 +114,15 @@ fn settings_for(
             max_order: PLSCF_MAX_ORDER,
             ..Default::default()
         };
+        // the run lowers the order to the band's lines (`plscf::MIN_ORDER` at least); here the
+        // widest band it can have, to the Nyquist frequency
         let lines = ((fs_hz / 2.0 - s.ssi.f_range_hz.0) / df).floor() as usize + 1;
-        if lines < rule.max_order + 2 {
+        let least = crate::analysis::oma::plscf::MIN_ORDER + 2;
+        if lines < least {
             return Err(SpecError::setting(format!(
                 "$plscf: {lines} spectral lines of {record} from {} Hz to the Nyquist frequency, \
-                 LSCF of orders up to {} needs {}: a longer $nperseg",
-                s.ssi.f_range_hz.0,
-                rule.max_order,
-                rule.max_order + 2
+                 LSCF needs at least {least}: a longer $nperseg or a lower $f_min_hz",
+                s.ssi.f_range_hz.0
             )));
         }
         s.plscf = Some(rule);

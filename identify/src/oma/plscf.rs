@@ -31,6 +31,10 @@ use realfft::RealFftPlanner;
 /// At most this many reference channels.
 pub const MAX_REFERENCES: usize = 4;
 
+/// The lowest model order fitted: with fewer lines in the band than its highest order needs
+/// (the order plus 2), the order is lowered to fit them, down to this.
+pub const MIN_ORDER: usize = 4;
+
 /// The exponential window's value at the last lag used.
 pub const EXP_WINDOW_END: f64 = 0.01;
 
@@ -166,7 +170,7 @@ pub fn plscf_modes(
         max_order: rule.max_order.min(lines.saturating_sub(2)) & !1,
         ..rule
     };
-    if rule.max_order < 4 {
+    if rule.max_order < MIN_ORDER {
         notes.push(format!(
             "pLSCF: {lines} spectral lines in {:.3}-{:.3} Hz, too few for a model: not run (a \
              longer $nperseg)",
