@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Several setups merged by PoSER: ours (`host-harness modal --references --setup`) beside
-pyOMA-2's `MultiSetup_PoSER` on the same files, and both beside the truth. Run on demand (and
+"""Several setups merged by PoSER and by PreGER: ours (`host-harness modal --references
+--setup --merge poser|preger`) beside pyOMA-2's `MultiSetup_PoSER` and `MultiSetup_PreGER`
+(`SSI_MS`) on the same files, and both beside the truth. Run on demand (and
 in CI with --check); the table goes to docs/validation.md §10.
 
     python3 scripts/peer_multisetup.py OUT --harness target/release/host-harness [--check]
@@ -10,7 +11,8 @@ Three `simulate-field` records of the five-storey shear frame (seeds 11, 12, 13;
 and one other (setup 1 storey 3, setup 2 storey 4 in the first column, setup 3 storey 5 in the
 last), so that each setup's reference columns are elsewhere in its file. Both sides run
 SSI-cov with 30 block rows and orders up to 40; pyOMA-2's parameters are taken at our merged
-SSI frequencies (`mpe` with `sel_freq`, `order_in="find_min"`) and merged by its PoSER. The
+SSI frequencies (`mpe` with `sel_freq`, `order_in="find_min"`), merged by its PoSER or
+identified together by its PreGER. The
 global points of both are the references, then each setup's other point (storeys 1 to 5).
 Writes OUT/s1.csv, s2.csv, s3.csv, truth.csv and peer-multisetup.md (replaced only with
 --force). Exit status 1 with --check when a merged SSI mode of ours is more than one line from
@@ -27,7 +29,7 @@ from pathlib import Path
 from peer_oma import ensure_venv, finish, mac, read_wide
 
 ONE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                                "RAYON_NUM_THREADS")}
+                                "RAYON_NUM_THREADS")} | {"TQDM_DISABLE": "1"}
 # per setup: the storeys kept (1-based), the references (storeys 1 and 2) among them
 SETUPS = [[1, 2, 3], [4, 2, 1], [2, 1, 5]]
 NPERSEG = 2048
@@ -47,12 +49,10 @@ def main():
     ensure_venv(__file__, ONE_THREAD)
     import logging
     import warnings
+    global np
     import numpy as np
     logging.disable(logging.CRITICAL)
     warnings.filterwarnings("ignore")
-    from pyoma2.algorithms import SSI
-    from pyoma2.setup import MultiSetup_PoSER, SingleSetup
-
     harness = str(Path(args.harness).resolve())
     out.mkdir(parents=True, exist_ok=True)
     files, refs = [], []
@@ -78,16 +78,51 @@ def main():
         m = truth.setdefault(int(r["mode"]), [float(r["f_hz"]), float(r["damping"]), []])
         m[2].append(float(r["shape"]))
 
-    # ours
+    lines, failures = [], []
+    for merge in ("poser", "preger"):
+        ours, ours_s = run_ours(harness, files, refs, merge)
+        fn, xi, phi, peer_s = run_peer(files, refs, merge, [f for f, _, _ in ours])
+        fs = read_wide(files[0])[1]
+        df = fs / NPERSEG
+        what = {"poser": "three setups' SSI-cov, mpe and PoSER",
+                "preger": "PreGER's SSI-cov of the three setups together, and mpe"}[merge]
+        lines += [f"**{merge}**: three setups of {len(read_wide(files[0])[0])} samples at "
+                  f"{fs:g} Hz (lines of {df:.4f} Hz); references storeys 1 and 2. Wall time: "
+                  f"ours {ours_s:.2f} s (the `modal` process, three setups, no figures), "
+                  f"pyOMA-2 {peer_s:.2f} s ({what}).", "",
+                  "| mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "
+                  "| pyOMA-2 damping | MAC ours/pyOMA-2 | MAC ours/truth | MAC pyOMA-2/truth |",
+                  "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        for i, (f, z, shape) in enumerate(ours):
+            k = int(np.argmin(np.abs(fn - f)))
+            t = min(truth.values(), key=lambda v: abs(v[0] - f))
+            m_peer, m_true = mac(shape, phi[:, k]), mac(shape, t[2])
+            m_peer_true = mac(phi[:, k], t[2])
+            lines.append(f"| {i + 1} | {t[0]:.4f}, {t[1]:.4f} | {f:.4f} | {fn[k]:.4f} | "
+                         f"{abs(f - fn[k]) / df:.2f} | {z:.4f} | {xi[k]:.4f} | {m_peer:.5f} | "
+                         f"{m_true:.5f} | {m_peer_true:.5f} |")
+            if abs(f - fn[k]) > df or abs(f - t[0]) > df:
+                failures.append(f"{merge} mode {i + 1}: {f:.4f} Hz, pyOMA-2 {fn[k]:.4f}, "
+                                f"truth {t[0]:.4f}")
+            if m_true < 0.99:
+                failures.append(f"{merge} mode {i + 1}: MAC with the truth {m_true:.4f}")
+        if len(ours) != len(truth):
+            failures.append(f"{merge}: {len(ours)} merged SSI modes, the truth has {len(truth)}")
+        lines.append("")
+    finish(lines, failures, md, args.check)
+
+
+def run_ours(harness, files, refs, merge):
+    """Our merged SSI modes `(f, damping, shape)` and the `modal` process's wall time."""
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [harness, "modal", "--displacement", str(files[0]), "--references",
                ",".join(str(c + 1) for c in refs[0]), "--nperseg", str(NPERSEG), "--no-plots",
-               "--out", str(Path(tmp) / "m")]
+               "--merge", merge, "--out", str(Path(tmp) / "m")]
         for f, r in zip(files[1:], refs[1:]):
             cmd += ["--setup", f"{f}:{','.join(str(c + 1) for c in r)}"]
         t0 = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True)
-        ours_s = time.perf_counter() - t0
+        took = time.perf_counter() - t0
         modes = [m for m in csv.DictReader(open(Path(tmp) / "m" / "modes.csv"))
                  if m["method"] == "ssi"]
         shapes = [r for r in csv.DictReader(open(Path(tmp) / "m" / "shapes.csv"))
@@ -96,47 +131,35 @@ def main():
     for m in modes:
         shape = [complex(float(r["re"]), float(r["im"])) for r in shapes if r["mode"] == m["mode"]]
         ours.append((float(m["f_hz"]), float(m["damping"]), shape))
-    sel = [f for f, _, _ in ours]
+    return ours, took
 
-    # pyOMA-2
+
+def run_peer(files, refs, merge, sel):
+    """pyOMA-2's merged SSI-cov (30 block rows, orders to 40) at our frequencies `sel`:
+    frequencies, damping, global shapes (columns) and its wall time."""
+    from pyoma2.algorithms import SSI, SSI_MS
+    from pyoma2.setup import MultiSetup_PoSER, MultiSetup_PreGER, SingleSetup
     t0 = time.perf_counter()
-    singles = []
-    for f in files:
-        data, fs = read_wide(f)
-        ss = SingleSetup(data, fs=fs)
-        ss.add_algorithms(SSI(name="SSI", br=30, ordmax=40, method="cov"))
-        ss.run_all()
-        ss.mpe("SSI", sel_freq=sel, order_in="find_min")
-        singles.append(ss)
-    msp = MultiSetup_PoSER(ref_ind=refs, single_setups=singles, names=["SSI"])
-    res = msp.merge_results()["SSI"]
-    peer_s = time.perf_counter() - t0
-    fn, xi, phi = np.atleast_1d(res.Fn), np.atleast_1d(res.Xi), np.asarray(res.Phi)
-
-    fs = read_wide(files[0])[1]
-    df = fs / NPERSEG
-    lines = [f"Three setups of {len(read_wide(files[0])[0])} samples at {fs:g} Hz (lines of "
-             f"{df:.4f} Hz); references storeys 1 and 2. Wall time: ours {ours_s:.2f} s (the "
-             f"`modal` process, three setups, no figures), pyOMA-2 {peer_s:.2f} s (three "
-             "setups' SSI-cov, mpe and PoSER).", "",
-             "| mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "
-             "| pyOMA-2 damping | MAC ours/pyOMA-2 | MAC ours/truth | MAC pyOMA-2/truth |",
-             "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    failures = []
-    for i, (f, z, shape) in enumerate(ours):
-        k = int(np.argmin(np.abs(fn - f)))
-        t = min(truth.values(), key=lambda v: abs(v[0] - f))
-        m_peer, m_true, m_peer_true = mac(shape, phi[:, k]), mac(shape, t[2]), mac(phi[:, k], t[2])
-        lines.append(f"| {i + 1} | {t[0]:.4f}, {t[1]:.4f} | {f:.4f} | {fn[k]:.4f} | "
-                     f"{abs(f - fn[k]) / df:.2f} | {z:.4f} | {xi[k]:.4f} | {m_peer:.5f} | "
-                     f"{m_true:.5f} | {m_peer_true:.5f} |")
-        if abs(f - fn[k]) > df or abs(f - t[0]) > df:
-            failures.append(f"mode {i + 1}: {f:.4f} Hz, pyOMA-2 {fn[k]:.4f}, truth {t[0]:.4f}")
-        if m_true < 0.99:
-            failures.append(f"mode {i + 1}: MAC with the truth {m_true:.4f}")
-    if len(ours) != len(truth):
-        failures.append(f"{len(ours)} merged SSI modes, the truth has {len(truth)}")
-    finish(lines, failures, md, args.check)
+    if merge == "poser":
+        singles = []
+        for f in files:
+            data, fs = read_wide(f)
+            ss = SingleSetup(data, fs=fs)
+            ss.add_algorithms(SSI(name="SSI", br=30, ordmax=40, method="cov"))
+            ss.run_all()
+            ss.mpe("SSI", sel_freq=sel, order_in="find_min")
+            singles.append(ss)
+        msp = MultiSetup_PoSER(ref_ind=refs, single_setups=singles, names=["SSI"])
+        res = msp.merge_results()["SSI"]
+    else:
+        data = [read_wide(f)[0] for f in files]
+        msp = MultiSetup_PreGER(fs=read_wide(files[0])[1], ref_ind=refs, datasets=data)
+        msp.add_algorithms(SSI_MS(name="SSI", br=30, ordmax=40, method="cov"))
+        msp.run_all()
+        msp.mpe("SSI", sel_freq=sel, order_in="find_min")
+        res = msp.algorithms["SSI"].result
+    took = time.perf_counter() - t0
+    return np.atleast_1d(res.Fn), np.atleast_1d(res.Xi), np.asarray(res.Phi), took
 
 
 if __name__ == "__main__":

@@ -559,26 +559,48 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
         "{report}"
     );
     let truth = truth(&tmp.path().join("r21"));
-    let found: Vec<_> = modes(&out).into_iter().filter(|m| m.0 == "ssi").collect();
-    assert_eq!(found.len(), 5, "{found:?}");
-    let shapes = std::fs::read_to_string(out.join("shapes.csv")).unwrap();
-    for (m, (f, _, shape)) in found.iter().zip(&truth) {
-        assert!((m.2 - f).abs() < 0.005 * f, "mode {}: {} vs {f}", m.1, m.2);
-        let got: Vec<f64> = shapes
-            .lines()
-            .map(|l| l.split(',').collect::<Vec<_>>())
-            .filter(|c| c[7] == "ssi" && c[0] == m.1.to_string())
-            .map(|c| c[4].parse().unwrap())
-            .collect();
-        assert_eq!(got.len(), 5);
-        let ab: f64 = got.iter().zip(shape).map(|(a, b)| a * b).sum();
-        let mac = ab * ab
-            / (got.iter().map(|a| a * a).sum::<f64>() * shape.iter().map(|b| b * b).sum::<f64>());
-        assert!(mac >= 0.99, "mode {}: MAC {mac}", m.1);
-    }
+    let ssi_modes_are_the_truth = |out: &Path| {
+        let found: Vec<_> = modes(out).into_iter().filter(|m| m.0 == "ssi").collect();
+        assert_eq!(found.len(), 5, "{found:?}");
+        let shapes = std::fs::read_to_string(out.join("shapes.csv")).unwrap();
+        for (m, (f, _, shape)) in found.iter().zip(&truth) {
+            assert!((m.2 - f).abs() < 0.005 * f, "mode {}: {} vs {f}", m.1, m.2);
+            let got: Vec<f64> = shapes
+                .lines()
+                .map(|l| l.split(',').collect::<Vec<_>>())
+                .filter(|c| c[7] == "ssi" && c[0] == m.1.to_string())
+                .map(|c| c[4].parse().unwrap())
+                .collect();
+            assert_eq!(got.len(), 5);
+            let ab: f64 = got.iter().zip(shape).map(|(a, b)| a * b).sum();
+            let mac = ab * ab
+                / (got.iter().map(|a| a * a).sum::<f64>()
+                    * shape.iter().map(|b| b * b).sum::<f64>());
+            assert!(mac >= 0.99, "mode {}: MAC {mac}", m.1);
+        }
+    };
+    ssi_modes_are_the_truth(&out);
     let parts = std::fs::read_to_string(out.join("setups.csv")).unwrap();
     assert!(parts.starts_with("method,mode,setup,f_hz,damping,scale_re,scale_im,reference_mac\n"));
     assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 10);
+    // the same setups with SSI's modes by PreGER: one model of both records (60 block rows, so
+    // that the one reference's rows are 1.5 times the highest order, 40), no SSI parts per
+    // setup
+    let pre = tmp.path().join("p");
+    assert_ok(&harness(&words(
+        "modal --displacement {} --references 1 --setup {} --merge preger --no-plots --out {}",
+        &[s1, &setup2, pre.to_str().unwrap()],
+    )));
+    let report = std::fs::read_to_string(pre.join("report.txt")).unwrap();
+    assert!(
+        report.contains("2 setups: SSI's modes by PreGER"),
+        "{report}"
+    );
+    assert!(report.contains("PreGER: 60 block rows"), "{report}");
+    ssi_modes_are_the_truth(&pre);
+    let parts = std::fs::read_to_string(pre.join("setups.csv")).unwrap();
+    assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 0);
+    assert!(parts.lines().any(|l| l.starts_with("efdd,")), "{parts}");
     // refusals
     let o = harness(&words(
         "modal --displacement {} --setup {} --out {}",

@@ -158,6 +158,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("efdd_quantity", "modal --displacement a.csv --fps 100 --efdd-quantity jerk"),
     ("plscf", "modal --displacement d.csv --fps 100 --nperseg 64 --f-min-hz 48 --plscf --out m"),
     ("setup", "modal --displacement a.csv --fps 100 --setup a.csv:1 --out m"),
+    ("merge", "modal --displacement a.csv --fps 100 --merge preger --out m"),
     ("ssi_block_rows", "modal --displacement a.csv --fps 100 --ssi-block-rows 1000"),
     ("ssi_max_order", "modal --displacement a.csv --fps 100 --ssi-max-order 1000"),
     ("target_size_mm", "analyze --frames fr --fps 120 --accel a.csv --fs 100 --mm-per-px 0.1 --threshold 100 --target-size-mm 3 --out o"),

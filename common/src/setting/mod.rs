@@ -62,6 +62,7 @@ pub const KEYS: &[&str] = &[
     "input_col",
     "lost_frames",
     "max_order",
+    "merge",
     "minutes",
     "mm_per_px",
     "nfft",

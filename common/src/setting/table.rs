@@ -527,6 +527,18 @@ pub const SETTINGS: &[Setting] = &[
                fits the resolved bells best, said in the report).",
     },
     Setting {
+        key: "merge",
+        commands: &["modal"],
+        values: Values::Choice(&["poser", "preger"]),
+        words: &[],
+        unit: "",
+        default: DefaultValue::Given("poser"),
+        help: "How several setups are merged: `poser` (each setup identified alone, its modes \
+               matched and scaled at the references) or `preger` (SSI identifies every setup's \
+               records together, each setup's observability matrix mapped onto the first's at \
+               the references; FDD, EFDD and LSCF still by PoSER).",
+    },
+    Setting {
         key: "plscf",
         commands: &["modal"],
         values: Values::Switch,

@@ -5,6 +5,7 @@
 use super::args::{parse_bands, Bands, WelchArgs};
 use crate::analysis::oma::bell::Quantity;
 use crate::analysis::oma::input::PixelAxis;
+use crate::analysis::oma::multi_setup::Merge;
 use crate::analysis::oma::ssi::SsiKind;
 use crate::jobs::{ModalInput, ModalSpec, SpecError};
 use std::path::PathBuf;
@@ -47,6 +48,15 @@ pub enum EfddQuantityArg {
     Velocity,
     /// Acceleration.
     Acceleration,
+}
+
+/// How several setups are merged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MergeArg {
+    /// Post separate estimation re-scaling.
+    Poser,
+    /// Pre global estimation re-scaling (SSI).
+    Preger,
 }
 
 /// Which SSI.
@@ -113,6 +123,9 @@ pub struct Args {
     /// `setups.csv` each setup's part).
     #[arg(long, value_name = "FILE.csv:T,...", value_parser = parse_setup)]
     pub setup: Vec<(PathBuf, Targets)>,
+    /// `$merge`.
+    #[arg(long, value_enum, default_value = super::args::given("merge"), help = super::args::help("merge"))]
+    pub merge: MergeArg,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "modal")]
     pub out: PathBuf,
@@ -153,6 +166,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ssi_max_order: args.ssi_max_order,
         references: args.references.map(|t| t.0),
         setups: args.setup.into_iter().map(|(p, t)| (p, t.0)).collect(),
+        merge: match args.merge {
+            MergeArg::Poser => Merge::Poser,
+            MergeArg::Preger => Merge::Preger,
+        },
         out: args.out,
         force: args.force,
         plots: !args.no_plots,

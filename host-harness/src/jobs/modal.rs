@@ -2,7 +2,7 @@
 
 use super::{SpecError, SpecResult};
 use crate::analysis::oma::input::{self, PixelAxis, Records};
-use crate::analysis::oma::multi_setup::SetupRecords;
+use crate::analysis::oma::multi_setup::{Merge, SetupRecords};
 use crate::analysis::oma::run::Output;
 use crate::analysis::oma::OmaSettings;
 use crate::analysis::WelchSettings;
@@ -40,6 +40,8 @@ pub struct ModalInput {
     /// `$setup`: the other setups, each a file and its reference targets (in
     /// `$references`' order).
     pub setups: Vec<(PathBuf, Vec<usize>)>,
+    /// `$merge`: how the setups are merged.
+    pub merge: Merge,
     /// Output directory.
     pub out: PathBuf,
     /// Replace an earlier `modal` output there.
@@ -173,6 +175,10 @@ fn setup_flags(input: &ModalInput) -> SpecResult<()> {
         (false, false) => Err(SpecError::setting(
             "$setup needs $references: the targets of the first file that every setup shares",
         )),
+        _ if input.merge == Merge::Preger && input.setups.is_empty() => Err(SpecError::setting(
+            "$merge preger identifies several setups together: give them with $setup and \
+             $references",
+        )),
         _ => Ok(()),
     }
 }
@@ -189,6 +195,7 @@ fn setups(input: &ModalInput, first: &Records) -> SpecResult<Vec<SetupRecords>> 
         settings: settings_for(input, first, &input.displacement)?,
         references: reference_channels(first, refs, &name)?,
         file: name,
+        preger_block_rows: None,
     }];
     for (path, theirs) in &input.setups {
         let file = path.display().to_string();
@@ -200,6 +207,13 @@ fn setups(input: &ModalInput, first: &Records) -> SpecResult<Vec<SetupRecords>> 
             )));
         }
         let records = input::read(path, input.axis, input.fps).map_err(SpecError::Input)?;
+        if input.merge == Merge::Preger && records.fs_hz != first.fs_hz {
+            return Err(SpecError::setting(format!(
+                "$merge preger: {file} is sampled at {} Hz, the first file at {} Hz: PreGER \
+                 identifies the setups with one model, at one rate (resample, or merge by poser)",
+                records.fs_hz, first.fs_hz
+            )));
+        }
         if records.unit != first.unit {
             return Err(SpecError::setting(format!(
                 "$setup {file}: values in {}, the first file's in {}",
@@ -211,7 +225,22 @@ fn setups(input: &ModalInput, first: &Records) -> SpecResult<Vec<SetupRecords>> 
             references: reference_channels(&records, theirs, &file)?,
             records,
             file,
+            preger_block_rows: None,
         });
+    }
+    if input.merge == Merge::Preger {
+        // PreGER's block rows: as given, else SSI's raised for the references' map
+        let shortest = out.iter().map(|s| s.records.channels[0].len()).min();
+        let first = &out[0].settings.ssi;
+        out[0].preger_block_rows = Some(input.ssi_block_rows.unwrap_or_else(|| {
+            let n = shortest.unwrap_or(0);
+            crate::analysis::oma::preger::block_rows(
+                refs.len(),
+                first.max_order,
+                first.block_rows,
+                n,
+            )
+        }));
     }
     Ok(out)
 }
@@ -265,7 +294,7 @@ impl ModalSpec {
             scrub: None,
         };
         if !self.others.is_empty() {
-            return crate::analysis::oma::multi_setup::run(&self.others, &output);
+            return crate::analysis::oma::multi_setup::run(&self.others, i.merge, &output);
         }
         crate::analysis::oma::run::run(&self.records, &self.settings, &output)
     }

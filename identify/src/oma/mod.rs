@@ -18,6 +18,7 @@ pub mod fdd;
 pub mod lscf;
 pub mod modes;
 pub mod plscf;
+pub mod preger;
 pub mod setups;
 pub mod ssi;
 pub mod ssi_dat;
@@ -290,7 +291,7 @@ pub const MAX_ITERATIONS: usize = 100_000;
 /// it before any numerics (exactly: a power of two), so that the analysis of a record in
 /// metres, micrometres or pixels is the same. A record without motion, or whose spectra (its
 /// square) would not be finite, is an error.
-fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
+pub(crate) fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
     let (mut sum, mut count) = (0.0f64, 0usize);
     for c in channels {
         let m = c.iter().sum::<f64>() / c.len().max(1) as f64;

@@ -88,24 +88,17 @@ pub fn ssi_modes(
             c.f_hz, c.damping, c.poles, s.ssi.f_range_hz.0, s.csd.nfft
         ));
     }
-    let mode = |n: usize, band: Option<usize>, c: &SsiMode| OmaMode {
-        method: Method::Ssi,
-        mode: n,
-        band_hz: band.map(|b| s.bands[b]),
-        f_hz: c.f_hz,
-        amplitude: None,
-        damping: Some(c.damping),
-        shape: normalise_shape(&c.shape),
-        evidence: match lone.iter().find(|l| l.0 == c.f_hz) {
-            Some((_, why)) => format!("{}; {why}", cluster_evidence(c)),
-            None => cluster_evidence(c),
-        },
-        uncertainty: Default::default(),
-    };
     let modes: Vec<OmaMode> =
         cluster::chosen((&kept, &dropped), &s.bands, ("ssi", kind), notes, rejected)
             .into_iter()
-            .map(|(n, band, c)| mode(n, band, c))
+            .map(|chosen| {
+                let why = lone.iter().find(|l| l.0 == chosen.2.f_hz);
+                let evidence = match why {
+                    Some((_, why)) => format!("{}; {why}", cluster_evidence(chosen.2)),
+                    None => cluster_evidence(chosen.2),
+                };
+                of_cluster(Method::Ssi, chosen, &s.bands, evidence)
+            })
             .collect();
     let clusters = kept
         .into_iter()
@@ -227,6 +220,27 @@ pub fn cluster_evidence(c: &SsiMode) -> String {
         c.mpc,
         c.mpd_deg
     )
+}
+
+/// The mode `method` found as the cluster `c`, numbered `n` (in band `band` of `bands`), with
+/// `evidence` for the report; no interval yet.
+pub fn of_cluster(
+    method: Method,
+    (n, band, c): (usize, Option<usize>, &SsiMode),
+    bands: &[(f64, f64)],
+    evidence: String,
+) -> OmaMode {
+    OmaMode {
+        method,
+        mode: n,
+        band_hz: band.map(|b| bands[b]),
+        f_hz: c.f_hz,
+        amplitude: None,
+        damping: Some(c.damping),
+        shape: normalise_shape(&c.shape),
+        evidence,
+        uncertainty: Default::default(),
+    }
 }
 
 /// The FDD peaks with bands: the highest line of each band (a band without a line is noted).

@@ -23,7 +23,7 @@ use super::csd::Csd;
 use super::lscf::{self, LscfRule};
 use super::ssi::Pole;
 use super::uncertainty;
-use crate::modal::{mac, normalise_shape};
+use crate::modal::mac;
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
@@ -192,25 +192,16 @@ pub fn plscf_modes(
         notes,
         rejected,
     );
+    let names: Vec<String> = refs.iter().map(|r| (r + 1).to_string()).collect();
     let mut modes: Vec<super::OmaMode> = chosen
-        .iter()
-        .map(|&(n, band, c)| super::OmaMode {
-            method: super::Method::Plscf,
-            mode: n,
-            band_hz: band.map(|b| s.bands[b]),
-            f_hz: c.f_hz,
-            amplitude: None,
-            damping: Some(c.damping),
-            shape: normalise_shape(&c.shape),
-            evidence: format!(
+        .into_iter()
+        .map(|chosen| {
+            let evidence = format!(
                 "{} (half-spectra of references {})",
-                super::modes::cluster_evidence(c),
-                refs.iter()
-                    .map(|r| (r + 1).to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            uncertainty: Default::default(),
+                super::modes::cluster_evidence(chosen.2),
+                names.join(", ")
+            );
+            super::modes::of_cluster(super::Method::Plscf, chosen, &s.bands, evidence)
         })
         .collect();
     jackknife_modes((channels, csd), s, &clusters, &mut modes, notes)?;

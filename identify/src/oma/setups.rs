@@ -284,22 +284,9 @@ mod tests {
     #[test]
     fn two_setups_sharing_two_references_give_the_global_shapes() {
         let (fs, n) = (50.0, 30_000);
-        let truth: [(f64, f64, [f64; 6]); 2] = [
-            (2.7, 0.02, [1.0, 0.8, 0.6, 0.4, -0.3, 0.2]),
-            (6.3, 0.015, [0.5, -0.9, 0.2, 1.0, 0.7, -0.6]),
-        ];
-        let record = |points: [usize; 4], seed: u64, gain: f64| -> Vec<Vec<f64>> {
-            let of: Vec<(f64, f64, &[f64])> =
-                truth.iter().map(|(f, z, v)| (*f, *z, &v[..])).collect();
-            let all = crate::oma::test_records::oscillators(fs, n, &of, (seed, 0.3));
-            points
-                .iter()
-                .map(|&p| all[p].iter().map(|v| gain * v).collect())
-                .collect()
-        };
+        let truth = crate::oma::test_records::SIX_POINTS;
         // setup 2 lists its references in another place and order: channels 3 and 1
-        let one = record([0, 1, 2, 3], 100, 1.0);
-        let two = record([4, 1, 5, 0], 200, 2.5);
+        let [one, two] = crate::oma::test_records::two_setups((100, 200));
         let r1 = analyze(&one, &OmaSettings::new(fs, n, None)).unwrap();
         let r2 = analyze(&two, &OmaSettings::new(fs, n, None)).unwrap();
         let setups = [

@@ -158,12 +158,28 @@ impl Parts {
         fs_hz: f64,
         rule: SsiRule,
     ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+        let (t, k) = self.matrix(left_out, rule)?;
+        poles_from(t, k, fs_hz, rule)
+    }
+
+    /// The matrix whose column space is the observability matrix's (SSI-cov's block Toeplitz
+    /// matrix, SSI-dat's projection factor) of the record without block `left_out` (all with
+    /// `None`), and its channels.
+    pub fn matrix(
+        &self,
+        left_out: Option<usize>,
+        rule: SsiRule,
+    ) -> anyhow::Result<(DMatrix<f64>, usize)> {
         match self {
-            Parts::Cov(sums) => poles_of(&sums.without(left_out), fs_hz, rule),
-            Parts::Dat(grams) => {
-                let l21 = projection(&grams.without(left_out), grams.block_rows, grams.channels)?;
-                poles_from(l21, grams.channels, fs_hz, rule)
+            Parts::Cov(sums) => {
+                let r = sums.without(left_out);
+                let k = r.first().map_or(0, |m| m.nrows());
+                Ok((toeplitz(&r, rule.block_rows), k))
             }
+            Parts::Dat(grams) => Ok((
+                projection(&grams.without(left_out), grams.block_rows, grams.channels)?,
+                grams.channels,
+            )),
         }
     }
 }
@@ -254,16 +270,20 @@ pub fn poles_of(
     rule: SsiRule,
 ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
     let k = r.first().map_or(0, |m| m.nrows());
-    let i = rule.block_rows;
-    // block Toeplitz: block (row a, column b) = R_{i + a - b}
+    poles_from(toeplitz(r, rule.block_rows), k, fs_hz, rule)
+}
+
+/// The block Toeplitz matrix of `i` block rows of the correlations `r` (lags `0 .. 2i`):
+/// block (row a, column b) = `R_{i + a - b}`.
+fn toeplitz(r: &[DMatrix<f64>], i: usize) -> DMatrix<f64> {
+    let k = r.first().map_or(0, |m| m.nrows());
     let mut t = DMatrix::<f64>::zeros(i * k, i * k);
     for a in 0..i {
         for b in 0..i {
-            let lag = i + a - b;
-            t.view_mut((a * k, b * k), (k, k)).copy_from(&r[lag]);
+            t.view_mut((a * k, b * k), (k, k)).copy_from(&r[i + a - b]);
         }
     }
-    poles_from(t, k, fs_hz, rule)
+    t
 }
 
 /// The poles of every order from `t`, a matrix of `i` block rows of `k` channels whose column
@@ -276,6 +296,15 @@ pub fn poles_from(
     rule: SsiRule,
 ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
     let i = t.nrows() / k.max(1);
+    let o = observability(t, (i * k).saturating_sub(k).min(rule.max_order) & !1)?;
+    poles_of_observability(&o, k, fs_hz, rule)
+}
+
+/// The observability matrix of order `n` from `t` (as [`poles_from`] takes it): the left
+/// singular vectors of its `n` largest singular values, each times the value's square root,
+/// largest first (columns of zeros where `t` has fewer).
+pub fn observability(t: DMatrix<f64>, n: usize) -> anyhow::Result<DMatrix<f64>> {
+    let rows = t.nrows();
     let svd = nalgebra::SVD::try_new(t, true, false, f64::EPSILON, super::MAX_ITERATIONS)
         .ok_or_else(|| not_converged("the block matrix's SVD", 0))?;
     let (u, sv) = (
@@ -286,16 +315,44 @@ pub fn poles_from(
     // singular values are not sorted by nalgebra: order them
     let mut order: Vec<usize> = (0..sv.len()).collect();
     order.sort_by(|&a, &b| sv[b].total_cmp(&sv[a]));
-    let max_order = rule.max_order.min(i * k - k) & !1;
+    let mut o = DMatrix::<f64>::zeros(rows, n);
+    for (c, &j) in order.iter().take(n).enumerate() {
+        o.set_column(c, &(u.column(j) * sv[j].max(0.0).sqrt()));
+    }
+    Ok(o)
+}
+
+/// The poles of every even order up to `o`'s columns from the observability matrix `o` (`i`
+/// block rows of `k` channels, its columns largest first): each order's state matrix from the
+/// shift of its first columns, its output matrix their first block row ([`poles`]).
+pub fn poles_of_observability(
+    o: &DMatrix<f64>,
+    k: usize,
+    fs_hz: f64,
+    rule: SsiRule,
+) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
+    let i = o.nrows() / k.max(1);
+    let max_order = o.ncols().min((i * k).saturating_sub(k)) & !1;
+    poles_of_orders(k, max_order, fs_hz, rule, |ord| {
+        Ok(o.columns(0, ord).into_owned())
+    })
+}
+
+/// The poles of every even order up to `max_order`, `o_of(order)` giving that order's
+/// observability matrix (block rows of `k` channels), as [`poles_of_observability`].
+pub fn poles_of_orders(
+    k: usize,
+    max_order: usize,
+    fs_hz: f64,
+    rule: SsiRule,
+    mut o_of: impl FnMut(usize) -> anyhow::Result<DMatrix<f64>>,
+) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
     let mut all: Vec<Pole> = Vec::new();
     let mut below: Vec<Pole> = Vec::new();
     let (mut cut, mut cut_below): (Vec<Pole>, Vec<Pole>) = (Vec::new(), Vec::new());
     for ord in (2..=max_order).step_by(2) {
-        let mut o = DMatrix::<f64>::zeros(i * k, ord);
-        for (c, &j) in order.iter().take(ord).enumerate() {
-            let scale = sv[j].max(0.0).sqrt();
-            o.set_column(c, &(u.column(j) * scale));
-        }
+        let o = o_of(ord)?;
+        let i = o.nrows() / k.max(1);
         let up = o.rows(0, (i - 1) * k).into_owned();
         let down = o.rows(k, (i - 1) * k).into_owned();
         let pinv = nalgebra::SVD::try_new(up, true, true, f64::EPSILON, super::MAX_ITERATIONS)

@@ -36,3 +36,30 @@ pub fn oscillators(
     }
     channels
 }
+
+/// Six points, two modes: `(f_hz, damping, shape over the six points)`.
+pub const SIX_POINTS: [(f64, f64, [f64; 6]); 2] = [
+    (2.7, 0.02, [1.0, 0.8, 0.6, 0.4, -0.3, 0.2]),
+    (6.3, 0.015, [0.5, -0.9, 0.2, 1.0, 0.7, -0.6]),
+];
+
+/// Two setups of [`SIX_POINTS`] at 50 Hz, 30000 samples, noise 0.3: setup 1 records points
+/// 1-4 (seed `seeds.0`), setup 2 points 5, 2, 6, 1 (seed `seeds.1`, 2.5 times larger), so
+/// they share points 1 and 2, setup 2 listing them as its channels 4 and 2.
+pub fn two_setups(seeds: (u64, u64)) -> [Vec<Vec<f64>>; 2] {
+    let of: Vec<(f64, f64, &[f64])> = SIX_POINTS
+        .iter()
+        .map(|(f, z, v)| (*f, *z, &v[..]))
+        .collect();
+    let record = |points: [usize; 4], seed: u64, gain: f64| -> Vec<Vec<f64>> {
+        let all = oscillators(50.0, 30_000, &of, (seed, 0.3));
+        points
+            .iter()
+            .map(|&p| all[p].iter().map(|v| gain * v).collect())
+            .collect()
+    };
+    [
+        record([0, 1, 2, 3], seeds.0, 1.0),
+        record([4, 1, 5, 0], seeds.1, 2.5),
+    ]
+}

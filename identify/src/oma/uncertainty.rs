@@ -403,31 +403,43 @@ fn spectral_replicates(
 }
 
 /// Per block of the record left out, per SSI mode of `modes` (in their order): the replicate's
-/// mode nearest it (within three half-power bandwidths or 1 %, whichever is wider, and a MAC
-/// of 0.8 or more with its shape), `None` fields where there is none; for a mode of `lone`
-/// (kept with fewer poles than a mode needs), among the clusters of at least
-/// [`super::modes::LONE_MIN_POLES`] poles.
+/// mode ([`replicates_from_poles`]).
 fn ssi_replicates(
     channels: &[Vec<f64>],
     s: &OmaSettings,
     (modes, lone): (&[OmaMode], &[f64]),
     groups: usize,
 ) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
-    let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
-    if ssi.is_empty() {
+    if !modes.iter().any(|m| m.method == Method::Ssi) {
         return Ok(None);
     }
     let parts = ssi::Parts::of(channels, s.ssi, groups)?;
+    let poles = |g: usize| Ok(parts.poles(Some(g), s.fs_hz, s.ssi)?.0);
+    replicates_from_poles((modes, lone), s.cluster, groups, poles).map(Some)
+}
+
+/// Per group `g` left out (`poles(g)`: the poles of every order without it), per SSI mode of
+/// `modes` (in their order): the replicate's mode nearest it (within three half-power
+/// bandwidths or 1 %, whichever is wider, and a MAC of 0.8 or more with its shape), `None`
+/// fields where there is none; for a mode of `lone` (kept with fewer poles than a mode
+/// needs), among the clusters of at least [`super::modes::LONE_MIN_POLES`] poles.
+fn replicates_from_poles(
+    (modes, lone): (&[OmaMode], &[f64]),
+    rule: ClusterRule,
+    groups: usize,
+    poles: impl Fn(usize) -> anyhow::Result<Vec<ssi::Pole>>,
+) -> anyhow::Result<Vec<Vec<Replicate>>> {
+    let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
     let mut out = Vec::with_capacity(groups);
     for g in 0..groups {
-        let (poles, _) = parts.poles(Some(g), s.fs_hz, s.ssi)?;
-        let (kept, _) = cluster::cluster(&poles, s.cluster);
+        let poles = poles(g)?;
+        let (kept, _) = cluster::cluster(&poles, rule);
         let small = match lone.is_empty() {
             true => Vec::new(),
             false => {
                 let rule = ClusterRule {
                     min_poles: super::modes::LONE_MIN_POLES,
-                    ..s.cluster
+                    ..rule
                 };
                 cluster::cluster(&poles, rule).0
             }
@@ -453,7 +465,31 @@ fn ssi_replicates(
             .collect();
         out.push(reps);
     }
-    Ok(Some(out))
+    Ok(out)
+}
+
+/// Per mode of `modes` (an SSI mode's; the others' left empty), its uncertainty by the jackknife over `groups`
+/// groups, `poles(g)` the poles of every order without group `g` (how several setups
+/// identified together give their intervals so). Notes name the modes left
+/// without an interval.
+pub fn of_ssi_modes(
+    modes: &[OmaMode],
+    rule: ClusterRule,
+    groups: usize,
+    poles: impl Fn(usize) -> anyhow::Result<Vec<ssi::Pole>>,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<Vec<Uncertainty>> {
+    let mut out = vec![Uncertainty::default(); modes.len()];
+    if groups < 3 || modes.is_empty() {
+        return Ok(out);
+    }
+    let reps = replicates_from_poles((modes, &[]), rule, groups, poles)?;
+    let ssi = modes.iter().zip(out.iter_mut());
+    for (i, (m, u)) in ssi.filter(|(m, _)| m.method == Method::Ssi).enumerate() {
+        let mine: Vec<Replicate> = reps.iter().map(|g| g[i].clone()).collect();
+        *u = mode_intervals(m, &mine, None, notes);
+    }
+    Ok(out)
 }
 
 /// Folds the scale's relative standard uncertainty per channel (`u_rel[c]`, from the scale

@@ -1,15 +1,27 @@
 //! `modal` over several setups (docs/method.md §3.12, "Several setups"): each setup's records
-//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), written as one output
-//! whose targets are the global points (the references first, then each setup's others) plus
-//! `setups.csv` (each setup's part in each mode); the figures are the first setup's.
+//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's modes from
+//! every setup's records together by PreGER ([`vibcam_identify::oma::preger`]) and the other
+//! methods' by PoSER; written as one output whose targets are the global points (the
+//! references first, then each setup's others) plus `setups.csv` (each setup's part in each
+//! mode PoSER merged); the figures are the first setup's (the stabilisation diagram PreGER's).
 
 use super::input::Records;
 use super::run::Output;
-use super::{analyze, OmaResult, OmaSettings};
+use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::analysis::run::Outcome;
 use crate::export::oma::{setups_csv, OmaSetupRow};
 use std::fmt::Write as _;
+use vibcam_identify::oma::preger::{self, Record};
 use vibcam_identify::oma::setups::{layout, poser, Setup};
+
+/// How several setups are merged (`$merge`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Merge {
+    /// Every method's modes by PoSER.
+    Poser,
+    /// SSI's by PreGER, the others' by PoSER.
+    Preger,
+}
 
 /// One setup of a `modal` job: its records, settings, file (for the report) and reference
 /// channels (0-based, in the common order).
@@ -23,17 +35,32 @@ pub struct SetupRecords {
     pub file: String,
     /// Its channels that are the references.
     pub references: Vec<usize>,
+    /// The first setup's: PreGER's block rows, with `$merge preger`.
+    pub preger_block_rows: Option<usize>,
 }
 
-/// Analyses every setup, merges them and writes the outputs (`o`'s preamble opens the report).
-pub fn run(setups: &[SetupRecords], o: &Output<'_>) -> anyhow::Result<Outcome> {
+/// Analyses every setup, merges them as `merge` says and writes the outputs (`o`'s preamble
+/// opens the report).
+pub fn run(setups: &[SetupRecords], merge: Merge, o: &Output<'_>) -> anyhow::Result<Outcome> {
     let results: Vec<OmaResult> = setups
         .iter()
         .map(|s| analyze(&s.records.channels, &s.settings))
         .collect::<anyhow::Result<_>>()?;
+    // with PreGER, PoSER merges the other methods' modes only
+    let for_poser: Vec<OmaResult> = match merge {
+        Merge::Poser => results.clone(),
+        Merge::Preger => results
+            .iter()
+            .map(|r| {
+                let mut r = r.clone();
+                r.modes.retain(|m| m.method != Method::Ssi);
+                r
+            })
+            .collect(),
+    };
     let parts: Vec<Setup<'_>> = setups
         .iter()
-        .zip(&results)
+        .zip(&for_poser)
         .map(|(s, r)| Setup {
             result: r,
             references: &s.references,
@@ -56,20 +83,15 @@ pub fn run(setups: &[SetupRecords], o: &Output<'_>) -> anyhow::Result<Outcome> {
     };
     let mut result = results[0].clone();
     result.modes = merged.modes;
-    result.rejected = results
-        .iter()
-        .enumerate()
-        .flat_map(|(i, r)| {
-            r.rejected
-                .iter()
-                .map(move |w| format!("setup {}: {w}", i + 1))
-        })
-        .collect();
     result.notes = merged.notes;
+    result.rejected.clear();
     for (i, r) in results.iter().enumerate() {
-        result
-            .notes
-            .extend(r.notes.iter().map(|n| format!("setup {}: {n}", i + 1)));
+        let setup = |w: &String| format!("setup {}: {w}", i + 1);
+        result.rejected.extend(r.rejected.iter().map(setup));
+        result.notes.extend(r.notes.iter().map(setup));
+    }
+    if merge == Merge::Preger {
+        together(setups, &mut result)?;
     }
     let rows: Vec<OmaSetupRow> = merged
         .parts
@@ -86,7 +108,11 @@ pub fn run(setups: &[SetupRecords], o: &Output<'_>) -> anyhow::Result<Outcome> {
         .collect();
     let mut extra = o.extra.clone();
     extra.push(("setups.csv".to_string(), setups_csv(&rows)));
-    let preamble = format!("{}{}", o.preamble, setups_text(setups, &results, &points));
+    let preamble = format!(
+        "{}{}",
+        o.preamble,
+        setups_text(setups, merge, &results, &points)
+    );
     let o = Output {
         extra,
         preamble,
@@ -95,19 +121,66 @@ pub fn run(setups: &[SetupRecords], o: &Output<'_>) -> anyhow::Result<Outcome> {
     super::run::write(&records, &first.settings, &result, &o)
 }
 
-/// The report's lines on the setups: each file's targets, samples and references, what each
-/// alone found, and where each global target comes from.
+/// SSI's modes of every setup's records together (PreGER, with setup 1's settings and
+/// PreGER's block rows) in `result`, with its poles and clusters; its notes and rejected
+/// clusters added.
+fn together(setups: &[SetupRecords], result: &mut OmaResult) -> anyhow::Result<()> {
+    let records: Vec<Record<'_>> = setups
+        .iter()
+        .map(|s| Record {
+            channels: &s.records.channels,
+            references: &s.references,
+        })
+        .collect();
+    let (mut notes, mut rejected) = (Vec::new(), Vec::new());
+    let mut s = setups[0].settings.clone();
+    s.ssi.block_rows = setups[0].preger_block_rows.unwrap_or(s.ssi.block_rows);
+    if s.ssi.block_rows != setups[0].settings.ssi.block_rows {
+        notes.push(format!(
+            "PreGER: {} block rows (SSI's {} raised so that the references' rows are {} times \
+             the highest order; or $ssi_block_rows)",
+            s.ssi.block_rows,
+            setups[0].settings.ssi.block_rows,
+            preger::REFERENCE_ROWS_OVER_ORDER
+        ));
+    }
+    let found = preger::identify(&records, &s, &mut notes, &mut rejected)?;
+    result.notes.extend(notes);
+    result.rejected.extend(rejected);
+    result.modes.retain(|m| m.method != Method::Ssi);
+    result.modes.extend(found.modes);
+    result
+        .modes
+        .sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
+    result.poles = found.poles;
+    result.clusters = found.clusters;
+    Ok(())
+}
+
+/// The report's lines on the setups: how they were merged, each file's targets, samples and
+/// references, what each alone found, and where each global target comes from.
 fn setups_text(
     setups: &[SetupRecords],
+    merge: Merge,
     results: &[OmaResult],
     points: &[(usize, usize)],
 ) -> String {
-    let mut o = format!(
-        "{} setups merged by PoSER (each analysed alone; modes of setup 1 matched in every other \
-         by method, frequency and the shape at the references; shapes scaled onto setup 1's at \
-         the references); the figures are setup 1's\n",
-        setups.len()
-    );
+    let poser = "each analysed alone; modes of setup 1 matched in every other by method, \
+                 frequency and the shape at the references; shapes scaled onto setup 1's at the \
+                 references";
+    let mut o = match merge {
+        Merge::Poser => format!(
+            "{} setups merged by PoSER ({poser}); the figures are setup 1's\n",
+            setups.len()
+        ),
+        Merge::Preger => format!(
+            "{} setups: SSI's modes by PreGER (one model of every setup's records: each setup's \
+             observability matrix mapped onto setup 1's at the references; the stabilisation \
+             diagram is this model's), the other methods' merged by PoSER ({poser}); the other \
+             figures are setup 1's\n",
+            setups.len()
+        ),
+    };
     for (i, (s, r)) in setups.iter().zip(results).enumerate() {
         let n = s.records.channels.first().map_or(0, Vec::len);
         let refs: Vec<String> = s
