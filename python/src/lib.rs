@@ -836,10 +836,30 @@ fn analysis_dict<'py>(
     py: Python<'py>,
     (c, report, fps): (oma_frames::Computed, String, f64),
 ) -> PyResult<Bound<'py, PyDict>> {
-    let r = &c.result;
+    let d = oma_dict(py, &c.result, &c.records)?;
+    let (disp, lost) = displacement_arrays(&c);
+    d.set_item("displacement", disp.into_pyarray(py))?;
+    d.set_item("lost", lost.into_pyarray(py))?;
+    d.set_item(
+        "camera_motion",
+        camera_motion_array(&c.viewed).into_pyarray(py),
+    )?;
+    d.set_item("report", spelled(&report))?;
+    d.set_item("fps", fps)?;
+    Ok(d)
+}
+
+/// The entries of an output-only analysis's dict that come from its result `r` and the
+/// records it analysed: modes, shapes and their uncertainty, targets, the singular values,
+/// unit, targets left out, notes, rejected peaks and clusters, evidence.
+fn oma_dict<'py>(
+    py: Python<'py>,
+    r: &host_harness::analysis::oma::OmaResult,
+    records: &host_harness::analysis::oma::input::Records,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("modes", modes_dict(py, r)?)?;
-    let k = c.records.targets.len();
+    let k = records.targets.len();
     let mut shapes = Array2::<Complex64>::zeros((r.modes.len(), k));
     for (i, m) in r.modes.iter().enumerate() {
         for (j, s) in m.shape.iter().enumerate().take(k) {
@@ -859,7 +879,7 @@ fn analysis_dict<'py>(
     d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
     d.set_item(
         "targets",
-        c.records
+        records
             .targets
             .iter()
             .map(|(t, _)| *t as i64)
@@ -867,7 +887,7 @@ fn analysis_dict<'py>(
             .into_pyarray(py),
     )?;
     let mut xy = Array2::<f64>::from_elem((k, 2), f64::NAN);
-    for (j, (_, p)) in c.records.targets.iter().enumerate() {
+    for (j, (_, p)) in records.targets.iter().enumerate() {
         if let Some((x, y)) = p {
             xy[[j, 0]] = *x;
             xy[[j, 1]] = *y;
@@ -884,11 +904,8 @@ fn analysis_dict<'py>(
     }
     d.set_item("svd_freq_hz", r.svd.freq_hz.clone().into_pyarray(py))?;
     d.set_item("svd", s.into_pyarray(py))?;
-    let (disp, lost) = displacement_arrays(&c);
-    d.set_item("displacement", disp.into_pyarray(py))?;
-    d.set_item("lost", lost.into_pyarray(py))?;
-    d.set_item("unit", c.records.unit.clone())?;
-    d.set_item("left_out", c.records.left_out.clone())?;
+    d.set_item("unit", records.unit.clone())?;
+    d.set_item("left_out", records.left_out.clone())?;
     d.set_item(
         "notes",
         r.notes.iter().map(|n| spelled(n)).collect::<Vec<_>>(),
@@ -901,12 +918,6 @@ fn analysis_dict<'py>(
             .map(|m| m.evidence.clone())
             .collect::<Vec<_>>(),
     )?;
-    d.set_item(
-        "camera_motion",
-        camera_motion_array(&c.viewed).into_pyarray(py),
-    )?;
-    d.set_item("report", spelled(&report))?;
-    d.set_item("fps", fps)?;
     Ok(d)
 }
 
@@ -1057,6 +1068,139 @@ fn study(
         Ok((table, summary))
     })
     .map_err(py_err)
+}
+
+/// `modal(...)`: output-only modal analysis of a displacement file (or of several setups), as
+/// `host-harness modal`; returns the dict `analyze` returns (without the camera's motion and
+/// the lost flags: `filled` counts each column's filled samples), its `displacement` the
+/// records analysed (with `setups`, one column per global point) and `setups` each setup's
+/// part in each mode PoSER merged. With `out` the command's files are
+/// written there too.
+#[pyfunction]
+#[pyo3(signature = (displacement, fps=None, axis="y", window="hann", nperseg=None,
+    noverlap=None, nfft=None, detrend="constant", bands=None, prominence_db=6.0, f_min_hz=None,
+    efdd_quantity="auto", plscf=false, ssi="cov", ssi_block_rows=None, ssi_max_order=None,
+    references=None, setups=Vec::new(), merge="poser", out=None, force=false))]
+#[allow(clippy::too_many_arguments)]
+fn modal<'py>(
+    py: Python<'py>,
+    displacement: String,
+    fps: Option<f64>,
+    axis: &str,
+    window: &str,
+    nperseg: Option<usize>,
+    noverlap: Option<usize>,
+    nfft: Option<usize>,
+    detrend: &str,
+    bands: Option<Vec<(f64, f64)>>,
+    prominence_db: f64,
+    f_min_hz: Option<f64>,
+    efdd_quantity: &str,
+    plscf: bool,
+    ssi: &str,
+    ssi_block_rows: Option<usize>,
+    ssi_max_order: Option<usize>,
+    references: Option<Vec<usize>>,
+    setups: Vec<(String, Vec<usize>)>,
+    merge: &str,
+    out: Option<String>,
+    force: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    use host_harness::analysis::oma::{bell::Quantity, input::PixelAxis};
+    use host_harness::analysis::oma::{multi_setup::Merge, ssi::SsiKind};
+    use host_harness::jobs::{ModalInput, ModalSpec};
+    let choice = |name: &str, v: &str, words: &[&str]| -> PyResult<usize> {
+        words
+            .iter()
+            .position(|w| *w == v)
+            .ok_or_else(|| bad(format!("{name} `{v}`: {}", words.join(", "))))
+    };
+    let write = out.is_some();
+    let input = ModalInput {
+        displacement: displacement.into(),
+        fps,
+        axis: [PixelAxis::Y, PixelAxis::X][choice("axis", axis, &["y", "x"])?],
+        welch: welch_settings(window, nperseg, noverlap, nfft, detrend)?,
+        bands,
+        prominence_db,
+        f_min_hz,
+        efdd_quantity: [
+            None,
+            Some(Quantity::Displacement),
+            Some(Quantity::Velocity),
+            Some(Quantity::Acceleration),
+        ][choice(
+            "efdd_quantity",
+            efdd_quantity,
+            &["auto", "displacement", "velocity", "acceleration"],
+        )?],
+        plscf,
+        ssi: [SsiKind::Cov, SsiKind::Dat][choice("ssi", ssi, &["cov", "dat"])?],
+        ssi_block_rows,
+        ssi_max_order,
+        references,
+        setups: setups.into_iter().map(|(f, t)| (f.into(), t)).collect(),
+        merge: [Merge::Poser, Merge::Preger][choice("merge", merge, &["poser", "preger"])?],
+        out: out.map(std::path::PathBuf::from).unwrap_or_default(),
+        force,
+        plots: write,
+    };
+    let (c, report, html) = py
+        .allow_threads(|| -> anyhow::Result<_> {
+            let spec = ModalSpec::new(input).map_err(SpecError::into_anyhow)?;
+            if write {
+                spec.run()?;
+            }
+            let c = spec.compute()?;
+            let (report, html) = spec.report_and_page(&c)?;
+            Ok((c, report, html))
+        })
+        .map_err(py_err)?;
+    modal_dict(py, &c, &report, &html)
+}
+
+/// The dict `modal` returns: [`oma_dict`]'s entries, the records as `displacement`, the filled
+/// samples' counts, the report and page, the sample rate and the setups' rows.
+fn modal_dict<'py>(
+    py: Python<'py>,
+    c: &host_harness::jobs::ModalComputed,
+    report: &str,
+    html: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = oma_dict(py, &c.result, &c.records)?;
+    let n = c.records.channels.first().map_or(0, Vec::len);
+    let k = c.records.channels.len();
+    let mut disp = Array2::<f64>::zeros((n, k));
+    for (j, ch) in c.records.channels.iter().enumerate() {
+        disp.index_axis_mut(NdAxis(1), j)
+            .iter_mut()
+            .zip(ch)
+            .for_each(|(o, v)| *o = *v);
+    }
+    d.set_item("displacement", disp.into_pyarray(py))?;
+    // a displacement file says how many samples of each target were filled, not which
+    d.set_item("filled", c.records.filled.clone())?;
+    d.set_item("report", spelled(report))?;
+    d.set_item("html", spelled(html))?;
+    d.set_item("fps", c.records.fs_hz)?;
+    let rows: Vec<Bound<'py, PyDict>> = c
+        .setups
+        .iter()
+        .flat_map(|(_, rows)| rows)
+        .map(|r| -> PyResult<_> {
+            let row = PyDict::new(py);
+            row.set_item("method", r.method)?;
+            row.set_item("mode", r.mode)?;
+            row.set_item("setup", r.setup)?;
+            row.set_item("f_hz", r.f_hz)?;
+            row.set_item("damping", r.damping)?;
+            row.set_item("scale", (r.scale.re, r.scale.im))?;
+            row.set_item("reference_mac", r.reference_mac)?;
+            Ok(row)
+        })
+        .collect::<PyResult<_>>()?;
+    d.set_item("setups", rows)?;
+    Ok(d)
 }
 
 /// `ema(...)`: experimental modal analysis of responses over a measured force, as
@@ -1471,6 +1615,7 @@ fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(upsample, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(ema, m)?)?;
+    m.add_function(wrap_pyfunction!(modal, m)?)?;
     m.add_function(wrap_pyfunction!(study, m)?)?;
     m.add_class::<FrameReader>()?;
     Ok(())

@@ -47,7 +47,7 @@ def test_defaults_agree_with_the_command_line(harness):
     # Python's argument -> the command's flag, where the names differ
     renamed = {"tracker": "mode"}
     checked = 0
-    for name in ["centroid", "track", "frf", "analyze", "ema", "study"]:
+    for name in ["centroid", "track", "frf", "analyze", "ema", "modal", "study"]:
         flags = cli_defaults(harness, name)
         for p in inspect.signature(getattr(vibcam, name)).parameters.values():
             flag = renamed.get(p.name, p.name)
@@ -66,7 +66,7 @@ def test_defaults_agree_with_the_command_line(harness):
 
 # Python's functions and the settings table: the table (`vibcam-common`'s `setting::table`)
 # declares each shared setting once; Python's defaults and refusals are checked against it.
-FUNCTIONS = ["centroid", "track", "frf", "analyze", "ema", "study", "open_frames"]
+FUNCTIONS = ["centroid", "track", "frf", "analyze", "ema", "modal", "study", "open_frames"]
 
 
 def test_every_default_is_the_settings_tables():

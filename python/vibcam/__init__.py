@@ -49,6 +49,7 @@ __all__ = [
     "upsample",
     "analyze",
     "ema",
+    "modal",
     "study",
     "open_frames",
 ]
@@ -492,7 +493,12 @@ class AnalysisResult:
     the text of ``report.txt``; ``evidence``: per mode (the rows of ``modes``), how it was
     found (a peak's prominence and bell, an SSI cluster's size, spread, MPC and MPD);
     ``rejected``: the peaks and SSI clusters not taken for modes, each with its reason (without
-    bands).
+    bands). From :func:`modal`: ``lost`` is ``None`` and ``filled`` counts each column's
+    filled samples (a displacement file says how many, not which); ``first_xy`` is NaN where
+    the file gives no position; ``fps`` is the sample rate; with several setups the columns
+    are the global points and ``setups`` holds each setup's part in each mode PoSER merged
+    (dicts: ``method``, ``mode``, ``setup``, ``f_hz``, ``damping``, ``scale`` (complex: its
+    shape's factor onto setup 1's at the references), ``reference_mac``).
     """
 
     modes: dict
@@ -513,6 +519,8 @@ class AnalysisResult:
     rejected: list = _field(default_factory=list)
     html: str = _field(default="", repr=False)
     camera_motion: _Optional[_np.ndarray] = None
+    filled: _Optional[list] = None
+    setups: list = _field(default_factory=list)
 
     def _repr_html_(self) -> str:
         """The page of ``analyze``'s ``report.html`` (the frame with the targets, the modes,
@@ -744,6 +752,86 @@ def ema(
         force=bool(force),
     )
     return _result(EmaResult, d)
+
+
+def modal(
+    displacement: _PathLike,
+    *,
+    fps: _Optional[float] = None,
+    axis: str = "y",
+    window: str = "hann",
+    nperseg: _Optional[int] = None,
+    noverlap: _Optional[int] = None,
+    nfft: _Optional[int] = None,
+    detrend: str = "constant",
+    bands: _Optional[_Sequence[_Sequence[float]]] = None,
+    prominence_db: float = 6.0,
+    f_min_hz: _Optional[float] = None,
+    efdd_quantity: str = "auto",
+    plscf: bool = False,
+    ssi: str = "cov",
+    ssi_block_rows: _Optional[int] = None,
+    ssi_max_order: _Optional[int] = None,
+    references: _Optional[_Sequence[int]] = None,
+    setups: _Optional[_Sequence[_Any]] = None,
+    merge: str = "poser",
+    out: _Optional[_PathLike] = None,
+    force: bool = False,
+) -> AnalysisResult:
+    """Output-only modal analysis of a displacement file, exactly as ``host-harness modal``
+    (the same numbers as its ``modes.csv`` and ``shapes.csv``).
+
+    ``displacement``: ``displacement.csv`` of ``track``/``analyze`` (``axis`` the image axis
+    of a file without millimetres), or a wide CSV (a time column and one column per target);
+    ``fps`` when it has no time column. The Welch settings as :func:`frf`; ``bands``: ``[(lo,
+    hi), ...]`` Hz, one mode per band (default: peaks of at least ``prominence_db`` picked);
+    ``f_min_hz`` the lowest frequency analysed; ``efdd_quantity``: what the records measure
+    (``"auto"``, ``"displacement"``, ``"velocity"``, ``"acceleration"``); ``plscf``: LSCF on
+    half-spectra too; ``ssi``: ``"cov"`` or ``"dat"``, with ``ssi_block_rows`` and
+    ``ssi_max_order``. Several setups of one structure: ``references`` the targets of
+    ``displacement`` every setup shares, ``setups`` the others as ``[(file, [targets in
+    references' order]), ...]``, ``merge`` ``"poser"`` or ``"preger"``. ``out``: also write
+    the command's files there (``force`` replaces an earlier ``modal`` output).
+    """
+    for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
+        _setting("modal", key, v)
+    if axis not in ("x", "y"):
+        raise InputError(f"axis = {axis!r}: 'x' or 'y'")
+    pairs = []
+    for i, s in enumerate(setups or []):
+        try:
+            f, targets = s
+            pairs.append((_os.fspath(f), [_whole(f"setups[{i}] target", t, 1, 1 << 20)
+                                          for t in targets]))
+        except (TypeError, ValueError):
+            raise InputError(f"setups[{i}] = {s!r}: (file, [reference targets]) is needed") \
+                from None
+    d = _vibcam.modal(
+        _os.fspath(displacement),
+        fps=None if fps is None else _number("fps", fps),
+        axis=axis,
+        window=window,
+        nperseg=_setting("modal", "nperseg", nperseg, optional=True),
+        noverlap=_setting("modal", "noverlap", noverlap, optional=True),
+        nfft=_setting("modal", "nfft", nfft, optional=True),
+        detrend=detrend,
+        bands=None if bands is None else _bands(bands),
+        prominence_db=_setting("modal", "prominence_db", prominence_db),
+        f_min_hz=None if f_min_hz is None else _number("f_min_hz", f_min_hz),
+        efdd_quantity=efdd_quantity,
+        plscf=bool(plscf),
+        ssi=ssi,
+        ssi_block_rows=_setting("modal", "ssi_block_rows", ssi_block_rows, optional=True),
+        ssi_max_order=_setting("modal", "ssi_max_order", ssi_max_order, optional=True),
+        references=None if references is None
+        else [_whole("references", t, 1, 1 << 20) for t in references],
+        setups=pairs,
+        merge=merge,
+        out=None if out is None else _os.fspath(out),
+        force=bool(force),
+    )
+    rows = [dict(r, scale=complex(*r["scale"])) for r in d["setups"]]
+    return _result(AnalysisResult, d, lost=None, camera_motion=None, setups=rows)
 
 
 def _result(cls, d: dict, **given: _Any):

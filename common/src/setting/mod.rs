@@ -134,7 +134,11 @@ pub fn spell(template: &str, naming: Naming) -> String {
                         out.push_str("--");
                         out.push_str(&key.replace('_', "-"));
                     }
-                    Naming::Python => out.push_str(key),
+                    // Python takes the repeated `--setup` as one list, `setups`
+                    Naming::Python => out.push_str(match *key {
+                        "setup" => "setups",
+                        k => k,
+                    }),
                 }
                 rest = &word[len..];
             }

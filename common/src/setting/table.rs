@@ -527,6 +527,18 @@ pub const SETTINGS: &[Setting] = &[
                fits the resolved bells best, said in the report).",
     },
     Setting {
+        key: "prominence_db",
+        commands: &["modal"],
+        values: Values::Number {
+            min: Bound::Closed(0.0),
+            max: Bound::Free,
+        },
+        words: &[],
+        unit: "dB",
+        default: DefaultValue::Given("6"),
+        help: "Without bands: the least prominence of a peak of the first singular value.",
+    },
+    Setting {
         key: "merge",
         commands: &["modal"],
         values: Values::Choice(&["poser", "preger"]),
@@ -557,6 +569,25 @@ pub const SETTINGS: &[Setting] = &[
         default: DefaultValue::Given("cov"),
         help: "Stochastic subspace identification from the outputs' correlations (`cov`) or \
                from the projection of their future on their past (`dat`, data-driven).",
+    },
+    Setting {
+        key: "ssi_block_rows",
+        commands: &["modal"],
+        values: Values::Whole { min: 2, max: 500 },
+        words: &[],
+        unit: "",
+        default: DefaultValue::Job("30"),
+        help: "SSI: block rows of the Toeplitz matrix, or of the past and of the future in the \
+               Hankel matrix (fewer for short records).",
+    },
+    Setting {
+        key: "ssi_max_order",
+        commands: &["modal"],
+        values: Values::Whole { min: 2, max: 400 },
+        words: &[],
+        unit: "",
+        default: DefaultValue::Job("40"),
+        help: "SSI: the highest model order (even).",
     },
     Setting {
         key: "threads",

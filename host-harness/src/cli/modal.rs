@@ -91,8 +91,8 @@ pub struct Args {
     /// automatically, see --prominence-db).
     #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
     pub bands: Option<Bands>,
-    /// Without --bands: least prominence of a peak of the first singular value, dB.
-    #[arg(long, value_name = "DB", default_value_t = 6.0)]
+    /// `$prominence_db`.
+    #[arg(long, value_name = "DB", allow_negative_numbers = true, default_value = super::args::given("prominence_db"), value_parser = super::args::number("prominence_db"), help = super::args::help("prominence_db"))]
     pub prominence_db: f64,
     /// Lowest frequency analysed, Hz (default: 0.5 Hz or two spectral lines, the higher).
     #[arg(long, value_name = "HZ")]
@@ -106,21 +106,20 @@ pub struct Args {
     /// `$ssi`.
     #[arg(long, value_enum, default_value = super::args::given("ssi"), help = super::args::help("ssi"))]
     pub ssi: SsiArg,
-    /// SSI: block rows of the Toeplitz matrix, or of the past and of the future in the
-    /// Hankel matrix (default 30, fewer for short records).
-    #[arg(long, value_name = "N", value_parser = super::args::int_range(2..=500))]
+    /// `$ssi_block_rows`.
+    #[arg(long, value_name = "N", value_parser = super::args::whole::<usize>("ssi_block_rows"), help = super::args::help("ssi_block_rows"))]
     pub ssi_block_rows: Option<usize>,
-    /// SSI: highest model order (even; default 40).
-    #[arg(long, value_name = "N", value_parser = super::args::int_range(2..=400))]
+    /// `$ssi_max_order`.
+    #[arg(long, value_name = "N", value_parser = super::args::whole::<usize>("ssi_max_order"), help = super::args::help("ssi_max_order"))]
     pub ssi_max_order: Option<usize>,
     /// Several setups: the targets of --displacement that every setup shares (the
     /// references), in a common order, e.g. `1,2`.
     #[arg(long, value_name = "T,...", value_parser = parse_targets)]
     pub references: Option<Targets>,
     /// Another setup of the same structure: its displacement file and its reference targets
-    /// in --references' order (`FILE.csv:T,...`); repeat for each. Each setup is analysed
-    /// alone and the modes merged by PoSER into global shapes (outputs on the global points,
-    /// `setups.csv` each setup's part).
+    /// in --references' order (`FILE.csv:T,...`); repeat for each. The modes are merged into
+    /// global shapes as --merge says (outputs on the global points, `setups.csv` each setup's
+    /// part in the modes PoSER merged).
     #[arg(long, value_name = "FILE.csv:T,...", value_parser = parse_setup)]
     pub setup: Vec<(PathBuf, Targets)>,
     /// `$merge`.

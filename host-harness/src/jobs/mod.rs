@@ -17,7 +17,7 @@ pub mod view;
 
 pub use analyze::{AccelSettings, AnalyzeInput, AnalyzeSpec, TimeOffset, DEFAULT_ACCEL_BANDS};
 pub use ema::{EmaInput, EmaSpec};
-pub use modal::{ModalInput, ModalSpec};
+pub use modal::{ModalComputed, ModalInput, ModalSpec};
 pub use track::{TrackInput, TrackSpec};
 pub use tracking::{PointsInput, Threshold, Tracker, Tracking, TrackingInput};
 pub use view::{ViewInput, WorldInput};

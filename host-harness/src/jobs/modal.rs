@@ -50,6 +50,17 @@ pub struct ModalInput {
     pub plots: bool,
 }
 
+/// What a `modal` job computed ([`ModalSpec::compute`]).
+#[derive(Debug, Clone)]
+pub struct ModalComputed {
+    /// The records analysed (with `$setup`, one channel per global point).
+    pub records: Records,
+    /// The modes found.
+    pub result: crate::analysis::oma::OmaResult,
+    /// With `$setup`: the report's lines on the setups and each setup's part in each mode.
+    pub setups: Option<(String, Vec<crate::export::oma::OmaSetupRow>)>,
+}
+
 /// A checked `modal` job: its records read, its settings resolved against them.
 #[derive(Debug, Clone)]
 pub struct ModalSpec {
@@ -86,13 +97,8 @@ fn settings_for(
         s.peaks.f_min_hz = f.max(df);
         s.ssi.f_range_hz.0 = f;
     }
-    let p = input.prominence_db;
-    if !(p.is_finite() && p >= 0.0) {
-        return Err(SpecError::setting(format!(
-            "$prominence_db must be >= 0, got {p}"
-        )));
-    }
-    s.peaks.prominence_db = p;
+    let range = vibcam_common::setting::table::number;
+    s.peaks.prominence_db = range("modal", "prominence_db", input.prominence_db)?;
     if let Some(b) = &input.bands {
         super::bands_below_nyquist(b, fs_hz, "the record's")?;
         s.bands = b.clone();
@@ -100,15 +106,11 @@ fn settings_for(
     s.ssi.kind = input.ssi;
     s.efdd.quantity = input.efdd_quantity;
     if let Some(i) = input.ssi_block_rows {
-        if !(2..=500).contains(&i) {
-            return Err(SpecError::setting(format!("$ssi_block_rows {i}: 2 to 500")));
-        }
+        range("modal", "ssi_block_rows", i as f64)?;
         s.ssi.block_rows = i;
     }
     if let Some(m) = input.ssi_max_order {
-        if !(2..=400).contains(&m) {
-            return Err(SpecError::setting(format!("$ssi_max_order {m}: 2 to 400")));
-        }
+        range("modal", "ssi_max_order", m as f64)?;
         s.ssi.max_order = m;
     }
     if input.plscf {
@@ -275,6 +277,49 @@ impl ModalSpec {
         &self.settings
     }
 
+    /// The job's results without writing a file: the records (the global points' with
+    /// `$setup`), the modes, and with `$setup` the merge's report lines and `setups.csv`'s rows.
+    pub fn compute(&self) -> anyhow::Result<ModalComputed> {
+        if !self.others.is_empty() {
+            let m = crate::analysis::oma::multi_setup::compute(&self.others, self.input.merge)?;
+            return Ok(ModalComputed {
+                records: m.records,
+                result: m.result,
+                setups: Some((m.text, m.rows)),
+            });
+        }
+        Ok(ModalComputed {
+            result: crate::analysis::oma::analyze(&self.records.channels, &self.settings)?,
+            records: self.records.clone(),
+            setups: None,
+        })
+    }
+
+    /// The report and the page of what [`ModalSpec::compute`] found, as [`ModalSpec::run`]
+    /// writes them (`report.txt`, `report.html`; the figures drawn in memory).
+    pub fn report_and_page(&self, c: &ModalComputed) -> anyhow::Result<(String, String)> {
+        use crate::analysis::oma::run;
+        let setups = c.setups.as_ref().map_or("", |(text, _)| text.as_str());
+        let preamble = format!("{}{setups}", self.preamble());
+        let report = run::report(&c.result, &c.records, &self.settings, &preamble);
+        let figures = run::figures(&c.result, &self.settings)?;
+        let along_x = self.input.axis == PixelAxis::X;
+        let page = run::page(
+            &c.result,
+            &c.records,
+            ("modal", along_x),
+            (None, Vec::new(), None),
+            crate::plots::page_figures(&figures),
+            &report,
+        );
+        Ok((report, page))
+    }
+
+    /// The report's first line: the input.
+    fn preamble(&self) -> String {
+        format!("input: {}\n", self.input.displacement.display())
+    }
+
     /// Runs the job: the report, and whether it succeeded.
     pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
         let i = &self.input;
@@ -287,7 +332,7 @@ impl ModalSpec {
             inputs,
             plots: i.plots,
             along_x: i.axis == PixelAxis::X,
-            preamble: format!("input: {}\n", i.displacement.display()),
+            preamble: self.preamble(),
             extra: Vec::new(),
             frame: None,
             view: None,

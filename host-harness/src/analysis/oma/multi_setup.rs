@@ -39,9 +39,37 @@ pub struct SetupRecords {
     pub preger_block_rows: Option<usize>,
 }
 
+/// What several setups merged give: the global records (one channel per global point), the
+/// merged result, the report's lines on the setups and `setups.csv`'s rows.
+#[derive(Debug, Clone)]
+pub struct Merged {
+    /// The global points' records (each point's channel from the setup it comes from).
+    pub records: Records,
+    /// The merged modes (with the first setup's spectra, or PreGER's poles).
+    pub result: OmaResult,
+    /// The report's lines on the setups: how they were merged, what each alone found, where
+    /// each global target comes from.
+    pub text: String,
+    /// Each setup's part in each mode PoSER merged.
+    pub rows: Vec<OmaSetupRow>,
+}
+
 /// Analyses every setup, merges them as `merge` says and writes the outputs (`o`'s preamble
 /// opens the report).
 pub fn run(setups: &[SetupRecords], merge: Merge, o: &Output<'_>) -> anyhow::Result<Outcome> {
+    let m = compute(setups, merge)?;
+    let mut extra = o.extra.clone();
+    extra.push(("setups.csv".to_string(), setups_csv(&m.rows)));
+    let o = Output {
+        extra,
+        preamble: format!("{}{}", o.preamble, m.text),
+        ..o.clone()
+    };
+    super::run::write(&m.records, &setups[0].settings, &m.result, &o)
+}
+
+/// Analyses every setup and merges them as `merge` says (no file written).
+pub fn compute(setups: &[SetupRecords], merge: Merge) -> anyhow::Result<Merged> {
     let results: Vec<OmaResult> = setups
         .iter()
         .map(|s| analyze(&s.records.channels, &s.settings))
@@ -106,19 +134,12 @@ pub fn run(setups: &[SetupRecords], merge: Merge, o: &Output<'_>) -> anyhow::Res
             reference_mac: p.reference_mac,
         })
         .collect();
-    let mut extra = o.extra.clone();
-    extra.push(("setups.csv".to_string(), setups_csv(&rows)));
-    let preamble = format!(
-        "{}{}",
-        o.preamble,
-        setups_text(setups, merge, &results, &points)
-    );
-    let o = Output {
-        extra,
-        preamble,
-        ..o.clone()
-    };
-    super::run::write(&records, &first.settings, &result, &o)
+    Ok(Merged {
+        text: setups_text(setups, merge, &results, &points),
+        records,
+        result,
+        rows,
+    })
 }
 
 /// SSI's modes of every setup's records together (PreGER, with setup 1's settings and
