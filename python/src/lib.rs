@@ -1148,10 +1148,10 @@ fn modal<'py>(
     let (c, report, html) = py
         .allow_threads(|| -> anyhow::Result<_> {
             let spec = ModalSpec::new(input).map_err(SpecError::into_anyhow)?;
-            if write {
-                spec.run()?;
-            }
             let c = spec.compute()?;
+            if write {
+                spec.write(&c)?;
+            }
             let (report, html) = spec.report_and_page(&c)?;
             Ok((c, report, html))
         })

@@ -795,8 +795,6 @@ def modal(
     """
     for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
         _setting("modal", key, v)
-    if axis not in ("x", "y"):
-        raise InputError(f"axis = {axis!r}: 'x' or 'y'")
     pairs = []
     for i, s in enumerate(setups or []):
         try:

@@ -322,9 +322,25 @@ impl ModalSpec {
 
     /// Runs the job: the report, and whether it succeeded.
     pub fn run(&self) -> anyhow::Result<crate::analysis::run::Outcome> {
+        self.write(&self.compute()?)
+    }
+
+    /// Writes what [`ModalSpec::compute`] found into the output directory (with `$setup`,
+    /// `setups.csv` too): the report, and whether it succeeded.
+    pub fn write(&self, c: &ModalComputed) -> anyhow::Result<crate::analysis::run::Outcome> {
         let i = &self.input;
         let mut inputs = vec![i.displacement.clone()];
         inputs.extend(i.setups.iter().map(|(p, _)| p.clone()));
+        let (text, extra) = match &c.setups {
+            Some((text, rows)) => (
+                text.as_str(),
+                vec![(
+                    "setups.csv".to_string(),
+                    crate::export::oma::setups_csv(rows),
+                )],
+            ),
+            None => ("", Vec::new()),
+        };
         let output = Output {
             out: &i.out,
             force: i.force,
@@ -332,15 +348,12 @@ impl ModalSpec {
             inputs,
             plots: i.plots,
             along_x: i.axis == PixelAxis::X,
-            preamble: self.preamble(),
-            extra: Vec::new(),
+            preamble: format!("{}{text}", self.preamble()),
+            extra,
             frame: None,
             view: None,
             scrub: None,
         };
-        if !self.others.is_empty() {
-            return crate::analysis::oma::multi_setup::run(&self.others, i.merge, &output);
-        }
-        crate::analysis::oma::run::run(&self.records, &self.settings, &output)
+        crate::analysis::oma::run::write(&c.records, &self.settings, &c.result, &output)
     }
 }

@@ -1,15 +1,13 @@
 //! `modal` over several setups (docs/method.md §3.12, "Several setups"): each setup's records
 //! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's modes from
 //! every setup's records together by PreGER ([`vibcam_identify::oma::preger`]) and the other
-//! methods' by PoSER; written as one output whose targets are the global points (the
-//! references first, then each setup's others) plus `setups.csv` (each setup's part in each
+//! methods' by PoSER; one result whose targets are the global points (the
+//! references first, then each setup's others) and the rows of `setups.csv` (each setup's part in each
 //! mode PoSER merged); the figures are the first setup's (the stabilisation diagram PreGER's).
 
 use super::input::Records;
-use super::run::Output;
 use super::{analyze, Method, OmaResult, OmaSettings};
-use crate::analysis::run::Outcome;
-use crate::export::oma::{setups_csv, OmaSetupRow};
+use crate::export::oma::OmaSetupRow;
 use std::fmt::Write as _;
 use vibcam_identify::oma::preger::{self, Record};
 use vibcam_identify::oma::setups::{layout, poser, Setup};
@@ -52,20 +50,6 @@ pub struct Merged {
     pub text: String,
     /// Each setup's part in each mode PoSER merged.
     pub rows: Vec<OmaSetupRow>,
-}
-
-/// Analyses every setup, merges them as `merge` says and writes the outputs (`o`'s preamble
-/// opens the report).
-pub fn run(setups: &[SetupRecords], merge: Merge, o: &Output<'_>) -> anyhow::Result<Outcome> {
-    let m = compute(setups, merge)?;
-    let mut extra = o.extra.clone();
-    extra.push(("setups.csv".to_string(), setups_csv(&m.rows)));
-    let o = Output {
-        extra,
-        preamble: format!("{}{}", o.preamble, m.text),
-        ..o.clone()
-    };
-    super::run::write(&m.records, &setups[0].settings, &m.result, &o)
 }
 
 /// Analyses every setup and merges them as `merge` says (no file written).
