@@ -1209,7 +1209,7 @@ fn modal_dict<'py>(
 #[pyfunction]
 #[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
-    delay_s=0.0, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
+    delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
     max_order=48, nperseg=None, out=None, force=false))]
 #[allow(clippy::too_many_arguments)]
 fn ema<'py>(
@@ -1223,7 +1223,7 @@ fn ema<'py>(
     impact: bool,
     exp_window: &str,
     block_s: Option<f64>,
-    delay_s: f64,
+    delay_s: Option<f64>,
     response_quantity: &str,
     bands: Option<Vec<(f64, f64)>>,
     f_min_hz: Option<f64>,

@@ -701,7 +701,7 @@ def ema(
     impact: bool = False,
     exp_window: _Union[str, float] = "auto",
     block_s: _Optional[float] = None,
-    delay_s: float = 0.0,
+    delay_s: _Optional[float] = None,
     response_quantity: str = "displacement",
     bands: _Optional[_Sequence[_Sequence[float]]] = None,
     f_min_hz: _Optional[float] = None,
@@ -720,7 +720,7 @@ def ema(
     files, else ``response_fs``/``excitation_fs``; the slower record is upsampled to the
     faster's rate. ``impact``: hits of a hammer (``exp_window`` ``"off"``, ``"auto"`` or the
     window's value at the block's end; ``block_s`` the longest block); else a continuous force
-    (Welch segments of ``nperseg``). ``delay_s``: the responses' first sample after the force's.
+    (Welch segments of ``nperseg``). ``delay_s``: the responses' first sample after the force's (None: as the files state, else estimated from an impact's onset).
     ``response_quantity``: ``"displacement"``, ``"velocity"`` or ``"acceleration"``. ``bands``:
     ``[(lo, hi), ...]`` Hz, one mode per band (default: every mode the stabilisation diagram
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
@@ -741,7 +741,7 @@ def ema(
         impact=bool(impact),
         exp_window=exp_window,
         block_s=_setting("ema", "block_s", block_s, optional=True),
-        delay_s=_setting("ema", "delay_s", delay_s),
+        delay_s=_setting("ema", "delay_s", delay_s, optional=True),
         response_quantity=response_quantity,
         bands=None if bands is None else _bands(bands),
         f_min_hz=_setting("ema", "f_min_hz", f_min_hz, optional=True),

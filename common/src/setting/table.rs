@@ -459,8 +459,10 @@ pub const SETTINGS: &[Setting] = &[
         values: FINITE,
         words: &[],
         unit: "s",
-        default: DefaultValue::Given("0"),
-        help: "The responses' first sample came this long after the force's (negative: before).",
+        default: DefaultValue::None,
+        help: "The responses' first sample came this long after the force's (negative: before; \
+               default: as the files state, else, of an impact test, from when the responses \
+               start to move after the pulse, else 0).",
     },
     Setting {
         key: "response_quantity",
@@ -482,7 +484,8 @@ pub const SETTINGS: &[Setting] = &[
         words: &[],
         unit: "Hz",
         default: DefaultValue::None,
-        help: "Lowest frequency fitted (default: the bands', else 1 % of the top, at least 0.5).",
+        help: "Lowest frequency fitted (default: the bands', else of an impact test the lowest \
+               the hits excited above the noise / 1.25, at least 1 % of the top and 0.5).",
     },
     Setting {
         key: "f_max_hz",
@@ -491,7 +494,8 @@ pub const SETTINGS: &[Setting] = &[
         words: &[],
         unit: "Hz",
         default: DefaultValue::None,
-        help: "Highest frequency fitted (default: the bands', else 0.8 x the slower record's \
+        help: "Highest frequency fitted (default: the bands', else of an impact test the highest \
+               the hits excited above the noise x 1.25, at most 0.8 x the slower record's \
                Nyquist frequency).",
     },
     Setting {

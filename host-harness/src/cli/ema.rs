@@ -61,8 +61,8 @@ pub struct Args {
     #[arg(long, value_name = "S", value_parser = super::args::number("block_s"), help = super::args::help("block_s"))]
     pub block_s: Option<f64>,
     /// `$delay_s`.
-    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value = super::args::given("delay_s"), value_parser = super::args::number("delay_s"), help = super::args::help("delay_s"))]
-    pub delay_s: f64,
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = super::args::number("delay_s"), help = super::args::help("delay_s"))]
+    pub delay_s: Option<f64>,
     /// `$response_quantity`.
     #[arg(long, value_enum, default_value = super::args::given("response_quantity"), help = super::args::help("response_quantity"))]
     pub response_quantity: QuantityArg,

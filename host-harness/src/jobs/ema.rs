@@ -1,8 +1,12 @@
 //! `ema`: experimental modal analysis of responses over a measured force.
 
 use super::{SpecError, SpecResult};
+use crate::analysis::ema::excited::{self, onset_lag_s};
+use crate::analysis::ema::impact;
 use crate::analysis::ema::impact::ImpactRule;
-use crate::analysis::ema::input::{align, read_force, read_responses};
+use crate::analysis::ema::input::{
+    align, choose_axis, rate_text, read_force, read_responses, Aligned, Series,
+};
 use crate::analysis::ema::lscf::LscfRule;
 use crate::analysis::ema::run::EmaRequest;
 use crate::analysis::ema::{EmaSettings, Excitation, ExpChoice};
@@ -32,8 +36,9 @@ pub struct EmaInput {
     pub exp_window: ExpChoice,
     /// `$block_s`: longest block of a hit, s.
     pub block_s: Option<f64>,
-    /// `$delay_s`: the responses' first sample after the force's, s.
-    pub delay_s: f64,
+    /// `$delay_s`: the responses' first sample after the force's, s (none: as the files
+    /// state, else estimated from an impact test's onset, else 0).
+    pub delay_s: Option<f64>,
     /// `$response_quantity`: displacement (receptance), velocity or acceleration.
     pub form: FrfForm,
     /// `$bands`, Hz (none: every mode the diagram shows).
@@ -116,17 +121,33 @@ impl EmaSpec {
         )
         .map_err(SpecError::Input)?;
         let response = without_the_force(response, &force, &input)?;
-        let aligned = align(&response, &force, input.delay_s).map_err(SpecError::Input)?;
+        let mut response = response;
+        let mut aligned =
+            align(&response, &force, input.delay_s.unwrap_or(0.0)).map_err(SpecError::Input)?;
         let nyq = aligned.nyquist_hz;
         if let Some(b) = &input.bands {
             super::bands_below_nyquist(b, 2.0 * nyq, "the slower record's")?;
         }
         let (f_min, f_max) = band_analysed(&input, aligned.nyquist_hz)?;
         let excitation = excitation(&input, &aligned)?;
+        let rule = match excitation {
+            Excitation::Impact { rule, .. } => Some(rule),
+            Excitation::Continuous { .. } => None,
+        };
+        if let (Some(rule), None, false) = (rule, input.delay_s, stated_starts(&response, &force)) {
+            if let Some(a) = estimated_delay(&response, &force, &aligned, rule)? {
+                aligned = a;
+            }
+        }
+        choose_axis(&mut response, &mut aligned, rule, (f_min, f_max));
         let settings = EmaSettings {
             excitation,
             form: input.form,
             band_hz: (f_min, f_max),
+            band_from_data: (
+                input.f_min_hz.is_none() && input.bands.is_none(),
+                input.f_max_hz.is_none() && input.bands.is_none(),
+            ),
             bands: input.bands.clone(),
             lscf: LscfRule {
                 max_order: input.max_order,
@@ -164,6 +185,47 @@ impl EmaSpec {
     }
 }
 
+/// Both files state when their first sample was taken (their delay is theirs).
+fn stated_starts(response: &Series, force: &Series) -> bool {
+    response.start_time.is_some() && force.start_time.is_some()
+}
+
+/// The records aligned again when an impact test's responses start to move well after the
+/// force's pulse ([`onset_lag_s`]: more than twice the pulse and three samples of the slower
+/// record): their record began that much before the force's. The estimate is said in the
+/// notes; `None` when there is no such lag.
+fn estimated_delay(
+    response: &Series,
+    force: &Series,
+    aligned: &Aligned,
+    rule: ImpactRule,
+) -> SpecResult<Option<Aligned>> {
+    let fs = aligned.fs_hz;
+    let Ok(hits) = impact::find(&aligned.force, fs, rule, &force.names[0]) else {
+        return Ok(None);
+    };
+    let Some(lag) = onset_lag_s(&aligned.responses, &hits, fs) else {
+        return Ok(None);
+    };
+    let pulse = hits
+        .used()
+        .map(|h| (h.pulse().end - h.pulse().start) as f64 / fs)
+        .fold(0.0f64, f64::max);
+    if lag <= (2.0 * pulse).max(3.0 / (2.0 * aligned.nyquist_hz)) {
+        return Ok(None);
+    }
+    let mut a = align(response, force, -lag).map_err(SpecError::Input)?;
+    a.notes.push(format!(
+        "the responses start to move {:.2} ms after the force's pulse (the median over \
+         responses and hits of when each leaves its noise by {} standard deviations): their \
+         record began that much before the force's, and they are aligned by it ($delay_s gives \
+         the delay instead)",
+        1e3 * lag,
+        excited::ONSET_SIGMAS
+    ));
+    Ok(Some(a))
+}
+
 /// The settings checked on their own, before any file is read.
 fn check_alone(input: &EmaInput) -> SpecResult<()> {
     if let Some(b) = &input.bands {
@@ -179,10 +241,9 @@ fn check_alone(input: &EmaInput) -> SpecResult<()> {
             "$response_col {c} is given twice: each response once"
         )));
     }
-    if !input.delay_s.is_finite() {
+    if let Some(d) = input.delay_s.filter(|d| !d.is_finite()) {
         return Err(SpecError::setting(format!(
-            "$delay_s must be a finite number of seconds, got {}",
-            input.delay_s
+            "$delay_s must be a finite number of seconds, got {d}"
         )));
     }
     if let ExpChoice::End(e) = input.exp_window {
@@ -216,7 +277,8 @@ fn band_analysed(input: &EmaInput, nyq: f64) -> SpecResult<(f64, f64)> {
     let f_max = match input.f_max_hz {
         Some(f) if !(f.is_finite() && f > 0.0 && f <= nyq) => {
             return Err(SpecError::setting(format!(
-                "$f_max_hz {f}: between 0 and the slower record's Nyquist frequency ({nyq} Hz)"
+                "$f_max_hz {f}: between 0 and the slower record's Nyquist frequency ({} Hz)",
+                rate_text(nyq)
             )))
         }
         Some(f) => f,

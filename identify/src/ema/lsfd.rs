@@ -129,6 +129,90 @@ pub fn fit(
     Ok(out)
 }
 
+/// Where a fit leaves its residual: over all FRFs and lines of the band.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Residual {
+    /// `||model - data|| / ||data||` over every FRF together.
+    pub overall: f64,
+    /// The FRF with the largest misfit (0-based) and that misfit.
+    pub worst: (usize, f64),
+    /// Mean residual power per line near the poles (within 5 half-power bandwidths, at least 3
+    /// lines) over the mean elsewhere in the band: near 1 for a noise floor, large when the model
+    /// misses at the modes.
+    pub near_over_far: f64,
+    /// The pole (index) near which the residual is largest.
+    pub at_pole: Option<usize>,
+    /// The share of the residual's power below the lowest pole's neighbourhood, and that
+    /// neighbourhood's lower edge, Hz.
+    pub below: (f64, f64),
+}
+
+/// Where the fit `constants` of `poles` to `frfs` leaves its residual over `band_hz`.
+pub fn residual(
+    freq_hz: &[f64],
+    frfs: &[Vec<Complex64>],
+    band_hz: (f64, f64),
+    poles: &[Pole],
+    form: FrfForm,
+    constants: &[Constants],
+) -> Residual {
+    let df = if freq_hz.len() > 1 {
+        freq_hz[1] - freq_hz[0]
+    } else {
+        1.0
+    };
+    let near = |f: f64| {
+        poles
+            .iter()
+            .position(|p| (f - p.f_hz).abs() <= (5.0 * p.damping * p.f_hz).max(3.0 * df))
+    };
+    let (mut res, mut data) = (0.0, 0.0);
+    let (mut near_p, mut near_n, mut far_p, mut far_n) = (0.0, 0usize, 0.0, 0usize);
+    let mut per_pole = vec![0.0; poles.len()];
+    let lowest = poles
+        .iter()
+        .map(|p| p.f_hz - (5.0 * p.damping * p.f_hz).max(3.0 * df))
+        .fold(f64::INFINITY, f64::min);
+    let mut below = 0.0;
+    for (h, c) in frfs.iter().zip(constants) {
+        for (k, &f) in freq_hz.iter().enumerate() {
+            if f < band_hz.0 || f > band_hz.1 || f <= 0.0 {
+                continue;
+            }
+            let r = (h[k] - c.evaluate(poles, form, f)).norm_sqr();
+            res += r;
+            data += h[k].norm_sqr();
+            if f < lowest {
+                below += r;
+            }
+            match near(f) {
+                Some(p) => {
+                    near_p += r;
+                    near_n += 1;
+                    per_pole[p] += r;
+                }
+                None => {
+                    far_p += r;
+                    far_n += 1;
+                }
+            }
+        }
+    }
+    let worst = constants
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (i, c.misfit))
+        .fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
+    let mean = |p: f64, n: usize| p / n.max(1) as f64;
+    Residual {
+        overall: (res / data.max(f64::MIN_POSITIVE)).sqrt(),
+        worst,
+        near_over_far: mean(near_p, near_n) / mean(far_p, far_n).max(f64::MIN_POSITIVE),
+        at_pole: (0..poles.len()).max_by(|&a, &b| per_pole[a].total_cmp(&per_pole[b])),
+        below: (below / res.max(f64::MIN_POSITIVE), lowest),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@
 //! with residual terms ([`lsfd`]); each mode's interval by the jackknife over the hits or the
 //! segment groups.
 
+pub mod excited;
 pub mod impact;
 pub use crate::oma::lscf;
 pub mod lsfd;
@@ -24,8 +25,10 @@ use spectra::{Frfs, Spectra};
 pub enum ExpChoice {
     /// None.
     Off,
-    /// Applied when a response has not decayed by its block's end (the RMS of its last tenth
-    /// above 5 % of its largest excursion), ending at 1 %.
+    /// Applied when the responses have not decayed by their block's end (over the lines the
+    /// hits excited, [`excited`], more than 5 % of the amplitude left in the block's last
+    /// quarter; without such lines, the RMS of the last tenth above 5 % of the largest
+    /// excursion), ending at 1 %.
     Auto,
     /// Applied, its value at the block's end this (0 < end < 1).
     End(f64),
@@ -55,8 +58,13 @@ pub struct EmaSettings {
     pub excitation: Excitation,
     /// Displacement, velocity or acceleration over force.
     pub form: FrfForm,
-    /// The band the poles and residues are fitted in, Hz.
+    /// The band the poles and residues are fitted in, Hz; with `band_from_data`, the outer
+    /// limits of the band chosen.
     pub band_hz: (f64, f64),
+    /// Choose the band's lower and upper end inside `band_hz` from the data (each end not
+    /// given): from an impact test's excited lines ([`excited::Excited::band`]), said in the
+    /// notes.
+    pub band_from_data: (bool, bool),
     /// One mode per band (none: every mode the stabilisation diagram shows).
     pub bands: Option<Vec<(f64, f64)>>,
     /// LSCF's orders and stability rules.
@@ -109,6 +117,8 @@ pub struct EmaResult {
     pub hits: Option<Hits>,
     /// The exponential window applied.
     pub exp: Option<ExpWindow>,
+    /// The band fitted, Hz (`band_hz` of the settings, or the one chosen from the data).
+    pub band_hz: (f64, f64),
     /// Units averaged (hits or segment groups) and their sizes.
     pub unit_sizes: Vec<usize>,
     /// What the reader should know.
@@ -237,19 +247,27 @@ pub fn analyse(
     s: &EmaSettings,
 ) -> anyhow::Result<EmaResult> {
     let mut notes = Vec::new();
-    let top = s.band_hz.1 * 1.05;
-    let (spectra, hits, exp): (Spectra, Option<Hits>, Option<ExpWindow>) = match s.excitation {
+    let Prepared {
+        spectra,
+        hits,
+        exp,
+        band_hz,
+    } = match s.excitation {
         Excitation::Impact { rule, exp } => impact_spectra(
             force,
             responses,
             fs_hz,
             (force_name, rule, exp),
-            top,
+            s,
             &mut notes,
         )?,
         Excitation::Continuous { nperseg } => {
-            continuous_spectra(force, responses, fs_hz, nperseg, top, &mut notes)?
+            continuous_spectra(force, responses, fs_hz, nperseg, s.band_hz, &mut notes)?
         }
+    };
+    let s = &EmaSettings {
+        band_hz,
+        ..s.clone()
     };
     let frfs = spectra.frfs(None);
     let freq = spectra.freq_hz.clone();
@@ -267,12 +285,7 @@ pub fn analyse(
         lsfd::fit(&freq, &frfs.h1, s.band_hz, &fitted, s.form)?
     };
     let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
-    let unit = if hits.is_some() {
-        "hit"
-    } else {
-        "segment group"
-    };
-    // the jackknife: every unit left out in turn
+    let unit = hits.as_ref().map_or("segment group", |_| "hit");
     let reps = replicates_or_none(&spectra, &freq, &fitted, s, unit, &mut notes);
     let modes = modes_of(
         chosen,
@@ -282,10 +295,13 @@ pub fn analyse(
         exp,
         &mut notes,
     );
-    notes.extend(misfit_note(&constants));
+    if !constants.is_empty() {
+        let r = lsfd::residual(&freq, &frfs.h1, s.band_hz, &fitted, s.form, &constants);
+        notes.extend(misfit_note(&r, &fitted));
+    }
     let clusters = all
-        .iter()
-        .map(|m| (m.clone(), true))
+        .into_iter()
+        .map(|m| (m, true))
         .chain(rejected.iter().map(|r| (r.cluster.clone(), false)))
         .collect();
     Ok(EmaResult {
@@ -298,22 +314,48 @@ pub fn analyse(
         constants,
         hits,
         exp,
+        band_hz,
         unit_sizes,
         notes,
     })
 }
 
-/// A note when the fitted model leaves over a fifth of an FRF unexplained.
-fn misfit_note(constants: &[lsfd::Constants]) -> Option<String> {
-    let misfit = constants.iter().map(|c| c.misfit).fold(0.0f64, f64::max);
-    (misfit > 0.2).then(|| {
-        format!(
-            "the fitted model leaves {:.0} % of an FRF unexplained (LSFD misfit {misfit:.3}): a \
-             delay between the records, modes the band cuts or not found, or noise; the numbers \
-             above are doubtful",
-            100.0 * misfit
-        )
-    })
+/// A note when the fitted model leaves over a fifth of an FRF unexplained, with the cause the
+/// residual points to: spread over the band as a noise floor is, or gathered at a mode.
+fn misfit_note(r: &lsfd::Residual, poles: &[Pole]) -> Option<String> {
+    let (worst, misfit) = r.worst;
+    if misfit <= 0.2 {
+        return None;
+    }
+    let cause = match r.at_pole.map(|p| poles[p].f_hz) {
+        _ if r.below.0 >= 0.5 => format!(
+            "{:.0} % of the residual lies below the lowest mode's peak ({:.0} Hz): a rigid-body \
+             or suspension motion there, or a mode below it, that the lower residual term does \
+             not follow; $f_min_hz above it fits the modes alone",
+            100.0 * r.below.0,
+            r.below.1
+        ),
+        Some(f) if r.near_over_far >= 3.0 => format!(
+            "the residual gathers at the modes (per line {:.0} times elsewhere, most at {f:.1} \
+             Hz): the model misses there: a delay between the records ($delay_s), a mode not \
+             found or split, or the band cutting a mode ($f_min_hz, $f_max_hz, $bands)",
+            r.near_over_far
+        ),
+        _ => format!(
+            "the residual is spread over the band as a noise floor is (per line near the modes \
+             {:.1} times elsewhere), not gathered at the modes: the FRFs are noisy between their \
+             peaks; more hits averaged or a narrower band ($f_min_hz, $f_max_hz, $bands) lower \
+             it",
+            r.near_over_far
+        ),
+    };
+    Some(format!(
+        "the fitted model leaves {:.0} % of response {}'s FRF unexplained (LSFD misfit \
+         {misfit:.3}; {:.0} % over all responses): {cause}; the numbers above are doubtful",
+        100.0 * misfit,
+        worst + 1,
+        100.0 * r.overall
+    ))
 }
 
 /// The jackknife's replicates with every `unit` left out in turn, or none (noted) with fewer than
@@ -408,33 +450,77 @@ fn modes_of(
     modes
 }
 
-/// The spectra of an impact test, hit by hit (the hits found, the exponential window chosen);
-/// notes when the responses have not decayed or move before the pulses.
-#[allow(clippy::type_complexity)]
+/// The spectra a test's FRFs are formed from, and what was decided on the way.
+struct Prepared {
+    spectra: Spectra,
+    hits: Option<Hits>,
+    exp: Option<ExpWindow>,
+    band_hz: (f64, f64),
+}
+
+/// The spectra of an impact test, hit by hit: the hits found, the band (from what they excited
+/// when `s.band_from_data`) and the exponential window chosen; notes say both, and when the
+/// responses have not decayed or move before the pulses.
 fn impact_spectra(
     force: &[f64],
     responses: &[Vec<f64>],
     fs_hz: f64,
     (force_name, rule, exp): (&str, ImpactRule, ExpChoice),
-    top: f64,
+    s: &EmaSettings,
     notes: &mut Vec<String>,
-) -> anyhow::Result<(Spectra, Option<Hits>, Option<ExpWindow>)> {
+) -> anyhow::Result<Prepared> {
     let hits = impact::find(force, fs_hz, rule, force_name)?;
     let block_s = hits.block as f64 / fs_hz;
-    let ratio = undecayed(responses, &hits);
+    let ex = excited::excited(responses, &hits, fs_hz, s.band_hz);
+    let band_hz = match (&ex, s.band_from_data) {
+        (Some(e), (lo, hi)) if lo || hi => {
+            let b = band_note(e, s.band_hz, notes);
+            (
+                if lo { b.0 } else { s.band_hz.0 },
+                if hi { b.1 } else { s.band_hz.1 },
+            )
+        }
+        _ => s.band_hz,
+    };
+    let (ratio, why) = match &ex {
+        Some(e) if e.lines > 0 => (
+            e.undecayed,
+            format!(
+                "{:.0} % of the excited lines' amplitude is left in the block's last quarter{}",
+                100.0 * e.undecayed,
+                e.undecayed_at_hz
+                    .map(|f| format!(", most at {f:.0} Hz"))
+                    .unwrap_or_default()
+            ),
+        ),
+        _ => {
+            let r = undecayed(responses, &hits);
+            let why = format!(
+                "the last tenth's RMS is {:.0} % of the largest excursion",
+                100.0 * r
+            );
+            (r, why)
+        }
+    };
     let window = match exp {
         ExpChoice::Off => None,
         ExpChoice::End(e) => Some(ExpWindow::ending_at(e, block_s)),
         ExpChoice::Auto if ratio > 0.05 => Some(ExpWindow::ending_at(0.01, block_s)),
         ExpChoice::Auto => None,
     };
-    if window.is_none() && ratio > 0.05 {
-        notes.push(format!(
-            "the responses have not decayed by the blocks' end (the last tenth's RMS is \
-             {:.0} % of the largest excursion) and no exponential window was applied: \
-             leakage widens the peaks and raises the damping",
-            100.0 * ratio
-        ));
+    match (window.is_some(), ratio > 0.05, exp) {
+        (false, true, _) => notes.push(format!(
+            "the responses have not decayed by the blocks' end ({why}) and no exponential \
+             window was applied: leakage widens the peaks and raises the damping"
+        )),
+        (true, true, ExpChoice::Auto) => notes.push(format!(
+            "exponential window applied: the responses have not decayed by the blocks' end \
+             ({why}); $exp_window off to leave it out"
+        )),
+        (false, false, ExpChoice::Auto) => notes.push(format!(
+            "no exponential window: the responses decayed within the blocks ({why})"
+        )),
+        _ => {}
     }
     let ahead = precursor(responses, &hits);
     if ahead > 0.1 {
@@ -445,21 +531,58 @@ fn impact_spectra(
             100.0 * ahead
         ));
     }
-    let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, top)?;
-    Ok((sp, Some(hits), window))
+    let sp = spectra::of_hits(force, responses, fs_hz, &hits, window, band_hz.1 * 1.05)?;
+    Ok(Prepared {
+        spectra: sp,
+        hits: Some(hits),
+        exp: window,
+        band_hz,
+    })
+}
+
+/// The band chosen from what the hits excited inside `outer` (said in `notes`), or `outer`
+/// when nothing stands out.
+fn band_note(e: &excited::Excited, outer: (f64, f64), notes: &mut Vec<String>) -> (f64, f64) {
+    match (e.span_hz, e.band(outer)) {
+        (Some((lo, hi)), Some(b)) => {
+            notes.push(format!(
+                "the band's ends not given are chosen from the data, {:.0}-{:.0} Hz: the \
+                 responses stand {} dB above their noise after the hits and decay at \
+                 {lo:.0}-{hi:.0} Hz ({} lines, the strongest {:.0} dB above the noise), widened \
+                 by {}; $f_min_hz, $f_max_hz or $bands to choose",
+                b.0,
+                b.1,
+                excited::ABOVE_FLOOR_DB,
+                e.lines,
+                e.peak_snr_db,
+                excited::MARGIN
+            ));
+            b
+        }
+        _ => {
+            notes.push(format!(
+                "no line of the responses stands {} dB above their noise after the hits and \
+                 decays: the whole band {:.0}-{:.0} Hz fitted; are the responses those of the \
+                 structure hit?",
+                excited::ABOVE_FLOOR_DB,
+                outer.0,
+                outer.1
+            ));
+            outer
+        }
+    }
 }
 
 /// The spectra of a continuous excitation over Welch segments in groups; a note when the force
 /// looks like hammer hits.
-#[allow(clippy::type_complexity)]
 fn continuous_spectra(
     force: &[f64],
     responses: &[Vec<f64>],
     fs_hz: f64,
     nperseg: usize,
-    top: f64,
+    band_hz: (f64, f64),
     notes: &mut Vec<String>,
-) -> anyhow::Result<(Spectra, Option<Hits>, Option<ExpWindow>)> {
+) -> anyhow::Result<Prepared> {
     let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
     let rms =
         (force.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / force.len().max(1) as f64).sqrt();
@@ -478,9 +601,14 @@ fn continuous_spectra(
         fs_hz,
         nperseg,
         crate::oma::uncertainty::GROUPS,
-        top,
+        band_hz.1 * 1.05,
     )?;
-    Ok((sp, None, None))
+    Ok(Prepared {
+        spectra: sp,
+        hits: None,
+        exp: None,
+        band_hz,
+    })
 }
 
 /// The jackknife's replicates: with every unit (hit or segment group) left out in turn, each

@@ -6,8 +6,9 @@
 //!   response (`disp_mm`, else the image's `-cy`), lost samples filled as `modal` fills them.
 //! * Any other `.csv`: a header of channel names and an optional time column (`t_s`, `time` or
 //!   `t`), every other column a channel.
-//! * `.npy` (pyidi's `(points, samples, 2)`): channels `point P y`, `point P x`; by default the
-//!   coordinate (y or x) that moves more.
+//! * `.npy` (pyidi's `(points, samples, 2)`): channels `point P y`, `point P x`; by default
+//!   both are read and [`choose_axis`] keeps the coordinate the hits excited above its noise
+//!   (an impact test), else the one that moves more.
 //! * `.lvm`, `.tdms`, `.uff`/`.unv` (dataset 58): channels by name, segments joined.
 //!
 //! **Rates.** From the file (a time column, LVM `Delta_X`, TDMS `wf_increment`, UFF's abscissa
@@ -22,6 +23,7 @@
 //! first sample came that long after the force's (its whole samples are dropped from the
 //! force's start; less than half a sample is left, stated), `< 0` the other way.
 
+use super::{excited, impact, impact::ImpactRule};
 use crate::bad_input;
 use crate::daq::{self, Channel};
 use crate::setting::SpecError;
@@ -45,6 +47,9 @@ pub struct Series {
     /// The absolute time of the first sample (s since 1904-01-01 UTC), when the file states
     /// it (TDMS `wf_start_time`).
     pub start_time: Option<f64>,
+    /// A pyidi `.npy` read without `$response_col`: its channels are every point's y, then
+    /// every point's x, until [`choose_axis`] keeps one coordinate.
+    pub axis_pending: bool,
 }
 
 /// Which reader a file's name asks for.
@@ -140,7 +145,9 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         .unwrap_or_default();
     let mut notes = record.notes.clone();
     let npy = kind(path) == "npy";
-    let wanted = wanted_channels(&record, &first, cols, npy, &mut notes, &file);
+    let wanted = wanted_channels(&first, cols, npy);
+    let has = |a: &str| wanted.iter().any(|n| n.ends_with(a));
+    let axis_pending = npy && cols.is_empty() && has(" y") && has(" x");
     if wanted.is_empty() {
         return Err(bad_input(format!("{file}: no channels")));
     }
@@ -174,6 +181,7 @@ pub fn read_responses(path: &Path, cols: &[String], fs_hz: Option<f64>) -> anyho
         notes,
         camera: npy,
         start_time,
+        axis_pending,
     })
 }
 
@@ -230,52 +238,115 @@ fn responses_from_displacement(
         notes,
         camera: true,
         start_time: None,
+        axis_pending: false,
     })
 }
 
-/// The channels to read: those named, else (a pyidi `.npy`) the coordinate that moves more
-/// (said in `notes`), else every channel of the first segment.
-fn wanted_channels(
-    record: &crate::daq::Record,
-    first: &[String],
-    cols: &[String],
-    npy: bool,
-    notes: &mut Vec<String>,
-    file: &str,
-) -> Vec<String> {
+/// The channels to read: those named, else (a pyidi `.npy`) every point's y then every point's
+/// x, else every channel of the first segment.
+fn wanted_channels(first: &[String], cols: &[String], npy: bool) -> Vec<String> {
     if !cols.is_empty() {
         cols.to_vec()
     } else if npy && first.iter().any(|n| n.ends_with(" y") || n.ends_with(" x")) {
-        // pyidi: the coordinate that moves more
-        let spread = |axis: &str| -> f64 {
-            first
-                .iter()
-                .filter(|n| n.ends_with(axis))
-                .filter_map(|n| record.channel(n, file).ok())
-                .map(|c| {
-                    let m = c.values.iter().sum::<f64>() / c.values.len().max(1) as f64;
-                    c.values.iter().map(|v| (v - m).powi(2)).sum::<f64>()
-                })
-                .sum()
-        };
-        let axis = if spread(" x") > spread(" y") {
-            " x"
-        } else {
-            " y"
-        };
-        notes.push(format!(
-            "{file}: the points' {} coordinate (it moves more than the other; \
-             $response_col to choose)",
-            axis.trim()
-        ));
-        first
-            .iter()
-            .filter(|n| n.ends_with(axis))
+        let ys = first.iter().filter(|n| n.ends_with(" y"));
+        ys.chain(first.iter().filter(|n| n.ends_with(" x")))
             .cloned()
             .collect()
     } else {
         first.to_vec()
     }
+}
+
+/// How much the hits of an impact test (`rule`) excited `responses` above their noise in
+/// `band_hz` (the summed early power over the floor of [`excited`]); `None` when the force
+/// holds no usable hit or the blocks are too short to tell.
+fn excited_score(
+    force: &[f64],
+    responses: &[Vec<f64>],
+    fs_hz: f64,
+    rule: ImpactRule,
+    band_hz: (f64, f64),
+) -> Option<excited::Excited> {
+    let hits = impact::find(force, fs_hz, rule, "force").ok()?;
+    excited::excited(responses, &hits, fs_hz, band_hz)
+}
+
+/// Keeps one coordinate of a pyidi `.npy` read with both ([`Series::axis_pending`]): of an
+/// impact test (`rule`), the one whose responses the hits excited more above their noise in
+/// `band_hz`; otherwise, or when neither stands out, the one that moves more. Said in the
+/// response's notes.
+pub fn choose_axis(
+    response: &mut Series,
+    aligned: &mut Aligned,
+    rule: Option<ImpactRule>,
+    band_hz: (f64, f64),
+) {
+    if !response.axis_pending {
+        return;
+    }
+    response.axis_pending = false;
+    let ys: Vec<usize> = (0..response.names.len())
+        .filter(|&i| response.names[i].ends_with(" y"))
+        .collect();
+    let xs: Vec<usize> = (0..response.names.len())
+        .filter(|&i| response.names[i].ends_with(" x"))
+        .collect();
+    let pick = |idx: &[usize]| -> Vec<Vec<f64>> {
+        idx.iter().map(|&i| aligned.responses[i].clone()).collect()
+    };
+    let score = |idx: &[usize]| {
+        rule.and_then(|r| excited_score(&aligned.force, &pick(idx), aligned.fs_hz, r, band_hz))
+    };
+    let (ey, ex) = (score(&ys), score(&xs));
+    let spread = |idx: &[usize]| -> f64 {
+        idx.iter()
+            .map(|&i| {
+                let v = &aligned.responses[i];
+                let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
+                v.iter().map(|x| (x - m).powi(2)).sum::<f64>()
+            })
+            .sum()
+    };
+    let said = |e: &Option<excited::Excited>| {
+        e.as_ref()
+            .filter(|e| e.lines > 0)
+            .map_or("none".to_string(), |e| {
+                format!(
+                    "{} lines, the strongest {:.0} dB above the noise",
+                    e.lines, e.peak_snr_db
+                )
+            })
+    };
+    let (sy, sx) = (
+        ey.as_ref().map_or(0.0, |e| e.score),
+        ex.as_ref().map_or(0.0, |e| e.score),
+    );
+    let (keep, why) = if sy > 0.0 || sx > 0.0 {
+        let y = sy >= sx;
+        (
+            if y { &ys } else { &xs },
+            format!(
+                "the hits excite it more above its noise (lines that stand {} dB above the \
+                 noise and decay: y {}, x {})",
+                excited::ABOVE_FLOOR_DB,
+                said(&ey),
+                said(&ex)
+            ),
+        )
+    } else {
+        let y = spread(&ys) >= spread(&xs);
+        (
+            if y { &ys } else { &xs },
+            "it moves more than the other".to_string(),
+        )
+    };
+    let axis = if keep == &ys { "y" } else { "x" };
+    response.notes.push(format!(
+        "the points' {axis} coordinate: {why}; $response_col to choose"
+    ));
+    response.names = keep.iter().map(|&i| response.names[i].clone()).collect();
+    response.channels = keep.iter().map(|&i| response.channels[i].clone()).collect();
+    aligned.responses = pick(keep);
 }
 
 /// A response channel holds samples, every one finite.
@@ -349,6 +420,7 @@ pub fn read_force(path: &Path, col: &str, fs_hz: Option<f64>) -> anyhow::Result<
         channels: vec![c.values.clone()],
         notes,
         camera: false,
+        axis_pending: false,
         start_time: c.start_time,
     })
 }
@@ -543,11 +615,13 @@ fn drop_delay(
             }
         }
         notes.push(format!(
-            "a delay of {delay_s} s: the first {k} samples of the {what} dropped{}",
+            "a delay of {} s: the first {k} samples of the {what} dropped{}",
+            rate_text(delay_s),
             if (shift - whole).abs() > 1e-6 {
                 format!(
-                    " ({:.3} of a sample at {fs} Hz left unaligned)",
-                    (shift - whole).abs()
+                    " ({:.3} of a sample at {} Hz left unaligned)",
+                    (shift - whole).abs(),
+                    rate_text(fs)
                 )
             } else {
                 String::new()

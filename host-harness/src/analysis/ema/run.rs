@@ -244,7 +244,7 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
 
 /// The figures: the first four responses' |H1| with the fit, and the stabilisation diagram.
 pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plots::Figure>> {
-    let (lo, hi) = req.settings.band_hz;
+    let (lo, hi) = r.band_hz;
     let k: Vec<usize> = (0..r.freq_hz.len())
         .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)
         .collect();
@@ -276,7 +276,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
     let magnitude = draw(
         "frf",
         "H1 and the LSCF/LSFD fit",
-        "|H1|, dB (re 1 unit of the response per unit of force)",
+        &format!("|H1|, dB (re 1 {})", frf_unit(req)),
         |c| db(c.norm()),
     )?;
     let phase = draw(
@@ -295,6 +295,21 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
         hi,
     )?;
     Ok(vec![magnitude, phase, stabilisation])
+}
+
+/// The FRF's unit as the files state theirs: `g/N`, `m/N`; a side not stated is named so.
+fn frf_unit(req: &EmaRequest) -> String {
+    let side = |u: &Option<String>, what: &str| {
+        u.as_deref()
+            .map(str::trim)
+            .filter(|u| !u.is_empty())
+            .map_or(format!("unit of the {what}"), str::to_string)
+    };
+    format!(
+        "{} per {}",
+        side(&req.response.unit, "response"),
+        side(&req.force.unit, "force")
+    )
 }
 
 /// `20 log10 v` (a floor at -400 dB for 0).
@@ -432,17 +447,20 @@ fn hits_text(s: &mut String, a: &Aligned, r: &EmaResult, h: &super::impact::Hits
     );
     match r.exp {
         Some(w) => {
+            // its damping at the first mode, or (no mode) at the band's middle
+            let f = r
+                .modes
+                .first()
+                .map_or(0.5 * (r.band_hz.0 + r.band_hz.1), |m| m.pole.f_hz);
             let _ = writeln!(
                 s,
                 "exponential window: tau {:.5} s (ends at {:.2} %), on force and \
-                 responses; it adds 1/(tau w) of damping ({:.5} at {:.3} Hz), removed \
+                 responses; it adds 1/(tau w) of damping ({:.2e} at {} Hz), removed \
                  from every mode's damping below",
                 w.tau_s,
                 100.0 * w.at(h.block as f64 / a.fs_hz),
-                r.modes
-                    .first()
-                    .map_or(0.0, |m| w.added_damping(m.pole.f_hz)),
-                r.modes.first().map_or(0.0, |m| m.pole.f_hz)
+                w.added_damping(f),
+                hz_text(f)
             );
         }
         None => {
@@ -451,13 +469,24 @@ fn hits_text(s: &mut String, a: &Aligned, r: &EmaResult, h: &super::impact::Hits
     }
 }
 
+/// A frequency at four significant digits (a band chosen from the data is no rounder).
+fn hz_text(v: f64) -> String {
+    if v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let scale = 10f64.powi(3 - v.log10().floor() as i32);
+    format!("{}", (v * scale).round() / scale)
+}
+
 /// The report's lines on the fit and its modes, and the clusters that are not modes.
 fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
-    let (lo, hi) = req.settings.band_hz;
+    let (lo, hi) = r.band_hz;
     let stable = r.poles.iter().filter(|p| p.stable).count();
     let _ = writeln!(
         s,
-        "fit: {lo}-{hi} Hz ({}), LSCF orders 2-{}: {} poles, {stable} stable; {} mode{}",
+        "fit: {}-{} Hz ({}), LSCF orders 2-{}: {} poles, {stable} stable; {} mode{}",
+        hz_text(lo),
+        hz_text(hi),
         match req.settings.form {
             FrfForm::Receptance => "receptance: residuals (iw)^-2 and 1",
             FrfForm::Mobility => "mobility: residuals (iw)^-1 and iw",
@@ -522,7 +551,7 @@ fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
 
 /// The report's lines on each response: its number and its mean coherence in the band.
 fn responses_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
-    let (lo, hi) = req.settings.band_hz;
+    let (lo, hi) = r.band_hz;
     let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
     for (o, n) in req.response.names.iter().enumerate() {
         let coh: Vec<f64> = (0..r.freq_hz.len())
