@@ -487,3 +487,63 @@ fn a_real_accelerometer_impact_test_gives_its_four_modes_by_default() {
         "accelerometer",
     );
 }
+
+#[test]
+fn poles_given_are_exactly_the_modes_and_an_earlier_modes_csv_is_a_poles_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let test = write_test(dir.path(), &[]);
+    let o = ema(dir.path(), "all", &[]);
+    assert_ok(&o);
+    let all = modes_of(&dir.path().join("all"));
+    assert_eq!(all.len(), 3, "{all:?}");
+    // modes 1 and 3 kept, as a user deletes a row of modes.csv (or picks two poles)
+    let text = std::fs::read_to_string(dir.path().join("all/modes.csv")).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| *i != 2)
+        .map(|(_, l)| l)
+        .collect();
+    let poles = dir.path().join("poles.csv");
+    std::fs::write(&poles, kept.join("\n")).unwrap();
+    let p = poles.to_str().unwrap();
+    let o = ema(dir.path(), "picked", &["--poles", p]);
+    assert_ok(&o);
+    let picked = modes_of(&dir.path().join("picked"));
+    assert_eq!(picked.len(), 2, "{picked:?}");
+    for (got, want) in picked.iter().zip([all[0], all[2]]) {
+        assert!(
+            (got.0 - want.0).abs() < 1e-9 * want.0,
+            "{got:?} vs {want:?}"
+        );
+        assert!((got.1 - want.1).abs() < 1e-9, "{got:?} vs {want:?}");
+    }
+    // the whole modes.csv fed back: the same modes, their shapes by LSFD as the closed form's
+    // (a subset's shapes are not: a mode left out of LSFD leaves its peak to the others)
+    let whole = dir.path().join("all/modes.csv");
+    let o = ema(dir.path(), "again", &["--poles", whole.to_str().unwrap()]);
+    assert_ok(&o);
+    let (again, shapes) = results(&dir.path().join("again"));
+    assert_eq!(again.len(), 3);
+    for (s, m) in shapes.iter().zip(&test.modes) {
+        let c = mac(s, &m.shape);
+        assert!(c >= 0.99, "MAC {c}");
+    }
+    // a pole outside the band, a file without the columns, and poles with bands are refused
+    let far = dir.path().join("far.csv");
+    std::fs::write(&far, "f_hz,damping\n900,0.01\n").unwrap();
+    assert_exit_2(
+        &ema(dir.path(), "far", &["--poles", far.to_str().unwrap()]),
+        "the pole at 900 Hz lies outside the band",
+    );
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "freq,zeta\n23,0.01\n").unwrap();
+    assert_exit_2(
+        &ema(dir.path(), "bad", &["--poles", bad.to_str().unwrap()]),
+        "no column `f_hz`",
+    );
+    assert_exit_2(
+        &ema(dir.path(), "both", &["--poles", p, "--bands", "20-30"]),
+        "--bands and --poles",
+    );
+}

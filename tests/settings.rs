@@ -101,6 +101,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("detrend", "frf --input xy.csv --x x --y y --fs 100 --detrend linear --out f.csv"),
     ("delay_s", "ema --response a.csv --excitation a.csv --delay-s inf --out o"),
     ("excitation_col", "ema --response f3.csv --excitation f3.csv --out o"),
+    ("poles", "ema --response a.csv --excitation a.csv --bands 1-2 --poles a.csv --out o"),
     ("excitation_fs", "ema --response a.csv --excitation a.csv --excitation-fs -1 --out o"),
     ("exp_window", "ema --response a.csv --excitation a.csv --exp-window 0.5 --out o"),
     ("exposure_ms", "analyze --frames fr --fps 120 --accel a2.csv --fs 1024 --mm-per-px 0.1 --threshold 100 --exposure-ms 20 --out o"),

@@ -1210,7 +1210,7 @@ fn modal_dict<'py>(
 #[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
-    max_order=48, nperseg=None, out=None, force=false))]
+    max_order=48, nperseg=None, out=None, force=false, poles=None))]
 #[allow(clippy::too_many_arguments)]
 fn ema<'py>(
     py: Python<'py>,
@@ -1232,6 +1232,7 @@ fn ema<'py>(
     nperseg: Option<usize>,
     out: Option<String>,
     force: bool,
+    poles: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::jobs::{EmaInput, EmaSpec};
     let (exp, form) = ema_choices(exp_window, response_quantity)?;
@@ -1251,6 +1252,7 @@ fn ema<'py>(
         bands,
         f_min_hz,
         f_max_hz,
+        poles: poles.map(std::path::PathBuf::from),
         max_order,
         nperseg,
         out: out.map(std::path::PathBuf::from).unwrap_or_default(),

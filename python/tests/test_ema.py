@@ -101,3 +101,16 @@ def test_a_real_camera_impact_test_gives_both_modes_by_default():
     for want in (695.91, 1898.64):
         assert any(abs(x - want) <= 0.005 * want for x in f), f
     assert "start to move" in r.report
+
+
+def test_poles_given_as_an_earlier_modes_csv_give_exactly_those_modes(hammer, tmp_path):
+    out = tmp_path / "all"
+    r = vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="force_n",
+                   impact=True, f_max_hz=200, out=out)
+    lines = (out / "modes.csv").read_text().splitlines()
+    picked = tmp_path / "picked.csv"
+    picked.write_text("\n".join([lines[0], lines[1], lines[3]]) + "\n")
+    p = vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="force_n",
+                   impact=True, f_max_hz=200, poles=picked)
+    f_all, f = list(r.modes["f_hz"]), list(p.modes["f_hz"])
+    assert f == pytest.approx([f_all[0], f_all[2]], rel=1e-12)

@@ -710,6 +710,7 @@ def ema(
     nperseg: _Optional[int] = None,
     out: _Optional[_PathLike] = None,
     force: bool = False,
+    poles: _Optional[_PathLike] = None,
 ) -> EmaResult:
     """Experimental modal analysis of responses over a measured force, exactly as
     ``host-harness ema`` (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -721,6 +722,8 @@ def ema(
     faster's rate. ``impact``: hits of a hammer (``exp_window`` ``"off"``, ``"auto"`` or the
     window's value at the block's end; ``block_s`` the longest block); else a continuous force
     (Welch segments of ``nperseg``). ``delay_s``: the responses' first sample after the force's (None: as the files state, else estimated from an impact's onset).
+    ``poles``: a CSV with ``f_hz`` and ``damping`` columns (an earlier ``modes.csv``, edited, or
+    poles picked on the stabilisation diagram): exactly these modes, their shapes by LSFD.
     ``response_quantity``: ``"displacement"``, ``"velocity"`` or ``"acceleration"``. ``bands``:
     ``[(lo, hi), ...]`` Hz, one mode per band (default: every mode the stabilisation diagram
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
@@ -750,6 +753,7 @@ def ema(
         nperseg=_setting("ema", "nperseg", nperseg, optional=True),
         out=None if out is None else _os.fspath(out),
         force=bool(force),
+        poles=None if poles is None else _os.fspath(poles),
     )
     return _result(EmaResult, d)
 

@@ -73,6 +73,7 @@ pub const KEYS: &[&str] = &[
     "output_col",
     "plscf",
     "points",
+    "poles",
     "prominence_db",
     "read_noise",
     "reference",

@@ -70,6 +70,11 @@ pub struct Args {
     /// diagram shows between --f-min-hz and --f-max-hz).
     #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
     pub bands: Option<Bands>,
+    /// Poles to give as the modes: a CSV with `f_hz` and `damping` columns (an earlier
+    /// `modes.csv`, its rows kept or edited, or poles picked on the stabilisation diagram);
+    /// their shapes by LSFD (default: every cluster the diagram shows).
+    #[arg(long, value_name = "FILE")]
+    pub poles: Option<std::path::PathBuf>,
     /// `$f_min_hz`.
     #[arg(long, value_name = "HZ", value_parser = super::args::number_in(Some("ema"), "f_min_hz"), help = super::args::help_in("ema", "f_min_hz"))]
     pub f_min_hz: Option<f64>,
@@ -113,6 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             QuantityArg::Acceleration => FrfForm::Accelerance,
         },
         bands: args.bands.as_ref().map(Bands::pairs),
+        poles: args.poles.clone(),
         f_min_hz: args.f_min_hz,
         f_max_hz: args.f_max_hz,
         max_order: args.max_order,

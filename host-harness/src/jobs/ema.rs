@@ -5,7 +5,7 @@ use crate::analysis::ema::excited::{self, onset_lag_s};
 use crate::analysis::ema::impact;
 use crate::analysis::ema::impact::ImpactRule;
 use crate::analysis::ema::input::{
-    align, choose_axis, rate_text, read_force, read_responses, Aligned, Series,
+    align, choose_axis, rate_text, read_force, read_poles, read_responses, Aligned, Series,
 };
 use crate::analysis::ema::lscf::LscfRule;
 use crate::analysis::ema::run::EmaRequest;
@@ -47,6 +47,9 @@ pub struct EmaInput {
     pub f_min_hz: Option<f64>,
     /// `$f_max_hz`.
     pub f_max_hz: Option<f64>,
+    /// `$poles`: a CSV of the poles to give as modes (`f_hz`, `damping`; none: the
+    /// stabilisation diagram's clusters).
+    pub poles: Option<PathBuf>,
     /// `$max_order`: LSCF's highest order.
     pub max_order: usize,
     /// `$nperseg`: a continuous test's Welch segment.
@@ -154,6 +157,10 @@ impl EmaSpec {
                 ..LscfRule::default()
             },
             cluster: ClusterRule::default(),
+            poles: match &input.poles {
+                Some(p) => Some(read_poles(p).map_err(SpecError::Input)?),
+                None => None,
+            },
         };
         Ok(EmaSpec {
             request: EmaRequest {
@@ -230,6 +237,12 @@ fn estimated_delay(
 fn check_alone(input: &EmaInput) -> SpecResult<()> {
     if let Some(b) = &input.bands {
         super::bands_ordered(b)?;
+    }
+    if input.bands.is_some() && input.poles.is_some() {
+        return Err(SpecError::setting(
+            "$bands and $poles: the poles given are the modes; bands choose among clusters"
+                .to_string(),
+        ));
     }
     if let Some((_, c)) = input
         .response_cols

@@ -71,6 +71,10 @@ pub struct EmaSettings {
     pub lscf: lscf::LscfRule,
     /// The clustering of stable poles into modes.
     pub cluster: ClusterRule,
+    /// Poles given (picked by hand on the stabilisation diagram, or an earlier `modes.csv`):
+    /// exactly these modes, the structure's poles (an exponential window's damping added back
+    /// before they are fitted), instead of the clusters; none: the clusters.
+    pub poles: Option<Vec<Pole>>,
 }
 
 /// One mode found.
@@ -221,6 +225,23 @@ fn pole_of(m: &SsiMode) -> Pole {
     }
 }
 
+/// `p` as the exponential window `exp` shows it: its real part shifted ([`unwindowed`]'s
+/// inverse).
+fn windowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
+    match exp {
+        None => p,
+        Some(w) => {
+            let s = p.s();
+            let s = Complex64::new(s.re + w.pole_shift(), s.im);
+            let wn = s.norm();
+            Pole {
+                f_hz: wn / (2.0 * std::f64::consts::PI),
+                damping: -s.re / wn,
+            }
+        }
+    }
+}
+
 /// `p` with the exponential window's shift of the real part undone.
 fn unwindowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
     match exp {
@@ -252,23 +273,12 @@ pub fn analyse(
         hits,
         exp,
         band_hz,
-    } = match s.excitation {
-        Excitation::Impact { rule, exp } => impact_spectra(
-            force,
-            responses,
-            fs_hz,
-            (force_name, rule, exp),
-            s,
-            &mut notes,
-        )?,
-        Excitation::Continuous { nperseg } => {
-            continuous_spectra(force, responses, fs_hz, nperseg, s.band_hz, &mut notes)?
-        }
-    };
+    } = prepare(force, responses, fs_hz, force_name, s, &mut notes)?;
     let s = &EmaSettings {
         band_hz,
         ..s.clone()
     };
+    given_in_band(s, exp)?;
     let frfs = spectra.frfs(None);
     let freq = spectra.freq_hz.clone();
     let Selection {
@@ -277,7 +287,10 @@ pub fn analyse(
         rejected,
         per_band,
     } = select(&freq, &frfs.h1, s)?;
-    let chosen = chosen_modes(per_band, s.bands.as_deref(), &mut notes);
+    let chosen = s.poles.as_ref().map_or_else(
+        || chosen_modes(per_band, s.bands.as_deref(), &mut notes),
+        |given| given_modes(given, exp, &poles),
+    );
     let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
     let constants = if fitted.is_empty() {
         Vec::new()
@@ -295,10 +308,7 @@ pub fn analyse(
         exp,
         &mut notes,
     );
-    if !constants.is_empty() {
-        let r = lsfd::residual(&freq, &frfs.h1, s.band_hz, &fitted, s.form, &constants);
-        notes.extend(misfit_note(&r, &fitted));
-    }
+    notes.extend(misfit_note(&freq, &frfs.h1, s, &fitted, &constants));
     let clusters = all
         .into_iter()
         .map(|m| (m, true))
@@ -322,7 +332,17 @@ pub fn analyse(
 
 /// A note when the fitted model leaves over a fifth of an FRF unexplained, with the cause the
 /// residual points to: spread over the band as a noise floor is, or gathered at a mode.
-fn misfit_note(r: &lsfd::Residual, poles: &[Pole]) -> Option<String> {
+fn misfit_note(
+    freq: &[f64],
+    h1: &[Vec<Complex64>],
+    s: &EmaSettings,
+    poles: &[Pole],
+    constants: &[lsfd::Constants],
+) -> Option<String> {
+    if constants.is_empty() {
+        return None;
+    }
+    let r = &lsfd::residual(freq, h1, s.band_hz, poles, s.form, constants);
     let (worst, misfit) = r.worst;
     if misfit <= 0.2 {
         return None;
@@ -407,6 +427,54 @@ fn chosen_modes(
     }
 }
 
+/// The poles given lie in the band fitted (`s.band_hz`), as the window `exp` moves them.
+fn given_in_band(s: &EmaSettings, exp: Option<ExpWindow>) -> anyhow::Result<()> {
+    if let Some(p) = s.poles.iter().flatten().find(|p| {
+        let f = windowed(**p, exp).f_hz;
+        f < s.band_hz.0 || f > s.band_hz.1
+    }) {
+        return Err(vibcam_readers::bad_input(format!(
+            "$poles: the pole at {} Hz lies outside the band fitted, {:.1}-{:.1} Hz ($f_min_hz, \
+             $f_max_hz)",
+            p.f_hz, s.band_hz.0, s.band_hz.1
+        )));
+    }
+    Ok(())
+}
+
+/// The modes of the poles `given` (the structure's): each as a cluster of its own, the pole of
+/// the windowed FRFs (`exp`'s decay added back), its count the diagram's stable poles within
+/// 1 % of it; MPC and MPD follow from its LSFD shape ([`modes_of`]).
+fn given_modes(
+    given: &[Pole],
+    exp: Option<ExpWindow>,
+    diagram: &[ssi::Pole],
+) -> Vec<(Option<(f64, f64)>, SsiMode)> {
+    given
+        .iter()
+        .map(|p| {
+            let w = windowed(*p, exp);
+            let near = diagram
+                .iter()
+                .filter(|q| q.stable && (q.f_hz - w.f_hz).abs() <= 0.01 * w.f_hz)
+                .count();
+            let mode = SsiMode {
+                f_hz: w.f_hz,
+                damping: w.damping,
+                shape: Vec::new(),
+                poles: near,
+                f_spread: 0.0,
+                damping_spread: 0.0,
+                mpc: f64::NAN,
+                mpd_deg: f64::NAN,
+                orders: (0, 0),
+                members: Vec::new(),
+            };
+            (None, mode)
+        })
+        .collect()
+}
+
 /// Each chosen mode with its pole (the exponential window's damping removed), its shape from
 /// the LSFD residues and its intervals from the replicates (`unit`: what one replicate leaves
 /// out).
@@ -435,6 +503,12 @@ fn modes_of(
                 (None, None, None)
             }
         };
+        let mut cl = cl;
+        if cl.mpc.is_nan() {
+            // a pole given: its shape is LSFD's
+            cl.mpc = crate::oma::cluster::mpc(&shape);
+            cl.mpd_deg = crate::oma::cluster::mpd_deg(&shape);
+        }
         modes.push(EmaMode {
             mode: i + 1,
             band_hz: band,
@@ -456,6 +530,25 @@ struct Prepared {
     hits: Option<Hits>,
     exp: Option<ExpWindow>,
     band_hz: (f64, f64),
+}
+
+/// The spectra of the test `s` describes, an impact's or a continuous force's.
+fn prepare(
+    force: &[f64],
+    responses: &[Vec<f64>],
+    fs_hz: f64,
+    force_name: &str,
+    s: &EmaSettings,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<Prepared> {
+    match s.excitation {
+        Excitation::Impact { rule, exp } => {
+            impact_spectra(force, responses, fs_hz, (force_name, rule, exp), s, notes)
+        }
+        Excitation::Continuous { nperseg } => {
+            continuous_spectra(force, responses, fs_hz, nperseg, s.band_hz, notes)
+        }
+    }
 }
 
 /// The spectra of an impact test, hit by hit: the hits found, the band (from what they excited

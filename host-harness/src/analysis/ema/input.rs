@@ -630,3 +630,53 @@ fn drop_delay(
     }
     Ok(())
 }
+
+/// The poles of a CSV with the columns `f_hz` and `damping` (a header row; other columns, as in
+/// an earlier `modes.csv`, ignored): the modes `ema` is to give. Errors name the file and row.
+pub fn read_poles(path: &Path) -> anyhow::Result<Vec<crate::analysis::modal::Pole>> {
+    let file = path.display().to_string();
+    let mut rd = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| bad_input(format!("{file}: {e}")))?;
+    let head = rd
+        .headers()
+        .map_err(|e| bad_input(format!("{file}: {e}")))?
+        .clone();
+    let col = |name: &str| {
+        head.iter().position(|h| h == name).ok_or_else(|| {
+            bad_input(format!(
+                "{file}: no column `{name}` (a poles file has `f_hz` and `damping`, as modes.csv)"
+            ))
+        })
+    };
+    let (fc, dc) = (col("f_hz")?, col("damping")?);
+    let mut poles = Vec::new();
+    for (i, rec) in rd.records().enumerate() {
+        let row = i + 2;
+        let rec = rec.map_err(|e| bad_input(format!("{file}: row {row}: {e}")))?;
+        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
+            rec.get(c)
+                .and_then(|v| v.parse::<f64>().ok())
+                .ok_or_else(|| {
+                    bad_input(format!(
+                        "{file}: row {row}: `{}` is no {what}",
+                        rec.get(c).unwrap_or("")
+                    ))
+                })
+        };
+        let (f_hz, damping) = (num(fc, "frequency")?, num(dc, "damping ratio")?);
+        if !(f_hz.is_finite() && f_hz > 0.0 && damping.is_finite() && (0.0..1.0).contains(&damping))
+        {
+            return Err(bad_input(format!(
+                "{file}: row {row}: a pole needs a frequency above 0 and a damping ratio from 0 \
+                 to below 1, got {f_hz} Hz and {damping}"
+            )));
+        }
+        poles.push(crate::analysis::modal::Pole { f_hz, damping });
+    }
+    if poles.is_empty() {
+        return Err(bad_input(format!("{file}: no pole")));
+    }
+    Ok(poles)
+}
