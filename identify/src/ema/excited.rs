@@ -89,7 +89,7 @@ struct Quarters {
 
 /// The [`Quarters`] of `responses` around each used hit of `hits`, smoothed; `None` when the
 /// block after the pulse is under 64 samples.
-fn quarters(responses: &[Vec<f64>], hits: &Hits, fs_hz: f64) -> Option<Quarters> {
+fn quarters<R: AsRef<[f64]>>(responses: &[R], hits: &Hits, fs_hz: f64) -> Option<Quarters> {
     let after = hits.block.saturating_sub(hits.pre);
     let q = after / 4;
     if q < 16 || responses.is_empty() {
@@ -107,7 +107,7 @@ fn quarters(responses: &[Vec<f64>], hits: &Hits, fs_hz: f64) -> Option<Quarters>
     let (mut early, mut late, mut before) = (vec![0.0; lines], vec![0.0; lines], vec![0.0; lines]);
     for hit in hits.used() {
         let s = hits.block_start(hit) + hits.pre;
-        for x in responses {
+        for x in responses.iter().map(AsRef::as_ref) {
             if s + after > x.len() {
                 continue;
             }
@@ -129,8 +129,8 @@ fn quarters(responses: &[Vec<f64>], hits: &Hits, fs_hz: f64) -> Option<Quarters>
 /// What the hits of `hits` excited in `responses` (at `fs_hz`) between `outer.0` and
 /// `outer.1` Hz; `None` when the blocks are too short to tell (under 64 samples after the
 /// pulse) or the band holds no line.
-pub fn excited(
-    responses: &[Vec<f64>],
+pub fn excited<R: AsRef<[f64]>>(
+    responses: &[R],
     hits: &Hits,
     fs_hz: f64,
     outer: (f64, f64),

@@ -225,37 +225,25 @@ fn pole_of(m: &SsiMode) -> Pole {
     }
 }
 
-/// `p` as the exponential window `exp` shows it: its real part shifted ([`unwindowed`]'s
-/// inverse).
-fn windowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
-    match exp {
-        None => p,
-        Some(w) => {
-            let s = p.s();
-            let s = Complex64::new(s.re + w.pole_shift(), s.im);
-            let wn = s.norm();
-            Pole {
-                f_hz: wn / (2.0 * std::f64::consts::PI),
-                damping: -s.re / wn,
-            }
-        }
+/// `p` with its real part moved by `by` (1/s): the exponential window's shift.
+fn shifted(p: Pole, by: f64) -> Pole {
+    let s = p.s();
+    let s = Complex64::new(s.re + by, s.im);
+    let wn = s.norm();
+    Pole {
+        f_hz: wn / (2.0 * std::f64::consts::PI),
+        damping: -s.re / wn,
     }
+}
+
+/// `p` as the exponential window `exp` shows it ([`unwindowed`]'s inverse).
+fn windowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
+    exp.map_or(p, |w| shifted(p, w.pole_shift()))
 }
 
 /// `p` with the exponential window's shift of the real part undone.
 fn unwindowed(p: Pole, exp: Option<ExpWindow>) -> Pole {
-    match exp {
-        None => p,
-        Some(w) => {
-            let s = p.s();
-            let s = Complex64::new(s.re - w.pole_shift(), s.im);
-            let wn = s.norm();
-            Pole {
-                f_hz: wn / (2.0 * std::f64::consts::PI),
-                damping: -s.re / wn,
-            }
-        }
-    }
+    exp.map_or(p, |w| shifted(p, -w.pole_shift()))
 }
 
 /// The analysis of `force` and `responses` (one rate `fs_hz`); `force_name` names the force in
@@ -565,13 +553,9 @@ fn impact_spectra(
     let hits = impact::find(force, fs_hz, rule, force_name)?;
     let block_s = hits.block as f64 / fs_hz;
     let ex = excited::excited(responses, &hits, fs_hz, s.band_hz);
-    let band_hz = match (&ex, s.band_from_data) {
-        (Some(e), (lo, hi)) if lo || hi => {
-            let b = band_note(e, s.band_hz, notes);
-            (
-                if lo { b.0 } else { s.band_hz.0 },
-                if hi { b.1 } else { s.band_hz.1 },
-            )
+    let band_hz = match &ex {
+        Some(e) if s.band_from_data.0 || s.band_from_data.1 => {
+            band_note(e, s.band_hz, s.band_from_data, notes)
         }
         _ => s.band_hz,
     };
@@ -633,24 +617,33 @@ fn impact_spectra(
     })
 }
 
-/// The band chosen from what the hits excited inside `outer` (said in `notes`), or `outer`
-/// when nothing stands out.
-fn band_note(e: &excited::Excited, outer: (f64, f64), notes: &mut Vec<String>) -> (f64, f64) {
+/// The band fitted: each end `free` chosen from what the hits excited inside `outer`, the
+/// others `outer`'s (said in `notes`); `outer` when nothing stands out.
+fn band_note(
+    e: &excited::Excited,
+    outer: (f64, f64),
+    free: (bool, bool),
+    notes: &mut Vec<String>,
+) -> (f64, f64) {
     match (e.span_hz, e.band(outer)) {
         (Some((lo, hi)), Some(b)) => {
+            let band = (
+                if free.0 { b.0 } else { outer.0 },
+                if free.1 { b.1 } else { outer.1 },
+            );
             notes.push(format!(
-                "the band's ends not given are chosen from the data, {:.0}-{:.0} Hz: the \
+                "band fitted {:.0}-{:.0} Hz, its ends not given chosen from the data: the \
                  responses stand {} dB above their noise after the hits and decay at \
                  {lo:.0}-{hi:.0} Hz ({} lines, the strongest {:.0} dB above the noise), widened \
                  by {}; $f_min_hz, $f_max_hz or $bands to choose",
-                b.0,
-                b.1,
+                band.0,
+                band.1,
                 excited::ABOVE_FLOOR_DB,
                 e.lines,
                 e.peak_snr_db,
                 excited::MARGIN
             ));
-            b
+            band
         }
         _ => {
             notes.push(format!(

@@ -262,13 +262,23 @@ fn wanted_channels(first: &[String], cols: &[String], npy: bool) -> Vec<String> 
 /// holds no usable hit or the blocks are too short to tell.
 fn excited_score(
     force: &[f64],
-    responses: &[Vec<f64>],
+    responses: &[&[f64]],
     fs_hz: f64,
     rule: ImpactRule,
     band_hz: (f64, f64),
 ) -> Option<excited::Excited> {
     let hits = impact::find(force, fs_hz, rule, "force").ok()?;
     excited::excited(responses, &hits, fs_hz, band_hz)
+}
+
+/// `v` with only the items at `keep` (ascending), moved, not copied.
+fn only<T>(v: &mut Vec<T>, keep: &[usize]) {
+    let all = std::mem::take(v);
+    *v = all
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, x)| keep.contains(&i).then_some(x))
+        .collect();
 }
 
 /// Keeps one coordinate of a pyidi `.npy` read with both ([`Series::axis_pending`]): of an
@@ -291,11 +301,12 @@ pub fn choose_axis(
     let xs: Vec<usize> = (0..response.names.len())
         .filter(|&i| response.names[i].ends_with(" x"))
         .collect();
-    let pick = |idx: &[usize]| -> Vec<Vec<f64>> {
-        idx.iter().map(|&i| aligned.responses[i].clone()).collect()
-    };
     let score = |idx: &[usize]| {
-        rule.and_then(|r| excited_score(&aligned.force, &pick(idx), aligned.fs_hz, r, band_hz))
+        let rs: Vec<&[f64]> = idx
+            .iter()
+            .map(|&i| aligned.responses[i].as_slice())
+            .collect();
+        rule.and_then(|r| excited_score(&aligned.force, &rs, aligned.fs_hz, r, band_hz))
     };
     let (ey, ex) = (score(&ys), score(&xs));
     let spread = |idx: &[usize]| -> f64 {
@@ -344,9 +355,9 @@ pub fn choose_axis(
     response.notes.push(format!(
         "the points' {axis} coordinate: {why}; $response_col to choose"
     ));
-    response.names = keep.iter().map(|&i| response.names[i].clone()).collect();
-    response.channels = keep.iter().map(|&i| response.channels[i].clone()).collect();
-    aligned.responses = pick(keep);
+    only(&mut response.names, keep);
+    only(&mut response.channels, keep);
+    only(&mut aligned.responses, keep);
 }
 
 /// A response channel holds samples, every one finite.
@@ -635,48 +646,30 @@ fn drop_delay(
 /// an earlier `modes.csv`, ignored): the modes `ema` is to give. Errors name the file and row.
 pub fn read_poles(path: &Path) -> anyhow::Result<Vec<crate::analysis::modal::Pole>> {
     let file = path.display().to_string();
-    let mut rd = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| bad_input(format!("{file}: {e}")))?;
-    let head = rd
-        .headers()
-        .map_err(|e| bad_input(format!("{file}: {e}")))?
-        .clone();
-    let col = |name: &str| {
-        head.iter().position(|h| h == name).ok_or_else(|| {
-            bad_input(format!(
-                "{file}: no column `{name}` (a poles file has `f_hz` and `damping`, as modes.csv)"
-            ))
+    let (_, header) = crate::csvio::open_with_header(path, &file, true)?;
+    if let Some(c) = ["f_hz", "damping"]
+        .iter()
+        .find(|c| !header.iter().any(|h| h == *c))
+    {
+        return Err(bad_input(format!(
+            "{file}: no column `{c}` (a poles file has `f_hz` and `damping`, as modes.csv)"
+        )));
+    }
+    let cols = crate::csvio::read_columns(path, &["f_hz", "damping"])?;
+    let (fs, ds) = (&cols.values[0], &cols.values[1]);
+    fs.iter()
+        .zip(ds)
+        .enumerate()
+        .map(|(i, (&f_hz, &damping))| {
+            if f_hz > 0.0 && (0.0..1.0).contains(&damping) {
+                Ok(crate::analysis::modal::Pole { f_hz, damping })
+            } else {
+                Err(bad_input(format!(
+                    "{file}: row {}: a pole needs a frequency above 0 and a damping ratio from 0 \
+                     to below 1, got {f_hz} Hz and {damping}",
+                    i + 2
+                )))
+            }
         })
-    };
-    let (fc, dc) = (col("f_hz")?, col("damping")?);
-    let mut poles = Vec::new();
-    for (i, rec) in rd.records().enumerate() {
-        let row = i + 2;
-        let rec = rec.map_err(|e| bad_input(format!("{file}: row {row}: {e}")))?;
-        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
-            rec.get(c)
-                .and_then(|v| v.parse::<f64>().ok())
-                .ok_or_else(|| {
-                    bad_input(format!(
-                        "{file}: row {row}: `{}` is no {what}",
-                        rec.get(c).unwrap_or("")
-                    ))
-                })
-        };
-        let (f_hz, damping) = (num(fc, "frequency")?, num(dc, "damping ratio")?);
-        if !(f_hz.is_finite() && f_hz > 0.0 && damping.is_finite() && (0.0..1.0).contains(&damping))
-        {
-            return Err(bad_input(format!(
-                "{file}: row {row}: a pole needs a frequency above 0 and a damping ratio from 0 \
-                 to below 1, got {f_hz} Hz and {damping}"
-            )));
-        }
-        poles.push(crate::analysis::modal::Pole { f_hz, damping });
-    }
-    if poles.is_empty() {
-        return Err(bad_input(format!("{file}: no pole")));
-    }
-    Ok(poles)
+        .collect()
 }
