@@ -5,7 +5,8 @@ accelerometer, with one target and several, modal, ema) loads with no
 console error and no network request, holds what it should (the frame, one marker per target,
 one animation per mode, the table of modes) and its animations advance; on pick.html scripted
 clicks add windows, a drag moves one, Delete removes one, "save points.csv" downloads a file, and
-`track --points` with that file gives the same tracks as with the hand-written one.
+`track --points` with that file gives the same tracks as with the hand-written one; on ema's
+page clicked poles are saved as poles.csv and `ema --poles` with it gives exactly those modes.
 
     python3 scripts/check_pages.py --harness target/debug/host-harness --work target/pages
 
@@ -184,6 +185,25 @@ def click_at(drv, svg, x_px, y_px):
     return cx, cy
 
 
+def downloads_into(drv, folder):
+    """An empty `folder`, where the browser's downloads go from now on."""
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    drv.execute_cdp_cmd("Browser.setDownloadBehavior",
+                        {"behavior": "allow", "downloadPath": str(folder)})
+    return folder
+
+
+def downloaded(path, what):
+    """Whether the download `path` arrived within 5 s (checked as `what`)."""
+    for _ in range(50):
+        if path.exists() and path.stat().st_size > 0:
+            break
+        time.sleep(0.1)
+    check(path.exists(), what)
+    return path.exists()
+
+
 def check_pick(drv, harness, work, rec):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
@@ -200,11 +220,7 @@ def check_pick(drv, harness, work, rec):
             f.write(f"{r['target']},{round(float(r['x']))},{round(float(r['y']))},31,31\n")
     page = work / "pick.html"
     run(harness, "pick", "--frames", rec / "frames", "--out", page, "--force")
-    downloads = work / "downloads"
-    shutil.rmtree(downloads, ignore_errors=True)
-    downloads.mkdir(parents=True)
-    drv.execute_cdp_cmd("Browser.setDownloadBehavior",
-                        {"behavior": "allow", "downloadPath": str(downloads)})
+    downloads = downloads_into(drv, work / "downloads")
     open_page(drv, page)
     check(console_errors(drv) == [], "pick.html: no console error")
     check(network_requests(drv) == [], "pick.html: no network request")
@@ -231,12 +247,7 @@ def check_pick(drv, harness, work, rec):
     check(n == len(want), "pick.html: Delete removes the selected window")
     drv.find_element(By.ID, "save").click()
     saved = downloads / "points.csv"
-    for _ in range(50):
-        if saved.exists() and saved.stat().st_size > 0:
-            break
-        time.sleep(0.1)
-    check(saved.exists(), "pick.html: save downloads points.csv")
-    if not saved.exists():
+    if not downloaded(saved, "pick.html: save downloads points.csv"):
         return
     # the same tracks from the saved file as from the hand-written one
     out_a, out_b = work / "track-saved", work / "track-hand"
@@ -259,6 +270,71 @@ def check_pick(drv, harness, work, rec):
     open_page(drv, page)
     n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
     check(n == len(want), f"pick.html --points: {n} windows shown")
+
+
+def check_pole_picker(drv, harness, work):
+    """On ema's page: hover shows a pole, clicks pick one pole per mode but the last, "save
+    poles.csv" downloads them, and `ema --poles` with that file gives exactly those modes."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    page = work / "ema" / "report.html"
+    downloads = downloads_into(drv, work / "downloads-poles")
+    open_page(drv, page)
+    data = json.loads(drv.find_element(By.ID, "pole-data").get_attribute("textContent"))["poles"]
+    circles = drv.find_elements(By.CSS_SELECTOR, "svg#pole-picker circle.pole")
+    check(len(circles) > 0 and len(circles) <= len(data),
+          f"ema pole picker: {len(circles)} poles drawn of {len(data)}")
+    check("LSCF stabilisation diagram" not in drv.page_source,
+          "ema pole picker: the diagram is drawn once (the picker, not also the static figure)")
+    with open(work / "ema" / "modes.csv", newline="") as f:
+        found = [float(r["f_hz"]) for r in csv.DictReader(f)]
+    # per mode found but the last, the highest-order pole of its cluster nearest to it
+    in_modes = [c for c in circles if "mode" in c.get_attribute("class").split()]
+    chosen = []
+    for f_mode in found[:-1]:
+        near = min(in_modes, key=lambda c: (round(abs(data[int(c.get_attribute("data-i"))][0]
+                                                      - f_mode) / f_mode, 3),
+                                           -data[int(c.get_attribute("data-i"))][2]))
+        chosen.append(near)
+    check(len(found) >= 2 and len(chosen) == len(found) - 1,
+          f"ema pole picker: {len(chosen)} poles to pick of {len(found)} modes")
+    ActionChains(drv).move_to_element(chosen[0]).perform()
+    hover = drv.find_element(By.ID, "pole-hover").text
+    want = f"{data[int(chosen[0].get_attribute('data-i'))][0]:.3f} Hz, damping"
+    check(want in hover, f"ema pole picker: hover shows the pole ({hover!r})")
+    for c in chosen:
+        ActionChains(drv).move_to_element(c).click().perform()
+    picked = drv.find_elements(By.CSS_SELECTOR, "svg#pole-picker circle.pole.picked")
+    rows = drv.find_elements(By.CSS_SELECTOR, "table#picked tbody tr")
+    check(len(picked) == len(chosen) and len(rows) == len(chosen),
+          f"ema pole picker: {len(picked)} circles and {len(rows)} rows picked by "
+          f"{len(chosen)} clicks")
+    # a click more and the same click again leave the choice as it was
+    extra = next(c for c in circles if c not in chosen)
+    ActionChains(drv).move_to_element(extra).click().click().perform()
+    n = drv.find_element(By.ID, "save-poles").get_attribute("data-count")
+    check(n == str(len(chosen)), f"ema pole picker: a second click drops a pole ({n} kept)")
+    drv.find_element(By.ID, "save-poles").click()
+    saved = downloads / "poles.csv"
+    if not downloaded(saved, "ema pole picker: save downloads poles.csv"):
+        return
+    with open(saved, newline="") as f:
+        given = [(float(r["f_hz"]), float(r["damping"])) for r in csv.DictReader(f)]
+    want = sorted((data[int(c.get_attribute("data-i"))][0], data[int(c.get_attribute("data-i"))][1])
+                  for c in chosen)
+    check(given == want, "ema pole picker: poles.csv holds the picked poles at full precision")
+    out = work / "ema-picked"
+    run(harness, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
+        work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
+        "--f-max-hz", "200", "--poles", saved, "--out", out, "--force")
+    with open(out / "modes.csv", newline="") as f:
+        got = [(float(r["f_hz"]), float(r["damping"])) for r in csv.DictReader(f)]
+    close = len(got) == len(want) and all(
+        abs(a[0] - b[0]) <= 1e-9 * b[0] and abs(a[1] - b[1]) <= 1e-9 * b[1]
+        for a, b in zip(got, want))
+    check(close, f"ema --poles with the saved file: exactly the {len(want)} poles picked "
+                 f"({got} vs {want})")
 
 
 def main():
@@ -317,6 +393,7 @@ def main():
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
                      "modal")
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema")
+        check_pole_picker(drv, h, work)
         # with the accelerometer: one shape per band over the five targets, a row per target
         # and mode; one target: its marker and the modes of both systems, no shapes
         check_report(drv, work / "accel5" / "report.html", 5, 2, "analyze --targets --accel",

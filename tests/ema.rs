@@ -428,8 +428,56 @@ fn a_real_camera_impact_test_gives_both_modes_by_default() {
     // the camera's pyidi displacements over the DAQ's force, nothing but the rate given: the
     // axis, the band, the window and the delay between the records come from the data
     let out = tempfile::tempdir().unwrap();
+    let o = ladisk_camera_ema(&out.path().join("e"), &[]);
+    assert_says(
+        &o,
+        &["y coordinate", "start to move", "chosen from the data"],
+    );
+    let modes = modes_of(&out.path().join("e"));
+    // sdypy-EMA on the same displacements (tests/data/real/ladisk-ema-beam/README.md)
+    has_modes(&modes, &[695.91, 1898.64], 0.005, "camera vs sdypy-EMA");
+    // and the accelerometer's modes of the same beam
+    has_modes(&modes, &[695.76, 1898.09], 0.005, "camera vs accelerometer");
+    assert!(modes.len() <= 3, "{modes:?}");
+    // the page's picker: per mode the highest-order pole of its cluster, fed back as a user
+    // clicks and saves them, gives those two modes; the damping it shows is the structure's
+    // (the exponential window's removed), near the mode's, not the windowed FRF's
+    let (poles, in_modes) = page_poles(&out.path().join("e"));
+    let mut picked = Vec::new();
+    for (f, d) in modes.iter().filter(|m| m.0 < 2500.0) {
+        let best = in_modes
+            .iter()
+            .map(|&i| poles[i])
+            .filter(|p| (p.0 - f).abs() < 0.01 * f)
+            .max_by_key(|p| p.2)
+            .unwrap_or_else(|| panic!("no pole of the mode at {f} Hz on the page"));
+        assert!((best.1 - d).abs() < 0.5 * d, "{best:?} vs the mode's {d}");
+        picked.push(best);
+    }
+    let file = out.path().join("poles.csv");
+    let rows: Vec<String> = picked.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
+    std::fs::write(&file, format!("f_hz,damping\n{}\n", rows.join("\n"))).unwrap();
+    let o = ladisk_camera_ema(&out.path().join("p"), &["--poles", file.to_str().unwrap()]);
+    assert_ok(&o);
+    let again = modes_of(&out.path().join("p"));
+    assert_eq!(again.len(), picked.len(), "{again:?}");
+    for (got, want) in again.iter().zip(&picked) {
+        assert!(
+            (got.0 - want.0).abs() < 1e-9 * want.0,
+            "{got:?} vs {want:?}"
+        );
+        assert!(
+            (got.1 - want.1).abs() < 1e-9 * want.1,
+            "{got:?} vs {want:?}"
+        );
+    }
+}
+
+/// `ema` of the real beam's camera displacements over the DAQ's force, nothing but the
+/// camera's rate given, into `out`, with `extra`.
+fn ladisk_camera_ema(out: &Path, extra: &[&str]) -> std::process::Output {
     let (r, f) = (ladisk("displacements_lk.npy"), ladisk("camera.lvm"));
-    let o = harness(&[
+    let mut args = vec![
         "ema",
         "--response",
         r.to_str().unwrap(),
@@ -442,18 +490,41 @@ fn a_real_camera_impact_test_gives_both_modes_by_default() {
         "--impact",
         "--no-plots",
         "--out",
-        out.path().join("e").to_str().unwrap(),
-    ]);
-    assert_says(
-        &o,
-        &["y coordinate", "start to move", "chosen from the data"],
-    );
-    let modes = modes_of(&out.path().join("e"));
-    // sdypy-EMA on the same displacements (tests/data/real/ladisk-ema-beam/README.md)
-    has_modes(&modes, &[695.91, 1898.64], 0.005, "camera vs sdypy-EMA");
-    // and the accelerometer's modes of the same beam
-    has_modes(&modes, &[695.76, 1898.09], 0.005, "camera vs accelerometer");
-    assert!(modes.len() <= 3, "{modes:?}");
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+/// The poles of `report.html`'s picker (frequency, damping, order), and the indices of those
+/// drawn as members of a mode's cluster.
+fn page_poles(dir: &Path) -> (Vec<(f64, f64, u64)>, Vec<usize>) {
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let tag = "id=\"pole-data\">";
+    let start = html.find(tag).expect("a pole picker") + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    let poles = data["poles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                p[0].as_f64().unwrap(),
+                p[1].as_f64().unwrap(),
+                p[2].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let circle = "<circle class=\"pole mode\" data-i=\"";
+    let in_modes = html
+        .match_indices(circle)
+        .map(|(i, _)| {
+            let rest = &html[i + circle.len()..];
+            rest[..rest.find('"').unwrap()].parse().unwrap()
+        })
+        .collect();
+    (poles, in_modes)
 }
 
 #[test]

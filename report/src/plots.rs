@@ -917,18 +917,7 @@ where
     Ok(())
 }
 
-/// What a pole of a stabilisation diagram is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PoleKind {
-    /// Not stable from the order below.
-    Pole,
-    /// Stable, in no cluster of two or more.
-    Stable,
-    /// In a cluster reported as a mode.
-    Mode,
-    /// In a cluster rejected (its reason in the report).
-    Rejected,
-}
+pub use crate::export::picker::PoleKind;
 
 /// A stabilisation diagram: every pole `(f_hz, order, kind)`: a grey dot, a cross (stable),
 /// a filled blue disk (in a mode's cluster) or an open orange square (in a rejected

@@ -219,6 +219,7 @@ fn page(
         text: text.to_string(),
         scrub: None,
         references,
+        picker: None,
     })
 }
 

@@ -129,6 +129,20 @@ pub struct EmaResult {
     pub notes: Vec<String>,
 }
 
+impl EmaResult {
+    /// The structure's pole behind a pole of the diagram (`poles`): the exponential window's
+    /// damping removed, what `EmaSettings::poles` takes back.
+    pub fn structure_pole(&self, p: &ssi::Pole) -> Pole {
+        unwindowed(
+            Pole {
+                f_hz: p.f_hz,
+                damping: p.damping,
+            },
+            self.exp,
+        )
+    }
+}
+
 /// The largest ratio, over responses and used hits, of the RMS of a block's last tenth to its
 /// largest excursion (each less its mean before the pulse).
 fn undecayed(responses: &[Vec<f64>], hits: &Hits) -> f64 {

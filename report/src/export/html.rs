@@ -4,8 +4,8 @@
 //! number and lost-frame count; the figures the command drew (tracks, spectra or singular
 //! values, stabilisation diagram, FRFs with their fit), inlined from their SVG; the table of
 //! modes (with intervals); the MAC matrix; each mode shape animated (a deformed polyline
-//! through the targets, on the frame when there is one; a scale slider, play and pause); and
-//! the text of `report.txt`.
+//! through the targets, on the frame when there is one; a scale slider, play and pause); the
+//! pole picker of `ema` ([`super::picker`]); and the text of `report.txt`.
 //!
 //! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
 //! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
@@ -148,6 +148,8 @@ pub struct Report {
     pub text: String,
     /// The frame scrubber (`track`, `analyze` with frames).
     pub scrub: Option<super::scrub::Scrubber>,
+    /// The pole picker (`ema`).
+    pub picker: Option<super::picker::Picker>,
 }
 
 /// `s` with `&`, `<`, `>` and `"` escaped for HTML text and attributes.
@@ -290,6 +292,9 @@ pub fn report_html(r: &Report) -> String {
             escape(caption),
             inline_svg(svg)
         );
+    }
+    if let Some(p) = &r.picker {
+        super::picker::section(&mut s, p);
     }
     let _ = write!(
         s,

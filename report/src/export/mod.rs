@@ -32,6 +32,7 @@ pub mod field;
 pub mod html;
 pub mod oma;
 pub mod pick;
+pub mod picker;
 pub mod plan;
 pub mod recording;
 pub mod scrub;

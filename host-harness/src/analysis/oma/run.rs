@@ -180,6 +180,7 @@ pub fn page(
         shapes,
         text: text.to_string(),
         scrub,
+        picker: None,
     })
 }
 
