@@ -6,7 +6,8 @@ console error and no network request, holds what it should (the frame, one marke
 one animation per mode, the table of modes) and its animations advance; on pick.html scripted
 clicks add windows, a drag moves one, Delete removes one, "save points.csv" downloads a file, and
 `track --points` with that file gives the same tracks as with the hand-written one; on ema's
-page clicked poles are saved as poles.csv and `ema --poles` with it gives exactly those modes.
+and modal's pages clicked poles are saved as poles.csv and `--poles` with it gives exactly those
+modes.
 
     python3 scripts/check_pages.py --harness target/debug/host-harness --work target/pages
 
@@ -272,68 +273,70 @@ def check_pick(drv, harness, work, rec):
     check(n == len(want), f"pick.html --points: {n} windows shown")
 
 
-def check_pole_picker(drv, harness, work):
-    """On ema's page: hover shows a pole, clicks pick one pole per mode but the last, "save
-    poles.csv" downloads them, and `ema --poles` with that file gives exactly those modes."""
+def check_pole_picker(drv, harness, work, name, args, method=None):
+    """On the page of `name` (ema, modal): hover shows a pole, clicks pick one pole per mode
+    (of `method`, every mode without) but the last, "save poles.csv" downloads them, and the
+    command (`args` without --out) with `--poles` and that file gives exactly those modes."""
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
 
-    page = work / "ema" / "report.html"
-    downloads = downloads_into(drv, work / "downloads-poles")
-    open_page(drv, page)
+    what = f"{name} pole picker"
+    downloads = downloads_into(drv, work / f"downloads-{name}-poles")
+    open_page(drv, work / name / "report.html")
     data = json.loads(drv.find_element(By.ID, "pole-data").get_attribute("textContent"))["poles"]
     circles = drv.find_elements(By.CSS_SELECTOR, "svg#pole-picker circle.pole")
     check(len(circles) > 0 and len(circles) <= len(data),
-          f"ema pole picker: {len(circles)} poles drawn of {len(data)}")
-    check("LSCF stabilisation diagram" not in drv.page_source,
-          "ema pole picker: the diagram is drawn once (the picker, not also the static figure)")
-    with open(work / "ema" / "modes.csv", newline="") as f:
-        found = [float(r["f_hz"]) for r in csv.DictReader(f)]
+          f"{what}: {len(circles)} poles drawn of {len(data)}")
+    check("<figcaption>stabilisation</figcaption>" not in drv.page_source,
+          f"{what}: the diagram is drawn once (the picker, not also the static figure)")
+
+    def modes_of(d):
+        with open(d / "modes.csv", newline="") as f:
+            return [(float(r["f_hz"]), float(r["damping"])) for r in csv.DictReader(f)
+                    if method is None or r["method"] == method]
+
+    def pole(c):
+        return data[int(c.get_attribute("data-i"))]
+
+    found = modes_of(work / name)
     # per mode found but the last, the highest-order pole of its cluster nearest to it
     in_modes = [c for c in circles if "mode" in c.get_attribute("class").split()]
-    chosen = []
-    for f_mode in found[:-1]:
-        near = min(in_modes, key=lambda c: (round(abs(data[int(c.get_attribute("data-i"))][0]
-                                                      - f_mode) / f_mode, 3),
-                                           -data[int(c.get_attribute("data-i"))][2]))
-        chosen.append(near)
+    chosen = [min(in_modes, key=lambda c: (round(abs(pole(c)[0] - f) / f, 3), -pole(c)[2]))
+              for f, _ in found[:-1]]
     check(len(found) >= 2 and len(chosen) == len(found) - 1,
-          f"ema pole picker: {len(chosen)} poles to pick of {len(found)} modes")
+          f"{what}: {len(chosen)} poles to pick of {len(found)} modes")
+    if not chosen:
+        return
     ActionChains(drv).move_to_element(chosen[0]).perform()
     hover = drv.find_element(By.ID, "pole-hover").text
-    want = f"{data[int(chosen[0].get_attribute('data-i'))][0]:.3f} Hz, damping"
-    check(want in hover, f"ema pole picker: hover shows the pole ({hover!r})")
+    check(f"{pole(chosen[0])[0]:.3f} Hz, damping" in hover,
+          f"{what}: hover shows the pole ({hover!r})")
     for c in chosen:
         ActionChains(drv).move_to_element(c).click().perform()
     picked = drv.find_elements(By.CSS_SELECTOR, "svg#pole-picker circle.pole.picked")
     rows = drv.find_elements(By.CSS_SELECTOR, "table#picked tbody tr")
     check(len(picked) == len(chosen) and len(rows) == len(chosen),
-          f"ema pole picker: {len(picked)} circles and {len(rows)} rows picked by "
-          f"{len(chosen)} clicks")
+          f"{what}: {len(picked)} circles and {len(rows)} rows picked by {len(chosen)} clicks")
     # a click more and the same click again leave the choice as it was
     extra = next(c for c in circles if c not in chosen)
     ActionChains(drv).move_to_element(extra).click().click().perform()
     n = drv.find_element(By.ID, "save-poles").get_attribute("data-count")
-    check(n == str(len(chosen)), f"ema pole picker: a second click drops a pole ({n} kept)")
+    check(n == str(len(chosen)), f"{what}: a second click drops a pole ({n} kept)")
     drv.find_element(By.ID, "save-poles").click()
     saved = downloads / "poles.csv"
-    if not downloaded(saved, "ema pole picker: save downloads poles.csv"):
+    if not downloaded(saved, f"{what}: save downloads poles.csv"):
         return
     with open(saved, newline="") as f:
         given = [(float(r["f_hz"]), float(r["damping"])) for r in csv.DictReader(f)]
-    want = sorted((data[int(c.get_attribute("data-i"))][0], data[int(c.get_attribute("data-i"))][1])
-                  for c in chosen)
-    check(given == want, "ema pole picker: poles.csv holds the picked poles at full precision")
-    out = work / "ema-picked"
-    run(harness, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
-        work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
-        "--f-max-hz", "200", "--poles", saved, "--out", out, "--force")
-    with open(out / "modes.csv", newline="") as f:
-        got = [(float(r["f_hz"]), float(r["damping"])) for r in csv.DictReader(f)]
+    want = sorted((pole(c)[0], pole(c)[1]) for c in chosen)
+    check(given == want, f"{what}: poles.csv holds the picked poles at full precision")
+    out = work / f"{name}-picked"
+    run(harness, *args, "--poles", saved, "--out", out, "--force")
+    got = modes_of(out)
     close = len(got) == len(want) and all(
         abs(a[0] - b[0]) <= 1e-9 * b[0] and abs(a[1] - b[1]) <= 1e-9 * b[1]
         for a, b in zip(got, want))
-    check(close, f"ema --poles with the saved file: exactly the {len(want)} poles picked "
+    check(close, f"{name} --poles with the saved file: exactly the {len(want)} poles picked "
                  f"({got} vs {want})")
 
 
@@ -354,8 +357,8 @@ def main():
         "--threshold", "127", "--out", work / "track", "--force")
     run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--threshold", "127",
         "--mm-per-px", "0.1266", "--targets", "5", "--out", work / "analyze", "--force")
-    run(h, "modal", "--displacement", work / "analyze" / "displacement.csv", "--out",
-        work / "modal", "--force")
+    modal = ["modal", "--displacement", work / "analyze" / "displacement.csv"]
+    run(h, *modal, "--out", work / "modal", "--force")
     run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
         "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
         "--exposure-ms", "2", "--targets", "5", "--window", "rect", "--out", work / "accel5",
@@ -373,9 +376,10 @@ def main():
         shaken / "points.csv", "--threshold", "127", "--tracker", "weighted", "--reference",
         shaken / "references.csv", "--out", work / "reference", "--force")
     run(h, "simulate-hammer", "--out", work / "hammer", "--force")
-    run(h, "ema", "--response", work / "hammer" / "camera.csv", "--excitation",
-        work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
-        "--f-max-hz", "200", "--out", work / "ema", "--force")
+    ema = ["ema", "--response", work / "hammer" / "camera.csv", "--excitation",
+           work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
+           "--f-max-hz", "200"]
+    run(h, *ema, "--out", work / "ema", "--force")
 
     def mode_rows(d):
         with open(d / "modes.csv", newline="") as f:
@@ -393,7 +397,8 @@ def main():
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
                      "modal")
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema")
-        check_pole_picker(drv, h, work)
+        check_pole_picker(drv, h, work, "ema", ema)
+        check_pole_picker(drv, h, work, "modal", modal, method="ssi")
         # with the accelerometer: one shape per band over the five targets, a row per target
         # and mode; one target: its marker and the modes of both systems, no shapes
         check_report(drv, work / "accel5" / "report.html", 5, 2, "analyze --targets --accel",

@@ -442,7 +442,7 @@ fn a_real_camera_impact_test_gives_both_modes_by_default() {
     // the page's picker: per mode the highest-order pole of its cluster, fed back as a user
     // clicks and saves them, gives those two modes; the damping it shows is the structure's
     // (the exponential window's removed), near the mode's, not the windowed FRF's
-    let (poles, in_modes) = page_poles(&out.path().join("e"));
+    let (poles, in_modes) = crate::util::page_poles(&out.path().join("e"));
     let mut picked = Vec::new();
     for (f, d) in modes.iter().filter(|m| m.0 < 2500.0) {
         let best = in_modes
@@ -494,37 +494,6 @@ fn ladisk_camera_ema(out: &Path, extra: &[&str]) -> std::process::Output {
     ];
     args.extend_from_slice(extra);
     harness(&args)
-}
-
-/// The poles of `report.html`'s picker (frequency, damping, order), and the indices of those
-/// drawn as members of a mode's cluster.
-fn page_poles(dir: &Path) -> (Vec<(f64, f64, u64)>, Vec<usize>) {
-    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    let tag = "id=\"pole-data\">";
-    let start = html.find(tag).expect("a pole picker") + tag.len();
-    let end = start + html[start..].find("</script>").unwrap();
-    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
-    let poles = data["poles"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| {
-            (
-                p[0].as_f64().unwrap(),
-                p[1].as_f64().unwrap(),
-                p[2].as_u64().unwrap(),
-            )
-        })
-        .collect();
-    let circle = "<circle class=\"pole mode\" data-i=\"";
-    let in_modes = html
-        .match_indices(circle)
-        .map(|(i, _)| {
-            let rest = &html[i + circle.len()..];
-            rest[..rest.find('"').unwrap()].parse().unwrap()
-        })
-        .collect();
-    (poles, in_modes)
 }
 
 #[test]

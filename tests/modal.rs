@@ -619,3 +619,79 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
     ));
     assert_exit_2(&o, "2 reference targets, --references has 1");
 }
+
+#[test]
+fn poles_picked_on_the_page_are_exactly_the_ssi_modes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let field = tmp.path().join("field");
+    assert_ok(&harness(&words(
+        "simulate-field --minutes 20 --seed 5 --out {}",
+        &[field.to_str().unwrap()],
+    )));
+    let disp = field.join("displacement.csv");
+    let run = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let mut args = words(
+            "modal --displacement {} --nperseg 1024 --no-plots --out {}",
+            &[disp.to_str().unwrap(), out.to_str().unwrap()],
+        );
+        args.extend_from_slice(extra);
+        harness(&args)
+    };
+    assert_ok(&run("all", &[]));
+    let ssi: Vec<_> = modes(&tmp.path().join("all"))
+        .into_iter()
+        .filter(|m| m.0 == "ssi")
+        .collect();
+    assert!(ssi.len() >= 3, "{ssi:?}");
+    // per SSI mode but the second, the highest-order pole of its cluster, as a user clicks it
+    let (poles, in_modes) = crate::util::page_poles(&tmp.path().join("all"));
+    let picked: Vec<(f64, f64, u64)> = ssi
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != 1)
+        .map(|(_, m)| {
+            in_modes
+                .iter()
+                .map(|&i| poles[i])
+                .filter(|p| (p.0 - m.2).abs() < 0.01 * m.2)
+                .max_by_key(|p| p.2)
+                .unwrap_or_else(|| panic!("no pole of the mode at {} Hz on the page", m.2))
+        })
+        .collect();
+    let file = tmp.path().join("poles.csv");
+    let rows: Vec<String> = picked.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
+    std::fs::write(&file, format!("f_hz,damping\n{}\n", rows.join("\n"))).unwrap();
+    let o = run("picked", &["--poles", file.to_str().unwrap()]);
+    assert_says(&o, &["given (--poles): the shape of the stable pole at"]);
+    let got: Vec<_> = modes(&tmp.path().join("picked"))
+        .into_iter()
+        .filter(|m| m.0 == "ssi")
+        .collect();
+    assert_eq!(got.len(), picked.len(), "{got:?}");
+    for (g, p) in got.iter().zip(&picked) {
+        assert_eq!((g.2, g.3), (p.0, p.1));
+    }
+    // a pole beyond the Nyquist frequency, one where the diagram has no stable pole, and poles
+    // with bands are refused
+    let far = tmp.path().join("far.csv");
+    std::fs::write(&far, "f_hz,damping\n500,0.01\n").unwrap();
+    assert_exit_2(
+        &run("far", &["--poles", far.to_str().unwrap()]),
+        "lies outside the frequencies analysed",
+    );
+    let lone = tmp.path().join("lone.csv");
+    let gap = 0.5 * (ssi[0].2 + ssi[1].2);
+    std::fs::write(&lone, format!("f_hz,damping\n{gap},0.01\n")).unwrap();
+    assert_exit_2(
+        &run("lone", &["--poles", lone.to_str().unwrap()]),
+        "no stable SSI-cov pole lies within 1 %",
+    );
+    assert_exit_2(
+        &run(
+            "both",
+            &["--poles", file.to_str().unwrap(), "--bands", "1-2"],
+        ),
+        "--poles with --setup or --bands",
+    );
+}

@@ -104,3 +104,34 @@ pub fn modes_csv_rows(dir: &std::path::Path) -> Vec<Vec<String>> {
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect()
 }
+
+/// The poles of `report.html`'s picker (frequency, damping, order), and the indices of those
+/// drawn as members of a mode's cluster.
+pub fn page_poles(dir: &std::path::Path) -> (Vec<(f64, f64, u64)>, Vec<usize>) {
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let tag = "id=\"pole-data\">";
+    let start = html.find(tag).expect("a pole picker") + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    let poles = data["poles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                p[0].as_f64().unwrap(),
+                p[1].as_f64().unwrap(),
+                p[2].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let circle = "<circle class=\"pole mode\" data-i=\"";
+    let in_modes = html
+        .match_indices(circle)
+        .map(|(i, _)| {
+            let rest = &html[i + circle.len()..];
+            rest[..rest.find('"').unwrap()].parse().unwrap()
+        })
+        .collect();
+    (poles, in_modes)
+}

@@ -1080,7 +1080,7 @@ fn study(
 #[pyo3(signature = (displacement, fps=None, axis="y", window="hann", nperseg=None,
     noverlap=None, nfft=None, detrend="constant", bands=None, prominence_db=6.0, f_min_hz=None,
     efdd_quantity="auto", plscf=false, ssi="cov", ssi_block_rows=None, ssi_max_order=None,
-    references=None, setups=Vec::new(), merge="poser", out=None, force=false))]
+    references=None, setups=Vec::new(), merge="poser", out=None, force=false, poles=None))]
 #[allow(clippy::too_many_arguments)]
 fn modal<'py>(
     py: Python<'py>,
@@ -1105,6 +1105,7 @@ fn modal<'py>(
     merge: &str,
     out: Option<String>,
     force: bool,
+    poles: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::analysis::oma::{bell::Quantity, input::PixelAxis};
     use host_harness::analysis::oma::{multi_setup::Merge, ssi::SsiKind};
@@ -1135,6 +1136,7 @@ fn modal<'py>(
             &["auto", "displacement", "velocity", "acceleration"],
         )?],
         plscf,
+        poles: poles.map(std::path::PathBuf::from),
         ssi: [SsiKind::Cov, SsiKind::Dat][choice("ssi", ssi, &["cov", "dat"])?],
         ssi_block_rows,
         ssi_max_order,

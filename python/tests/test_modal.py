@@ -95,3 +95,20 @@ def test_modal_errors_name_pythons_arguments(field):
     with pytest.raises(vibcam.InputError, match="references: target 9"):
         vibcam.modal(field / "displacement.csv", references=[9],
                      setups=[(field / "displacement.csv", [1])])
+
+
+def test_poles_picked_are_exactly_the_ssi_modes_and_refusals_name_the_argument(field, tmp_path):
+    r = vibcam.modal(field / "displacement.csv")
+    ssi = ssi_modes(r)
+    keep = [ssi[0], ssi[-1]]
+    poles = tmp_path / "poles.csv"
+    poles.write_text("f_hz,damping\n" + "".join(
+        f"{float(r.modes['f_hz'][i])!r},{float(r.modes['damping'][i])!r}\n" for i in keep))
+    p = vibcam.modal(field / "displacement.csv", poles=poles)
+    got = ssi_modes(p)
+    assert [p.modes["f_hz"][i] for i in got] == [r.modes["f_hz"][i] for i in keep]
+    assert [p.modes["damping"][i] for i in got] == [r.modes["damping"][i] for i in keep]
+    assert "given (poles)" in p.report
+    assert 'id="pole-picker"' in p._repr_html_()
+    with pytest.raises(vibcam.InputError, match="^poles with setups or bands"):
+        vibcam.modal(field / "displacement.csv", poles=poles, bands=[(1, 2)])

@@ -781,6 +781,7 @@ def modal(
     merge: str = "poser",
     out: _Optional[_PathLike] = None,
     force: bool = False,
+    poles: _Optional[_PathLike] = None,
 ) -> AnalysisResult:
     """Output-only modal analysis of a displacement file, exactly as ``host-harness modal``
     (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -794,8 +795,11 @@ def modal(
     half-spectra too; ``ssi``: ``"cov"`` or ``"dat"``, with ``ssi_block_rows`` and
     ``ssi_max_order``. Several setups of one structure: ``references`` the targets of
     ``displacement`` every setup shares, ``setups`` the others as ``[(file, [targets in
-    references' order]), ...]``, ``merge`` ``"poser"`` or ``"preger"``. ``out``: also write
-    the command's files there (``force`` replaces an earlier ``modal`` output).
+    references' order]), ...]``, ``merge`` ``"poser"`` or ``"preger"``. ``poles``: a CSV with
+    ``f_hz`` and ``damping`` (poles picked on the page's stabilisation diagram, or an earlier
+    ``modes.csv``): SSI's modes exactly these, each one's shape the diagram's stable pole
+    nearest it. ``out``: also write the command's files there (``force`` replaces an earlier
+    ``modal`` output).
     """
     for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
         _setting("modal", key, v)
@@ -831,6 +835,7 @@ def modal(
         merge=merge,
         out=None if out is None else _os.fspath(out),
         force=bool(force),
+        poles=None if poles is None else _os.fspath(poles),
     )
     rows = [dict(r, scale=complex(*r["scale"])) for r in d["setups"]]
     return _result(AnalysisResult, d, lost=None, camera_motion=None, setups=rows)

@@ -103,6 +103,11 @@ pub struct Args {
     /// `$plscf`.
     #[arg(long, help = super::args::help("plscf"))]
     pub plscf: bool,
+    /// SSI's modes exactly these poles: a CSV with `f_hz` and `damping` columns (poles picked
+    /// on report.html's stabilisation diagram, or an earlier `modes.csv`); each one's shape
+    /// from the diagram's stable pole nearest it (default: the diagram's clusters).
+    #[arg(long, value_name = "FILE")]
+    pub poles: Option<std::path::PathBuf>,
     /// `$ssi`.
     #[arg(long, value_enum, default_value = super::args::given("ssi"), help = super::args::help("ssi"))]
     pub ssi: SsiArg,
@@ -161,6 +166,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             EfddQuantityArg::Acceleration => Some(Quantity::Acceleration),
         },
         plscf: args.plscf,
+        poles: args.poles,
         ssi_block_rows: args.ssi_block_rows,
         ssi_max_order: args.ssi_max_order,
         references: args.references.map(|t| t.0),

@@ -29,6 +29,9 @@ pub struct ModalInput {
     pub efdd_quantity: Option<crate::analysis::oma::bell::Quantity>,
     /// `$plscf`: also LSCF on half-spectra.
     pub plscf: bool,
+    /// `$poles`: a CSV of the poles SSI gives as its modes (`f_hz`, `damping`: poles picked on
+    /// the page's diagram, or an earlier `modes.csv`).
+    pub poles: Option<PathBuf>,
     /// `$ssi`: covariance- or data-driven.
     pub ssi: crate::analysis::oma::ssi::SsiKind,
     /// `$ssi_block_rows`.
@@ -131,6 +134,9 @@ fn settings_for(
         }
         s.plscf = Some(rule);
     }
+    if let Some(file) = &input.poles {
+        s.poles = Some(poles_in_range(file, s.ssi.f_range_hz, &record)?);
+    }
     if n < 4 * s.ssi.block_rows {
         return Err(SpecError::setting(format!(
             "$ssi_block_rows {}: {record} has {n} samples, at least {} are needed",
@@ -177,11 +183,34 @@ fn setup_flags(input: &ModalInput) -> SpecResult<()> {
         (false, false) => Err(SpecError::setting(
             "$setup needs $references: the targets of the first file that every setup shares",
         )),
+        _ if input.poles.is_some() && (!input.setups.is_empty() || input.bands.is_some()) => {
+            Err(SpecError::setting(
+                "$poles with $setup or $bands: the poles given are the modes of one record; \
+                 bands choose among clusters",
+            ))
+        }
         _ if input.merge == Merge::Preger && input.setups.is_empty() => Err(SpecError::setting(
             "$merge preger identifies several setups together: give them with $setup and \
              $references",
         )),
         _ => Ok(()),
+    }
+}
+
+/// The poles of `file` (`$poles`), each within the frequencies SSI analyses of `record`.
+fn poles_in_range(
+    file: &std::path::Path,
+    (lo, hi): (f64, f64),
+    record: &str,
+) -> SpecResult<Vec<crate::analysis::modal::Pole>> {
+    let poles = crate::analysis::ema::input::read_poles(file).map_err(SpecError::Input)?;
+    match poles.iter().find(|p| p.f_hz < lo || p.f_hz > hi) {
+        Some(p) => Err(SpecError::setting(format!(
+            "$poles: the pole at {} Hz lies outside the frequencies analysed in {record}, \
+             {lo:.4}-{hi:.4} Hz ($f_min_hz, the Nyquist frequency)",
+            p.f_hz
+        ))),
+        None => Ok(poles),
     }
 }
 

@@ -96,6 +96,9 @@ pub struct OmaSettings {
     pub groups: usize,
     /// What measured the records (the notes on harmonics).
     pub source: RecordSource,
+    /// `$poles`: SSI's modes exactly these (frequency and damping as given), each one's shape
+    /// the diagram's stable pole nearest it ([`modes::ssi_modes`]); `None`: the clusters.
+    pub poles: Option<Vec<crate::modal::Pole>>,
 }
 
 impl OmaSettings {
@@ -146,6 +149,7 @@ impl OmaSettings {
             plscf: None,
             groups: uncertainty::GROUPS,
             source: RecordSource::File,
+            poles: None,
         }
     }
 }

@@ -75,7 +75,7 @@ pub fn ssi_modes(
     let (poles, cut) = ssi::poles(channels, s.fs_hz, s.ssi)?;
     let kind = s.ssi.kind.label();
     let (mut kept, mut dropped) = cluster::cluster(&poles, s.cluster);
-    let lone = match s.bands.is_empty() {
+    let lone = match s.bands.is_empty() && s.poles.is_none() {
         true => keep_lone(svd, s, &mut kept, &mut dropped),
         false => Vec::new(),
     };
@@ -87,6 +87,18 @@ pub fn ssi_modes(
              $f_min_hz takes it in",
             c.f_hz, c.damping, c.poles, s.ssi.f_range_hz.0, s.csd.nfft
         ));
+    }
+    if let Some(given) = &s.poles {
+        return Ok(SsiFound {
+            modes: given_modes(given, &poles, kind)?,
+            poles,
+            clusters: kept
+                .into_iter()
+                .map(|c| (c, true))
+                .chain(dropped.into_iter().map(|r| (r.cluster, false)))
+                .collect(),
+            lone: Vec::new(),
+        });
     }
     let modes: Vec<OmaMode> =
         cluster::chosen((&kept, &dropped), &s.bands, ("ssi", kind), notes, rejected)
@@ -111,6 +123,58 @@ pub fn ssi_modes(
         clusters,
         lone: lone.into_iter().map(|l| l.0).collect(),
     })
+}
+
+/// The modes of the poles `given` (`$poles`), in ascending frequency: each its frequency and
+/// damping as given, its shape the one of the diagram's stable pole nearest it (the highest
+/// order among equals) within 1 %, the stable poles there its evidence. A pole picked on the
+/// diagram is one of its poles: its own shape. Refused (bad input) where no stable pole lies
+/// within 1 % of one.
+fn given_modes(
+    given: &[crate::modal::Pole],
+    poles: &[Pole],
+    kind: &str,
+) -> anyhow::Result<Vec<OmaMode>> {
+    let mut given = given.to_vec();
+    given.sort_by(|a, b| a.f_hz.total_cmp(&b.f_hz));
+    given
+        .iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let gap = |p: &Pole| (p.f_hz - g.f_hz).abs();
+            let near: Vec<&Pole> = poles
+                .iter()
+                .filter(|p| p.stable && gap(p) <= 0.01 * g.f_hz)
+                .collect();
+            let best = near
+                .iter()
+                .min_by(|a, b| gap(a).total_cmp(&gap(b)).then(b.order.cmp(&a.order)))
+                .ok_or_else(|| {
+                    vibcam_readers::bad_input(format!(
+                        "$poles: no stable {kind} pole lies within 1 % of {} Hz (the diagram's \
+                         poles are in report.html's picker)",
+                        g.f_hz
+                    ))
+                })?;
+            Ok(OmaMode {
+                method: Method::Ssi,
+                mode: i + 1,
+                band_hz: None,
+                f_hz: g.f_hz,
+                amplitude: None,
+                damping: Some(g.damping),
+                shape: normalise_shape(&best.shape),
+                evidence: format!(
+                    "given ($poles): the shape of the stable pole at {:.4} Hz (order {}); {} \
+                     stable poles within 1 %",
+                    best.f_hz,
+                    best.order,
+                    near.len()
+                ),
+                uncertainty: Default::default(),
+            })
+        })
+        .collect()
 }
 
 /// Moves the clusters of `dropped` that [`lone_explanations`] keeps into `kept` (ascending

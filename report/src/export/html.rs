@@ -5,7 +5,7 @@
 //! values, stabilisation diagram, FRFs with their fit), inlined from their SVG; the table of
 //! modes (with intervals); the MAC matrix; each mode shape animated (a deformed polyline
 //! through the targets, on the frame when there is one; a scale slider, play and pause); the
-//! pole picker of `ema` ([`super::picker`]); and the text of `report.txt`.
+//! pole picker of `ema` and `modal` ([`super::picker`]); and the text of `report.txt`.
 //!
 //! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
 //! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
@@ -148,7 +148,7 @@ pub struct Report {
     pub text: String,
     /// The frame scrubber (`track`, `analyze` with frames).
     pub scrub: Option<super::scrub::Scrubber>,
-    /// The pole picker (`ema`).
+    /// The pole picker (`ema`, `modal`).
     pub picker: Option<super::picker::Picker>,
 }
 

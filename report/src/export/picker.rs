@@ -1,5 +1,5 @@
-//! The pole picker of `report.html` (`ema`): the stabilisation diagram drawn as the page's own
-//! SVG, each pole a circle one clicks to pick or unpick, its frequency, damping, order and MPC
+//! The pole picker of `report.html` (`ema`, `modal`): the stabilisation diagram drawn as the
+//! page's own SVG, each pole a circle one clicks to pick or unpick, its frequency, damping, order and MPC
 //! shown on hover; the picked poles listed in a table and saved as `poles.csv` (`f_hz`,
 //! `damping`, `order`, `mpc`), the file a run with `$poles` takes to give exactly those modes.
 //! Frequencies and damping ratios are the structure's (an exponential window's damping

@@ -168,33 +168,15 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
 /// The page's pole picker: every pole of the diagram, drawn where the fit found it, its
 /// structure's frequency and damping what `poles.csv` saves (none without poles).
 fn picker(r: &EmaResult) -> Option<crate::export::picker::Picker> {
-    use crate::export::picker::{PickPole, Picker};
-    let kinds = crate::analysis::oma::run::pole_kinds(&r.poles, &r.clusters);
-    let poles: Vec<PickPole> = r
-        .poles
-        .iter()
-        .zip(kinds)
-        .map(|(p, (_, order, kind))| {
-            let structure = r.structure_pole(p);
-            PickPole {
-                at_hz: p.f_hz,
-                order,
-                kind,
-                f_hz: structure.f_hz,
-                damping: structure.damping,
-                mpc: crate::analysis::oma::cluster::mpc(&p.shape),
-            }
-        })
-        .collect();
-    (!poles.is_empty()).then(|| Picker {
-        poles,
-        f_range: r.band_hz,
-        modes_hz: r.modes.iter().map(|m| m.fitted.f_hz).collect(),
-        rerun: "Saved as <code>poles.csv</code>, the file <code>ema</code> takes with \
-                <code>$poles</code> to give exactly these modes, with their shapes, intervals \
-                and report."
-            .into(),
-    })
+    crate::analysis::oma::run::picker(
+        (&r.poles, &r.clusters),
+        r.band_hz,
+        r.modes.iter().map(|m| m.fitted.f_hz).collect(),
+        |p| r.structure_pole(p),
+        "Saved as <code>poles.csv</code>, the file <code>ema</code> takes with \
+         <code>$poles</code> to give exactly these modes, with their shapes, intervals and \
+         report.",
+    )
 }
 
 /// `s` within a universal file's text field of `max` characters: line breaks as spaces, cut

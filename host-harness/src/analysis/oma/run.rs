@@ -168,6 +168,28 @@ pub fn page(
         })
         .collect();
     let (mac, shapes) = mac_and_animations(&modes, "");
+    // `modal` takes the poles picked back ($poles); the picker draws its diagram
+    let picker = (command == "modal")
+        .then(|| {
+            let ssi = r.modes.iter().filter(|m| m.method == Method::Ssi);
+            picker(
+                (&r.poles, &r.clusters),
+                (0.0, r.svd.freq_hz.last().copied().unwrap_or(1.0)),
+                ssi.map(|m| m.f_hz).collect(),
+                |p| crate::analysis::modal::Pole {
+                    f_hz: p.f_hz,
+                    damping: p.damping,
+                },
+                "Saved as <code>poles.csv</code>, the file <code>modal</code> takes with \
+                 <code>$poles</code> to give exactly these SSI modes, each with the shape of \
+                 its pole.",
+            )
+        })
+        .flatten();
+    let figures = figures
+        .into_iter()
+        .filter(|(name, _)| picker.is_none() || name != "stabilisation")
+        .collect();
     report_html(&Report {
         title: format!("{command}: output-only modal analysis"),
         frame,
@@ -180,7 +202,7 @@ pub fn page(
         shapes,
         text: text.to_string(),
         scrub,
-        picker: None,
+        picker,
     })
 }
 
@@ -246,6 +268,41 @@ pub fn pole_kinds(
             (p.f_hz, p.order, kind)
         })
         .collect()
+}
+
+/// The page's pole picker ([`crate::export::picker`]) of a diagram's `poles` and `clusters`
+/// over `f_range` Hz, the modes found at `modes_hz`; `structure` the pole `poles.csv` saves
+/// for a pole of the diagram (an exponential window's damping removed); `rerun` how the file
+/// is used. None without poles.
+pub fn picker(
+    (poles, clusters): (&[super::ssi::Pole], &[(super::cluster::SsiMode, bool)]),
+    f_range: (f64, f64),
+    modes_hz: Vec<f64>,
+    structure: impl Fn(&super::ssi::Pole) -> crate::analysis::modal::Pole,
+    rerun: &str,
+) -> Option<crate::export::picker::Picker> {
+    use crate::export::picker::{PickPole, Picker};
+    let picks: Vec<PickPole> = poles
+        .iter()
+        .zip(pole_kinds(poles, clusters))
+        .map(|(p, (_, order, kind))| {
+            let s = structure(p);
+            PickPole {
+                at_hz: p.f_hz,
+                order,
+                kind,
+                f_hz: s.f_hz,
+                damping: s.damping,
+                mpc: super::cluster::mpc(&p.shape),
+            }
+        })
+        .collect();
+    (!picks.is_empty()).then(|| Picker {
+        poles: picks,
+        f_range,
+        modes_hz,
+        rerun: rerun.to_string(),
+    })
 }
 
 /// The rows of `modes.csv`.
