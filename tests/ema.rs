@@ -253,13 +253,13 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-#[test]
-fn a_random_force_gives_the_modes_through_welch_segments() {
-    // a periodic random force at 1 kHz (2^17 samples) and the exact periodic response of the
-    // three modes through their receptance, displacement noise 0.1 % of its RMS
+/// A random-force test in `dir`: a periodic random force at 1 kHz (2^17 samples), its
+/// spectrum kept within `band` Hz when given (a shaker's), and the exact periodic response of
+/// the three modes through their receptance, displacement noise 0.1 % of its RMS
+/// (`force.csv`, `camera.csv`).
+fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
     use rustfft::num_complex::Complex;
-    let dir = std::env::temp_dir().join(format!("vibcam-ema-random-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::create_dir_all(dir).unwrap();
     let test = HammerRecording {
         seconds: 1.0,
         daq_hz: 1000.0,
@@ -273,21 +273,27 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     }
     .test();
     let (fs, n) = (1000.0, 1usize << 17);
-    let force = host_harness::testing::uniform_noise(11, n);
+    let mut force = host_harness::testing::uniform_noise(11, n);
     let mut planner = rustfft::FftPlanner::<f64>::new();
     let mut spec: Vec<Complex<f64>> = force.iter().map(|v| Complex::new(*v, 0.0)).collect();
     planner.plan_fft_forward(n).process(&mut spec);
+    let freq = |k: usize| (if k <= n / 2 { k } else { n - k }) as f64 * fs / n as f64;
+    if let Some((lo, hi)) = band {
+        for (k, c) in spec.iter_mut().enumerate() {
+            if freq(k) < lo || freq(k) > hi {
+                *c = Complex::new(0.0, 0.0);
+            }
+        }
+        let mut back = spec.clone();
+        planner.plan_fft_inverse(n).process(&mut back);
+        force = back.iter().map(|c| c.re / n as f64).collect();
+    }
     let mut responses = Vec::new();
     for o in 0..POINTS {
         let mut x: Vec<Complex<f64>> = (0..n)
             .map(|k| {
-                let kk = if k <= n / 2 {
-                    k as f64
-                } else {
-                    k as f64 - n as f64
-                };
-                let h = test.receptance(o, kk.abs() * fs / n as f64);
-                let h = if kk < 0.0 { h.conj() } else { h };
+                let h = test.receptance(o, freq(k));
+                let h = if k > n / 2 { h.conj() } else { h };
                 spec[k] * Complex::new(h.re, h.im) * 1e3 / n as f64
             })
             .collect();
@@ -315,6 +321,13 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     }
     std::fs::write(dir.join("force.csv"), f).unwrap();
     std::fs::write(dir.join("camera.csv"), r).unwrap();
+    test
+}
+
+#[test]
+fn a_random_force_gives_the_modes_through_welch_segments() {
+    let dir = std::env::temp_dir().join(format!("vibcam-ema-random-{}", std::process::id()));
+    let test = write_random_test(&dir, None);
     let out = dir.join("out");
     let o = harness(&words("ema --response {} --excitation {} --excitation-col force_n --f-max-hz 200 --out {} --no-plots", &[dir.join("camera.csv").to_str().unwrap(), dir.join("force.csv").to_str().unwrap(), out.to_str().unwrap()]));
     assert_says(
@@ -324,6 +337,41 @@ fn a_random_force_gives_the_modes_through_welch_segments() {
     // measured: 23.0082 Hz (+0.036 %), damping 0.01512 (+0.8 %) and closer for the others
     check_modes(&out, &test, "random force");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_shakers_band_is_found_from_the_coherence() {
+    // the force within 10-150 Hz only: without a band given, the one fitted is where the
+    // responses follow the force, not up to 0.8 x Nyquist
+    let dir = tempfile::tempdir().unwrap();
+    let test = write_random_test(dir.path(), Some((10.0, 150.0)));
+    let out = dir.path().join("out");
+    let o = harness(&words(
+        "ema --response {} --excitation {} --excitation-col force_n --out {} --no-plots",
+        &[
+            dir.path().join("camera.csv").to_str().unwrap(),
+            dir.path().join("force.csv").to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+    ));
+    assert_says(&o, &["coherence with the force"]);
+    let report = String::from_utf8_lossy(&o.stdout).to_string();
+    let line = report
+        .lines()
+        .find(|l| l.starts_with("fit: "))
+        .expect("the fit's line");
+    let band: Vec<f64> = line[5..]
+        .split(" Hz")
+        .next()
+        .unwrap()
+        .split('-')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        (band[0] - 10.0).abs() < 1.0 && (band[1] - 150.0).abs() < 1.0,
+        "{line}"
+    );
+    check_modes(&out, &test, "a shaker's band");
 }
 
 #[test]

@@ -233,6 +233,38 @@ pub fn onset_lag_s(responses: &[Vec<f64>], hits: &Hits, fs_hz: f64) -> Option<f6
     median(&mut lags)
 }
 
+/// Coherence from which a line of a continuous test counts as measured: the median over the
+/// responses of the ordinary coherence with the force, over 5 lines.
+pub const COHERENT: f64 = 0.8;
+/// Fewest Welch segments for the coherence to tell signal from noise (with one, every line's
+/// is 1).
+pub const COHERENCE_SEGMENTS: usize = 8;
+
+/// The lines of a continuous test where the responses follow the force: the lowest and highest
+/// line within `outer` whose median coherence over the responses (over 5 lines) is at least
+/// [`COHERENT`], and how many lines are; `None` when no line is. Outside the force's band (a
+/// shaker's) or where the responses are their noise the coherence falls.
+pub fn coherent_span(
+    freq_hz: &[f64],
+    coherence: &[Vec<f64>],
+    outer: (f64, f64),
+) -> Option<(f64, f64, usize)> {
+    let per_line: Vec<f64> = (0..freq_hz.len())
+        .map(|k| {
+            let mut at: Vec<f64> = coherence.iter().filter_map(|c| c.get(k).copied()).collect();
+            median(&mut at).unwrap_or(0.0)
+        })
+        .collect();
+    let smoothed = smooth(&per_line);
+    let coherent: Vec<f64> = freq_hz
+        .iter()
+        .zip(&smoothed)
+        .filter(|(f, c)| **f >= outer.0 && **f <= outer.1 && **c >= COHERENT)
+        .map(|(f, _)| *f)
+        .collect();
+    Some((*coherent.first()?, *coherent.last()?, coherent.len()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -305,5 +337,32 @@ mod tests {
         let e = excited(&[noise], &hits, 10_000.0, (20.0, 4000.0)).unwrap();
         assert_eq!(e.lines, 0);
         assert!(e.band((20.0, 4000.0)).is_none());
+    }
+
+    #[test]
+    fn the_coherent_span_is_where_the_median_response_follows_the_force() {
+        let freq: Vec<f64> = (0..100).map(f64::from).collect();
+        // two responses coherent over 20-60 Hz, one over 25-80 Hz: the median is coherent over
+        // 20-60 Hz, and over 5 lines its sharp edges reach 0.8 two lines in (22-58 Hz); a lone
+        // coherent line at 90 Hz stays out
+        let c = |lo: usize, hi: usize| -> Vec<f64> {
+            (0..100)
+                .map(|k| {
+                    if (lo..=hi).contains(&k) || k == 90 {
+                        0.95
+                    } else {
+                        0.1
+                    }
+                })
+                .collect()
+        };
+        let coherence = vec![c(20, 60), c(20, 60), c(25, 80)];
+        let (lo, hi, lines) = coherent_span(&freq, &coherence, (0.0, 99.0)).unwrap();
+        assert_eq!((lo, hi, lines), (22.0, 58.0, 37));
+        assert_eq!(
+            coherent_span(&freq, &coherence, (30.0, 40.0)),
+            Some((30.0, 40.0, 11))
+        );
+        assert_eq!(coherent_span(&freq, &[c(200, 200)], (0.0, 99.0)), None);
     }
 }

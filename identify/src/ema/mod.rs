@@ -548,7 +548,7 @@ fn prepare(
             impact_spectra(force, responses, fs_hz, (force_name, rule, exp), s, notes)
         }
         Excitation::Continuous { nperseg } => {
-            continuous_spectra(force, responses, fs_hz, nperseg, s.band_hz, notes)
+            continuous_spectra(force, responses, fs_hz, nperseg, s, notes)
         }
     }
 }
@@ -680,7 +680,7 @@ fn continuous_spectra(
     responses: &[Vec<f64>],
     fs_hz: f64,
     nperseg: usize,
-    band_hz: (f64, f64),
+    s: &EmaSettings,
     notes: &mut Vec<String>,
 ) -> anyhow::Result<Prepared> {
     let mean = force.iter().sum::<f64>() / force.len().max(1) as f64;
@@ -701,14 +701,66 @@ fn continuous_spectra(
         fs_hz,
         nperseg,
         crate::oma::uncertainty::GROUPS,
-        band_hz.1 * 1.05,
+        s.band_hz.1 * 1.05,
     )?;
+    let band_hz = match s.band_from_data {
+        (false, false) => s.band_hz,
+        free => coherent_band(&sp, s.band_hz, free, notes),
+    };
     Ok(Prepared {
         spectra: sp,
         hits: None,
         exp: None,
         band_hz,
     })
+}
+
+/// The band of a continuous test: each end `free` chosen from where the responses follow the
+/// force ([`excited::coherent_span`]) inside `outer`, the others `outer`'s (said in `notes`); `outer` with too few segments or no coherent line.
+fn coherent_band(
+    sp: &Spectra,
+    outer: (f64, f64),
+    free: (bool, bool),
+    notes: &mut Vec<String>,
+) -> (f64, f64) {
+    let segments: usize = sp.units.iter().map(|u| u.size).sum();
+    if segments < excited::COHERENCE_SEGMENTS {
+        notes.push(format!(
+            "{segments} Welch segments: too few for the coherence to say where the responses \
+             follow the force ({} at least); the whole band {:.1}-{:.1} Hz fitted",
+            excited::COHERENCE_SEGMENTS,
+            outer.0,
+            outer.1
+        ));
+        return outer;
+    }
+    let frfs = sp.frfs(None);
+    let Some((lo, hi, lines)) = excited::coherent_span(&sp.freq_hz, &frfs.coherence, outer) else {
+        notes.push(format!(
+            "no line's coherence with the force reaches {} (the median over the responses): \
+             the whole band {:.1}-{:.1} Hz fitted; are the responses those of the structure \
+             driven?",
+            excited::COHERENT,
+            outer.0,
+            outer.1
+        ));
+        return outer;
+    };
+    // not widened: a line beyond is one the force did not drive (its H1 is noise over
+    // nothing)
+    let band = (
+        if free.0 { lo } else { outer.0 },
+        if free.1 { hi } else { outer.1 },
+    );
+    notes.push(format!(
+        "band fitted {:.1}-{:.1} Hz, its ends not given chosen from the data: the responses' \
+         coherence with the force (their median, over 5 lines) is at least {} at \
+         {lo:.1}-{hi:.1} Hz ({lines} lines); $f_min_hz, $f_max_hz or $bands to choose",
+        band.0,
+        band.1,
+        excited::COHERENT,
+    ));
+    band
 }
 
 /// The jackknife's replicates: with every unit (hit or segment group) left out in turn, each
