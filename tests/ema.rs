@@ -577,6 +577,21 @@ fn a_real_accelerometer_impact_test_gives_its_four_modes_by_default() {
 }
 
 #[test]
+fn a_page_without_a_mode_says_so_and_why() {
+    let dir = tempfile::tempdir().unwrap();
+    write_test(dir.path(), &[]);
+    // no mode lies in 40-50 Hz: the page's banner says so, with the band's note
+    assert_ok(&ema(dir.path(), "none", &["--bands", "40-50"]));
+    let page = std::fs::read_to_string(dir.path().join("none/report.html")).unwrap();
+    assert!(page.contains("<div id=\"banner\"><strong>No mode was found."));
+    assert!(page.contains("<li>band 40-50 Hz: no mode"), "{page}");
+    // and a page with modes has none
+    assert_ok(&ema(dir.path(), "all", &[]));
+    let page = std::fs::read_to_string(dir.path().join("all/report.html")).unwrap();
+    assert!(!page.contains("id=\"banner\""));
+}
+
+#[test]
 fn poles_given_are_exactly_the_modes_and_an_earlier_modes_csv_is_a_poles_file() {
     let dir = tempfile::tempdir().unwrap();
     let test = write_test(dir.path(), &[]);

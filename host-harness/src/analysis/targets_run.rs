@@ -220,6 +220,7 @@ fn page(
         scrub: None,
         references,
         picker: None,
+        banner: None,
     })
 }
 

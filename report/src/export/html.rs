@@ -9,7 +9,7 @@
 //!
 //! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
 //! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
-//! `button#play`, `input#scale`, `pre#report-text`.
+//! `button#play`, `input#scale`, `pre#report-text`, `div#banner` (no mode found, and why).
 
 use num_complex::Complex64;
 use std::fmt::Write as _;
@@ -150,6 +150,9 @@ pub struct Report {
     pub scrub: Option<super::scrub::Scrubber>,
     /// The pole picker (`ema`, `modal`).
     pub picker: Option<super::picker::Picker>,
+    /// A banner under the title (`div#banner`): its heading and the reasons listed (an
+    /// identification that found no mode, and why).
+    pub banner: Option<(String, Vec<String>)>,
 }
 
 /// `s` with `&`, `<`, `>` and `"` escaped for HTML text and attributes.
@@ -224,7 +227,8 @@ table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;text-
 pre{background:#f6f6f6;padding:1em;overflow-x:auto}\
 .mode{display:inline-block;margin:0 1em 1em 0;vertical-align:top}\
 .mode svg{border:1px solid #ddd;background:#fff}\
-#frame{max-width:100%;height:auto}";
+#frame{max-width:100%;height:auto}\
+#banner{border:2px solid #c83c28;background:#fff4f2;padding:.5em 1em;margin:1em 0}";
 
 /// The page's script: animates every `svg.mode-shape` from the data in `#shape-data`.
 const SCRIPT: &str = r#"(function(){
@@ -261,6 +265,17 @@ pub fn report_html(r: &Report) -> String {
         escape(&r.title),
         escape(&r.title)
     );
+    if let Some((head, reasons)) = &r.banner {
+        let _ = write!(
+            s,
+            "<div id=\"banner\"><strong>{}</strong><ul>",
+            escape(head)
+        );
+        for why in reasons {
+            let _ = write!(s, "<li>{}</li>", escape(why));
+        }
+        s.push_str("</ul></div>\n");
+    }
     let view = View::of(r);
     let frame_image = r.frame.as_ref().map(|f| {
         format!(

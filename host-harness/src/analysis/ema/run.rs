@@ -161,8 +161,28 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         shapes,
         text: text.to_string(),
         picker,
+        banner: crate::analysis::oma::run::no_mode_banner(r.modes.is_empty(), &rejected(r)),
         ..Report::default()
     })
+}
+
+/// The notes that say a band holds no mode, then the clusters not taken for modes, the
+/// fullest first, each with its size and reason.
+fn rejected(r: &EmaResult) -> Vec<String> {
+    let mut clusters: Vec<_> = r.rejected.iter().collect();
+    clusters.sort_by_key(|c| std::cmp::Reverse(c.cluster.poles));
+    let clusters = clusters.into_iter().map(|c| {
+        format!(
+            "cluster at {:.4} Hz ({} stable poles): {}",
+            c.cluster.f_hz, c.cluster.poles, c.reason
+        )
+    });
+    r.notes
+        .iter()
+        .filter(|n| n.contains("no mode"))
+        .cloned()
+        .chain(clusters)
+        .collect()
 }
 
 /// The page's pole picker: every pole of the diagram, drawn where the fit found it, its

@@ -203,6 +203,7 @@ pub fn page(
         text: text.to_string(),
         scrub,
         picker,
+        banner: no_mode_banner(r.modes.is_empty(), &r.rejected),
     })
 }
 
@@ -268,6 +269,35 @@ pub fn pole_kinds(
             (p.f_hz, p.order, kind)
         })
         .collect()
+}
+
+/// The reasons a banner lists at the most; the rest are in the report.
+pub const BANNER_REASONS: usize = 8;
+
+/// The page's banner when an identification found no mode (`none`): the peaks and clusters
+/// not taken with their reasons (`rejected`, the first [`BANNER_REASONS`]), or that none
+/// stood out.
+pub fn no_mode_banner(none: bool, rejected: &[String]) -> Option<(String, Vec<String>)> {
+    if !none {
+        return None;
+    }
+    let mut reasons: Vec<String> = rejected.iter().take(BANNER_REASONS).cloned().collect();
+    if rejected.len() > BANNER_REASONS {
+        reasons.push(format!(
+            "and {} more in the report below",
+            rejected.len() - BANNER_REASONS
+        ));
+    }
+    if reasons.is_empty() {
+        reasons.push(
+            "no peak stood out and no cluster of stable poles formed: see the report's notes"
+                .into(),
+        );
+    }
+    Some((
+        "No mode was found. What was seen and why it was not taken:".into(),
+        reasons,
+    ))
 }
 
 /// The page's pole picker ([`crate::export::picker`]) of a diagram's `poles` and `clusters`
