@@ -631,6 +631,14 @@ fn impact_spectra(
     })
 }
 
+/// Each end of a band: `chosen`'s where `free` (not given), `outer`'s where given.
+fn free_ends(free: (bool, bool), chosen: (f64, f64), outer: (f64, f64)) -> (f64, f64) {
+    (
+        if free.0 { chosen.0 } else { outer.0 },
+        if free.1 { chosen.1 } else { outer.1 },
+    )
+}
+
 /// The band fitted: each end `free` chosen from what the hits excited inside `outer`, the
 /// others `outer`'s (said in `notes`); `outer` when nothing stands out.
 fn band_note(
@@ -641,10 +649,7 @@ fn band_note(
 ) -> (f64, f64) {
     match (e.span_hz, e.band(outer)) {
         (Some((lo, hi)), Some(b)) => {
-            let band = (
-                if free.0 { b.0 } else { outer.0 },
-                if free.1 { b.1 } else { outer.1 },
-            );
+            let band = free_ends(free, b, outer);
             notes.push(format!(
                 "band fitted {:.0}-{:.0} Hz, its ends not given chosen from the data: the \
                  responses stand {} dB above their noise after the hits and decay at \
@@ -716,7 +721,8 @@ fn continuous_spectra(
 }
 
 /// The band of a continuous test: each end `free` chosen from where the responses follow the
-/// force ([`excited::coherent_span`]) inside `outer`, the others `outer`'s (said in `notes`); `outer` with too few segments or no coherent line.
+/// force ([`excited::coherent_span`]) inside `outer`, the others `outer`'s (said in `notes`);
+/// `outer` with too few segments or no coherent line.
 fn coherent_band(
     sp: &Spectra,
     outer: (f64, f64),
@@ -748,10 +754,7 @@ fn coherent_band(
     };
     // not widened: a line beyond is one the force did not drive (its H1 is noise over
     // nothing)
-    let band = (
-        if free.0 { lo } else { outer.0 },
-        if free.1 { hi } else { outer.1 },
-    );
+    let band = free_ends(free, (lo, hi), outer);
     notes.push(format!(
         "band fitted {:.1}-{:.1} Hz, its ends not given chosen from the data: the responses' \
          coherence with the force (their median, over 5 lines) is at least {} at \

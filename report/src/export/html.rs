@@ -148,12 +148,15 @@ pub struct Report {
     pub text: String,
     /// The frame scrubber (`track`, `analyze` with frames).
     pub scrub: Option<super::scrub::Scrubber>,
-    /// The pole picker (`ema`, `modal`).
+    /// The pole picker (`ema`, `modal`); it takes the place of the figure [`STABILISATION`].
     pub picker: Option<super::picker::Picker>,
     /// A banner under the title (`div#banner`): its heading and the reasons listed (an
     /// identification that found no mode, and why).
     pub banner: Option<(String, Vec<String>)>,
 }
+
+/// The caption (figure name) of the static stabilisation diagram a page's picker replaces.
+pub const STABILISATION: &str = "stabilisation";
 
 /// `s` with `&`, `<`, `>` and `"` escaped for HTML text and attributes.
 pub fn escape(s: &str) -> String {
@@ -300,7 +303,12 @@ pub fn report_html(r: &Report) -> String {
     if let Some((labels, m)) = &r.mac {
         mac_section(&mut s, labels, m);
     }
-    for (caption, svg) in &r.figures {
+    // the picker draws the stabilisation diagram: its static figure stays a file only
+    let shown = r
+        .figures
+        .iter()
+        .filter(|(caption, _)| r.picker.is_none() || caption != STABILISATION);
+    for (caption, svg) in shown {
         let _ = writeln!(
             s,
             "<figure><figcaption>{}</figcaption>{}</figure>",

@@ -143,11 +143,6 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         .collect();
     let (mac, shapes) = mac_and_animations(&modes, "mode ");
     let picker = picker(r);
-    // the picker draws the stabilisation diagram; its static figure stays a file
-    let figures = figures
-        .into_iter()
-        .filter(|(name, _)| picker.is_none() || name != "stabilisation")
-        .collect();
     report_html(&Report {
         title: format!(
             "ema: {} over {}",
@@ -329,7 +324,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
     let poles = crate::analysis::oma::run::pole_kinds(&r.poles, &r.clusters);
     let modes: Vec<f64> = r.modes.iter().map(|m| m.fitted.f_hz).collect();
     let stabilisation = crate::plots::stabilisation_figure(
-        "stabilisation",
+        crate::export::html::STABILISATION,
         "LSCF stabilisation diagram",
         &poles,
         &modes,

@@ -132,7 +132,7 @@ pub fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crat
         .map(|m| m.f_hz)
         .collect();
     figures.push(crate::plots::stabilisation_figure(
-        "stabilisation",
+        crate::export::html::STABILISATION,
         &format!("{} stabilisation diagram", settings.ssi.kind.label()),
         &poles,
         &ssi,
@@ -169,27 +169,22 @@ pub fn page(
         .collect();
     let (mac, shapes) = mac_and_animations(&modes, "");
     // `modal` takes the poles picked back ($poles); the picker draws its diagram
-    let picker = (command == "modal")
-        .then(|| {
-            let ssi = r.modes.iter().filter(|m| m.method == Method::Ssi);
-            picker(
-                (&r.poles, &r.clusters),
-                (0.0, r.svd.freq_hz.last().copied().unwrap_or(1.0)),
-                ssi.map(|m| m.f_hz).collect(),
-                |p| crate::analysis::modal::Pole {
-                    f_hz: p.f_hz,
-                    damping: p.damping,
-                },
-                "Saved as <code>poles.csv</code>, the file <code>modal</code> takes with \
-                 <code>$poles</code> to give exactly these SSI modes, each with the shape of \
-                 its pole.",
-            )
-        })
-        .flatten();
-    let figures = figures
-        .into_iter()
-        .filter(|(name, _)| picker.is_none() || name != "stabilisation")
-        .collect();
+    let ssi = r.modes.iter().filter(|m| m.method == Method::Ssi);
+    let picker = match command {
+        "modal" => picker(
+            (&r.poles, &r.clusters),
+            (0.0, r.svd.freq_hz.last().copied().unwrap_or(1.0)),
+            ssi.map(|m| m.f_hz).collect(),
+            |p| crate::analysis::modal::Pole {
+                f_hz: p.f_hz,
+                damping: p.damping,
+            },
+            "Saved as <code>poles.csv</code>, the file <code>modal</code> takes with \
+             <code>$poles</code> to give exactly these SSI modes, each with the shape of its \
+             pole.",
+        ),
+        _ => None,
+    };
     report_html(&Report {
         title: format!("{command}: output-only modal analysis"),
         frame,
