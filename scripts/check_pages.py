@@ -16,6 +16,7 @@ selenium (pip). Exit status 0 when every check passes, 1 otherwise.
 """
 import argparse
 import csv
+import hashlib
 import json
 import shutil
 import subprocess
@@ -79,10 +80,48 @@ def open_page(drv, path):
     time.sleep(0.5)
 
 
-def check_report(drv, path, markers, modes, what, rows=None):
+def sha256_of(path):
+    """SHA-256 of a file, or of a folder as ``sha256sum`` lists its files (not hidden ones, in
+    name order, ``digest  name`` lines), hashed again: what the report's header states."""
+    path = Path(path)
+    if path.is_file():
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    lines = "".join(f"{sha256_of(f)}  {f.name}\n" for f in sorted(path.iterdir())
+                    if f.is_file() and not f.name.startswith("."))
+    return hashlib.sha256(lines.encode()).hexdigest()
+
+
+def check_header(drv, command, inputs, what):
+    """The page's header: the version with a commit, the command as typed, every input's
+    SHA-256 (computed here, independently), the settings with the defaults marked."""
+    from selenium.webdriver.common.by import By
+
+    head = drv.find_elements(By.CSS_SELECTOR, "section#provenance")
+    check(len(head) == 1, f"{what}: the header")
+    if not head:
+        return
+    version = head[0].find_element(By.CSS_SELECTOR, "tr.version td").text
+    check(version.startswith("vibcam ") and "commit" in version, f"{what}: version {version}")
+    typed = head[0].find_element(By.CSS_SELECTOR, "tr.command td").text
+    check(typed.startswith(f"host-harness {command} "), f"{what}: the command {typed[:60]}")
+    got = sorted(r.get_attribute("data-sha256")
+                 for r in head[0].find_elements(By.CSS_SELECTOR, "tr.input"))
+    want = sorted(sha256_of(p) for p in inputs)
+    check(got == want, f"{what}: the inputs' SHA-256 {got} (want {want})")
+    given = drv.find_elements(By.CSS_SELECTOR, "#settings tr.setting:not(.default)")
+    defaults = drv.find_elements(By.CSS_SELECTOR, "#settings tr.setting.default")
+    check(len(given) >= 1 and len(defaults) >= 1,
+          f"{what}: settings given ({len(given)}) and default ({len(defaults)}) marked")
+
+
+def check_report(drv, path, markers, modes, what, rows=None, header=None):
+    """A report page: size, no console error or request, the frame and markers, the modes'
+    table and animations, the report's text; with ``header`` (command, inputs) its header."""
     from selenium.webdriver.common.by import By
 
     open_page(drv, path)
+    if header is not None:
+        check_header(drv, *header, what)
     size = Path(path).stat().st_size
     check(size < 5_000_000, f"{what}: {size / 1e6:.2f} MB")
     check(console_errors(drv) == [], f"{what}: no console error {console_errors(drv)}")
@@ -389,20 +428,24 @@ def main():
 
     drv = browser(work)
     try:
-        check_report(drv, work / "track" / "report.html", 5, None, "track")
+        check_report(drv, work / "track" / "report.html", 5, None, "track",
+                     header=("track", [rec / "frames", rec / "points.csv"]))
         check_scrubber(drv, work / "track-occluded" / "report.html", 5, 1, set(range(300, 330)),
                        "track, scrubber")
         check_report(drv, work / "analyze" / "report.html", 5, mode_rows(work / "analyze"),
-                     "analyze")
+                     "analyze", header=("analyze", [rec / "frames"]))
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
-                     "modal")
-        check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema")
+                     "modal", header=("modal", [work / "analyze" / "displacement.csv"]))
+        check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema",
+                     header=("ema", [work / "hammer" / "camera.csv",
+                                     work / "hammer" / "force.csv"]))
         check_pole_picker(drv, h, work, "ema", ema)
         check_pole_picker(drv, h, work, "modal", modal, method="ssi")
         # with the accelerometer: one shape per band over the five targets, a row per target
         # and mode; one target: its marker and the modes of both systems, no shapes
         check_report(drv, work / "accel5" / "report.html", 5, 2, "analyze --targets --accel",
-                     rows=mode_rows(work / "accel5"))
+                     rows=mode_rows(work / "accel5"),
+                     header=("analyze", [rec / "frames", rec / "accel.csv"]))
         check_report(drv, work / "accel1" / "report.html", 1, 0, "analyze --accel",
                      rows=mode_rows(work / "accel1"))
         # the camera's motion: the references on the frame, its spectrum among the figures

@@ -203,7 +203,10 @@ fn sinusoidal_recording_gives_the_closed_form_modes_for_both_systems() {
     }
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
     assert!(report.contains("lost frames: 0 of 120"), "{report}");
-    assert_eq!(String::from_utf8_lossy(&o.stdout), report);
+    // report.txt: the run's header (date, command, inputs), a blank line, what was printed
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(report.starts_with("date: "), "{report}");
+    assert!(report.ends_with(&format!("\n\n{printed}")), "{report}");
     let frf = std::fs::read_to_string(out.join("frf.csv")).unwrap();
     assert!(frf.starts_with(
         "freq_hz,acc_h1_re,acc_h1_im,acc_h1_abs,acc_coherence,vis_h1_re,vis_h1_im,vis_h1_abs,vis_coherence\n"

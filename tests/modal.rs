@@ -695,3 +695,73 @@ fn poles_picked_on_the_page_are_exactly_the_ssi_modes() {
         "--poles with --setup or --bands",
     );
 }
+
+/// SHA-256 of `path` by coreutils' `sha256sum`, an implementation independent of ours.
+fn sha256sum(path: &Path) -> String {
+    let o = std::process::Command::new("sha256sum")
+        .arg(path)
+        .output()
+        .expect("sha256sum runs");
+    String::from_utf8(o.stdout).unwrap()[..64].to_string()
+}
+
+#[test]
+fn a_report_opens_with_who_what_and_when() {
+    let tmp = tempfile::tempdir().unwrap();
+    // a folder with a space and a quote: the command line quotes it as a shell reads it back
+    let field = tmp.path().join("lab's field");
+    assert_ok(&harness(&words(
+        "simulate-field --minutes 5 --seed 4 --out {}",
+        &[field.to_str().unwrap()],
+    )));
+    let disp = field.join("displacement.csv");
+    let run = |out: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"))
+            .args(["modal", "--displacement", disp.to_str().unwrap()])
+            .args(["--nperseg", "512", "--out", out.to_str().unwrap()])
+            .env("SOURCE_DATE_EPOCH", "1000000000")
+            .output()
+            .unwrap()
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    assert_ok(&run(&a));
+    assert_ok(&run(&b));
+    let report = std::fs::read_to_string(a.join("report.txt")).unwrap();
+    let head: Vec<&str> = report.lines().take_while(|l| !l.is_empty()).collect();
+    assert_eq!(head[0], "date: 2001-09-09T01:46:40Z", "{report}");
+    assert!(
+        head[1].starts_with("version: vibcam 0.1.0 (commit "),
+        "{report}"
+    );
+    let quoted = disp.to_str().unwrap().replace('\'', "'\\''");
+    let typed = format!(
+        "command: host-harness modal --displacement '{quoted}' --nperseg 512 --out {}",
+        a.display()
+    );
+    assert!(head.contains(&typed.as_str()), "{typed}\n{report}");
+    let bytes = std::fs::metadata(&disp).unwrap().len();
+    let input = format!(
+        "input: {}, {bytes} bytes, sha256 {}",
+        disp.display(),
+        sha256sum(&disp)
+    );
+    assert!(head.contains(&input.as_str()), "{input}\n{report}");
+    // the settings: the one given, and the defaults marked
+    assert!(head.contains(&"  --nperseg = 512"), "{report}");
+    assert!(
+        head.contains(&"  --prominence-db = 6 (default)"),
+        "{report}"
+    );
+    assert!(head.contains(&"  --fps = (none) (default)"), "{report}");
+    // then the analysis, as before
+    assert!(report.contains("\n\ninput: "), "{report}");
+    // the page holds the same block; the same run at the same stated date writes the same
+    let page = std::fs::read_to_string(a.join("report.html")).unwrap();
+    assert!(page.contains("<section id=\"provenance\">"));
+    assert!(page.contains(&format!("data-sha256=\"{}\"", sha256sum(&disp))));
+    let other = std::fs::read_to_string(b.join("report.txt")).unwrap();
+    assert_eq!(
+        other,
+        report.replace(a.to_str().unwrap(), b.to_str().unwrap())
+    );
+}

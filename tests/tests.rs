@@ -183,7 +183,10 @@ fn the_crates_depend_only_on_layers_below_theirs() {
 /// it, re-exported under their module names.
 const ROOMS: [(&str, &[&[&str]]); 6] = [
     ("common", &[&["stats"], &["uncertainty"]]),
-    ("report", &[&["outdir"], &["export"], &["plots"]]),
+    (
+        "report",
+        &[&["outdir", "provenance"], &["export"], &["plots"]],
+    ),
     ("identify", &[&["modal"], &["oma"], &["ema"]]),
     (
         "track",

@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use vibcam_report::provenance::{Invocation, Setting};
 
 pub mod analyze;
 pub mod args;
@@ -183,11 +184,72 @@ pub fn negative_values_joined(
     out
 }
 
+/// How the command was asked for, for the reports' header: the command line as typed (each
+/// argument quoted for a POSIX shell where needed) and every flag of the subcommand with its
+/// value, the ones not given marked as defaults.
+fn invocation(args: &[std::ffi::OsString], matches: &clap::ArgMatches) -> Invocation {
+    use clap::parser::ValueSource;
+    use clap::CommandFactory as _;
+    let mut words: Vec<String> = args.iter().map(|a| quoted(&a.to_string_lossy())).collect();
+    if let Some(first) = words.first_mut() {
+        // the program as its name, not the path it was started by
+        *first = "host-harness".into();
+    }
+    let mut settings = Vec::new();
+    let command = Cli::command();
+    let sub = matches
+        .subcommand()
+        .and_then(|(name, m)| Some((command.find_subcommand(name)?, m)));
+    if let Some((cmd, m)) = sub {
+        for arg in cmd.get_arguments() {
+            let id = arg.get_id().as_str();
+            if matches!(id, "help" | "version") {
+                continue;
+            }
+            let name = arg.get_long().map_or(id.to_string(), |l| format!("--{l}"));
+            let value = match m.try_get_raw(id) {
+                Ok(Some(v)) => v
+                    .map(|x| x.to_string_lossy().into_owned())
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                _ => "(none)".into(),
+            };
+            let default = m.value_source(id) != Some(ValueSource::CommandLine);
+            settings.push(Setting {
+                name,
+                value,
+                default,
+            });
+        }
+    }
+    Invocation {
+        command: words.join(" "),
+        settings,
+    }
+}
+
+/// `word` as a POSIX shell reads it back: as it is when it holds only characters the shell
+/// takes literally, else in single quotes (a `'` inside as `'\''`).
+fn quoted(word: &str) -> String {
+    let plain = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./=:,+@%".contains(c));
+    match plain {
+        true => word.to_string(),
+        false => format!("'{}'", word.replace('\'', "'\\''")),
+    }
+}
+
 /// Entry point used by `main.rs`: exit code 0 on success, 2 for bad input, 1 otherwise.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse_from(negative_values_joined(std::env::args_os()));
-    let result =
-        run(cli).and_then(|()| std::io::Write::flush(&mut std::io::stdout()).map_err(stdout_error));
+    use clap::{CommandFactory as _, FromArgMatches as _};
+    let args = negative_values_joined(std::env::args_os());
+    let matches = Cli::command().get_matches_from(args.clone());
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let stated = invocation(&args, &matches);
+    let result = vibcam_report::provenance::with_invocation(stated, || run(cli))
+        .and_then(|()| std::io::Write::flush(&mut std::io::stdout()).map_err(stdout_error));
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,

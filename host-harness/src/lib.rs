@@ -42,5 +42,5 @@ pub use vibcam_readers::{bad_input, csvio, daq, frames, BadInput};
 pub use vibcam_chain as chain;
 pub use vibcam_common::{failpoint, geometry, lost_frames, setting, stats, testing, uncertainty};
 pub use vibcam_model as model;
-pub use vibcam_report::{export, outdir, plots};
+pub use vibcam_report::{export, outdir, plots, provenance};
 pub use vibcam_sim::{calibrate, imaging, plan, recording, study};

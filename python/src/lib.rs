@@ -148,6 +148,16 @@ enum Frames {
     Array(Arc<[GreyFrame]>),
 }
 
+impl Frames {
+    /// The input files for a report's provenance: the path, none for frames in memory.
+    fn paths(&self) -> Vec<std::path::PathBuf> {
+        match self {
+            Frames::Path(p) => vec![p.into()],
+            Frames::Array(_) => Vec::new(),
+        }
+    }
+}
+
 /// `frames` as given to a function: a `str` (the Python half turns path-like objects into
 /// one) or an array.
 fn frames_arg(obj: &Bound<'_, PyAny>) -> PyResult<Frames> {
@@ -512,16 +522,66 @@ fn evidence_of(tracks: &host_harness::analysis::targets::Tracks) -> EvidenceArra
     (score, fb, check)
 }
 
+/// How a Python call was made, as the package's wrapper states it: the call as written and
+/// each keyword (name, value shown, whether it was left at its default).
+type Call = Option<(String, Vec<(String, String, bool)>)>;
+
+/// The invocation a report's header names for `call` (not stated without one).
+fn invocation(call: Call) -> Option<host_harness::provenance::Invocation> {
+    use host_harness::provenance::{Invocation, Setting};
+    call.map(|(command, settings)| Invocation {
+        command,
+        settings: settings
+            .into_iter()
+            .map(|(name, value, default)| Setting {
+                name,
+                value,
+                default,
+            })
+            .collect(),
+    })
+}
+
+/// `job` with `call` stated for the reports it writes (nothing stated without one).
+fn stated<T>(call: Call, job: impl FnOnce() -> T) -> T {
+    match invocation(call) {
+        Some(inv) => host_harness::provenance::with_invocation(inv, job),
+        None => job(),
+    }
+}
+
+/// The report and the page of a job whose inputs are `inputs`, the page opened by their
+/// provenance (and the call stated around it), settings spelled Python's way.
+fn signed_spelled(
+    inputs: &[std::path::PathBuf],
+    report: &str,
+    page: impl FnOnce(&str) -> host_harness::export::html::Report,
+) -> (String, String) {
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let p = host_harness::provenance::Provenance::now(&inputs);
+    let html = host_harness::analysis::signed_page(&p, report, page);
+    (spelled(report), spelled(&html))
+}
+
+/// Which of `words` the argument `name` = `v` is (an error listing them otherwise).
+fn choice(name: &str, v: &str, words: &[&str]) -> PyResult<usize> {
+    words
+        .iter()
+        .position(|w| *w == v)
+        .ok_or_else(|| bad(format!("{name} `{v}`: {}", words.join(", "))))
+}
+
 /// `track(frames, tracking)`: every target's position per frame, `(N, K, 2)` pixels (NaN where
 /// lost), and the firmware's flags `(N, K)`; also the frame rate used.
 #[pyfunction]
-#[pyo3(signature = (frames, tracking, view=None, axis="y"))]
+#[pyo3(signature = (frames, tracking, view=None, axis="y", call=None))]
 fn track<'py>(
     py: Python<'py>,
     frames: &Bound<'py, PyAny>,
     tracking: TrackingArgs,
     view: Option<ViewArgs>,
     axis: &str,
+    call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
@@ -545,29 +605,31 @@ fn track<'py>(
         Frames::Path(p) => p.clone(),
         Frames::Array(a) => format!("an array of {} frames", a.len()),
     };
+    let inputs = frames.paths();
     let tracked = py
-        .allow_threads(|| -> anyhow::Result<Tracked> {
-            let (source, rates) = frames.resolve(fps, retime, false, None)?;
-            let t = Tracking::new(input).map_err(SpecError::into_anyhow)?;
-            let has_scale = view.has_scale();
-            let settings = host_harness::jobs::view::check(view, None, &t.targets, t.tracker)
-                .map_err(SpecError::into_anyhow)?;
-            let req = track_request(label, (retime, &rates), t, settings, axis);
-            let v = host_harness::analysis::track_run::compute(&req, &source)?;
-            let o = host_harness::analysis::track_run::outputs(&req, &source, &v)?;
-            let report = spelled(&o.report);
-            let html = spelled(&o.page(&report));
-            let raw = v.raw.as_ref().map(|r| positions_of(r).0);
-            let mm = has_scale.then(|| scaled_displacements(&v, axis));
-            Ok((
-                positions_of(&v.tracks),
-                raw,
-                camera_motion_array(&v),
-                mm,
-                (v.describe(axis == Axis::X), report, html),
-                rates.fps,
-                evidence_of(&v.tracks),
-            ))
+        .allow_threads(|| {
+            stated(call, || -> anyhow::Result<Tracked> {
+                let (source, rates) = frames.resolve(fps, retime, false, None)?;
+                let t = Tracking::new(input).map_err(SpecError::into_anyhow)?;
+                let has_scale = view.has_scale();
+                let settings = host_harness::jobs::view::check(view, None, &t.targets, t.tracker)
+                    .map_err(SpecError::into_anyhow)?;
+                let req = track_request(label, (retime, &rates), t, settings, axis);
+                let v = host_harness::analysis::track_run::compute(&req, &source)?;
+                let o = host_harness::analysis::track_run::outputs(&req, &source, &v)?;
+                let (report, html) = signed_spelled(&inputs, &o.report, |r| o.page(r));
+                let raw = v.raw.as_ref().map(|r| positions_of(r).0);
+                let mm = has_scale.then(|| scaled_displacements(&v, axis));
+                Ok((
+                    positions_of(&v.tracks),
+                    raw,
+                    camera_motion_array(&v),
+                    mm,
+                    (v.describe(axis == Axis::X), report, html),
+                    rates.fps,
+                    evidence_of(&v.tracks),
+                ))
+            })
         })
         .map_err(py_err)?;
     let ((positions, flags), raw, camera, mm, (view_report, report, html), fps, evidence) = tracked;
@@ -727,7 +789,7 @@ fn upsample<'py>(
 #[pyfunction]
 #[pyo3(signature = (frames, tracking, mm_per_px=None, axis="y", invert=false,
     lost_frames="interpolate", window="hann", nperseg=None, noverlap=None, nfft=None,
-    detrend="constant", bands=None, view=None))]
+    detrend="constant", bands=None, view=None, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn analyze<'py>(
     py: Python<'py>,
@@ -744,6 +806,7 @@ fn analyze<'py>(
     detrend: &str,
     bands: Option<Vec<(f64, f64)>>,
     view: Option<ViewArgs>,
+    call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
     let (fps, retime) = (tracking.fps, tracking.retime);
@@ -779,28 +842,33 @@ fn analyze<'py>(
         out: std::path::PathBuf::new(),
         force: false,
     };
+    let inputs = frames.paths();
     let computed = py
-        .allow_threads(|| -> anyhow::Result<_> {
-            let (source, rates) = frames.resolve(fps, retime, true, None)?;
-            let fps = rates.fps;
-            let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
-            let c = oma_frames::compute(&req, &source)?;
-            let (report, html) = analyze_page(&c, &req, &source)?;
-            Ok((c, report, fps, html))
+        .allow_threads(|| {
+            stated(call, || -> anyhow::Result<_> {
+                let (source, rates) = frames.resolve(fps, retime, true, None)?;
+                let fps = rates.fps;
+                let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
+                let c = oma_frames::compute(&req, &source)?;
+                let (report, html) = analyze_page(&c, &req, &source, &inputs)?;
+                Ok((c, report, fps, html))
+            })
         })
         .map_err(py_err)?;
     let (c, report, fps, html) = computed;
     let d = analysis_dict(py, (c, report, fps))?;
-    d.set_item("html", spelled(&html))?;
+    d.set_item("html", html)?;
     Ok(d)
 }
 
 /// The report and the page of `analyze` without an accelerometer, as the command writes them
-/// (its figures drawn in memory, the same SVGs embedded).
+/// (its figures drawn in memory, the same SVGs embedded; opened by the provenance of
+/// `inputs`; settings spelled Python's way).
 fn analyze_page(
     c: &oma_frames::Computed,
     req: &oma_frames::FramesRequest,
     source: &host_harness::frames::FrameSource,
+    inputs: &[std::path::PathBuf],
 ) -> anyhow::Result<(String, String)> {
     use host_harness::analysis::oma::run;
     let along_x = req.displacement.axis == Axis::X;
@@ -816,19 +884,20 @@ fn analyze_page(
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
     let figures = run::figures(&c.result, &c.settings)?;
-    let html = run::page(
-        &c.result,
-        &c.records,
-        ("analyze", along_x),
-        (
-            frame,
-            host_harness::analysis::view::reference_markers(&c.viewed),
-            host_harness::analysis::track_run::scrubber(source, req.fps, &c.viewed),
-        ),
-        host_harness::plots::page_figures(&figures),
-        &report,
-    );
-    Ok((report, html))
+    Ok(signed_spelled(inputs, &report, |report| {
+        run::page(
+            &c.result,
+            &c.records,
+            ("analyze", along_x),
+            (
+                frame,
+                host_harness::analysis::view::reference_markers(&c.viewed),
+                host_harness::analysis::track_run::scrubber(source, req.fps, &c.viewed),
+            ),
+            host_harness::plots::page_figures(&figures),
+            report,
+        )
+    }))
 }
 
 /// The dict `analyze` returns.
@@ -1080,7 +1149,8 @@ fn study(
 #[pyo3(signature = (displacement, fps=None, axis="y", window="hann", nperseg=None,
     noverlap=None, nfft=None, detrend="constant", bands=None, prominence_db=6.0, f_min_hz=None,
     efdd_quantity="auto", plscf=false, ssi="cov", ssi_block_rows=None, ssi_max_order=None,
-    references=None, setups=Vec::new(), merge="poser", out=None, force=false, poles=None))]
+    references=None, setups=Vec::new(), merge="poser", out=None, force=false, poles=None,
+    call=None))]
 #[allow(clippy::too_many_arguments)]
 fn modal<'py>(
     py: Python<'py>,
@@ -1106,16 +1176,11 @@ fn modal<'py>(
     out: Option<String>,
     force: bool,
     poles: Option<String>,
+    call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::analysis::oma::{bell::Quantity, input::PixelAxis};
     use host_harness::analysis::oma::{multi_setup::Merge, ssi::SsiKind};
     use host_harness::jobs::{ModalInput, ModalSpec};
-    let choice = |name: &str, v: &str, words: &[&str]| -> PyResult<usize> {
-        words
-            .iter()
-            .position(|w| *w == v)
-            .ok_or_else(|| bad(format!("{name} `{v}`: {}", words.join(", "))))
-    };
     let write = out.is_some();
     let input = ModalInput {
         displacement: displacement.into(),
@@ -1148,14 +1213,16 @@ fn modal<'py>(
         plots: write,
     };
     let (c, report, html) = py
-        .allow_threads(|| -> anyhow::Result<_> {
-            let spec = ModalSpec::new(input).map_err(SpecError::into_anyhow)?;
-            let c = spec.compute()?;
-            if write {
-                spec.write(&c)?;
-            }
-            let (report, html) = spec.report_and_page(&c)?;
-            Ok((c, report, html))
+        .allow_threads(|| {
+            stated(call, || -> anyhow::Result<_> {
+                let spec = ModalSpec::new(input).map_err(SpecError::into_anyhow)?;
+                let c = spec.compute()?;
+                if write {
+                    spec.write(&c)?;
+                }
+                let (report, html) = spec.report_and_page(&c)?;
+                Ok((c, report, html))
+            })
         })
         .map_err(py_err)?;
     modal_dict(py, &c, &report, &html)
@@ -1212,7 +1279,7 @@ fn modal_dict<'py>(
 #[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
-    max_order=48, nperseg=None, out=None, force=false, poles=None))]
+    max_order=48, nperseg=None, out=None, force=false, poles=None, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn ema<'py>(
     py: Python<'py>,
@@ -1235,6 +1302,7 @@ fn ema<'py>(
     out: Option<String>,
     force: bool,
     poles: Option<String>,
+    call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::jobs::{EmaInput, EmaSpec};
     let (exp, form) = ema_choices(exp_window, response_quantity)?;
@@ -1262,22 +1330,26 @@ fn ema<'py>(
         plots: write,
     };
     let (r, report, names, html) = py
-        .allow_threads(|| -> anyhow::Result<_> {
-            let spec = EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
-            let names = spec.request().response.names.clone();
-            if write {
-                spec.run()?;
-            }
-            let (r, report) = spec.compute()?;
-            // the command's page, its figures drawn in memory
-            let figures = host_harness::analysis::ema::run::figures(spec.request(), &r)?;
-            let html = host_harness::analysis::ema::run::page(
-                spec.request(),
-                &r,
-                &report,
-                host_harness::plots::page_figures(&figures),
-            );
-            Ok((r, report, names, html))
+        .allow_threads(|| {
+            stated(call, || -> anyhow::Result<_> {
+                let spec = EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
+                let names = spec.request().response.names.clone();
+                if write {
+                    spec.run()?;
+                }
+                let (r, report) = spec.compute()?;
+                // the command's page, its figures drawn in memory
+                let figures = host_harness::analysis::ema::run::figures(spec.request(), &r)?;
+                let (report, html) = signed_spelled(&spec.request().inputs, &report, |report| {
+                    host_harness::analysis::ema::run::page(
+                        spec.request(),
+                        &r,
+                        report,
+                        host_harness::plots::page_figures(&figures),
+                    )
+                });
+                Ok((r, report, names, html))
+            })
         })
         .map_err(py_err)?;
     ema_dict(py, &r, report, names, html)

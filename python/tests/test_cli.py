@@ -101,10 +101,23 @@ def test_track_equals_the_command_line(recording, harness, as_python, tmp_path):
         assert np.float32(t.positions[k, j, 0]) == np.float32(row["cx"])
         assert np.float32(t.positions[k, j, 1]) == np.float32(row["cy"])
         assert t.flags[k, j] == int(row["flags"])
-    # the same report and the same page, with the same figure, settings named Python's way
-    assert t.report == as_python((out / "report.txt").read_text())
+    # the same report (after report.txt's header) and the same page, with the same figure,
+    # settings named Python's way
+    header, body = (out / "report.txt").read_text().split("\n\n", 1)
+    assert t.report == as_python(body)
+    assert "\ncommand: host-harness track --frames " in header
     page, html = (out / "report.html").read_text(), t._repr_html_()
     assert html.count("<svg") == page.count("<svg") >= 1 and "<title>track: " in html
+    # each page's header names its own call: the command line, or the Python call with the
+    # arguments given, the others marked as defaults
+    assert "<code>host-harness track --frames " in page
+    call = f"vibcam.track('{recording / 'frames'}', targets=5, threshold=127, fps=120, " \
+           "return_flags=True)"
+    assert f"<code>{call}</code>" in html
+    assert "<tr class=\"setting default\"><th>tracker</th><td>'auto' (default)" in html
+    frames_sha = [line.split("sha256 ")[1] for line in header.splitlines()
+                  if line.startswith("input: ")]
+    assert frames_sha and all(f'data-sha256="{h}"' in html for h in frames_sha)
 
 
 def test_lucas_kanade_points_equal_the_command_line(recording, harness, tmp_path):

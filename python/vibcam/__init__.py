@@ -13,6 +13,7 @@ Every function releases the GIL while it works.
 from __future__ import annotations
 
 import csv as _csv
+import inspect as _inspect
 import io as _io
 import math as _math
 import numbers as _numbers
@@ -143,6 +144,41 @@ def _vector(name: str, x: _Any) -> _np.ndarray:
         v = a[bad[0]]
         raise InputError(f"{name}[{bad[0]}] is {'NaN' if _np.isnan(v) else v}: every value must be finite")
     return _np.ascontiguousarray(a)
+
+
+def _shown(v: _Any) -> str:
+    """A value as a report's header shows it: an array by its shape and type, a path as a
+    string, anything else by ``repr`` (cut at 200 characters)."""
+    if hasattr(v, "shape") and hasattr(v, "dtype"):
+        return f"array{tuple(v.shape)} {v.dtype}"
+    if isinstance(v, _os.PathLike):
+        v = _os.fspath(v)
+    text = repr(v)
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _same(a: _Any, b: _Any) -> bool:
+    """Whether a value is its parameter's default (an array never is)."""
+    if hasattr(a, "shape"):
+        return False
+    try:
+        return bool(a == b) and type(a) is type(b)
+    except Exception:
+        return False
+
+
+def _call(fn: _Any, given: dict) -> tuple:
+    """How ``fn`` was called, for the report's header: the call as written (the arguments
+    not left at their default) and every parameter ``(name, value shown, default?)``."""
+    settings, written = [], []
+    for name, p in _inspect.signature(fn).parameters.items():
+        v = given.get(name, p.default)
+        default = p.default is not _inspect.Parameter.empty and _same(v, p.default)
+        settings.append((name, _shown(v), default))
+        if not default:
+            written.append(_shown(v) if p.default is _inspect.Parameter.empty
+                           else f"{name}={_shown(v)}")
+    return (f"vibcam.{fn.__name__}({', '.join(written)})", settings)
 
 
 def _roi(roi: _Any) -> _Optional[tuple]:
@@ -321,7 +357,8 @@ class Tracks:
     scale; NaN where no reference was seen); with a scale: ``displacement_mm`` ``(N, K)`` along
     ``axis`` (positive up for ``y``); ``view_report``: what the references and the scale gave
     (references left out and why, each target's scale and its uncertainty); ``report``: the
-    report ``track`` writes (report.txt), and the page of its ``report.html`` shown inline by
+    report ``track`` prints (report.txt after its header), and the page of its ``report.html``
+    (its header naming this call, the inputs' SHA-256 and the settings) shown inline by
     notebooks. Each position's evidence, ``(N, K)`` (Lucas-Kanade; NaN and ``""`` for the
     centroids): ``score``, its match against the first frame's template (ZNCC); ``fb_px``, the
     forward-backward disagreement in px; ``check``, the check that took the position away
@@ -397,6 +434,7 @@ def track(
     u_px])`` points of the structure's plane, or a CSV file ``x,y,x_mm,y_mm[,u_px]``): each
     target's ``displacement_mm`` along ``axis``.
     """
+    call = _call(track, locals())
     if axis not in ("x", "y"):
         raise InputError(f"axis {axis!r}: 'x' or 'y'")
     d = _vibcam.track(
@@ -404,6 +442,7 @@ def track(
         _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
         _view(reference, camera_model, scale, target_size_mm, world),
         axis,
+        call=call,
     )
     if return_flags:
         return Tracks(
@@ -490,7 +529,8 @@ class AnalysisResult:
     frame; ``svd_freq_hz``, ``svd``: the singular values of the cross-spectral matrix per line;
     ``displacement``: ``(N, all targets)`` in ``unit`` (mm with ``mm_per_px``, else px; lost
     frames filled, NaN for a target left out); ``lost``: which frames were filled; ``report``:
-    the text of ``report.txt``; ``evidence``: per mode (the rows of ``modes``), how it was
+    the text of ``report.txt`` after its header (the page's header names the call, the inputs'
+    SHA-256 and the settings); ``evidence``: per mode (the rows of ``modes``), how it was
     found (a peak's prominence and bell, an SSI cluster's size, spread, MPC and MPD);
     ``rejected``: the peaks and SSI clusters not taken for modes, each with its reason (without
     bands). From :func:`modal`: ``lost`` is ``None`` and ``filled`` counts each column's
@@ -636,6 +676,7 @@ def analyze(
     motion removed and the scale from the scene, as :func:`track` (``camera_motion`` in the
     result; a scale other than ``mm_per_px`` makes the values mm).
     """
+    call = _call(analyze, locals())
     d = _vibcam.analyze(
         _frames(frames),
         _tracking(points, targets, tracker, threshold, fps, retime, search_px, gate_px, roi),
@@ -650,6 +691,7 @@ def analyze(
         detrend=detrend,
         bands=None if bands is None else _bands(bands),
         view=_view(reference, camera_model, scale, target_size_mm, world),
+        call=call,
     )
     motion = d["camera_motion"] if reference is not None else None
     return _result(AnalysisResult, d, camera_motion=motion)
@@ -668,7 +710,8 @@ class EmaResult:
     ``responses``: the responses' names (the columns); ``freq_hz``, ``h1``, ``h2``,
     ``coherence``: the FRFs per response and line; ``hits_left_out``: each hit of an impact test
     not used, with the reason (a double hit, a clipped force); ``notes``; ``report``: the text
-    of ``report.txt``.
+    of ``report.txt`` after its header (the page's header names the call, the inputs' SHA-256
+    and the settings).
     """
 
     modes: dict
@@ -729,6 +772,7 @@ def ema(
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
     (``force`` replaces an earlier ``ema`` output).
     """
+    call = _call(ema, locals())
     exp_window = _setting("ema", "exp_window", exp_window)
     if not isinstance(exp_window, str):
         exp_window = repr(exp_window)
@@ -754,6 +798,7 @@ def ema(
         out=None if out is None else _os.fspath(out),
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
+        call=call,
     )
     return _result(EmaResult, d)
 
@@ -801,6 +846,7 @@ def modal(
     nearest it. ``out``: also write the command's files there (``force`` replaces an earlier
     ``modal`` output).
     """
+    call = _call(modal, locals())
     for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
         _setting("modal", key, v)
     pairs = []
@@ -836,6 +882,7 @@ def modal(
         out=None if out is None else _os.fspath(out),
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
+        call=call,
     )
     rows = [dict(r, scale=complex(*r["scale"])) for r in d["setups"]]
     return _result(AnalysisResult, d, lost=None, camera_motion=None, setups=rows)

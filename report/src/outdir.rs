@@ -47,6 +47,8 @@ pub struct Staged {
     target: PathBuf,
     stage: PathBuf,
     command: &'static str,
+    /// The run's inputs, as given.
+    inputs: Vec<PathBuf>,
     replace: bool,
     committed: bool,
     /// The lock on the staging directory, held while the value lives.
@@ -99,6 +101,7 @@ impl Staged {
             target: target.to_path_buf(),
             stage,
             command,
+            inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
             replace,
             committed: false,
             _lock: lock,
@@ -113,6 +116,11 @@ impl Staged {
     /// The target directory (where the outputs will be; for messages and reports).
     pub fn target(&self) -> &Path {
         &self.target
+    }
+
+    /// The run's inputs as given to [`Staged::new`] (for the report's provenance).
+    pub fn inputs(&self) -> &[PathBuf] {
+        &self.inputs
     }
 
     /// Whether committing would replace an earlier output directory.

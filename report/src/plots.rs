@@ -616,6 +616,20 @@ where
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_db_range_ends_forty_db_under_the_first_curves_floor() {
+        // the first curve from -20 to 0 dB (5th percentile -19), a second of rounding noise
+        let first: Vec<f64> = (0..=100).map(|i| -20.0 + 0.2 * f64::from(i)).collect();
+        let noise = vec![-3000.0; 101];
+        let (lo, hi) = db_range(&[first.clone(), noise]).unwrap();
+        assert_eq!(hi, 0.0);
+        assert!((lo - (-19.0 - DB_BELOW_FLOOR)).abs() < 1e-9, "{lo}");
+        // curves within the reach keep their own lowest value
+        let near: Vec<f64> = first.iter().map(|v| v - 10.0).collect();
+        assert_eq!(db_range(&[first, near]).unwrap(), (-30.0, 0.0));
+        assert_eq!(db_range(&[]), None);
+    }
+
     fn sample() -> (Vec<SummaryRow>, Vec<RealizationRow>, Vec<FrfBandRow>) {
         let mut s = Vec::new();
         let mut r = Vec::new();
@@ -816,8 +830,9 @@ where
 }
 
 /// The singular values of an output-only analysis: one curve per singular value in dB
-/// (`10 log10 s`) over `freq_hz`, the picked lines `(f_hz, s1, label)` marked and labelled,
-/// written as `NAME.png` and `NAME.svg`.
+/// (`10 log10 s`) over `freq_hz`, the first [`SVD_CURVES`] only (the others, of many targets,
+/// are the noise's and often numerically zero; `svd.csv` holds them all), the picked lines
+/// `(f_hz, s1, label)` marked and labelled, written as `NAME.png` and `NAME.svg`.
 pub fn svd_figure(
     name: &str,
     title: &str,
@@ -825,7 +840,7 @@ pub fn svd_figure(
     s: &[Vec<f64>],
     picks: &[(f64, f64, String)],
 ) -> anyhow::Result<Figure> {
-    let k = s.first().map_or(0, Vec::len);
+    let k = s.first().map_or(0, Vec::len).min(SVD_CURVES);
     let curves: Vec<(String, Vec<f64>)> = (0..k)
         .map(|i| (format!("s{}", i + 1), s.iter().map(|sv| sv[i]).collect()))
         .collect();
@@ -870,6 +885,30 @@ pub fn db_figure(
     figure!(name, |r| draw_svd(r, (title, y_label), xr, &curves, picks))
 }
 
+/// The singular values a figure draws.
+pub const SVD_CURVES: usize = 4;
+
+/// How far below the first curve's floor (its 5th percentile) a dB figure reaches: what lies
+/// further down (a singular value of rounding noise at -3000 dB) would flatten every peak.
+pub const DB_BELOW_FLOOR: f64 = 40.0;
+
+/// The value range of a dB figure: from the lowest value, but no further than
+/// [`DB_BELOW_FLOOR`] under the first curve's 5th percentile, to the highest.
+pub fn db_range(curves: &[Vec<f64>]) -> Option<(f64, f64)> {
+    let (lo, hi) = finite_range(curves.iter().flatten().copied())?;
+    let mut first: Vec<f64> = curves
+        .first()?
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    first.sort_by(f64::total_cmp);
+    let floor = first
+        .get(first.len() / 20)
+        .map_or(lo, |p| p - DB_BELOW_FLOOR);
+    Some((lo.max(floor).min(hi), hi))
+}
+
 fn decibels(v: f64) -> f64 {
     10.0 * v.max(f64::MIN_POSITIVE).log10()
 }
@@ -885,8 +924,11 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let (lo, hi) =
-        finite_range(curves.iter().flat_map(|c| c.2.iter().map(|p| p.1))).unwrap_or((-1.0, 1.0));
+    let values: Vec<Vec<f64>> = curves
+        .iter()
+        .map(|c| c.2.iter().map(|p| p.1).collect())
+        .collect();
+    let (lo, hi) = db_range(&values).unwrap_or((-1.0, 1.0));
     let mut chart = build_chart(
         &root,
         SINGLE,
@@ -897,9 +939,10 @@ where
         y_label,
     )?;
     for (label, colour, points) in curves {
+        // what lies below the range runs along the chart's floor
         draw_line(
             &mut chart,
-            points.iter().copied(),
+            points.iter().map(|&(f, v)| (f, v.max(lo - 3.0))),
             *colour,
             1,
             label.clone(),

@@ -85,25 +85,35 @@ pub struct Alignment {
     pub residual_s: f64,
 }
 
-/// Places `frames` frames at `fc` Hz, the first at `time_offset_s` after the first of
-/// `samples` accelerometer samples at `fa` Hz (see the module documentation).
-///
-/// Errors: rates not positive, `N * fa / fc` not an integer, the frames start before the
-/// accelerometer record, or the accelerometer record is too short for the frames (the message
-/// names both counts and durations).
 /// Writes a job's `report.txt` and its `report.html` (`page` makes it from the report's text),
-/// the settings they name spelled as the command line's flags (`$nperseg`: `--nperseg`);
-/// returns the report as written.
+/// both opened by the run's provenance (the inputs `out` was given, the invocation the front
+/// end stated), the settings they name spelled as the command line's flags (`$nperseg`:
+/// `--nperseg`); returns the report without its provenance (what the terminal shows: the
+/// command was just typed there).
 pub fn write_report(
     out: &vibcam_report::outdir::Staged,
     report: &str,
-    page: impl FnOnce(&str) -> String,
+    page: impl FnOnce(&str) -> crate::export::html::Report,
 ) -> anyhow::Result<String> {
     use crate::setting::{spell, Naming};
+    let inputs: Vec<&Path> = out.inputs().iter().map(|p| p.as_path()).collect();
+    let provenance = vibcam_report::provenance::Provenance::now(&inputs);
     let report = spell(report, Naming::Cli);
-    out.write("report.txt", &report)?;
-    out.write("report.html", spell(&page(&report), Naming::Cli))?;
+    let page = signed_page(&provenance, &report, page);
+    out.write("report.txt", format!("{}\n{report}", provenance.text()))?;
+    out.write("report.html", spell(&page, Naming::Cli))?;
     Ok(report)
+}
+
+/// A job's page (`page` made from the report's text) with `provenance` as its header.
+pub fn signed_page(
+    provenance: &vibcam_report::provenance::Provenance,
+    report: &str,
+    page: impl FnOnce(&str) -> crate::export::html::Report,
+) -> String {
+    let mut r = page(report);
+    r.provenance = Some(provenance.clone());
+    crate::export::html::report_html(&r)
 }
 
 /// Prints a warning on standard error beside the progress, with the settings it names spelled
@@ -113,6 +123,12 @@ pub fn warn(text: &str) {
     eprintln!("warning: {text}");
 }
 
+/// Places `frames` frames at `fc` Hz, the first at `time_offset_s` after the first of
+/// `samples` accelerometer samples at `fa` Hz (see the module documentation).
+///
+/// Errors: rates not positive, `N * fa / fc` not an integer, the frames start before the
+/// accelerometer record, or the accelerometer record is too short for the frames (the message
+/// names both counts and durations).
 pub fn align(
     frames: usize,
     fc: f64,

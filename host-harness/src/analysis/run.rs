@@ -229,8 +229,8 @@ fn one_target_page(
     a: Option<&super::Analysis>,
     text: &str,
     figures: &[crate::plots::Figure],
-) -> String {
-    use crate::export::html::{report_html, Marker, Report};
+) -> crate::export::html::Report {
+    use crate::export::html::{Marker, Report};
     let fps = req.settings.frame_rate_hz;
     let frame = source
         .frame_at(fps, 0)
@@ -282,7 +282,7 @@ fn one_target_page(
         "95 % interval",
     ]);
     let figures = crate::plots::page_figures(figures);
-    report_html(&Report {
+    Report {
         title: format!("analyze: {}", req.frames),
         frame,
         markers,
@@ -291,7 +291,7 @@ fn one_target_page(
         modes: (!rows.is_empty()).then_some((head, rows)),
         text: text.to_string(),
         ..Report::default()
-    })
+    }
 }
 
 /// `frf.csv`, `modes.csv` and the plot of a successful analysis, named in the report.

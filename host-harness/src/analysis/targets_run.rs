@@ -167,8 +167,8 @@ fn page(
     ),
     text: &str,
     figures: &[crate::plots::Figure],
-) -> String {
-    use crate::export::html::{mac_matrix, report_html, Report, ShapeAnimation};
+) -> crate::export::html::Report {
+    use crate::export::html::{mac_matrix, Report, ShapeAnimation};
     use num_complex::Complex64;
     let frame = source
         .frame_at(req.settings.frame_rate_hz, 0)
@@ -192,7 +192,7 @@ fn page(
         .collect();
     let shapes: Vec<&[Complex64]> = fitted.iter().map(|(_, v)| v.as_slice()).collect();
     let figures = crate::plots::page_figures(figures);
-    report_html(&Report {
+    Report {
         title: format!("analyze: {}", req.frames),
         frame,
         markers,
@@ -221,7 +221,8 @@ fn page(
         references,
         picker: None,
         banner: None,
-    })
+        provenance: None,
+    }
 }
 
 /// The page's table of modes: per target and mode, frequency, |H1|, damping and their 95 %

@@ -138,15 +138,15 @@ pub struct Outputs {
 
 impl Outputs {
     /// `report.html` with the report `text` as written (its settings spelled for the reader).
-    pub fn page(&self, text: &str) -> String {
-        use crate::export::html::{report_html, Report};
+    pub fn page(&self, text: &str) -> crate::export::html::Report {
+        use crate::export::html::Report;
         let figures: Vec<crate::plots::Figure> = self
             .tracks_figure
             .iter()
             .chain(&self.camera.figure)
             .cloned()
             .collect();
-        report_html(&Report {
+        Report {
             title: self.title.clone(),
             frame: self.frame.clone(),
             markers: self.markers.clone(),
@@ -156,7 +156,7 @@ impl Outputs {
             figures: crate::plots::page_figures(&figures),
             text: text.to_string(),
             ..Report::default()
-        })
+        }
     }
 }
 

@@ -168,7 +168,11 @@ impl EmaSpec {
                 force,
                 aligned,
                 settings,
-                inputs: vec![input.response.clone(), input.excitation.clone()],
+                inputs: [&input.response, &input.excitation]
+                    .into_iter()
+                    .chain(&input.poles)
+                    .cloned()
+                    .collect(),
                 out: input.out.clone(),
                 force_out: input.force,
                 plots: input.plots,

@@ -333,15 +333,29 @@ impl ModalSpec {
         let report = run::report(&c.result, &c.records, &self.settings, &preamble);
         let figures = run::figures(&c.result, &self.settings)?;
         let along_x = self.input.axis == PixelAxis::X;
-        let page = run::page(
-            &c.result,
-            &c.records,
-            ("modal", along_x),
-            (None, Vec::new(), None),
-            crate::plots::page_figures(&figures),
-            &report,
-        );
+        let inputs = self.inputs();
+        let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+        let provenance = vibcam_report::provenance::Provenance::now(&inputs);
+        let page = crate::analysis::signed_page(&provenance, &report, |report| {
+            run::page(
+                &c.result,
+                &c.records,
+                ("modal", along_x),
+                (None, Vec::new(), None),
+                crate::plots::page_figures(&figures),
+                report,
+            )
+        });
         Ok((report, page))
+    }
+
+    /// The files the job reads: the displacement file, the other setups' files, the poles.
+    fn inputs(&self) -> Vec<std::path::PathBuf> {
+        let i = &self.input;
+        let mut inputs = vec![i.displacement.clone()];
+        inputs.extend(i.setups.iter().map(|(p, _)| p.clone()));
+        inputs.extend(i.poles.clone());
+        inputs
     }
 
     /// The report's first line: the input.
@@ -358,8 +372,7 @@ impl ModalSpec {
     /// `setups.csv` too): the report, and whether it succeeded.
     pub fn write(&self, c: &ModalComputed) -> anyhow::Result<crate::analysis::run::Outcome> {
         let i = &self.input;
-        let mut inputs = vec![i.displacement.clone()];
-        inputs.extend(i.setups.iter().map(|(p, _)| p.clone()));
+        let inputs = self.inputs();
         let (text, extra) = match &c.setups {
             Some((text, rows)) => (
                 text.as_str(),

@@ -9,7 +9,8 @@
 //!
 //! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
 //! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
-//! `button#play`, `input#scale`, `pre#report-text`, `div#banner` (no mode found, and why).
+//! `button#play`, `input#scale`, `pre#report-text`, `div#banner` (no mode found, and why),
+//! `section#provenance` (the header: [`crate::provenance::html`]).
 
 use num_complex::Complex64;
 use std::fmt::Write as _;
@@ -153,6 +154,8 @@ pub struct Report {
     /// A banner under the title (`div#banner`): its heading and the reasons listed (an
     /// identification that found no mode, and why).
     pub banner: Option<(String, Vec<String>)>,
+    /// The header under the title: date, version, command, inputs, settings, machine.
+    pub provenance: Option<crate::provenance::Provenance>,
 }
 
 /// The caption (figure name) of the static stabilisation diagram a page's picker replaces.
@@ -231,7 +234,9 @@ pre{background:#f6f6f6;padding:1em;overflow-x:auto}\
 .mode{display:inline-block;margin:0 1em 1em 0;vertical-align:top}\
 .mode svg{border:1px solid #ddd;background:#fff}\
 #frame{max-width:100%;height:auto}\
-#banner{border:2px solid #c83c28;background:#fff4f2;padding:.5em 1em;margin:1em 0}";
+#banner{border:2px solid #c83c28;background:#fff4f2;padding:.5em 1em;margin:1em 0}\
+#provenance{font-size:90%;margin:0 0 1em 0}#provenance th{text-align:left;vertical-align:top}\
+#provenance td{text-align:left;word-break:break-all}#provenance .default td{color:#777}";
 
 /// The page's script: animates every `svg.mode-shape` from the data in `#shape-data`.
 const SCRIPT: &str = r#"(function(){
@@ -268,6 +273,9 @@ pub fn report_html(r: &Report) -> String {
         escape(&r.title),
         escape(&r.title)
     );
+    if let Some(p) = &r.provenance {
+        s.push_str(&crate::provenance::html(p, escape));
+    }
     if let Some((head, reasons)) = &r.banner {
         let _ = write!(
             s,

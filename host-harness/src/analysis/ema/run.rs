@@ -28,7 +28,7 @@ pub struct EmaRequest {
     pub aligned: Aligned,
     /// The analysis settings.
     pub settings: EmaSettings,
-    /// The input files.
+    /// The input files: the response, the excitation, then the poles file when given.
     pub inputs: Vec<PathBuf>,
     /// Output directory.
     pub out: PathBuf,
@@ -117,8 +117,13 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
 /// `report.html` of `ema`: the modes with their intervals, the MAC of their shapes, each shape
 /// animated along the responses (in their order: a camera's targets have no positions here),
 /// the figures (caption, SVG), the report `text`.
-pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, String)>) -> String {
-    use crate::export::html::{mac_and_animations, modes_table, report_html, ModeCells, Report};
+pub fn page(
+    req: &EmaRequest,
+    r: &EmaResult,
+    text: &str,
+    figures: Vec<(String, String)>,
+) -> crate::export::html::Report {
+    use crate::export::html::{mac_and_animations, modes_table, ModeCells, Report};
     let iv = |i: Option<Interval>| i.map(|i| (i.lo, i.hi));
     let cells: Vec<ModeCells> = r
         .modes
@@ -143,7 +148,7 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         .collect();
     let (mac, shapes) = mac_and_animations(&modes, "mode ");
     let picker = picker(r);
-    report_html(&Report {
+    Report {
         title: format!(
             "ema: {} over {}",
             req.inputs[0].display(),
@@ -158,7 +163,7 @@ pub fn page(req: &EmaRequest, r: &EmaResult, text: &str, figures: Vec<(String, S
         picker,
         banner: crate::analysis::oma::run::no_mode_banner(r.modes.is_empty(), &rejected(r)),
         ..Report::default()
-    })
+    }
 }
 
 /// The notes that say a band holds no mode, then the clusters not taken for modes, the

@@ -155,8 +155,8 @@ pub fn page(
     ),
     figures: Vec<(String, String)>,
     text: &str,
-) -> String {
-    use crate::export::html::{mac_and_animations, report_html, Report};
+) -> crate::export::html::Report {
+    use crate::export::html::{mac_and_animations, Report};
     let markers = markers(records);
     let (head, rows) = modes_table(r);
     let modes: Vec<(String, &[Complex64])> = r
@@ -185,7 +185,7 @@ pub fn page(
         ),
         _ => None,
     };
-    report_html(&Report {
+    Report {
         title: format!("{command}: output-only modal analysis"),
         frame,
         markers,
@@ -199,7 +199,8 @@ pub fn page(
         scrub,
         picker,
         banner: no_mode_banner(r.modes.is_empty(), &r.rejected),
-    })
+        provenance: None,
+    }
 }
 
 /// The targets on the page: each one's position and lost samples (none when a target has no
