@@ -114,6 +114,19 @@ def check_header(drv, command, inputs, what):
           f"{what}: settings given ({len(given)}) and default ({len(defaults)}) marked")
 
 
+def check_labels(drv, what, at_least=1):
+    """No two labels on the frame overlap (their bounding rectangles as the browser lays them
+    out), and at least ``at_least`` are drawn."""
+    rects = drv.execute_script(
+        "return Array.from(document.querySelectorAll('svg#frame text')).map(function(t){"
+        "var r=t.getBoundingClientRect();return [r.left,r.top,r.right,r.bottom];});")
+    hits = [(i, j) for i in range(len(rects)) for j in range(i + 1, len(rects))
+            if rects[i][0] < rects[j][2] and rects[j][0] < rects[i][2]
+            and rects[i][1] < rects[j][3] and rects[j][1] < rects[i][3]]
+    check(len(rects) >= at_least, f"{what}: {len(rects)} labels drawn")
+    check(hits == [], f"{what}: no two labels overlap ({len(hits)} pairs do)")
+
+
 def check_report(drv, path, markers, modes, what, rows=None, header=None):
     """A report page: size, no console error or request, the frame and markers, the modes'
     table and animations, the report's text; with ``header`` (command, inputs) its header."""
@@ -131,6 +144,7 @@ def check_report(drv, path, markers, modes, what, rows=None, header=None):
               f"{what}: the frame")
         n = len(drv.find_elements(By.CSS_SELECTOR, "svg#frame g.marker"))
         check(n == markers, f"{what}: {n} markers, {markers} targets")
+        check_labels(drv, what)
     if modes is not None:
         shapes = drv.find_elements(By.CSS_SELECTOR, "svg.mode-shape")
         check(len(shapes) == modes, f"{what}: {len(shapes)} animations, {modes} modes")
@@ -405,6 +419,12 @@ def main():
     run(h, "analyze", "--frames", rec / "frames", "--fps", "120", "--accel", rec / "accel.csv",
         "--fs", "2048", "--time-col", "t_s", "--threshold", "127", "--mm-per-px", "0.1266",
         "--exposure-ms", "2", "--window", "rect", "--out", work / "accel1", "--force")
+    # sixteen windows 8 px apart: their numbers cannot all stand beside them
+    crowded = work / "crowded.csv"
+    crowded.write_text("target,x,y,w,h\n" + "".join(
+        f"{k + 1},{12 + 8 * k},35,9,9\n" for k in range(16)))
+    run(h, "track", "--frames", rec / "frames", "--fps", "120", "--points", crowded,
+        "--tracker", "lk", "--out", work / "track-crowded", "--force")
     occluded_frames = occluded(rec, work, 1, set(range(300, 330)))
     run(h, "track", "--frames", occluded_frames, "--fps", "120", "--points", rec / "points.csv",
         "--tracker", "lk", "--out", work / "track-occluded", "--force")
@@ -432,6 +452,8 @@ def main():
                      header=("track", [rec / "frames", rec / "points.csv"]))
         check_scrubber(drv, work / "track-occluded" / "report.html", 5, 1, set(range(300, 330)),
                        "track, scrubber")
+        check_report(drv, work / "track-crowded" / "report.html", 16, None, "track, crowded")
+        check_labels(drv, "track, crowded", at_least=6)
         check_report(drv, work / "analyze" / "report.html", 5, mode_rows(work / "analyze"),
                      "analyze", header=("analyze", [rec / "frames"]))
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),

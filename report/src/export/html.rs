@@ -94,24 +94,36 @@ pub struct ReferenceMarker {
     pub left_out: bool,
 }
 
-/// A dot at `xy` (px, pixel centres at integers) and its label, sized by `stroke`, in
-/// `colours` (dot, label).
-fn dot(s: &mut String, xy: (f64, f64), stroke: f64, colours: (&str, &str), label: &str) {
+/// A dot at `xy` (px, pixel centres at integers) with its `tip` (the tooltip) and its label
+/// at `at` (text anchor and baseline; none when the label found no free place), sized by
+/// `stroke`, in `colours` (dot, label).
+fn dot(
+    s: &mut String,
+    xy: (f64, f64),
+    stroke: f64,
+    colours: (&str, &str),
+    (label, tip, at): (&str, &str, Option<(f64, f64)>),
+) {
     let xy = (xy.0 + 0.5, xy.1 + 0.5);
     let _ = write!(
         s,
-        "<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/><text x=\"{}\" y=\"{}\" fill=\"{}\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">{}</text>",
+        "<title>{}</title><circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>",
+        escape(tip),
         xy.0,
         xy.1,
         2.0 * stroke,
         colours.0,
-        xy.0 + 3.0 * stroke,
-        xy.1 - 3.0 * stroke,
-        colours.1,
-        12.0 * stroke,
-        0.3 * stroke,
-        escape(label)
     );
+    if let Some((x, y)) = at {
+        let _ = write!(
+            s,
+            "<text class=\"label\" x=\"{x}\" y=\"{y}\" fill=\"{}\" font-size=\"{}\" stroke=\"#000\" stroke-width=\"{}\">{}</text>",
+            colours.1,
+            12.0 * stroke,
+            0.3 * stroke,
+            escape(label)
+        );
+    }
 }
 
 /// A mode shape to animate.
@@ -305,11 +317,20 @@ pub fn report_html(r: &Report) -> String {
     if let Some((head, rows)) = &r.modes {
         modes_section(&mut s, head, rows);
     }
-    if !r.shapes.is_empty() {
+    // one point has no shape to see (every mode moves one dot) and its MAC is 1 for any two
+    // modes; one mode has no other to compare with: such sections say nothing, so are left out
+    let one_point = r.shapes.first().is_some_and(|m| m.shape.len() < 2);
+    if one_point {
+        s.push_str(
+            "<p id=\"one-point\">One point measured: its modes have no shape to animate and \
+             no MAC to compare them by.</p>\n",
+        );
+    } else if !r.shapes.is_empty() {
         shapes_section(&mut s, r, &view, frame_image.as_deref());
     }
-    if let Some((labels, m)) = &r.mac {
-        mac_section(&mut s, labels, m);
+    match &r.mac {
+        Some((labels, m)) if labels.len() >= 2 && !one_point => mac_section(&mut s, labels, m),
+        _ => {}
     }
     // the picker draws the stabilisation diagram: its static figure stays a file only
     let shown = r
@@ -400,15 +421,37 @@ impl View {
 /// The first frame, each target's window, number and lost frames, the references.
 fn frame_section(s: &mut String, r: &Report, view: &View, img: &str) {
     let (w, h) = (view.w, view.h);
+    let shown = if w < 700.0 { 700.0 } else { w.min(1100.0) };
     let _ = write!(
         s,
-        "<h2>The first frame and the targets</h2>\n<svg id=\"frame\" viewBox=\"0 0 {w} {h}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\">{img}",
-        if w < 700.0 { 700.0 } else { w.min(1100.0) }
+        "<h2>The first frame and the targets</h2>\n<svg id=\"frame\" viewBox=\"0 0 {w} {h}\" width=\"{shown}\" xmlns=\"http://www.w3.org/2000/svg\">{img}",
     );
-    let stroke = (w.max(h) / 400.0).max(1.0);
-    for m in &r.markers {
+    // 1.2 screen pixels in the frame's pixels: lines, dots and labels keep one size on the
+    // screen whatever the frame's (12 px labels over a 165 px frame would cover it)
+    let stroke = 1.2 * w / shown;
+    // the targets' numbers, then the references', each where it covers no other
+    let texts: Vec<(String, (f64, f64))> = r
+        .markers
+        .iter()
+        .map(|m| (m.target.to_string(), m.xy))
+        .chain(
+            r.references
+                .iter()
+                .map(|m| (format!("r{}", m.number), m.xy)),
+        )
+        .collect();
+    let anchors: Vec<((f64, f64), usize)> = texts
+        .iter()
+        .map(|(t, xy)| ((xy.0 + 0.5, xy.1 + 0.5), t.chars().count()))
+        .collect();
+    let at = super::labels::place(&anchors, 3.0 * stroke, 12.0 * stroke, (w, h));
+    for (i, m) in r.markers.iter().enumerate() {
         let xy = (m.xy.0 + 0.5, m.xy.1 + 0.5);
-        let _ = write!(s, "<g class=\"marker\" data-target=\"{}\">", m.target);
+        let _ = write!(
+            s,
+            "<g class=\"marker\" data-target=\"{}\" data-lost=\"{}\">",
+            m.target, m.lost
+        );
         if let Some((ww, wh)) = m.window {
             let _ = write!(
                 s,
@@ -417,25 +460,67 @@ fn frame_section(s: &mut String, r: &Report, view: &View, img: &str) {
                 xy.1 - wh / 2.0
             );
         }
-        let label = if m.lost > 0 {
-            format!("{} ({} lost)", m.target, m.lost)
-        } else {
-            m.target.to_string()
+        let tip = format!("target {}: {} frames lost", m.target, m.lost);
+        // a target with lost frames is drawn orange; the counts are listed under the frame
+        let colours = match m.lost {
+            0 => ("#ff3030", "#ffe000"),
+            _ => ("#ff9900", "#ff9900"),
         };
-        dot(s, m.xy, stroke, ("#ff3030", "#ffe000"), &label);
+        dot(s, m.xy, stroke, colours, (&texts[i].0, &tip, at[i]));
         s.push_str("</g>");
     }
-    for m in &r.references {
+    let n = r.markers.len();
+    for (k, m) in r.references.iter().enumerate() {
         let _ = write!(s, "<g class=\"reference\" data-reference=\"{}\">", m.number);
-        let label = format!(
-            "r{}{}",
+        let tip = format!(
+            "reference r{}{}",
             m.number,
-            if m.left_out { " (left out)" } else { "" }
+            if m.left_out { ", left out" } else { "" }
         );
-        dot(s, m.xy, stroke, ("#30ff60", "#30ff60"), &label);
+        let colours = ("#30ff60", "#30ff60");
+        dot(s, m.xy, stroke, colours, (&texts[n + k].0, &tip, at[n + k]));
         s.push_str("</g>");
     }
     s.push_str("</svg>\n");
+    lost_summary(s, r);
+}
+
+/// Under the frame: which targets lost frames and how many (all of them in one phrase when
+/// they lost the same count), the references left out.
+fn lost_summary(s: &mut String, r: &Report) {
+    let lost: Vec<&Marker> = r.markers.iter().filter(|m| m.lost > 0).collect();
+    let left_out: Vec<String> = r
+        .references
+        .iter()
+        .filter(|m| m.left_out)
+        .map(|m| format!("r{}", m.number))
+        .collect();
+    if lost.is_empty() && left_out.is_empty() {
+        return;
+    }
+    s.push_str("<p id=\"lost\">");
+    let same = lost.windows(2).all(|p| p[0].lost == p[1].lost);
+    match (lost.len(), same) {
+        (0, _) => {}
+        (k, true) if k == r.markers.len() && k > 1 => {
+            let _ = write!(s, "Every target lost {} frames.", lost[0].lost);
+        }
+        _ => {
+            let each: Vec<String> = lost
+                .iter()
+                .map(|m| format!("{} ({})", m.target, m.lost))
+                .collect();
+            let _ = write!(s, "Frames lost, by target: {}.", each.join(", "));
+        }
+    }
+    if !left_out.is_empty() {
+        let _ = write!(
+            s,
+            " References left out of the camera's motion: {}.",
+            left_out.join(", ")
+        );
+    }
+    s.push_str("</p>\n");
 }
 
 /// The modes' table.
@@ -653,9 +738,31 @@ mod tests {
             ..Report::default()
         };
         let html = report_html(&r);
+        // one mode: no MAC to draw
+        assert!(!html.contains("id=\"mac\""));
+        let two = Report {
+            mac: Some((
+                vec!["1".into(), "2".into()],
+                vec![vec![1.0, 0.1], vec![0.1, 1.0]],
+            )),
+            ..r.clone()
+        };
+        assert!(report_html(&two).contains("id=\"mac\""));
+        // one point: neither animation nor MAC, and a word why
+        let single = Report {
+            shapes: vec![ShapeAnimation {
+                label: "mode 1".into(),
+                shape: vec![Complex64::new(1.0, 0.0)],
+            }],
+            ..two.clone()
+        };
+        let one = report_html(&single);
+        assert!(one.contains("id=\"one-point\""));
+        assert!(!one.contains("class=\"mode-shape\"") && !one.contains("id=\"mac\""));
         assert_eq!(html.matches("class=\"marker\"").count(), 3);
         assert_eq!(html.matches("class=\"mode-shape\"").count(), 1);
-        assert!(html.contains("(2 lost)"));
+        assert!(html.contains("Frames lost, by target: 2 (1), 3 (2)."));
+        assert!(html.contains("<title>target 3: 2 frames lost</title>"));
         assert!(html.contains("modal: &lt;test&gt;"));
         assert!(html.contains("a &lt; b"));
         // no address but the SVG namespace (an identifier, never fetched)

@@ -30,6 +30,7 @@ pub mod calibrate;
 pub mod ema;
 pub mod field;
 pub mod html;
+pub mod labels;
 pub mod oma;
 pub mod pick;
 pub mod picker;
