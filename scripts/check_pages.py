@@ -18,6 +18,7 @@ import argparse
 import csv
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -108,8 +109,8 @@ def check_header(drv, command, inputs, what):
                  for r in head[0].find_elements(By.CSS_SELECTOR, "tr.input"))
     want = sorted(sha256_of(p) for p in inputs)
     check(got == want, f"{what}: the inputs' SHA-256 {got} (want {want})")
-    given = drv.find_elements(By.CSS_SELECTOR, "#settings tr.setting:not(.default)")
-    defaults = drv.find_elements(By.CSS_SELECTOR, "#settings tr.setting.default")
+    given = drv.find_elements(By.CSS_SELECTOR, "#settings li.setting:not(.default)")
+    defaults = drv.find_elements(By.CSS_SELECTOR, "#settings li.setting.default")
     check(len(given) >= 1 and len(defaults) >= 1,
           f"{what}: settings given ({len(given)}) and default ({len(defaults)}) marked")
 
@@ -125,6 +126,24 @@ def check_labels(drv, what, at_least=1):
             and rects[i][1] < rects[j][3] and rects[j][1] < rects[i][3]]
     check(len(rects) >= at_least, f"{what}: {len(rects)} labels drawn")
     check(hits == [], f"{what}: no two labels overlap ({len(hits)} pairs do)")
+
+
+def check_print(drv, path, what):
+    """The page printed by Chromium (A4, its print stylesheet): a PDF with a page per section
+    (each `h2` starts one); written beside the output folder as ``FOLDER.pdf`` (never inside
+    it: a file the command did not write keeps ``--force`` from replacing the folder)."""
+    import base64
+    from selenium.webdriver.common.print_page_options import PrintOptions
+
+    open_page(drv, path)
+    sections = len(drv.find_elements("css selector", "h2"))
+    opts = PrintOptions()
+    opts.page_width, opts.page_height = 21.0, 29.7
+    pdf = base64.b64decode(drv.print_page(opts))
+    Path(path).parent.with_suffix(".pdf").write_bytes(pdf)
+    pages = len(re.findall(rb"/Type\s*/Page[^s]", pdf))
+    check(pdf.startswith(b"%PDF"), f"{what}: printed to PDF ({len(pdf)} bytes)")
+    check(pages >= sections >= 2, f"{what}: {pages} printed pages for {sections} sections")
 
 
 def check_report(drv, path, markers, modes, what, rows=None, header=None):
@@ -461,6 +480,8 @@ def main():
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema",
                      header=("ema", [work / "hammer" / "camera.csv",
                                      work / "hammer" / "force.csv"]))
+        check_print(drv, work / "modal" / "report.html", "modal, printed")
+        check_print(drv, work / "ema" / "report.html", "ema, printed")
         check_pole_picker(drv, h, work, "ema", ema)
         check_pole_picker(drv, h, work, "modal", modal, method="ssi")
         # with the accelerometer: one shape per band over the five targets, a row per target

@@ -114,7 +114,7 @@ def test_track_equals_the_command_line(recording, harness, as_python, tmp_path):
     call = f"vibcam.track('{recording / 'frames'}', targets=5, threshold=127, fps=120, " \
            "return_flags=True)"
     assert f"<code>{call}</code>" in html
-    assert "<tr class=\"setting default\"><th>tracker</th><td>'auto' (default)" in html
+    assert "<li class=\"setting default\">tracker = 'auto'</li>" in html
     frames_sha = [line.split("sha256 ")[1] for line in header.splitlines()
                   if line.startswith("input: ")]
     assert frames_sha and all(f'data-sha256="{h}"' in html for h in frames_sha)

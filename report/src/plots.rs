@@ -224,6 +224,33 @@ where
     Ok(())
 }
 
+/// Draws a dashed curve (a fit beside its data) with its legend entry.
+fn draw_dashed<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    points: Vec<(f64, f64)>,
+    colour: RGBColor,
+    label: impl Into<String>,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let style = colour.stroke_width(2);
+    chart
+        .draw_series(DashedLineSeries::new(points, 7, 5, style))?
+        .label(label)
+        .legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (7, 0)], style)
+                + PathElement::new(vec![(12, 0), (19, 0)], style)
+        });
+    Ok(())
+}
+
+/// `c` at half its brightness.
+fn darker(c: RGBColor) -> RGBColor {
+    RGBColor(c.0 / 2, c.1 / 2, c.2 / 2)
+}
+
 /// Draws the legend of `chart` in its upper right corner.
 fn draw_legend<'a, DB: DrawingBackend + 'a>(chart: &mut Chart<'a, DB>, layout: Layout) -> DrawResult
 where
@@ -558,7 +585,14 @@ pub enum Lines {
     FrfDb,
     /// Tracks over time: time axis, the values' own range, thin lines.
     Tracks,
+    /// Measured FRFs and their fits (a fit labelled as its data with [`FIT`] after, drawn
+    /// after it): frequency axis, the values' own range; each response's data solid in its
+    /// colour, its fit dashed in a darker shade of it.
+    FrfFit,
 }
+
+/// What ends a fit's label in a [`Lines::FrfFit`] figure.
+pub const FIT: &str = " fit";
 
 fn draw_lines<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
@@ -578,7 +612,7 @@ where
             let y_max = values().filter(|v| v.is_finite()).fold(0.0f64, f64::max) * 1.05;
             (0.0..y_max.max(1e-12), "frequency (Hz)")
         }
-        Lines::Tracks | Lines::FrfDb => {
+        Lines::Tracks | Lines::FrfDb | Lines::FrfFit => {
             let (lo, hi) = finite_range(values()).unwrap_or((-1.0, 1.0));
             let pad = ((hi - lo) * 0.05).max(1e-9);
             let x_label = if lines == Lines::Tracks {
@@ -591,21 +625,28 @@ where
     };
     let mut chart = build_chart(&root, SINGLE, title, xr.0..xr.1, y_range, x_label, y_label)?;
     for (i, (label, x, y)) in curves.iter().enumerate() {
+        let points = x
+            .iter()
+            .zip(y.iter())
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .map(|(x, y)| (*x, *y));
         let (colour, width) = match lines {
             Lines::Frf if i == 0 => (TRANSDUCER, 2),
             Lines::Frf | Lines::FrfDb => (exposure_colour(i, curves.len().max(2)), 2),
             Lines::Tracks => (exposure_colour(i, curves.len().max(2)), 1),
+            Lines::FrfFit => {
+                // a fit takes the colour of the data drawn before it
+                let data = |c: &&(&str, &[f64], &[f64])| !c.0.ends_with(FIT);
+                let k = curves.iter().filter(data).count();
+                let j = curves[..=i].iter().filter(data).count().max(1) - 1;
+                (exposure_colour(j, k.max(2)), 1)
+            }
         };
-        draw_line(
-            &mut chart,
-            x.iter()
-                .zip(y.iter())
-                .filter(|(x, y)| x.is_finite() && y.is_finite())
-                .map(|(x, y)| (*x, *y)),
-            colour,
-            width,
-            *label,
-        )?;
+        if lines == Lines::FrfFit && label.ends_with(FIT) {
+            draw_dashed(&mut chart, points.collect(), darker(colour), *label)?;
+        } else {
+            draw_line(&mut chart, points, colour, width, *label)?;
+        }
     }
     draw_legend(&mut chart, SINGLE)?;
     root.present()?;

@@ -274,8 +274,8 @@ fn folder_digest(dir: &Path) -> std::io::Result<(String, u64, usize)> {
 }
 
 /// The header of `report.html` (`section#provenance`): the same as [`Provenance::text`], as a
-/// table (`tr.input` per input, `tr.setting` per setting, `.default` on the defaulted ones);
-/// `escape` escapes text for HTML.
+/// table (`tr.input` per input, with its `data-sha256`) and the list `ul#settings` (`li.setting`
+/// per setting, `.default` on the defaulted ones); `escape` escapes text for HTML.
 pub fn html(p: &Provenance, escape: fn(&str) -> String) -> String {
     let mut s = String::from("<section id=\"provenance\"><table class=\"provenance\">");
     let row = |s: &mut String, class: &str, k: &str, v: &str| {
@@ -313,25 +313,27 @@ pub fn html(p: &Provenance, escape: fn(&str) -> String) -> String {
     row(&mut s, "machine", "machine", &p.machine);
     s.push_str("</table>");
     if let Some(inv) = &p.invocation {
+        // every setting, in columns (a printed report shows them all; defaults in grey)
         let given = inv.settings.iter().filter(|st| !st.default).count();
         let _ = write!(
             s,
-            "<details id=\"settings\"><summary>settings: {given} given, {} default</summary><table>",
+            "<p class=\"settings-head\">settings: {given} given, {} default (grey)</p><ul id=\"settings\">",
             inv.settings.len() - given
         );
         for st in &inv.settings {
-            let (class, mark) = match st.default {
-                true => ("setting default", " (default)"),
-                false => ("setting", ""),
+            let class = if st.default {
+                "setting default"
+            } else {
+                "setting"
             };
             let _ = write!(
                 s,
-                "<tr class=\"{class}\"><th>{}</th><td>{}{mark}</td></tr>",
+                "<li class=\"{class}\">{} = {}</li>",
                 escape(&st.name),
                 escape(&st.value)
             );
         }
-        s.push_str("</table></details>");
+        s.push_str("</ul>");
     }
     s.push_str("</section>\n");
     s

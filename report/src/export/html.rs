@@ -248,9 +248,18 @@ pre{background:#f6f6f6;padding:1em;overflow-x:auto}\
 #frame{max-width:100%;height:auto}\
 #banner{border:2px solid #c83c28;background:#fff4f2;padding:.5em 1em;margin:1em 0}\
 #provenance{font-size:90%;margin:0 0 1em 0}#provenance th{text-align:left;vertical-align:top}\
-#provenance td{text-align:left;word-break:break-all}#provenance .default td{color:#777}";
+#provenance td{text-align:left;word-break:break-all}\
+#settings{columns:3 16em;font-size:85%;margin:.3em 0;padding-left:1.2em}\
+#settings .default{color:#888}.settings-head{margin:.5em 0 0 0;font-size:90%}\
+@media print{@page{size:A4;margin:14mm}\
+body{margin:0;max-width:none;font-size:10pt}\
+h2{break-before:page}h2:first-of-type{break-before:auto}\
+figure,svg,table,.mode,#banner,#provenance{break-inside:avoid}\
+button,input,#save-poles,#clear-poles,#poles-csv,#pole-hover{display:none}\
+pre{white-space:pre-wrap;font-size:8pt}svg.figure,#frame{max-width:100%}}";
 
-/// The page's script: animates every `svg.mode-shape` from the data in `#shape-data`.
+/// The page's script: animates every `svg.mode-shape` from the data in `#shape-data`; printed,
+/// each shape stands still at its extreme (phase 0: the real part at full scale).
 const SCRIPT: &str = r#"(function(){
 var data=JSON.parse(document.getElementById('shape-data').textContent);
 var playing=true,scale=1,t0=performance.now(),phase=0;
@@ -272,6 +281,9 @@ function draw(){
  }
 }
 function tick(now){if(playing){phase=((now-t0)/1200)*2*Math.PI%(2*Math.PI);draw();}requestAnimationFrame(tick);}
+function still(){playing=false;phase=0;draw();if(play){play.textContent='play';}}
+window.addEventListener('beforeprint',still);
+if(window.matchMedia){var pm=window.matchMedia('print');if(pm.matches){still();}if(pm.addEventListener){pm.addEventListener('change',function(e){if(e.matches){still();}});}}
 draw();requestAnimationFrame(tick);
 })();"#;
 

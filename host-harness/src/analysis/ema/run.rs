@@ -301,7 +301,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
             ));
             if let Some(c) = r.constants.get(o) {
                 owned.push((
-                    format!("{} fit", req.response.names[o]),
+                    format!("{}{}", req.response.names[o], crate::plots::FIT),
                     f.iter()
                         .map(|&fr| value(c.evaluate(&fitted, req.settings.form, fr)))
                         .collect(),
@@ -312,7 +312,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
             .iter()
             .map(|(l, v)| (l.as_str(), f.as_slice(), v.as_slice()))
             .collect();
-        crate::plots::lines_figure(stem, title, y_label, &curves, crate::plots::Lines::FrfDb)
+        crate::plots::lines_figure(stem, title, y_label, &curves, crate::plots::Lines::FrfFit)
     };
     let magnitude = draw(
         "frf",
