@@ -481,6 +481,14 @@ def main():
                      header=("ema", [work / "hammer" / "camera.csv",
                                      work / "hammer" / "force.csv"]))
         check_print(drv, work / "modal" / "report.html", "modal, printed")
+        # `--pdf`: the command prints its own page through headless Chromium
+        run(h, *modal, "--pdf", "--out", work / "modal-pdf", "--force")
+        pdf = (work / "modal-pdf" / "report.pdf").read_bytes()
+        open_page(drv, work / "modal-pdf" / "report.html")
+        sections = len(drv.find_elements(By.CSS_SELECTOR, "h2"))
+        pages = len(re.findall(rb"/Type\s*/Page[^s]", pdf))
+        check(pdf.startswith(b"%PDF") and pages >= sections >= 2,
+              f"modal --pdf: report.pdf of {pages} pages for {sections} sections")
         check_print(drv, work / "ema" / "report.html", "ema, printed")
         check_pole_picker(drv, h, work, "ema", ema)
         check_pole_picker(drv, h, work, "modal", modal, method="ssi")

@@ -765,3 +765,52 @@ fn a_report_opens_with_who_what_and_when() {
         report.replace(a.to_str().unwrap(), b.to_str().unwrap())
     );
 }
+
+#[test]
+fn pdf_is_printed_by_chromium_or_its_absence_is_said() {
+    let tmp = tempfile::tempdir().unwrap();
+    let field = tmp.path().join("field");
+    assert_ok(&harness(&words(
+        "simulate-field --minutes 5 --seed 4 --out {}",
+        &[field.to_str().unwrap()],
+    )));
+    let disp = field.join("displacement.csv");
+    let run = |out: &Path, browser: Option<&str>| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"));
+        c.args(["modal", "--displacement", disp.to_str().unwrap(), "--pdf"])
+            .args(["--out", out.to_str().unwrap(), "--force"]);
+        if let Some(b) = browser {
+            c.env("VIBCAM_CHROMIUM", b);
+        }
+        c.output().unwrap()
+    };
+    // a browser that cannot run: said, and every other output written
+    let none = tmp.path().join("none");
+    let o = run(&none, Some("/no/such/chromium"));
+    assert_ok(&o);
+    let warned = crate::util::stderr(&o);
+    crate::util::assert_contains(&warned, &["warning: no report.pdf", "/no/such/chromium"]);
+    assert!(none.join("report.html").is_file() && !none.join("report.pdf").exists());
+    // with a Chromium on this machine: the page as a PDF, listed as an output (so that --force
+    // replaces it), no scratch file left
+    let found = ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .any(|b| {
+            std::process::Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        });
+    if found {
+        let out = tmp.path().join("pdf");
+        for _ in 0..2 {
+            assert_ok(&run(&out, None));
+        }
+        let pdf = std::fs::read(out.join("report.pdf")).unwrap();
+        // the page printed, not an error page: a page per section (the print stylesheet)
+        let pages = pdf.windows(11).filter(|w| w == b"/Type /Page").count()
+            - pdf.windows(12).filter(|w| w == b"/Type /Pages").count();
+        assert!(pdf.starts_with(b"%PDF") && pages >= 3, "{pages} pages");
+        assert!(!out.join(".report.pdf.partial").exists());
+    }
+}

@@ -185,7 +185,7 @@ const ROOMS: [(&str, &[&[&str]]); 6] = [
     ("common", &[&["stats"], &["uncertainty"]]),
     (
         "report",
-        &[&["outdir", "provenance"], &["export"], &["plots"]],
+        &[&["outdir", "provenance", "pdf"], &["export"], &["plots"]],
     ),
     ("identify", &[&["modal"], &["oma"], &["ema"]]),
     (

@@ -695,6 +695,7 @@ fn track_request(
         notes: rates.notes.clone(),
         out: std::path::PathBuf::new(),
         force: false,
+        pdf: false,
         inputs: t.points_file.into_iter().collect(),
         view,
     }
@@ -841,6 +842,7 @@ fn analyze<'py>(
         twin: None,
         out: std::path::PathBuf::new(),
         force: false,
+        pdf: false,
     };
     let inputs = frames.paths();
     let computed = py
@@ -1150,7 +1152,7 @@ fn study(
     noverlap=None, nfft=None, detrend="constant", bands=None, prominence_db=6.0, f_min_hz=None,
     efdd_quantity="auto", plscf=false, ssi="cov", ssi_block_rows=None, ssi_max_order=None,
     references=None, setups=Vec::new(), merge="poser", out=None, force=false, poles=None,
-    call=None))]
+    pdf=false, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn modal<'py>(
     py: Python<'py>,
@@ -1176,6 +1178,7 @@ fn modal<'py>(
     out: Option<String>,
     force: bool,
     poles: Option<String>,
+    pdf: bool,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::analysis::oma::{bell::Quantity, input::PixelAxis};
@@ -1211,6 +1214,7 @@ fn modal<'py>(
         out: out.map(std::path::PathBuf::from).unwrap_or_default(),
         force,
         plots: write,
+        pdf,
     };
     let (c, report, html) = py
         .allow_threads(|| {
@@ -1279,7 +1283,7 @@ fn modal_dict<'py>(
 #[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
-    max_order=48, nperseg=None, out=None, force=false, poles=None, call=None))]
+    max_order=48, nperseg=None, out=None, force=false, poles=None, pdf=false, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn ema<'py>(
     py: Python<'py>,
@@ -1302,6 +1306,7 @@ fn ema<'py>(
     out: Option<String>,
     force: bool,
     poles: Option<String>,
+    pdf: bool,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::jobs::{EmaInput, EmaSpec};
@@ -1328,6 +1333,7 @@ fn ema<'py>(
         out: out.map(std::path::PathBuf::from).unwrap_or_default(),
         force,
         plots: write,
+        pdf,
     };
     let (r, report, names, html) = py
         .allow_threads(|| {

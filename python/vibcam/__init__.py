@@ -754,6 +754,7 @@ def ema(
     out: _Optional[_PathLike] = None,
     force: bool = False,
     poles: _Optional[_PathLike] = None,
+    pdf: bool = False,
 ) -> EmaResult:
     """Experimental modal analysis of responses over a measured force, exactly as
     ``host-harness ema`` (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -770,7 +771,8 @@ def ema(
     ``response_quantity``: ``"displacement"``, ``"velocity"`` or ``"acceleration"``. ``bands``:
     ``[(lo, hi), ...]`` Hz, one mode per band (default: every mode the stabilisation diagram
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
-    (``force`` replaces an earlier ``ema`` output).
+    (``force`` replaces an earlier ``ema`` output; ``pdf`` prints ``report.pdf`` too, through a
+    headless Chromium).
     """
     call = _call(ema, locals())
     exp_window = _setting("ema", "exp_window", exp_window)
@@ -798,6 +800,7 @@ def ema(
         out=None if out is None else _os.fspath(out),
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
+        pdf=bool(pdf),
         call=call,
     )
     return _result(EmaResult, d)
@@ -827,6 +830,7 @@ def modal(
     out: _Optional[_PathLike] = None,
     force: bool = False,
     poles: _Optional[_PathLike] = None,
+    pdf: bool = False,
 ) -> AnalysisResult:
     """Output-only modal analysis of a displacement file, exactly as ``host-harness modal``
     (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -844,7 +848,7 @@ def modal(
     ``f_hz`` and ``damping`` (poles picked on the page's stabilisation diagram, or an earlier
     ``modes.csv``): SSI's modes exactly these, each one's shape the diagram's stable pole
     nearest it. ``out``: also write the command's files there (``force`` replaces an earlier
-    ``modal`` output).
+    ``modal`` output; ``pdf`` prints ``report.pdf`` too, through a headless Chromium).
     """
     call = _call(modal, locals())
     for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
@@ -882,6 +886,7 @@ def modal(
         out=None if out is None else _os.fspath(out),
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
+        pdf=bool(pdf),
         call=call,
     )
     rows = [dict(r, scale=complex(*r["scale"])) for r in d["setups"]]

@@ -88,11 +88,13 @@ pub struct Alignment {
 /// Writes a job's `report.txt` and its `report.html` (`page` makes it from the report's text),
 /// both opened by the run's provenance (the inputs `out` was given, the invocation the front
 /// end stated), the settings they name spelled as the command line's flags (`$nperseg`:
-/// `--nperseg`); returns the report without its provenance (what the terminal shows: the
-/// command was just typed there).
+/// `--nperseg`); with `pdf`, `report.pdf` too, printed by a headless Chromium (a warning when
+/// none is installed or it fails: the other outputs stand). Returns the report without its
+/// provenance (what the terminal shows: the command was just typed there).
 pub fn write_report(
     out: &vibcam_report::outdir::Staged,
     report: &str,
+    pdf: bool,
     page: impl FnOnce(&str) -> crate::export::html::Report,
 ) -> anyhow::Result<String> {
     use crate::setting::{spell, Naming};
@@ -102,6 +104,20 @@ pub fn write_report(
     let page = signed_page(&provenance, &report, page);
     out.write("report.txt", format!("{}\n{report}", provenance.text()))?;
     out.write("report.html", spell(&page, Naming::Cli))?;
+    if pdf {
+        // the page as staged (the target directory holds it only after the commit)
+        let html = out.dir().join("report.html");
+        use vibcam_report::pdf::{browser, print, PdfError};
+        let printed = browser()
+            .ok_or(PdfError::NoBrowser)
+            .and_then(|b| print(&b, &html, &out.dir().join(".report.pdf.partial")));
+        match printed {
+            Ok(bytes) => {
+                out.write("report.pdf", bytes)?;
+            }
+            Err(e) => warn(&e.to_string()),
+        }
+    }
     Ok(report)
 }
 

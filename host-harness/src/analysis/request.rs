@@ -75,6 +75,8 @@ pub struct Request {
     pub out: PathBuf,
     /// `--force`.
     pub force: bool,
+    /// Also print `report.pdf`.
+    pub pdf: bool,
 }
 
 impl Request {

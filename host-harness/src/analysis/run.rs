@@ -176,7 +176,7 @@ fn write(req: &Request, source: &FrameSource, out: Staged, c: Computed) -> anyho
         (Some(a), Some(figure)) => write_results(&out, req, a, figure, &mut report)?,
         _ => Vec::new(),
     };
-    let mut report = super::write_report(&out, &report, |report| {
+    let mut report = super::write_report(&out, &report, req.pdf, |report| {
         one_target_page(req, source, &c.centroids, a, report, &figures)
     })?;
     if c.result.is_ok() {

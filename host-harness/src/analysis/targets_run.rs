@@ -101,7 +101,7 @@ fn write(
         report.push_str(&super::points::windows_report(w, tracks));
     }
     let failed = a.failures();
-    let report = super::write_report(&out, &report, |report| {
+    let report = super::write_report(&out, &report, req.pdf, |report| {
         page(
             req,
             source,

@@ -41,6 +41,8 @@ pub struct Request {
     pub out: PathBuf,
     /// `--force`.
     pub force: bool,
+    /// Also print `report.pdf`.
+    pub pdf: bool,
     /// Input files besides the frames (the points file).
     pub inputs: Vec<PathBuf>,
     /// Static references and the scale from the scene.
@@ -57,7 +59,7 @@ pub fn run(req: &Request) -> anyhow::Result<String> {
     let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
     let viewed = compute(req, &source)?;
     let o = outputs(req, &source, &viewed)?;
-    write(out, o)
+    write(out, o, req.pdf)
 }
 
 /// The targets tracked in the camera's view of `source`; a record where no target has a
@@ -214,15 +216,15 @@ pub fn outputs(
     })
 }
 
-/// Writes the outputs of `track` into the staged directory `out` and commits it; returns the
-/// report as written.
-fn write(out: Staged, o: Outputs) -> anyhow::Result<String> {
+/// Writes the outputs of `track` into the staged directory `out` (with `pdf`, `report.pdf`
+/// too) and commits it; returns the report as written.
+fn write(out: Staged, o: Outputs, pdf: bool) -> anyhow::Result<String> {
     out.write("displacement.csv", &o.displacement_csv)?;
     o.camera.write_staged(&out)?;
     if let Some(f) = &o.tracks_figure {
         f.write_staged(&out)?;
     }
-    let report = super::write_report(&out, &o.report, |report| o.page(report))?;
+    let report = super::write_report(&out, &o.report, pdf, |report| o.page(report))?;
     out.commit()?;
     Ok(report)
 }

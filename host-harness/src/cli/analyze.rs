@@ -96,6 +96,10 @@ pub struct Args {
     /// it, and it holds no input of this run), as a whole. A failed run replaces nothing.
     #[arg(long)]
     pub force: bool,
+    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
+    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
+    #[arg(long)]
+    pub pdf: bool,
     /// The targets: `$targets` blobs or `$points` windows.
     #[command(flatten)]
     pub targets: super::args::TargetArgs,
@@ -197,5 +201,6 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
         }),
         out: args.out,
         force: args.force,
+        pdf: args.pdf,
     })
 }

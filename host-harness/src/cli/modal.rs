@@ -136,6 +136,10 @@ pub struct Args {
     /// Replace --out if it is an earlier output of `modal` (as a whole).
     #[arg(long)]
     pub force: bool,
+    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
+    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
+    #[arg(long)]
+    pub pdf: bool,
     /// Do not write the figures.
     #[arg(long)]
     pub no_plots: bool,
@@ -177,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         out: args.out,
         force: args.force,
+        pdf: args.pdf,
         plots: !args.no_plots,
     })
     .map_err(SpecError::into_anyhow)?;

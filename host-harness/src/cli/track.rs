@@ -35,6 +35,10 @@ pub struct Args {
     /// Replace --out if it is an earlier output of `track`, as a whole.
     #[arg(long)]
     pub force: bool,
+    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
+    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
+    #[arg(long)]
+    pub pdf: bool,
 }
 
 /// Runs `host-harness track`.
@@ -50,6 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         plots: !args.no_plots,
         out: args.out.clone(),
         force: args.force,
+        pdf: args.pdf,
     };
     let report = TrackSpec::new(input, rates)
         .map_err(SpecError::into_anyhow)?

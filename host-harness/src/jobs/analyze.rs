@@ -76,6 +76,8 @@ pub struct AnalyzeInput {
     pub out: PathBuf,
     /// Replace an earlier `analyze` output there.
     pub force: bool,
+    /// Also print `report.pdf` (headless Chromium).
+    pub pdf: bool,
 }
 
 /// A checked `analyze` job.
@@ -208,6 +210,7 @@ fn with_reference(
         twin: input.twin,
         out: input.out,
         force: input.force,
+        pdf: input.pdf,
     };
     Ok((AnalyzeSpec::Reference(Box::new(request)), warnings))
 }
@@ -360,6 +363,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         bands,
         out: input.out,
         force: input.force,
+        pdf: input.pdf,
         notes: rates.notes,
         view,
     })

@@ -60,6 +60,8 @@ pub struct EmaInput {
     pub force: bool,
     /// Draw the figures.
     pub plots: bool,
+    /// Also print `report.pdf` (headless Chromium).
+    pub pdf: bool,
 }
 
 /// The responses without the force's own channel when both come from one file: taken among
@@ -175,6 +177,7 @@ impl EmaSpec {
                     .collect(),
                 out: input.out.clone(),
                 force_out: input.force,
+                pdf: input.pdf,
                 plots: input.plots,
             },
         })

@@ -49,6 +49,8 @@ pub struct ModalInput {
     pub out: PathBuf,
     /// Replace an earlier `modal` output there.
     pub force: bool,
+    /// Also print `report.pdf` (headless Chromium).
+    pub pdf: bool,
     /// Draw the figures.
     pub plots: bool,
 }
@@ -386,6 +388,7 @@ impl ModalSpec {
         let output = Output {
             out: &i.out,
             force: i.force,
+            pdf: i.pdf,
             command: "modal",
             inputs,
             plots: i.plots,

@@ -27,6 +27,8 @@ pub struct TrackInput {
     pub out: PathBuf,
     /// Replace an earlier `track` output there.
     pub force: bool,
+    /// Also print `report.pdf` (headless Chromium).
+    pub pdf: bool,
 }
 
 /// A checked `track` job.
@@ -63,6 +65,7 @@ impl TrackSpec {
                 notes: rates.notes,
                 out: input.out,
                 force: input.force,
+                pdf: input.pdf,
                 inputs: tracking.points_file.into_iter().collect(),
                 view,
             },

@@ -32,6 +32,8 @@ pub struct EmaRequest {
     pub inputs: Vec<PathBuf>,
     /// Output directory.
     pub out: PathBuf,
+    /// Also print `report.pdf`.
+    pub pdf: bool,
     /// Replace an earlier `ema` output there.
     pub force_out: bool,
     /// Draw the figures.
@@ -104,7 +106,7 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
     for f in &figures {
         f.write_staged(&out)?;
     }
-    let report = crate::analysis::write_report(&out, &report, |report| {
+    let report = crate::analysis::write_report(&out, &report, req.pdf, |report| {
         page(req, &r, report, crate::plots::page_figures(&figures))
     })?;
     out.commit()?;

@@ -44,6 +44,8 @@ pub struct FramesRequest {
     pub out: PathBuf,
     /// `--force`.
     pub force: bool,
+    /// Also print `report.pdf`.
+    pub pdf: bool,
     /// Notes on the frames' rate.
     pub notes: Vec<String>,
     /// Static references and the scale from the scene.
@@ -219,6 +221,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
         &Output {
             out: &req.out,
             force: req.force,
+            pdf: req.pdf,
             command: "analyze",
             inputs,
             plots: true,

@@ -21,6 +21,8 @@ pub struct Output<'a> {
     pub out: &'a Path,
     /// Replace an earlier output of the same command.
     pub force: bool,
+    /// Also print `report.pdf`.
+    pub pdf: bool,
     /// The command writing it (`modal` or `analyze`).
     pub command: &'static str,
     /// The run's inputs (never inside a directory that is replaced).
@@ -82,7 +84,7 @@ pub fn write(
     }
     let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
     let figures = crate::plots::page_figures(&figures);
-    let report = crate::analysis::write_report(&out, &report, |report| {
+    let report = crate::analysis::write_report(&out, &report, o.pdf, |report| {
         page(
             r,
             records,
