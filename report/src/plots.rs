@@ -591,6 +591,10 @@ pub enum Lines {
     FrfFit,
 }
 
+/// The most curves a [`lines_figure`] names one by one in its legend; with more it names the
+/// first and the last, and says the colours of the others run between.
+pub const LEGEND_MAX: usize = 10;
+
 /// What ends a fit's label in a [`Lines::FrfFit`] figure.
 pub const FIT: &str = " fit";
 
@@ -642,10 +646,28 @@ where
                 (exposure_colour(j, k.max(2)), 1)
             }
         };
+        // many curves: the legend names the first and the last (the colours run between)
+        let crowd = curves.len() > LEGEND_MAX && i > 0 && i + 1 < curves.len();
         if lines == Lines::FrfFit && label.ends_with(FIT) {
             draw_dashed(&mut chart, points.collect(), darker(colour), *label)?;
+        } else if crowd {
+            chart.draw_series(LineSeries::new(points, colour.stroke_width(width)))?;
         } else {
             draw_line(&mut chart, points, colour, width, *label)?;
+        }
+        if crowd && i == 1 {
+            let between = format!(
+                "{} .. {}: colours between",
+                curves[1].0,
+                curves[curves.len() - 2].0
+            );
+            draw_line(
+                &mut chart,
+                std::iter::empty(),
+                RGBColor(150, 150, 150),
+                1,
+                between,
+            )?;
         }
     }
     draw_legend(&mut chart, SINGLE)?;
@@ -656,6 +678,40 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_legend_of_many_tracks_names_the_first_and_the_last() {
+        let t: Vec<f64> = (0..50).map(f64::from).collect();
+        let ys: Vec<Vec<f64>> = (0..28)
+            .map(|k| t.iter().map(|v| v * f64::from(k)).collect())
+            .collect();
+        let names: Vec<String> = (1..=28).map(|k| format!("target {k}")).collect();
+        let curves: Vec<(&str, &[f64], &[f64])> = names
+            .iter()
+            .zip(&ys)
+            .map(|(n, y)| (n.as_str(), t.as_slice(), y.as_slice()))
+            .collect();
+        let f = lines_figure("tracks", "Tracks", "px", &curves, Lines::Tracks).unwrap();
+        // the SVG writes each text on a line of its own
+        let lines: Vec<&str> = f.svg.lines().collect();
+        for named in [
+            "target 1",
+            "target 28",
+            "target 2 .. target 27: colours between",
+        ] {
+            assert!(lines.contains(&named), "{named}");
+        }
+        assert!(!lines.contains(&"target 14"));
+        // ten or fewer: each by name
+        let f = lines_figure(
+            "tracks",
+            "Tracks",
+            "px",
+            &curves[..LEGEND_MAX],
+            Lines::Tracks,
+        );
+        assert!(f.unwrap().svg.lines().any(|l| l == "target 10"));
+    }
 
     #[test]
     fn a_db_range_ends_forty_db_under_the_first_curves_floor() {

@@ -325,7 +325,7 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
     let phase = draw(
         "frf_phase",
         "H1's phase and the fit's",
-        "phase of H1, degrees",
+        "phase of H1, degrees (wrapped to -180..180)",
         |c| c.arg().to_degrees(),
     )?;
     let poles = crate::analysis::oma::run::pole_kinds(&r.poles, &r.clusters);
