@@ -146,6 +146,35 @@ def check_print(drv, path, what):
     check(pages >= sections >= 2, f"{what}: {pages} printed pages for {sections} sections")
 
 
+def check_svd_range(drv, folder, what):
+    """The singular-value figure of the page in ``folder``: at most four curves, and a dB axis
+    from no lower than 40 dB under the first singular value's 5th percentile (10 dB for the
+    ticks' rounding; ``svd.csv`` read here) to its peak."""
+    import math
+
+    with open(folder / "svd.csv", newline="") as f:
+        rows = list(csv.DictReader(f))[1:]
+    s1 = sorted(10 * math.log10(max(float(r["s1"]), 1e-300)) for r in rows)
+    floor, top = s1[len(s1) // 20] - 40.0, s1[-1]
+    ticks = drv.execute_script(
+        "var out=[];document.querySelectorAll('figure').forEach(function(f){"
+        "var c=f.querySelector('figcaption');if(c&&c.textContent==='svd'){"
+        "f.querySelectorAll('text[text-anchor=end]').forEach(function(t){"
+        "out.push(t.textContent.trim());});}});return out;")
+    values = [float(t) for t in ticks if re.fullmatch(r"-?[0-9.]+", t)]
+    check(len(values) >= 2, f"{what}: {len(values)} dB ticks on the singular values")
+    if values:
+        check(min(values) >= floor - 10 and max(values) <= top + 10,
+              f"{what}: singular values drawn from {min(values)} to {max(values)} dB "
+              f"(floor {floor:.1f}, peak {top:.1f})")
+    legend = drv.execute_script(
+        "var n=0;document.querySelectorAll('figure').forEach(function(f){"
+        "var c=f.querySelector('figcaption');if(c&&c.textContent==='svd'){"
+        "f.querySelectorAll('text').forEach(function(t){"
+        "if(/^s[0-9]+$/.test(t.textContent.trim())){n++;}});}});return n;")
+    check(1 <= legend <= 4, f"{what}: {legend} singular values drawn (at most 4)")
+
+
 def check_report(drv, path, markers, modes, what, rows=None, header=None):
     """A report page: size, no console error or request, the frame and markers, the modes'
     table and animations, the report's text; with ``header`` (command, inputs) its header."""
@@ -477,6 +506,7 @@ def main():
                      "analyze", header=("analyze", [rec / "frames"]))
         check_report(drv, work / "modal" / "report.html", None, mode_rows(work / "modal"),
                      "modal", header=("modal", [work / "analyze" / "displacement.csv"]))
+        check_svd_range(drv, work / "modal", "modal")
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema",
                      header=("ema", [work / "hammer" / "camera.csv",
                                      work / "hammer" / "force.csv"]))
