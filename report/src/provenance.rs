@@ -229,10 +229,18 @@ fn hex(bytes: &[u8]) -> String {
 /// directly in it (hidden ones left out), in name order.
 pub fn input_file(path: &Path) -> InputFile {
     let shown = path.display().to_string();
-    let described = if path.is_dir() {
-        folder_digest(path)
-    } else {
-        file_digest(path).map(|(h, n)| (h, n, 1))
+    // a pipe or a device was read by the job already: hashing it again would read nothing (a
+    // digest of no bytes, silently wrong) or wait for ever; a pattern names no one file
+    let described = match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => folder_digest(path),
+        Ok(m) if m.is_file() => file_digest(path).map(|(h, n)| (h, n, 1)),
+        Ok(_) => Err(std::io::Error::other(
+            "not a regular file (a pipe or a device): not hashed",
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(std::io::Error::other(
+            "no file or folder of this name (a pattern of files is not hashed)",
+        )),
+        Err(e) => Err(e),
     };
     match described {
         Ok((sha, bytes, files)) => InputFile {
@@ -364,6 +372,14 @@ mod tests {
         assert_eq!(d.sha256.as_deref(), Some(want.as_str()));
         let gone = input_file(&tmp.path().join("missing"));
         assert!(gone.sha256.is_none() && gone.line().contains("not read"));
+        // a device (or a pipe) is named as such, never given the digest of no bytes
+        let device = input_file(Path::new("/dev/null"));
+        assert!(device.sha256.is_none(), "{device:?}");
+        assert!(
+            device.line().contains("not a regular file"),
+            "{}",
+            device.line()
+        );
     }
 
     #[test]
