@@ -200,15 +200,21 @@ def check_report(drv, path, markers, modes, what, rows=None, header=None):
         want = modes if rows is None else rows
         check(len(got) == want + 1, f"{what}: the table of modes has {len(got) - 1} rows")
         if shapes:
-            line = shapes[0].find_element(By.CSS_SELECTOR, "polyline.shape-line")
-            a = line.get_attribute("points")
+            def places():
+                dots = shapes[0].find_elements(By.CSS_SELECTOR, "circle.shape-dot")
+                wires = shapes[0].find_elements(By.CSS_SELECTOR, "line.wire")
+                return [(e.get_attribute("cx"), e.get_attribute("cy")) for e in dots] + \
+                    [tuple(e.get_attribute(k) for k in ("x1", "y1", "x2", "y2")) for e in wires]
+            a = places()
             time.sleep(0.35)
-            b = line.get_attribute("points")
+            b = places()
             check(a != b, f"{what}: the first shape's animation advances")
             drv.find_element(By.ID, "play").click()
-            c = line.get_attribute("points")
+            c = places()
             time.sleep(0.35)
-            check(line.get_attribute("points") == c, f"{what}: pause stops it")
+            check(places() == c, f"{what}: pause stops it")
+            check(drv.find_element(By.ID, "wire").text.strip() != "",
+                  f"{what}: the page says where the shapes' lines come from")
     check(drv.find_element(By.ID, "report-text").text.strip() != "", f"{what}: the report")
 
 
@@ -441,6 +447,27 @@ def check_pole_picker(drv, harness, work, name, args, method=None):
                  f"({got} vs {want})")
 
 
+def check_wire(drv, path, geometry, what):
+    """Every mode shape of the page is drawn with the geometry's lines: as many `line.wire` as
+    the file has lines, each between the nodes the file names (`data-a`/`data-b`, 0-based)."""
+    from selenium.webdriver.common.by import By
+
+    text = Path(geometry).read_text().splitlines()
+    rows = [r.split(",") for r in text if r and not r.startswith("#")]
+    start = [i for i, r in enumerate(rows) if r == ["from", "to"]][0]
+    want = sorted((int(a) - 1, int(b) - 1) for a, b in rows[start + 1:])
+    open_page(drv, path)
+    shapes = drv.find_elements(By.CSS_SELECTOR, "svg.mode-shape")
+    check(len(shapes) > 0, f"{what}: shapes drawn")
+    for k, svg in enumerate(shapes):
+        got = sorted((int(e.get_attribute("data-a")), int(e.get_attribute("data-b")))
+                     for e in svg.find_elements(By.CSS_SELECTOR, "line.wire"))
+        check(got == want, f"{what}: mode {k + 1} has {len(got)} lines, the geometry "
+                           f"{len(want)}: {got} vs {want}")
+    check(Path(geometry).name in drv.find_element(By.ID, "wire").text,
+          f"{what}: the page names the geometry")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--harness", default="target/debug/host-harness")
@@ -487,6 +514,12 @@ def main():
            work / "hammer" / "force.csv", "--excitation-col", "force_n", "--impact",
            "--f-max-hz", "200"]
     run(h, *ema, "--out", work / "ema", "--force")
+    # a geometry with a branch (not the number order): five nodes in mm, five lines
+    geometry = work / "geometry.csv"
+    geometry.write_text("node,x_mm,y_mm\n1,0,0\n2,100,0\n3,200,0\n4,300,0\n5,200,150\n"
+                        "from,to\n1,2\n2,3\n3,4\n3,5\n5,1\n")
+    run(h, *modal, "--geometry", geometry, "--out", work / "modal-geometry", "--force")
+    run(h, *ema, "--geometry", geometry, "--out", work / "ema-geometry", "--force")
 
     def mode_rows(d):
         with open(d / "modes.csv", newline="") as f:
@@ -510,6 +543,12 @@ def main():
         check_report(drv, work / "ema" / "report.html", None, mode_rows(work / "ema"), "ema",
                      header=("ema", [work / "hammer" / "camera.csv",
                                      work / "hammer" / "force.csv"]))
+        check_wire(drv, work / "modal-geometry" / "report.html", geometry, "modal --geometry")
+        check_wire(drv, work / "ema-geometry" / "report.html", geometry, "ema --geometry")
+        check_report(drv, work / "ema-geometry" / "report.html", None,
+                     mode_rows(work / "ema-geometry"), "ema --geometry",
+                     header=("ema", [work / "hammer" / "camera.csv",
+                                     work / "hammer" / "force.csv", geometry]))
         check_print(drv, work / "modal" / "report.html", "modal, printed")
         # `--pdf`: the command prints its own page through headless Chromium
         run(h, *modal, "--pdf", "--out", work / "modal-pdf", "--force")

@@ -7,6 +7,15 @@ use crate::util::assert_says;
 use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, words};
 use std::path::Path;
 
+/// `simulate-field --minutes M --seed S` into `dir`: its `displacement.csv`.
+fn field_record(dir: &Path, minutes: u32, seed: u32) -> std::path::PathBuf {
+    assert_ok(&harness(&words(
+        "simulate-field --minutes {} --seed {} --out {}",
+        &[&minutes.to_string(), &seed.to_string(), dir.to_str().unwrap()],
+    )));
+    dir.join("displacement.csv")
+}
+
 /// `(method, mode, f_hz, damping)` from modes.csv.
 fn modes(dir: &Path) -> Vec<(String, usize, f64, f64)> {
     crate::util::modes_csv_rows(dir)
@@ -623,12 +632,7 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
 #[test]
 fn poles_picked_on_the_page_are_exactly_the_ssi_modes() {
     let tmp = tempfile::tempdir().unwrap();
-    let field = tmp.path().join("field");
-    assert_ok(&harness(&words(
-        "simulate-field --minutes 20 --seed 5 --out {}",
-        &[field.to_str().unwrap()],
-    )));
-    let disp = field.join("displacement.csv");
+    let disp = field_record(&tmp.path().join("field"), 20, 5);
     let run = |name: &str, extra: &[&str]| {
         let out = tmp.path().join(name);
         let mut args = words(
@@ -709,12 +713,7 @@ fn sha256sum(path: &Path) -> String {
 fn a_report_opens_with_who_what_and_when() {
     let tmp = tempfile::tempdir().unwrap();
     // a folder with a space and a quote: the command line quotes it as a shell reads it back
-    let field = tmp.path().join("lab's field");
-    assert_ok(&harness(&words(
-        "simulate-field --minutes 5 --seed 4 --out {}",
-        &[field.to_str().unwrap()],
-    )));
-    let disp = field.join("displacement.csv");
+    let disp = field_record(&tmp.path().join("lab's field"), 5, 4);
     let run = |out: &Path| {
         std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"))
             .args(["modal", "--displacement", disp.to_str().unwrap()])
@@ -769,12 +768,7 @@ fn a_report_opens_with_who_what_and_when() {
 #[test]
 fn pdf_is_printed_by_chromium_or_its_absence_is_said() {
     let tmp = tempfile::tempdir().unwrap();
-    let field = tmp.path().join("field");
-    assert_ok(&harness(&words(
-        "simulate-field --minutes 5 --seed 4 --out {}",
-        &[field.to_str().unwrap()],
-    )));
-    let disp = field.join("displacement.csv");
+    let disp = field_record(&tmp.path().join("field"), 5, 4);
     let run = |out: &Path, browser: Option<&str>| {
         let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_host-harness"));
         c.args(["modal", "--displacement", disp.to_str().unwrap(), "--pdf"])
@@ -813,4 +807,70 @@ fn pdf_is_printed_by_chromium_or_its_absence_is_said() {
         assert!(pdf.starts_with(b"%PDF") && pages >= 3, "{pages} pages");
         assert!(!out.join(".report.pdf.partial").exists());
     }
+}
+
+#[test]
+fn shapes_are_drawn_on_the_geometry_given_and_a_wrong_one_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let disp = field_record(&tmp.path().join("field"), 5, 4);
+    let disp = disp.to_str().unwrap();
+    // the five storeys one above the other, 3 m apart, joined floor to floor
+    let geometry = tmp.path().join("frame.csv");
+    let nodes: String = (1..=5).map(|i| format!("{i},0,{}\n", 3000 * i)).collect();
+    let lines: String = (1..5).map(|i| format!("{i},{}\n", i + 1)).collect();
+    std::fs::write(
+        &geometry,
+        format!("# shear frame\nnode,x_mm,y_mm\n{nodes}from,to\n{lines}"),
+    )
+    .unwrap();
+    let g = geometry.to_str().unwrap();
+    let out = tmp.path().join("m");
+    assert_ok(&harness(&words(
+        "modal --displacement {} --nperseg 512 --geometry {} --out {}",
+        &[disp, g, out.to_str().unwrap()],
+    )));
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let shapes = page.matches("<svg class=\"mode-shape\"").count();
+    assert!(shapes >= 3, "{shapes} shapes");
+    // every shape is the geometry's four lines, drawn where its nodes are (y up: storey 5 on top)
+    assert_eq!(page.matches("<line class=\"wire\"").count(), 4 * shapes);
+    assert!(
+        page.contains("data-a=\"3\" data-b=\"4\" x1=\"0\" y1=\"-12000\" x2=\"0\" y2=\"-15000\"")
+    );
+    assert!(page.contains(&format!(
+        "Lines of the geometry {g} (4 lines; its nodes in millimetres"
+    )));
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    assert!(report.contains(&format!("input: {g}, ")), "{report}");
+    // without it: the targets in number order, said so
+    let plain = tmp.path().join("p");
+    assert_ok(&harness(&words(
+        "modal --displacement {} --nperseg 512 --out {}",
+        &[disp, plain.to_str().unwrap()],
+    )));
+    let page = std::fs::read_to_string(plain.join("report.html")).unwrap();
+    assert!(page.contains("Lines join the points in number order"));
+    assert_eq!(page.matches("<line class=\"wire\"").count(), 4 * shapes);
+    // a node that is no target, and a row that is no node: refused before any work, named
+    let refuse = |text: &str, needle: &str| {
+        std::fs::write(&geometry, text).unwrap();
+        let o = harness(&words(
+            "modal --displacement {} --geometry {} --out {}",
+            &[disp, g, tmp.path().join("x").to_str().unwrap()],
+        ));
+        assert_exit_2(&o, needle);
+        assert!(!tmp.path().join("x").exists());
+    };
+    refuse(
+        &format!("node,x_mm,y_mm\n{nodes}6,0,0\n"),
+        "node 6 is not a target of the input (its targets are 1, 2, 3, 4, 5)",
+    );
+    refuse(
+        "from,to\n1,2\n2,x\n",
+        &format!("{g}: row 3: `x` is not a node number"),
+    );
+    refuse(
+        &format!("node,x_mm,y_mm\n{}", &nodes[..nodes.len() - 10]),
+        "target 5 has no node",
+    );
 }

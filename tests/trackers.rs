@@ -390,6 +390,28 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         let f: f64 = c[5].parse().unwrap();
         assert!((f - 3.6).abs() < 0.5, "{} at {f} Hz: {report}", c[9]);
     }
+    // analysed from the frames, the shapes are drawn storey by storey (the points file's
+    // groups, each joined in order: 4 x 6 lines), not zig-zagging from one storey to the next
+    let analyzed = tmp.path().join("analyzed");
+    assert_ok(&harness(&words(
+        "analyze --frames {} --fps 23 --points {} --tracker lk --search-px 130 --axis x --out {}",
+        &[
+            &frames,
+            rec.join("points.csv").to_str().unwrap(),
+            analyzed.to_str().unwrap(),
+        ],
+    )));
+    let page = std::fs::read_to_string(analyzed.join("report.html")).unwrap();
+    let shapes = page.matches("<svg class=\"mode-shape\"").count();
+    assert!(shapes >= 1, "no shape drawn");
+    assert_eq!(page.matches("<line class=\"wire\"").count(), 24 * shapes);
+    assert!(
+        page.contains("Lines join the targets of each group tracking followed together (4 groups)")
+    );
+    assert!(
+        !page.contains("data-a=\"6\" data-b=\"7\""),
+        "a line from storey 1 to 2"
+    );
     // the same windows without the storeys, as a new user writes them: the groups are found
     // from the first frames' motion, and every tag is followed through every frame (before,
     // 7 tags took their neighbours), with the default search and with a search of the whole

@@ -790,7 +790,7 @@ fn upsample<'py>(
 #[pyfunction]
 #[pyo3(signature = (frames, tracking, mm_per_px=None, axis="y", invert=false,
     lost_frames="interpolate", window="hann", nperseg=None, noverlap=None, nfft=None,
-    detrend="constant", bands=None, view=None, call=None))]
+    detrend="constant", bands=None, view=None, geometry=None, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn analyze<'py>(
     py: Python<'py>,
@@ -807,6 +807,7 @@ fn analyze<'py>(
     detrend: &str,
     bands: Option<Vec<(f64, f64)>>,
     view: Option<ViewArgs>,
+    geometry: Option<String>,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
@@ -843,8 +844,10 @@ fn analyze<'py>(
         out: std::path::PathBuf::new(),
         force: false,
         pdf: false,
+        geometry: geometry.clone().map(std::path::PathBuf::from),
     };
-    let inputs = frames.paths();
+    let mut inputs = frames.paths();
+    inputs.extend(geometry.map(std::path::PathBuf::from));
     let computed = py
         .allow_threads(|| {
             stated(call, || -> anyhow::Result<_> {
@@ -886,6 +889,7 @@ fn analyze_page(
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
     let figures = run::figures(&c.result, &c.settings)?;
+    let wire = oma_frames::wire(req, c)?;
     Ok(signed_spelled(inputs, &report, |report| {
         run::page(
             &c.result,
@@ -896,7 +900,7 @@ fn analyze_page(
                 host_harness::analysis::view::reference_markers(&c.viewed),
                 host_harness::analysis::track_run::scrubber(source, req.fps, &c.viewed),
             ),
-            host_harness::plots::page_figures(&figures),
+            (host_harness::plots::page_figures(&figures), wire),
             report,
         )
     }))
@@ -1152,7 +1156,7 @@ fn study(
     noverlap=None, nfft=None, detrend="constant", bands=None, prominence_db=6.0, f_min_hz=None,
     efdd_quantity="auto", plscf=false, ssi="cov", ssi_block_rows=None, ssi_max_order=None,
     references=None, setups=Vec::new(), merge="poser", out=None, force=false, poles=None,
-    pdf=false, call=None))]
+    pdf=false, geometry=None, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn modal<'py>(
     py: Python<'py>,
@@ -1179,6 +1183,7 @@ fn modal<'py>(
     force: bool,
     poles: Option<String>,
     pdf: bool,
+    geometry: Option<String>,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::analysis::oma::{bell::Quantity, input::PixelAxis};
@@ -1215,6 +1220,7 @@ fn modal<'py>(
         force,
         plots: write,
         pdf,
+        geometry: geometry.map(std::path::PathBuf::from),
     };
     let (c, report, html) = py
         .allow_threads(|| {
@@ -1283,7 +1289,8 @@ fn modal_dict<'py>(
 #[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
-    max_order=48, nperseg=None, out=None, force=false, poles=None, pdf=false, call=None))]
+    max_order=48, nperseg=None, out=None, force=false, poles=None, pdf=false, geometry=None,
+    call=None))]
 #[allow(clippy::too_many_arguments)]
 fn ema<'py>(
     py: Python<'py>,
@@ -1307,6 +1314,7 @@ fn ema<'py>(
     force: bool,
     poles: Option<String>,
     pdf: bool,
+    geometry: Option<String>,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     use host_harness::jobs::{EmaInput, EmaSpec};
@@ -1334,6 +1342,7 @@ fn ema<'py>(
         force,
         plots: write,
         pdf,
+        geometry: geometry.map(std::path::PathBuf::from),
     };
     let (r, report, names, html) = py
         .allow_threads(|| {

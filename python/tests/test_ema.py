@@ -81,6 +81,21 @@ def test_ema_errors_name_pythons_arguments(hammer):
         vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="push")
 
 
+def test_shapes_are_drawn_on_a_geometry_and_a_wrong_one_is_named(hammer, tmp_path):
+    g = tmp_path / "beam.csv"
+    g.write_text("node,x_mm,y_mm\n" + "".join(f"{i},{100 * i},0\n" for i in range(1, 6))
+                 + "from,to\n1,2\n2,3\n3,4\n4,5\n")
+    r = vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="force_n",
+                   impact=True, f_max_hz=200, geometry=g)
+    html = r._repr_html_()
+    assert html.count('<line class="wire"') == 4 * html.count('class="mode-shape"') == 12
+    assert "geometry=" in html and "Lines of the geometry" in html
+    g.write_text("from,to\n1,9\n")
+    with pytest.raises(vibcam.InputError, match="node 9 is not a response"):
+        vibcam.ema(hammer / "camera.csv", hammer / "force.csv", excitation_col="force_n",
+                   impact=True, geometry=g)
+
+
 def test_a_two_dimensional_array_is_one_channel_per_point(hammer):
     r = vibcam.ema(hammer / "two_d.npy", hammer / "force.csv", response_fs=2000,
                    excitation_col="force_n", impact=True, f_max_hz=200)

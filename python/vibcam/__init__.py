@@ -662,6 +662,7 @@ def analyze(
     scale: _Optional[_Sequence] = None,
     target_size_mm: _Optional[float] = None,
     world: _Any = None,
+    geometry: _Optional[_PathLike] = None,
 ) -> AnalysisResult:
     """Output-only modal analysis of the targets in ``frames`` (FDD, EFDD and SSI-cov on their
     displacements), exactly as ``host-harness analyze`` without ``--accel`` (the same numbers as
@@ -674,7 +675,8 @@ def analyze(
     ``bands``: ``[(lo, hi), ...]`` Hz, one mode per band (default: peaks picked).
     ``reference``, ``camera_model``, ``scale``, ``target_size_mm``, ``world``: the camera's
     motion removed and the scale from the scene, as :func:`track` (``camera_motion`` in the
-    result; a scale other than ``mm_per_px`` makes the values mm).
+    result; a scale other than ``mm_per_px`` makes the values mm). ``geometry``: a CSV of the structure's nodes (``node,x_mm,y_mm`` or ``node,x_px,y_px``)
+    and lines (``from,to``) on which the page draws the shapes (docs/cli.md, "Geometry").
     """
     call = _call(analyze, locals())
     d = _vibcam.analyze(
@@ -691,6 +693,7 @@ def analyze(
         detrend=detrend,
         bands=None if bands is None else _bands(bands),
         view=_view(reference, camera_model, scale, target_size_mm, world),
+        geometry=None if geometry is None else _os.fspath(geometry),
         call=call,
     )
     motion = d["camera_motion"] if reference is not None else None
@@ -755,6 +758,7 @@ def ema(
     force: bool = False,
     poles: _Optional[_PathLike] = None,
     pdf: bool = False,
+    geometry: _Optional[_PathLike] = None,
 ) -> EmaResult:
     """Experimental modal analysis of responses over a measured force, exactly as
     ``host-harness ema`` (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -772,7 +776,8 @@ def ema(
     ``[(lo, hi), ...]`` Hz, one mode per band (default: every mode the stabilisation diagram
     shows between ``f_min_hz`` and ``f_max_hz``). ``out``: also write the command's files there
     (``force`` replaces an earlier ``ema`` output; ``pdf`` prints ``report.pdf`` too, through a
-    headless Chromium).
+    headless Chromium). ``geometry``: a CSV of the structure's nodes (``node,x_mm,y_mm`` or ``node,x_px,y_px``, a node per response)
+    and lines (``from,to``) on which the page draws the shapes (docs/cli.md, "Geometry").
     """
     call = _call(ema, locals())
     exp_window = _setting("ema", "exp_window", exp_window)
@@ -801,6 +806,7 @@ def ema(
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
         pdf=bool(pdf),
+        geometry=None if geometry is None else _os.fspath(geometry),
         call=call,
     )
     return _result(EmaResult, d)
@@ -831,6 +837,7 @@ def modal(
     force: bool = False,
     poles: _Optional[_PathLike] = None,
     pdf: bool = False,
+    geometry: _Optional[_PathLike] = None,
 ) -> AnalysisResult:
     """Output-only modal analysis of a displacement file, exactly as ``host-harness modal``
     (the same numbers as its ``modes.csv`` and ``shapes.csv``).
@@ -849,6 +856,8 @@ def modal(
     ``modes.csv``): SSI's modes exactly these, each one's shape the diagram's stable pole
     nearest it. ``out``: also write the command's files there (``force`` replaces an earlier
     ``modal`` output; ``pdf`` prints ``report.pdf`` too, through a headless Chromium).
+    ``geometry``: a CSV of the structure's nodes (``node,x_mm,y_mm`` or ``node,x_px,y_px``)
+    and lines (``from,to``) on which the page draws the shapes (docs/cli.md, "Geometry").
     """
     call = _call(modal, locals())
     for key, v in (("efdd_quantity", efdd_quantity), ("ssi", ssi), ("merge", merge)):
@@ -887,6 +896,7 @@ def modal(
         force=bool(force),
         poles=None if poles is None else _os.fspath(poles),
         pdf=bool(pdf),
+        geometry=None if geometry is None else _os.fspath(geometry),
         call=call,
     )
     rows = [dict(r, scale=complex(*r["scale"])) for r in d["setups"]]

@@ -58,6 +58,7 @@ pub const KEYS: &[&str] = &[
     "from",
     "fs",
     "gate_px",
+    "geometry",
     "impact",
     "input_col",
     "lost_frames",

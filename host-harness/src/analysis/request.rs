@@ -77,6 +77,9 @@ pub struct Request {
     pub force: bool,
     /// Also print `report.pdf`.
     pub pdf: bool,
+    /// `$geometry`: the structure's nodes and lines the page draws the shapes on (its path,
+    /// its content; checked against the targets).
+    pub geometry: Option<(PathBuf, vibcam_readers::geometry::Geometry)>,
 }
 
 impl Request {
@@ -89,6 +92,7 @@ impl Request {
             v.extend(t.view.references.as_ref().and_then(|r| r.file.as_deref()));
         }
         v.extend(self.points_file.as_deref());
+        v.extend(self.geometry.as_ref().map(|g| g.0.as_path()));
         v
     }
 }

@@ -176,6 +176,9 @@ fn page(
         .flatten()
         .and_then(|(_, f)| f.to_image().ok());
     let markers = super::track_run::markers(tracks, windows);
+    // the geometry was checked against the targets when the job was
+    let wire =
+        super::track_run::wire(req.geometry.as_ref(), markers.len(), windows).unwrap_or_default();
     let (head, rows) = modes_table(a);
     let fitted: Vec<(String, Vec<Complex64>)> = a
         .shapes
@@ -216,6 +219,7 @@ fn page(
                 shape: v.clone(),
             })
             .collect(),
+        wire,
         text: text.to_string(),
         scrub: None,
         references,

@@ -374,6 +374,23 @@ pub fn markers(tracks: &Tracks, windows: Option<&PointsInfo>) -> Vec<crate::expo
         .collect()
 }
 
+/// The lines `report.html` draws the shapes of the `k` targets with: `$geometry`'s when given,
+/// else the groups tracking followed targets in ([`PointsInfo::groups`]), else none said.
+pub fn wire(
+    geometry: Option<&(std::path::PathBuf, vibcam_readers::geometry::Geometry)>,
+    k: usize,
+    windows: Option<&PointsInfo>,
+) -> anyhow::Result<crate::export::wire::Wire> {
+    let points: Vec<usize> = (1..=k).collect();
+    let groups: Option<Vec<Vec<usize>>> = windows.and_then(|w| w.groups.as_ref()).map(|g| {
+        g.groups
+            .iter()
+            .map(|grp| grp.iter().map(|t| t + 1).collect())
+            .collect()
+    });
+    crate::export::wire::Wire::on(geometry, &points, "target", groups.as_deref())
+}
+
 /// The most frames the scrubber spreads through the record, and the most first frames of a
 /// loss it adds.
 const SCRUB_SPREAD: usize = 16;

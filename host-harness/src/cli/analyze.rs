@@ -100,6 +100,10 @@ pub struct Args {
     /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
     #[arg(long)]
     pub pdf: bool,
+    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
+    /// target) and lines (`from,to`) on which report.html draws the shapes (default: lines join the targets each group tracking followed, else the targets in number order, broken at long steps).
+    #[arg(long, value_name = "FILE.csv")]
+    pub geometry: Option<std::path::PathBuf>,
     /// The targets: `$targets` blobs or `$points` windows.
     #[command(flatten)]
     pub targets: super::args::TargetArgs,
@@ -202,5 +206,6 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
         out: args.out,
         force: args.force,
         pdf: args.pdf,
+        geometry: args.geometry.clone(),
     })
 }

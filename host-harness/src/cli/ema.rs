@@ -97,6 +97,10 @@ pub struct Args {
     /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
     #[arg(long)]
     pub pdf: bool,
+    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
+    /// response) and lines (`from,to`) on which report.html draws the shapes (default: lines join the responses in number order, broken at long steps).
+    #[arg(long, value_name = "FILE.csv")]
+    pub geometry: Option<std::path::PathBuf>,
     /// Do not write the figures.
     #[arg(long)]
     pub no_plots: bool,
@@ -130,6 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out: args.out,
         force: args.force,
         pdf: args.pdf,
+        geometry: args.geometry.clone(),
         plots: !args.no_plots,
     })
     .map_err(SpecError::into_anyhow)?;

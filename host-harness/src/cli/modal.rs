@@ -140,6 +140,11 @@ pub struct Args {
     /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
     #[arg(long)]
     pub pdf: bool,
+    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
+    /// target) and lines (`from,to`) on which report.html draws the shapes (default: lines
+    /// join the targets in number order, broken at long steps).
+    #[arg(long, value_name = "FILE.csv")]
+    pub geometry: Option<PathBuf>,
     /// Do not write the figures.
     #[arg(long)]
     pub no_plots: bool,
@@ -183,6 +188,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         force: args.force,
         pdf: args.pdf,
         plots: !args.no_plots,
+        geometry: args.geometry,
     })
     .map_err(SpecError::into_anyhow)?;
     super::finish(spec.run()?, &out)

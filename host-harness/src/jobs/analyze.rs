@@ -78,6 +78,9 @@ pub struct AnalyzeInput {
     pub force: bool,
     /// Also print `report.pdf` (headless Chromium).
     pub pdf: bool,
+    /// `$geometry`: the structure's nodes and lines the page draws the shapes on (several
+    /// targets).
+    pub geometry: Option<PathBuf>,
 }
 
 /// A checked `analyze` job.
@@ -174,6 +177,7 @@ fn with_reference(
     if let Some(t) = &input.twin {
         check_twin(t, targets.is_some(), tracking.points_file.is_some())?;
     }
+    let geometry = geometry(input.geometry.as_deref(), &tracking.targets)?;
     let request = Request {
         frames: input.frames.frames,
         retime: input.frames.retime,
@@ -211,8 +215,26 @@ fn with_reference(
         out: input.out,
         force: input.force,
         pdf: input.pdf,
+        geometry,
     };
     Ok((AnalyzeSpec::Reference(Box::new(request)), warnings))
+}
+
+/// `$geometry` read and checked against the targets: a node for each, lines between them.
+#[allow(clippy::type_complexity)]
+fn geometry(
+    path: Option<&std::path::Path>,
+    targets: &Targets,
+) -> SpecResult<Option<(PathBuf, vibcam_readers::geometry::Geometry)>> {
+    if path.is_some() && *targets == Targets::Whole {
+        return Err(SpecError::setting(
+            "$geometry draws the shapes of several targets: give $targets K or $points",
+        ));
+    }
+    let g = super::read_geometry(path)?;
+    crate::analysis::track_run::wire(g.as_ref(), targets.count(), None)
+        .map_err(SpecError::Input)?;
+    Ok(g)
 }
 
 /// References take the camera's motion out of several targets only.
@@ -344,6 +366,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
     super::bands_below_nyquist(&bands, rates.fps, "the camera's")?;
     let (tracking, view, scaled) =
         super::view::tracking_and_view(input.tracking, input.view, input.mm_per_px)?;
+    let geometry = geometry(input.geometry.as_deref(), &tracking.targets)?;
     Ok(FramesRequest {
         frames: input.frames.frames,
         retime: input.frames.retime,
@@ -366,5 +389,6 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         pdf: input.pdf,
         notes: rates.notes,
         view,
+        geometry,
     })
 }

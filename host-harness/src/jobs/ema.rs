@@ -62,6 +62,8 @@ pub struct EmaInput {
     pub plots: bool,
     /// Also print `report.pdf` (headless Chromium).
     pub pdf: bool,
+    /// `$geometry`: the structure's nodes and lines the page draws the shapes on.
+    pub geometry: Option<PathBuf>,
 }
 
 /// The responses without the force's own channel when both come from one file: taken among
@@ -164,6 +166,10 @@ impl EmaSpec {
                 None => None,
             },
         };
+        let geometry = super::read_geometry(input.geometry.as_deref())?;
+        let points: Vec<usize> = (1..=aligned.responses.len()).collect();
+        let wire = crate::export::wire::Wire::on(geometry.as_ref(), &points, "response", None)
+            .map_err(SpecError::Input)?;
         Ok(EmaSpec {
             request: EmaRequest {
                 response,
@@ -173,12 +179,14 @@ impl EmaSpec {
                 inputs: [&input.response, &input.excitation]
                     .into_iter()
                     .chain(&input.poles)
+                    .chain(&input.geometry)
                     .cloned()
                     .collect(),
                 out: input.out.clone(),
                 force_out: input.force,
                 pdf: input.pdf,
                 plots: input.plots,
+                wire,
             },
         })
     }

@@ -40,3 +40,15 @@ pub struct FramesInput {
     /// Frames A..B only.
     pub frame_range: Option<FrameRange>,
 }
+
+/// `$geometry` read when given (its path and its nodes and lines); an error names the file and
+/// the row.
+pub fn read_geometry(
+    path: Option<&std::path::Path>,
+) -> SpecResult<Option<(std::path::PathBuf, vibcam_readers::geometry::Geometry)>> {
+    path.map(|p| {
+        let g = vibcam_readers::geometry::read(p).map_err(SpecError::Input)?;
+        Ok((p.to_path_buf(), g))
+    })
+    .transpose()
+}

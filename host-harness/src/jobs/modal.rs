@@ -53,6 +53,8 @@ pub struct ModalInput {
     pub pdf: bool,
     /// Draw the figures.
     pub plots: bool,
+    /// `$geometry`: the structure's nodes and lines the page draws the shapes on.
+    pub geometry: Option<PathBuf>,
 }
 
 /// What a `modal` job computed ([`ModalSpec::compute`]).
@@ -74,6 +76,8 @@ pub struct ModalSpec {
     settings: OmaSettings,
     /// With `$setup`: every setup, the first file's first.
     others: Vec<SetupRecords>,
+    /// `$geometry` read.
+    geometry: Option<(PathBuf, vibcam_readers::geometry::Geometry)>,
 }
 
 /// pLSCF's highest order (`$plscf`): as SSI's default, 20 pole pairs.
@@ -290,12 +294,26 @@ impl ModalSpec {
             input::read(&input.displacement, input.axis, input.fps).map_err(SpecError::Input)?;
         let settings = settings_for(&input, &records, &input.displacement)?;
         let others = setups(&input, &records)?;
-        Ok(ModalSpec {
+        let geometry = super::read_geometry(input.geometry.as_deref())?;
+        let spec = ModalSpec {
             input,
             records,
             settings,
             others,
-        })
+            geometry,
+        };
+        // one record: its targets are the shapes' points, so the geometry is checked now (with
+        // setups the global points are known once merged)
+        if spec.others.is_empty() {
+            spec.wire(&spec.records).map_err(SpecError::Input)?;
+        }
+        Ok(spec)
+    }
+
+    /// The lines of the page's shapes on the targets of `records`.
+    fn wire(&self, records: &Records) -> anyhow::Result<crate::export::wire::Wire> {
+        let points: Vec<usize> = records.targets.iter().map(|t| t.0).collect();
+        crate::export::wire::Wire::on(self.geometry.as_ref(), &points, "target", None)
     }
 
     /// The records read.
@@ -338,25 +356,28 @@ impl ModalSpec {
         let inputs = self.inputs();
         let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
         let provenance = vibcam_report::provenance::Provenance::now(&inputs);
+        let wire = self.wire(&c.records)?;
         let page = crate::analysis::signed_page(&provenance, &report, |report| {
             run::page(
                 &c.result,
                 &c.records,
                 ("modal", along_x),
                 (None, Vec::new(), None),
-                crate::plots::page_figures(&figures),
+                (crate::plots::page_figures(&figures), wire),
                 report,
             )
         });
         Ok((report, page))
     }
 
-    /// The files the job reads: the displacement file, the other setups' files, the poles.
+    /// The files the job reads: the displacement file, the other setups' files, the poles, the
+    /// geometry.
     fn inputs(&self) -> Vec<std::path::PathBuf> {
         let i = &self.input;
         let mut inputs = vec![i.displacement.clone()];
         inputs.extend(i.setups.iter().map(|(p, _)| p.clone()));
         inputs.extend(i.poles.clone());
+        inputs.extend(i.geometry.clone());
         inputs
     }
 
@@ -398,6 +419,7 @@ impl ModalSpec {
             frame: None,
             view: None,
             scrub: None,
+            wire: self.wire(&c.records)?,
         };
         crate::analysis::oma::run::write(&c.records, &self.settings, &c.result, &output)
     }

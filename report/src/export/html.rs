@@ -3,12 +3,14 @@
 //! shows, each part when the analysis has it: the first frame with each target's window,
 //! number and lost-frame count; the figures the command drew (tracks, spectra or singular
 //! values, stabilisation diagram, FRFs with their fit), inlined from their SVG; the table of
-//! modes (with intervals); the MAC matrix; each mode shape animated (a deformed polyline
-//! through the targets, on the frame when there is one; a scale slider, play and pause); the
+//! modes (with intervals); the MAC matrix; each mode shape animated as a wireframe ([`Wire`]:
+//! a geometry's lines and nodes, the tracking's groups, or the points in number order; on the
+//! frame when there is one, else in a plain 2-D view; a scale slider, play and pause); the
 //! pole picker of `ema` and `modal` ([`super::picker`]); and the text of `report.txt`.
 //!
 //! Elements the browser tests find: `svg#frame` with one `g.marker` per target, `table#modes`,
-//! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `polyline.shape-line` moves),
+//! `svg#mac` with `rect.mac-cell`s, one `svg.mode-shape` per mode (its `line.wire`s and
+//! `circle.shape-dot`s move; `p#wire` says where the lines come from),
 //! `button#play`, `input#scale`, `pre#report-text`, `div#banner` (no mode found, and why),
 //! `section#provenance` (the header: [`crate::provenance::html`]).
 
@@ -136,6 +138,8 @@ pub struct ShapeAnimation {
     pub shape: Vec<Complex64>,
 }
 
+pub use super::wire::{number_order, Unit, Wire};
+
 /// What a page shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Report {
@@ -157,6 +161,8 @@ pub struct Report {
     pub mac: Option<MacMatrix>,
     /// Mode shapes to animate.
     pub shapes: Vec<ShapeAnimation>,
+    /// The lines the shapes are drawn with.
+    pub wire: Wire,
     /// The text report.
     pub text: String,
     /// The frame scrubber (`track`, `analyze` with frames).
@@ -272,11 +278,12 @@ function draw(){
   var d=data.modes[m],base=data.base,amp=data.amplitude*scale,pts=[];
   for(var i=0;i<base.length;i++){
    var v=d.re[i]*Math.cos(phase)-d.im[i]*Math.sin(phase);
-   pts.push((base[i][0]+data.dir[0]*amp*v).toFixed(2)+','+(base[i][1]+data.dir[1]*amp*v).toFixed(2));
+   pts.push([(base[i][0]+data.dir[0]*amp*v).toFixed(2),(base[i][1]+data.dir[1]*amp*v).toFixed(2)]);
   }
-  svgs[m].querySelector('polyline.shape-line').setAttribute('points',pts.join(' '));
   var dots=svgs[m].querySelectorAll('circle.shape-dot');
-  for(var j=0;j<dots.length&&j<pts.length;j++){var p=pts[j].split(',');dots[j].setAttribute('cx',p[0]);dots[j].setAttribute('cy',p[1]);}
+  for(var j=0;j<dots.length&&j<pts.length;j++){dots[j].setAttribute('cx',pts[j][0]);dots[j].setAttribute('cy',pts[j][1]);}
+  var wires=svgs[m].querySelectorAll('line.wire');
+  for(var k=0;k<wires.length;k++){var a=pts[+wires[k].getAttribute('data-a')],b=pts[+wires[k].getAttribute('data-b')];if(a&&b){wires[k].setAttribute('x1',a[0]);wires[k].setAttribute('y1',a[1]);wires[k].setAttribute('x2',b[0]);wires[k].setAttribute('y2',b[1]);}}
   svgs[m].setAttribute('data-phase',phase.toFixed(4));
  }
 }
@@ -405,15 +412,7 @@ impl View {
                 (w, 300.0, pts)
             }
         };
-        let (bx0, by0, bx1, by1) = base.iter().fold(
-            (
-                f64::INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::NEG_INFINITY,
-            ),
-            |(a, b, c, d), p| (a.min(p.0), b.min(p.1), c.max(p.0), d.max(p.1)),
-        );
+        let (bx0, by0, bx1, by1) = bounds(&base);
         // the view of a shape: the frame, or the targets' bounding box with a margin
         let (vx, vy, vw, vh) = if r.frame.is_some() || base.is_empty() {
             (0.0, 0.0, w, h)
@@ -552,14 +551,72 @@ fn modes_section(s: &mut String, head: &[String], rows: &[Vec<String>]) {
     s.push_str("</table>\n");
 }
 
-/// Each mode's shape animated over the frame (or the targets' line), and the data its script
-/// reads.
+/// An SVG view box: x, y, width, height.
+type ViewBox = (f64, f64, f64, f64);
+
+/// Where a page's shapes are drawn: each point's place, the view box, whether over the frame.
+/// A geometry's nodes in millimetres give a plain view (y up); in pixels, places on the frame;
+/// without nodes, the targets where they were tracked ([`View`]).
+fn shape_places(r: &Report, view: &View) -> (Vec<(f64, f64)>, ViewBox, bool) {
+    let n = r.shapes.first().map_or(0, |m| m.shape.len());
+    let (base, plain) = match &r.wire.nodes {
+        Some((xy, Unit::Mm)) if xy.len() == n => (xy.iter().map(|p| (p.0, -p.1)).collect(), true),
+        Some((xy, Unit::Px)) if xy.len() == n => (
+            xy.iter().map(|p| (p.0 + 0.5, p.1 + 0.5)).collect(),
+            r.frame.is_none(),
+        ),
+        _ => return (view.base.clone(), view.view_box, r.frame.is_some()),
+    };
+    if !plain {
+        return (base, (0.0, 0.0, view.w, view.h), true);
+    }
+    // a margin of a fifth of the structure's size around it, and a view at least half as
+    // tall as wide (a beam along x has room to move)
+    let (x0, y0, x1, y1) = bounds(&base);
+    let m = 0.2 * (x1 - x0).max(y1 - y0).max(1e-9);
+    let (w, h) = (x1 - x0 + 2.0 * m, y1 - y0 + 2.0 * m);
+    let (w, h) = (w.max(0.5 * h), h.max(0.5 * w));
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    (base, (cx - 0.5 * w, cy - 0.5 * h, w, h), false)
+}
+
+/// The bounding box of `points`: (x min, y min, x max, y max).
+fn bounds(points: &[(f64, f64)]) -> (f64, f64, f64, f64) {
+    points.iter().fold(
+        (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ),
+        |(a, b, c, d), p| (a.min(p.0), b.min(p.1), c.max(p.0), d.max(p.1)),
+    )
+}
+
+/// Each mode's shape animated as a wireframe over the frame (or in a plain view), and the data
+/// its script reads.
 fn shapes_section(s: &mut String, r: &Report, view: &View, frame_image: Option<&str>) {
-    let (vx, vy, vw, vh) = view.view_box;
-    let base = &view.base;
-    s.push_str(
-        "<h2>Mode shapes</h2>\n<p><button id=\"play\">pause</button> scale \
+    let (base, (vx, vy, vw, vh), on_frame) = shape_places(r, view);
+    let base = &base;
+    let (lines, from) = if r.wire.from.is_empty() {
+        (
+            number_order(base),
+            "Lines join the points in number order, broken where a step is longer than 1.5 \
+             times the median step (no geometry was given)."
+                .to_string(),
+        )
+    } else {
+        (r.wire.lines.clone(), r.wire.from.clone())
+    };
+    let lines: Vec<(usize, usize)> = lines
+        .into_iter()
+        .filter(|&(a, b)| a < base.len() && b < base.len())
+        .collect();
+    let _ = write!(
+        s,
+        "<h2>Mode shapes</h2>\n<p id=\"wire\">{}</p>\n<p><button id=\"play\">pause</button> scale \
          <input id=\"scale\" type=\"range\" min=\"0\" max=\"5\" step=\"0.05\" value=\"1\"></p>\n",
+        escape(&from)
     );
     let stroke = (vw.max(vh) / 300.0).max(1.0);
     for (i, m) in r.shapes.iter().enumerate() {
@@ -570,17 +627,21 @@ fn shapes_section(s: &mut String, r: &Report, view: &View, frame_image: Option<&
             i + 1,
             if r.frame.is_some() { 540.0 } else { 360.0 }
         );
-        if let Some(img) = frame_image {
+        if let (Some(img), true) = (frame_image, on_frame) {
             let _ = write!(s, "<g opacity=\"0.6\">{img}</g>");
         }
-        let pts: Vec<String> = base.iter().map(|p| format!("{},{}", p.0, p.1)).collect();
-        let _ = write!(
-            s,
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"#bbb\" stroke-width=\"{stroke}\" stroke-dasharray=\"4\"/><polyline class=\"shape-line\" points=\"{}\" fill=\"none\" stroke=\"#e0301e\" stroke-width=\"{}\"/>",
-            pts.join(" "),
-            pts.join(" "),
-            1.5 * stroke
-        );
+        for (class, colour, width, dash) in [
+            ("wire-rest", "#bbb", stroke, " stroke-dasharray=\"4\""),
+            ("wire", "#e0301e", 1.5 * stroke, ""),
+        ] {
+            for &(a, b) in &lines {
+                let _ = write!(
+                    s,
+                    "<line class=\"{class}\" data-a=\"{a}\" data-b=\"{b}\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{colour}\" stroke-width=\"{width}\"{dash}/>",
+                    base[a].0, base[a].1, base[b].0, base[b].1
+                );
+            }
+        }
         for p in base {
             let _ = write!(
                 s,
@@ -593,7 +654,12 @@ fn shapes_section(s: &mut String, r: &Report, view: &View, frame_image: Option<&
         s.push_str("</svg></div>\n");
     }
     // the largest component moves a tenth of the view (times the slider)
-    let amplitude = 0.1 * vw.min(vh);
+    shape_data(s, r, base, 0.1 * vw.min(vh));
+}
+
+/// The data the shapes' script reads (the points' places, the motion's direction, the
+/// amplitude, each mode's complex shape) and the script.
+fn shape_data(s: &mut String, r: &Report, base: &[(f64, f64)], amplitude: f64) {
     let modes: Vec<String> = r
         .shapes
         .iter()

@@ -41,6 +41,7 @@ pub mod signals;
 pub mod study;
 pub mod targets;
 pub mod uff;
+pub mod wire;
 
 use std::path::Path;
 

@@ -28,7 +28,8 @@ pub struct EmaRequest {
     pub aligned: Aligned,
     /// The analysis settings.
     pub settings: EmaSettings,
-    /// The input files: the response, the excitation, then the poles file when given.
+    /// The input files: the response, the excitation, then the poles and the geometry files
+    /// when given.
     pub inputs: Vec<PathBuf>,
     /// Output directory.
     pub out: PathBuf,
@@ -38,6 +39,8 @@ pub struct EmaRequest {
     pub force_out: bool,
     /// Draw the figures.
     pub plots: bool,
+    /// The lines the page draws the shapes with (on the responses).
+    pub wire: crate::export::wire::Wire,
 }
 
 /// The analysis of `req` and its report, nothing written.
@@ -161,6 +164,7 @@ pub fn page(
         modes: (!rows.is_empty()).then_some((head, rows)),
         mac,
         shapes,
+        wire: req.wire.clone(),
         text: text.to_string(),
         picker,
         banner: crate::analysis::oma::run::no_mode_banner(r.modes.is_empty(), &rejected(r)),

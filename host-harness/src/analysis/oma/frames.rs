@@ -46,6 +46,9 @@ pub struct FramesRequest {
     pub force: bool,
     /// Also print `report.pdf`.
     pub pdf: bool,
+    /// `$geometry`: the structure's nodes and lines the page draws the shapes on (its path,
+    /// its content; checked against the targets).
+    pub geometry: Option<(PathBuf, vibcam_readers::geometry::Geometry)>,
     /// Notes on the frames' rate.
     pub notes: Vec<String>,
     /// Static references and the scale from the scene.
@@ -175,6 +178,18 @@ fn records_of(
     Ok((records, mm, lost))
 }
 
+/// The lines the page draws the shapes with: on every target (`$geometry`'s, or the groups
+/// tracking followed), then on the targets kept (the shapes' points).
+pub fn wire(req: &FramesRequest, c: &Computed) -> anyhow::Result<crate::export::wire::Wire> {
+    let kept: Vec<usize> = c.records.targets.iter().map(|t| t.0 - 1).collect();
+    let all = crate::analysis::track_run::wire(
+        req.geometry.as_ref(),
+        c.tracks.first.len(),
+        c.viewed.windows.as_ref(),
+    )?;
+    Ok(all.keep(&kept))
+}
+
 /// Tracks the targets and runs the output-only analysis; writes its outputs.
 pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     let found = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?;
@@ -203,6 +218,8 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     );
     let mut inputs = vec![PathBuf::from(&req.frames)];
     inputs.extend(req.points_file.clone());
+    inputs.extend(req.geometry.as_ref().map(|g| g.0.clone()));
+    let wire = wire(req, &c)?;
     let mut preamble = format!(
         "frames: {} ({} frames at {} fps), no accelerometer: output-only analysis\n",
         req.frames, n, req.fps
@@ -235,6 +252,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
                 .and_then(|(_, f)| f.to_image().ok()),
             view: Some((&c.viewed, req.fps)),
             scrub: crate::analysis::track_run::scrubber(&source, req.fps, &c.viewed),
+            wire,
         },
     )
 }

@@ -41,6 +41,8 @@ pub struct Output<'a> {
     pub view: Option<(&'a crate::analysis::view::Viewed, f64)>,
     /// The frame scrubber, from frames.
     pub scrub: Option<crate::export::scrub::Scrubber>,
+    /// The lines the shapes are drawn with (on the records' targets).
+    pub wire: crate::export::wire::Wire,
 }
 
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
@@ -96,7 +98,7 @@ pub fn write(
                     .unwrap_or_default(),
                 o.scrub.clone(),
             ),
-            figures,
+            (figures, o.wire.clone()),
             report,
         )
     })?;
@@ -144,8 +146,8 @@ pub fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crat
 }
 
 /// `report.html`: the targets (on the first frame when there is one), the modes with their
-/// intervals, the MAC of their shapes, each shape animated, the figures (caption, SVG), the
-/// report `text`. `command` names the page (`modal`, `analyze`); `along_x` the motion's axis.
+/// intervals, the MAC of their shapes, each shape animated on `wire`, the figures (caption,
+/// SVG), the report `text`. `command` names the page (`modal`, `analyze`); `along_x` the motion's axis.
 pub fn page(
     r: &OmaResult,
     records: &Records,
@@ -155,7 +157,7 @@ pub fn page(
         Vec<crate::export::html::ReferenceMarker>,
         Option<crate::export::scrub::Scrubber>,
     ),
-    figures: Vec<(String, String)>,
+    (figures, wire): (Vec<(String, String)>, crate::export::wire::Wire),
     text: &str,
 ) -> crate::export::html::Report {
     use crate::export::html::{mac_and_animations, Report};
@@ -197,6 +199,7 @@ pub fn page(
         modes: (!rows.is_empty()).then_some((head, rows)),
         mac,
         shapes,
+        wire,
         text: text.to_string(),
         scrub,
         picker,
