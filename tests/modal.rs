@@ -11,7 +11,11 @@ use std::path::Path;
 fn field_record(dir: &Path, minutes: u32, seed: u32) -> std::path::PathBuf {
     assert_ok(&harness(&words(
         "simulate-field --minutes {} --seed {} --out {}",
-        &[&minutes.to_string(), &seed.to_string(), dir.to_str().unwrap()],
+        &[
+            &minutes.to_string(),
+            &seed.to_string(),
+            dir.to_str().unwrap(),
+        ],
     )));
     dir.join("displacement.csv")
 }
