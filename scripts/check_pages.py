@@ -215,6 +215,13 @@ def check_report(drv, path, markers, modes, what, rows=None, header=None):
             check(places() == c, f"{what}: pause stops it")
             check(drv.find_element(By.ID, "wire").text.strip() != "",
                   f"{what}: the page says where the shapes' lines come from")
+    if drv.find_elements(By.ID, "mac"):
+        out = drv.execute_script(
+            "var s=document.getElementById('mac').getBoundingClientRect();"
+            "return Array.from(document.querySelectorAll('svg#mac text')).filter(function(t){"
+            "var r=t.getBoundingClientRect();return r.left<s.left-0.5||r.right>s.right+0.5||"
+            "r.top<s.top-0.5||r.bottom>s.bottom+0.5;}).map(function(t){return t.textContent;});")
+        check(out == [], f"{what}: every MAC label within its figure {out}")
     check(drv.find_element(By.ID, "report-text").text.strip() != "", f"{what}: the report")
 
 

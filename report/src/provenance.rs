@@ -102,6 +102,22 @@ pub fn current_invocation() -> Option<Invocation> {
     INVOCATION.with(|c| c.borrow().clone())
 }
 
+/// The files `inputs` name, each once (the force and the responses in one DAQ file are one
+/// input), a Photron header followed by the `.mraw` beside it that holds its frames.
+fn with_companions(inputs: &[&Path]) -> Vec<std::path::PathBuf> {
+    let mut out: Vec<std::path::PathBuf> = Vec::new();
+    for p in inputs {
+        let mraw = p.with_extension("mraw");
+        let companion = vibcam_readers::frames::photron::is_header(p) && mraw.is_file();
+        for f in std::iter::once(p.to_path_buf()).chain(companion.then_some(mraw)) {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+    }
+    out
+}
+
 impl Provenance {
     /// The block for a report written now, from `inputs` (hashed here) and the invocation
     /// stated on this thread.
@@ -110,7 +126,10 @@ impl Provenance {
             date_utc: date_utc(),
             version: version(),
             invocation: current_invocation(),
-            inputs: inputs.iter().map(|p| input_file(p)).collect(),
+            inputs: with_companions(inputs)
+                .iter()
+                .map(|p| input_file(p))
+                .collect(),
             machine: machine(),
         }
     }
@@ -400,6 +419,26 @@ mod tests {
         assert_eq!(current_invocation(), None);
         let page = html(&Provenance::now(&[]), |s| s.replace('<', "&lt;"));
         assert!(page.contains("not stated"));
+    }
+
+    #[test]
+    fn a_file_given_twice_is_one_input_and_a_photron_header_brings_its_frames() {
+        let tmp = std::env::temp_dir().join(format!("vibcam-twice-{}.lvm", std::process::id()));
+        std::fs::write(&tmp, b"force and response").unwrap();
+        let p = Provenance::now(&[tmp.as_path(), tmp.as_path()]);
+        std::fs::remove_file(&tmp).unwrap();
+        assert_eq!(p.inputs.len(), 1);
+        assert_eq!(p.text().matches("input: ").count(), 1);
+        // a Photron header brings the frames beside it
+        let cih = std::env::temp_dir().join(format!("vibcam-rec-{}.cih", std::process::id()));
+        std::fs::write(&cih, b"#Camera Information Header").unwrap();
+        std::fs::write(cih.with_extension("mraw"), b"frames").unwrap();
+        let p = Provenance::now(&[cih.as_path()]);
+        std::fs::remove_file(cih.with_extension("mraw")).unwrap();
+        std::fs::remove_file(&cih).unwrap();
+        let names: Vec<&str> = p.inputs.iter().map(|i| i.path.as_str()).collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        assert!(names[1].ends_with(".mraw"), "{names:?}");
     }
 
     #[test]

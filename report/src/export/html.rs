@@ -690,10 +690,14 @@ fn mac_section(s: &mut String, labels: &[String], m: &[Vec<f64>]) {
     let cell = 40.0;
     let pad = 110.0;
     let size = pad + cell * n as f64;
+    // the column labels lean right at 60 degrees: the last one reaches past the grid by half
+    // its length (11 px text, 0.6 em a character)
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
+    let wide = size + (0.5 * 0.6 * 11.0 * longest - 0.4 * cell).max(0.0);
     let _ = write!(
         s,
-        "<h2>MAC of the mode shapes</h2>\n<svg id=\"mac\" viewBox=\"0 0 {size} {size}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\" font-size=\"11\">",
-        size.min(700.0)
+        "<h2>MAC of the mode shapes</h2>\n<svg id=\"mac\" viewBox=\"0 0 {wide} {size}\" width=\"{}\" xmlns=\"http://www.w3.org/2000/svg\" font-size=\"11\">",
+        wide.min(700.0 * wide / size)
     );
     for (i, row) in m.iter().enumerate() {
         let _ = write!(
