@@ -346,15 +346,18 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     )));
     let truth = truth(&rec);
     let frames = format!("{r}/frames");
+    // tracked and analysed in one run (`analyze` without an accelerometer: `track`'s
+    // displacement.csv and `modal`'s outputs, one tracking of the 184 HD frames, not two)
     let grouped = tmp.path().join("grouped");
-    assert_ok(&harness(&words(
-        "track --frames {} --fps 23 --points {} --tracker lk --search-px 130 --out {}",
+    let o = harness(&words(
+        "analyze --frames {} --fps 23 --points {} --tracker lk --search-px 130 --axis x --out {}",
         &[
             &frames,
             rec.join("points.csv").to_str().unwrap(),
             grouped.to_str().unwrap(),
         ],
-    )));
+    ));
+    let report = assert_says(&o, &["regime: 2 free decay(s)"]);
     let rows = displacement(&grouped);
     assert_eq!(rows.len(), 184 * 28);
     let (worst, lost) = worst_and_lost(&rows, &truth);
@@ -363,19 +366,7 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     assert!(worst < 1.0, "worst {worst} px");
     // the free decays of that track give the structure's mode by default (3.6 Hz, damping
     // 10 %; before the decay method, no mode): measured 3.6000 Hz, 0.1000
-    let modal = tmp.path().join("modal");
-    let o = harness(&words(
-        "modal --displacement {} --axis x --out {}",
-        &[
-            tmp.path()
-                .join("grouped/displacement.csv")
-                .to_str()
-                .unwrap(),
-            modal.to_str().unwrap(),
-        ],
-    ));
-    let report = assert_says(&o, &["regime: 2 free decay(s)"]);
-    let decay: Vec<Vec<String>> = crate::util::modes_csv_rows(&modal)
+    let decay: Vec<Vec<String>> = crate::util::modes_csv_rows(&grouped)
         .into_iter()
         .filter(|c| c[9] == "decay")
         .collect();
@@ -386,22 +377,13 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         "{f} Hz, {z}"
     );
     // no FDD line far from the mode (the pull's quasi-static line is no mode)
-    for c in crate::util::modes_csv_rows(&modal) {
+    for c in crate::util::modes_csv_rows(&grouped) {
         let f: f64 = c[5].parse().unwrap();
         assert!((f - 3.6).abs() < 0.5, "{} at {f} Hz: {report}", c[9]);
     }
-    // analysed from the frames, the shapes are drawn storey by storey (the points file's
-    // groups, each joined in order: 4 x 6 lines), not zig-zagging from one storey to the next
-    let analyzed = tmp.path().join("analyzed");
-    assert_ok(&harness(&words(
-        "analyze --frames {} --fps 23 --points {} --tracker lk --search-px 130 --axis x --out {}",
-        &[
-            &frames,
-            rec.join("points.csv").to_str().unwrap(),
-            analyzed.to_str().unwrap(),
-        ],
-    )));
-    let page = std::fs::read_to_string(analyzed.join("report.html")).unwrap();
+    // the shapes are drawn storey by storey (the points file's groups, each joined in order:
+    // 4 x 6 lines), not zig-zagging from one storey to the next
+    let page = std::fs::read_to_string(grouped.join("report.html")).unwrap();
     let shapes = page.matches("<svg class=\"mode-shape\"").count();
     assert!(shapes >= 1, "no shape drawn");
     assert_eq!(page.matches("<line class=\"wire\"").count(), 24 * shapes);
