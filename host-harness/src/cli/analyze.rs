@@ -96,14 +96,9 @@ pub struct Args {
     /// it, and it holds no input of this run), as a whole. A failed run replaces nothing.
     #[arg(long)]
     pub force: bool,
-    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
-    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
-    #[arg(long)]
-    pub pdf: bool,
-    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
-    /// target) and lines (`from,to`) on which report.html draws the shapes (default: lines join the targets each group tracking followed, else the targets in number order, broken at long steps).
-    #[arg(long, value_name = "FILE.csv")]
-    pub geometry: Option<std::path::PathBuf>,
+    /// `--pdf` and `--geometry`: what the page is printed to and drawn on.
+    #[command(flatten)]
+    pub page: super::args::PageArgs,
     /// The targets: `$targets` blobs or `$points` windows.
     #[command(flatten)]
     pub targets: super::args::TargetArgs,
@@ -205,7 +200,7 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
         }),
         out: args.out,
         force: args.force,
-        pdf: args.pdf,
-        geometry: args.geometry.clone(),
+        pdf: args.page.pdf,
+        geometry: args.page.geometry.clone(),
     })
 }

@@ -571,3 +571,18 @@ impl Recording {
         )
     }
 }
+
+/// The page's flags of `analyze`, `modal` and `ema`: printed to PDF, drawn on a geometry.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PageArgs {
+    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
+    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
+    #[arg(long)]
+    pub pdf: bool,
+    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
+    /// target, for `ema` per response) and lines (`from,to`) on which report.html draws the
+    /// shapes (default: the groups tracking followed, else the points in number order, broken
+    /// at long steps).
+    #[arg(long, value_name = "FILE.csv")]
+    pub geometry: Option<std::path::PathBuf>,
+}

@@ -136,15 +136,9 @@ pub struct Args {
     /// Replace --out if it is an earlier output of `modal` (as a whole).
     #[arg(long)]
     pub force: bool,
-    /// Also write report.pdf, report.html printed by a headless Chromium (chromium or
-    /// google-chrome on PATH, or VIBCAM_CHROMIUM); a warning when there is none.
-    #[arg(long)]
-    pub pdf: bool,
-    /// The structure's geometry: nodes (`node,x_mm,y_mm` or `node,x_px,y_px`, a node per
-    /// target) and lines (`from,to`) on which report.html draws the shapes (default: lines
-    /// join the targets in number order, broken at long steps).
-    #[arg(long, value_name = "FILE.csv")]
-    pub geometry: Option<PathBuf>,
+    /// `--pdf` and `--geometry`: what the page is printed to and drawn on.
+    #[command(flatten)]
+    pub page: super::args::PageArgs,
     /// Do not write the figures.
     #[arg(long)]
     pub no_plots: bool,
@@ -186,9 +180,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         out: args.out,
         force: args.force,
-        pdf: args.pdf,
+        pdf: args.page.pdf,
         plots: !args.no_plots,
-        geometry: args.geometry,
+        geometry: args.page.geometry.clone(),
     })
     .map_err(SpecError::into_anyhow)?;
     super::finish(spec.run()?, &out)
