@@ -855,6 +855,28 @@ fn shapes_are_drawn_on_the_geometry_given_and_a_wrong_one_is_refused() {
     let page = std::fs::read_to_string(plain.join("report.html")).unwrap();
     assert!(page.contains("Lines join the points in number order"));
     assert_eq!(page.matches("<line class=\"wire\"").count(), 4 * shapes);
+    // a sixth target left out of the analysis (constant): its node is no error, its lines go
+    let text = std::fs::read_to_string(disp).unwrap();
+    let six: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| format!("{l},{}\n", if i == 0 { "6" } else { "0" }))
+        .collect();
+    let six_csv = tmp.path().join("six.csv");
+    std::fs::write(&six_csv, six).unwrap();
+    std::fs::write(
+        &geometry,
+        format!("node,x_mm,y_mm\n{nodes}6,0,18000\nfrom,to\n{lines}5,6\n"),
+    )
+    .unwrap();
+    let left = tmp.path().join("left");
+    assert_ok(&harness(&words(
+        "modal --displacement {} --nperseg 512 --geometry {} --out {}",
+        &[six_csv.to_str().unwrap(), g, left.to_str().unwrap()],
+    )));
+    let page = std::fs::read_to_string(left.join("report.html")).unwrap();
+    let n = page.matches("<svg class=\"mode-shape\"").count();
+    assert_eq!(page.matches("<line class=\"wire\"").count(), 4 * n);
     // a node that is no target, and a row that is no node: refused before any work, named
     let refuse = |text: &str, needle: &str| {
         std::fs::write(&geometry, text).unwrap();

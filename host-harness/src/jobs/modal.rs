@@ -310,10 +310,14 @@ impl ModalSpec {
         Ok(spec)
     }
 
-    /// The lines of the page's shapes on the targets of `records`.
+    /// The lines of the page's shapes on the targets of `records`: the geometry is checked
+    /// against every target of the file (a node of a target left out, too lost or constant, is
+    /// no error), then kept on the targets analysed (the shapes' points).
     fn wire(&self, records: &Records) -> anyhow::Result<crate::export::wire::Wire> {
-        let points: Vec<usize> = records.targets.iter().map(|t| t.0).collect();
-        crate::export::wire::Wire::on(self.geometry.as_ref(), &points, "target", None)
+        let kept = records.targets.iter().map(|t| t.0);
+        let points: Vec<usize> = kept.chain(records.left_out.iter().map(|t| t.0)).collect();
+        let all = crate::export::wire::Wire::on(self.geometry.as_ref(), &points, "target", None)?;
+        Ok(all.keep(&(0..records.targets.len()).collect::<Vec<_>>()))
     }
 
     /// The records read.
