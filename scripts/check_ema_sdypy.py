@@ -7,6 +7,10 @@ shapes (modal constants) within a MAC of 0.99 of ours (modes.csv, shapes.csv).
 
     python3 scripts/check_ema_sdypy.py EMA_OUT_DIR [--lower HZ] [--upper HZ] [--order N]
 
+A roving-hammer test's frf.uff (several reference nodes, the points hit) is fitted as one set
+of FRFs; each mode's constants form a matrix (responses x hit points) whose dominant singular
+vector, over the larger of the two sets as `ema` gives it, is compared with ours.
+
 The FRFs must be those the modes were fitted on: an `ema` run without an exponential window
 (`--exp-window off`; with one, frf.uff holds the windowed FRFs and ours have its damping
 removed). Runs inside the virtual environment of scripts/check_uff.py ($CHECK_UFF_VENV, else
@@ -65,7 +69,11 @@ def main():
               and s["orddenom_spec_data_type"] == 13,
               f"response node {s['rsp_node']}: an FRF (type 4) of displacement (8) over "
               f"force (13)")
-    sets.sort(key=lambda s: s["rsp_node"])
+    sets.sort(key=lambda s: (s["ref_node"], s["rsp_node"]))
+    refs = sorted({s["ref_node"] for s in sets})
+    rsps = sorted({s["rsp_node"] for s in sets})
+    check(len(sets) == len(refs) * len(rsps),
+          f"{len(sets)} FRFs: {len(rsps)} responses x {len(refs)} reference nodes {refs}")
     freq = np.asarray(sets[0]["x"])
     frf = np.array([np.asarray(s["data"]) for s in sets])
     f_modes = [m[0] for m in modes]
@@ -85,6 +93,10 @@ def main():
         check(abs(z_s - z) <= 0.05 * z,
               f"mode {i + 1}: sdypy-EMA damping {z_s:.6f}, ema {z:.6f} (within 5 %)")
         a = np.asarray(model.A[:, i])
+        if len(refs) > 1:
+            # the constants as a matrix, responses x hit points, and its dominant vector
+            u, _, vh = np.linalg.svd(a.reshape(len(refs), len(rsps)).T)
+            a = vh[0, :] if len(refs) > len(rsps) else u[:, 0]
         ours = np.array([shapes[i + 1][t] for t in sorted(shapes[i + 1])])
         mac = abs(np.vdot(a, ours)) ** 2 / (np.vdot(a, a).real * np.vdot(ours, ours).real)
         check(mac >= 0.99, f"mode {i + 1}: MAC of the shapes {mac:.5f} (>= 0.99)")

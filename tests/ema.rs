@@ -38,6 +38,7 @@ fn write_test(dir: &Path, extra: &[&str]) -> HammerTest {
         clip_n: None,
         force_noise_n: 0.3,
         camera_noise_mm: 0.0005,
+        hit_points: Vec::new(),
         seed: 1,
     }
     .test()
@@ -269,6 +270,7 @@ fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
         clip_n: None,
         force_noise_n: 0.0,
         camera_noise_mm: 0.0,
+        hit_points: Vec::new(),
         seed: 1,
     }
     .test();
@@ -649,4 +651,110 @@ fn poles_given_are_exactly_the_modes_and_an_earlier_modes_csv_is_a_poles_file() 
         &ema(dir.path(), "both", &["--poles", p, "--bands", "20-30"]),
         "--bands and --poles",
     );
+}
+
+/// `ema --roving P=camera_P.csv,force_P.csv` for each point of `points` in `dir`, into `out`,
+/// with `extra`.
+fn ema_roving(dir: &Path, points: &[usize], out: &Path, extra: &[&str]) -> std::process::Output {
+    let records: Vec<String> = points
+        .iter()
+        .map(|p| {
+            let (c, f) = (
+                dir.join(format!("camera_{p}.csv")),
+                dir.join(format!("force_{p}.csv")),
+            );
+            format!("{p}={},{}", c.display(), f.display())
+        })
+        .collect();
+    let mut args = vec!["ema"];
+    for r in &records {
+        args.extend(["--roving", r.as_str()]);
+    }
+    args.extend(words(
+        "--excitation-col force_n --f-max-hz 200 --no-plots --force --out {}",
+        &[out.to_str().unwrap()],
+    ));
+    args.extend_from_slice(extra);
+    harness(&args)
+}
+
+#[test]
+fn a_roving_hammer_gives_the_modes_and_the_shapes_over_the_hit_points() {
+    let dir = std::env::temp_dir().join(format!("vibcam-roving-{}", std::process::id()));
+    // a DAQ at 10 kHz still samples the 0.6 ms pulses 6 times
+    let o = harness(&words(
+        "simulate-hammer --hit-points 1,2,3,4,5 --daq-hz 10000 --out {} --force",
+        &[dir.join("h").to_str().unwrap()],
+    ));
+    assert_says(&o, &["force_P.csv and camera_P.csv for P = 1, 2, 3, 4, 5"]);
+    let h = dir.join("h");
+    let all = [1, 2, 3, 4, 5];
+    // one fixed transducer (point 4) and the hammer at every point: the shapes over the hit
+    // points, by reciprocity the structure's at all five
+    let out = dir.join("one");
+    let o = ema_roving(&h, &all, &out, &["--impact", "--response-col", "p4"]);
+    assert_ok(&o);
+    check_modes(
+        &out,
+        &HammerTest::three_modes(Vec::new()),
+        "roving, one response",
+    );
+    let frf = std::fs::read_to_string(out.join("frf.csv")).unwrap();
+    let mut lines = frf.lines();
+    assert_eq!(
+        lines.next(),
+        Some("freq_hz,target,hit_point,re,im,abs,coherence")
+    );
+    let first: Vec<(String, String)> = lines
+        .take(5)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[1].to_string(), c[2].to_string())
+        })
+        .collect();
+    let want: Vec<(String, String)> = all.iter().map(|p| ("1".into(), p.to_string())).collect();
+    assert_eq!(first, want, "one FRF per hit point at each line");
+    let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
+    for needle in [
+        "roving hammer: 5 records, one per hit point",
+        "hit points (the `hit_point` of frf.csv, the `target` of shapes.csv)",
+        "jackknife over the groups of every record's hits",
+        "s for all (the shortest their hits allow)",
+    ] {
+        assert!(report.contains(needle), "`{needle}` not in {report}");
+    }
+    // the modes have intervals holding the truth
+    let modes = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+    for (l, m) in modes
+        .lines()
+        .skip(1)
+        .zip(&HammerTest::three_modes(Vec::new()).modes)
+    {
+        let c: Vec<&str> = l.split(',').collect();
+        let (f, lo, hi): (f64, f64, f64) = (
+            c[5].parse().unwrap(),
+            c[11].parse().unwrap(),
+            c[12].parse().unwrap(),
+        );
+        assert!(lo < f && f < hi && (hi - lo) < 0.01 * m.f_hz, "{l}");
+    }
+    // what a roving test cannot be
+    let o = ema_roving(&h, &[1, 2, 2], &dir.join("twice"), &["--impact"]);
+    assert_exit_2(&o, "--roving: hit point 2 is given twice");
+    let o = ema_roving(&h, &[1, 2], &dir.join("cont"), &[]);
+    assert_exit_2(&o, "--roving: a roving-hammer test is an impact test");
+    assert!(!dir.join("twice").exists() && !dir.join("cont").exists());
+    // a record whose force another DAQ took at another rate
+    let o = harness(&words(
+        "simulate-hammer --hit-points 3 --daq-hz 20000 --out {} --force",
+        &[dir.join("other").to_str().unwrap()],
+    ));
+    assert_ok(&o);
+    std::fs::copy(dir.join("other/force_3.csv"), h.join("force_3.csv")).unwrap();
+    let o = ema_roving(&h, &[1, 2, 3], &dir.join("rates"), &["--impact"]);
+    assert_exit_2(
+        &o,
+        "its records are analysed at 20000 Hz, the first record's at 10000 Hz",
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -115,6 +115,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("free", "calibrate --observed a.csv --out o"),
     ("from", "upsample --input a.csv --col a --from 10 --to 5 --out o.csv"),
     ("fs", "analyze --frames fr --fps 120 --accel a.csv --threshold 100 --out o"),
+    ("roving", "ema --roving 1=a.csv --roving 1=a.csv --impact --out o"),
     ("geometry", "analyze --frames fr --fps 120 --threshold 100 --geometry a.csv --out o"),
     ("gate_px", "track --frames fr --fps 120 --points p.csv --gate-px 3 --threshold 10 --out o"),
     ("impact", "ema --response a.csv --excitation a.csv --exp-window 0.5 --out o"),

@@ -58,6 +58,21 @@ pub struct HammerTest {
 /// Points of [`HammerTest::three_modes`].
 pub const THREE_MODE_POINTS: usize = 5;
 
+impl Hit {
+    /// Hits of these peak forces (N), one every 3 s from 0.2 s, 0.6 ms wide each.
+    pub fn every_3_s(peaks_n: &[f64]) -> Vec<Hit> {
+        peaks_n
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| Hit {
+                t_s: 0.2 + 3.0 * i as f64,
+                width_s: 0.0006,
+                peak_n: p,
+            })
+            .collect()
+    }
+}
+
 impl HammerTest {
     /// A structure of three modes (23 Hz 1.5 %, 61.5 Hz 1.0 %, 118 Hz 0.8 %) seen at five
     /// points (the shapes of a beam's first three bending modes, `sin(r pi (o + 0.7) / 6)`),

@@ -1286,7 +1286,7 @@ fn modal_dict<'py>(
 /// `host-harness ema`; returns a dict of arrays (the Python half's `EmaResult`). With `out`
 /// the command's files are written there too.
 #[pyfunction]
-#[pyo3(signature = (response, excitation, response_cols=Vec::new(), response_fs=None,
+#[pyo3(signature = (response, excitation, roving=Vec::new(), response_cols=Vec::new(), response_fs=None,
     excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
     max_order=48, nperseg=None, out=None, force=false, poles=None, pdf=false, geometry=None,
@@ -1296,6 +1296,7 @@ fn ema<'py>(
     py: Python<'py>,
     response: String,
     excitation: String,
+    roving: Vec<(usize, String, String)>,
     response_cols: Vec<String>,
     response_fs: Option<f64>,
     excitation_col: Option<String>,
@@ -1317,7 +1318,7 @@ fn ema<'py>(
     geometry: Option<String>,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use host_harness::jobs::{EmaInput, EmaSpec};
+    use host_harness::jobs::EmaInput;
     let (exp, form) = ema_choices(exp_window, response_quantity)?;
     let write = out.is_some();
     let input = EmaInput {
@@ -1325,6 +1326,16 @@ fn ema<'py>(
         response_cols,
         response_fs,
         excitation: excitation.into(),
+        roving: roving
+            .into_iter()
+            .map(
+                |(point, response, excitation)| host_harness::jobs::RovingRecord {
+                    point,
+                    response: response.into(),
+                    excitation: excitation.into(),
+                },
+            )
+            .collect(),
         excitation_col,
         excitation_fs,
         impact,
@@ -1344,44 +1355,67 @@ fn ema<'py>(
         pdf,
         geometry: geometry.map(std::path::PathBuf::from),
     };
-    let (r, report, names, html) = py
-        .allow_threads(|| {
-            stated(call, || -> anyhow::Result<_> {
-                let spec = EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
-                let names = spec.request().response.names.clone();
-                if write {
-                    spec.run()?;
-                }
-                let (r, report) = spec.compute()?;
-                // the command's page, its figures drawn in memory
-                let figures = host_harness::analysis::ema::run::figures(spec.request(), &r)?;
-                let (report, html) = signed_spelled(&spec.request().inputs, &report, |report| {
-                    host_harness::analysis::ema::run::page(
-                        spec.request(),
-                        &r,
-                        report,
-                        host_harness::plots::page_figures(&figures),
-                    )
-                });
-                Ok((r, report, names, html))
-            })
-        })
+    let done = py
+        .allow_threads(|| stated(call, || ema_computed(input, write)))
         .map_err(py_err)?;
-    ema_dict(py, &r, report, names, html)
+    ema_dict(py, done)
+}
+
+/// What `ema` computed: the result, the report and the page (each setting spelled for
+/// Python), the responses' names and the points the shapes stand at.
+struct EmaDone {
+    r: host_harness::analysis::ema::EmaResult,
+    report: String,
+    html: String,
+    names: Vec<String>,
+    points: Vec<usize>,
+}
+
+/// `ema`'s job of `input` run (its files written too with `write`) and its page built.
+fn ema_computed(input: host_harness::jobs::EmaInput, write: bool) -> anyhow::Result<EmaDone> {
+    use host_harness::analysis::ema::run;
+    let spec = host_harness::jobs::EmaSpec::new(input).map_err(SpecError::into_anyhow)?;
+    if write {
+        spec.run()?;
+    }
+    let (r, report) = spec.compute()?;
+    // the command's page, its figures drawn in memory
+    let figures = run::figures(spec.request(), &r)?;
+    let (report, html) = signed_spelled(&spec.request().inputs, &report, |report| {
+        run::page(
+            spec.request(),
+            &r,
+            report,
+            host_harness::plots::page_figures(&figures),
+        )
+    });
+    let points = (0..r.modes.first().map_or(0, |m| m.shape.len()))
+        .map(|i| run::shape_at(spec.request(), &r, i))
+        .collect();
+    Ok(EmaDone {
+        names: spec.request().response.names.clone(),
+        points,
+        r,
+        report,
+        html,
+    })
 }
 
 /// The dict `ema` returns: modes, shapes, spectra, notes, the hits left out, the report and
 /// the page.
-fn ema_dict<'py>(
-    py: Python<'py>,
-    r: &host_harness::analysis::ema::EmaResult,
-    report: String,
-    names: Vec<String>,
-    html: String,
-) -> PyResult<Bound<'py, PyDict>> {
+fn ema_dict(py: Python<'_>, done: EmaDone) -> PyResult<Bound<'_, PyDict>> {
+    let EmaDone {
+        r,
+        report,
+        html,
+        names,
+        points,
+    } = done;
+    let r = &r;
     let d = PyDict::new(py);
     d.set_item("modes", ema_modes(py, r)?)?;
-    let (shapes, abs_u) = ema_shapes(r, names.len());
+    let (shapes, abs_u) = ema_shapes(r, points.len().max(names.len()));
+    d.set_item("shape_points", points)?;
     d.set_item("shapes", shapes.into_pyarray(py))?;
     d.set_item("shapes_abs_u", abs_u.into_pyarray(py))?;
     d.set_item("responses", names)?;
@@ -1470,7 +1504,8 @@ fn ema_modes<'py>(
     Ok(modes)
 }
 
-/// Each mode's shape over the `k` responses, and its modulus's standard uncertainty.
+/// Each mode's shape over its `k` points (responses, or a roving hammer's hit points), and its
+/// modulus's standard uncertainty.
 fn ema_shapes(
     r: &host_harness::analysis::ema::EmaResult,
     k: usize,

@@ -129,3 +129,25 @@ def test_poles_given_as_an_earlier_modes_csv_give_exactly_those_modes(hammer, tm
                    impact=True, f_max_hz=200, poles=picked)
     f_all, f = list(r.modes["f_hz"]), list(p.modes["f_hz"])
     assert f == pytest.approx([f_all[0], f_all[2]], rel=1e-12)
+
+
+def test_a_roving_hammer_gives_the_shapes_over_the_hit_points(harness, tmp_path):
+    d = tmp_path / "roving"
+    r = harness("simulate-hammer", "--hit-points", "1,2,3,4,5", "--daq-hz", "10000",
+                "--out", str(d))
+    assert r.returncode == 0, r.stderr
+    records = [(p, d / f"camera_{p}.csv", d / f"force_{p}.csv") for p in range(1, 6)]
+    r = vibcam.ema(roving=records, response_cols=["p4"], excitation_col="force_n",
+                   impact=True, f_max_hz=200)
+    assert r.shape_points == [1, 2, 3, 4, 5] and r.responses == ["p4"]
+    assert r.shapes.shape == (3, 5) and r.h1.shape == (5, len(r.freq_hz))
+    for i, (f, z, shape) in enumerate(truth(d)):
+        assert abs(r.modes["f_hz"][i] - f) < 1e-3 * f
+        assert mac(r.shapes[i], shape) > 0.99
+    assert "roving hammer: 5 records" in r.report
+    with pytest.raises(ValueError, match="instead of response and excitation"):
+        vibcam.ema(d / "camera_1.csv", d / "force_1.csv", roving=records, impact=True)
+    with pytest.raises(ValueError, match="the hit point 0"):
+        vibcam.ema(roving=[(0, d / "camera_1.csv", d / "force_1.csv")], impact=True)
+    with pytest.raises(vibcam.InputError, match="roving: hit point 2 is given twice"):
+        vibcam.ema(roving=records[:2] + records[1:2], excitation_col="force_n", impact=True)

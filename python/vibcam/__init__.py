@@ -710,8 +710,10 @@ class EmaResult:
     ``f_hz_hi``, ``damping_u``, ``damping_lo``, ``damping_hi``, NaN where not estimated);
     ``shapes``: complex ``(modes, responses)``, the LSFD residues normalised (largest
     component 1); ``shapes_abs_u``: the standard uncertainty of each component's magnitude;
-    ``responses``: the responses' names (the columns); ``freq_hz``, ``h1``, ``h2``,
-    ``coherence``: the FRFs per response and line; ``hits_left_out``: each hit of an impact test
+    ``responses``: the responses' names; ``shape_points``: the point each shape column stands at
+    (the responses' numbers, or a roving hammer's hit points when they outnumber the
+    responses); ``freq_hz``, ``h1``, ``h2``, ``coherence``: the FRFs per response and line (a
+    roving hammer's: per hit point, then per response); ``hits_left_out``: each hit of an impact test
     not used, with the reason (a double hit, a clipped force); ``notes``; ``report``: the text
     of ``report.txt`` after its header (the page's header names the call, the inputs' SHA-256
     and the settings).
@@ -728,6 +730,7 @@ class EmaResult:
     report: str
     notes: list = _field(default_factory=list)
     hits_left_out: list = _field(default_factory=list)
+    shape_points: list = _field(default_factory=list)
     html: str = _field(default="", repr=False)
 
     def _repr_html_(self) -> str:
@@ -737,9 +740,10 @@ class EmaResult:
 
 
 def ema(
-    response: _PathLike,
-    excitation: _PathLike,
+    response: _Optional[_PathLike] = None,
+    excitation: _Optional[_PathLike] = None,
     *,
+    roving: _Optional[_Sequence[_Sequence[_Any]]] = None,
     response_cols: _Optional[_Sequence[str]] = None,
     response_fs: _Optional[float] = None,
     excitation_col: _Optional[str] = None,
@@ -778,16 +782,25 @@ def ema(
     (``force`` replaces an earlier ``ema`` output; ``pdf`` prints ``report.pdf`` too, through a
     headless Chromium). ``geometry``: a CSV of the structure's nodes (``node,x_mm,y_mm`` or ``node,x_px,y_px``, a node per response)
     and lines (``from,to``) on which the page draws the shapes (docs/cli.md, "Geometry").
+    ``roving``: a roving-hammer test instead of ``response`` and ``excitation``, one record per
+    point hit: ``[(point, file), ...]`` (the file holding its force and responses) or
+    ``[(point, responses_file, force_file), ...]``; with ``impact=True`` (docs/cli.md, ema).
     """
     call = _call(ema, locals())
+    records = [] if roving is None else [_roving_record(r) for r in roving]
+    if records and (response is not None or excitation is not None):
+        raise ValueError("roving: instead of response and excitation, not beside them")
+    if not records and (response is None or excitation is None):
+        raise ValueError("response and excitation are needed (or roving, one record per hit point)")
     exp_window = _setting("ema", "exp_window", exp_window)
     if not isinstance(exp_window, str):
         exp_window = repr(exp_window)
     _setting("ema", "response_quantity", response_quantity)
     cols = [] if response_cols is None else [str(c) for c in response_cols]
     d = _vibcam.ema(
-        _os.fspath(response),
-        _os.fspath(excitation),
+        records[0][1] if records else _os.fspath(response),
+        records[0][2] if records else _os.fspath(excitation),
+        roving=records,
         response_cols=cols,
         response_fs=_setting("ema", "response_fs", response_fs, optional=True),
         excitation_col=None if excitation_col is None else str(excitation_col),
@@ -810,6 +823,18 @@ def ema(
         call=call,
     )
     return _result(EmaResult, d)
+
+
+def _roving_record(r: _Any) -> tuple:
+    """A roving-hammer record as ``(point, responses_file, force_file)``."""
+    items = list(r) if isinstance(r, (list, tuple)) else None
+    if items is None or len(items) not in (2, 3):
+        raise ValueError(f"roving: {r!r} is not (point, file) or (point, responses, force)")
+    point = items[0]
+    if isinstance(point, bool) or not isinstance(point, int) or point < 1:
+        raise ValueError(f"roving: the hit point {point!r} is not a whole number from 1")
+    files = [_os.fspath(f) for f in items[1:]]
+    return (point, files[0], files[-1])
 
 
 def modal(

@@ -87,6 +87,7 @@ pub const KEYS: &[&str] = &[
     "retime",
     "rms_px",
     "roi",
+    "roving",
     "roll_deg",
     "runs",
     "saturation",

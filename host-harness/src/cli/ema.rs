@@ -4,7 +4,7 @@
 use super::args::{parse_bands, Bands};
 use crate::analysis::ema::ExpChoice;
 use crate::analysis::modal::FrfForm;
-use crate::jobs::{EmaInput, EmaSpec, SpecError};
+use crate::jobs::{EmaInput, EmaSpec, RovingRecord, SpecError};
 use std::path::PathBuf;
 
 /// What the responses measure.
@@ -27,14 +27,45 @@ fn parse_exp(s: &str) -> Result<ExpChoice, String> {
     }
 }
 
+/// `--roving POINT=FILE[,FILE]`: the hit point, then one file holding force and responses,
+/// or the responses' file and the force's.
+fn parse_roving(s: &str) -> Result<RovingRecord, String> {
+    let (point, files) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}`: POINT=FILE or POINT=RESPONSES,FORCE (`3=hit3.lvm`)"))?;
+    let point: usize = point
+        .trim()
+        .parse()
+        .ok()
+        .filter(|&p| p >= 1)
+        .ok_or_else(|| format!("`{s}`: the hit point `{point}` is not a whole number from 1"))?;
+    let (response, excitation) = match files.split_once(',') {
+        Some((r, f)) => (PathBuf::from(r), PathBuf::from(f)),
+        None => (PathBuf::from(files), PathBuf::from(files)),
+    };
+    if response.as_os_str().is_empty() || excitation.as_os_str().is_empty() {
+        return Err(format!("`{s}`: a file name is empty"));
+    }
+    Ok(RovingRecord {
+        point,
+        response,
+        excitation,
+    })
+}
+
 /// Arguments of `host-harness ema`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Responses: `displacement.csv` of `track`/`analyze`, a wide CSV (a time column `t_s`,
     /// `time` or `t`, one column per response), a pyidi `.npy`, or a DAQ file (`.lvm`,
     /// `.tdms`, `.uff`/`.unv`).
-    #[arg(long, value_name = "FILE")]
-    pub response: PathBuf,
+    #[arg(
+        long,
+        value_name = "FILE",
+        required_unless_present = "roving",
+        conflicts_with = "roving"
+    )]
+    pub response: Option<PathBuf>,
     /// A response channel by name (repeat for several; default: every channel, a pyidi
     /// `.npy`'s coordinate that moves more; in a `displacement.csv`, `target N` or `N`).
     #[arg(long = "response-col", value_name = "NAME")]
@@ -43,8 +74,20 @@ pub struct Args {
     #[arg(long, value_name = "HZ", value_parser = super::args::number("response_fs"), help = super::args::help("response_fs"))]
     pub response_fs: Option<f64>,
     /// The force: a DAQ file or CSV.
-    #[arg(long, value_name = "FILE")]
-    pub excitation: PathBuf,
+    #[arg(
+        long,
+        value_name = "FILE",
+        required_unless_present = "roving",
+        conflicts_with = "roving"
+    )]
+    pub excitation: Option<PathBuf>,
+    /// A roving-hammer test's record (repeat, one per hit point): the point hit, then the
+    /// file holding its force and responses, or the responses' file and the force's
+    /// (`3=hit3.lvm`, `3=camera3.csv,force3.csv`); instead of --response and --excitation.
+    /// The responses are the same in every record; the shapes are over the hit points when
+    /// they outnumber the responses.
+    #[arg(long, value_name = "POINT=FILE[,FILE]", value_parser = parse_roving)]
+    pub roving: Vec<RovingRecord>,
     /// `$excitation_col`.
     #[arg(long, value_name = "NAME", help = super::args::help("excitation_col"))]
     pub excitation_col: Option<String>,
@@ -104,11 +147,20 @@ pub struct Args {
 /// Runs `host-harness ema`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let out = args.out.clone();
+    // clap asks for both files, or --roving instead
+    let first = args.roving.first();
     let spec = EmaSpec::new(EmaInput {
-        response: args.response,
+        response: args
+            .response
+            .or_else(|| first.map(|r| r.response.clone()))
+            .unwrap_or_default(),
         response_cols: args.response_col,
         response_fs: args.response_fs,
-        excitation: args.excitation,
+        excitation: args
+            .excitation
+            .or_else(|| first.map(|r| r.excitation.clone()))
+            .unwrap_or_default(),
+        roving: args.roving,
         excitation_col: args.excitation_col,
         excitation_fs: args.excitation_fs,
         impact: args.impact,

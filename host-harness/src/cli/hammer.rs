@@ -40,6 +40,10 @@ pub struct Args {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// A roving hammer: the points hit (of 1-5), one record each (`force_P.csv`,
+    /// `camera_P.csv`), every one with the same hits (default: one record, hit at point 2).
+    #[arg(long, value_name = "P,...", value_delimiter = ',')]
+    pub hit_points: Vec<usize>,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "hammer")]
     pub out: PathBuf,
@@ -67,6 +71,19 @@ fn check(a: &Args) -> anyhow::Result<Vec<String>> {
             "--seconds {} at {} Hz: more than 20 million samples",
             a.seconds,
             a.daq_hz.max(a.camera_hz)
+        )));
+    }
+    let mut points = a.hit_points.clone();
+    points.sort_unstable();
+    if let Some(p) = points.iter().find(|&&p| !(1..=5).contains(&p)) {
+        return Err(crate::bad_input(format!(
+            "--hit-points: point {p} is not one of the structure's five (1-5)"
+        )));
+    }
+    if let Some(w) = points.windows(2).find(|w| w[0] == w[1]) {
+        return Err(crate::bad_input(format!(
+            "--hit-points: point {} is given twice",
+            w[0]
         )));
     }
     if a.peaks_n.is_empty() || a.peaks_n.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
@@ -163,6 +180,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             force_noise_n: a.force_noise_n,
             camera_noise_mm: a.camera_noise_mm,
             seed: a.seed,
+            hit_points: a.hit_points.clone(),
         },
     )?;
     let mut text = String::new();
@@ -170,8 +188,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         text.push_str(n);
         text.push('\n');
     }
+    let records = if a.hit_points.is_empty() {
+        "force.csv, camera.csv".to_string()
+    } else {
+        let p: Vec<String> = a.hit_points.iter().map(usize::to_string).collect();
+        format!("force_P.csv and camera_P.csv for P = {}", p.join(", "))
+    };
     text.push_str(&format!(
-        "wrote {}: force.csv, camera.csv, truth.csv, README.txt\n",
+        "wrote {}: {records}, truth.csv, README.txt\n",
         a.out.display()
     ));
     super::stdout(&text)?;

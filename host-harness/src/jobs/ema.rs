@@ -8,12 +8,12 @@ use crate::analysis::ema::input::{
     align, choose_axis, rate_text, read_force, read_poles, read_responses, Aligned, Series,
 };
 use crate::analysis::ema::lscf::LscfRule;
-use crate::analysis::ema::run::EmaRequest;
+use crate::analysis::ema::run::{EmaRequest, RovingRead};
 use crate::analysis::ema::{EmaSettings, Excitation, ExpChoice};
 use crate::analysis::modal::FrfForm;
 use crate::analysis::oma::cluster::ClusterRule;
 use crate::setting::table;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `ema`'s settings as given.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,6 +26,9 @@ pub struct EmaInput {
     pub response_fs: Option<f64>,
     /// The force's file.
     pub excitation: PathBuf,
+    /// `$roving`: a roving-hammer test's records, one per hit point (empty: the one test of
+    /// `response` and `excitation`, which are then the first record's).
+    pub roving: Vec<RovingRecord>,
     /// `$excitation_col` (none: the file's only channel).
     pub excitation_col: Option<String>,
     /// `$excitation_fs`, Hz, when the file states no rate.
@@ -66,17 +69,31 @@ pub struct EmaInput {
     pub geometry: Option<PathBuf>,
 }
 
-/// The responses without the force's own channel when both come from one file: taken among
-/// every channel it is left out (said so); named as a response it is refused (the FRF of the
-/// force over itself is 1, and would be fitted as a mode).
+/// One record of a roving-hammer test: the point hit, the responses' file and the force's
+/// (the same file when it holds both).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RovingRecord {
+    /// The hit point's number.
+    pub point: usize,
+    /// The responses' file.
+    pub response: PathBuf,
+    /// The force's file.
+    pub excitation: PathBuf,
+}
+
+/// The responses without the force's own channel when both come from one file (`files`: the
+/// responses' and the force's): taken among every channel it is left out (said so); named as a
+/// response it is refused (the FRF of the force over itself is 1, and would be fitted as a
+/// mode).
 fn without_the_force(
-    mut response: crate::analysis::ema::input::Series,
-    force: &crate::analysis::ema::input::Series,
+    mut response: Series,
+    force: &Series,
+    files: (&Path, &Path),
     input: &EmaInput,
-) -> SpecResult<crate::analysis::ema::input::Series> {
+) -> SpecResult<Series> {
     let same_file = match (
-        std::fs::canonicalize(&input.response),
-        std::fs::canonicalize(&input.excitation),
+        std::fs::canonicalize(files.0),
+        std::fs::canonicalize(files.1),
     ) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,
@@ -99,7 +116,7 @@ fn without_the_force(
     if response.names.is_empty() {
         return Err(SpecError::setting(format!(
             "{}: its only channel is the force: give the responses' file",
-            input.response.display()
+            files.0.display()
         )));
     }
     response.notes.push(format!(
@@ -107,6 +124,75 @@ fn without_the_force(
         force.names[0]
     ));
     Ok(response)
+}
+
+/// One record read: the responses, the force, both aligned.
+type Read = (Series, Series, Aligned);
+
+/// The record of `files` (the responses' and the force's) read and aligned: the force's channel
+/// out of the responses, an impact test's delay estimated when the files state none, a pyidi
+/// `.npy`'s axis chosen.
+fn read_record(input: &EmaInput, files: (&Path, &Path)) -> SpecResult<Read> {
+    let response = read_responses(files.0, &input.response_cols, input.response_fs)
+        .map_err(SpecError::Input)?;
+    let force = read_force(
+        files.1,
+        input.excitation_col.as_deref().unwrap_or(""),
+        input.excitation_fs,
+    )
+    .map_err(SpecError::Input)?;
+    let mut response = without_the_force(response, &force, files, input)?;
+    let mut aligned =
+        align(&response, &force, input.delay_s.unwrap_or(0.0)).map_err(SpecError::Input)?;
+    let nyq = aligned.nyquist_hz;
+    if let Some(b) = &input.bands {
+        super::bands_below_nyquist(b, 2.0 * nyq, "the slower record's")?;
+    }
+    let (f_min, f_max) = band_analysed(input, aligned.nyquist_hz)?;
+    let rule = match excitation(input, &aligned)? {
+        Excitation::Impact { rule, .. } => Some(rule),
+        Excitation::Continuous { .. } => None,
+    };
+    if let (Some(rule), None, false) = (rule, input.delay_s, stated_starts(&response, &force)) {
+        if let Some(a) = estimated_delay(&response, &force, &aligned, rule)? {
+            aligned = a;
+        }
+    }
+    choose_axis(&mut response, &mut aligned, rule, (f_min, f_max));
+    Ok((response, force, aligned))
+}
+
+/// A roving-hammer test's other records (after the first, `first`), read as the first: the same
+/// responses at the same rate, or refused naming the file.
+fn read_roving(input: &EmaInput, first: &Read) -> SpecResult<Vec<RovingRead>> {
+    let mut out = Vec::new();
+    for r in input.roving.iter().skip(1) {
+        let (response, force, aligned) = read_record(input, (&r.response, &r.excitation))?;
+        let name = r.response.display();
+        if response.names != first.0.names {
+            return Err(SpecError::Input(vibcam_readers::bad_input(format!(
+                "{name}: its responses ({}) are not the first record's ({}): every record of a \
+                 roving-hammer test holds the same responses",
+                response.names.join(", "),
+                first.0.names.join(", ")
+            ))));
+        }
+        if (aligned.fs_hz - first.2.fs_hz).abs() > 1e-9 * first.2.fs_hz {
+            return Err(SpecError::Input(vibcam_readers::bad_input(format!(
+                "{name}: its records are analysed at {} Hz, the first record's at {} Hz: a \
+                 roving-hammer test's records share one rate",
+                rate_text(aligned.fs_hz),
+                rate_text(first.2.fs_hz)
+            ))));
+        }
+        out.push(RovingRead {
+            point: r.point,
+            name: name.to_string(),
+            notes: response.notes.into_iter().chain(force.notes).collect(),
+            aligned,
+        });
+    }
+    Ok(out)
 }
 
 /// A checked `ema` job: its records read and aligned.
@@ -119,34 +205,11 @@ impl EmaSpec {
     /// Reads the files and checks the settings against them.
     pub fn new(input: EmaInput) -> SpecResult<Self> {
         check_alone(&input)?;
-        let response = read_responses(&input.response, &input.response_cols, input.response_fs)
-            .map_err(SpecError::Input)?;
-        let force = read_force(
-            &input.excitation,
-            input.excitation_col.as_deref().unwrap_or(""),
-            input.excitation_fs,
-        )
-        .map_err(SpecError::Input)?;
-        let response = without_the_force(response, &force, &input)?;
-        let mut response = response;
-        let mut aligned =
-            align(&response, &force, input.delay_s.unwrap_or(0.0)).map_err(SpecError::Input)?;
-        let nyq = aligned.nyquist_hz;
-        if let Some(b) = &input.bands {
-            super::bands_below_nyquist(b, 2.0 * nyq, "the slower record's")?;
-        }
+        let first = read_record(&input, (&input.response, &input.excitation))?;
+        let others = read_roving(&input, &first)?;
+        let (response, force, aligned) = first;
         let (f_min, f_max) = band_analysed(&input, aligned.nyquist_hz)?;
         let excitation = excitation(&input, &aligned)?;
-        let rule = match excitation {
-            Excitation::Impact { rule, .. } => Some(rule),
-            Excitation::Continuous { .. } => None,
-        };
-        if let (Some(rule), None, false) = (rule, input.delay_s, stated_starts(&response, &force)) {
-            if let Some(a) = estimated_delay(&response, &force, &aligned, rule)? {
-                aligned = a;
-            }
-        }
-        choose_axis(&mut response, &mut aligned, rule, (f_min, f_max));
         let settings = EmaSettings {
             excitation,
             form: input.form,
@@ -167,17 +230,40 @@ impl EmaSpec {
             },
         };
         let geometry = super::read_geometry(input.geometry.as_deref())?;
-        let points: Vec<usize> = (1..=aligned.responses.len()).collect();
-        let wire = crate::export::wire::Wire::on(geometry.as_ref(), &points, "response", None)
+        // the shapes are over the hit points when they outnumber the responses
+        let (points, what): (Vec<usize>, _) = if input.roving.len() > aligned.responses.len() {
+            (input.roving.iter().map(|r| r.point).collect(), "hit point")
+        } else {
+            ((1..=aligned.responses.len()).collect(), "response")
+        };
+        let wire = crate::export::wire::Wire::on(geometry.as_ref(), &points, what, None)
             .map_err(SpecError::Input)?;
+        let roving = match input.roving.first() {
+            Some(r) => std::iter::once(RovingRead {
+                point: r.point,
+                name: r.response.display().to_string(),
+                notes: Vec::new(),
+                aligned: aligned.clone(),
+            })
+            .chain(others)
+            .collect(),
+            None => Vec::new(),
+        };
+        let files = input
+            .roving
+            .iter()
+            .skip(1)
+            .flat_map(|r| [&r.response, &r.excitation]);
         Ok(EmaSpec {
             request: EmaRequest {
                 response,
                 force,
                 aligned,
+                roving,
                 settings,
                 inputs: [&input.response, &input.excitation]
                     .into_iter()
+                    .chain(files)
                     .chain(&input.poles)
                     .chain(&input.geometry)
                     .cloned()
@@ -250,6 +336,20 @@ fn estimated_delay(
 
 /// The settings checked on their own, before any file is read.
 fn check_alone(input: &EmaInput) -> SpecResult<()> {
+    let mut points: Vec<usize> = input.roving.iter().map(|r| r.point).collect();
+    points.sort_unstable();
+    if let Some(w) = points.windows(2).find(|w| w[0] == w[1]) {
+        return Err(SpecError::setting(format!(
+            "$roving: hit point {} is given twice: one record per hit point",
+            w[0]
+        )));
+    }
+    if !input.roving.is_empty() && !input.impact {
+        return Err(SpecError::setting(
+            "$roving: a roving-hammer test is an impact test, analysed hit by hit ($impact)"
+                .to_string(),
+        ));
+    }
     if let Some(b) = &input.bands {
         super::bands_ordered(b)?;
     }

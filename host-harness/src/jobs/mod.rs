@@ -16,7 +16,7 @@ pub mod tracking;
 pub mod view;
 
 pub use analyze::{AccelSettings, AnalyzeInput, AnalyzeSpec, TimeOffset, DEFAULT_ACCEL_BANDS};
-pub use ema::{EmaInput, EmaSpec};
+pub use ema::{EmaInput, EmaSpec, RovingRecord};
 pub use modal::{ModalComputed, ModalInput, ModalSpec};
 pub use track::{TrackInput, TrackSpec};
 pub use tracking::{PointsInput, Threshold, Tracker, Tracking, TrackingInput};

@@ -10,6 +10,7 @@ pub mod excited;
 pub mod impact;
 pub use crate::oma::lscf;
 pub mod lsfd;
+pub mod roving;
 pub mod spectra;
 
 use crate::modal::{normalise_shape, FrfForm, Pole};
@@ -100,6 +101,67 @@ pub struct EmaMode {
     pub shape_abs_u: Option<Vec<f64>>,
 }
 
+/// How a test's FRFs stand: `outputs` responses for each of `inputs` hit points (references),
+/// FRF `j * outputs + o` the response `o` over the force at hit point `j`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    /// Responses.
+    pub outputs: usize,
+    /// Hit points (forces): 1 but for a roving hammer ([`roving`]).
+    pub inputs: usize,
+}
+
+impl Layout {
+    /// The shape is given over the hit points: there are more of them than responses (a roving
+    /// hammer with one fixed transducer); else over the responses.
+    pub fn over_inputs(&self) -> bool {
+        self.inputs > self.outputs
+    }
+
+    /// A mode's shape vector from its residues in every FRF: with one hit point, the residues;
+    /// else the dominant singular vector of the residue matrix `A = phi L^T` (outputs x inputs,
+    /// of rank one), over the responses or, by [`Layout::over_inputs`], over the hit points
+    /// (`L`, equal to `phi` at those points when the structure is reciprocal).
+    pub fn vector(&self, residues: &[Complex64]) -> Vec<Complex64> {
+        if self.inputs <= 1 || residues.len() != self.outputs * self.inputs {
+            return residues.to_vec();
+        }
+        let a = nalgebra::DMatrix::from_fn(self.outputs, self.inputs, |o, j| {
+            residues[j * self.outputs + o]
+        });
+        let svd = a.svd(true, true);
+        let best = (0..svd.singular_values.len())
+            .max_by(|&x, &y| svd.singular_values[x].total_cmp(&svd.singular_values[y]))
+            .unwrap_or(0);
+        let sigma = svd.singular_values[best];
+        if self.over_inputs() {
+            // A = u s v^H: L^T is s times the row of v^H, phi's scale aside
+            svd.v_t.map_or_else(Vec::new, |vt| {
+                (0..self.inputs).map(|j| vt[(best, j)] * sigma).collect()
+            })
+        } else {
+            svd.u.map_or_else(Vec::new, |u| {
+                (0..self.outputs).map(|o| u[(o, best)] * sigma).collect()
+            })
+        }
+    }
+
+    /// FRF `k` named for a reader: "response 2", or with several hit points "response 2 at
+    /// hit point 3" (`points`: the hit points' numbers).
+    pub fn frf_name(&self, k: usize, points: &[usize]) -> String {
+        let o = k % self.outputs.max(1) + 1;
+        if self.inputs <= 1 {
+            format!("response {o}")
+        } else {
+            let j = k / self.outputs.max(1);
+            format!(
+                "response {o} at hit point {}",
+                points.get(j).copied().unwrap_or(j + 1)
+            )
+        }
+    }
+}
+
 /// What the analysis found.
 #[derive(Debug, Clone)]
 pub struct EmaResult {
@@ -117,8 +179,13 @@ pub struct EmaResult {
     pub modes: Vec<EmaMode>,
     /// LSFD's constants per response (residues in mode order).
     pub constants: Vec<lsfd::Constants>,
-    /// The hits (impact).
+    /// The FRFs' layout (responses, hit points); the shapes are over the responses or over
+    /// the hit points ([`Layout::over_inputs`]).
+    pub layout: Layout,
+    /// The hits (impact; a roving hammer's: those of its first record).
     pub hits: Option<Hits>,
+    /// A roving hammer's hits, per record (empty for one record).
+    pub roving: Vec<Hits>,
     /// The exponential window applied.
     pub exp: Option<ExpWindow>,
     /// The band fitted, Hz (`band_hz` of the settings, or the one chosen from the data).
@@ -276,58 +343,105 @@ pub fn analyse(
         exp,
         band_hz,
     } = prepare(force, responses, fs_hz, force_name, s, &mut notes)?;
-    let s = &EmaSettings {
+    let formed = Formed {
+        freq: spectra.freq_hz.clone(),
+        frfs: spectra.frfs(None),
+        layout: Layout {
+            outputs: responses.len(),
+            inputs: 1,
+        },
+        points: &[],
+        exp,
         band_hz,
+        unit_sizes: spectra.units.iter().map(|u| u.size).collect(),
+        unit: hits.as_ref().map_or("segment group", |_| "hit"),
+        without: &|g| spectra.frfs(Some(g)).h1,
+    };
+    let mut r = identify(formed, s, notes)?;
+    r.hits = hits;
+    Ok(r)
+}
+
+/// The FRFs of a test and what they were formed with: their lines, layout and hit points
+/// (none for one test), the exponential window, the band, the jackknife's units (their sizes,
+/// their name, and the FRFs without each).
+struct Formed<'a> {
+    freq: Vec<f64>,
+    frfs: Frfs,
+    layout: Layout,
+    points: &'a [usize],
+    exp: Option<ExpWindow>,
+    band_hz: (f64, f64),
+    unit_sizes: Vec<usize>,
+    unit: &'static str,
+    without: Without<'a>,
+}
+
+/// The modes of FRFs `f` formed (one test's or a roving hammer's): the poles of the
+/// stabilisation diagram, the modes chosen (clusters, bands or poles given), their residues
+/// and shapes, their intervals; `notes` so far, the result's (no hits: the caller's).
+fn identify(f: Formed, s: &EmaSettings, mut notes: Vec<String>) -> anyhow::Result<EmaResult> {
+    let s = &EmaSettings {
+        band_hz: f.band_hz,
         ..s.clone()
     };
-    given_in_band(s, exp)?;
-    let frfs = spectra.frfs(None);
-    let freq = spectra.freq_hz.clone();
+    given_in_band(s, f.exp)?;
     let Selection {
         poles,
         modes: all,
         rejected,
         per_band,
-    } = select(&freq, &frfs.h1, s)?;
+    } = select(&f.freq, &f.frfs.h1, s)?;
     let chosen = s.poles.as_ref().map_or_else(
         || chosen_modes(per_band, s.bands.as_deref(), &mut notes),
-        |given| given_modes(given, exp, &poles),
+        |given| given_modes(given, f.exp, &poles),
     );
     let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
     let constants = if fitted.is_empty() {
         Vec::new()
     } else {
-        lsfd::fit(&freq, &frfs.h1, s.band_hz, &fitted, s.form)?
+        lsfd::fit(&f.freq, &f.frfs.h1, s.band_hz, &fitted, s.form)?
     };
-    let unit_sizes: Vec<usize> = spectra.units.iter().map(|u| u.size).collect();
-    let unit = hits.as_ref().map_or("segment group", |_| "hit");
-    let reps = replicates_or_none(&spectra, &freq, &fitted, s, unit, &mut notes);
+    let units = f.unit_sizes.len();
+    let reps = if units >= 3 && !fitted.is_empty() {
+        replicates((units, f.without), &f.freq, &fitted, s, f.layout)
+    } else {
+        no_replicates(units, &fitted, f.unit, &mut notes)
+    };
     let modes = modes_of(
         chosen,
         &fitted,
         &constants,
-        (&reps, &unit_sizes, unit),
-        exp,
+        (&reps, &f.unit_sizes, f.unit),
+        (f.exp, f.layout),
         &mut notes,
     );
-    notes.extend(misfit_note(&freq, &frfs.h1, s, &fitted, &constants));
+    notes.extend(misfit_note(
+        &f.freq,
+        &f.frfs.h1,
+        s,
+        &fitted,
+        (&constants, f.layout, f.points),
+    ));
     let clusters = all
         .into_iter()
         .map(|m| (m, true))
         .chain(rejected.iter().map(|r| (r.cluster.clone(), false)))
         .collect();
     Ok(EmaResult {
-        freq_hz: freq,
-        frfs,
+        freq_hz: f.freq,
+        frfs: f.frfs,
         poles,
         clusters,
         rejected,
         modes,
         constants,
-        hits,
-        exp,
-        band_hz,
-        unit_sizes,
+        layout: f.layout,
+        hits: None,
+        roving: Vec::new(),
+        exp: f.exp,
+        band_hz: f.band_hz,
+        unit_sizes: f.unit_sizes,
         notes,
     })
 }
@@ -339,7 +453,7 @@ fn misfit_note(
     h1: &[Vec<Complex64>],
     s: &EmaSettings,
     poles: &[Pole],
-    constants: &[lsfd::Constants],
+    (constants, layout, points): (&[lsfd::Constants], Layout, &[usize]),
 ) -> Option<String> {
     if constants.is_empty() {
         return None;
@@ -372,35 +486,28 @@ fn misfit_note(
         ),
     };
     Some(format!(
-        "the fitted model leaves {:.0} % of response {}'s FRF unexplained (LSFD misfit \
+        "the fitted model leaves {:.0} % of {}'s FRF unexplained (LSFD misfit \
          {misfit:.3}; {:.0} % over all responses): {cause}; the numbers above are doubtful",
         100.0 * misfit,
-        worst + 1,
+        layout.frf_name(worst, points),
         100.0 * r.overall
     ))
 }
 
-/// The jackknife's replicates with every `unit` left out in turn, or none (noted) with fewer than
-/// 3 units.
-fn replicates_or_none(
-    spectra: &Spectra,
-    freq: &[f64],
+/// No replicates (noted when there are modes): `units` (hits or segment groups) are fewer than
+/// the jackknife's 3.
+fn no_replicates(
+    units: usize,
     fitted: &[Pole],
-    s: &EmaSettings,
     unit: &str,
     notes: &mut Vec<String>,
 ) -> Vec<Vec<Replicate>> {
-    if spectra.units.len() >= 3 && !fitted.is_empty() {
-        replicates(spectra, freq, fitted, s)
-    } else {
-        if !fitted.is_empty() {
-            notes.push(format!(
-                "no intervals: {} {unit}s averaged, the jackknife needs at least 3",
-                spectra.units.len()
-            ));
-        }
-        vec![Vec::new(); fitted.len()]
+    if !fitted.is_empty() {
+        notes.push(format!(
+            "no intervals: {units} {unit}s averaged, the jackknife needs at least 3"
+        ));
     }
+    vec![Vec::new(); fitted.len()]
 }
 
 /// The modes chosen: one per band (a band without one noted), or every cluster per band found.
@@ -478,19 +585,19 @@ fn given_modes(
 }
 
 /// Each chosen mode with its pole (the exponential window's damping removed), its shape from
-/// the LSFD residues and its intervals from the replicates (`unit`: what one replicate leaves
-/// out).
+/// the LSFD residues (by `layout`, [`Layout::vector`]) and its intervals from the replicates
+/// (`unit`: what one replicate leaves out; their shapes already by `layout`).
 fn modes_of(
     chosen: Vec<(Option<(f64, f64)>, SsiMode)>,
     fitted: &[Pole],
     constants: &[lsfd::Constants],
     (reps, unit_sizes, unit): (&[Vec<Replicate>], &[usize], &str),
-    exp: Option<ExpWindow>,
+    (exp, layout): (Option<ExpWindow>, Layout),
     notes: &mut Vec<String>,
 ) -> Vec<EmaMode> {
     let mut modes = Vec::new();
     for (i, ((band, cl), p)) in chosen.into_iter().zip(fitted).enumerate() {
-        let residues: Vec<Complex64> = constants.iter().map(|c| c.residues[i]).collect();
+        let residues = layout.vector(&constants.iter().map(|c| c.residues[i]).collect::<Vec<_>>());
         let shape = normalise_shape(&residues);
         let pole = unwindowed(*p, exp);
         let (fi, di, su) = match intervals(pole, (&residues, &shape), &reps[i], exp, unit_sizes) {
@@ -766,18 +873,24 @@ fn coherent_band(
     band
 }
 
-/// The jackknife's replicates: with every unit (hit or segment group) left out in turn, each
-/// fitted mode's pole found again (within 2 %) and its LSFD shape, or `None`.
+/// The FRFs (H1) without one unit of the jackknife, by the unit's index.
+type Without<'a> = &'a dyn Fn(usize) -> Vec<Vec<Complex64>>;
+
+/// The jackknife's replicates: with every one of `units` units (hit, segment group, or a group
+/// of hits of every record) left out in turn (`without` its FRFs), each fitted mode's pole
+/// found again (within 2 %) and its LSFD residues as `layout` gives a shape's vector
+/// ([`Layout::vector`]), or `None`.
 fn replicates(
-    spectra: &Spectra,
+    (units, without): (usize, Without),
     freq: &[f64],
     fitted: &[Pole],
     s: &EmaSettings,
+    layout: Layout,
 ) -> Vec<Vec<Replicate>> {
     let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); fitted.len()];
-    for g in 0..spectra.units.len() {
-        let f = spectra.frfs(Some(g));
-        let got = select(freq, &f.h1, s).ok();
+    for g in 0..units {
+        let h1 = without(g);
+        let got = select(freq, &h1, s).ok();
         let matched: Vec<Option<Pole>> = fitted
             .iter()
             .map(|p| {
@@ -795,11 +908,11 @@ fn replicates(
             .zip(fitted)
             .map(|(m, p)| m.unwrap_or(*p))
             .collect();
-        let rep_shapes = lsfd::fit(freq, &f.h1, s.band_hz, &rep_poles, s.form).ok();
+        let rep_shapes = lsfd::fit(freq, &h1, s.band_hz, &rep_poles, s.form).ok();
         for (r, m) in matched.iter().enumerate() {
             let shape = rep_shapes
                 .as_ref()
-                .map(|c| c.iter().map(|k| k.residues[r]).collect::<Vec<_>>());
+                .map(|c| layout.vector(&c.iter().map(|k| k.residues[r]).collect::<Vec<_>>()));
             reps[r].push(m.and_then(|p| shape.map(|sh| (p, sh))));
         }
     }

@@ -41,16 +41,30 @@ pub struct Frfs {
     pub coherence: Vec<Vec<f64>>,
 }
 
+impl Frfs {
+    /// `other`'s FRFs after these (the FRFs of several records, one after the other).
+    pub fn extend(&mut self, other: Frfs) {
+        self.h1.extend(other.h1);
+        self.h2.extend(other.h2);
+        self.coherence.extend(other.coherence);
+    }
+}
+
 impl Spectra {
     /// The FRFs of every unit but `left_out`.
     pub fn frfs(&self, left_out: Option<usize>) -> Frfs {
+        self.frfs_without(left_out.map_or(0..0, |g| g..g + 1))
+    }
+
+    /// The FRFs of every unit but those of `left_out` (a range of units; empty: all of them).
+    pub fn frfs_without(&self, left_out: std::ops::Range<usize>) -> Frfs {
         let lines = self.freq_hz.len();
         let outs = self.units.first().map_or(0, |u| u.fx.len());
         let mut ff = vec![0.0; lines];
         let mut fx = vec![vec![Complex64::new(0.0, 0.0); lines]; outs];
         let mut xx = vec![vec![0.0; lines]; outs];
         for (i, u) in self.units.iter().enumerate() {
-            if Some(i) == left_out {
+            if left_out.contains(&i) {
                 continue;
             }
             for k in 0..lines {

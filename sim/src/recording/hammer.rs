@@ -31,21 +31,15 @@ pub struct HammerRecording {
     pub camera_noise_mm: f64,
     /// Random seed.
     pub seed: u64,
+    /// A roving hammer's hit points (1-based, of the five): one record each, every one with
+    /// the same hits; empty: one record, hit at point 2.
+    pub hit_points: Vec<usize>,
 }
 
 impl HammerRecording {
     /// The test: [`HammerTest::three_modes`] with this recording's hits.
     pub fn test(&self) -> HammerTest {
-        let mut hits: Vec<Hit> = self
-            .peaks_n
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| Hit {
-                t_s: 0.2 + 3.0 * i as f64,
-                width_s: 0.0006,
-                peak_n: p,
-            })
-            .collect();
+        let mut hits = Hit::every_3_s(&self.peaks_n);
         if self.double_hit && hits.len() > 1 {
             hits.push(Hit {
                 t_s: hits[1].t_s + 0.004,
@@ -57,25 +51,25 @@ impl HammerRecording {
     }
 }
 
-/// Writes `force.csv` (`t_s,force_n`), `camera.csv` (`t_s,p1..p5`, mm), `truth.csv`
-/// (`mode,f_hz,damping,point,shape`) and `README.txt` (the `ema` command) into `out`, staged
-/// (complete or absent).
-pub fn write_hammer_recording(out: &Path, force: bool, r: &HammerRecording) -> anyhow::Result<()> {
-    let test = r.test();
-    let dir = Staged::new(out, force, "simulate-hammer", &[])?;
-    let mut rng = ChaCha8Rng::seed_from_u64(r.seed);
-    let unit = Normal::new(0.0, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
+/// The force of `test` at the DAQ's rate as `force.csv` holds it (`t_s,force_n`), noise and
+/// clipping included.
+fn force_csv(test: &HammerTest, r: &HammerRecording, noise: &mut dyn FnMut() -> f64) -> String {
     let n = (r.seconds * r.daq_hz).round() as usize;
     let mut s = String::from("t_s,force_n\n");
     for k in 0..n {
         let t = k as f64 / r.daq_hz;
-        let mut f = test.force(t) + r.force_noise_n * unit.sample(&mut rng);
+        let mut f = test.force(t) + r.force_noise_n * noise();
         if let Some(c) = r.clip_n {
             f = f.min(c);
         }
         let _ = writeln!(s, "{t},{f:.5}");
     }
-    dir.write("force.csv", s)?;
+    s
+}
+
+/// The five points' displacements of `test` at the camera's rate as `camera.csv` holds them
+/// (`t_s,p1..p5`, mm), noise included.
+fn camera_csv(test: &HammerTest, r: &HammerRecording, noise: &mut dyn FnMut() -> f64) -> String {
     let m = (r.seconds * r.camera_hz).round() as usize;
     let mut s = String::from("t_s");
     for o in 0..THREE_MODE_POINTS {
@@ -86,12 +80,50 @@ pub fn write_hammer_recording(out: &Path, force: bool, r: &HammerRecording) -> a
         let t = k as f64 / r.camera_hz;
         let _ = write!(s, "{t}");
         for o in 0..THREE_MODE_POINTS {
-            let x = 1e3 * test.displacement(o, t) + r.camera_noise_mm * unit.sample(&mut rng);
+            let x = 1e3 * test.displacement(o, t) + r.camera_noise_mm * noise();
             let _ = write!(s, ",{x:.7}");
         }
         s.push('\n');
     }
-    dir.write("camera.csv", s)?;
+    s
+}
+
+/// Writes `force.csv` (`t_s,force_n`), `camera.csv` (`t_s,p1..p5`, mm), `truth.csv`
+/// (`mode,f_hz,damping,point,shape`) and `README.txt` (the `ema` command) into `out`, staged
+/// (complete or absent). With hit points (a roving hammer), `force_P.csv` and `camera_P.csv`
+/// for each point `P` hit instead of the first two.
+pub fn write_hammer_recording(out: &Path, force: bool, r: &HammerRecording) -> anyhow::Result<()> {
+    let test = r.test();
+    let dir = Staged::new(out, force, "simulate-hammer", &[])?;
+    let mut rng = ChaCha8Rng::seed_from_u64(r.seed);
+    let unit = Normal::new(0.0, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut noise = || unit.sample(&mut rng);
+    let command = if r.hit_points.is_empty() {
+        dir.write("force.csv", force_csv(&test, r, &mut noise))?;
+        dir.write("camera.csv", camera_csv(&test, r, &mut noise))?;
+        "hit at point 2.\nforce.csv: the force at {daq} Hz (N); camera.csv: the displacements at \
+         {camera} Hz (mm), from the same trigger.\n\nhost-harness ema --response camera.csv \
+         --excitation force.csv --excitation-col force_n --impact --f-max-hz 200\n"
+            .to_string()
+    } else {
+        let mut roving = String::new();
+        for &p in &r.hit_points {
+            let at = HammerTest {
+                drive: p - 1,
+                ..test.clone()
+            };
+            dir.write(&format!("force_{p}.csv"), force_csv(&at, r, &mut noise))?;
+            dir.write(&format!("camera_{p}.csv"), camera_csv(&at, r, &mut noise))?;
+            let _ = write!(roving, " --roving {p}=camera_{p}.csv,force_{p}.csv");
+        }
+        format!(
+            "hit by a roving hammer at points {:?}, one record each.\nforce_P.csv: the force \
+             at point P at {{daq}} Hz (N); camera_P.csv: the displacements then at {{camera}} Hz \
+             (mm), from the same trigger.\n\nhost-harness ema{roving} --excitation-col \
+             force_n --impact --f-max-hz 200\n",
+            r.hit_points
+        )
+    };
     let mut s = String::from("mode,f_hz,damping,point,shape\n");
     for (i, md) in test.modes.iter().enumerate() {
         for (o, v) in md.shape.iter().enumerate() {
@@ -102,11 +134,10 @@ pub fn write_hammer_recording(out: &Path, force: bool, r: &HammerRecording) -> a
     dir.write(
         "README.txt",
         format!(
-            "A synthetic impact hammer test: three modes (truth.csv), five points, hit at point \
-             2.\nforce.csv: the force at {} Hz (N); camera.csv: the displacements at {} Hz \
-             (mm), from the same trigger.\n\nhost-harness ema --response camera.csv \
-             --excitation force.csv --excitation-col force_n --impact --f-max-hz 200\n",
-            r.daq_hz, r.camera_hz
+            "A synthetic impact hammer test: three modes (truth.csv), five points, {}",
+            command
+                .replace("{daq}", &r.daq_hz.to_string())
+                .replace("{camera}", &r.camera_hz.to_string())
         ),
     )?;
     dir.commit()

@@ -26,6 +26,8 @@ pub struct EmaRequest {
     pub force: Series,
     /// Both at one rate and one start.
     pub aligned: Aligned,
+    /// A roving-hammer test's records, the first (`aligned`) too (empty: one test).
+    pub roving: Vec<RovingRead>,
     /// The analysis settings.
     pub settings: EmaSettings,
     /// The input files: the response, the excitation, then the poles and the geometry files
@@ -43,16 +45,68 @@ pub struct EmaRequest {
     pub wire: crate::export::wire::Wire,
 }
 
+/// One record of a roving-hammer test, read and aligned.
+#[derive(Debug, Clone)]
+pub struct RovingRead {
+    /// The point hit.
+    pub point: usize,
+    /// The record's name (its responses' file).
+    pub name: String,
+    /// What reading it said (the first record's are the request's).
+    pub notes: Vec<String>,
+    /// Its force and responses at the first record's rate.
+    pub aligned: Aligned,
+}
+
+/// A roving-hammer test's hit points, in its records' order (none for one test).
+pub fn points(req: &EmaRequest) -> Vec<usize> {
+    req.roving.iter().map(|r| r.point).collect()
+}
+
+/// The number of the point a shape's component `i` stands at: the hit point's when the shapes
+/// are over the hit points, else the response's (1-based).
+pub fn shape_at(req: &EmaRequest, r: &EmaResult, i: usize) -> usize {
+    if r.layout.over_inputs() {
+        req.roving.get(i).map_or(i + 1, |x| x.point)
+    } else {
+        i + 1
+    }
+}
+
+/// FRF `i`'s name: the response's, with several hit points "name @ hit P".
+fn frf_label(req: &EmaRequest, r: &EmaResult, i: usize) -> String {
+    let outputs = r.layout.outputs.max(1);
+    let name = &req.response.names[i % outputs];
+    match req.roving.get(i / outputs) {
+        Some(x) if r.layout.inputs > 1 => format!("{name} @ hit {}", x.point),
+        _ => name.clone(),
+    }
+}
+
 /// The analysis of `req` and its report, nothing written.
 pub fn compute(req: &EmaRequest) -> anyhow::Result<(EmaResult, String)> {
     let a = &req.aligned;
-    let r = analyse(
-        &a.force,
-        &a.responses,
-        a.fs_hz,
-        &req.force.names[0],
-        &req.settings,
-    )?;
+    let r = if req.roving.is_empty() {
+        analyse(
+            &a.force,
+            &a.responses,
+            a.fs_hz,
+            &req.force.names[0],
+            &req.settings,
+        )?
+    } else {
+        let records: Vec<super::roving::Record> = req
+            .roving
+            .iter()
+            .map(|r| super::roving::Record {
+                force: &r.aligned.force,
+                responses: &r.aligned.responses,
+                point: r.point,
+                name: &r.name,
+            })
+            .collect();
+        super::roving::analyse(&records, a.fs_hz, &req.settings)?
+    };
     let report = report(req, &r);
     Ok((r, report))
 }
@@ -64,7 +118,7 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
     let out = Staged::new(&req.out, req.force_out, "ema", &inputs)?;
     out.write(
         "frf.csv",
-        export::frf_csv(&r.freq_hz, &r.frfs.h1, &r.frfs.coherence),
+        export::frf_matrix_csv(&r.freq_hz, &r.frfs.h1, &r.frfs.coherence, &points(req)),
     )?;
     let system = if req.response.camera { "vision" } else { "daq" };
     let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
@@ -81,13 +135,14 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
         })
         .collect();
     out.write("modes.csv", export::modes_csv(&rows))?;
+    let result = &r;
     let shapes: Vec<OmaShapeRow> = r
         .modes
         .iter()
         .flat_map(|m| {
             m.shape.iter().enumerate().map(move |(o, c)| OmaShapeRow {
                 mode: m.mode,
-                target: o + 1,
+                target: shape_at(req, result, o),
                 xy_px: None,
                 value: *c,
                 method: "lscf",
@@ -238,7 +293,7 @@ fn uff_cut_notes(req: &EmaRequest) -> Vec<String> {
 }
 
 /// The FRFs as universal-file datasets 58 (function type 4): response `o` node `o`, the force
-/// node 0; the numerator's quantity from the FRF's form, units as the files state them.
+/// node 0 (a roving hammer's: the point hit); the numerator's quantity from the FRF's form, units as the files state them.
 fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
     let (quantity, label) = match req.settings.form {
         FrfForm::Receptance => (Quantity::Displacement, "Displacement"),
@@ -254,7 +309,7 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
         .map(|(o, h)| Dataset58 {
             id_lines: [
                 uff_field(
-                    &format!("H1 {} / {}", req.response.names[o], req.force.names[0]),
+                    &format!("H1 {} / {}", frf_label(req, r, o), req.force.names[0]),
                     80,
                 ),
                 "vibcam ema".into(),
@@ -264,11 +319,15 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
             ],
             function_id: o as u32 + 1,
             response: Dof {
-                node: o as u32 + 1,
+                node: (o % r.layout.outputs.max(1)) as u32 + 1,
                 direction: 0,
             },
+            // one test: the force's node 0; a roving hammer: the point hit
             reference: Dof {
-                node: 0,
+                node: req
+                    .roving
+                    .get(o / r.layout.outputs.max(1))
+                    .map_or(0, |x| x.point as u32),
                 direction: 0,
             },
             f0_hz: 0.0,
@@ -289,7 +348,7 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
     Ok(crate::export::uff::write_file(&sets)?)
 }
 
-/// The figures: the first four responses' |H1| with the fit, and the stabilisation diagram.
+/// The figures: the first four FRFs' |H1| with the fit, and the stabilisation diagram.
 pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plots::Figure>> {
     let (lo, hi) = r.band_hz;
     let k: Vec<usize> = (0..r.freq_hz.len())
@@ -302,12 +361,12 @@ pub fn figures(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<crate::plo
         let mut owned: Vec<(String, Vec<f64>)> = Vec::new();
         for (o, h) in r.frfs.h1.iter().enumerate().take(4) {
             owned.push((
-                req.response.names[o].clone(),
+                frf_label(req, r, o),
                 k.iter().map(|&i| value(h[i])).collect(),
             ));
             if let Some(c) = r.constants.get(o) {
                 owned.push((
-                    format!("{}{}", req.response.names[o], crate::plots::FIT),
+                    format!("{}{}", frf_label(req, r, o), crate::plots::FIT),
                     f.iter()
                         .map(|&fr| value(c.evaluate(&fitted, req.settings.form, fr)))
                         .collect(),
@@ -377,6 +436,12 @@ pub fn report(req: &EmaRequest, r: &EmaResult) -> String {
     inputs_text(&mut s, req);
     let df = r.freq_hz.get(1).copied().unwrap_or(0.0);
     match (&req.settings.excitation, &r.hits) {
+        (Excitation::Impact { .. }, Some(_)) if !r.roving.is_empty() => {
+            for (x, h) in req.roving.iter().zip(&r.roving) {
+                let _ = writeln!(s, "hit point {} ({}):", x.point, x.name);
+                hits_text(&mut s, &x.aligned, r, h, df);
+            }
+        }
         (Excitation::Impact { .. }, Some(h)) => hits_text(&mut s, &req.aligned, r, h, df),
         (Excitation::Continuous { nperseg }, _) => {
             let _ = writeln!(
@@ -437,6 +502,30 @@ fn inputs_text(s: &mut String, req: &EmaRequest) {
         .chain(&uff_cut_notes(req))
     {
         let _ = writeln!(s, "  {n}");
+    }
+    if !req.roving.is_empty() {
+        let _ = writeln!(
+            s,
+            "roving hammer: {} records, one per hit point (the first above), the same responses \
+             in each",
+            req.roving.len()
+        );
+        // each record's reading notes but those the first's (above) said already
+        let said: Vec<&String> = req
+            .response
+            .notes
+            .iter()
+            .chain(&req.force.notes)
+            .chain(&a.notes)
+            .collect();
+        for x in &req.roving {
+            let _ = writeln!(s, "  hit point {}: {}", x.point, x.name);
+            for n in x.notes.iter().chain(&x.aligned.notes) {
+                if !said.contains(&n) {
+                    let _ = writeln!(s, "    {n}");
+                }
+            }
+        }
     }
 }
 
@@ -570,11 +659,11 @@ fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
         let _ = writeln!(
             s,
             "(f and damping: the medians of each cluster's stable poles; intervals: jackknife \
-             over the {}; LSFD misfit: the worst response's relative misfit over the band)",
-            if r.hits.is_some() {
-                "hits"
-            } else {
-                "segment groups"
+             over the {}; LSFD misfit: the worst FRF's relative misfit over the band)",
+            match (&r.hits, r.roving.is_empty()) {
+                (Some(_), false) => "groups of every record's hits",
+                (Some(_), true) => "hits",
+                (None, _) => "segment groups",
             }
         );
     }
@@ -596,17 +685,52 @@ fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
     }
 }
 
-/// The report's lines on each response: its number and its mean coherence in the band.
+/// The report's lines on each response: its number and its mean coherence in the band (a
+/// roving hammer's: per hit point too).
 fn responses_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
     let (lo, hi) = r.band_hz;
-    let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
-    for (o, n) in req.response.names.iter().enumerate() {
+    let coherence = |i: usize| {
         let coh: Vec<f64> = (0..r.freq_hz.len())
             .filter(|&k| r.freq_hz[k] >= lo && r.freq_hz[k] <= hi)
-            .map(|k| r.frfs.coherence[o][k])
+            .map(|k| r.frfs.coherence[i][k])
             .collect();
-        let mean = coh.iter().sum::<f64>() / coh.len().max(1) as f64;
-        let _ = writeln!(s, "  {}: {n} (mean coherence in the band {mean:.3})", o + 1);
+        coh.iter().sum::<f64>() / coh.len().max(1) as f64
+    };
+    if r.layout.inputs > 1 {
+        let over = r.layout.over_inputs();
+        let _ = writeln!(
+            s,
+            "\nresponses (the `target` of frf.csv{}):",
+            if over { "" } else { " and shapes.csv" }
+        );
+        for (o, n) in req.response.names.iter().enumerate() {
+            let _ = writeln!(s, "  {}: {n}", o + 1);
+        }
+        let _ = writeln!(
+            s,
+            "hit points (the `hit_point` of frf.csv{}), each FRF's mean coherence in the band:",
+            if over {
+                ", the `target` of shapes.csv"
+            } else {
+                ""
+            }
+        );
+        for (j, x) in req.roving.iter().enumerate() {
+            let each: Vec<String> = (0..r.layout.outputs)
+                .map(|o| format!("{:.3}", coherence(j * r.layout.outputs + o)))
+                .collect();
+            let _ = writeln!(s, "  {}: {} ({})", x.point, x.name, each.join(", "));
+        }
+        return;
+    }
+    let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
+    for (o, n) in req.response.names.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "  {}: {n} (mean coherence in the band {:.3})",
+            o + 1,
+            coherence(o)
+        );
     }
     if r.unit_sizes.len() == 1 {
         let _ = writeln!(
