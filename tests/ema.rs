@@ -290,39 +290,7 @@ fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
         planner.plan_fft_inverse(n).process(&mut back);
         force = back.iter().map(|c| c.re / n as f64).collect();
     }
-    let mut responses = Vec::new();
-    for o in 0..POINTS {
-        let mut x: Vec<Complex<f64>> = (0..n)
-            .map(|k| {
-                let h = test.receptance(o, freq(k));
-                let h = if k > n / 2 { h.conj() } else { h };
-                spec[k] * Complex::new(h.re, h.im) * 1e3 / n as f64
-            })
-            .collect();
-        planner.plan_fft_inverse(n).process(&mut x);
-        let re: Vec<f64> = x.iter().map(|c| c.re).collect();
-        let rms = (re.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-        let e = host_harness::testing::uniform_noise(20 + o as u64, n);
-        responses.push(
-            re.iter()
-                .zip(&e)
-                .map(|(v, e)| v + 1e-3 * rms * 3.46 * e)
-                .collect::<Vec<f64>>(),
-        );
-    }
-    let mut f = String::from("t_s,force_n\n");
-    let mut r = String::from("t_s,p1,p2,p3,p4,p5\n");
-    for k in 0..n {
-        let t = k as f64 / fs;
-        f.push_str(&format!("{t},{}\n", force[k]));
-        r.push_str(&format!("{t}"));
-        for x in &responses {
-            r.push_str(&format!(",{}", x[k]));
-        }
-        r.push('\n');
-    }
-    std::fs::write(dir.join("force.csv"), f).unwrap();
-    std::fs::write(dir.join("camera.csv"), r).unwrap();
+    write_driven(dir, fs, &[("force_n", force, spec, test.drive)], 20);
     test
 }
 
@@ -755,6 +723,147 @@ fn a_roving_hammer_gives_the_modes_and_the_shapes_over_the_hit_points() {
     assert_exit_2(
         &o,
         "its records are analysed at 20000 Hz, the first record's at 10000 Hz",
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A force driving the structure: its column's name, samples, spectrum (a full complex
+/// transform) and the point it drives (0-based).
+type Driven<'a> = (
+    &'a str,
+    Vec<f64>,
+    Vec<rustfft::num_complex::Complex<f64>>,
+    usize,
+);
+
+/// Writes `force.csv` (`t_s` and a column per force) and `camera.csv` (`t_s,p1..p5`): the five
+/// points' exact periodic displacements (mm) under `forces` through the receptances of the
+/// three-mode structure, each with uniform noise of 0.1 % of its RMS (seeds from `seed`).
+fn write_driven(dir: &Path, fs: f64, forces: &[Driven], seed: u64) {
+    use rustfft::num_complex::Complex;
+    let n = forces[0].1.len();
+    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let freq = |k: usize| (if k <= n / 2 { k } else { n - k }) as f64 * fs / n as f64;
+    let mut responses = Vec::new();
+    for o in 0..POINTS {
+        let mut x: Vec<Complex<f64>> = (0..n)
+            .map(|k| {
+                forces
+                    .iter()
+                    .map(|(_, _, sp, d)| {
+                        let test = HammerTest {
+                            drive: *d,
+                            ..HammerTest::three_modes(Vec::new())
+                        };
+                        let h = test.receptance(o, freq(k));
+                        let h = if k > n / 2 { h.conj() } else { h };
+                        sp[k] * Complex::new(h.re, h.im) * 1e3 / n as f64
+                    })
+                    .sum()
+            })
+            .collect();
+        planner.plan_fft_inverse(n).process(&mut x);
+        let re: Vec<f64> = x.iter().map(|c| c.re).collect();
+        let rms = (re.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+        let e = host_harness::testing::uniform_noise(seed + o as u64, n);
+        responses.push(
+            re.iter()
+                .zip(&e)
+                .map(|(v, e)| v + 1e-3 * rms * 3.46 * e)
+                .collect::<Vec<f64>>(),
+        );
+    }
+    let names: Vec<&str> = forces.iter().map(|f| f.0).collect();
+    let mut f = format!("t_s,{}\n", names.join(","));
+    let mut r = String::from("t_s,p1,p2,p3,p4,p5\n");
+    for k in 0..n {
+        let t = k as f64 / fs;
+        f.push_str(&format!("{t}"));
+        for force in forces {
+            f.push_str(&format!(",{}", force.1[k]));
+        }
+        f.push('\n');
+        r.push_str(&format!("{t}"));
+        for x in &responses {
+            r.push_str(&format!(",{}", x[k]));
+        }
+        r.push('\n');
+    }
+    std::fs::write(dir.join("force.csv"), f).unwrap();
+    std::fs::write(dir.join("camera.csv"), r).unwrap();
+}
+
+/// Two shakers' white forces at points 2 and 4 (`force.csv`: `t_s,shaker_a,shaker_b`) and the
+/// five points' exact periodic displacements through the receptances (`camera.csv`), 2^16
+/// samples at 1 kHz, 0.1 % noise.
+fn write_shakers_test(dir: &Path) {
+    use rustfft::num_complex::Complex;
+    std::fs::create_dir_all(dir).unwrap();
+    let (fs, n) = (1000.0, 1usize << 16);
+    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let forces: Vec<Vec<f64>> = (0..2)
+        .map(|i| host_harness::testing::uniform_noise(31 + i, n))
+        .collect();
+    let spectra: Vec<Vec<Complex<f64>>> = forces
+        .iter()
+        .map(|f| {
+            let mut s: Vec<Complex<f64>> = f.iter().map(|v| Complex::new(*v, 0.0)).collect();
+            planner.plan_fft_forward(n).process(&mut s);
+            s
+        })
+        .collect();
+    let driven: Vec<Driven> = ["shaker_a", "shaker_b"]
+        .into_iter()
+        .zip(forces)
+        .zip(spectra)
+        .zip([1, 3])
+        .map(|(((name, f), sp), d)| (name, f, sp, d))
+        .collect();
+    write_driven(dir, fs, &driven, 40);
+}
+
+#[test]
+fn two_shakers_at_once_give_the_frf_matrix_and_the_modes() {
+    let dir = std::env::temp_dir().join(format!("vibcam-shakers-{}", std::process::id()));
+    write_shakers_test(&dir);
+    let (r, f, out) = (
+        dir.join("camera.csv"),
+        dir.join("force.csv"),
+        dir.join("out"),
+    );
+    let o = harness(&words(
+        "ema --response {} --excitation {} --excitation-col shaker_a --excitation-col shaker_b --f-min-hz 5 --f-max-hz 200 --no-plots --out {}",
+        &[r.to_str().unwrap(), f.to_str().unwrap(), out.to_str().unwrap()],
+    ));
+    assert_says(
+        &o,
+        &[
+            "force 2: ",
+            "2 forces at once: the FRF matrix by the multiple-input H1",
+            "2 forces: the median conditioning of their cross-spectral matrix",
+            "each one's mean multiple coherence with the forces in the band",
+        ],
+    );
+    check_modes(&out, &HammerTest::three_modes(Vec::new()), "two shakers");
+    let frf = std::fs::read_to_string(out.join("frf.csv")).unwrap();
+    assert!(frf.starts_with("freq_hz,target,force,re,im,abs,coherence\n"));
+    assert_eq!(frf.lines().nth(10).unwrap().split(',').nth(2), Some("2"));
+    assert_eq!(frf.lines().filter(|l| l.starts_with("0,")).count(), 10);
+    // one force named twice, and several forces with hits, are refused
+    let o = ema_of(
+        (&r, &f, "shaker_a"),
+        &dir.join("x"),
+        &["--excitation-col", "shaker_a"],
+    );
+    assert_exit_2(&o, "--excitation-col shaker_a is given twice");
+    let o = ema_of(
+        (&r, &f, "shaker_a"),
+        &dir.join("x"),
+        &["--excitation-col", "shaker_b"],
+    );
+    assert_exit_2(
+        &o,
+        "several forces at once are a continuous test (shakers), not --impact",
     );
     std::fs::remove_dir_all(&dir).ok();
 }

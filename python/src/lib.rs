@@ -1287,7 +1287,7 @@ fn modal_dict<'py>(
 /// the command's files are written there too.
 #[pyfunction]
 #[pyo3(signature = (response, excitation, roving=Vec::new(), response_cols=Vec::new(), response_fs=None,
-    excitation_col=None, excitation_fs=None, impact=false, exp_window="auto", block_s=None,
+    excitation_col=Vec::new(), excitation_fs=None, impact=false, exp_window="auto", block_s=None,
     delay_s=None, response_quantity="displacement", bands=None, f_min_hz=None, f_max_hz=None,
     max_order=48, nperseg=None, out=None, force=false, poles=None, pdf=false, geometry=None,
     call=None))]
@@ -1299,7 +1299,7 @@ fn ema<'py>(
     roving: Vec<(usize, String, String)>,
     response_cols: Vec<String>,
     response_fs: Option<f64>,
-    excitation_col: Option<String>,
+    excitation_col: Vec<String>,
     excitation_fs: Option<f64>,
     impact: bool,
     exp_window: &str,
@@ -1336,7 +1336,7 @@ fn ema<'py>(
                 },
             )
             .collect(),
-        excitation_col,
+        excitation_cols: excitation_col,
         excitation_fs,
         impact,
         exp_window: exp,

@@ -151,3 +151,31 @@ def test_a_roving_hammer_gives_the_shapes_over_the_hit_points(harness, tmp_path)
         vibcam.ema(roving=[(0, d / "camera_1.csv", d / "force_1.csv")], impact=True)
     with pytest.raises(vibcam.InputError, match="roving: hit point 2 is given twice"):
         vibcam.ema(roving=records[:2] + records[1:2], excitation_col="force_n", impact=True)
+
+
+def test_several_forces_are_a_list_of_excitation_channels(tmp_path):
+    rng = np.random.default_rng(5)
+    n, fs = 1 << 15, 1000.0
+    f = rng.standard_normal((2, n))
+    # point 1 driven by shaker a, point 2 by b, each a single mode at 40 / 90 Hz
+    freq = np.fft.rfftfreq(n, 1 / fs)
+    w = 2 * np.pi * freq
+
+    def mode(fn, z):
+        wn = 2 * np.pi * fn
+        return 1.0 / (wn ** 2 - w ** 2 + 2j * z * wn * w)
+
+    h = [[mode(40, 0.02) + 0.5 * mode(90, 0.01), 0.5 * mode(40, 0.02) - mode(90, 0.01)],
+         [0.5 * mode(40, 0.02) - mode(90, 0.01), 0.25 * mode(40, 0.02) + mode(90, 0.01)]]
+    F = np.fft.rfft(f, axis=1)
+    x = [np.fft.irfft(h[o][0] * F[0] + h[o][1] * F[1], n) for o in range(2)]
+    t = np.arange(n) / fs
+    np.savetxt(tmp_path / "force.csv", np.column_stack([t, f.T]), delimiter=",",
+               header="t_s,a,b", comments="")
+    np.savetxt(tmp_path / "resp.csv", np.column_stack([t, np.array(x).T]), delimiter=",",
+               header="t_s,x1,x2", comments="")
+    r = vibcam.ema(tmp_path / "resp.csv", tmp_path / "force.csv", excitation_col=["a", "b"],
+                   f_min_hz=10, f_max_hz=200)
+    assert r.h1.shape == (4, len(r.freq_hz))
+    assert sorted(round(v) for v in r.modes["f_hz"]) == [40, 90]
+    assert "2 forces at once" in r.report

@@ -746,7 +746,7 @@ def ema(
     roving: _Optional[_Sequence[_Sequence[_Any]]] = None,
     response_cols: _Optional[_Sequence[str]] = None,
     response_fs: _Optional[float] = None,
-    excitation_col: _Optional[str] = None,
+    excitation_col: _Optional[_Union[str, _Sequence[str]]] = None,
     excitation_fs: _Optional[float] = None,
     impact: bool = False,
     exp_window: _Union[str, float] = "auto",
@@ -769,7 +769,8 @@ def ema(
 
     ``response``: ``displacement.csv`` of ``track``/``analyze``, a wide CSV, a pyidi ``.npy``
     or a DAQ file (``.lvm``, ``.tdms``, ``.uff``); ``response_cols`` picks channels by name.
-    ``excitation``: the file with the force, ``excitation_col`` its channel. Rates come from the
+    ``excitation``: the file with the force, ``excitation_col`` its channel (a list of channels:
+    several forces at once, shakers, the FRF matrix by the multiple-input H1). Rates come from the
     files, else ``response_fs``/``excitation_fs``; the slower record is upsampled to the
     faster's rate. ``impact``: hits of a hammer (``exp_window`` ``"off"``, ``"auto"`` or the
     window's value at the block's end; ``block_s`` the longest block); else a continuous force
@@ -803,7 +804,8 @@ def ema(
         roving=records,
         response_cols=cols,
         response_fs=_setting("ema", "response_fs", response_fs, optional=True),
-        excitation_col=None if excitation_col is None else str(excitation_col),
+        excitation_col=([] if excitation_col is None else [str(excitation_col)]
+                        if isinstance(excitation_col, str) else [str(c) for c in excitation_col]),
         excitation_fs=_setting("ema", "excitation_fs", excitation_fs, optional=True),
         impact=bool(impact),
         exp_window=exp_window,

@@ -418,7 +418,8 @@ pub const SETTINGS: &[Setting] = &[
         words: &[],
         unit: "",
         default: DefaultValue::None,
-        help: "The force's channel (default: the file's only channel).",
+        help: "The force's channel (default: the file's only channel); repeated, several \
+               forces at once (shakers), each a channel of the same file.",
     },
     Setting {
         key: "impact",

@@ -90,7 +90,7 @@ pub struct Args {
     pub roving: Vec<RovingRecord>,
     /// `$excitation_col`.
     #[arg(long, value_name = "NAME", help = super::args::help("excitation_col"))]
-    pub excitation_col: Option<String>,
+    pub excitation_col: Vec<String>,
     /// `$excitation_fs`.
     #[arg(long, value_name = "HZ", value_parser = super::args::number("excitation_fs"), help = super::args::help("excitation_fs"))]
     pub excitation_fs: Option<f64>,
@@ -161,7 +161,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .or_else(|| first.map(|r| r.excitation.clone()))
             .unwrap_or_default(),
         roving: args.roving,
-        excitation_col: args.excitation_col,
+        excitation_cols: args.excitation_col,
         excitation_fs: args.excitation_fs,
         impact: args.impact,
         exp_window: args.exp_window,

@@ -29,8 +29,9 @@ pub struct EmaInput {
     /// `$roving`: a roving-hammer test's records, one per hit point (empty: the one test of
     /// `response` and `excitation`, which are then the first record's).
     pub roving: Vec<RovingRecord>,
-    /// `$excitation_col` (none: the file's only channel).
-    pub excitation_col: Option<String>,
+    /// `$excitation_col`: the force's channel (none: the file's only channel), or several
+    /// forces at once (shakers), each a channel of the excitation's file.
+    pub excitation_cols: Vec<String>,
     /// `$excitation_fs`, Hz, when the file states no rate.
     pub excitation_fs: Option<f64>,
     /// `$impact`: hits of a hammer (else a continuous force).
@@ -137,7 +138,7 @@ fn read_record(input: &EmaInput, files: (&Path, &Path)) -> SpecResult<Read> {
         .map_err(SpecError::Input)?;
     let force = read_force(
         files.1,
-        input.excitation_col.as_deref().unwrap_or(""),
+        input.excitation_cols.first().map_or("", String::as_str),
         input.excitation_fs,
     )
     .map_err(SpecError::Input)?;
@@ -160,6 +161,19 @@ fn read_record(input: &EmaInput, files: (&Path, &Path)) -> SpecResult<Read> {
     }
     choose_axis(&mut response, &mut aligned, rule, (f_min, f_max));
     Ok((response, force, aligned))
+}
+
+/// The forces after the first (`$excitation_col` repeated: shakers at once), each read from the
+/// excitation's file and aligned with the responses as the first was.
+fn more_forces(input: &EmaInput, response: &Series) -> SpecResult<Vec<(Series, Vec<f64>)>> {
+    let mut out = Vec::new();
+    for col in input.excitation_cols.iter().skip(1) {
+        let force =
+            read_force(&input.excitation, col, input.excitation_fs).map_err(SpecError::Input)?;
+        let a = align(response, &force, input.delay_s.unwrap_or(0.0)).map_err(SpecError::Input)?;
+        out.push((force, a.force));
+    }
+    Ok(out)
 }
 
 /// A roving-hammer test's other records (after the first, `first`), read as the first: the same
@@ -207,6 +221,7 @@ impl EmaSpec {
         check_alone(&input)?;
         let first = read_record(&input, (&input.response, &input.excitation))?;
         let others = read_roving(&input, &first)?;
+        let more = more_forces(&input, &first.0)?;
         let (response, force, aligned) = first;
         let (f_min, f_max) = band_analysed(&input, aligned.nyquist_hz)?;
         let excitation = excitation(&input, &aligned)?;
@@ -260,6 +275,7 @@ impl EmaSpec {
                 force,
                 aligned,
                 roving,
+                more_forces: more,
                 settings,
                 inputs: [&input.response, &input.excitation]
                     .into_iter()
@@ -336,6 +352,23 @@ fn estimated_delay(
 
 /// The settings checked on their own, before any file is read.
 fn check_alone(input: &EmaInput) -> SpecResult<()> {
+    let cols = &input.excitation_cols;
+    if let Some((_, c)) = cols
+        .iter()
+        .enumerate()
+        .find(|(i, c)| cols[..*i].contains(c))
+    {
+        return Err(SpecError::setting(format!(
+            "$excitation_col {c} is given twice: each force once"
+        )));
+    }
+    if cols.len() > 1 && (input.impact || !input.roving.is_empty()) {
+        return Err(SpecError::setting(
+            "$excitation_col given more than once: several forces at once are a continuous \
+             test (shakers), not $impact nor $roving"
+                .to_string(),
+        ));
+    }
     let mut points: Vec<usize> = input.roving.iter().map(|r| r.point).collect();
     points.sort_unstable();
     if let Some(w) = points.windows(2).find(|w| w[0] == w[1]) {

@@ -10,6 +10,7 @@ pub mod excited;
 pub mod impact;
 pub use crate::oma::lscf;
 pub mod lsfd;
+pub mod mimo;
 pub mod roving;
 pub mod spectra;
 
@@ -146,18 +147,16 @@ impl Layout {
         }
     }
 
-    /// FRF `k` named for a reader: "response 2", or with several hit points "response 2 at
-    /// hit point 3" (`points`: the hit points' numbers).
+    /// FRF `k` named for a reader: "response 2", with several hit points "response 2 at
+    /// hit point 3" (`points`: the hit points' numbers), with several forces at once (no
+    /// points) "response 2 over force 1".
     pub fn frf_name(&self, k: usize, points: &[usize]) -> String {
         let o = k % self.outputs.max(1) + 1;
-        if self.inputs <= 1 {
-            format!("response {o}")
-        } else {
-            let j = k / self.outputs.max(1);
-            format!(
-                "response {o} at hit point {}",
-                points.get(j).copied().unwrap_or(j + 1)
-            )
+        let j = k / self.outputs.max(1);
+        match points.get(j) {
+            _ if self.inputs <= 1 => format!("response {o}"),
+            Some(p) => format!("response {o} at hit point {p}"),
+            None => format!("response {o} over force {}", j + 1),
         }
     }
 }
@@ -817,7 +816,15 @@ fn continuous_spectra(
     )?;
     let band_hz = match s.band_from_data {
         (false, false) => s.band_hz,
-        free => coherent_band(&sp, s.band_hz, free, notes),
+        free => {
+            let segments = sp.units.iter().map(|u| u.size).sum();
+            coherent_band(
+                (segments, &sp.freq_hz, &sp.frfs(None)),
+                s.band_hz,
+                free,
+                notes,
+            )
+        }
     };
     Ok(Prepared {
         spectra: sp,
@@ -827,16 +834,16 @@ fn continuous_spectra(
     })
 }
 
-/// The band of a continuous test: each end `free` chosen from where the responses follow the
-/// force ([`excited::coherent_span`]) inside `outer`, the others `outer`'s (said in `notes`);
-/// `outer` with too few segments or no coherent line.
+/// The band of a continuous test (`segments` averaged into the FRFs `frfs` at lines `freq`):
+/// each end `free` chosen from where the responses follow the force
+/// ([`excited::coherent_span`]) inside `outer`, the others `outer`'s (said in `notes`); `outer`
+/// with too few segments or no coherent line.
 fn coherent_band(
-    sp: &Spectra,
+    (segments, freq, frfs): (usize, &[f64], &Frfs),
     outer: (f64, f64),
     free: (bool, bool),
     notes: &mut Vec<String>,
 ) -> (f64, f64) {
-    let segments: usize = sp.units.iter().map(|u| u.size).sum();
     if segments < excited::COHERENCE_SEGMENTS {
         notes.push(format!(
             "{segments} Welch segments: too few for the coherence to say where the responses \
@@ -847,8 +854,7 @@ fn coherent_band(
         ));
         return outer;
     }
-    let frfs = sp.frfs(None);
-    let Some((lo, hi, lines)) = excited::coherent_span(&sp.freq_hz, &frfs.coherence, outer) else {
+    let Some((lo, hi, lines)) = excited::coherent_span(freq, &frfs.coherence, outer) else {
         notes.push(format!(
             "no line's coherence with the force reaches {} (the median over the responses): \
              the whole band {:.1}-{:.1} Hz fitted; are the responses those of the structure \

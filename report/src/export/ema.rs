@@ -10,27 +10,28 @@ use std::fmt::Write as _;
 /// `frf.csv`: `freq_hz,target,re,im,abs,coherence`, one row per line and response (`target`
 /// the response's number, 1-based, in the report's order).
 pub fn frf_csv(freq_hz: &[f64], h: &[Vec<Complex64>], coherence: &[Vec<f64>]) -> Vec<u8> {
-    frf_matrix_csv(freq_hz, h, coherence, &[])
+    frf_matrix_csv(freq_hz, h, coherence, ("", Vec::new()))
 }
 
-/// [`frf_csv`] of a roving-hammer test: `h[j * outputs + o]` the FRF of response `o` over the
-/// force at hit point `points[j]`, a `hit_point` column after `target` (none without points).
+/// [`frf_csv`] of an FRF matrix: `h[j * outputs + o]` the FRF of response `o` over input `j`
+/// (a roving hammer's hit point `points[j]`, or several forces' number), in a column `column`
+/// (`hit_point`, `force`) after `target` (none without points).
 pub fn frf_matrix_csv(
     freq_hz: &[f64],
     h: &[Vec<Complex64>],
     coherence: &[Vec<f64>],
-    points: &[usize],
+    (column, points): (&str, Vec<usize>),
 ) -> Vec<u8> {
     let outputs = if points.is_empty() {
         h.len().max(1)
     } else {
         (h.len() / points.len()).max(1)
     };
-    let mut s = String::from(if points.is_empty() {
-        "freq_hz,target,re,im,abs,coherence\n"
+    let mut s = if points.is_empty() {
+        String::from("freq_hz,target,re,im,abs,coherence\n")
     } else {
-        "freq_hz,target,hit_point,re,im,abs,coherence\n"
-    });
+        format!("freq_hz,target,{column},re,im,abs,coherence\n")
+    };
     for (k, f) in freq_hz.iter().enumerate() {
         for (i, (hi, co)) in h.iter().zip(coherence).enumerate() {
             let v = hi[k];

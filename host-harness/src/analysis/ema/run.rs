@@ -28,6 +28,9 @@ pub struct EmaRequest {
     pub aligned: Aligned,
     /// A roving-hammer test's records, the first (`aligned`) too (empty: one test).
     pub roving: Vec<RovingRead>,
+    /// The forces after the first (shakers at once): each as read, and its samples aligned
+    /// as `aligned.force`.
+    pub more_forces: Vec<(Series, Vec<f64>)>,
     /// The analysis settings.
     pub settings: EmaSettings,
     /// The input files: the response, the excitation, then the poles and the geometry files
@@ -58,9 +61,16 @@ pub struct RovingRead {
     pub aligned: Aligned,
 }
 
-/// A roving-hammer test's hit points, in its records' order (none for one test).
-pub fn points(req: &EmaRequest) -> Vec<usize> {
-    req.roving.iter().map(|r| r.point).collect()
+/// The FRF matrix's second index in `frf.csv`: a roving hammer's hit points (`hit_point`), or
+/// several forces' numbers (`force`); none for one force.
+pub fn frf_inputs(req: &EmaRequest) -> (&'static str, Vec<usize>) {
+    if !req.roving.is_empty() {
+        ("hit_point", req.roving.iter().map(|r| r.point).collect())
+    } else if !req.more_forces.is_empty() {
+        ("force", (1..=req.more_forces.len() + 1).collect())
+    } else {
+        ("", Vec::new())
+    }
 }
 
 /// The number of the point a shape's component `i` stands at: the hit point's when the shapes
@@ -73,20 +83,40 @@ pub fn shape_at(req: &EmaRequest, r: &EmaResult, i: usize) -> usize {
     }
 }
 
-/// FRF `i`'s name: the response's, with several hit points "name @ hit P".
+/// FRF `i`'s name: the response's, with several hit points "name @ hit P", with several
+/// forces "name / force".
 fn frf_label(req: &EmaRequest, r: &EmaResult, i: usize) -> String {
     let outputs = r.layout.outputs.max(1);
-    let name = &req.response.names[i % outputs];
-    match req.roving.get(i / outputs) {
-        Some(x) if r.layout.inputs > 1 => format!("{name} @ hit {}", x.point),
-        _ => name.clone(),
+    let (name, j) = (&req.response.names[i % outputs], i / outputs);
+    if let Some(x) = req.roving.get(j).filter(|_| r.layout.inputs > 1) {
+        format!("{name} @ hit {}", x.point)
+    } else if !req.more_forces.is_empty() {
+        format!("{name} / {}", force_name(req, j))
+    } else {
+        name.clone()
+    }
+}
+
+/// Force `j`'s channel name (0: the first).
+fn force_name(req: &EmaRequest, j: usize) -> &str {
+    match j {
+        0 => &req.force.names[0],
+        _ => req
+            .more_forces
+            .get(j - 1)
+            .map_or("", |m| m.0.names[0].as_str()),
     }
 }
 
 /// The analysis of `req` and its report, nothing written.
 pub fn compute(req: &EmaRequest) -> anyhow::Result<(EmaResult, String)> {
     let a = &req.aligned;
-    let r = if req.roving.is_empty() {
+    let r = if !req.more_forces.is_empty() {
+        let forces: Vec<Vec<f64>> = std::iter::once(a.force.clone())
+            .chain(req.more_forces.iter().map(|m| m.1.clone()))
+            .collect();
+        super::mimo::analyse(&forces, &a.responses, a.fs_hz, &req.settings)?
+    } else if req.roving.is_empty() {
         analyse(
             &a.force,
             &a.responses,
@@ -118,7 +148,7 @@ pub fn run(req: &EmaRequest) -> anyhow::Result<Outcome> {
     let out = Staged::new(&req.out, req.force_out, "ema", &inputs)?;
     out.write(
         "frf.csv",
-        export::frf_matrix_csv(&r.freq_hz, &r.frfs.h1, &r.frfs.coherence, &points(req)),
+        export::frf_matrix_csv(&r.freq_hz, &r.frfs.h1, &r.frfs.coherence, frf_inputs(req)),
     )?;
     let system = if req.response.camera { "vision" } else { "daq" };
     let cells = |i: Option<Interval>| i.map(|i| (i.u, i.lo, i.hi));
@@ -309,7 +339,11 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
         .map(|(o, h)| Dataset58 {
             id_lines: [
                 uff_field(
-                    &format!("H1 {} / {}", frf_label(req, r, o), req.force.names[0]),
+                    &if req.more_forces.is_empty() {
+                        format!("H1 {} / {}", frf_label(req, r, o), req.force.names[0])
+                    } else {
+                        format!("H1 {}", frf_label(req, r, o))
+                    },
                     80,
                 ),
                 "vibcam ema".into(),
@@ -322,12 +356,12 @@ fn uff(req: &EmaRequest, r: &EmaResult) -> anyhow::Result<Vec<u8>> {
                 node: (o % r.layout.outputs.max(1)) as u32 + 1,
                 direction: 0,
             },
-            // one test: the force's node 0; a roving hammer: the point hit
+            // one force: node 0; a roving hammer: the point hit; several forces: their number
             reference: Dof {
-                node: req
-                    .roving
+                node: frf_inputs(req)
+                    .1
                     .get(o / r.layout.outputs.max(1))
-                    .map_or(0, |x| x.point as u32),
+                    .map_or(0, |&x| x as u32),
                 direction: 0,
             },
             f0_hz: 0.0,
@@ -502,6 +536,32 @@ fn inputs_text(s: &mut String, req: &EmaRequest) {
         .chain(&uff_cut_notes(req))
     {
         let _ = writeln!(s, "  {n}");
+    }
+    several_inputs_text(s, req);
+}
+
+/// The report's lines on a test's forces after the first, or a roving hammer's records (each
+/// with what its reading said that the first's did not).
+fn several_inputs_text(s: &mut String, req: &EmaRequest) {
+    let a = &req.aligned;
+    let unit = |u: &Option<String>| u.clone().unwrap_or_else(|| "unit not stated".into());
+    for (i, (f, _)) in req.more_forces.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "force {}: {} channel `{}` ({}, {} Hz)",
+            i + 2,
+            req.inputs[1].display(),
+            f.names[0],
+            unit(&f.unit),
+            super::input::rate_text(f.fs_hz)
+        );
+    }
+    if !req.more_forces.is_empty() {
+        let _ = writeln!(
+            s,
+            "{} forces at once: the FRF matrix by the multiple-input H1 (Gxf Gff^-1 per line)",
+            req.more_forces.len() + 1
+        );
     }
     if !req.roving.is_empty() {
         let _ = writeln!(
@@ -697,31 +757,7 @@ fn responses_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
         coh.iter().sum::<f64>() / coh.len().max(1) as f64
     };
     if r.layout.inputs > 1 {
-        let over = r.layout.over_inputs();
-        let _ = writeln!(
-            s,
-            "\nresponses (the `target` of frf.csv{}):",
-            if over { "" } else { " and shapes.csv" }
-        );
-        for (o, n) in req.response.names.iter().enumerate() {
-            let _ = writeln!(s, "  {}: {n}", o + 1);
-        }
-        let _ = writeln!(
-            s,
-            "hit points (the `hit_point` of frf.csv{}), each FRF's mean coherence in the band:",
-            if over {
-                ", the `target` of shapes.csv"
-            } else {
-                ""
-            }
-        );
-        for (j, x) in req.roving.iter().enumerate() {
-            let each: Vec<String> = (0..r.layout.outputs)
-                .map(|o| format!("{:.3}", coherence(j * r.layout.outputs + o)))
-                .collect();
-            let _ = writeln!(s, "  {}: {} ({})", x.point, x.name, each.join(", "));
-        }
-        return;
+        return matrix_responses_text(s, req, r, &coherence);
     }
     let _ = writeln!(s, "\nresponses (the `target` of frf.csv and shapes.csv):");
     for (o, n) in req.response.names.iter().enumerate() {
@@ -737,5 +773,69 @@ fn responses_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
             s,
             "  (one hit: the coherence is 1 by construction and says nothing)"
         );
+    }
+}
+
+/// [`responses_text`] of an FRF matrix: each response (its multiple coherence with several
+/// forces), and the forces or a roving hammer's hit points (each FRF's coherence); `coherence`
+/// gives FRF `i`'s mean coherence in the band.
+fn matrix_responses_text(
+    s: &mut String,
+    req: &EmaRequest,
+    r: &EmaResult,
+    coherence: &dyn Fn(usize) -> f64,
+) {
+    if !req.more_forces.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nresponses (the `target` of frf.csv{}), each one's mean multiple coherence with \
+             the forces in the band:",
+            if r.layout.over_inputs() {
+                ""
+            } else {
+                " and shapes.csv"
+            }
+        );
+        for (o, n) in req.response.names.iter().enumerate() {
+            let _ = writeln!(s, "  {}: {n} ({:.3})", o + 1, coherence(o));
+        }
+        let _ = writeln!(
+            s,
+            "forces (the `force` of frf.csv{}): {}",
+            if r.layout.over_inputs() {
+                ", the `target` of shapes.csv"
+            } else {
+                ""
+            },
+            (0..r.layout.inputs)
+                .map(|j| format!("{}: {}", j + 1, force_name(req, j)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        return;
+    }
+    let over = r.layout.over_inputs();
+    let _ = writeln!(
+        s,
+        "\nresponses (the `target` of frf.csv{}):",
+        if over { "" } else { " and shapes.csv" }
+    );
+    for (o, n) in req.response.names.iter().enumerate() {
+        let _ = writeln!(s, "  {}: {n}", o + 1);
+    }
+    let _ = writeln!(
+        s,
+        "hit points (the `hit_point` of frf.csv{}), each FRF's mean coherence in the band:",
+        if over {
+            ", the `target` of shapes.csv"
+        } else {
+            ""
+        }
+    );
+    for (j, x) in req.roving.iter().enumerate() {
+        let each: Vec<String> = (0..r.layout.outputs)
+            .map(|o| format!("{:.3}", coherence(j * r.layout.outputs + o)))
+            .collect();
+        let _ = writeln!(s, "  {}: {} ({})", x.point, x.name, each.join(", "));
     }
 }
