@@ -22,6 +22,15 @@ use impact::{ExpWindow, Hits, ImpactRule};
 use num_complex::Complex64;
 use spectra::{Frfs, Spectra};
 
+/// Asserts that one of `notes` holds `needle` (the tests of several modules).
+#[cfg(test)]
+fn assert_noted(notes: &[String], needle: &str) {
+    assert!(
+        notes.iter().any(|n| n.contains(needle)),
+        "`{needle}` in none of {notes:?}"
+    );
+}
+
 /// The exponential window of an impact test.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ExpChoice {

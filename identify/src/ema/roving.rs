@@ -299,13 +299,7 @@ mod tests {
             let fi = m.f_interval.expect("an interval from three groups of hits");
             assert!(fi.lo <= m.pole.f_hz && m.pole.f_hz <= fi.hi);
         }
-        assert!(
-            r.notes
-                .iter()
-                .any(|n| n.starts_with("roving hammer: 5 records")),
-            "{:?}",
-            r.notes
-        );
+        super::super::assert_noted(&r.notes, "roving hammer: 5 records");
     }
 
     #[test]
