@@ -14,7 +14,7 @@ pub mod mimo;
 pub mod roving;
 pub mod spectra;
 
-use crate::modal::{normalise_shape, FrfForm, Pole};
+use crate::modal::{mac, normalise_shape, FrfForm, Pole};
 use crate::oma::cluster::{cluster, ClusterRule, Rejected, SsiMode};
 use crate::oma::ssi;
 use crate::oma::uncertainty::{jackknife_sized, Interval};
@@ -279,8 +279,13 @@ fn precursor(responses: &[Vec<f64>], hits: &Hits) -> f64 {
 
 /// The poles of `h1` and the modes among them: every stable cluster, or per band the fullest
 /// reported cluster in it (`None` where a band has none).
-fn select(freq_hz: &[f64], h1: &[Vec<Complex64>], s: &EmaSettings) -> anyhow::Result<Selection> {
-    let poles = lscf::poles(freq_hz, h1, s.band_hz, s.lscf)?;
+fn select(
+    freq_hz: &[f64],
+    h1: &[Vec<Complex64>],
+    layout: Layout,
+    s: &EmaSettings,
+) -> anyhow::Result<Selection> {
+    let poles = layout_poles(freq_hz, h1, layout, s)?;
     let (modes, rejected) = cluster(&poles, s.cluster);
     let per_band = match &s.bands {
         None => modes.iter().cloned().map(Some).collect(),
@@ -301,6 +306,31 @@ fn select(freq_hz: &[f64], h1: &[Vec<Complex64>], s: &EmaSettings) -> anyhow::Re
         rejected,
         per_band,
     })
+}
+
+/// The LSCF poles of the FRFs `h1` (input-major, as `layout` says): with one hit point or one
+/// response the common denominator over every FRF, else the poly-reference LSCF with the
+/// fewer of forces and responses as references (the matrix transposed when the hit points
+/// are more, by reciprocity), so that the poles' shapes are over [`Layout::over_inputs`]'s
+/// side (docs/method.md §3.13).
+fn layout_poles(
+    freq_hz: &[f64],
+    h1: &[Vec<Complex64>],
+    layout: Layout,
+    s: &EmaSettings,
+) -> anyhow::Result<Vec<ssi::Pole>> {
+    let Layout { outputs, inputs } = layout;
+    if outputs.min(inputs) <= 1 || h1.len() != outputs * inputs {
+        return lscf::poles(freq_hz, h1, s.band_hz, s.lscf);
+    }
+    if layout.over_inputs() {
+        // h1[j * outputs + o]: rows are the hit points, the responses the references
+        return lscf::poles_matrix(freq_hz, h1, outputs, s.band_hz, s.lscf);
+    }
+    let by_response: Vec<Vec<Complex64>> = (0..outputs * inputs)
+        .map(|oj| h1[(oj % inputs) * outputs + oj / inputs].clone())
+        .collect();
+    lscf::poles_matrix(freq_hz, &by_response, inputs, s.band_hz, s.lscf)
 }
 
 /// One replicate of a mode: its pole and residues (`None`: not found without that unit).
@@ -396,20 +426,15 @@ fn identify(f: Formed, s: &EmaSettings, mut notes: Vec<String>) -> anyhow::Resul
     given_in_band(s, f.exp)?;
     let Selection {
         poles,
-        modes: all,
-        rejected,
+        modes: mut all,
+        mut rejected,
         per_band,
-    } = select(&f.freq, &f.frfs.h1, s)?;
-    let chosen = s.poles.as_ref().map_or_else(
+    } = select(&f.freq, &f.frfs.h1, f.layout, s)?;
+    let mut chosen = s.poles.as_ref().map_or_else(
         || chosen_modes(per_band, s.bands.as_deref(), &mut notes),
         |given| given_modes(given, f.exp, &poles),
     );
-    let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
-    let constants = if fitted.is_empty() {
-        Vec::new()
-    } else {
-        lsfd::fit(&f.freq, &f.frfs.h1, s.band_hz, &fitted, s.form)?
-    };
+    let (fitted, constants) = fit_without_twins(&f, s, &mut chosen, (&mut all, &mut rejected))?;
     let units = f.unit_sizes.len();
     let reps = if units >= 3 && !fitted.is_empty() {
         replicates((units, f.without), &f.freq, &fitted, s, f.layout)
@@ -452,6 +477,84 @@ fn identify(f: Formed, s: &EmaSettings, mut notes: Vec<String>) -> anyhow::Resul
         unit_sizes: f.unit_sizes,
         notes,
     })
+}
+
+/// The chosen modes' poles and LSFD constants, each mode that is another's [`twin`] dropped
+/// (to `rejected`, and out of `all`) and the rest fitted again; poles given are all kept.
+fn fit_without_twins(
+    f: &Formed,
+    s: &EmaSettings,
+    chosen: &mut Vec<(Option<(f64, f64)>, SsiMode)>,
+    (all, rejected): (&mut Vec<SsiMode>, &mut Vec<Rejected>),
+) -> anyhow::Result<(Vec<Pole>, Vec<lsfd::Constants>)> {
+    loop {
+        let fitted: Vec<Pole> = chosen.iter().map(|(_, m)| pole_of(m)).collect();
+        let constants = if fitted.is_empty() {
+            Vec::new()
+        } else {
+            lsfd::fit(&f.freq, &f.frfs.h1, s.band_hz, &fitted, s.form)?
+        };
+        let twin = match s.poles {
+            Some(_) => None,
+            None => twin(chosen, &constants, f.layout),
+        };
+        let Some(t) = twin else {
+            return Ok((fitted, constants));
+        };
+        let (_, c) = chosen.remove(t.drop);
+        all.retain(|m| m != &c);
+        rejected.push(Rejected {
+            cluster: c,
+            reason: t.reason,
+        });
+        rejected.sort_by(|a, b| a.cluster.f_hz.total_cmp(&b.cluster.f_hz));
+    }
+}
+
+/// A mode chosen that is another's second pole: which to drop, and why.
+struct Twin {
+    drop: usize,
+    reason: String,
+}
+
+/// Of the modes `chosen` and their LSFD `constants`, one whose residues give the shape (MAC
+/// at least 0.9, as [`Layout::vector`] takes it) of a fuller cluster's mode within five of its
+/// half-power bandwidths: the fitted model's second pole for one mode of the structure (the
+/// poly-reference model, with a matrix denominator, can place one beside a mode's own on noisy
+/// FRFs; its shape across the orders is noise, so the clusters' own rule does not see it).
+/// Two close modes of the structure have shapes of their own and are kept.
+fn twin(
+    chosen: &[(Option<(f64, f64)>, SsiMode)],
+    constants: &[lsfd::Constants],
+    layout: Layout,
+) -> Option<Twin> {
+    if constants.is_empty() {
+        return None;
+    }
+    let shapes: Vec<Vec<Complex64>> = (0..chosen.len())
+        .map(|i| layout.vector(&constants.iter().map(|c| c.residues[i]).collect::<Vec<_>>()))
+        .collect();
+    for i in 0..chosen.len() {
+        for j in i + 1..chosen.len() {
+            let (a, b) = (&chosen[i].1, &chosen[j].1);
+            let (fuller, other) = if a.poles >= b.poles { (i, j) } else { (j, i) };
+            let (m, c) = (&chosen[fuller].1, &chosen[other].1);
+            let within = (m.f_hz - c.f_hz).abs() <= 5.0 * 2.0 * m.damping.max(c.damping) * m.f_hz;
+            let same = mac(&shapes[i], &shapes[j]);
+            if within && same >= 0.9 {
+                return Some(Twin {
+                    drop: other,
+                    reason: format!(
+                        "LSFD gives it the shape of the {:.4} Hz mode (MAC {same:.3}), a fuller \
+                         column ({} poles) within five of its half-power bandwidths: a second \
+                         pole of the fitted model for that mode",
+                        m.f_hz, m.poles
+                    ),
+                });
+            }
+        }
+    }
+    None
 }
 
 /// A note when the fitted model leaves over a fifth of an FRF unexplained, with the cause the
@@ -905,7 +1008,7 @@ fn replicates(
     let mut reps: Vec<Vec<Replicate>> = vec![Vec::new(); fitted.len()];
     for g in 0..units {
         let h1 = without(g);
-        let got = select(freq, &h1, s).ok();
+        let got = select(freq, &h1, layout, s).ok();
         let matched: Vec<Option<Pole>> = fitted
             .iter()
             .map(|p| {

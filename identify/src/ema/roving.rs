@@ -5,8 +5,9 @@
 //! length (the shortest any record's hit spacing allows) and one exponential window (applied to
 //! every record when one needs it: its decay is the same in every FRF and taken off the poles
 //! as for one record); the band fitted is the union of the records' own. The FRF matrix
-//! `H[o][j]` (response `o` over the force at hit point `j`) is fitted as one set of FRFs: LSCF's
-//! common denominator gives the poles, LSFD the residues of every FRF. A mode's residues form the
+//! `H[o][j]` (response `o` over the force at hit point `j`) is fitted as one set of FRFs: LSCF
+//! gives the poles (poly-reference with the fewer of responses and hit points as references),
+//! LSFD the residues of every FRF. A mode's residues form the
 //! matrix `A_r = phi_r L_r^T` (responses x hit points), of rank one; its dominant singular
 //! vectors are the shape over the responses and over the hit points (the same shape where both
 //! sets hold the point and the structure is reciprocal, Maxwell-Betti). The shape reported is

@@ -1,8 +1,9 @@
 //! Output-only LSCF on half-spectra (docs/method.md §3.12): the cross-spectral matrix's
 //! columns of a few reference channels turned into **positive half-spectra** (the transform of
 //! the correlation function's positive lags, which has the modal form of an FRF: each mode a
-//! pole pair over a common denominator), fitted by the LSCF kernel `ema` uses on FRFs
-//! ([`super::lscf`]), the poles of every order judged stable as SSI's.
+//! pole pair with a residue `phi_r l_r^T`), fitted by the poly-reference LSCF kernel `ema`
+//! uses on FRF matrices ([`super::lscf::poles_matrix`]), the poles of every order judged
+//! stable as SSI's.
 //!
 //! From the Welch matrix `G_ij(f)` (one-sided) of lag window `w_c` ([`super::fdd::lag_window`]):
 //! the two-sided spectrum, its inverse transform (the circular correlation `R_ij(l)` times
@@ -14,9 +15,11 @@
 //! pole's decay; the kernel takes it off ([`super::lscf::LscfRule::decay_per_s`]).
 //!
 //! The functions fitted are `S+_ir` for every channel `i` and reference `r`: the references
-//! are every channel up to four, else the four of most power (their auto-spectra summed). A
-//! pole's shape is the dominant left singular vector of its `K x R` numerator matrix (the
-//! residue of a mode is `phi_r l_r^T`, rank one).
+//! are every channel up to four, else the four of most power (their auto-spectra summed). The
+//! model is the right matrix fraction `S+(w) = B(z) A(z)^-1` with `R x R` matrix coefficients
+//! (PolyMAX, as pyOMA-2's pLSCF); a pole's shape is `B(z_r) v` over the channels, `v` the null
+//! vector of `A(z_r)`. Until 2026-12-07 it was one common denominator over the `K R`
+//! functions, each pole's shape the dominant singular vector of its `K x R` numerators.
 
 use super::cluster::{self, SsiMode};
 use super::csd::Csd;
@@ -24,7 +27,6 @@ use super::lscf::{self, LscfRule};
 use super::ssi::Pole;
 use super::uncertainty;
 use crate::modal::mac;
-use nalgebra::DMatrix;
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
 
@@ -124,8 +126,8 @@ pub fn half_spectra(
 }
 
 /// The poles of every order of the half-spectra `h` of records sampled at `fs_hz` in
-/// `band_hz` by the LSCF kernel with `rule` (its window decay set here), each pole's shape the
-/// dominant left singular vector of its numerator matrix (module documentation).
+/// `band_hz` by the poly-reference LSCF kernel with `rule` (its window decay set here), the
+/// references `h`'s, each pole's shape over the channels (module documentation).
 pub fn poles(
     h: &HalfSpectra,
     fs_hz: f64,
@@ -136,12 +138,7 @@ pub fn poles(
         decay_per_s: fs_hz / h.tau,
         ..rule
     };
-    let refs = h.references.len().max(1);
-    let mut poles = lscf::poles(&h.freq_hz, &h.s, band_hz, rule)?;
-    for p in &mut poles {
-        p.shape = dominant(&p.shape, refs);
-    }
-    Ok(poles)
+    lscf::poles_matrix(&h.freq_hz, &h.s, h.references.len().max(1), band_hz, rule)
 }
 
 /// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without it)
@@ -280,26 +277,6 @@ fn jackknife_modes(
             .and_then(|d| uncertainty::jackknife_sized(d, &z, &sizes));
     }
     Ok(())
-}
-
-/// The dominant left singular vector of the `K x R` matrix `v` (row-major `v[i * R + r]`).
-fn dominant(v: &[Complex64], refs: usize) -> Vec<Complex64> {
-    if refs == 1 {
-        return v.to_vec();
-    }
-    let k = v.len() / refs;
-    let m = DMatrix::<Complex64>::from_fn(k, refs, |i, r| v[i * refs + r]);
-    match nalgebra::SVD::try_new(m, true, false, f64::EPSILON, super::MAX_ITERATIONS) {
-        Some(svd) => {
-            let top = (0..svd.singular_values.len())
-                .max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]));
-            match (svd.u, top) {
-                (Some(u), Some(j)) => u.column(j).iter().copied().collect(),
-                _ => v.iter().step_by(refs).copied().collect(),
-            }
-        }
-        None => v.iter().step_by(refs).copied().collect(),
-    }
 }
 
 #[cfg(test)]

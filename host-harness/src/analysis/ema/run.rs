@@ -674,13 +674,35 @@ fn hz_text(v: f64) -> String {
     format!("{}", (v * scale).round() / scale)
 }
 
+/// The LSCF model of the fit: one common denominator (orders 2 to the highest) with one hit
+/// point or one response, else the poly-reference model with the fewer of them as references.
+fn lscf_text(
+    rule: crate::analysis::ema::lscf::LscfRule,
+    layout: crate::analysis::ema::Layout,
+) -> String {
+    let refs = layout.outputs.min(layout.inputs);
+    match refs {
+        0 | 1 => format!("LSCF orders 2-{}", rule.max_order),
+        _ => format!(
+            "poly-reference LSCF ({refs} references: the {}, {refs} x {refs} matrix \
+             coefficients), orders 1-{}",
+            if layout.over_inputs() {
+                "responses"
+            } else {
+                "forces"
+            },
+            crate::analysis::ema::lscf::matrix_order(rule, refs)
+        ),
+    }
+}
+
 /// The report's lines on the fit and its modes, and the clusters that are not modes.
 fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
     let (lo, hi) = r.band_hz;
     let stable = r.poles.iter().filter(|p| p.stable).count();
     let _ = writeln!(
         s,
-        "fit: {}-{} Hz ({}), LSCF orders 2-{}: {} poles, {stable} stable; {} mode{}",
+        "fit: {}-{} Hz ({}), {}: {} poles, {stable} stable; {} mode{}",
         hz_text(lo),
         hz_text(hi),
         match req.settings.form {
@@ -688,7 +710,7 @@ fn modes_text(s: &mut String, req: &EmaRequest, r: &EmaResult) {
             FrfForm::Mobility => "mobility: residuals (iw)^-1 and iw",
             FrfForm::Accelerance => "accelerance: residuals 1 and (iw)^2",
         },
-        req.settings.lscf.max_order,
+        lscf_text(req.settings.lscf, r.layout),
         r.poles.len(),
         r.modes.len(),
         if r.modes.len() == 1 { "" } else { "s" }

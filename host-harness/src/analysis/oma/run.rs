@@ -575,17 +575,25 @@ fn plscf_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         .iter()
         .filter(|f| **f >= band.0 && **f <= band.1)
         .count();
+    let refs = super::plscf::references(&r.csd);
+    let rule = crate::analysis::ema::lscf::LscfRule {
+        max_order: rule.max_order.min(lines.saturating_sub(2)) & !1,
+        ..rule
+    };
     let _ = writeln!(
         o,
-        "pLSCF: LSCF (a common denominator, orders 2 to {}, stable as SSI's) over {:.3}-{:.3} \
-         Hz on the half-spectra of references {} (the cross-spectral matrix's correlations \
-         at lags 0 to {} over the Welch lag window, times an exponential window falling to \
-         {} %, its decay taken off the poles); its stable poles clustered as SSI's",
-        rule.max_order.min(lines.saturating_sub(2)) & !1,
+        "pLSCF: poly-reference LSCF ({} x {} matrix coefficients, orders {} to {}, stable as \
+         SSI's) over {:.3}-{:.3} Hz on the half-spectra of references {} (the cross-spectral \
+         matrix's correlations at lags 0 to {} over the Welch lag window, times an exponential \
+         window falling to {} %, its decay taken off the poles); its stable poles clustered as \
+         SSI's",
+        refs.len(),
+        refs.len(),
+        if refs.len() == 1 { 2 } else { 1 },
+        crate::analysis::ema::lscf::matrix_order(rule, refs.len()),
         band.0,
         band.1,
-        super::plscf::references(&r.csd)
-            .iter()
+        refs.iter()
             .map(|c| (c + 1).to_string())
             .collect::<Vec<_>>()
             .join(", "),
