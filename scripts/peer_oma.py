@@ -17,7 +17,7 @@ missing). Writes FIELD/peer-oma.md (an existing one is replaced only with --forc
 1 when a check of --check fails (SSI-cov's and SSI-dat's frequencies within one line and damping
 within 10 %, MAC >= 0.99 for every method but pLSCF; FDD and EFDD frequencies, EFDD damping and
 pLSCF are compared, not checked: see docs/method.md §3.12). pLSCF: ours (`modal --plscf`, the
-common-denominator LSCF on half-spectra) beside pyOMA-2's matrix-fraction pLSCF on half-spectra
+poly-reference LSCF on half-spectra) beside pyOMA-2's matrix-fraction pLSCF on half-spectra
 (`method_SD="cor"`, order 20), its parameters at our frequencies from its order 19.
 """
 import argparse

@@ -184,7 +184,7 @@ fn the_shear_frame_is_identified_without_an_accelerometer() {
     let report = std::fs::read_to_string(dat.join("report.txt")).unwrap();
     assert!(report.contains("SSI-dat: 30 block rows"), "{report}");
     assert!(
-        report.contains("pLSCF: poly-reference LSCF (4 x 4 matrix coefficients, orders 1 to 14"),
+        report.contains("pLSCF: poly-reference LSCF (4 x 4 matrix coefficients, orders 1 to 20"),
         "{report}"
     );
 }
