@@ -128,6 +128,12 @@ impl Layout {
         self.inputs > self.outputs
     }
 
+    /// The references of the LSCF fit: the fewer of responses and hit points (one: the
+    /// common denominator; several: the poly-reference model, docs/method.md §3.13).
+    pub fn references(&self) -> usize {
+        self.outputs.min(self.inputs)
+    }
+
     /// A mode's shape vector from its residues in every FRF: with one hit point, the residues;
     /// else the dominant singular vector of the residue matrix `A = phi L^T` (outputs x inputs,
     /// of rank one), over the responses or, by [`Layout::over_inputs`], over the hit points
@@ -320,7 +326,7 @@ fn layout_poles(
     s: &EmaSettings,
 ) -> anyhow::Result<Vec<ssi::Pole>> {
     let Layout { outputs, inputs } = layout;
-    if outputs.min(inputs) <= 1 || h1.len() != outputs * inputs {
+    if layout.references() <= 1 || h1.len() != outputs * inputs {
         return lscf::poles(freq_hz, h1, s.band_hz, s.lscf);
     }
     if layout.over_inputs() {

@@ -101,6 +101,13 @@ pub fn matrix_order(rule: LscfRule, references: usize) -> usize {
     (rule.max_order / r).max(MIN_MATRIX_ORDERS.min(rule.max_order))
 }
 
+/// The orders fitted for `references` references under `rule`: from 2 with one (the scalar
+/// denominator's least order with a pole pair), from 1 with several, to [`matrix_order`].
+pub fn orders(rule: LscfRule, references: usize) -> std::ops::RangeInclusive<usize> {
+    let first = if references.max(1) == 1 { 2 } else { 1 };
+    first..=matrix_order(rule, references)
+}
+
 /// The poly-reference LSCF (PolyMAX; Peeters, Van der Auweraer, Guillaume & Leuridan, Shock and
 /// Vibration 11, 2004) of the FRF matrix `frfs[o * references + r][line]` (output `o`'s FRF for
 /// reference `r`): the right matrix-fraction model `H(w) = B(z) A(z)^-1`, `A` a polynomial of
@@ -167,7 +174,7 @@ pub fn poles_matrix(
     };
     let mut all: Vec<Pole> = Vec::new();
     let mut below: Vec<Pole> = Vec::new();
-    for order in (if rr == 1 { 2 } else { 1 })..=n {
+    for order in orders(rule, rr) {
         let m = order + 1;
         let r_inv = r
             .view((0, 0), (m, m))
@@ -207,7 +214,9 @@ pub fn poles_matrix(
             if !(damping > 0.0 && damping < rule.zeta_max && f_hz >= lo && f_hz <= hi) {
                 continue;
             }
-            let v = null_vector(&a, rr, z);
+            let Some(v) = null_vector(&a, rr, z) else {
+                continue;
+            };
             let shape: Vec<Complex64> = numerators
                 .iter()
                 .zip(&scales)
@@ -279,10 +288,13 @@ fn scales(
             }
         };
         if !(rms.is_finite() && rms > 0.0) {
-            anyhow::bail!(
-                "LSCF: FRF {} is zero or not finite in {lo}..{hi} Hz",
-                o * rr + 1
-            );
+            match rr {
+                1 => anyhow::bail!("LSCF: FRF {} is zero or not finite in {lo}..{hi} Hz", o + 1),
+                _ => anyhow::bail!(
+                    "LSCF: the FRFs of output {} are zero or not finite in {lo}..{hi} Hz",
+                    o + 1
+                ),
+            }
         }
         scales.push(rms);
     }
@@ -378,10 +390,11 @@ fn matrix_roots(a: &DMatrix<f64>, refs: usize) -> Vec<Complex64> {
 }
 
 /// The null vector of `A(z)` (coefficients `a` stacked as [`matrix_roots`] takes them): the
-/// right singular vector of its least singular value; one reference: 1.
-fn null_vector(a: &DMatrix<f64>, refs: usize, z: Complex64) -> Vec<Complex64> {
+/// right singular vector of its least singular value; one reference: 1. `None` when the SVD
+/// does not converge (the pole is left out rather than given a shape it does not have).
+fn null_vector(a: &DMatrix<f64>, refs: usize, z: Complex64) -> Option<Vec<Complex64>> {
     if refs == 1 {
-        return vec![Complex64::new(1.0, 0.0)];
+        return Some(vec![Complex64::new(1.0, 0.0)]);
     }
     let coefficients = a.nrows() / refs;
     let mut at = DMatrix::<Complex64>::zeros(refs, refs);
@@ -394,23 +407,12 @@ fn null_vector(a: &DMatrix<f64>, refs: usize, z: Complex64) -> Vec<Complex64> {
         }
         zj *= z;
     }
-    let fallback = || {
-        let mut v = vec![Complex64::new(0.0, 0.0); refs];
-        v[0] = Complex64::new(1.0, 0.0);
-        v
-    };
-    let Some(svd) =
-        nalgebra::SVD::try_new(at, false, true, f64::EPSILON, crate::oma::MAX_ITERATIONS)
-    else {
-        return fallback();
-    };
+    let svd = nalgebra::SVD::try_new(at, false, true, f64::EPSILON, crate::oma::MAX_ITERATIONS)?;
     let least = (0..svd.singular_values.len())
-        .min_by(|&x, &y| svd.singular_values[x].total_cmp(&svd.singular_values[y]));
-    match (svd.v_t, least) {
-        // A = U S V^H: the null vector is the conjugate of V^H's row
-        (Some(vt), Some(k)) => (0..refs).map(|c| vt[(k, c)].conj()).collect(),
-        _ => fallback(),
-    }
+        .min_by(|&x, &y| svd.singular_values[x].total_cmp(&svd.singular_values[y]))?;
+    // A = U S V^H: the null vector is the conjugate of V^H's row
+    let vt = svd.v_t?;
+    Some((0..refs).map(|c| vt[(least, c)].conj()).collect())
 }
 
 /// The roots of the real polynomial `sum_j c_j z^j` (`c` ascending, the last coefficient

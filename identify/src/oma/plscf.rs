@@ -141,6 +141,21 @@ pub fn poles(
     lscf::poles_matrix(&h.freq_hz, &h.s, h.references.len().max(1), band_hz, rule)
 }
 
+/// The rule pLSCF fits `csd` with over `band`, and the band's lines: `rule`'s highest order
+/// lowered (to an even order) to what the lines carry.
+pub fn fitted_rule(rule: LscfRule, csd: &Csd, band: (f64, f64)) -> (LscfRule, usize) {
+    let lines = csd
+        .freq_hz
+        .iter()
+        .filter(|f| **f >= band.0 && **f <= band.1)
+        .count();
+    let rule = LscfRule {
+        max_order: rule.max_order.min(lines.saturating_sub(2)) & !1,
+        ..rule
+    };
+    (rule, lines)
+}
+
 /// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without it)
 /// over [`band`] (of the modes `found` by the other methods): every stable cluster
 /// ([`super::cluster`], the rules of SSI's) without bands (those rejected go to `rejected`), or the
@@ -158,15 +173,7 @@ pub fn plscf_modes(
         return Ok(Vec::new());
     };
     let band = band(s, found);
-    let lines = csd
-        .freq_hz
-        .iter()
-        .filter(|f| **f >= band.0 && **f <= band.1)
-        .count();
-    let rule = LscfRule {
-        max_order: rule.max_order.min(lines.saturating_sub(2)) & !1,
-        ..rule
-    };
+    let (rule, lines) = fitted_rule(rule, csd, band);
     if rule.max_order < MIN_ORDER {
         notes.push(format!(
             "pLSCF: {lines} spectral lines in {:.3}-{:.3} Hz, too few for a model: not run (a \
@@ -339,9 +346,9 @@ mod tests {
         for (m, (f, z, shape)) in modes.into_iter().enumerate() {
             let near = |p: &&Pole| p.stable && (p.f_hz - f).abs() < 0.02 * f;
             let truth: Vec<Complex64> = shape.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-            // every stable pole up to matrix order 14; above, the model has 4 x 2 poles per
-            // order for two modes and places a second one beside mode 2 (7.68 and 7.81 Hz
-            // from order 15), which the clusters below leave out
+            // every stable pole up to matrix order 14; above, the model's 4 n roots (four
+            // references) for two modes' four place a second pole beside mode 2 (7.68 and
+            // 7.81 Hz from order 15), which the clusters below leave out
             let low: Vec<&Pole> = poles
                 .iter()
                 .filter(near)

@@ -680,18 +680,20 @@ fn lscf_text(
     rule: crate::analysis::ema::lscf::LscfRule,
     layout: crate::analysis::ema::Layout,
 ) -> String {
-    let refs = layout.outputs.min(layout.inputs);
+    let refs = layout.references();
+    let orders = crate::analysis::ema::lscf::orders(rule, refs);
     match refs {
-        0 | 1 => format!("LSCF orders 2-{}", rule.max_order),
+        0 | 1 => format!("LSCF orders {}-{}", orders.start(), orders.end()),
         _ => format!(
             "poly-reference LSCF ({refs} references: the {}, {refs} x {refs} matrix \
-             coefficients), orders 1-{}",
+             coefficients), orders {}-{}",
             if layout.over_inputs() {
                 "responses"
             } else {
                 "forces"
             },
-            crate::analysis::ema::lscf::matrix_order(rule, refs)
+            orders.start(),
+            orders.end()
         ),
     }
 }

@@ -569,17 +569,9 @@ fn plscf_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         .cloned()
         .collect();
     let band = super::plscf::band(s, &others);
-    let lines = r
-        .csd
-        .freq_hz
-        .iter()
-        .filter(|f| **f >= band.0 && **f <= band.1)
-        .count();
+    let (rule, _) = super::plscf::fitted_rule(rule, &r.csd, band);
     let refs = super::plscf::references(&r.csd);
-    let rule = crate::analysis::ema::lscf::LscfRule {
-        max_order: rule.max_order.min(lines.saturating_sub(2)) & !1,
-        ..rule
-    };
+    let orders = crate::analysis::ema::lscf::orders(rule, refs.len());
     let _ = writeln!(
         o,
         "pLSCF: poly-reference LSCF ({} x {} matrix coefficients, orders {} to {}, stable as \
@@ -589,8 +581,8 @@ fn plscf_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
          SSI's",
         refs.len(),
         refs.len(),
-        if refs.len() == 1 { 2 } else { 1 },
-        crate::analysis::ema::lscf::matrix_order(rule, refs.len()),
+        orders.start(),
+        orders.end(),
         band.0,
         band.1,
         refs.iter()
