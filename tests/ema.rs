@@ -259,7 +259,7 @@ fn a_labview_force_and_a_camera_started_late_are_aligned_by_the_delay() {
 /// the three modes through their receptance, displacement noise 0.1 % of its RMS
 /// (`force.csv`, `camera.csv`).
 fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
-    use rustfft::num_complex::Complex;
+    use vibcam_fft::Complex;
     std::fs::create_dir_all(dir).unwrap();
     let test = HammerRecording {
         seconds: 1.0,
@@ -276,9 +276,9 @@ fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
     .test();
     let (fs, n) = (1000.0, 1usize << 17);
     let mut force = host_harness::testing::uniform_noise(11, n);
-    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let mut planner = vibcam_fft::Planner::new();
     let mut spec: Vec<Complex<f64>> = force.iter().map(|v| Complex::new(*v, 0.0)).collect();
-    planner.plan_fft_forward(n).process(&mut spec);
+    planner.forward(n).process(&mut spec);
     let freq = |k: usize| (if k <= n / 2 { k } else { n - k }) as f64 * fs / n as f64;
     if let Some((lo, hi)) = band {
         for (k, c) in spec.iter_mut().enumerate() {
@@ -287,7 +287,7 @@ fn write_random_test(dir: &Path, band: Option<(f64, f64)>) -> HammerTest {
             }
         }
         let mut back = spec.clone();
-        planner.plan_fft_inverse(n).process(&mut back);
+        planner.inverse(n).process(&mut back);
         force = back.iter().map(|c| c.re / n as f64).collect();
     }
     write_driven(dir, fs, &[("force_n", force, spec, test.drive)], 20);
@@ -729,20 +729,15 @@ fn a_roving_hammer_gives_the_modes_and_the_shapes_over_the_hit_points() {
 
 /// A force driving the structure: its column's name, samples, spectrum (a full complex
 /// transform) and the point it drives (0-based).
-type Driven<'a> = (
-    &'a str,
-    Vec<f64>,
-    Vec<rustfft::num_complex::Complex<f64>>,
-    usize,
-);
+type Driven<'a> = (&'a str, Vec<f64>, Vec<vibcam_fft::Complex<f64>>, usize);
 
 /// Writes `force.csv` (`t_s` and a column per force) and `camera.csv` (`t_s,p1..p5`): the five
 /// points' exact periodic displacements (mm) under `forces` through the receptances of the
 /// three-mode structure, each with uniform noise of 0.1 % of its RMS (seeds from `seed`).
 fn write_driven(dir: &Path, fs: f64, forces: &[Driven], seed: u64) {
-    use rustfft::num_complex::Complex;
+    use vibcam_fft::Complex;
     let n = forces[0].1.len();
-    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let mut planner = vibcam_fft::Planner::new();
     let freq = |k: usize| (if k <= n / 2 { k } else { n - k }) as f64 * fs / n as f64;
     let mut responses = Vec::new();
     for o in 0..POINTS {
@@ -762,7 +757,7 @@ fn write_driven(dir: &Path, fs: f64, forces: &[Driven], seed: u64) {
                     .sum()
             })
             .collect();
-        planner.plan_fft_inverse(n).process(&mut x);
+        planner.inverse(n).process(&mut x);
         let re: Vec<f64> = x.iter().map(|c| c.re).collect();
         let rms = (re.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
         let e = host_harness::testing::uniform_noise(seed + o as u64, n);
@@ -797,10 +792,10 @@ fn write_driven(dir: &Path, fs: f64, forces: &[Driven], seed: u64) {
 /// five points' exact periodic displacements through the receptances (`camera.csv`), 2^16
 /// samples at 1 kHz, 0.1 % noise.
 fn write_shakers_test(dir: &Path) {
-    use rustfft::num_complex::Complex;
+    use vibcam_fft::Complex;
     std::fs::create_dir_all(dir).unwrap();
     let (fs, n) = (1000.0, 1usize << 16);
-    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let mut planner = vibcam_fft::Planner::new();
     let forces: Vec<Vec<f64>> = (0..2)
         .map(|i| host_harness::testing::uniform_noise(31 + i, n))
         .collect();
@@ -808,7 +803,7 @@ fn write_shakers_test(dir: &Path) {
         .iter()
         .map(|f| {
             let mut s: Vec<Complex<f64>> = f.iter().map(|v| Complex::new(*v, 0.0)).collect();
-            planner.plan_fft_forward(n).process(&mut s);
+            planner.forward(n).process(&mut s);
             s
         })
         .collect();

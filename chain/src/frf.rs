@@ -352,9 +352,8 @@ mod tests {
     /// Reference Welch H1 (rustfft, f64, written from method.md §2.4).
     fn reference_h1(x: &[f64], y: &[f64], c: &WelchConfig) -> (Vec<Complex64>, Vec<f64>) {
         let (nperseg, noverlap, nfft) = (c.nperseg, c.noverlap, c.nfft);
-        use rustfft::FftPlanner;
         let win = window_coeffs(c.window, nperseg);
-        let fft = FftPlanner::<f64>::new().plan_fft_forward(nfft);
+        let fft = vibcam_fft::Planner::new().forward(nfft);
         let bins = nfft / 2 + 1;
         let mut pxx = vec![0.0; bins];
         let mut pyy = vec![0.0; bins];

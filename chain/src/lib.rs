@@ -123,7 +123,6 @@ mod tests {
         fa: f64,
         m: usize,
     ) -> anyhow::Result<Vec<f64>> {
-        use rustfft::FftPlanner;
         let n = disp_mm.len();
         let _ = fc;
         if n == 0 || m < n {
@@ -131,9 +130,9 @@ mod tests {
                 "cannot upsample {n} frames to {m} samples"
             )));
         }
-        let mut planner = FftPlanner::<f64>::new();
+        let mut planner = vibcam_fft::Planner::new();
         let mut x: Vec<Complex64> = disp_mm.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-        planner.plan_fft_forward(n).process(&mut x);
+        planner.forward(n).process(&mut x);
         let mut y = vec![Complex64::new(0.0, 0.0); m];
         let half = n / 2;
         for k in 1..n.div_ceil(2) {
@@ -155,7 +154,7 @@ mod tests {
             *v *= -w * w;
         }
         y[0] = Complex64::new(0.0, 0.0);
-        planner.plan_fft_inverse(m).process(&mut y);
+        planner.inverse(m).process(&mut y);
         Ok(y.iter().map(|v| v.re / n as f64 / 1000.0).collect())
     }
 

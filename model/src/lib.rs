@@ -211,7 +211,7 @@ pub fn simulate_seen(
     };
     let (fine_per_frame, n) = acq.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let mut planner = vibcam_fft::Planner::new();
     let mut input = input_spectrum(rig, acq, n, &mut rng, &mut planner);
     let df = acq.fine_hz() / n as f64;
     let mut tip_acc = vec![Complex64::new(0.0, 0.0); n];
@@ -246,7 +246,7 @@ pub fn simulate_seen(
             }
         }
     }
-    let ifft = planner.plan_fft_inverse(n);
+    let ifft = planner.inverse(n);
     for buf in [&mut input, &mut tip_acc, &mut tip_mm]
         .into_iter()
         .chain(at_mm.iter_mut())
@@ -280,7 +280,7 @@ fn input_spectrum(
     acq: &Acquisition,
     n: usize,
     rng: &mut ChaCha8Rng,
-    planner: &mut rustfft::FftPlanner<f64>,
+    planner: &mut vibcam_fft::Planner,
 ) -> Vec<Complex64> {
     let fine_hz = acq.fine_hz();
     let df = fine_hz / n as f64;
@@ -307,7 +307,7 @@ fn input_spectrum(
                 }
                 *v = Complex64::new(test.pulse(j as f64 / fine_hz) + held, 0.0);
             }
-            planner.plan_fft_forward(n).process(&mut input);
+            planner.forward(n).process(&mut input);
         }
     }
     input
@@ -394,8 +394,8 @@ mod tests {
         let acq = short(120.0, 240);
         let run = simulate(&rig, &acq, 5).unwrap();
         let n = run.input.len();
-        let mut planner = rustfft::FftPlanner::<f64>::new();
-        let fft = planner.plan_fft_forward(n);
+        let mut planner = vibcam_fft::Planner::new();
+        let fft = planner.forward(n);
         let spec = |v: &[f64]| {
             let mut b: Vec<Complex64> = v.iter().map(|x| Complex64::new(*x, 0.0)).collect();
             fft.process(&mut b);

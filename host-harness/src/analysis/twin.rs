@@ -229,8 +229,8 @@ fn motion(coord: &[f64], fc: f64, exposure_s: f64) -> anyhow::Result<Vec<f64>> {
     let mut x: Vec<f64> = (0..n)
         .map(|k| coord[k] - first - slope * k as f64)
         .collect();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(n);
+    let mut planner = vibcam_fft::RealPlanner::new();
+    let fwd = planner.forward(n);
     let mut spec = fwd.make_output_vec();
     fwd.process(&mut x, &mut spec)
         .map_err(|e| anyhow::anyhow!("internal: {e}"))?;
@@ -243,7 +243,7 @@ fn motion(coord: &[f64], fc: f64, exposure_s: f64) -> anyhow::Result<Vec<f64>> {
         }
     }
     let m = n * STEPS;
-    let inv = planner.plan_fft_inverse(m);
+    let inv = planner.inverse(m);
     let mut big = inv.make_input_vec();
     let bins = spec.len();
     big[..bins].copy_from_slice(&spec);

@@ -13,7 +13,6 @@
 //! pre-trigger is often a few frames: the decay is what the record holds.
 
 use super::impact::Hits;
-use realfft::RealFftPlanner;
 
 /// Early power over the noise floor for a line to be excited, dB.
 pub const ABOVE_FLOOR_DB: f64 = 10.0;
@@ -55,7 +54,7 @@ impl Excited {
 fn add_power(
     x: &[f64],
     win: &[f64],
-    fft: &std::sync::Arc<dyn realfft::RealToComplex<f64>>,
+    fft: &std::sync::Arc<dyn vibcam_fft::RealToComplex<f64>>,
     acc: &mut [f64],
 ) {
     let mean = x.iter().sum::<f64>() / x.len() as f64;
@@ -95,7 +94,7 @@ fn quarters<R: AsRef<[f64]>>(responses: &[R], hits: &Hits, fs_hz: f64) -> Option
     if q < 16 || responses.is_empty() {
         return None;
     }
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(q);
+    let fft = vibcam_fft::RealPlanner::new().forward(q);
     let win: Vec<f64> = (0..q)
         .map(|i| {
             (std::f64::consts::PI * (i as f64 + 0.5) / q as f64)

@@ -22,7 +22,6 @@ use super::{identify, EmaResult, EmaSettings, Excitation, Formed, Layout};
 use crate::oma::uncertainty::{group, GROUPS};
 use nalgebra::DMatrix;
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 use vibcam_readers::bad_input;
 
 /// One group's sums, per line.
@@ -68,7 +67,7 @@ impl Spectra {
         let segments = (len - n) / step + 1;
         let groups = groups.min(segments).max(1);
         let lines = ((f_top_hz * n as f64 / fs_hz).ceil() as usize + 1).min(n / 2 + 1);
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+        let fft = vibcam_fft::RealPlanner::new().forward(n);
         let hann: Vec<f64> = (0..n)
             .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
             .collect();
@@ -305,8 +304,8 @@ mod tests {
         let n = forces[0].len();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         let unit = Normal::new(0.0, 1.0).unwrap();
-        let mut planner = RealFftPlanner::<f64>::new();
-        let (fwd, inv) = (planner.plan_fft_forward(n), planner.plan_fft_inverse(n));
+        let mut planner = vibcam_fft::RealPlanner::new();
+        let (fwd, inv) = (planner.forward(n), planner.inverse(n));
         let spectra: Vec<Vec<Complex64>> = forces
             .iter()
             .map(|f| {

@@ -6,7 +6,6 @@
 
 use super::impact::{force_window, ExpWindow, Hits};
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 
 /// One unit's sums, per line.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,7 +118,7 @@ impl Spectra {
 /// Transforms one block (or segment): force and responses already windowed; the sums of its
 /// lines `0..lines` added to `unit`.
 fn accumulate(
-    fft: &std::sync::Arc<dyn realfft::RealToComplex<f64>>,
+    fft: &std::sync::Arc<dyn vibcam_fft::RealToComplex<f64>>,
     force: &[f64],
     responses: &[Vec<f64>],
     lines: usize,
@@ -174,7 +173,7 @@ pub fn of_hits(
 ) -> anyhow::Result<Spectra> {
     let n = hits.block;
     let lines = lines_to(n, fs_hz, f_top_hz);
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let fft = vibcam_fft::RealPlanner::new().forward(n);
     let window: Vec<f64> = (0..n)
         .map(|k| exp.map_or(1.0, |w| w.at(k as f64 / fs_hz)))
         .collect();
@@ -228,7 +227,7 @@ pub fn of_segments(
     let segments = (force.len() - n) / step + 1;
     let groups = groups.min(segments).max(1);
     let lines = lines_to(n, fs_hz, f_top_hz);
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let fft = vibcam_fft::RealPlanner::new().forward(n);
     let hann: Vec<f64> = (0..n)
         .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
         .collect();

@@ -680,12 +680,11 @@ mod tests {
     /// through the first mode of the rig, exactly (periodic over the record, in the frequency
     /// domain): the estimate whose resolution bias the smoothed fit must remove.
     fn welch_of_one_mode(nperseg: usize, seed: u64) -> vibcam_chain::frf::Frf {
-        use realfft::RealFftPlanner;
         let (fs, n) = (64.0, 1 << 18);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let x: Vec<f64> = (0..n).map(|_| StandardNormal.sample(&mut rng)).collect();
-        let mut planner = RealFftPlanner::<f64>::new();
-        let (fwd, inv) = (planner.plan_fft_forward(n), planner.plan_fft_inverse(n));
+        let mut planner = vibcam_fft::RealPlanner::new();
+        let (fwd, inv) = (planner.forward(n), planner.inverse(n));
         let mut spec = fwd.make_output_vec();
         fwd.process(&mut x.clone(), &mut spec).unwrap();
         for (k, v) in spec.iter_mut().enumerate() {

@@ -25,9 +25,9 @@
 //! frequencies of the upper modes 0.1-0.3 % low (intervals holding 10-50 %); with `t` fitted,
 //! within 0.07 % (80-95 %).
 
-use realfft::{RealFftPlanner, RealToComplex};
 use std::f64::consts::PI;
 use std::sync::Arc;
+use vibcam_fft::RealToComplex;
 
 /// The weight of the tilt's prior: a tilt of one power of `f` costs what one line's residual
 /// of this size (natural log) does, about one line's scatter in a Welch estimate of ten
@@ -119,7 +119,7 @@ struct Kernel<'a> {
 
 impl<'a> Kernel<'a> {
     fn new(nfft: usize, fs_hz: f64, lag: &'a [f64], tilt: (i32, usize)) -> Self {
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(nfft);
+        let fft = vibcam_fft::RealPlanner::new().forward(nfft);
         let spectrum = fft.make_output_vec();
         Kernel {
             nfft,

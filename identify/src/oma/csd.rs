@@ -6,7 +6,6 @@
 
 use firmware_core::spectrum::{Detrend, Window};
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 use vibcam_readers::bad_input;
 
 /// Welch settings of the cross-spectral matrix (resolved: every length known).
@@ -149,8 +148,8 @@ fn raw_sum(
         .map(|i| f64::from(c.window.value(i, c.nperseg)))
         .collect();
     let lines = c.nfft / 2 + 1;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(c.nfft);
+    let mut planner = vibcam_fft::RealPlanner::new();
+    let fft = planner.forward(c.nfft);
     let mut input = fft.make_input_vec();
     let mut spectra = vec![vec![Complex64::new(0.0, 0.0); lines]; k];
     let mut g = vec![vec![Complex64::new(0.0, 0.0); k * k]; lines];

@@ -28,7 +28,6 @@ use super::ssi::Pole;
 use super::uncertainty;
 use crate::modal::mac;
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 
 /// At most this many reference channels.
 pub const MAX_REFERENCES: usize = 4;
@@ -81,9 +80,9 @@ pub fn half_spectra(
     let lag_window = super::fdd::lag_window(window, nperseg);
     let l = (nperseg / 2).clamp(2, nfft / 2);
     let tau = (l - 1) as f64 / (1.0 / EXP_WINDOW_END).ln();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let inverse = planner.plan_fft_inverse(nfft);
-    let forward = planner.plan_fft_forward(nfft);
+    let mut planner = vibcam_fft::RealPlanner::new();
+    let inverse = planner.inverse(nfft);
+    let forward = planner.forward(nfft);
     let mut s = Vec::with_capacity(k * references.len());
     let (mut spectrum, mut lags) = (inverse.make_input_vec(), inverse.make_output_vec());
     let mut out = forward.make_output_vec();

@@ -49,8 +49,8 @@ use firmware_core::centroid::{
     centroid, Centroid, CentroidConfig, Flags, Frame, FrameError, Moments,
 };
 use num_complex::Complex32;
-use realfft::{ComplexToReal, RealFftPlanner};
 use std::sync::Arc;
+use vibcam_fft::ComplexToReal;
 
 /// Margin (grey levels) between the analytic profile's level crossings and the decision
 /// level: covers the band-limited interpolant's aliasing error (at most `MARGIN / 4`, checked
@@ -161,7 +161,7 @@ impl FastDiskCamera {
                 sin[y * bins + k] = ph.sin() as f32;
             }
         }
-        let ifft = RealFftPlanner::<f32>::new().plan_fft_inverse(height);
+        let ifft = vibcam_fft::RealPlanner32::new().inverse(height);
         let decision = threshold as f64 + 0.5;
         let r_in = radius_at(target, decision + MARGIN);
         let r_out = radius_at(target, decision - MARGIN);

@@ -26,8 +26,8 @@
 //! Nyquist frequency: band-limited, so the phase-shift translation is exact.
 
 use num_complex::Complex32;
-use realfft::{ComplexToReal, RealFftPlanner};
 use std::sync::Arc;
+use vibcam_fft::ComplexToReal;
 use vibcam_model::DiskTarget;
 
 /// Renders motion-blurred 8-bit frames of a [`DiskTarget`] moving along `y`.
@@ -133,9 +133,9 @@ impl BlurRenderer {
         let span = (hi - lo).max(0.0);
         let height = (((span + 2.0 * pad) / 16.0).ceil() as usize * 16).max(32);
         let rest_y = (pad - lo).round();
-        let mut planner = RealFftPlanner::<f32>::new();
-        let fwd = planner.plan_fft_forward(height);
-        let ifft = planner.plan_fft_inverse(height);
+        let mut planner = vibcam_fft::RealPlanner32::new();
+        let fwd = planner.forward(height);
+        let ifft = planner.inverse(height);
         let bins = height / 2 + 1;
         // a symmetric target needs the columns right of its centre only
         let first = if target.is_symmetric() {
@@ -214,9 +214,9 @@ impl BlurRenderer {
             return None;
         }
         let half_cols = columns.len() / 2;
-        let mut planner = RealFftPlanner::<f32>::new();
-        let fwd = planner.plan_fft_forward(height);
-        let ifft = planner.plan_fft_inverse(height);
+        let mut planner = vibcam_fft::RealPlanner32::new();
+        let fwd = planner.forward(height);
+        let ifft = planner.inverse(height);
         let bins = height / 2 + 1;
         let spectra = columns
             .iter()

@@ -135,8 +135,8 @@ fn band_noise(n: usize, fs_hz: f64, band: (f64, f64), seed: u64) -> Vec<f64> {
     use rand_distr::{Distribution, Normal};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let normal = Normal::new(0.0, 1.0).expect("unit normal");
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let inv = planner.plan_fft_inverse(n);
+    let mut planner = vibcam_fft::RealPlanner::new();
+    let inv = planner.inverse(n);
     let mut spec = inv.make_input_vec();
     let df = fs_hz / n as f64;
     for (i, s) in spec.iter_mut().enumerate() {

@@ -207,9 +207,7 @@ mod tests {
                 .join()
                 .unwrap();
             let mut x: Vec<Complex64> = sim.input.iter().map(|v| Complex64::new(*v, 0.0)).collect();
-            rustfft::FftPlanner::new()
-                .plan_fft_forward(SAMPLES)
-                .process(&mut x);
+            vibcam_fft::Planner::new().forward(SAMPLES).process(&mut x);
             let df = FS_HZ / SAMPLES as f64;
             let h1 = |k: usize| {
                 let (mut num, mut den) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));

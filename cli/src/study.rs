@@ -1,14 +1,14 @@
-//! `host-harness study`: run a Monte Carlo study and write its outputs.
+//! `host-harness study` and `vibcam-study`: run a Monte Carlo study and write its outputs.
 
-use crate::study::{self, Execution, Preset, Shard, StudyConfig};
 use std::path::PathBuf;
+use vibcam_sim::study::{self, Execution, Preset, Shard, StudyConfig};
 
 /// Arguments of `host-harness study`. Without arguments: the grandstand preset at a run count
 /// that finishes in about a minute on two cores.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scenario preset (ignored fields come from it).
-    #[arg(long, conflicts_with = "config", value_parser = super::args::choice(&Preset::ALL, Preset::name))]
+    #[arg(long, conflicts_with = "config", value_parser = crate::flags::choice(&Preset::ALL, Preset::name))]
     pub preset: Option<Preset>,
     /// Study file (TOML) with the fields of the resolved `config.toml`; flags override it.
     #[arg(long, value_name = "FILE.toml")]
@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long)]
     pub fixed_structure: bool,
     /// `$threads`.
-    #[arg(long, default_value = super::args::given("threads"), value_parser = super::args::whole::<usize>("threads"), help = super::args::help("threads"))]
+    #[arg(long, default_value = crate::flags::given("threads"), value_parser = crate::flags::whole::<usize>("threads"), help = crate::flags::help("threads"))]
     pub threads: usize,
     /// Output directory. Default: `out/<preset>-<config hash>`, resumed automatically when
     /// it exists (running the same command twice re-reports the finished study).
@@ -48,7 +48,7 @@ pub struct Args {
     pub no_plots: bool,
     /// Coverage probability of the intervals (JCGM 101 7.7) in summary.csv and coverage.csv;
     /// the column names keep "95" (default 0.95).
-    #[arg(long, value_name = "P", value_parser = super::args::parse_coverage)]
+    #[arg(long, value_name = "P", value_parser = crate::flags::parse_coverage)]
     pub coverage: Option<f64>,
     /// Adaptive Monte Carlo (JCGM 101 7.9): batches of runs until every reported quantity
     /// (or the --adaptive-on one) is stable to --digits; --runs is then the cap.
@@ -96,7 +96,8 @@ pub fn resolve(args: &Args) -> anyhow::Result<StudyConfig> {
 /// The adaptive settings from the flags: the standard's batch size unless `--batch` (a smaller
 /// one is said), the run cap `--runs` or a thousand batches (at most `MAX_RUNS`).
 fn set_adaptive(args: &Args, cfg: &mut StudyConfig) -> anyhow::Result<()> {
-    let standard = crate::uncertainty::default_batch_size(cfg.coverage).unwrap_or(10_000) as u64;
+    let standard =
+        vibcam_common::uncertainty::default_batch_size(cfg.coverage).unwrap_or(10_000) as u64;
     let batch = args.batch.unwrap_or(standard);
     if batch < standard {
         eprintln!(
@@ -105,7 +106,7 @@ fn set_adaptive(args: &Args, cfg: &mut StudyConfig) -> anyhow::Result<()> {
         );
     }
     if batch == 0 {
-        return Err(crate::bad_input("--batch: must be at least 1"));
+        return Err(vibcam_readers::bad_input("--batch: must be at least 1"));
     }
     if args.runs.is_none() {
         cfg.runs = (study::config::MAX_RUNS / batch).min(1000) * batch;
@@ -201,7 +202,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let done = study::execute(&cfg, scenario.as_ref(), &exec)?;
     let elapsed = started.elapsed();
     let text = study::finish(&cfg, scenario.as_ref(), &done.records, &out, !args.no_plots)?;
-    super::stdout(&text)?;
+    crate::process::stdout(&text)?;
     eprintln!(
         "{} runs computed in {:.1} s ({} in the study)",
         done.computed,

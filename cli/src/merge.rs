@@ -1,7 +1,7 @@
 //! `host-harness merge`: combine the directories of `study --shard K/N` runs.
 
-use crate::study;
 use std::path::PathBuf;
+use vibcam_sim::study;
 
 /// Arguments of `host-harness merge`.
 #[derive(Debug, clap::Args)]
@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long)]
     pub no_plots: bool,
     /// Coverage probability of the intervals (default: the shards' one).
-    #[arg(long, value_name = "P", value_parser = super::args::parse_coverage)]
+    #[arg(long, value_name = "P", value_parser = crate::flags::parse_coverage)]
     pub coverage: Option<f64>,
 }
 
@@ -40,5 +40,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &args.out,
         !args.no_plots,
     )?;
-    super::stdout(&text)
+    crate::process::stdout(&text)
 }
