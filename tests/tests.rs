@@ -192,7 +192,7 @@ const ROOMS: [(&str, &[&[&str]]); 7] = [
     (
         "track",
         &[
-            &["tracks"],
+            &["tracks", "region"],
             &["verify"],
             &["choose"],
             &["shared_motion"],

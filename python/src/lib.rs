@@ -323,6 +323,39 @@ fn centroid(
     Ok((x, y, c.moments.pixels, flag_names(c.flags)))
 }
 
+/// `region_points(frame, region, spacing, window_px, min_texture, direction)`: the windows a
+/// region of `frame` gives (docs/method.md §2.12), as `pick --region` chooses them: the kept
+/// centres `(x, y)` and the line saying how many places were kept and why the others were not.
+#[pyfunction]
+#[pyo3(signature = (frame, region, spacing, window_px, min_texture, direction))]
+fn region_points(
+    py: Python<'_>,
+    frame: &Bound<'_, PyAny>,
+    region: &str,
+    spacing: f64,
+    window_px: usize,
+    min_texture: f64,
+    direction: &str,
+) -> PyResult<(Vec<(f64, f64)>, String)> {
+    use host_harness::analysis::region::{select, Direction, Selection, Shape};
+    let frames = frames_of_array(frame)?;
+    let [frame] = frames.as_slice() else {
+        return Err(bad(format!(
+            "frame: one frame (H, W) or (H, W, 3|4) is needed, got {} frames",
+            frames.len()
+        )));
+    };
+    let sel = Selection {
+        shape: Shape::parse(region).map_err(|e| bad(format!("region: {e}")))?,
+        spacing,
+        window: window_px,
+        min_texture,
+        direction: Direction::parse(direction).map_err(|e| bad(format!("direction: {e}")))?,
+    };
+    let found = py.allow_threads(|| select(frame, &sel)).map_err(py_err)?;
+    Ok((found.kept(), found.describe(&sel)))
+}
+
 /// How the targets are found and followed, as `track` and `analyze` take it (the Python half
 /// builds this dict; every key present).
 #[derive(Debug, FromPyObject)]
@@ -1736,6 +1769,7 @@ fn _vibcam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_TARGETS", host_harness::jobs::tracking::MAX_TARGETS)?;
     m.add("SETTINGS", settings_table(m.py())?)?;
     m.add_function(wrap_pyfunction!(centroid, m)?)?;
+    m.add_function(wrap_pyfunction!(region_points, m)?)?;
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_function(wrap_pyfunction!(frf, m)?)?;
     m.add_function(wrap_pyfunction!(upsample, m)?)?;

@@ -146,3 +146,40 @@ def test_every_refused_argument_is_an_input_error_naming_it(recording):
     assert reader.count == 3
     got = list(reader)
     assert len(got) == 3 and reader.label.endswith("frame_00004.png"), reader.label
+
+
+def test_region_points_are_picks_and_their_defaults(tmp_path, harness):
+    # the real striped beam of tests/data (pyidi's Photron showcase, MIT): the same points
+    # as `pick --region`, the same defaults, and the stripes' texture fixes y, not x
+    from conftest import ROOT
+    from test_package import cli_defaults
+
+    cih = ROOT / "tests" / "data" / "real" / "pyidi-showcase" / "data_showcase.cih"
+    frame = next(iter(vibcam.open_frames(cih)))
+    region = "0,0;640,0;640,40;0,40"
+    points = tmp_path / "p.csv"
+    r = harness("pick", "--frames", str(cih), "--region", region, "--spacing", "4",
+                "--direction", "y", "--points-out", str(points), "--out",
+                str(tmp_path / "p.html"))
+    assert r.returncode == 0, r.stderr
+    rows = np.loadtxt(points, delimiter=",", skiprows=1)
+    xy = vibcam.region_points(frame, region, spacing=4, direction="y")
+    assert xy.shape == (len(rows), 2) and len(rows) >= 500
+    assert np.array_equal(xy, rows[:, 1:3])
+    assert len(vibcam.region_points(frame, region, spacing=4)) * 10 < len(xy)
+    import inspect
+
+    flags = cli_defaults(harness, "pick")
+    params = inspect.signature(vibcam.region_points).parameters
+    for name in ["spacing", "window_px", "min_texture", "direction"]:
+        d = params[name].default
+        assert (float(flags[name]) == d) if not isinstance(d, str) else flags[name] == d, name
+    for call, needle in [
+        (lambda: vibcam.region_points(frame, region, spacing=0.5), "^spacing 0.5"),
+        (lambda: vibcam.region_points(frame, region, window_px=4), "^window_px = 4"),
+        (lambda: vibcam.region_points(frame, region, min_texture=2), "^min_texture 2"),
+        (lambda: vibcam.region_points(frame, "0,0;1,1"), "^region: a polygon needs"),
+        (lambda: vibcam.region_points(frame, region, direction="up"), "^direction: `up`"),
+    ]:
+        with pytest.raises(vibcam.InputError, match=needle):
+            call()

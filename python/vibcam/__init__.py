@@ -53,6 +53,7 @@ __all__ = [
     "modal",
     "study",
     "open_frames",
+    "region_points",
 ]
 
 #: ``(bit, name)`` of the firmware's result flags (``Tracks.flags``, ``Centroid.flags``).
@@ -1031,6 +1032,41 @@ def study(
         return StudyResult(table, _columns(summary), summary, None)
     table, summary = run(_os.fspath(out))
     return StudyResult(table, _columns(summary), summary, _os.fspath(out))
+
+
+def region_points(
+    frame: _Any,
+    region: str,
+    spacing: float = 10.0,
+    window_px: int = 21,
+    min_texture: float = 0.05,
+    direction: str = "both",
+) -> _np.ndarray:
+    """The windows a region of ``frame`` gives, as ``pick --region`` chooses them (docs/method.md
+    §2.12): the places of a grid every ``spacing`` px inside ``region`` (``"X,Y;X,Y;..."`` a
+    polygon, ``"line:X,Y;..."`` along a line, ``"brush:R:X,Y;..."`` within R px of a stroke)
+    whose ``window_px`` x ``window_px`` window has at least ``min_texture`` times the region's
+    best texture: the structure tensor's smaller eigenvalue (``direction="both"``, Shi-Tomasi)
+    or the gradient energy along ``"x"``, ``"y"`` or an angle in degrees. Returns the kept
+    centres as an ``(N, 2)`` array of ``(x, y)`` px; ``track(points=...)`` takes them with the
+    window size.
+
+    >>> frame = next(iter(vibcam.open_frames("rec.cih")))  # doctest: +SKIP
+    >>> xy = vibcam.region_points(frame, "0,0;640,0;640,40;0,40", spacing=4, direction="y")  # doctest: +SKIP
+    """
+    if not isinstance(region, str):
+        raise InputError(f"region = {region!r}: 'X,Y;X,Y;...', 'line:...' or 'brush:R:...'")
+    if not isinstance(direction, str):
+        raise InputError(f"direction = {direction!r}: 'both', 'x', 'y' or degrees as text")
+    kept, _line = _vibcam.region_points(
+        _frames(frame),
+        region,
+        _number("spacing", spacing, positive=True),
+        _whole("window_px", window_px, 5, 255),
+        _number("min_texture", min_texture),
+        direction,
+    )
+    return _np.asarray(kept, dtype=float).reshape(-1, 2)
 
 
 def open_frames(

@@ -3,6 +3,9 @@
 //!
 //! - [`tracks`]: what every tracker returns ([`tracks::Tracks`]), and the K blobs of the whole
 //!   frame followed with a gate and each target's history;
+//! - [`region`]: points from a region of the first frame (a polygon, a line, a brush's
+//!   strokes) on a grid, kept where their texture fixes the motion (Shi-Tomasi, or one
+//!   direction's gradient energy);
 //! - [`points`]: chosen points, a window each: firmware-core's centroid at the window's
 //!   threshold (Otsu) or its Lucas-Kanade tracker; groups from the file or found from the first
 //!   frames' motion; look-alikes named;
@@ -21,6 +24,7 @@ pub mod camera_motion;
 pub mod choose;
 pub mod follow;
 pub mod points;
+pub mod region;
 pub mod shared_motion;
 pub mod tracks;
 pub mod verify;

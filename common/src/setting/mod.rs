@@ -64,6 +64,7 @@ pub const KEYS: &[&str] = &[
     "lost_frames",
     "max_order",
     "merge",
+    "min_texture",
     "minutes",
     "mm_per_px",
     "nfft",
@@ -74,11 +75,13 @@ pub const KEYS: &[&str] = &[
     "output_col",
     "plscf",
     "points",
+    "points_out",
     "poles",
     "prominence_db",
     "read_noise",
     "reference",
     "references",
+    "region",
     "render",
     "response_col",
     "response_fs",
@@ -98,6 +101,7 @@ pub const KEYS: &[&str] = &[
     "shape_reference",
     "setup",
     "shard",
+    "spacing",
     "ssi",
     "ssi_block_rows",
     "ssi_max_order",
@@ -116,6 +120,7 @@ pub const KEYS: &[&str] = &[
     "world",
     "x",
     "y",
+    "window_px",
 ];
 
 /// `template` with each `$key` spelled for `naming` (unknown `$` words stay as written): how

@@ -151,7 +151,7 @@ pub const SETTINGS: &[Setting] = &[
     },
     Setting {
         key: "frame_range",
-        commands: FRAMES,
+        commands: &["analyze", "track", "open_frames", "pick"],
         values: Values::Text("A..B"),
         words: &[],
         unit: "",

@@ -38,7 +38,7 @@ pub mod frf_uncertainty;
 pub mod imaging_share;
 pub use vibcam_identify::modal;
 // Tracking, under the paths it had here.
-pub use vibcam_track::{camera_motion, follow, points, shared_motion};
+pub use vibcam_track::{camera_motion, follow, points, region, shared_motion};
 pub mod oma;
 pub mod pick;
 pub mod report;

@@ -3,6 +3,7 @@
 //! follows are chosen with the mouse.
 
 use crate::export::pick::{pick_html, PickPoint};
+use crate::frames::GreyFrame;
 
 /// The longest side of a frame as the page holds it, px: larger frames are shown scaled down
 /// (clicks still give full-resolution pixels), so that 50 frames of a 6000 x 6000 camera make a
@@ -19,6 +20,8 @@ pub struct PickRequest {
     pub fps: Option<f64>,
     /// `--retime`: `fps` retimes a video's container rate (slow motion).
     pub retime: bool,
+    /// Frames A..B only (a camera file with a damaged time stamp at one end).
+    pub frame_range: Option<crate::frames::FrameRange>,
     /// Points to show at the start.
     pub points: Option<std::path::PathBuf>,
     /// Frames on the page's slider (1 to 50).
@@ -27,7 +30,13 @@ pub struct PickRequest {
     pub out: std::path::PathBuf,
     /// Replace an existing file.
     pub force: bool,
+    /// Points chosen from a region of the first frame ([`crate::analysis::region`]), numbered
+    /// after `points`, and the points file they are written to with `points`.
+    pub region: Option<(crate::analysis::region::Selection, std::path::PathBuf)>,
 }
+
+/// A frame as the page shows it, with its label.
+type ShownFrame = (String, crate::export::html::FrameImage);
 
 /// Whether `path` begins as the pages [`run`] writes do (`--force` replaces only those).
 fn is_pick_page(path: &std::path::Path) -> bool {
@@ -83,22 +92,91 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
             .collect(),
         None => Vec::new(),
     };
-    let source = crate::frames::open_frames(&req.frames, req.retime, None)?.source;
-    let frames = spread_frames(req, &source)?;
+    let source = crate::frames::open_frames(&req.frames, req.retime, req.frame_range)?.source;
+    let (frames, full) = spread_frames(req, &source)?;
     let Some(first) = frames.first() else {
         return Err(crate::bad_input(format!("{}: no frames", req.frames)));
     };
     windows_inside(&points, (first.1.width, first.1.height))?;
+    let mut points = points;
+    let mut text = String::new();
+    let chosen = match (&req.region, full) {
+        (Some((sel, path)), Some(full)) => {
+            text.push_str(&add_region_points(sel, &full, &mut points)?);
+            Some((path, points_file(&points)))
+        }
+        _ => None,
+    };
     let html = pick_html(&format!("pick: {}", req.frames), &frames, &points);
+    if let Some((path, csv)) = &chosen {
+        crate::export::write_atomic(path, csv.as_bytes())?;
+        text.push_str(&format!(
+            "wrote {} ({} points for track --points)\n",
+            path.display(),
+            points.len()
+        ));
+    }
     crate::export::write_atomic(&req.out, html.as_bytes())?;
-    Ok(format!(
+    text.push_str(&format!(
         "wrote {} ({} frames, {} points, {:.1} MB): open it in a browser, click to add windows, \
          save points.csv for track --points\n",
         req.out.display(),
         frames.len(),
         points.len(),
         html.len() as f64 / 1e6
-    ))
+    ));
+    Ok(text)
+}
+
+/// The points `sel` finds in the first frame `full`, numbered after `points` and added to
+/// them; returns the report's line on what was kept and left out.
+fn add_region_points(
+    sel: &crate::analysis::region::Selection,
+    full: &GreyFrame,
+    points: &mut Vec<PickPoint>,
+) -> anyhow::Result<String> {
+    let found = crate::analysis::region::select(full, sel)?;
+    let kept = found.kept();
+    if kept.is_empty() {
+        return Err(crate::bad_input(format!(
+            "$region: none of its {} places has the texture $min_texture asks for ({})",
+            found.candidates.len(),
+            found.describe(sel)
+        )));
+    }
+    let size = u32::try_from(sel.window).unwrap_or(u32::MAX);
+    let first_new = points.iter().map(|p| p.target).max().unwrap_or(0) + 1;
+    points.extend(kept.iter().enumerate().map(|(i, &xy)| PickPoint {
+        target: first_new + i,
+        xy,
+        size: (size, size),
+        group: None,
+    }));
+    Ok(format!("{}\n", found.describe(sel)))
+}
+
+/// The points file `track --points` reads: `target,x,y,w,h[,group]`.
+fn points_file(points: &[PickPoint]) -> String {
+    let grouped = points.iter().any(|p| p.group.is_some());
+    let mut csv = String::from(if grouped {
+        "target,x,y,w,h,group\n"
+    } else {
+        "target,x,y,w,h\n"
+    });
+    for p in points {
+        csv.push_str(&format!(
+            "{},{},{},{},{}",
+            p.target, p.xy.0, p.xy.1, p.size.0, p.size.1
+        ));
+        if grouped {
+            csv.push_str(&format!(
+                ",{}",
+                p.group.map_or(String::new(), |g| g.to_string())
+            ));
+        }
+        csv.push('\n');
+    }
+    csv
 }
 
 /// `--out` is never an input, never inside the frames' folder, and replaced (with `--force`)
@@ -108,6 +186,21 @@ fn refuse_replacing(req: &PickRequest) -> anyhow::Result<()> {
     let mut inputs = vec![frames_path];
     inputs.extend(req.points.as_deref());
     crate::outdir::refuse_output_file_among_inputs(&req.out, &inputs)?;
+    if let Some((_, path)) = &req.region {
+        crate::outdir::refuse_output_file_among_inputs(path, &inputs)?;
+        if path == &req.out {
+            return Err(crate::bad_input(format!(
+                "$points_out {}: the page's own $out",
+                path.display()
+            )));
+        }
+        if path.exists() && !req.force {
+            return Err(crate::bad_input(format!(
+                "{} exists: $force replaces it",
+                path.display()
+            )));
+        }
+    }
     if req.out.exists() && !req.force {
         return Err(crate::bad_input(format!(
             "{} exists: $force replaces it",
@@ -130,18 +223,24 @@ fn refuse_replacing(req: &PickRequest) -> anyhow::Result<()> {
 fn spread_frames(
     req: &PickRequest,
     source: &crate::frames::FrameSource,
-) -> anyhow::Result<Vec<(String, crate::export::html::FrameImage)>> {
+) -> anyhow::Result<(Vec<ShownFrame>, Option<GreyFrame>)> {
     let fps = reading_rate(req, source)?;
     let count = source.count(fps)?;
     let step = count.map_or(1, |n| (n / req.shown).max(1));
     let mut frames = Vec::new();
+    // the first frame at full resolution, for the texture of a region's points (asked only
+    // with a region)
+    let mut first = None;
     source.decode_while(fps, |k, label, frame| {
+        if k == 0 && req.region.is_some() {
+            first = Some(frame.clone());
+        }
         if k.is_multiple_of(step) {
             frames.push((label, frame.to_image_within(SHOWN_MAX_SIDE)?));
         }
         Ok(frames.len() < req.shown)
     })?;
-    Ok(frames)
+    Ok((frames, first))
 }
 
 /// Every given window lies inside the `(width, height)` frame.
