@@ -385,6 +385,38 @@ def check_pick(drv, harness, work, rec):
     open_page(drv, page)
     n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
     check(n == len(want), f"pick.html --points: {n} windows shown")
+    # a polygon drawn around the first target (clicks on its window add vertices, not
+    # select it; a click lands within 2 px of where it was aimed, the page being scaled), its
+    # text taken by `pick --region`, whose points lie inside it
+    from selenium.webdriver.support.ui import Select
+
+    Select(drv.find_element(By.ID, "tool")).select_by_value("polygon")
+    svg = drv.find_element(By.ID, "pick")
+    x0, y0 = float(want[0]["x"]), float(want[0]["y"])
+    # 24 px across, inside the frame (the first target is near its left edge)
+    lo_x, lo_y = max(x0 - 12, 1.0), max(y0 - 12, 1.0)
+    corners = [(lo_x, lo_y), (lo_x + 24, lo_y), (lo_x + 24, lo_y + 24), (lo_x, lo_y + 24)]
+    for x, y in corners:
+        click_at(drv, svg, x, y)
+    text = drv.execute_script("return window.vibcamRegion();")
+    shown = drv.find_element(By.ID, "region").get_attribute("value")
+    vertices = [tuple(float(v) for v in q.split(",")) for q in text.split(";")] if text else []
+    check(len(vertices) == 4 and shown == text
+          and all(abs(a - x) <= 2 and abs(b - y) <= 2 for (a, b), (x, y) in zip(vertices, corners))
+          and len(drv.find_elements(By.CSS_SELECTOR, "svg#pick polygon.region")) == 1,
+          f"pick.html: four clicks draw the polygon {text!r} (clicked {corners})")
+    n = len(drv.find_elements(By.CSS_SELECTOR, "svg#pick g.window"))
+    check(n == len(want), f"pick.html: clicks in polygon mode add no window ({n})")
+    region_points = work / "region.csv"
+    run(harness, "pick", "--frames", rec / "frames", "--region", text, "--spacing", "4",
+        "--points-out", region_points, "--out", work / "region.html", "--force")
+    with open(region_points, newline="") as f:
+        got = [(float(r["x"]), float(r["y"])) for r in csv.DictReader(f)]
+    inside = [v[0] for v in vertices], [v[1] for v in vertices]
+    check(len(got) > 0
+          and all(min(inside[0]) <= x <= max(inside[0]) and min(inside[1]) <= y <= max(inside[1])
+                  for x, y in got),
+          f"pick --region with the page's polygon: {len(got)} points, all inside it")
 
 
 def check_pole_picker(drv, harness, work, name, args, method=None):

@@ -43,7 +43,7 @@ function render(){
   var r=document.createElementNS(ns,'rect');
   r.setAttribute('x',p.x+0.5-p.w/2);r.setAttribute('y',p.y+0.5-p.h/2);r.setAttribute('width',p.w);r.setAttribute('height',p.h);
   r.setAttribute('fill','rgba(0,200,255,0.08)');r.setAttribute('stroke',i===sel?'#ff3030':'#00c8ff');r.setAttribute('stroke-width',Math.max(W,H)/400+0.5);
-  r.addEventListener('mousedown',function(ev){ev.stopPropagation();sel=i;drag={i:i,start:toPx(ev),x:p.x,y:p.y,moved:false};sw.value=p.w;sh.value=p.h;sg.value=p.group==null?'':p.group;render();});
+  r.addEventListener('mousedown',function(ev){if(tool.value!=='window')return;ev.stopPropagation();sel=i;drag={i:i,start:toPx(ev),x:p.x,y:p.y,moved:false};sw.value=p.w;sh.value=p.h;sg.value=p.group==null?'':p.group;render();});
   var t=document.createElementNS(ns,'text');t.setAttribute('x',p.x+0.5-p.w/2);t.setAttribute('y',p.y+0.5-p.h/2-1);t.setAttribute('fill','#ffe000');t.setAttribute('font-size',Math.max(10,Math.max(W,H)/50));
   t.textContent=p.target+(p.group!=null?' (group '+p.group+')':'');
   g.appendChild(r);g.appendChild(t);svg.appendChild(g);
@@ -53,15 +53,49 @@ function render(){
  tb.innerHTML=rows;
 }
 function size(v){v=Math.round(parseFloat(v));return isFinite(v)&&v>=3?v:21;}
+var tool=document.getElementById('tool'),brushR=document.getElementById('brush-r'),regionText=document.getElementById('region');
+var reg=[],stroke=false;
+function r1(v){return Math.round(v*10)/10;}
+function regionString(){
+ if(reg.length===0)return '';
+ var v=reg.map(function(q){return r1(q.x)+','+r1(q.y);}).join(';');
+ var t=tool.value,r=parseFloat(brushR.value);
+ if(t==='line')return 'line:'+v;
+ if(t==='brush')return 'brush:'+(isFinite(r)&&r>0?r:10)+':'+v;
+ return v;
+}
+function drawRegion(){
+ var old=svg.querySelectorAll('.region');for(var i=0;i<old.length;i++){old[i].remove();}
+ if(reg.length===0){regionText.value='';return;}
+ var ns='http://www.w3.org/2000/svg',t=tool.value;
+ var e=document.createElementNS(ns,t==='polygon'?'polygon':'polyline');e.setAttribute('class','region');
+ e.setAttribute('points',reg.map(function(q){return (q.x+0.5)+','+(q.y+0.5);}).join(' '));
+ var r=parseFloat(brushR.value);
+ e.setAttribute('fill',t==='polygon'?'rgba(255,200,0,0.12)':'none');
+ e.setAttribute('stroke',t==='brush'?'rgba(255,200,0,0.35)':'#ffc800');
+ e.setAttribute('stroke-width',t==='brush'?2*(isFinite(r)&&r>0?r:10):Math.max(W,H)/400+0.5);
+ e.setAttribute('stroke-linecap','round');e.setAttribute('stroke-linejoin','round');
+ svg.appendChild(e);regionText.value=regionString();
+}
+tool.addEventListener('change',function(){reg=[];drawRegion();});
+brushR.addEventListener('change',drawRegion);
+document.getElementById('clear-region').addEventListener('click',function(){reg=[];drawRegion();});
+window.vibcamRegion=regionString;
 svg.addEventListener('mousedown',function(ev){
  if(ev.button!==0)return;var q=toPx(ev);
+ if(tool.value!=='window'){
+  if(tool.value==='brush'){if(!stroke){reg=[];}stroke=true;}
+  reg.push(q);drawRegion();return;
+ }
  var next=pts.reduce(function(a,p){return Math.max(a,p.target);},0)+1;
  var g=sg.value===''?null:Math.max(0,Math.round(parseFloat(sg.value)));
  var p={target:next,x:q.x,y:q.y,w:Math.min(size(sw.value),W),h:Math.min(size(sh.value),H),group:isFinite(g)?g:null};clamp(p);
  pts.push(p);sel=pts.length-1;render();
 });
-window.addEventListener('mousemove',function(ev){if(!drag)return;var q=toPx(ev);var p=pts[drag.i];p.x=drag.x+q.x-drag.start.x;p.y=drag.y+q.y-drag.start.y;clamp(p);drag.moved=true;render();});
-window.addEventListener('mouseup',function(){drag=null;});
+window.addEventListener('mousemove',function(ev){
+ if(stroke){var q=toPx(ev),l=reg[reg.length-1];if(Math.hypot(q.x-l.x,q.y-l.y)>=2){reg.push(q);drawRegion();}return;}
+ if(!drag)return;var q=toPx(ev);var p=pts[drag.i];p.x=drag.x+q.x-drag.start.x;p.y=drag.y+q.y-drag.start.y;clamp(p);drag.moved=true;render();});
+window.addEventListener('mouseup',function(){drag=null;stroke=false;});
 window.addEventListener('keydown',function(ev){
  if((ev.key==='Delete'||ev.key==='Backspace')&&sel>=0&&document.activeElement.tagName!=='INPUT'){pts.splice(sel,1);sel=-1;
   pts.forEach(function(p,i){p.target=i+1;});render();ev.preventDefault();}
@@ -104,6 +138,17 @@ pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoi
          <input id=\"size-h\" type=\"number\" min=\"3\" value=\"21\" style=\"width:4em\"> px, group \
          <input id=\"group\" type=\"number\" min=\"0\" style=\"width:4em\"> \
          <button id=\"save\">save points.csv</button></p>"
+    );
+    let _ = writeln!(
+        s,
+        "<p>click to add <select id=\"tool\"><option value=\"window\">a window</option>\
+         <option value=\"polygon\">a polygon's vertex</option><option value=\"line\">a line's \
+         vertex</option><option value=\"brush\">a brush stroke (drag)</option></select> \
+         brush radius <input id=\"brush-r\" type=\"number\" min=\"1\" value=\"10\" \
+         style=\"width:4em\"> px <button id=\"clear-region\">clear region</button><br>\
+         region <input id=\"region\" readonly size=\"60\"> for <code>pick --region</code>, \
+         which keeps the places of a grid in it whose window has the texture to track \
+         (<code>--spacing</code>, <code>--min-texture</code>, <code>--direction</code>)</p>"
     );
     if frames.len() > 1 {
         let _ = writeln!(
