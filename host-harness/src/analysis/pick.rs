@@ -2,7 +2,7 @@
 //! file into `pick.html` ([`crate::export::pick`]), the page where the points `track --points`
 //! follows are chosen with the mouse.
 
-use crate::export::pick::{pick_html, PickPoint};
+use crate::export::pick::{pick_html, points_csv, PickPoint};
 use crate::frames::GreyFrame;
 
 /// The longest side of a frame as the page holds it, px: larger frames are shown scaled down
@@ -103,7 +103,7 @@ pub fn run(req: &PickRequest) -> anyhow::Result<String> {
     let chosen = match (&req.region, full) {
         (Some((sel, path)), Some(full)) => {
             text.push_str(&add_region_points(sel, &full, &mut points)?);
-            Some((path, points_file(&points)))
+            Some((path, points_csv(&points)))
         }
         _ => None,
     };
@@ -153,30 +153,6 @@ fn add_region_points(
         group: None,
     }));
     Ok(format!("{}\n", found.describe(sel)))
-}
-
-/// The points file `track --points` reads: `target,x,y,w,h[,group]`.
-fn points_file(points: &[PickPoint]) -> String {
-    let grouped = points.iter().any(|p| p.group.is_some());
-    let mut csv = String::from(if grouped {
-        "target,x,y,w,h,group\n"
-    } else {
-        "target,x,y,w,h\n"
-    });
-    for p in points {
-        csv.push_str(&format!(
-            "{},{},{},{},{}",
-            p.target, p.xy.0, p.xy.1, p.size.0, p.size.1
-        ));
-        if grouped {
-            csv.push_str(&format!(
-                ",{}",
-                p.group.map_or(String::new(), |g| g.to_string())
-            ));
-        }
-        csv.push('\n');
-    }
-    csv
 }
 
 /// `--out` is never an input, never inside the frames' folder, and replaced (with `--force`)

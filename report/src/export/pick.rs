@@ -117,6 +117,31 @@ document.getElementById('save').addEventListener('click',function(){
 render();
 })();"#;
 
+/// The points file `track --points` reads: `target,x,y,w,h[,group]` (a `group` column when any
+/// point has one, empty for the others: no group), the format of the page's "save points.csv".
+pub fn points_csv(points: &[PickPoint]) -> String {
+    let grouped = points.iter().any(|p| p.group.is_some());
+    let mut csv = String::from(if grouped {
+        "target,x,y,w,h,group\n"
+    } else {
+        "target,x,y,w,h\n"
+    });
+    for p in points {
+        csv.push_str(&format!(
+            "{},{},{},{},{}",
+            p.target, p.xy.0, p.xy.1, p.size.0, p.size.1
+        ));
+        if grouped {
+            csv.push_str(&format!(
+                ",{}",
+                p.group.map_or(String::new(), |g| g.to_string())
+            ));
+        }
+        csv.push('\n');
+    }
+    csv
+}
+
 /// The page: `frames` (label and image; the first shown), `points` at the start.
 pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoint]) -> String {
     let (w, h) = frames.first().map_or((1, 1), |(_, f)| (f.width, f.height));
