@@ -192,11 +192,12 @@ const ROOMS: [(&str, &[&[&str]]); 7] = [
     (
         "track",
         &[
-            &["tracks", "region"],
+            &["tracks"],
             &["verify"],
             &["choose"],
             &["shared_motion"],
             &["points"],
+            &["region"],
             &["follow"],
             &["camera_motion"],
             &["view"],

@@ -530,9 +530,10 @@ fn a_real_high_speed_recording_tracks_across_its_edges_as_pyidi_does() {
 }
 
 /// Points from a region of the same real recording (`pick --region`, docs/method.md §2.12):
-/// the whole frame at a 4 px spacing keeps every 21 px window that fits (775 of them) when the
-/// texture must fix y, the beam's motion, and only a few when it must fix every direction
-/// (the stripes fix no x: Shi-Tomasi); Lucas-Kanade follows all of them, and the ones at the
+/// the whole frame at a 4 px spacing keeps 760 of the 775 21 px windows that fit when the
+/// texture must fix y, the beam's motion (15 that Lucas-Kanade would refuse as flat left out),
+/// and only a few when it must fix every direction (the stripes fix no x: Shi-Tomasi);
+/// Lucas-Kanade follows all of them, and the ones at the
 /// places of the hand-chosen windows give pyidi's y there (measured: within 0.031 px in every
 /// frame; windows that straddle the beam's edge lose some frames to the ambiguity check,
 /// never a wrong position).

@@ -765,6 +765,15 @@ fn set_templates(
     Ok(refused)
 }
 
+/// Which of `points` firmware-core's Lucas-Kanade refuses in `frame` with `track`'s default
+/// settings (a flat window: too little texture in its weaker direction; or one at the frame's
+/// edge): what `track --tracker lk` would follow in no frame.
+pub fn lk_refusals(points: &[Point], frame: &GreyFrame) -> anyhow::Result<Vec<Option<Flags>>> {
+    // the threshold plays no part in Lucas-Kanade; no saturation level: the full scale
+    let mut trackers = lk_trackers(points, &CentroidConfig::binary(0), None)?;
+    set_templates(&mut trackers, points, frame, "the first frame")
+}
+
 /// The groups the points file states (two or more targets with one `group`).
 fn file_groups(points: &[Point]) -> Vec<Vec<usize>> {
     let mut groups: Vec<Vec<usize>> = Vec::new();

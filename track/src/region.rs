@@ -9,7 +9,9 @@
 //! that only has to measure motion along `v`, such as a beam's edge across its vibration). A
 //! window is kept when its texture is at least `min_texture` times the best candidate's in the
 //! region (OpenCV's `qualityLevel` rule), so the threshold does not depend on the camera's
-//! gain or bit depth.
+//! gain or bit depth, and when Lucas-Kanade accepts it as a template (its Hessian's smaller
+//! eigenvalue at least the tracker's `min_texture`: a window textured along one direction only
+//! may not be).
 
 use vibcam_readers::frames::GreyFrame;
 
@@ -81,6 +83,10 @@ pub struct Candidate {
     pub texture: Option<f64>,
     /// Whether it is kept.
     pub kept: bool,
+    /// Textured enough by the region's rule, but refused by Lucas-Kanade in the first frame
+    /// (too little texture in its weaker direction for its Hessian: it would follow the
+    /// window in no frame).
+    pub flat_for_lk: bool,
 }
 
 /// The points a region gives, and why the others were left out.
@@ -112,7 +118,8 @@ impl RegionPoints {
             .filter(|c| c.texture.is_none())
             .count();
         let kept = self.candidates.iter().filter(|c| c.kept).count();
-        let weak = self.candidates.len() - outside - kept;
+        let flat = self.candidates.iter().filter(|c| c.flat_for_lk).count();
+        let weak = self.candidates.len() - outside - kept - flat;
         let what = match sel.direction {
             Direction::Both => "the smaller eigenvalue of the structure tensor".to_string(),
             Direction::Along(a) => format!(
@@ -122,7 +129,8 @@ impl RegionPoints {
         };
         format!(
             "{} places every {} px in the region: {kept} kept, {weak} with less texture than {} \
-             of the best ({what} >= {:.4e} of {:.4e}), {outside} whose {w} x {w} window leaves \
+             of the best ({what} >= {:.4e} of {:.4e}), {flat} that Lucas-Kanade finds flat (too \
+             little texture in their weaker direction), {outside} whose {w} x {w} window leaves \
              the frame",
             self.candidates.len(),
             sel.spacing,
@@ -381,6 +389,7 @@ pub fn select(frame: &GreyFrame, sel: &Selection) -> anyhow::Result<RegionPoints
             xy,
             texture: structure(frame, xy, sel.window).map(|s| texture(s, sel.direction)),
             kept: false,
+            flat_for_lk: false,
         })
         .collect();
     let best = candidates
@@ -391,6 +400,29 @@ pub fn select(frame: &GreyFrame, sel: &Selection) -> anyhow::Result<RegionPoints
     for c in &mut candidates {
         // a flat window (no texture at all) never fixes a position
         c.kept = c.texture.is_some_and(|t| t > 0.0 && t >= needed);
+    }
+    // what Lucas-Kanade itself would refuse: a window textured along one direction only may
+    // still leave its Hessian too weak in the other
+    let kept: Vec<usize> = (0..candidates.len())
+        .filter(|&i| candidates[i].kept)
+        .collect();
+    let side = u32::try_from(sel.window).unwrap_or(u32::MAX);
+    let points: Vec<crate::points::Point> = kept
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| crate::points::Point {
+            target: k + 1,
+            xy: candidates[i].xy,
+            size: (side, side),
+            threshold: None,
+            group: None,
+        })
+        .collect();
+    for (&i, refused) in kept.iter().zip(crate::points::lk_refusals(&points, frame)?) {
+        if refused.is_some() {
+            candidates[i].kept = false;
+            candidates[i].flat_for_lk = true;
+        }
     }
     Ok(RegionPoints {
         candidates,
@@ -504,6 +536,42 @@ mod tests {
         assert!(structure(&ramp, (4.0, 20.0), 7).is_some());
         assert!(structure(&ramp, (35.0, 20.0), 7).is_some());
         assert!(structure(&ramp, (36.0, 20.0), 7).is_none());
+    }
+
+    #[test]
+    fn stripes_measure_one_direction_but_lucas_kanade_needs_both() {
+        // horizontal stripes 4 px high: all their texture is along y
+        let f = frame(80, 80, |_, y| if (y / 4) % 2 == 0 { 50 } else { 200 });
+        let sel = Selection {
+            shape: Shape::Polygon(vec![(0.0, 0.0), (79.0, 0.0), (79.0, 79.0), (0.0, 79.0)]),
+            spacing: 10.0,
+            window: 11,
+            min_texture: 0.1,
+            direction: Direction::Along(std::f64::consts::FRAC_PI_2),
+        };
+        let r = select(&f, &sel).unwrap();
+        let inside: Vec<&Candidate> = r
+            .candidates
+            .iter()
+            .filter(|c| c.texture.is_some())
+            .collect();
+        assert!(!inside.is_empty());
+        // textured enough along y everywhere, but the tracker's Hessian is singular: none kept
+        assert!(
+            inside.iter().all(|c| c.flat_for_lk && !c.kept),
+            "{inside:?}"
+        );
+        assert!(r.describe(&sel).contains("Lucas-Kanade finds flat"));
+        // and in every direction the stripes have no texture at all
+        let both = select(
+            &f,
+            &Selection {
+                direction: Direction::Both,
+                ..sel
+            },
+        )
+        .unwrap();
+        assert!(both.kept().is_empty() && both.candidates.iter().all(|c| !c.flat_for_lk));
     }
 
     #[test]
