@@ -1043,28 +1043,37 @@ fn track_frame_lk(
     (groups, templates): (&[Vec<usize>], &[BlockTemplate]),
     search_cap: Option<&[u16]>,
 ) -> anyhow::Result<Checked> {
+    use rayon::prelude::*;
     let k = trackers.len();
     let in_group = |t: usize| groups.iter().any(|m| m.contains(&t));
-    let mut results = Vec::with_capacity(k);
-    with_frame(frame, |f| {
-        for (t, tracker) in trackers.iter_mut().enumerate() {
-            let own = tracker.config().search;
-            let search = match (in_group(t), search_cap.and_then(|c| c.get(t))) {
-                (true, _) => 0,
-                (false, Some(&cap)) => own.min(cap),
-                (false, None) => own,
-            };
-            let start = if checks.doubted[t] {
-                checks.last_good[t]
-            } else {
-                None
-            };
-            results.push(match &f {
-                AnyFrame::U8(f) => tracker.track_from(f, start, search),
-                AnyFrame::U16(f) => tracker.track_from(f, start, search),
-            });
-        }
+    // each target's tracker on its own (a dense field of windows spread over the cores); the
+    // results in target order, so every output is the one tracking them in turn gives
+    let results: Vec<_> = with_frame(frame, |f| {
+        let checks = &*checks;
+        trackers
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(8)
+            .map(|(t, tracker)| {
+                let own = tracker.config().search;
+                let search = match (in_group(t), search_cap.and_then(|c| c.get(t))) {
+                    (true, _) => 0,
+                    (false, Some(&cap)) => own.min(cap),
+                    (false, None) => own,
+                };
+                let start = if checks.doubted[t] {
+                    checks.last_good[t]
+                } else {
+                    None
+                };
+                match &f {
+                    AnyFrame::U8(f) => tracker.track_from(f, start, search),
+                    AnyFrame::U16(f) => tracker.track_from(f, start, search),
+                }
+            })
+            .collect()
     })?;
+    debug_assert_eq!(results.len(), k);
     let mut checked: Checked = Vec::with_capacity(k);
     for (t, r) in results.into_iter().enumerate() {
         checked.push(checks.check(frame, t, r)?);
