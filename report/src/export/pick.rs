@@ -142,6 +142,17 @@ pub fn points_csv(points: &[PickPoint]) -> String {
     csv
 }
 
+/// The page's region tools: what a click adds (a window, or the vertices of a polygon, a line
+/// or a brush stroke) and the region as the text `pick` takes for its region.
+const REGION_TOOLS: &str = "<p>click to add <select id=\"tool\"><option value=\"window\">a \
+    window</option><option value=\"polygon\">a polygon's vertex</option><option \
+    value=\"line\">a line's vertex</option><option value=\"brush\">a brush stroke \
+    (drag)</option></select> brush radius <input id=\"brush-r\" type=\"number\" min=\"1\" \
+    value=\"10\" style=\"width:4em\"> px <button id=\"clear-region\">clear region</button><br>\
+    region <input id=\"region\" readonly size=\"60\"> for <code>pick</code>'s region (with its \
+    spacing, least texture and direction): it keeps the places of a grid in it whose window has \
+    the texture to track</p>\n";
+
 /// The page: `frames` (label and image; the first shown), `points` at the start.
 pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoint]) -> String {
     let (w, h) = frames.first().map_or((1, 1), |(_, f)| (f.width, f.height));
@@ -164,17 +175,7 @@ pub fn pick_html(title: &str, frames: &[(String, FrameImage)], points: &[PickPoi
          <input id=\"group\" type=\"number\" min=\"0\" style=\"width:4em\"> \
          <button id=\"save\">save points.csv</button></p>"
     );
-    let _ = writeln!(
-        s,
-        "<p>click to add <select id=\"tool\"><option value=\"window\">a window</option>\
-         <option value=\"polygon\">a polygon's vertex</option><option value=\"line\">a line's \
-         vertex</option><option value=\"brush\">a brush stroke (drag)</option></select> \
-         brush radius <input id=\"brush-r\" type=\"number\" min=\"1\" value=\"10\" \
-         style=\"width:4em\"> px <button id=\"clear-region\">clear region</button><br>\
-         region <input id=\"region\" readonly size=\"60\"> for <code>pick --region</code>, \
-         which keeps the places of a grid in it whose window has the texture to track \
-         (<code>--spacing</code>, <code>--min-texture</code>, <code>--direction</code>)</p>"
-    );
+    s.push_str(REGION_TOOLS);
     if frames.len() > 1 {
         let _ = writeln!(
             s,
