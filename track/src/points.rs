@@ -769,9 +769,19 @@ fn set_templates(
 /// settings (a flat window: too little texture in its weaker direction; or one at the frame's
 /// edge): what `track --tracker lk` would follow in no frame.
 pub fn lk_refusals(points: &[Point], frame: &GreyFrame) -> anyhow::Result<Vec<Option<Flags>>> {
+    // one tracker per window size, its template taken again for each point (a tracker holds
+    // buffers for the largest window: one per point of a dense field would be hundreds of MB);
     // the threshold plays no part in Lucas-Kanade; no saturation level: the full scale
-    let mut trackers = lk_trackers(points, &CentroidConfig::binary(0), None)?;
-    set_templates(&mut trackers, points, frame, "the first frame")
+    let mut refused = Vec::with_capacity(points.len());
+    let mut tracker: Vec<Box<HostLk>> = Vec::new();
+    for (i, p) in points.iter().enumerate() {
+        let one = std::slice::from_ref(p);
+        if i == 0 || points[i - 1].size != p.size {
+            tracker = lk_trackers(one, &CentroidConfig::binary(0), None)?;
+        }
+        refused.extend(set_templates(&mut tracker, one, frame, "the first frame")?);
+    }
+    Ok(refused)
 }
 
 /// The groups the points file states (two or more targets with one `group`).

@@ -202,33 +202,62 @@ impl Shape {
     }
 
     /// The grid places (whole pixels) in the shape, `spacing` px apart: a polygon's and a
-    /// brush's on the grid of multiples of `spacing` (rounded), in row order; a line's along it
-    /// from its first vertex, duplicates left out.
-    pub fn places(&self, spacing: f64) -> Vec<(f64, f64)> {
+    /// brush's on the grid of multiples of `spacing` (rounded) inside a `frame` (width, height)
+    /// frame, in row order; a line's along it from its first vertex, duplicates left out. More
+    /// than [`MAX_PLACES`] is refused (the message names the count), so that a region far
+    /// larger than the frame or a tiny spacing cannot run for hours.
+    pub fn places(&self, spacing: f64, frame: (usize, usize)) -> Result<Vec<(f64, f64)>, String> {
+        let too_many = |n: f64| {
+            format!(
+                "$region: {n:.0} places every {spacing} px, at most {MAX_PLACES} (a larger \
+                 $spacing, or a smaller region)"
+            )
+        };
         match self {
-            Shape::Line(path) => along(path, spacing),
-            Shape::Polygon(poly) => grid(poly, 0.0, spacing, |p| inside(poly, p)),
-            Shape::Brush { radius, path } => grid(path, *radius, spacing, |p| {
+            Shape::Line(path) => {
+                let length: f64 = path
+                    .windows(2)
+                    .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+                    .sum();
+                match length / spacing + 1.0 {
+                    n if n > MAX_PLACES as f64 => Err(too_many(n)),
+                    _ => Ok(along(path, spacing)),
+                }
+            }
+            Shape::Polygon(poly) => {
+                grid(poly, 0.0, (spacing, frame), |p| inside(poly, p)).map_err(too_many)
+            }
+            Shape::Brush { radius, path } => grid(path, *radius, (spacing, frame), |p| {
                 distance_to_path(path, p) <= *radius
-            }),
+            })
+            .map_err(too_many),
         }
     }
 }
 
-/// The grid places within the bounding box of `pts` grown by `margin`, kept by `keep`.
+/// The most places a region may have (a 6000 x 6000 frame at 14 px).
+pub const MAX_PLACES: usize = 200_000;
+
+/// The grid places within the bounding box of `pts` grown by `margin` and within the `(width,
+/// height)` frame, kept by `keep`; `Err(count)` when the box holds more than [`MAX_PLACES`].
 fn grid(
     pts: &[(f64, f64)],
     margin: f64,
-    spacing: f64,
+    (spacing, (width, height)): (f64, (usize, usize)),
     keep: impl Fn((f64, f64)) -> bool,
-) -> Vec<(f64, f64)> {
+) -> Result<Vec<(f64, f64)>, f64> {
     let lo = |f: fn(&(f64, f64)) -> f64| pts.iter().map(f).fold(f64::INFINITY, f64::min) - margin;
     let hi =
         |f: fn(&(f64, f64)) -> f64| pts.iter().map(f).fold(f64::NEG_INFINITY, f64::max) + margin;
-    let (x0, x1, y0, y1) = (lo(|p| p.0), hi(|p| p.0), lo(|p| p.1), hi(|p| p.1));
+    let (x0, x1) = (lo(|p| p.0).max(0.0), hi(|p| p.0).min(width as f64 - 1.0));
+    let (y0, y1) = (lo(|p| p.1).max(0.0), hi(|p| p.1).min(height as f64 - 1.0));
     let mut out = Vec::new();
     let (i0, i1) = ((x0 / spacing).ceil() as i64, (x1 / spacing).floor() as i64);
     let (j0, j1) = ((y0 / spacing).ceil() as i64, (y1 / spacing).floor() as i64);
+    let count = ((i1 - i0 + 1).max(0) as f64) * ((j1 - j0 + 1).max(0) as f64);
+    if count > MAX_PLACES as f64 {
+        return Err(count);
+    }
     for j in j0..=j1 {
         for i in i0..=i1 {
             let p = ((i as f64 * spacing).round(), (j as f64 * spacing).round());
@@ -237,15 +266,16 @@ fn grid(
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// Places every `spacing` px along the polyline `path` (rounded to whole pixels).
 fn along(path: &[(f64, f64)], spacing: f64) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     let mut push = |p: (f64, f64)| {
         let p = (p.0.round(), p.1.round());
-        if !out.contains(&p) {
+        if seen.insert((p.0 as i64, p.1 as i64)) {
             out.push(p);
         }
     };
@@ -375,7 +405,10 @@ pub fn select(frame: &GreyFrame, sel: &Selection) -> anyhow::Result<RegionPoints
             sel.min_texture
         )));
     }
-    let places = sel.shape.places(sel.spacing);
+    let places = sel
+        .shape
+        .places(sel.spacing, frame.dimensions())
+        .map_err(bad_input)?;
     if places.is_empty() {
         return Err(bad_input(format!(
             "$region: no place of the {} px grid inside it (a smaller $spacing, or a larger \
@@ -479,14 +512,14 @@ mod tests {
             (100.5, 50.5),
             (-0.5, 50.5),
         ]);
-        let p = rect.places(10.0);
+        let p = rect.places(10.0, (1000, 1000)).unwrap();
         // 0, 10, ..., 100 across and 0, ..., 50 down
         assert_eq!(p.len(), 11 * 6);
         assert_eq!(p[0], (0.0, 0.0));
         assert_eq!(p[12], (10.0, 10.0));
         // a right triangle below the diagonal of a 100 x 100 square: about half the places
         let tri = Shape::Polygon(vec![(0.0, 0.0), (100.0, 100.0), (0.0, 100.0)]);
-        let t = tri.places(5.0);
+        let t = tri.places(5.0, (1000, 1000)).unwrap();
         assert!(t.iter().all(|&(x, y)| x <= y), "{t:?}");
         // between the strict inside (x > 0, x < y, y < 100: 171 places) and the closed
         // triangle (21 * 22 / 2 = 231): the even-odd rule takes some of the edges' places
@@ -497,7 +530,7 @@ mod tests {
     fn a_line_gives_points_at_the_spacing_and_a_brush_its_neighbourhood() {
         let line = Shape::Line(vec![(0.0, 0.0), (30.0, 0.0), (30.0, 20.0)]);
         assert_eq!(
-            line.places(10.0),
+            line.places(10.0, (1000, 1000)).unwrap(),
             vec![
                 (0.0, 0.0),
                 (10.0, 0.0),
@@ -511,7 +544,15 @@ mod tests {
             radius: 10.0,
             path: vec![(50.0, 50.0)],
         };
-        let b = brush.places(5.0);
+        let b = brush.places(5.0, (1000, 1000)).unwrap();
+        // a region far larger than the frame is cut to it; one too fine to finish is refused
+        let huge = Shape::Polygon(vec![(-1e12, -1e12), (1e12, -1e12), (1e12, 1e12)]);
+        let cut = huge.places(10.0, (100, 50)).unwrap();
+        // the places with x > y (35) up to those with x >= y (40), all in the frame
+        assert!((35..=40).contains(&cut.len()), "{}", cut.len());
+        assert!(cut.iter().all(|&(x, y)| x <= 99.0 && y <= 49.0 && x >= y));
+        let far = Shape::Line(vec![(0.0, 0.0), (1e12, 0.0)]);
+        assert!(far.places(1.0, (100, 50)).unwrap_err().contains("at most"));
         // the places of the 5 px grid within 10 px of (50, 50): the centre, 4 at 5 px, 4 at
         // 7.07 px, 4 at 10 px
         assert_eq!(b.len(), 13);
