@@ -507,6 +507,45 @@ def check_wire(drv, path, geometry, what):
           f"{what}: the page names the geometry")
 
 
+VIDEO_FRAMES_JS = """
+const [id, done] = arguments;
+const v = document.getElementById(id);
+const grab = () => {
+  const c = document.createElement('canvas');
+  c.width = v.videoWidth; c.height = v.videoHeight;
+  const g = c.getContext('2d');
+  g.drawImage(v, 0, 0);
+  return g.getImageData(0, 0, c.width, c.height).data;
+};
+const at = (t) => new Promise(r => { v.onseeked = () => r(grab()); v.currentTime = t; });
+(async () => {
+  v.pause();
+  if (v.readyState < 2) {
+    await new Promise(r => v.addEventListener('loadeddata', r, {once: true}));
+  }
+  const a = await at(0.0), b = await at(0.5);
+  let diff = 0;
+  for (let i = 0; i < a.length; i += 4) diff = Math.max(diff, Math.abs(a[i] - b[i]));
+  done({w: v.videoWidth, h: v.videoHeight, diff: diff, duration: v.duration});
+})().catch(e => done({error: String(e)}));
+"""
+
+
+def check_videos(drv, path, count, what):
+    """Each magnified video on the page loads and plays: its frame at 0 s and at 0.5 s (a
+    quarter period) differ."""
+    from selenium.webdriver.common.by import By
+
+    open_page(drv, path)
+    videos = drv.find_elements(By.CSS_SELECTOR, "video.magnified")
+    check(len(videos) == count, f"{what}: {len(videos)} magnified videos, {count} modes")
+    drv.set_script_timeout(30)
+    for v in videos:
+        got = drv.execute_async_script(VIDEO_FRAMES_JS, v.get_attribute("id"))
+        ok = "error" not in got and got["w"] > 0 and got["diff"] >= 20 and got["duration"] > 1
+        check(ok, f"{what}: {v.get_attribute('id')} loads and moves ({got})")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--harness", default="target/debug/host-harness")
@@ -558,6 +597,16 @@ def main():
     geometry.write_text("node,x_mm,y_mm\n1,0,0\n2,100,0\n3,200,0\n4,300,0\n5,200,150\n"
                         "from,to\n1,2\n2,3\n3,4\n3,5\n5,1\n")
     run(h, *modal, "--geometry", geometry, "--out", work / "modal-geometry", "--force")
+    # a full field: hundreds of points on a speckled beam, each mode magnified into a video
+    beam = work / "beam"
+    run(h, "simulate-field", "--render", "--scene", "speckle", "--minutes", "0.134", "--fps",
+        "50", "--exposure-ms", "1", "--out", beam, "--force")
+    run(h, "pick", "--frames", beam / "frames", "--region",
+        (beam / "region.txt").read_text().strip(), "--spacing", "3", "--window-px", "11", "--direction", "y", "--points-out",
+        work / "beam-points.csv", "--out", work / "beam-pick.html", "--force")
+    run(h, "analyze", "--frames", beam / "frames", "--fps", "50", "--points",
+        work / "beam-points.csv",
+        "--tracker", "lk", "--out", work / "beam-analysis", "--force")
     run(h, *ema, "--geometry", geometry, "--out", work / "ema-geometry", "--force")
 
     def mode_rows(d):
@@ -614,6 +663,9 @@ def main():
         check(n == 4, f"analyze --reference: {n} references drawn, 4 given")
         check("camera_motion" in drv.page_source, "analyze --reference: the camera's spectrum")
         check_pick(drv, h, work, rec)
+        ssi = sum(1 for r in csv.DictReader(open(work / "beam-analysis" / "modes.csv"))
+                  if r["method"] == "ssi")
+        check_videos(drv, work / "beam-analysis" / "report.html", ssi, "analyze, a full field")
         if args.screenshots:
             shots = Path(args.screenshots)
             shots.mkdir(parents=True, exist_ok=True)

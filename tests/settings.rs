@@ -113,6 +113,7 @@ const REFUSALS: &[(&str, &str)] = &[
     ("frames", "track --frames nowhere --fps 120 --targets 1 --threshold 100 --out o"),
     ("frames_shown", "pick --frames fr --fps 120 --frames-shown 99 --out o.html"),
     ("region", "pick --frames fr --fps 120 --region 1,1;2,1;2,2 --out o.html"),
+    ("magnify_px", "analyze --frames fr --fps 120 --threshold 100 --magnify-px 101 --out o"),
     ("spacing", "pick --frames fr --fps 120 --region 0,0;40,0;40,40 --spacing 0.5 --out o.html"),
     ("window_px", "pick --frames fr --fps 120 --region 0,0;40,0;40,40 --window-px 4 --out o.html"),
     ("min_texture", "pick --frames fr --fps 120 --region 0,0;40,0;40,40 --min-texture 2 --out o.html"),

@@ -10,6 +10,7 @@ mod centroid;
 mod daq;
 mod defects;
 mod ema;
+mod field;
 mod formats;
 mod golden;
 mod hostile;
@@ -201,6 +202,7 @@ const ROOMS: [(&str, &[&[&str]]); 7] = [
             &["follow"],
             &["camera_motion"],
             &["view"],
+            &["magnify"],
         ],
     ),
     (

@@ -877,6 +877,7 @@ fn analyze<'py>(
         out: std::path::PathBuf::new(),
         force: false,
         pdf: false,
+        magnify_px: 0.0,
         geometry: geometry.clone().map(std::path::PathBuf::from),
     };
     let mut inputs = frames.paths();

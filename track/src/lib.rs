@@ -18,11 +18,14 @@
 //!   (the target's own score, its group's geometry) that take away what it does not support;
 //! - [`camera_motion`]: the camera's motion per frame from static references, by consensus;
 //! - [`view`]: the targets tracked, the camera's motion removed, the scale from the scene (one,
-//!   between two points, each target's size, the plane's homography).
+//!   between two points, each target's size, the plane's homography);
+//! - [`magnify`]: a mode's motion at the points spread over the image and applied, magnified,
+//!   to the reference frame (the frames of a motion-magnification video).
 
 pub mod camera_motion;
 pub mod choose;
 pub mod follow;
+pub mod magnify;
 pub mod points;
 pub mod region;
 pub mod shared_motion;

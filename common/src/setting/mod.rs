@@ -62,6 +62,7 @@ pub const KEYS: &[&str] = &[
     "impact",
     "input_col",
     "lost_frames",
+    "magnify_px",
     "max_order",
     "merge",
     "min_texture",

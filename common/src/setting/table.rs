@@ -268,6 +268,21 @@ pub const SETTINGS: &[Setting] = &[
                and of the plot.",
     },
     Setting {
+        key: "magnify_px",
+        commands: &["analyze"],
+        values: Values::Number {
+            min: Bound::Closed(0.0),
+            max: Bound::Closed(100.0),
+        },
+        words: &[],
+        unit: "px",
+        default: DefaultValue::Given("4"),
+        help: "Without $accel: per mode a video of the first frame moving in that mode alone \
+               (`magnified_<method>_<mode>.webm`, VP9 written by the `ffmpeg` program, played in \
+               report.html), magnified so that the point moving most moves this many pixels; 0 \
+               writes none.",
+    },
+    Setting {
         key: "lost_frames",
         commands: RECORDING,
         values: Values::Choice(&["interpolate", "hold"]),

@@ -226,6 +226,7 @@ fn page(
         picker: None,
         banner: None,
         provenance: None,
+        videos: Vec::new(),
     }
 }
 

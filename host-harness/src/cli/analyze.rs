@@ -81,6 +81,9 @@ pub struct Args {
     /// without: peaks picked automatically]
     #[arg(long, value_name = "LO-HI,...", value_parser = parse_bands)]
     pub bands: Option<Bands>,
+    /// `$magnify_px`.
+    #[arg(long, value_name = "PX", default_value = super::args::given("magnify_px"), value_parser = super::args::number("magnify_px"), help = super::args::help("magnify_px"))]
+    pub magnify_px: f64,
     /// Output directory (created).
     #[arg(long, value_name = "DIR", default_value = "analysis")]
     pub out: PathBuf,
@@ -201,6 +204,7 @@ fn input(args: Args) -> anyhow::Result<AnalyzeInput> {
         out: args.out,
         force: args.force,
         pdf: args.page.pdf,
+        magnify_px: args.magnify_px,
         geometry: args.page.geometry.clone(),
     })
 }

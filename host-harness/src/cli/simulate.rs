@@ -64,6 +64,11 @@ pub struct Args {
     /// degrees (a camera looking at it obliquely: each target at its own scale).
     #[arg(long, value_name = "DEG", requires = "render")]
     pub oblique_deg: Option<f64>,
+    /// With --render: `speckle` films a speckle-painted simply supported beam side-on instead
+    /// (modes 2.5, 10, 22.5 Hz; the shapes known at every pixel column: shapes.csv, motion.csv,
+    /// region.txt for `pick --region`), not with --case or the camera's flags.
+    #[arg(long, value_enum, requires = "render", conflicts_with_all = ["case", "references", "shake_px", "roll_deg", "shake_hz", "oblique_deg"])]
+    pub scene: Option<SceneArg>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -87,6 +92,13 @@ pub enum CaseArg {
     WeakHighMode,
 }
 
+/// `--scene`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneArg {
+    /// A speckle-painted beam.
+    Speckle,
+}
+
 /// Runs `host-harness simulate-field`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let minutes = args.minutes.unwrap_or(if args.render { 5.0 } else { 30.0 });
@@ -107,7 +119,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         CaseArg::CloseModes => FieldCase::CloseModes,
         CaseArg::WeakHighMode => FieldCase::WeakHighMode,
     };
-    let model = case.model();
+    let model = match args.scene {
+        Some(SceneArg::Speckle) => crate::recording::speckle::model(),
+        None => case.model(),
+    };
     let (n, warnings) = crate::model::field::record_length(&model, minutes, args.fps, args.render)?;
     if args.render {
         let rec = FieldRecording {
@@ -122,9 +137,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             view: view(&args),
         };
         let bar = crate::study::runner::progress_bar(n as u64, true, "frames");
-        let report = write_field_recording(&rec, &args.out, args.force, |done| {
-            bar.set_position(done as u64)
-        });
+        let progress = |done: usize| bar.set_position(done as u64);
+        let report = match args.scene {
+            Some(SceneArg::Speckle) => {
+                crate::recording::speckle::write_speckle_beam(&rec, &args.out, args.force, progress)
+            }
+            None => write_field_recording(&rec, &args.out, args.force, progress),
+        };
         bar.finish_and_clear();
         return super::stdout(&with_warnings(report?, &warnings));
     }

@@ -78,6 +78,8 @@ pub struct AnalyzeInput {
     pub force: bool,
     /// Also print `report.pdf` (headless Chromium).
     pub pdf: bool,
+    /// `$magnify_px` (output-only): each mode's magnified video, 0 none.
+    pub magnify_px: f64,
     /// `$geometry`: the structure's nodes and lines the page draws the shapes on (several
     /// targets).
     pub geometry: Option<PathBuf>,
@@ -387,6 +389,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
         out: input.out,
         force: input.force,
         pdf: input.pdf,
+        magnify_px: input.magnify_px,
         notes: rates.notes,
         view,
         geometry,

@@ -424,6 +424,7 @@ impl ModalSpec {
             view: None,
             scrub: None,
             wire: self.wire(&c.records)?,
+            magnify: None,
         };
         crate::analysis::oma::run::write(&c.records, &self.settings, &c.result, &output)
     }

@@ -156,17 +156,13 @@ fn raw_sum(
     for s in range {
         let start = s * step;
         for (ch, out) in channels.iter().zip(spectra.iter_mut()) {
-            let seg = &ch[start..start + c.nperseg];
-            let mean = match c.detrend {
-                Detrend::Constant => seg.iter().sum::<f64>() / c.nperseg as f64,
-                _ => 0.0,
-            };
-            input.iter_mut().for_each(|v| *v = 0.0);
-            for ((o, v), wv) in input.iter_mut().zip(seg).zip(&w) {
-                *o = (v - mean) * wv;
-            }
-            fft.process(&mut input, out)
-                .map_err(|e| anyhow::anyhow!("internal: {e}"))?;
+            segment_spectrum(
+                &ch[start..start + c.nperseg],
+                (&w, c.detrend),
+                &fft,
+                &mut input,
+                out,
+            )?;
         }
         for (line, m) in g.iter_mut().enumerate() {
             for i in 0..k {
@@ -178,6 +174,27 @@ fn raw_sum(
         }
     }
     Ok(g)
+}
+
+/// The spectrum of one segment into `out`: its mean removed (constant detrending), windowed by
+/// `w`, zero-padded to the transform's length in `input`.
+pub(crate) fn segment_spectrum(
+    seg: &[f64],
+    (w, detrend): (&[f64], Detrend),
+    fft: &std::sync::Arc<dyn vibcam_fft::RealToComplex<f64>>,
+    input: &mut [f64],
+    out: &mut [Complex64],
+) -> anyhow::Result<()> {
+    let mean = match detrend {
+        Detrend::Constant => seg.iter().sum::<f64>() / seg.len().max(1) as f64,
+        _ => 0.0,
+    };
+    input.iter_mut().for_each(|v| *v = 0.0);
+    for ((o, v), wv) in input.iter_mut().zip(seg).zip(w) {
+        *o = (v - mean) * wv;
+    }
+    fft.process(input, out)
+        .map_err(|e| anyhow::anyhow!("internal: {e}"))
 }
 
 /// The cross-spectral matrix from the raw sums of `segments` segments ([`raw_sum`]): the

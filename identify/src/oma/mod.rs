@@ -16,6 +16,7 @@ pub mod csd;
 pub mod decay;
 pub mod fdd;
 pub mod lscf;
+pub mod many;
 pub mod modes;
 pub mod plscf;
 pub mod preger;
@@ -317,8 +318,12 @@ pub(crate) fn record_scale(channels: &[Vec<f64>]) -> anyhow::Result<f64> {
 
 /// Output-only analysis of `channels` (one record per target, equal lengths). The records are
 /// scaled by a power of two before the numerics (the power of two nearest their RMS) and the spectra and
-/// amplitudes scaled back: the same modes whatever the record's unit.
+/// amplitudes scaled back: the same modes whatever the record's unit. More than
+/// [`many::MAX_FULL_CHANNELS`] channels are analysed on references ([`many`]).
 pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResult> {
+    if channels.len() > many::MAX_FULL_CHANNELS {
+        return many::analyze(channels, s);
+    }
     let scale = record_scale(channels)?;
     let scaled: Vec<Vec<f64>> = channels
         .iter()

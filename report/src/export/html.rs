@@ -174,6 +174,25 @@ pub struct Report {
     pub banner: Option<(String, Vec<String>)>,
     /// The header under the title: date, version, command, inputs, settings, machine.
     pub provenance: Option<crate::provenance::Provenance>,
+    /// Each mode's magnified video.
+    pub videos: Vec<Video>,
+}
+
+/// A video on the page (`video.magnified`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Video {
+    /// Its caption.
+    pub label: String,
+    /// Its source: a `data:` URI, or a file beside the page.
+    pub src: String,
+}
+
+impl Report {
+    /// The page with `videos`.
+    pub fn with_videos(mut self, videos: Vec<Video>) -> Report {
+        self.videos = videos;
+        self
+    }
 }
 
 /// The caption (figure name) of the static stabilisation diagram a page's picker replaces.
@@ -351,6 +370,7 @@ pub fn report_html(r: &Report) -> String {
         Some((labels, m)) if labels.len() >= 2 && !one_point => mac_section(&mut s, labels, m),
         _ => {}
     }
+    videos_section(&mut s, &r.videos);
     // the picker draws the stabilisation diagram: its static figure stays a file only
     let shown = r
         .figures
@@ -373,6 +393,27 @@ pub fn report_html(r: &Report) -> String {
         escape(&r.text)
     );
     s
+}
+
+/// The magnified videos, one figure each (none: nothing).
+fn videos_section(s: &mut String, videos: &[Video]) {
+    if videos.is_empty() {
+        return;
+    }
+    s.push_str(
+        "<h2>Each mode magnified</h2>\n<p>The first frame moving in one mode alone, one period \
+         looped, magnified as the caption says (the report below tells how).</p>\n",
+    );
+    for (i, v) in videos.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "<figure><figcaption>{}</figcaption><video class=\"magnified\" id=\"magnified-{}\" \
+             src=\"{}\" controls loop autoplay muted playsinline></video></figure>",
+            escape(&v.label),
+            i + 1,
+            escape(&v.src)
+        );
+    }
 }
 
 /// Where the targets are drawn: the frame's size (or a line of the targets' own) and their

@@ -47,7 +47,17 @@ pub struct FieldRecording {
 }
 
 impl FieldRecording {
-    fn validate(&self) -> anyhow::Result<()> {
+    /// `N frames at F fps, exposure E ms, read noise R grey levels, seed S` (the READMEs').
+    pub fn camera_words(&self) -> String {
+        format!(
+            "{} frames at {} fps, exposure {} ms, read noise {} grey levels, seed {}",
+            self.frames, self.fps, self.exposure_ms, self.read_noise, self.seed
+        )
+    }
+
+    /// Refuses an exposure of a frame period or more, an RMS motion outside (0, 20] px, read
+    /// noise outside 0-64 grey levels and fewer than 2 frames, naming the setting.
+    pub fn validate(&self) -> anyhow::Result<()> {
         let period_ms = 1000.0 / self.fps;
         if !(self.exposure_ms >= 0.0 && self.exposure_ms < period_ms) {
             return Err(vibcam_readers::bad_input(format!(
@@ -195,8 +205,7 @@ fn write_view(
     );
     let readme = format!(
         "Synthetic field recording seen by a camera that moves or looks at an angle: {} \
-         targets, {} frames at {} fps, exposure {} ms, read noise {} grey levels, seed {}; the \
-         point that moves most has an RMS displacement of {} px at the nominal 0.5 px/mm.\n\
+         targets, {}; the point that moves most has an RMS displacement of {} px at the nominal 0.5 px/mm.\n\
          Camera: shake {} px RMS per axis and roll {} deg RMS over {}-{} Hz, the plane turned \
          by {} deg, {} static reference disks.\nModes: {}\nTruth: truth.csv (modes), \
          truth_motion.csv (each target's image centre and its displacement along the plane's y \
@@ -204,11 +213,7 @@ fn write_view(
          disk; world.csv: the references' centres in the image and in the plane (mm), for \
          `analyze --world`.\n\nAnalyse the frames (output-only) with:\n\n  {command}\n",
         rec.model.points,
-        rec.frames,
-        rec.fps,
-        rec.exposure_ms,
-        rec.read_noise,
-        rec.seed,
+        rec.camera_words(),
         rec.rms_px,
         v.shake_px,
         v.roll_deg,

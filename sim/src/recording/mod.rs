@@ -18,6 +18,7 @@ pub mod field;
 pub mod hammer;
 pub mod release;
 pub mod scene;
+pub mod speckle;
 pub mod targets;
 
 use crate::imaging::{BlurRenderer, DiskTarget, TargetPath};

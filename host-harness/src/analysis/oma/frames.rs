@@ -46,6 +46,8 @@ pub struct FramesRequest {
     pub force: bool,
     /// Also print `report.pdf`.
     pub pdf: bool,
+    /// `$magnify_px`: each mode's magnified video, 0 none.
+    pub magnify_px: f64,
     /// `$geometry`: the structure's nodes and lines the page draws the shapes on (its path,
     /// its content; checked against the targets).
     pub geometry: Option<(PathBuf, vibcam_readers::geometry::Geometry)>,
@@ -220,6 +222,7 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
     inputs.extend(req.points_file.clone());
     inputs.extend(req.geometry.as_ref().map(|g| g.0.clone()));
     let wire = wire(req, &c)?;
+    let first = source.frame_at(req.fps, 0).ok().flatten().map(|(_, f)| f);
     let mut preamble = format!(
         "frames: {} ({} frames at {} fps), no accelerometer: output-only analysis\n",
         req.frames, n, req.fps
@@ -245,14 +248,17 @@ pub fn run(req: &FramesRequest) -> anyhow::Result<Outcome> {
             along_x: req.displacement.axis == crate::analysis::Axis::X,
             preamble,
             extra: vec![("displacement.csv".to_string(), displacement)],
-            frame: source
-                .frame_at(req.fps, 0)
-                .ok()
-                .flatten()
-                .and_then(|(_, f)| f.to_image().ok()),
+            frame: first.as_ref().and_then(|f| f.to_image().ok()),
             view: Some((&c.viewed, req.fps)),
             scrub: crate::analysis::track_run::scrubber(&source, req.fps, &c.viewed),
             wire,
+            magnify: first.filter(|_| req.magnify_px > 0.0).map(|frame| {
+                super::magnified::Magnify {
+                    px: req.magnify_px,
+                    frame,
+                    along_x: req.displacement.axis == crate::analysis::Axis::X,
+                }
+            }),
         },
     )
 }

@@ -43,6 +43,8 @@ pub struct Output<'a> {
     pub scrub: Option<crate::export::scrub::Scrubber>,
     /// The lines the shapes are drawn with (on the records' targets).
     pub wire: crate::export::wire::Wire,
+    /// Each mode's magnified video (`analyze` from frames).
+    pub magnify: Option<super::magnified::Magnify>,
 }
 
 /// Analyses `records` with `settings` and writes the outputs; the report is returned.
@@ -84,7 +86,15 @@ pub fn write(
     for f in &figures {
         f.write_staged(&out)?;
     }
+    let (videos, magnified) = match &o.magnify {
+        Some(m) => {
+            let points: Vec<Option<(f64, f64)>> = records.targets.iter().map(|t| t.1).collect();
+            super::magnified::write_videos(&out, r, &points, m)
+        }
+        None => (Vec::new(), String::new()),
+    };
     let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
+    let report = format!("{report}{magnified}");
     let figures = crate::plots::page_figures(&figures);
     let report = crate::analysis::write_report(&out, &report, o.pdf, |report| {
         page(
@@ -101,6 +111,7 @@ pub fn write(
             (figures, o.wire.clone()),
             report,
         )
+        .with_videos(videos)
     })?;
     out.commit()?;
     Ok(Outcome {
@@ -205,6 +216,7 @@ pub fn page(
         picker,
         banner: no_mode_banner(r.modes.is_empty(), &r.rejected),
         provenance: None,
+        videos: Vec::new(),
     }
 }
 

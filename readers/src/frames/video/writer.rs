@@ -68,31 +68,65 @@ impl Ffv1Writer {
         fps: f64,
         kind: Pixels,
     ) -> Result<Self, VideoError> {
-        if width == 0 || height == 0 || !(fps.is_finite() && fps > 0.0) {
-            return Err(VideoError::BadFrame {
-                path: path.into(),
-                what: format!("cannot write {width}x{height} frames at {fps} fps"),
-            });
-        }
+        check_size(path, (width, height), fps)?;
         let (input, stored) = kind.formats();
+        let mut cmd = Command::new("ffmpeg");
+        cmd.args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", input])
+            .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
+            .args([
+                "-i",
+                "-",
+                "-c:v",
+                "ffv1",
+                "-level",
+                "3",
+                "-g",
+                "1",
+                "-slicecrc",
+                "1",
+            ])
+            .args(["-pix_fmt", stored, "-f", "matroska"]);
+        Self::start(cmd, path, (width, height), kind)
+    }
+
+    /// Starts a video for a web page: VP9 in WebM (`yuv420p`, constant quality `crf`, 0 best
+    /// to 63; 10 keeps a grey frame within a grey level or two), from 8-bit grey frames, an odd
+    /// width or height padded by one black column or row. Not lossless: for showing, as
+    /// browsers play it.
+    pub fn create_webm(
+        path: &Path,
+        width: usize,
+        height: usize,
+        fps: f64,
+        crf: u8,
+    ) -> Result<Self, VideoError> {
+        check_size(path, (width, height), fps)?;
+        let mut cmd = Command::new("ffmpeg");
+        cmd.args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "gray"])
+            .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
+            .args(["-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"])
+            .args([
+                "-c:v",
+                "libvpx-vp9",
+                "-crf",
+                &crf.min(63).to_string(),
+                "-b:v",
+                "0",
+            ])
+            .args(["-row-mt", "1", "-deadline", "good", "-cpu-used", "4"])
+            .args(["-pix_fmt", "yuv420p", "-f", "webm"]);
+        Self::start(cmd, path, (width, height), Pixels::Grey8)
+    }
+
+    /// Spawns `cmd` writing `path` from frames on its standard input.
+    fn start(
+        mut cmd: Command,
+        path: &Path,
+        (width, height): (usize, usize),
+        kind: Pixels,
+    ) -> Result<Self, VideoError> {
         let mut child = spawn(
-            Command::new("ffmpeg")
-                .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", input])
-                .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
-                .args([
-                    "-i",
-                    "-",
-                    "-c:v",
-                    "ffv1",
-                    "-level",
-                    "3",
-                    "-g",
-                    "1",
-                    "-slicecrc",
-                    "1",
-                ])
-                .args(["-pix_fmt", stored, "-f", "matroska"])
-                .arg(file_arg(path))
+            cmd.arg(file_arg(path))
                 .stdin(Stdio::piped())
                 .stdout(Stdio::null())
                 .stderr(Stdio::piped()),
@@ -209,6 +243,17 @@ impl Drop for Ffv1Writer {
         drop(self.stdin.take());
         let _status = self.child.wait();
     }
+}
+
+/// Refuses an empty frame or a rate that is not a positive number.
+fn check_size(path: &Path, (width, height): (usize, usize), fps: f64) -> Result<(), VideoError> {
+    if width == 0 || height == 0 || !(fps.is_finite() && fps > 0.0) {
+        return Err(VideoError::BadFrame {
+            path: path.into(),
+            what: format!("cannot write {width}x{height} frames at {fps} fps"),
+        });
+    }
+    Ok(())
 }
 
 /// A frame rate as FFmpeg should read it: `p/q` when a denominator up to 10 010 gives it to
