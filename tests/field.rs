@@ -91,6 +91,9 @@ fn a_speckled_beam_gives_its_modes_at_hundreds_of_points_and_videos_that_track_b
     // each mode's video, tracked back: the stated 4 px times the shape, within 5 %
     let page = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert_eq!(page.matches("<video class=\"magnified\"").count(), 3);
+    // beside each, the mode's displacement field with its arrows
+    assert_eq!(page.matches("<svg class=\"field\"").count(), 3);
+    assert!(page.matches("marker-end=\"url(#head)\"").count() >= 3 * 20);
     let s = &found[&("ssi".to_string(), 1)];
     let video = out.join("magnified_ssi_1.webm");
     let back = tmp.path().join("back");

@@ -185,6 +185,8 @@ pub struct Video {
     pub label: String,
     /// Its source: a `data:` URI, or a file beside the page.
     pub src: String,
+    /// The mode's displacement field over the frame (an SVG; empty: none).
+    pub figure: String,
 }
 
 impl Report {
@@ -402,16 +404,19 @@ fn videos_section(s: &mut String, videos: &[Video]) {
     }
     s.push_str(
         "<h2>Each mode magnified</h2>\n<p>The first frame moving in one mode alone, one period \
-         looped, magnified as the caption says (the report below tells how).</p>\n",
+         looped, magnified as the caption says (the report below tells how); under it the \
+         mode's displacement field over the frame: red along the motion's direction, blue \
+         against it, an arrow at some of the points.</p>\n",
     );
     for (i, v) in videos.iter().enumerate() {
         let _ = writeln!(
             s,
             "<figure><figcaption>{}</figcaption><video class=\"magnified\" id=\"magnified-{}\" \
-             src=\"{}\" controls loop autoplay muted playsinline></video></figure>",
+             src=\"{}\" controls loop autoplay muted playsinline></video>{}</figure>",
             escape(&v.label),
             i + 1,
-            escape(&v.src)
+            escape(&v.src),
+            v.figure
         );
     }
 }

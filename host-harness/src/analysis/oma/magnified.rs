@@ -1,7 +1,9 @@
 //! `analyze`'s magnified videos (output-only, from frames): for each mode, the first frame
 //! moving in that mode alone ([`vibcam_track::magnify`]), the point moving most by
 //! `$magnify_px`, one period in [`FRAMES_PER_PERIOD`] frames played at [`VIDEO_FPS`], written as
-//! WebM (VP9) by the `ffmpeg` program into the output and played on `report.html`.
+//! WebM (VP9) by the `ffmpeg` program into the output and played on `report.html`; beside it
+//! the mode's displacement field over the frame ([`field_svg`]: a colour map, arrows at the
+//! points).
 
 use super::{Method, OmaMode, OmaResult};
 use crate::outdir::Staged;
@@ -87,6 +89,7 @@ pub fn write_videos(
             &mode.shape,
             (spread, m.px + 2.0 * spread),
         );
+        let figure = field_svg(&reference, &field, (&local, &mode.shape), u).unwrap_or_default();
         match encode(out, &name, &reference, &field, (m.px, u)) {
             Ok(bytes) => {
                 let src = if bytes.len() <= EMBED_BYTES {
@@ -110,6 +113,7 @@ pub fn write_videos(
                         m.px
                     ),
                     src,
+                    figure,
                 });
             }
             Err(e) => {
@@ -172,4 +176,84 @@ fn cropped(
         px.extend((ax..ax + w).map(|x| grey[row + x.min(fw - 1)]));
     }
     ((ax, ay, w, h), (w, h, px))
+}
+
+/// The mode's displacement field over the frame as an SVG: the frame in grey, the field's real
+/// part (the shape normalised to a largest component of 1, so real there) as a colour map, red
+/// along the motion's direction and blue against it, faded where it is small; an arrow at up to
+/// [`ARROWS`] of the points, its length the point's real part times an eighteenth of the
+/// picture's longer side.
+pub fn field_svg(
+    (w, h, reference): &(usize, usize, Vec<f32>),
+    field: &magnify::Field,
+    (points, shape): (&[(f64, f64)], &[num_complex::Complex64]),
+    u: (f64, f64),
+) -> anyhow::Result<String> {
+    use std::fmt::Write as _;
+    let mut rgb = image::RgbImage::new(*w as u32, *h as u32);
+    for (i, px) in rgb.pixels_mut().enumerate() {
+        let g = f64::from(reference[i]);
+        let v = field.d[i].re.clamp(-1.0, 1.0);
+        // diverging: white at 0, red at +1, blue at -1
+        let c = if v >= 0.0 {
+            [255.0, 255.0 * (1.0 - v), 255.0 * (1.0 - v)]
+        } else {
+            [255.0 * (1.0 + v), 255.0 * (1.0 + v), 255.0]
+        };
+        let a = 0.6 * (4.0 * field.d[i].norm()).min(1.0);
+        *px = image::Rgb(c.map(|c| (g * (1.0 - a) + c * a).round().clamp(0.0, 255.0) as u8));
+    }
+    let mut png = std::io::Cursor::new(Vec::new());
+    rgb.write_to(&mut png, image::ImageFormat::Png)?;
+    let mut s = format!(
+        "<svg class=\"field\" viewBox=\"0 0 {w} {h}\" width=\"{w}\" height=\"{h}\" \
+         xmlns=\"http://www.w3.org/2000/svg\"><defs><marker id=\"head\" viewBox=\"0 0 6 6\" \
+         refX=\"5\" refY=\"3\" markerWidth=\"4\" markerHeight=\"4\" orient=\"auto\">\
+         <path d=\"M0,0 L6,3 L0,6 z\" fill=\"#111\"/></marker></defs><image width=\"{w}\" \
+         height=\"{h}\" href=\"data:image/png;base64,{}\"/>",
+        crate::export::html::base64(&png.into_inner())
+    );
+    let length = (*w).max(*h) as f64 / 18.0;
+    for j in arrow_points(points, (*w, *h)) {
+        let (p, v) = (points[j], shape[j]);
+        let d = v.re * length;
+        if d.abs() < 0.5 {
+            continue;
+        }
+        let _ = write!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"#111\" \
+             stroke-width=\"1\" marker-end=\"url(#head)\"/>",
+            p.0 + 0.5,
+            p.1 + 0.5,
+            p.0 + 0.5 + d * u.0,
+            p.1 + 0.5 + d * u.1
+        );
+    }
+    s.push_str("</svg>");
+    Ok(s)
+}
+
+/// The most arrows a field's figure draws.
+pub const ARROWS: usize = 48;
+
+/// The points the arrows stand at: the picture's longer side cut into [`ARROWS`] bins, in each
+/// the point nearest the points' middle across it.
+fn arrow_points(points: &[(f64, f64)], (w, h): (usize, usize)) -> Vec<usize> {
+    let along = |p: &(f64, f64)| if w >= h { (p.0, p.1) } else { (p.1, p.0) };
+    let (lo, hi) = points.iter().fold((f64::MAX, f64::MIN), |(l, h), p| {
+        (l.min(along(p).1), h.max(along(p).1))
+    });
+    let middle = (lo + hi) / 2.0;
+    let side = w.max(h) as f64;
+    let mut best: Vec<Option<(usize, f64)>> = vec![None; ARROWS];
+    for (j, p) in points.iter().enumerate() {
+        let (a, b) = along(p);
+        let bin = ((a / side * ARROWS as f64) as usize).min(ARROWS - 1);
+        let off = (b - middle).abs();
+        if best[bin].is_none_or(|(_, o)| off < o) {
+            best[bin] = Some((j, off));
+        }
+    }
+    best.into_iter().flatten().map(|(j, _)| j).collect()
 }

@@ -132,9 +132,18 @@ pub fn figures(r: &OmaResult, settings: &OmaSettings) -> anyhow::Result<Vec<crat
             (m.f_hz, s1, format!("{:.3} Hz", m.f_hz))
         })
         .collect();
+    // many channels: the matrix is the reference channels' (`oma::many`)
+    let channels = r.modes.iter().map(|m| m.shape.len()).max().unwrap_or(0);
+    let title = match r.csd.k < channels {
+        true => format!(
+            "singular values of the cross-spectral matrix of {} reference channels",
+            r.csd.k
+        ),
+        false => "singular values of the cross-spectral matrix".to_string(),
+    };
     figures.push(crate::plots::svd_figure(
         "svd",
-        "singular values of the cross-spectral matrix",
+        &title,
         &r.svd.freq_hz,
         &r.svd.s,
         &picks,
