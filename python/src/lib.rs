@@ -823,7 +823,7 @@ fn upsample<'py>(
 #[pyfunction]
 #[pyo3(signature = (frames, tracking, mm_per_px=None, axis="y", invert=false,
     lost_frames="interpolate", window="hann", nperseg=None, noverlap=None, nfft=None,
-    detrend="constant", bands=None, view=None, geometry=None, call=None))]
+    detrend="constant", bands=None, view=None, geometry=None, magnify=None, call=None))]
 #[allow(clippy::too_many_arguments)]
 fn analyze<'py>(
     py: Python<'py>,
@@ -841,6 +841,7 @@ fn analyze<'py>(
     bands: Option<Vec<(f64, f64)>>,
     view: Option<ViewArgs>,
     geometry: Option<String>,
+    magnify: Option<(String, f64)>,
     call: Call,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = frames_arg(frames)?;
@@ -877,7 +878,7 @@ fn analyze<'py>(
         out: std::path::PathBuf::new(),
         force: false,
         pdf: false,
-        magnify_px: 0.0,
+        magnify_px: magnify.as_ref().map_or(0.0, |m| m.1),
         geometry: geometry.clone().map(std::path::PathBuf::from),
     };
     let mut inputs = frames.paths();
@@ -889,27 +890,35 @@ fn analyze<'py>(
                 let fps = rates.fps;
                 let req = AnalyzeSpec::output_only(input, rates).map_err(SpecError::into_anyhow)?;
                 let c = oma_frames::compute(&req, &source)?;
-                let (report, html) = analyze_page(&c, &req, &source, &inputs)?;
-                Ok((c, report, fps, html))
+                let dir = magnify.as_ref().map(|m| std::path::PathBuf::from(&m.0));
+                let (report, html, videos) =
+                    analyze_page(&c, &req, &source, (&inputs, dir.as_deref()))?;
+                Ok((c, report, fps, html, videos))
             })
         })
         .map_err(py_err)?;
-    let (c, report, fps, html) = computed;
+    let (c, report, fps, html, videos) = computed;
     let d = analysis_dict(py, (c, report, fps))?;
     d.set_item("html", html)?;
+    let videos: Vec<String> = videos
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    d.set_item("videos", videos)?;
     Ok(d)
 }
 
 /// The report and the page of `analyze` without an accelerometer, as the command writes them
 /// (its figures drawn in memory, the same SVGs embedded; opened by the provenance of
-/// `inputs`; settings spelled Python's way).
+/// `inputs`; settings spelled Python's way), with each mode's magnified video written into
+/// `magnify_dir` when given (created; the files written returned).
 fn analyze_page(
     c: &oma_frames::Computed,
     req: &oma_frames::FramesRequest,
     source: &host_harness::frames::FrameSource,
-    inputs: &[std::path::PathBuf],
-) -> anyhow::Result<(String, String)> {
-    use host_harness::analysis::oma::run;
+    (inputs, magnify_dir): (&[std::path::PathBuf], Option<&std::path::Path>),
+) -> anyhow::Result<(String, String, Vec<std::path::PathBuf>)> {
+    use host_harness::analysis::oma::{magnified, run};
     let along_x = req.displacement.axis == Axis::X;
     let report = run::report(
         &c.result,
@@ -917,14 +926,26 @@ fn analyze_page(
         &c.settings,
         &c.viewed.describe(along_x),
     );
-    let frame = source
-        .frame_at(req.fps, 0)
-        .ok()
-        .flatten()
-        .and_then(|(_, f)| f.to_image().ok());
+    let first = source.frame_at(req.fps, 0).ok().flatten().map(|(_, f)| f);
+    let frame = first.as_ref().and_then(|f| f.to_image().ok());
+    let (videos, text, files) = match (magnify_dir, first) {
+        (Some(dir), Some(frame)) if req.magnify_px > 0.0 => {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+            let points: Vec<Option<(f64, f64)>> = c.records.targets.iter().map(|t| t.1).collect();
+            let m = magnified::Magnify {
+                px: req.magnify_px,
+                frame,
+                along_x,
+            };
+            magnified::write_videos(dir, &c.result, &points, &m)
+        }
+        _ => (Vec::new(), String::new(), Vec::new()),
+    };
+    let report = format!("{report}{text}");
     let figures = run::figures(&c.result, &c.settings)?;
     let wire = oma_frames::wire(req, c)?;
-    Ok(signed_spelled(inputs, &report, |report| {
+    let (report, html) = signed_spelled(inputs, &report, |report| {
         run::page(
             &c.result,
             &c.records,
@@ -937,7 +958,9 @@ fn analyze_page(
             (host_harness::plots::page_figures(&figures), wire),
             report,
         )
-    }))
+        .with_videos(videos)
+    });
+    Ok((report, html, files))
 }
 
 /// The dict `analyze` returns.

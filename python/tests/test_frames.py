@@ -3,6 +3,7 @@ arrays taken as the files are, bad arrays refused, and the GIL released while wo
 
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -183,3 +184,34 @@ def test_region_points_are_picks_and_their_defaults(tmp_path, harness):
     ]:
         with pytest.raises(vibcam.InputError, match=needle):
             call()
+
+
+def test_a_dense_field_gives_its_modes_and_each_modes_video(tmp_path, harness):
+    # the speckled beam (its shapes known at every pixel): hundreds of points from its region,
+    # the modes on reference channels, a magnified video per mode written where asked
+    beam = tmp_path / "beam"
+    r = harness("simulate-field", "--render", "--scene", "speckle", "--minutes", "0.134",
+                "--fps", "50", "--exposure-ms", "1", "--out", str(beam))
+    assert r.returncode == 0, r.stderr
+    frame = next(iter(vibcam.open_frames(beam / "frames", fps=50)))
+    region = (beam / "region.txt").read_text().strip()
+    xy = vibcam.region_points(frame, region, spacing=3, window_px=11, direction="y")
+    assert len(xy) >= 500
+    points = tmp_path / "points.csv"
+    points.write_text("target,x,y,w,h\n" + "".join(
+        f"{i + 1},{x},{y},11,11\n" for i, (x, y) in enumerate(xy)))
+    res = vibcam.analyze(beam / "frames", points, fps=50, tracker="lk",
+                         magnify_dir=tmp_path / "videos")
+    assert res.shapes.shape[1] == len(xy)
+    assert any("reference channels" in n for n in res.notes)
+    ssi = [i for i, m in enumerate(res.modes["method"]) if m == "ssi"]
+    assert len(ssi) == 3
+    for i in ssi:
+        r_mode = res.modes["mode"][i]
+        truth = np.sin(r_mode * np.pi * (xy[:, 0] - 16.0) / 288.0)
+        s = res.shapes[i]
+        mac = abs(np.vdot(truth, s)) ** 2 / (np.vdot(s, s).real * truth @ truth)
+        assert mac >= 0.99, (r_mode, mac)
+    assert [Path(v).name for v in res.videos] == [f"magnified_ssi_{k}.webm" for k in (1, 2, 3)]
+    assert all(Path(v).stat().st_size > 1000 for v in res.videos)
+    assert res.html.count('<video class="magnified"') == 3

@@ -539,7 +539,8 @@ class AnalysisResult:
     the file gives no position; ``fps`` is the sample rate; with several setups the columns
     are the global points and ``setups`` holds each setup's part in each mode PoSER merged
     (dicts: ``method``, ``mode``, ``setup``, ``f_hz``, ``damping``, ``scale`` (complex: its
-    shape's factor onto setup 1's at the references), ``reference_mac``).
+    shape's factor onto setup 1's at the references), ``reference_mac``). ``videos``: the
+    paths of each mode's magnified video (:func:`analyze` with ``magnify_dir``).
     """
 
     modes: dict
@@ -562,6 +563,7 @@ class AnalysisResult:
     camera_motion: _Optional[_np.ndarray] = None
     filled: _Optional[list] = None
     setups: list = _field(default_factory=list)
+    videos: list = _field(default_factory=list)
 
     def _repr_html_(self) -> str:
         """The page of ``analyze``'s ``report.html`` (the frame with the targets, the modes,
@@ -664,6 +666,8 @@ def analyze(
     target_size_mm: _Optional[float] = None,
     world: _Any = None,
     geometry: _Optional[_PathLike] = None,
+    magnify_dir: _Optional[_PathLike] = None,
+    magnify_px: float = 4.0,
 ) -> AnalysisResult:
     """Output-only modal analysis of the targets in ``frames`` (FDD, EFDD and SSI-cov on their
     displacements), exactly as ``host-harness analyze`` without ``--accel`` (the same numbers as
@@ -678,6 +682,12 @@ def analyze(
     motion removed and the scale from the scene, as :func:`track` (``camera_motion`` in the
     result; a scale other than ``mm_per_px`` makes the values mm). ``geometry``: a CSV of the structure's nodes (``node,x_mm,y_mm`` or ``node,x_px,y_px``)
     and lines (``from,to``) on which the page draws the shapes (docs/cli.md, "Geometry").
+    ``magnify_dir``: a folder (created) for each mode's magnified video as ``analyze
+    --magnify-px`` writes it (``magnified_<method>_<mode>.webm``, through the ``ffmpeg``
+    program; the point moving most moves ``magnify_px`` pixels); their paths in ``videos``, the
+    videos and each mode's displacement field on the page. More than 48 targets (a dense field,
+    :func:`region_points`) are identified on 12 reference channels, each shape carried to
+    every target.
     """
     call = _call(analyze, locals())
     d = _vibcam.analyze(
@@ -695,6 +705,8 @@ def analyze(
         bands=None if bands is None else _bands(bands),
         view=_view(reference, camera_model, scale, target_size_mm, world),
         geometry=None if geometry is None else _os.fspath(geometry),
+        magnify=None if magnify_dir is None else (
+            _os.fspath(magnify_dir), _setting("analyze", "magnify_px", magnify_px)),
         call=call,
     )
     motion = d["camera_motion"] if reference is not None else None

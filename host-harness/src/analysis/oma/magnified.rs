@@ -6,7 +6,7 @@
 //! points).
 
 use super::{Method, OmaMode, OmaResult};
-use crate::outdir::Staged;
+use std::path::{Path, PathBuf};
 use vibcam_readers::frames::GreyFrame;
 use vibcam_track::magnify::{self, FRAMES_PER_PERIOD};
 
@@ -44,24 +44,27 @@ pub fn shown(r: &OmaResult) -> Vec<&OmaMode> {
     .unwrap_or_default()
 }
 
-/// Writes a video per shown mode into `out`; returns the page's videos (label, source: the
-/// file embedded or its name) and the report's lines (what was written, or why nothing).
+/// A video per shown mode written into `dir` (the staged output, or Python's folder): the
+/// page's videos (label, source: the file embedded or its name), the report's lines (what was
+/// written, or why nothing) and the files written.
 pub fn write_videos(
-    out: &Staged,
+    dir: &Path,
     r: &OmaResult,
     points: &[Option<(f64, f64)>],
     m: &Magnify,
-) -> (Vec<crate::export::html::Video>, String) {
+) -> (Vec<crate::export::html::Video>, String, Vec<PathBuf>) {
     let modes = shown(r);
     if m.px <= 0.0 || modes.is_empty() {
-        return (Vec::new(), String::new());
+        return (Vec::new(), String::new(), Vec::new());
     }
     let Some(points) = points.iter().copied().collect::<Option<Vec<_>>>() else {
         return (
             Vec::new(),
             "magnified videos: none (a target without a position in the first frame)\n".into(),
+            Vec::new(),
         );
     };
+    let mut files = Vec::new();
     let (crop, reference) = cropped(&m.frame, &points);
     let local: Vec<(f64, f64)> = points
         .iter()
@@ -90,8 +93,9 @@ pub fn write_videos(
             (spread, m.px + 2.0 * spread),
         );
         let figure = field_svg(&reference, &field, (&local, &mode.shape), u).unwrap_or_default();
-        match encode(out, &name, &reference, &field, (m.px, u)) {
+        match encode(&dir.join(&name), &reference, &field, (m.px, u)) {
             Ok(bytes) => {
+                files.push(dir.join(&name));
                 let src = if bytes.len() <= EMBED_BYTES {
                     format!(
                         "data:video/webm;base64,{}",
@@ -117,32 +121,30 @@ pub fn write_videos(
                 });
             }
             Err(e) => {
-                let _ = std::fs::remove_file(out.dir().join(&name));
+                let _ = std::fs::remove_file(dir.join(&name));
                 text.push_str(&format!("  no {name}: {e:#}\n"));
             }
         }
     }
-    (videos, text)
+    (videos, text, files)
 }
 
-/// Encodes one period of a field's motion into `out/name`; returns the file's bytes.
+/// Encodes one period of a field's motion into `path`; returns the file's bytes.
 fn encode(
-    out: &Staged,
-    name: &str,
+    path: &Path,
     (w, h, reference): &(usize, usize, Vec<f32>),
     field: &magnify::Field,
     motion: (f64, (f64, f64)),
 ) -> anyhow::Result<Vec<u8>> {
-    let path = out.dir().join(name);
     let mut video =
-        vibcam_readers::frames::video::Ffv1Writer::create_webm(&path, *w, *h, VIDEO_FPS, 10)
+        vibcam_readers::frames::video::Ffv1Writer::create_webm(path, *w, *h, VIDEO_FPS, 10)
             .map_err(|e| e.into_anyhow())?;
     for n in 0..FRAMES_PER_PERIOD {
         let f = magnify::frame(reference, field, motion, (n, FRAMES_PER_PERIOD));
         video.write_frame(&f).map_err(|e| e.into_anyhow())?;
     }
     video.finish().map_err(|e| e.into_anyhow())?;
-    Ok(std::fs::read(&path)?)
+    Ok(std::fs::read(path)?)
 }
 
 /// The part of `frame` the videos show: the points' bounding box with a margin of a quarter of

@@ -86,12 +86,12 @@ pub fn write(
     for f in &figures {
         f.write_staged(&out)?;
     }
-    let (videos, magnified) = match &o.magnify {
+    let (videos, magnified, _) = match &o.magnify {
         Some(m) => {
             let points: Vec<Option<(f64, f64)>> = records.targets.iter().map(|t| t.1).collect();
-            super::magnified::write_videos(&out, r, &points, m)
+            super::magnified::write_videos(out.dir(), r, &points, m)
         }
-        None => (Vec::new(), String::new()),
+        None => (Vec::new(), String::new(), Vec::new()),
     };
     let report = report(r, records, settings, &format!("{}{camera}", o.preamble));
     let report = format!("{report}{magnified}");
