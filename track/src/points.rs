@@ -1014,6 +1014,28 @@ impl Checks {
         (c, e)
     }
 
+    /// Each target's result in `frame` (in target order) with its evidence
+    /// ([`forward_backward_check`]), the targets spread over the cores: each has its own
+    /// backward tracker, so the results are those of checking them in turn.
+    fn check_all(
+        &mut self,
+        frame: &GreyFrame,
+        results: Vec<firmware_core::lk::LkResult>,
+    ) -> anyhow::Result<Checked> {
+        use rayon::prelude::*;
+        let (prev, verified, origins) = (self.prev.as_ref(), &self.verified, &self.origins);
+        self.back
+            .par_iter_mut()
+            .zip(results)
+            .enumerate()
+            .with_min_len(8)
+            .map(|(t, (back, r))| {
+                let e = forward_backward_check((frame, prev), back, (&r, verified[t]), origins[t])?;
+                Ok((r, e))
+            })
+            .collect()
+    }
+
     /// Result `r` of target `t` in `frame`, with its evidence ([`forward_backward_check`]).
     fn check(
         &mut self,
@@ -1084,10 +1106,7 @@ fn track_frame_lk(
             .collect()
     })?;
     debug_assert_eq!(results.len(), k);
-    let mut checked: Checked = Vec::with_capacity(k);
-    for (t, r) in results.into_iter().enumerate() {
-        checked.push(checks.check(frame, t, r)?);
-    }
+    let mut checked = checks.check_all(frame, results)?;
     let mut integral: Option<Integral> = None;
     for members in groups {
         let failed: Vec<usize> = members
