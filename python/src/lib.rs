@@ -900,10 +900,6 @@ fn analyze<'py>(
     let (c, report, fps, html, videos) = computed;
     let d = analysis_dict(py, (c, report, fps))?;
     d.set_item("html", html)?;
-    let videos: Vec<String> = videos
-        .iter()
-        .map(|p| p.to_string_lossy().into_owned())
-        .collect();
     d.set_item("videos", videos)?;
     Ok(d)
 }

@@ -96,29 +96,11 @@ pub fn write_videos(
         match encode(&dir.join(&name), &reference, &field, (m.px, u)) {
             Ok(bytes) => {
                 files.push(dir.join(&name));
-                let src = if bytes.len() <= EMBED_BYTES {
-                    format!(
-                        "data:video/webm;base64,{}",
-                        crate::export::html::base64(&bytes)
-                    )
-                } else {
-                    name.clone()
-                };
                 text.push_str(&format!(
                     "  {name}: mode {} at {:.4} Hz\n",
                     mode.mode, mode.f_hz
                 ));
-                videos.push(crate::export::html::Video {
-                    label: format!(
-                        "{} mode {}, {:.3} Hz, magnified to {} px",
-                        mode.method.name(),
-                        mode.mode,
-                        mode.f_hz,
-                        m.px
-                    ),
-                    src,
-                    figure,
-                });
+                videos.push(page_video(mode, m.px, (&name, &bytes), figure));
             }
             Err(e) => {
                 let _ = std::fs::remove_file(dir.join(&name));
@@ -127,6 +109,34 @@ pub fn write_videos(
         }
     }
     (videos, text, files)
+}
+
+/// The page's video of `mode` (the file `name` of `bytes`: embedded when at most
+/// [`EMBED_BYTES`], else linked) with its field's figure.
+fn page_video(
+    mode: &OmaMode,
+    px: f64,
+    (name, bytes): (&str, &[u8]),
+    figure: String,
+) -> crate::export::html::Video {
+    let src = if bytes.len() <= EMBED_BYTES {
+        format!(
+            "data:video/webm;base64,{}",
+            crate::export::html::base64(bytes)
+        )
+    } else {
+        name.to_string()
+    };
+    crate::export::html::Video {
+        label: format!(
+            "{} mode {}, {:.3} Hz, magnified to {px} px",
+            mode.method.name(),
+            mode.mode,
+            mode.f_hz
+        ),
+        src,
+        figure,
+    }
 }
 
 /// Encodes one period of a field's motion into `path`; returns the file's bytes.
