@@ -6,10 +6,10 @@
 
 use crate::analyze::{make_recording, Recording};
 use crate::util::assert_says;
-use crate::util::words;
 use crate::util::{
     analyze_recording, assert_exit_2, assert_ok, harness, render_cantilever, stderr,
 };
+use crate::util::{path_words, words};
 use std::path::{Path, PathBuf};
 
 /// `simulate-hammer` into `dir` (a short record: two hits).
@@ -23,13 +23,10 @@ fn hammer(dir: &Path) {
 /// `ema` of `response` over `excitation` (column `force_n` unless `extra` names one) into
 /// `out`, an impact test below 200 Hz.
 fn ema(response: &Path, excitation: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = words(
+    let mut args = path_words(
         "ema --response {} --excitation {} --impact --out {} --force",
-        &[
-            response.to_str().unwrap(),
-            excitation.to_str().unwrap(),
-            out.to_str().unwrap(),
-        ],
+        &[response, excitation, out],
+        &[],
     );
     if !extra.contains(&"--exp-window") {
         args.extend_from_slice(&["--exp-window", "off"]);

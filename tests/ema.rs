@@ -5,7 +5,7 @@
 //! with and without the exponential window, and name a double hit and a clipped hit.
 
 use crate::util::assert_says;
-use crate::util::{assert_exit_2, assert_ok, harness, words};
+use crate::util::{assert_exit_2, assert_ok, harness, mac, words};
 use host_harness::model::hammer::HammerTest;
 use host_harness::recording::hammer::HammerRecording;
 use std::path::Path;
@@ -67,17 +67,6 @@ fn results(dir: &Path) -> (Vec<(f64, f64)>, Vec<Vec<C>>) {
         shapes[m - 1][t - 1] = (c[4].parse().unwrap(), c[5].parse().unwrap());
     }
     (modes, shapes)
-}
-
-/// MAC of a complex shape with a real one.
-fn mac(a: &[(f64, f64)], b: &[f64]) -> f64 {
-    let (re, im) = a
-        .iter()
-        .zip(b)
-        .fold((0.0, 0.0), |(r, i), (x, y)| (r + x.0 * y, i + x.1 * y));
-    let aa: f64 = a.iter().map(|x| x.0 * x.0 + x.1 * x.1).sum();
-    let bb: f64 = b.iter().map(|y| y * y).sum();
-    (re * re + im * im) / (aa * bb)
 }
 
 fn check_modes(dir: &Path, test: &HammerTest, what: &str) {

@@ -2,7 +2,7 @@
 //! points picked from one region, their modes (on reference channels, shapes carried to every
 //! point), and each mode's magnified video tracked back by our own tracker.
 
-use crate::util::{assert_ok, harness, words};
+use crate::util::{assert_ok, harness, mac, words};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -27,17 +27,6 @@ fn shapes(dir: &Path) -> HashMap<(String, usize), Vec<(usize, f64, (f64, f64))>>
             ));
     }
     out
-}
-
-/// The MAC of a complex shape against a real one.
-fn mac(a: &[(f64, f64)], b: &[f64]) -> f64 {
-    let (re, im) = a
-        .iter()
-        .zip(b)
-        .fold((0.0, 0.0), |(r, i), (x, y)| (r + x.0 * y, i + x.1 * y));
-    let na: f64 = a.iter().map(|x| x.0 * x.0 + x.1 * x.1).sum();
-    let nb: f64 = b.iter().map(|y| y * y).sum();
-    (re * re + im * im) / (na * nb)
 }
 
 #[test]

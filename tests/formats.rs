@@ -4,7 +4,7 @@
 //! comparison with pyMRAW and PIL is `scripts/check_frames.py`, run by CI.
 
 use crate::analyze::{disk, make_recording, position_px, Recording, FPS, H, W};
-use crate::util::{assert_exit_2, assert_ok, harness, stderr, words};
+use crate::util::{assert_exit_2, assert_ok, harness, path_words, stderr, words};
 use host_harness::frames::photron::write_recording;
 use std::path::Path;
 
@@ -30,16 +30,11 @@ fn photron(dir: &Path, bits: u32, scale: u16) -> std::path::PathBuf {
 }
 
 fn analyze(frames: &Path, accel: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = words(
+    harness(&path_words(
         "analyze --frames {} --accel {} --fs 2048 --mm-per-px 0.1 --out {}",
-        &[
-            frames.to_str().unwrap(),
-            accel.to_str().unwrap(),
-            out.to_str().unwrap(),
-        ],
-    );
-    args.extend_from_slice(extra);
-    harness(&args)
+        &[frames, accel, out],
+        extra,
+    ))
 }
 
 /// The `modes.csv` cells `f_hz,amplitude` of every row.

@@ -3,7 +3,7 @@
 //! and every way Lucas-Kanade loses a target: a flag and a lost frame, never a wrong position.
 
 use crate::util::{assert_contains, assert_says};
-use crate::util::{assert_exit_2, assert_ok, harness, render_cantilever, words};
+use crate::util::{assert_exit_2, assert_ok, harness, path_words, render_cantilever, words};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -93,16 +93,11 @@ fn render_noisy_targets(rec: &Path, scene: &str) {
 }
 
 fn track(frames: &Path, points: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = words(
+    harness(&path_words(
         "track --frames {} --fps 120 --points {} --out {} --no-plots",
-        &[
-            frames.to_str().unwrap(),
-            points.to_str().unwrap(),
-            out.to_str().unwrap(),
-        ],
-    );
-    args.extend_from_slice(extra);
-    harness(&args)
+        &[frames, points, out],
+        extra,
+    ))
 }
 
 /// The 5-target recording with read noise (disks of radius 10 px with 0.5 px edges, 2 ms

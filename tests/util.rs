@@ -29,6 +29,25 @@ pub fn words<'a>(line: &'a str, slots: &[&'a str]) -> Vec<&'a str> {
     words
 }
 
+/// The words of `line` with each `{}` taking the next of `paths` (as text), then `extra`.
+pub fn path_words<'a>(line: &'a str, paths: &[&'a Path], extra: &[&'a str]) -> Vec<&'a str> {
+    let slots: Vec<&str> = paths.iter().map(|p| p.to_str().unwrap()).collect();
+    let mut w = words(line, &slots);
+    w.extend_from_slice(extra);
+    w
+}
+
+/// MAC of a complex shape (`(re, im)` per point) with a real one.
+pub fn mac(a: &[(f64, f64)], b: &[f64]) -> f64 {
+    let (re, im) = a
+        .iter()
+        .zip(b)
+        .fold((0.0, 0.0), |(r, i), (x, y)| (r + x.0 * y, i + x.1 * y));
+    let aa: f64 = a.iter().map(|x| x.0 * x.0 + x.1 * x.1).sum();
+    let bb: f64 = b.iter().map(|y| y * y).sum();
+    (re * re + im * im) / (aa * bb)
+}
+
 /// The process's standard error as text.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
