@@ -17,15 +17,21 @@ use num_complex::Complex64;
 /// Frames in one period of a magnified mode.
 pub const FRAMES_PER_PERIOD: usize = 48;
 
+/// The most points whose nearest neighbour [`spread_px`] measures.
+pub const SPREAD_SAMPLE: usize = 1024;
+
 /// The Gaussian weights' width for points at `points`: 0.75 of the median distance from a point
-/// to its nearest neighbour, at least 2 px (a lone point: 20 px).
+/// to its nearest neighbour (over at most [`SPREAD_SAMPLE`] of the points, evenly taken, each
+/// against all: bounded for a field of many thousands), at least 2 px (a lone point: 20 px).
 pub fn spread_px(points: &[(f64, f64)]) -> f64 {
     if points.len() < 2 {
         return 20.0;
     }
+    let step = points.len().div_ceil(SPREAD_SAMPLE);
     let mut nearest: Vec<f64> = points
         .iter()
         .enumerate()
+        .step_by(step)
         .map(|(i, a)| {
             points
                 .iter()

@@ -366,6 +366,7 @@ fn output_only(input: AnalyzeInput, rates: Rates) -> SpecResult<FramesRequest> {
     }
     let bands = input.bands.unwrap_or_default();
     super::bands_below_nyquist(&bands, rates.fps, "the camera's")?;
+    vibcam_common::setting::table::number("analyze", "magnify_px", input.magnify_px)?;
     let (tracking, view, scaled) =
         super::view::tracking_and_view(input.tracking, input.view, input.mm_per_px)?;
     let geometry = geometry(input.geometry.as_deref(), &tracking.targets)?;

@@ -175,17 +175,21 @@ fn cropped(
     let (ax, ay) = (clamp(x0 - margin, fw), clamp(y0 - margin, fh));
     let (bx, by) = (clamp(x1 + margin + 1.0, fw), clamp(y1 + margin + 1.0, fh));
     let (w, h) = ((bx - ax).max(1), (by - ay).max(1));
-    let grey: Vec<f32> = match frame {
-        GreyFrame::U8 { data, .. } => data.iter().map(|&v| f32::from(v)).collect(),
+    // the crop's pixels only, grey levels as f32 (16 bits scaled by the frame's largest)
+    let index = |x: usize, y: usize| y.min(fh - 1) * fw + x.min(fw - 1);
+    let mut px = Vec::with_capacity(w * h);
+    match frame {
+        GreyFrame::U8 { data, .. } => {
+            for y in ay..ay + h {
+                px.extend((ax..ax + w).map(|x| f32::from(data[index(x, y)])));
+            }
+        }
         GreyFrame::U16 { data, .. } => {
             let top = f32::from(data.iter().copied().max().unwrap_or(0).max(1));
-            data.iter().map(|&v| f32::from(v) * 255.0 / top).collect()
+            for y in ay..ay + h {
+                px.extend((ax..ax + w).map(|x| f32::from(data[index(x, y)]) * 255.0 / top));
+            }
         }
-    };
-    let mut px = Vec::with_capacity(w * h);
-    for y in ay..ay + h {
-        let row = y.min(fh - 1) * fw;
-        px.extend((ax..ax + w).map(|x| grey[row + x.min(fw - 1)]));
     }
     ((ax, ay, w, h), (w, h, px))
 }
