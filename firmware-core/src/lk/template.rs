@@ -4,19 +4,44 @@
 
 use super::*;
 
-/// Row `y` of the frame read by `raw` smoothed along x by the first `taps` of `kernel`
-/// (centred), at `x_first + i` into `out[i]`: the taps summed in order.
-fn smooth_x(
-    raw: &impl Fn(usize, usize) -> f32,
+/// Row `y` of the frame smoothed along x by the first `taps` of `kernel` (centred), at
+/// `x_first + i` into `out[i]`: the taps summed in order. Coordinates are offset by 8 (so they
+/// stay unsigned past the top-left edge); past the frame's edges the edge pixels repeat.
+fn smooth_x<P: Pixel>(
+    frame: &Frame<'_, P>,
     (kernel, taps): ([f32; 5], usize),
     (x_first, y): (usize, usize),
     out: &mut [f32],
 ) {
+    let (fw, fh) = (frame.width() as i64, frame.height() as i64);
+    let row = frame
+        .row((y as i64 - 8).min(fh - 1).max(0) as usize)
+        .unwrap_or(&[]);
     let half = taps / 2;
+    let lo = x_first as i64 - half as i64 - 8;
+    let span = out.len() + taps.max(1) - 1;
+    // inside the frame: the row's pixels themselves (most windows)
+    if let Some(src) = usize::try_from(lo)
+        .ok()
+        .and_then(|lo| row.get(lo..lo + span))
+    {
+        for (o, win) in out.iter_mut().zip(src.windows(taps.max(1))) {
+            let mut v = 0.0;
+            for (w, p) in kernel.iter().zip(win) {
+                v += w * f32::from((*p).into());
+            }
+            *o = v;
+        }
+        return;
+    }
+    let raw = |x: i64| {
+        row.get((x - 8).min(fw - 1).max(0) as usize)
+            .map_or(0.0, |&v| f32::from(v.into()))
+    };
     for (i, o) in out.iter_mut().enumerate() {
         let mut v = 0.0;
         for (k, w) in kernel.iter().take(taps).enumerate() {
-            v += w * raw(x_first + i + k - half, y);
+            v += w * raw((x_first + i + k) as i64 - half as i64);
         }
         *o = v;
     }
@@ -103,7 +128,9 @@ pub(super) fn bspline_weights(f: f32) -> [f32; 4] {
 pub(super) const CLIP_FRACTION: f32 = 0.75;
 
 /// Whether the template is below [`CLIP_FRACTION`] of `sat` at pixel `(i, j)` and its eight
-/// neighbours (the frame's window may sit up to a pixel off the template's grid).
+/// neighbours (the frame's window may sit up to a pixel off the template's grid): the
+/// definition [`LkTracker::mark_dark`] computes for every pixel at once.
+#[cfg(test)]
 pub(super) fn dark_near(
     t: &[f32],
     (tw, th): (usize, usize),
@@ -119,6 +146,21 @@ pub(super) fn dark_near(
         }
     }
     true
+}
+
+/// The `n` flags of `d` at `start`, `start + step`, ...: each one and its two neighbours
+/// along the line (fewer at its ends), in place (a carry holds the flag before).
+fn erode_line(d: &mut [bool], start: usize, step: usize, n: usize) {
+    let mut before = true;
+    for k in 0..n {
+        let at = start + k * step;
+        let next = k + 1 >= n || d.get(at + step).copied().unwrap_or(true);
+        if let Some(v) = d.get_mut(at) {
+            let now = *v;
+            *v = before && now && next;
+            before = now;
+        }
+    }
 }
 
 /// Stores the smoothed values `v` (integers) as `v - mean` into `out`; returns their sum and
@@ -173,10 +215,17 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             usize::from(self.config.width),
             usize::from(self.config.height),
         );
-        for (j, row) in self.dark.chunks_mut(tw.max(1)).take(th).enumerate() {
-            for (i, d) in row.iter_mut().enumerate() {
-                *d = dark_near(&self.t, (tw, th), (i, j), sat);
-            }
+        // below the level at the pixel (a NaN is below), then at its row neighbours, then at
+        // its column neighbours: separably, what `dark_near` says of each pixel
+        let level = CLIP_FRACTION * f32::from(sat);
+        for (d, &v) in self.dark.iter_mut().zip(&self.t).take(tw * th) {
+            *d = v.partial_cmp(&level).is_none_or(|o| o.is_lt());
+        }
+        for j in 0..th {
+            erode_line(&mut self.dark, j * tw, 1, tw);
+        }
+        for i in 0..tw {
+            erode_line(&mut self.dark, i, tw, th);
         }
         self.dark_sat = sat;
     }
@@ -199,18 +248,8 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         // the gradients read one pixel around the window, the smoothing up to two more, the
         // spline's padding four: past the frame's edge the edge pixels repeat (coordinates
-        // offset by 8 so they stay unsigned)
+        // offset by 8 so they stay unsigned; see `smooth_x`)
         let (x0u, y0u) = (x0 as usize + 8, y0 as usize + 8);
-        let raw = |x: usize, y: usize| -> f32 {
-            let (x, y) = (
-                (x as i64 - 8).min(fw - 1).max(0) as usize,
-                (y as i64 - 8).min(fh - 1).max(0) as usize,
-            );
-            frame
-                .row(y)
-                .and_then(|r| r.get(x))
-                .map_or(0.0, |&v| f32::from(v.into()))
-        };
         let (kernel, taps) = self.config.smoothing.kernel();
         let half = taps / 2;
         let spline = self.config.interpolation == Interpolation::Spline;
@@ -228,7 +267,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 let y = y_first + j;
                 while next <= y + half {
                     if let Some(r) = ring.get_mut(slot(next)..slot(next) + pw) {
-                        smooth_x(&raw, (kernel, taps), (x_first, next), r);
+                        smooth_x(frame, (kernel, taps), (x_first, next), r);
                     }
                     next += 1;
                 }
@@ -277,48 +316,51 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                         .get_mut(h_next % taps)
                         .and_then(|r| r.get_mut(..width))
                     {
-                        smooth_x(&raw, (kernel, taps), (x_first, h_next), r);
+                        smooth_x(frame, (kernel, taps), (x_first, h_next), r);
                     }
                     h_next += 1;
                 }
                 if let Some(r) = s_ring.get_mut(s_next % 3) {
-                    for (i, o) in r.iter_mut().take(width).enumerate() {
-                        let mut v = 0.0;
-                        for (k, w) in kernel.iter().take(taps).enumerate() {
-                            let h = h_ring.get((s_next + k - half) % taps);
-                            v += w * h.and_then(|h| h.get(i)).copied().unwrap_or(0.0);
+                    // the taps' rows summed in order into each pixel (a row at a time)
+                    let out = r.get_mut(..width).unwrap_or(&mut []);
+                    out.fill(0.0);
+                    for (k, w) in kernel.iter().take(taps).enumerate() {
+                        let h = h_ring.get((s_next + k - half) % taps);
+                        for (o, v) in out.iter_mut().zip(h.map_or(&[][..], |h| &h[..])) {
+                            *o += w * v;
                         }
-                        *o = v;
                     }
                 }
                 s_next += 1;
             }
-            // the smoothed frame at (x0u + i - 1 + d, y + e), d = 0..=2, e = -1..=1
-            let sm = |d: usize, e: usize| -> f32 {
-                s_ring
-                    .get((y + e - 1) % 3)
-                    .and_then(|r| r.get(d))
-                    .copied()
-                    .unwrap_or(0.0)
-            };
-            for i in 0..tw {
+            // the smoothed rows at y - 1, y, y + 1, from x0u - 1 (the window and a pixel around)
+            let rows = |e: usize| s_ring.get((y + e - 1) % 3).map_or(&[][..], |r| &r[..]);
+            let (up, mid, down) = (rows(0), rows(1), rows(2));
+            fn cut(a: &mut [f32], (j, tw): (usize, usize)) -> &mut [f32] {
+                a.get_mut(j * tw..j * tw + tw).unwrap_or(&mut [])
+            }
+            let (t, gxs, gys) = (
+                cut(&mut self.t, (j, tw)),
+                cut(&mut self.gx, (j, tw)),
+                cut(&mut self.gy, (j, tw)),
+            );
+            let at = mid
+                .windows(3)
+                .zip(up.iter().skip(1).zip(down.iter().skip(1)));
+            for (i, ((m, (u, d)), (t, (a, b)))) in at
+                .zip(t.iter_mut().zip(gxs.iter_mut().zip(gys.iter_mut())))
+                .enumerate()
+            {
+                // central differences of the smoothed frame, or the spline's slopes
                 let (gx, gy) = if spline {
                     spline_grad(i as i64, j as i64)
                 } else {
-                    (
-                        0.5 * (sm(i + 2, 1) - sm(i, 1)),
-                        0.5 * (sm(i + 1, 2) - sm(i + 1, 0)),
-                    )
+                    (0.5 * (m[2] - m[0]), 0.5 * (d - u))
                 };
-                let v = sm(i + 1, 1);
-                let k = j * tw + i;
-                if let (Some(t), Some(a), Some(b)) =
-                    (self.t.get_mut(k), self.gx.get_mut(k), self.gy.get_mut(k))
-                {
-                    *t = v;
-                    *a = gx;
-                    *b = gy;
-                }
+                let v = m[1];
+                *t = v;
+                *a = gx;
+                *b = gy;
                 sum += v;
                 sxx += gx * gx;
                 sxy += gx * gy;

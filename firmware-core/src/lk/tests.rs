@@ -748,3 +748,32 @@ proptest::proptest! {
         }
     }
 }
+
+#[test]
+fn the_separable_dark_mask_is_the_definition_at_every_pixel() {
+    let noise = |k: usize| ((k as u64 * 2654435761 + 977) % 1000) as f32;
+    for (tw, th) in [(3, 3), (5, 9), (21, 21), (31, 4), (3, 7), (7, 3)] {
+        for sparse in [1usize, 7, 40, 1000] {
+            let mut lk = Lk::try_new(LkConfig::new(tw as u16, th as u16)).unwrap();
+            for (k, v) in lk.t.iter_mut().take(tw * th).enumerate() {
+                // bright pixels (at or above 3/4 of 255) one in `sparse`, a NaN now and then
+                *v = match (k % sparse, k % 11) {
+                    (0, _) => 191.25 + noise(k) / 10.0,
+                    (_, 5) => f32::NAN,
+                    _ => noise(k) / 6.0,
+                };
+            }
+            lk.dark_sat = 0;
+            lk.mark_dark(255);
+            for j in 0..th {
+                for i in 0..tw {
+                    assert_eq!(
+                        lk.dark[j * tw + i],
+                        dark_near(&lk.t, (tw, th), (i, j), 255),
+                        "{tw} x {th}, one bright in {sparse}: pixel ({i}, {j})"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -317,10 +317,11 @@ fn plot(
     start_s: f64,
     along_x: bool,
 ) -> anyhow::Result<crate::plots::Figure> {
-    let series: Vec<(String, Vec<f64>, Vec<f64>)> = tracks
-        .centroids
+    let k = tracks.centroids.len();
+    let shown = shown_tracks(k);
+    let series: Vec<(String, Vec<f64>, Vec<f64>)> = shown
         .iter()
-        .enumerate()
+        .map(|&t| (t, &tracks.centroids[t]))
         .map(|(t, c)| {
             let (x0, y0) = tracks.first[t];
             let (mut ts, mut d) = (Vec::new(), Vec::new());
@@ -341,17 +342,35 @@ fn plot(
         .iter()
         .map(|(l, t, d)| (l.as_str(), t.as_slice(), d.as_slice()))
         .collect();
-    crate::plots::lines_figure(
-        "tracks",
-        if along_x {
-            "Tracks: x - x(first frame), image x right"
-        } else {
-            "Tracks: y - y(first frame), image y down"
-        },
-        "px",
-        &curves,
-        crate::plots::Lines::Tracks,
-    )
+    let axis = if along_x {
+        "x - x(first frame), image x right"
+    } else {
+        "y - y(first frame), image y down"
+    };
+    let title = if shown.len() < k {
+        format!(
+            "Tracks of {} of {k} targets (evenly by number): {axis}",
+            shown.len()
+        )
+    } else {
+        format!("Tracks: {axis}")
+    };
+    crate::plots::lines_figure("tracks", &title, "px", &curves, crate::plots::Lines::Tracks)
+}
+
+/// The most targets the tracks' figure draws: a dense field's hundreds of curves hide each
+/// other (and took a tenth of `track`'s time to draw); `displacement.csv` has them all.
+const TRACKS_SHOWN: usize = 48;
+
+/// Which of `k` targets the tracks' figure draws: all, or [`TRACKS_SHOWN`] evenly spread by
+/// number from the first to the last.
+fn shown_tracks(k: usize) -> Vec<usize> {
+    if k <= TRACKS_SHOWN {
+        return (0..k).collect();
+    }
+    (0..TRACKS_SHOWN)
+        .map(|i| i * (k - 1) / (TRACKS_SHOWN - 1))
+        .collect()
 }
 
 /// The targets for `report.html`: first positions, windows (chosen points) and lost frames.
@@ -479,4 +498,21 @@ pub fn scrubber(
             .map(|e| e.iter().map(|e| e.score).collect())
             .collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tracks_figure_draws_every_target_or_an_even_spread_with_both_ends() {
+        assert_eq!(shown_tracks(3), vec![0, 1, 2]);
+        assert_eq!(shown_tracks(TRACKS_SHOWN).len(), TRACKS_SHOWN);
+        for k in [TRACKS_SHOWN + 1, 100, 768, 5000] {
+            let s = shown_tracks(k);
+            assert_eq!(s.len(), TRACKS_SHOWN);
+            assert_eq!((s[0], s[TRACKS_SHOWN - 1]), (0, k - 1));
+            assert!(s.windows(2).all(|w| w[0] < w[1]), "{k}: {s:?}");
+        }
+    }
 }
