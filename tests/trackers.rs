@@ -5,7 +5,7 @@
 use crate::util::{assert_contains, assert_says};
 use crate::util::{assert_exit_2, assert_ok, harness, path_words, render_cantilever, words};
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `(frame, target) -> (x, y)` from a recording's truth.csv.
 fn truth(dir: &Path) -> HashMap<(usize, usize), (f64, f64)> {
@@ -327,20 +327,46 @@ fn worst_and_lost(rows: &[Row], truth: &HashMap<(usize, usize), (f64, f64)>) -> 
         })
 }
 
+/// The pull-and-release recording of the cluttered scene (28 alike tags on four storeys in
+/// front of a white brick wall, 184 HD frames at 23 fps, jumps up to 120 px between frames, tags
+/// 150-170 px apart), rendered once for the three tests that track it (so they can run in
+/// parallel), under Cargo's temporary directory for tests (a static's guard would never remove
+/// it): its directory and its truth.
+fn release() -> (&'static Path, &'static HashMap<(usize, usize), (f64, f64)>) {
+    type Rec = (PathBuf, HashMap<(usize, usize), (f64, f64)>);
+    static REC: std::sync::OnceLock<Rec> = std::sync::OnceLock::new();
+    let (rec, truth) = REC.get_or_init(|| {
+        let rec = Path::new(env!("CARGO_TARGET_TMPDIR")).join("release-rec");
+        let _ = std::fs::remove_dir_all(&rec);
+        assert_ok(&harness(&words(
+            "render --recording {} --scene cluttered --motion release",
+            &[rec.to_str().unwrap()],
+        )));
+        let truth = truth(&rec);
+        (rec, truth)
+    });
+    (rec, truth)
+}
+
+/// The release's points file without its groups column, as a new user writes it, in `dir`.
+fn release_alone(rec: &Path, dir: &Path) -> (String, PathBuf) {
+    let text = std::fs::read_to_string(rec.join("points.csv")).unwrap();
+    let alone: String = text
+        .lines()
+        .map(|l| l.rsplit_once(',').map_or(l, |(head, _)| head).to_string() + "\n")
+        .collect();
+    assert!(alone.starts_with("target,x,y,w,h\n"), "{alone}");
+    let alone_csv = dir.join("alone.csv");
+    std::fs::write(&alone_csv, &alone).unwrap();
+    (alone, alone_csv)
+}
+
 #[test]
 fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_motion() {
-    // 28 alike tags on four storeys in front of a white brick wall, 23 fps, jumps up to 120 px
-    // between frames, tags 150-170 px apart: every tag through every frame within 1 px of the
-    // truth with the storeys as groups; alone, a tag's own search takes a neighbour
+    // every tag through every frame within 1 px of the truth with the storeys as groups
+    let (rec, truth) = release();
     let tmp = tempfile::tempdir().unwrap();
-    let rec = tmp.path().join("rec");
-    let r = rec.to_str().unwrap();
-    assert_ok(&harness(&words(
-        "render --recording {} --scene cluttered --motion release",
-        &[r],
-    )));
-    let truth = truth(&rec);
-    let frames = format!("{r}/frames");
+    let frames = format!("{}/frames", rec.display());
     // tracked and analysed in one run (`analyze` without an accelerometer: `track`'s
     // displacement.csv and `modal`'s outputs, one tracking of the 184 HD frames, not two)
     let grouped = tmp.path().join("grouped");
@@ -355,7 +381,7 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
     let report = assert_says(&o, &["regime: 2 free decay(s)"]);
     let rows = displacement(&grouped);
     assert_eq!(rows.len(), 184 * 28);
-    let (worst, lost) = worst_and_lost(&rows, &truth);
+    let (worst, lost) = worst_and_lost(&rows, truth);
     assert_eq!(lost, 0);
     // measured 0.063 px (the JPEG, the blur, the wall in the windows' margins)
     assert!(worst < 1.0, "worst {worst} px");
@@ -389,18 +415,18 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
         !page.contains("data-a=\"6\" data-b=\"7\""),
         "a line from storey 1 to 2"
     );
+}
+
+#[test]
+fn lk_finds_the_storeys_of_a_pull_and_release_from_the_first_frames_motion() {
+    let (rec, truth) = release();
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = format!("{}/frames", rec.display());
     // the same windows without the storeys, as a new user writes them: the groups are found
     // from the first frames' motion, and every tag is followed through every frame (before,
     // 7 tags took their neighbours), with the default search and with a search of the whole
     // frame (65535 px: a top tag was reported on one two storeys down, flags 0)
-    let text = std::fs::read_to_string(rec.join("points.csv")).unwrap();
-    let alone: String = text
-        .lines()
-        .map(|l| l.rsplit_once(',').map_or(l, |(head, _)| head).to_string() + "\n")
-        .collect();
-    assert!(alone.starts_with("target,x,y,w,h\n"), "{alone}");
-    let alone_csv = tmp.path().join("alone.csv");
-    std::fs::write(&alone_csv, &alone).unwrap();
+    let (_, alone_csv) = release_alone(rec, tmp.path());
     for search in [None, Some("65535")] {
         let out = tmp
             .path()
@@ -420,10 +446,18 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
                 && !report.contains("WARNING"),
             "{report}"
         );
-        let (worst, lost) = worst_and_lost(&displacement(&out), &truth);
+        let (worst, lost) = worst_and_lost(&displacement(&out), truth);
         assert_eq!(lost, 0, "{search:?}");
         assert!(worst < 1.0, "{search:?}: worst {worst} px");
     }
+}
+
+#[test]
+fn lk_flags_a_pull_and_release_tag_followed_alone_ambiguous_never_a_jump_onto_its_neighbour() {
+    let (rec, _) = release();
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = format!("{}/frames", rec.display());
+    let (alone, _) = release_alone(rec, tmp.path());
     // each tag in a group of its own: the look-alikes are named in the report, and a search
     // that reaches a neighbour nearly as good a match, or a jump the motion so far does not
     // explain, is a lost frame flagged ambiguous (128), never a clean jump onto the neighbour
