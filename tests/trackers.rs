@@ -327,13 +327,16 @@ fn worst_and_lost(rows: &[Row], truth: &HashMap<(usize, usize), (f64, f64)>) -> 
         })
 }
 
+/// A recording's truth: `(frame, target) -> (x, y)` px.
+type Truth = HashMap<(usize, usize), (f64, f64)>;
+
 /// The pull-and-release recording of the cluttered scene (28 alike tags on four storeys in
 /// front of a white brick wall, 184 HD frames at 23 fps, jumps up to 120 px between frames, tags
 /// 150-170 px apart), rendered once for the three tests that track it (so they can run in
 /// parallel), under Cargo's temporary directory for tests (a static's guard would never remove
 /// it): its directory and its truth.
-fn release() -> (&'static Path, &'static HashMap<(usize, usize), (f64, f64)>) {
-    type Rec = (PathBuf, HashMap<(usize, usize), (f64, f64)>);
+fn release() -> (&'static Path, &'static Truth) {
+    type Rec = (PathBuf, Truth);
     static REC: std::sync::OnceLock<Rec> = std::sync::OnceLock::new();
     let (rec, truth) = REC.get_or_init(|| {
         let rec = Path::new(env!("CARGO_TARGET_TMPDIR")).join("release-rec");
