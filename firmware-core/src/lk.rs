@@ -13,13 +13,15 @@
 //!   multiply-adds per pixel.
 //! * **Refinement** ([`LkTracker::track`]): from the start `p`, with the error
 //!   `e = I(x + p) - T(x)`, `dp = H^-1 sum [gx e, gy e]` and `p <- p - dp`, until `|dp|` is
-//!   below [`LkConfig::tolerance`] or after [`LkConfig::max_iterations`]. `I(x + p) - T(x)` is
-//!   formed in one of two ways ([`Interpolation`]): by default the frame is read at whole
-//!   pixels (the window at the whole-pixel part `q` of `p`) and the template's cubic B-spline
-//!   (prefiltered once per template, gradients from the spline) is shifted by `q - p`, as
-//!   pyidi interpolates its reference; or the frame is interpolated at `x + p` by Keys' cubic
-//!   convolution or bilinearly (cheaper on an MCU, more pixel locking). Every template pixel
-//!   shares the fractional part, so the interpolation is separable with the same weights.
+//!   below [`LkConfig::tolerance`] or after [`LkConfig::max_iterations`] (for a template that
+//!   measures one direction only, the step along the other scaled down: [`APERTURE`]).
+//!   `I(x + p) - T(x)` is formed in one of two ways ([`Interpolation`]): by default the frame
+//!   is read at whole pixels (the window at the whole-pixel part `q` of `p`) and the
+//!   template's cubic B-spline (prefiltered once per template, gradients from the spline) is
+//!   shifted by `q - p`, as pyidi interpolates its reference; or the frame is interpolated at
+//!   `x + p` by Keys' cubic convolution or bilinearly (cheaper on an MCU, more pixel
+//!   locking). Every template pixel shares the fractional part, so the interpolation is
+//!   separable with the same weights.
 //! * **Where to start**: the last displacement. When that does not converge to a match (its
 //!   zero-normalised cross-correlation, ZNCC, below [`LkConfig::accept_score`]) and
 //!   [`LkConfig::search`] is not 0, a **coarse integer search** over `+-search` pixels around
@@ -117,6 +119,14 @@ const LAGS: usize = 5;
 /// long as it can be; 0.95 leaves the taps' floor clear of rounding. (It was 3/4: a third of
 /// the frames of a broadband motion then read, smoothed and correlated a second window.)
 const KEEP: f32 = 0.95;
+
+/// Below this ratio of its structure tensor's eigenvalues a template measures one direction
+/// only (stripes, a straight edge: the aperture problem): its refinement's steps along the
+/// weak direction count scaled by `sqrt(lambda_2 / lambda_1)` against
+/// [`LkConfig::tolerance`] and the settling bound, so the iteration stops once the measured
+/// direction has settled instead of wandering along the stripes to its cap. Above it (a
+/// textured window) the step is `|dp|`, as always.
+pub const APERTURE: f32 = 0.05;
 
 /// Settings of an [`LkTracker`]: plain data, checked by [`LkConfig::validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -179,6 +179,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let mut step = f32::INFINITY;
         let mut score = 0.0;
         let from = p;
+        let weak = self.weak_direction();
         for _ in 0..self.config.max_iterations {
             out.iterations = out.iterations.saturating_add(1);
             let (b, s) = if self.config.interpolation == Interpolation::Spline {
@@ -190,7 +191,15 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             let dx = self.h_inv[0] * b.0 + self.h_inv[1] * b.1;
             let dy = self.h_inv[1] * b.0 + self.h_inv[2] * b.1;
             p = (p.0 - dx, p.1 - dy);
-            step = sqrtf(dx * dx + dy * dy);
+            step = match weak {
+                None => sqrtf(dx * dx + dy * dy),
+                // a window that measures one direction only: the step along the other scaled
+                // by how weakly the window measures it ([`APERTURE`])
+                Some(((wx, wy), r)) => {
+                    let (along, across) = (dx * wx + dy * wy, dy * wx - dx * wy);
+                    sqrtf(across * across + r * r * along * along)
+                }
+            };
             if !step.is_finite() {
                 return Err(Flags::DIVERGED);
             }
@@ -207,6 +216,28 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             }
         }
         Ok((p, score, step < 0.1))
+    }
+
+    /// The template's weak direction when it measures one direction only (the smaller
+    /// eigenvalue of its structure tensor below [`APERTURE`] times the larger: stripes, a
+    /// straight edge): the unit eigenvector of the smaller eigenvalue and
+    /// `sqrt(lambda_2 / lambda_1)`; `None` for a template textured both ways.
+    pub(super) fn weak_direction(&self) -> Option<((f32, f32), f32)> {
+        let [a, b, c] = self.structure();
+        let half_tr = 0.5 * (a + c);
+        let disc = sqrtf(0.25 * (a - c) * (a - c) + b * b);
+        let (l1, l2) = (half_tr + disc, (half_tr - disc).max(0.0));
+        if !(l1 > 0.0 && l1.is_finite()) || l2 >= APERTURE * l1 {
+            return None;
+        }
+        // (H - l2 I) v = 0 by either row, the one of larger coefficients
+        let (vx, vy) = if fabsf(a - l2) >= fabsf(c - l2) {
+            (b, l2 - a)
+        } else {
+            (l2 - c, b)
+        };
+        let n = sqrtf(vx * vx + vy * vy);
+        (n > 0.0 && n.is_finite()).then(|| ((vx / n, vy / n), sqrtf(l2 / l1)))
     }
 
     /// Interpolates the frame at the template's pixels shifted by `p`: returns
