@@ -334,21 +334,30 @@ type Truth = HashMap<(usize, usize), (f64, f64)>;
 /// front of a white brick wall, 184 HD frames at 23 fps, jumps up to 120 px between frames, tags
 /// 150-170 px apart), rendered once for the three tests that track it (so they can run in
 /// parallel), under Cargo's temporary directory for tests (a static's guard would never remove
-/// it): its directory and its truth.
-fn release() -> (&'static Path, &'static Truth) {
-    type Rec = (PathBuf, Truth);
-    static REC: std::sync::OnceLock<Rec> = std::sync::OnceLock::new();
-    let (rec, truth) = REC.get_or_init(|| {
+/// it).
+fn release() -> &'static Release {
+    static REC: std::sync::OnceLock<Release> = std::sync::OnceLock::new();
+    REC.get_or_init(|| {
         let rec = Path::new(env!("CARGO_TARGET_TMPDIR")).join("release-rec");
         let _ = std::fs::remove_dir_all(&rec);
         assert_ok(&harness(&words(
             "render --recording {} --scene cluttered --motion release",
             &[rec.to_str().unwrap()],
         )));
-        let truth = truth(&rec);
-        (rec, truth)
-    });
-    (rec, truth)
+        Release {
+            frames: format!("{}/frames", rec.display()),
+            truth: truth(&rec),
+            rec,
+        }
+    })
+}
+
+/// The rendered pull and release: its directory, its frames (a `--frames` argument) and its
+/// truth.
+struct Release {
+    rec: PathBuf,
+    frames: String,
+    truth: Truth,
 }
 
 /// The release's points file without its groups column, as a new user writes it, in `dir`.
@@ -367,16 +376,15 @@ fn release_alone(rec: &Path, dir: &Path) -> (String, PathBuf) {
 #[test]
 fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_motion() {
     // every tag through every frame within 1 px of the truth with the storeys as groups
-    let (rec, truth) = release();
+    let Release { rec, frames, truth } = release();
     let tmp = tempfile::tempdir().unwrap();
-    let frames = format!("{}/frames", rec.display());
     // tracked and analysed in one run (`analyze` without an accelerometer: `track`'s
     // displacement.csv and `modal`'s outputs, one tracking of the 184 HD frames, not two)
     let grouped = tmp.path().join("grouped");
     let o = harness(&words(
         "analyze --frames {} --fps 23 --points {} --tracker lk --search-px 130 --axis x --out {}",
         &[
-            &frames,
+            frames,
             rec.join("points.csv").to_str().unwrap(),
             grouped.to_str().unwrap(),
         ],
@@ -422,9 +430,8 @@ fn lk_follows_alike_tags_through_a_pull_and_release_by_their_storeys_shared_moti
 
 #[test]
 fn lk_finds_the_storeys_of_a_pull_and_release_from_the_first_frames_motion() {
-    let (rec, truth) = release();
+    let Release { rec, frames, truth } = release();
     let tmp = tempfile::tempdir().unwrap();
-    let frames = format!("{}/frames", rec.display());
     // the same windows without the storeys, as a new user writes them: the groups are found
     // from the first frames' motion, and every tag is followed through every frame (before,
     // 7 tags took their neighbours), with the default search and with a search of the whole
@@ -434,7 +441,7 @@ fn lk_finds_the_storeys_of_a_pull_and_release_from_the_first_frames_motion() {
         let out = tmp
             .path()
             .join(format!("alone_{}", search.unwrap_or("default")));
-        let mut args = words("track --frames {} --fps 23 --tracker lk", &[&frames]);
+        let mut args = words("track --frames {} --fps 23 --tracker lk", &[frames]);
         args.extend(["--points", alone_csv.to_str().unwrap()]);
         args.extend(["--out", out.to_str().unwrap()]);
         if let Some(s) = search {
@@ -457,9 +464,8 @@ fn lk_finds_the_storeys_of_a_pull_and_release_from_the_first_frames_motion() {
 
 #[test]
 fn lk_flags_a_pull_and_release_tag_followed_alone_ambiguous_never_a_jump_onto_its_neighbour() {
-    let (rec, _) = release();
+    let Release { rec, frames, .. } = release();
     let tmp = tempfile::tempdir().unwrap();
-    let frames = format!("{}/frames", rec.display());
     let (alone, _) = release_alone(rec, tmp.path());
     // each tag in a group of its own: the look-alikes are named in the report, and a search
     // that reaches a neighbour nearly as good a match, or a jump the motion so far does not
@@ -477,7 +483,7 @@ fn lk_flags_a_pull_and_release_tag_followed_alone_ambiguous_never_a_jump_onto_it
     let out = tmp.path().join("single");
     let o = harness(&words(
         "track --frames {} --fps 23 --tracker lk --search-px 130 --points {} --out {}",
-        &[&frames, single_csv.to_str().unwrap(), out.to_str().unwrap()],
+        &[frames, single_csv.to_str().unwrap(), out.to_str().unwrap()],
     ));
     assert_ok(&o);
     let report = String::from_utf8_lossy(&o.stdout).into_owned();

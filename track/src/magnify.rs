@@ -125,8 +125,8 @@ pub fn frame(
     (amplitude, u): (f64, (f64, f64)),
     (n, frames): (usize, usize),
 ) -> Vec<u8> {
-    let turn = Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * n as f64 / frames as f64);
     use rayon::prelude::*;
+    let turn = Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * n as f64 / frames as f64);
     let (w, h) = (f.width, f.height);
     let mut out = vec![0u8; w * h];
     // rows spread over the cores (an HD frame is a million pixels, a video 48 of them)
