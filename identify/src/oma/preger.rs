@@ -79,16 +79,16 @@ fn points(setups: &[Record<'_>]) -> usize {
         .sum::<usize>()
 }
 
-/// Each setup's observability matrix of order `n` (without block `left_out`), split into the
+/// Each setup's observability matrix of order `n` (without the blocks `left_out`), split into the
 /// rows of its references and of its other points, with its other points' count.
 type Split = (DMatrix<f64>, DMatrix<f64>, usize);
 
 /// The setups' observability matrices of order `n` from their SSI matrices (`parts`, without
-/// block `left_out`), each split at its references ([`Split`]).
+/// the blocks `left_out`), each split at its references ([`Split`]).
 fn observabilities(
     setups: &[Record<'_>],
     parts: &[Parts],
-    (left_out, n): (Option<usize>, usize),
+    (left_out, n): (&[usize], usize),
     s: &OmaSettings,
 ) -> anyhow::Result<Vec<Split>> {
     let i = s.ssi.block_rows;
@@ -153,11 +153,11 @@ fn global_observability(
     Ok(o)
 }
 
-/// The poles of every order of the setups together (without block `left_out` of each).
+/// The poles of every order of the setups together (without the blocks `left_out` of each).
 fn poles(
     setups: &[Record<'_>],
     parts: &[Parts],
-    left_out: Option<usize>,
+    left_out: &[usize],
     s: &OmaSettings,
 ) -> anyhow::Result<Vec<Pole>> {
     let n = max_order(setups, s);
@@ -213,7 +213,7 @@ pub fn identify(
             s.ssi.max_order
         ));
     }
-    let all = poles(&setups, &parts, None, s)?;
+    let all = poles(&setups, &parts, &[], s)?;
     let (kept, dropped) = cluster::cluster(&all, s.cluster);
     let label = format!("{} by PreGER", s.ssi.kind.label());
     let mut modes: Vec<OmaMode> = cluster::chosen(
@@ -234,7 +234,7 @@ pub fn identify(
     })
     .collect();
     if groups >= 3 {
-        let without = |g: usize| poles(&setups, &parts, Some(g), s);
+        let without = |g: &[usize]| poles(&setups, &parts, g, s);
         let intervals = uncertainty::of_ssi_modes(&modes, s.cluster, groups, without, notes)?;
         for (m, u) in modes.iter_mut().zip(intervals) {
             m.uncertainty = u;
@@ -341,7 +341,7 @@ mod tests {
             references: &[0, 1, 2],
         }];
         let parts: Vec<Parts> = vec![Parts::of(&channels, s.ssi, 1).unwrap()];
-        let ours = poles(&setups, &parts, None, &s).unwrap();
+        let ours = poles(&setups, &parts, &[], &s).unwrap();
         let plain = ssi::poles(&channels, fs, s.ssi).unwrap().0;
         assert_eq!(ours.len(), plain.len());
         for (a, b) in ours.iter().zip(&plain) {

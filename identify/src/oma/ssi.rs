@@ -129,7 +129,7 @@ pub fn poles(
     fs_hz: f64,
     rule: SsiRule,
 ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
-    Parts::of(channels, rule, 1)?.poles(None, fs_hz, rule)
+    Parts::of(channels, rule, 1)?.poles(&[], fs_hz, rule)
 }
 
 /// What SSI's matrix is made of, per block of the record, for either kind: the whole record's
@@ -151,10 +151,10 @@ impl Parts {
         })
     }
 
-    /// The poles of every order of the record without block `left_out` (all with `None`).
+    /// The poles of every order of the record without the blocks `left_out` (all with none).
     pub fn poles(
         &self,
-        left_out: Option<usize>,
+        left_out: &[usize],
         fs_hz: f64,
         rule: SsiRule,
     ) -> anyhow::Result<(Vec<Pole>, Vec<Pole>)> {
@@ -163,11 +163,11 @@ impl Parts {
     }
 
     /// The matrix whose column space is the observability matrix's (SSI-cov's block Toeplitz
-    /// matrix, SSI-dat's projection factor) of the record without block `left_out` (all with
-    /// `None`), and its channels.
+    /// matrix, SSI-dat's projection factor) of the record without the blocks `left_out` (all
+    /// with none), and its channels.
     pub fn matrix(
         &self,
-        left_out: Option<usize>,
+        left_out: &[usize],
         rule: SsiRule,
     ) -> anyhow::Result<(DMatrix<f64>, usize)> {
         match self {
@@ -199,11 +199,11 @@ pub struct CorrelationSums {
 impl CorrelationSums {
     /// The correlations of the whole record.
     pub fn all(&self) -> Vec<DMatrix<f64>> {
-        self.without(None)
+        self.without(&[])
     }
 
-    /// The correlations of the record without block `left_out` (all with `None`).
-    pub fn without(&self, left_out: Option<usize>) -> Vec<DMatrix<f64>> {
+    /// The correlations of the record without the blocks `left_out` (all with none).
+    pub fn without(&self, left_out: &[usize]) -> Vec<DMatrix<f64>> {
         let lags = self.sums.first().map_or(0, Vec::len);
         let k = self
             .sums
@@ -215,7 +215,7 @@ impl CorrelationSums {
                 let mut m = DMatrix::<f64>::zeros(k, k);
                 let mut n = 0usize;
                 for (b, (sum, count)) in self.sums.iter().zip(&self.counts).enumerate() {
-                    if Some(b) != left_out {
+                    if !left_out.contains(&b) {
                         m += &sum[l];
                         n += count[l];
                     }

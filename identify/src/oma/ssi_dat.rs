@@ -34,14 +34,14 @@ pub struct HankelGrams {
 }
 
 impl HankelGrams {
-    /// The Gram matrix (divided by the number of columns) of the record without block
-    /// `left_out` (all with `None`).
-    pub fn without(&self, left_out: Option<usize>) -> DMatrix<f64> {
+    /// The Gram matrix (divided by the number of columns) of the record without the blocks
+    /// `left_out` (all with none).
+    pub fn without(&self, left_out: &[usize]) -> DMatrix<f64> {
         let m = 2 * self.block_rows * self.channels;
         let mut g = DMatrix::<f64>::zeros(m, m);
         let mut n = 0usize;
         for (b, (sum, count)) in self.sums.iter().zip(&self.counts).enumerate() {
-            if Some(b) != left_out {
+            if !left_out.contains(&b) {
                 g += sum;
                 n += count;
             }
@@ -199,7 +199,7 @@ mod tests {
             c[t0 + t + r / k] - m
         });
         let less = (&whole - &part * part.transpose()) / (j - (t1 - t0)) as f64;
-        assert!((g.without(Some(1)) - less).amax() < 1e-9 * whole.amax());
+        assert!((g.without(&[1]) - less).amax() < 1e-9 * whole.amax());
     }
 
     #[test]
@@ -210,7 +210,7 @@ mod tests {
             .map(|c| vibcam_common::testing::gaussian_noise(20 + c, n))
             .collect();
         let i = 3;
-        let g = grams(&channels, i, 1).unwrap().without(None);
+        let g = grams(&channels, i, 1).unwrap().without(&[]);
         let l21 = projection(&g, i, 2).unwrap();
         let m = i * 2;
         let (gpp, gfp) = (g.view((0, 0), (m, m)), g.view((m, 0), (m, m)));

@@ -12,7 +12,7 @@
 //! interval is given (and a note says so): an interval from the replicates that did would be
 //! too narrow.
 
-use super::cluster::{self, ClusterRule};
+use super::cluster::{self, ClusterRule, SsiMode};
 use super::csd::{self, Csd};
 use super::fdd::{self, Svd};
 use super::modes::Peak;
@@ -152,6 +152,99 @@ pub fn jackknife_sized(estimate: f64, replicates: &[f64], sizes: &[usize]) -> Op
     })
 }
 
+/// Replicates of SSI's delete-half jackknife by default ([`half_samples`]).
+pub const HALF_SAMPLES: usize = 20;
+
+/// The replicates of the delete-half jackknife over `groups` groups: each the groups it leaves
+/// out, `groups / 2` of them. Every such choice when there are at most `count`; otherwise
+/// `count` of them in complementary pairs (each group left out equally often), drawn by a fixed
+/// generator so that a record always gets the same intervals.
+pub fn half_samples(groups: usize, d: usize, count: usize) -> Vec<Vec<usize>> {
+    let all = (0..d).fold(1usize, |c, i| c * (groups - i) / (i + 1));
+    if all <= count {
+        return (0..1usize << groups)
+            .filter(|m| m.count_ones() as usize == d)
+            .map(|m| (0..groups).filter(|g| m >> g & 1 == 1).collect())
+            .collect();
+    }
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        // splitmix64
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let mut out: Vec<Vec<usize>> = Vec::with_capacity(count);
+    while out.len() < count {
+        let mut order: Vec<usize> = (0..groups).collect();
+        for i in (1..groups).rev() {
+            order.swap(i, (next() % (i as u64 + 1)) as usize);
+        }
+        let mut left: Vec<usize> = order[..d].to_vec();
+        left.sort_unstable();
+        if out.contains(&left) {
+            continue;
+        }
+        let mut other: Vec<usize> = order[d..].to_vec();
+        other.sort_unstable();
+        out.push(left);
+        if groups == 2 * d && out.len() < count {
+            out.push(other);
+        }
+    }
+    out
+}
+
+/// The delete-half jackknife interval of `estimate` from its replicates, each without `d` of
+/// the `groups` groups (Shao & Wu, *Annals of Statistics* 17, 1989): `u^2 = (G - d) / (d R)
+/// sum (x_r - mean)^2` over the `R` replicates, Student's t with `G - 1` degrees of freedom.
+/// Unlike the delete-one jackknife it holds for estimates that are not smooth in the data
+/// (a median, a pole chosen among several): a jump of one replicate enters its variance once
+/// instead of about `G - 1` times.
+pub fn jackknife_half(
+    estimate: f64,
+    replicates: &[f64],
+    (groups, d): (usize, usize),
+) -> Option<Interval> {
+    let r = replicates.len();
+    if r < 2 || d == 0 || d >= groups || !replicates.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let mean = replicates.iter().sum::<f64>() / r as f64;
+    let var = (groups - d) as f64 / (d * r) as f64
+        * replicates.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+    let u = var.sqrt();
+    let half = t975(groups - 1) * u;
+    Some(Interval {
+        u,
+        lo: estimate - half,
+        hi: estimate + half,
+    })
+}
+
+/// How a mode's replicates were made, which says how their spread gives a variance.
+#[derive(Debug, Clone, Copy)]
+enum Scheme<'a> {
+    /// One of equal groups left out per replicate ([`jackknife`]).
+    Plain,
+    /// One group left out per replicate, the groups of these sizes ([`jackknife_sized`]).
+    Sized(&'a [usize]),
+    /// `d` of `groups` groups left out per replicate ([`jackknife_half`]).
+    Half(usize, usize),
+}
+
+impl Scheme<'_> {
+    fn interval(self, estimate: f64, replicates: &[f64]) -> Option<Interval> {
+        match self {
+            Scheme::Plain => jackknife(estimate, replicates),
+            Scheme::Sized(sizes) => jackknife_sized(estimate, replicates, sizes),
+            Scheme::Half(groups, d) => jackknife_half(estimate, replicates, (groups, d)),
+        }
+    }
+}
+
 /// Per mode of `modes` (in their order), its uncertainty by the jackknife over `groups`
 /// groups; `peaks` are the FDD peaks the FDD and EFDD modes came from (in mode order), the
 /// records, their cross-spectral matrix (`whole`) and the settings those of the analysis;
@@ -182,30 +275,27 @@ pub fn of_modes(
         })
         .collect();
     let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
-    let ssi = ssi_replicates(channels, s, (modes, lone), groups)?;
+    let ssi = ssi_replicates(channels, s, (modes, lone), groups, notes)?;
     for (m, u) in modes.iter().zip(out.iter_mut()) {
         let reps = mode_replicates(m, modes, peaks, (spectral.as_ref(), ssi.as_ref()));
-        let Some((reps, sizes)) = reps else {
+        let Some((reps, scheme)) = reps else {
             continue;
         };
-        *u = mode_intervals(m, &reps, sizes, notes);
+        *u = mode_intervals(m, &reps, scheme, notes);
     }
     Ok(out)
 }
 
-/// A mode's intervals from its replicates (`sizes`: the groups' sizes, `None` equal): FDD's
-/// amplitude and shape; EFDD's and SSI's frequency, damping and shape (EFDD's amplitude too).
+/// A mode's intervals from its replicates (made as `scheme` says): FDD's amplitude and shape;
+/// EFDD's and SSI's frequency, damping and shape (EFDD's amplitude too).
 fn mode_intervals(
     m: &OmaMode,
     reps: &[Replicate],
-    sizes: Option<&[usize]>,
+    scheme: Scheme<'_>,
     notes: &mut Vec<String>,
 ) -> Uncertainty {
     let mut u = Uncertainty::default();
-    let jackknife = |a: f64, v: &[f64]| match sizes {
-        Some(sz) => jackknife_sized(a, v, sz),
-        None => jackknife(a, v),
-    };
+    let jackknife = |a: f64, v: &[f64]| scheme.interval(a, v);
     let pick = |f: &dyn Fn(&Replicate) -> Option<f64>| -> Option<Vec<f64>> {
         reps.iter().map(f).collect()
     };
@@ -224,7 +314,7 @@ fn mode_intervals(
                 .amplitude
                 .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)))
                 .map(non_negative);
-            u.shape_abs = shape_u(&m.shape, reps);
+            u.shape_abs = shape_u(&m.shape, reps, scheme);
         }
         Method::Efdd | Method::Ssi => {
             match pick(&|r| r.efdd_or_ssi.map(|x| x.0)) {
@@ -254,7 +344,7 @@ fn mode_intervals(
                     .and_then(|a| pick(&|r| r.amplitude).and_then(|v| jackknife(a, &v)))
                     .map(non_negative);
             }
-            u.shape_abs = shape_u(&m.shape, reps);
+            u.shape_abs = shape_u(&m.shape, reps, scheme);
         }
         // the jackknife over the decays (`decay::decay_modes`), over segments
         // (`plscf::plscf_modes`), computed with them
@@ -263,8 +353,9 @@ fn mode_intervals(
     u
 }
 
-/// One mode's replicates and the sizes of the groups they leave out (SSI's blocks of samples
-/// are equal to within one sample: the plain jackknife); `None` when there are none.
+/// One mode's replicates and how they were made (the spectral ones each without a group of
+/// Welch segments, of these sizes; SSI's without half of the blocks of samples); `None` when
+/// there are none.
 #[allow(clippy::type_complexity)]
 fn mode_replicates<'a>(
     m: &OmaMode,
@@ -272,9 +363,9 @@ fn mode_replicates<'a>(
     peaks: &[Peak],
     (spectral, ssi): (
         Option<&'a (Vec<Vec<Replicate>>, Vec<usize>)>,
-        Option<&'a Vec<Vec<Replicate>>>,
+        Option<&'a SsiReplicates>,
     ),
-) -> Option<(Vec<Replicate>, Option<&'a [usize]>)> {
+) -> Option<(Vec<Replicate>, Scheme<'a>)> {
     match m.method {
         Method::Fdd | Method::Efdd => {
             let p = peaks
@@ -285,7 +376,7 @@ fn mode_replicates<'a>(
                 spectral.map(|(r, sizes)| {
                     (
                         r.iter().map(|g| g[p].clone()).collect(),
-                        Some(sizes.as_slice()),
+                        Scheme::Sized(sizes.as_slice()),
                     )
                 })
             })
@@ -295,7 +386,7 @@ fn mode_replicates<'a>(
                 .iter()
                 .filter(|x| x.method == Method::Ssi)
                 .position(|x| x.mode == m.mode)?;
-            Some((r.iter().map(|g| g[i].clone()).collect(), None))
+            r.get(i).cloned()
         }),
         Method::Decay | Method::Plscf => None,
     }
@@ -317,7 +408,11 @@ struct Replicate {
 }
 
 /// The jackknife uncertainty of each shape component's magnitude.
-fn shape_u(shape: &[num_complex::Complex64], reps: &[Replicate]) -> Option<Vec<f64>> {
+fn shape_u(
+    shape: &[num_complex::Complex64],
+    reps: &[Replicate],
+    scheme: Scheme<'_>,
+) -> Option<Vec<f64>> {
     let shapes: Option<Vec<&Vec<num_complex::Complex64>>> =
         reps.iter().map(|r| r.shape.as_ref()).collect();
     let shapes = shapes?;
@@ -328,7 +423,9 @@ fn shape_u(shape: &[num_complex::Complex64], reps: &[Replicate]) -> Option<Vec<f
                     .iter()
                     .map(|s| s.get(j).map_or(0.0, |c| c.norm()))
                     .collect();
-                jackknife(shape[j].norm(), &v).map_or(f64::NAN, |i| i.u)
+                scheme
+                    .interval(shape[j].norm(), &v)
+                    .map_or(f64::NAN, |i| i.u)
             })
             .collect(),
     )
@@ -402,65 +499,129 @@ fn spectral_replicates(
     Ok(Some((out, sizes)))
 }
 
-/// Per block of the record left out, per SSI mode of `modes` (in their order): the replicate's
-/// mode ([`replicates_from_poles`]).
+/// SSI's replicates: per SSI mode (in their order), its replicates and how they were made.
+type SsiReplicates = Vec<(Vec<Replicate>, Scheme<'static>)>;
+
+/// Per SSI mode of `modes` (in their order) its replicates ([`ssi_mode_replicates`]) from
+/// `groups` blocks of the record.
 fn ssi_replicates(
     channels: &[Vec<f64>],
     s: &OmaSettings,
     (modes, lone): (&[OmaMode], &[f64]),
     groups: usize,
-) -> anyhow::Result<Option<Vec<Vec<Replicate>>>> {
+    notes: &mut Vec<String>,
+) -> anyhow::Result<Option<SsiReplicates>> {
     if !modes.iter().any(|m| m.method == Method::Ssi) {
         return Ok(None);
     }
     let parts = ssi::Parts::of(channels, s.ssi, groups)?;
-    let poles = |g: usize| Ok(parts.poles(Some(g), s.fs_hz, s.ssi)?.0);
-    replicates_from_poles((modes, lone), s.cluster, groups, poles).map(Some)
+    let poles = |g: &[usize]| Ok(parts.poles(g, s.fs_hz, s.ssi)?.0);
+    ssi_mode_replicates((modes, lone), s.cluster, groups, poles, notes).map(Some)
 }
 
-/// Per group `g` left out (`poles(g)`: the poles of every order without it), per SSI mode of
-/// `modes` (in their order): the replicate's mode nearest it (within three half-power
-/// bandwidths or 1 %, whichever is wider, and a MAC of 0.8 or more with its shape), `None`
-/// fields where there is none; for a mode of `lone` (kept with fewer poles than a mode
-/// needs), among the clusters of at least [`super::modes::LONE_MIN_POLES`] poles.
-fn replicates_from_poles(
+/// Per SSI mode of `modes` (in their order) its replicates, `poles(left_out)` the poles of
+/// every order without the groups `left_out` of `groups`: those of the delete-half jackknife
+/// ([`half_samples`], [`HALF_SAMPLES`] of them), because SSI's estimate of a mode is not smooth
+/// in the data (the cluster's median over model orders, each order's pole a choice among
+/// several) and a replicate's own jump enters the delete-one jackknife's variance about
+/// `groups - 1` times (docs/validation.md §3). A mode that a replicate with half of the record
+/// does not find (a short record, a weak mode) takes the delete-one jackknife's replicates
+/// instead, and a note says so.
+fn ssi_mode_replicates(
     (modes, lone): (&[OmaMode], &[f64]),
     rule: ClusterRule,
     groups: usize,
-    poles: impl Fn(usize) -> anyhow::Result<Vec<ssi::Pole>>,
+    poles: impl Fn(&[usize]) -> anyhow::Result<Vec<ssi::Pole>>,
+    notes: &mut Vec<String>,
+) -> anyhow::Result<SsiReplicates> {
+    let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
+    let column = |reps: &[Vec<Replicate>], i: usize| -> Vec<Replicate> {
+        reps.iter().map(|r| r[i].clone()).collect()
+    };
+    let d = groups / 2;
+    let half = replicates_from_poles(
+        (modes, lone),
+        rule,
+        &half_samples(groups, d, HALF_SAMPLES),
+        &poles,
+    )?;
+    let missed = |i: usize| half.iter().filter(|r| r[i].efdd_or_ssi.is_none()).count();
+    let mut one: Option<Vec<Vec<Replicate>>> = None;
+    let mut out = Vec::with_capacity(ssi.len());
+    for (i, m) in ssi.iter().enumerate() {
+        let k = missed(i);
+        if k == 0 {
+            out.push((column(&half, i), Scheme::Half(groups, d)));
+            continue;
+        }
+        if one.is_none() {
+            let design: Vec<Vec<usize>> = (0..groups).map(|g| vec![g]).collect();
+            one = Some(replicates_from_poles((modes, lone), rule, &design, &poles)?);
+        }
+        notes.push(format!(
+            "{} mode {} ({:.4} Hz): its intervals from the delete-one jackknife (each replicate \
+             without a tenth of the record): {k} of {} replicates without half of the record \
+             did not find the mode",
+            m.method.name(),
+            m.mode,
+            m.f_hz,
+            half.len()
+        ));
+        out.push((column(one.as_deref().unwrap_or_default(), i), Scheme::Plain));
+    }
+    Ok(out)
+}
+
+/// Per replicate of `design` (each the groups it leaves out; `poles(left_out)`: the poles of
+/// every order without them), per SSI mode of `modes` (in their order): the replicate's mode
+/// nearest it (within three half-power bandwidths or 1 %, whichever is wider, and a MAC of
+/// 0.8 or more with its shape), `None` fields where there is none. It is sought among the
+/// replicate's clusters that make a mode, then (for a mode of `lone`, kept with fewer poles
+/// than a mode needs: only) among those of at least [`super::modes::LONE_MIN_POLES`] poles:
+/// the whole record decided that the mode is there, a replicate with half of it re-estimates
+/// the mode even where it would not have decided so.
+fn replicates_from_poles(
+    (modes, lone): (&[OmaMode], &[f64]),
+    rule: ClusterRule,
+    design: &[Vec<usize>],
+    poles: &impl Fn(&[usize]) -> anyhow::Result<Vec<ssi::Pole>>,
 ) -> anyhow::Result<Vec<Vec<Replicate>>> {
     let ssi: Vec<&OmaMode> = modes.iter().filter(|m| m.method == Method::Ssi).collect();
-    let mut out = Vec::with_capacity(groups);
-    for g in 0..groups {
-        let poles = poles(g)?;
+    let small_rule = ClusterRule {
+        min_poles: super::modes::LONE_MIN_POLES,
+        ..rule
+    };
+    let mut out = Vec::with_capacity(design.len());
+    for left_out in design {
+        let poles = poles(left_out)?;
         let (kept, _) = cluster::cluster(&poles, rule);
-        let small = match lone.is_empty() {
-            true => Vec::new(),
-            false => {
-                let rule = ClusterRule {
-                    min_poles: super::modes::LONE_MIN_POLES,
-                    ..rule
-                };
-                cluster::cluster(&poles, rule).0
-            }
-        };
-        let reps = ssi
-            .iter()
-            .map(|m| {
-                let z = m.damping.unwrap_or(0.01);
-                let reach = (3.0 * 2.0 * z * m.f_hz).max(0.01 * m.f_hz);
-                let near = match lone.contains(&m.f_hz) {
-                    true => &small,
-                    false => &kept,
-                }
+        let small = std::cell::OnceCell::new();
+        let nearest = |clusters: &[SsiMode], m: &OmaMode| {
+            let z = m.damping.unwrap_or(0.01);
+            let reach = (3.0 * 2.0 * z * m.f_hz).max(0.01 * m.f_hz);
+            clusters
                 .iter()
                 .filter(|c| (c.f_hz - m.f_hz).abs() <= reach && mac(&c.shape, &m.shape) >= 0.8)
-                .min_by(|a, b| (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs()));
-                near.map_or_else(Replicate::default, |c| Replicate {
+                .min_by(|a, b| (a.f_hz - m.f_hz).abs().total_cmp(&(b.f_hz - m.f_hz).abs()))
+                .map(|c| Replicate {
                     efdd_or_ssi: Some((c.f_hz, c.damping)),
                     amplitude: None,
                     shape: Some(normalise_shape(&c.shape)),
                 })
+        };
+        let reps = ssi
+            .iter()
+            .map(|m| {
+                let found = match lone.contains(&m.f_hz) {
+                    true => None,
+                    false => nearest(&kept, m),
+                };
+                found
+                    .or_else(|| {
+                        let small = small.get_or_init(|| cluster::cluster(&poles, small_rule).0);
+                        nearest(small, m)
+                    })
+                    .unwrap_or_default()
             })
             .collect();
         out.push(reps);
@@ -468,26 +629,25 @@ fn replicates_from_poles(
     Ok(out)
 }
 
-/// Per mode of `modes` (an SSI mode's; the others' left empty), its uncertainty by the jackknife over `groups`
-/// groups, `poles(g)` the poles of every order without group `g` (how several setups
-/// identified together give their intervals so). Notes name the modes left
-/// without an interval.
+/// Per mode of `modes` (an SSI mode's; the others' left empty), its uncertainty by the
+/// delete-half jackknife over `groups` groups, `poles(left_out)` the poles of every order
+/// without the groups `left_out` (how several setups identified together give their intervals
+/// so). Notes name the modes left without an interval.
 pub fn of_ssi_modes(
     modes: &[OmaMode],
     rule: ClusterRule,
     groups: usize,
-    poles: impl Fn(usize) -> anyhow::Result<Vec<ssi::Pole>>,
+    poles: impl Fn(&[usize]) -> anyhow::Result<Vec<ssi::Pole>>,
     notes: &mut Vec<String>,
 ) -> anyhow::Result<Vec<Uncertainty>> {
     let mut out = vec![Uncertainty::default(); modes.len()];
     if groups < 3 || modes.is_empty() {
         return Ok(out);
     }
-    let reps = replicates_from_poles((modes, &[]), rule, groups, poles)?;
+    let reps = ssi_mode_replicates((modes, &[]), rule, groups, poles, notes)?;
     let ssi = modes.iter().zip(out.iter_mut());
-    for (i, (m, u)) in ssi.filter(|(m, _)| m.method == Method::Ssi).enumerate() {
-        let mine: Vec<Replicate> = reps.iter().map(|g| g[i].clone()).collect();
-        *u = mode_intervals(m, &mine, None, notes);
+    for ((m, u), (mine, scheme)) in ssi.filter(|(m, _)| m.method == Method::Ssi).zip(reps) {
+        *u = mode_intervals(m, &mine, scheme, notes);
     }
     Ok(out)
 }
@@ -603,6 +763,95 @@ mod tests {
         assert_eq!((t975(1), t975(9), t975(40)), (12.706, 2.262, 1.96));
         assert!(jackknife(1.0, &[1.0]).is_none());
         assert!(jackknife(1.0, &[1.0, f64::NAN]).is_none());
+    }
+
+    #[test]
+    fn half_samples_leave_out_half_and_each_group_equally_often() {
+        let d = half_samples(10, 5, HALF_SAMPLES);
+        assert_eq!(d.len(), HALF_SAMPLES);
+        let mut times = [0usize; 10];
+        for (i, s) in d.iter().enumerate() {
+            assert_eq!(s.len(), 5);
+            assert!(s.windows(2).all(|w| w[0] < w[1]), "sorted and distinct");
+            assert!(!d[..i].contains(s), "no replicate twice");
+            s.iter().for_each(|&g| times[g] += 1);
+        }
+        // complementary pairs: every group left out by half of the replicates
+        assert_eq!(times, [HALF_SAMPLES / 2; 10]);
+        assert_eq!(
+            d,
+            half_samples(10, 5, HALF_SAMPLES),
+            "the same design every time"
+        );
+        // few groups: every choice, C(6, 3) = 20
+        let all = half_samples(6, 3, 40);
+        assert_eq!(all.len(), 20);
+        assert!(all.iter().all(|s| s.len() == 3));
+    }
+
+    #[test]
+    fn the_delete_half_jackknife_of_a_mean_is_the_variance_of_the_mean() {
+        // the mean of six groups: over every half left out, the delete-half variance is
+        // s^2 / n exactly (sampling without replacement), as the delete-one jackknife's is
+        let x = [0.3, -1.2, 2.5, 0.7, 1.9, -0.4];
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let s2 = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let design = half_samples(6, 3, 100);
+        let reps: Vec<f64> = design
+            .iter()
+            .map(|out| {
+                let kept: Vec<f64> = (0..6).filter(|g| !out.contains(g)).map(|g| x[g]).collect();
+                kept.iter().sum::<f64>() / kept.len() as f64
+            })
+            .collect();
+        let half = jackknife_half(mean, &reps, (6, 3)).unwrap();
+        assert!(
+            (half.u.powi(2) - s2 / n).abs() < 1e-12,
+            "{} {}",
+            half.u.powi(2),
+            s2 / n
+        );
+        let ones: Vec<f64> = (0..6)
+            .map(|g| (x.iter().sum::<f64>() - x[g]) / (n - 1.0))
+            .collect();
+        assert!((jackknife(mean, &ones).unwrap().u - half.u).abs() < 1e-12);
+        assert!((half.hi - mean - t975(5) * half.u).abs() < 1e-12);
+        assert!(jackknife_half(1.0, &[1.0], (6, 3)).is_none());
+        assert!(jackknife_half(1.0, &[1.0, 2.0], (6, 0)).is_none());
+    }
+
+    #[test]
+    fn a_jump_of_one_replicate_counts_once_in_the_delete_half_jackknife() {
+        // an estimate that jumps by +-e with the data it is given (a pole chosen among
+        // several), over a constant: its own variance is e^2; the delete-one jackknife sees
+        // about (G - 1)^2 / G e^2, the delete-half one about e^2
+        let e = 1.0;
+        let jump = |out: &[usize]| {
+            let h = out
+                .iter()
+                .fold(17u64, |h, &g| h.wrapping_mul(31).wrapping_add(g as u64));
+            if h.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 63 == 1 {
+                e
+            } else {
+                -e
+            }
+        };
+        let (mut one, mut half) = (0.0, 0.0);
+        let trials = 200;
+        for t in 0..trials {
+            // a different record: the groups relabelled
+            let shift = |g: usize| (g + t) % 10 + 10 * (t / 10);
+            let ones: Vec<f64> = (0..10).map(|g| jump(&[shift(g), 1000])).collect();
+            let halves: Vec<f64> = half_samples(10, 5, HALF_SAMPLES)
+                .iter()
+                .map(|s| jump(&s.iter().map(|&g| shift(g)).collect::<Vec<_>>()))
+                .collect();
+            one += jackknife(0.0, &ones).unwrap().u.powi(2) / trials as f64;
+            half += jackknife_half(0.0, &halves, (10, 5)).unwrap().u.powi(2) / trials as f64;
+        }
+        assert!(one > 6.0 * e * e, "delete-one: {one}");
+        assert!((0.7..1.3).contains(&half), "delete-half: {half}");
     }
 
     #[test]

@@ -681,8 +681,8 @@ fn modes_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         let _ = writeln!(
             o,
             "\n95 % intervals (statistical, from the record: the jackknife over {} groups of its \
-             segments or time, the decay method's over its decays; the imaging's own share is \
-             not in them):",
+             segments or time, SSI's leaving out half of them, the decay method's over its \
+             decays; the imaging's own share is not in them):",
             s.groups
         );
         for m in with {
