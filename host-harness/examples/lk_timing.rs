@@ -2,7 +2,9 @@
 //! windows, the frames preloaded (decoding excluded), as `scripts/peer_trackers.py` times its
 //! peers: the same windows, the same defaults as `track --tracker lk` (no search needed on
 //! this motion, but configured as the CLI does). Prints the time per target-frame, the mean
-//! iterations and the frames lost.
+//! iterations, the frames lost and the frames searched (the coarse search ran: the first
+//! refinement was not accepted). `LK_SEARCH=R` sets the search range instead of the default
+//! half window (0: none), to see what the searches cost.
 //!
 //! ```text
 //! cargo run --release -p host-harness --example lk_timing REC [REPEATS]
@@ -51,13 +53,16 @@ fn main() -> anyhow::Result<()> {
         .ok_or_else(|| anyhow::anyhow!("no frames in {}", rec.display()))?;
     let (w, h) = (*w, *h);
     let mut best = f64::INFINITY;
-    let (mut iterations, mut lost) = (0u64, 0u64);
+    let (mut iterations, mut lost, mut searched) = (0u64, 0u64, 0u64);
     for _ in 0..repeats {
         let mut trackers: Vec<Box<Lk>> = Vec::new();
         let first = view(&frames[0].2, (w, h))?;
         for p in &points {
             let mut cfg = LkConfig::new(p.size.0 as u16, p.size.1 as u16);
             cfg.saturation = 0;
+            if let Ok(s) = std::env::var("LK_SEARCH") {
+                cfg.search = s.parse()?;
+            }
             let mut t = Box::new(Lk::try_new(cfg).map_err(|e| anyhow::anyhow!("{e}"))?);
             let roi = window(p.xy, p.size, (w, h)).ok_or_else(|| {
                 anyhow::anyhow!("target {}: the window leaves the frame", p.target)
@@ -66,7 +71,7 @@ fn main() -> anyhow::Result<()> {
                 .map_err(|e| anyhow::anyhow!("target {}: {e}", p.target))?;
             trackers.push(t);
         }
-        (iterations, lost) = (0, 0);
+        (iterations, lost, searched) = (0, 0, 0);
         let t0 = Instant::now();
         for (_, _, d) in &frames[1..] {
             let f = view(d, (w, h))?;
@@ -74,6 +79,7 @@ fn main() -> anyhow::Result<()> {
                 let r = t.track(&f);
                 iterations += u64::from(r.iterations);
                 lost += u64::from(r.displacement().is_none());
+                searched += u64::from(r.searched);
             }
         }
         best = best.min(t0.elapsed().as_secs_f64());
@@ -81,7 +87,7 @@ fn main() -> anyhow::Result<()> {
     let n = ((frames.len() - 1) * points.len()) as f64;
     println!(
         "lk: {:.2} us per target-frame ({} targets, {} frames, best of {repeats}), {:.2} \
-         iterations per target-frame, {lost} lost",
+         iterations per target-frame, {lost} lost, {searched} searched",
         best / n * 1e6,
         points.len(),
         frames.len() - 1,

@@ -462,3 +462,45 @@ pub(super) fn tap_forms(
     }
     out
 }
+
+/// The frame's sums of a search's ZNCC at one offset: `[sum vf, sum vf^2, sum vf vt]` with
+/// `vf = f - m`, `vt = t - m`, over the template `t` (rows of `tw`) and the frame window's
+/// `rows` (each `tw` long), in four lanes carried across the rows and added once at the end.
+#[inline(always)]
+pub(super) fn zncc_sums<'a, P: Pixel>(
+    t: &[f32],
+    tw: usize,
+    rows: impl Iterator<Item = &'a [P]>,
+    m: f32,
+) -> [f32; 3] {
+    let (mut sf, mut sff, mut sft) = (f32x4::ZERO, f32x4::ZERO, f32x4::ZERO);
+    let (mut a, mut b, mut c) = (0.0f32, 0.0f32, 0.0f32);
+    let mv = f32x4::splat(m);
+    for (t, f) in t.chunks_exact(tw.max(1)).zip(rows) {
+        let (tc, fc) = (t.chunks_exact(4), f.chunks_exact(4));
+        let (tr, fr) = (tc.remainder(), fc.remainder());
+        for (t4, f4) in tc.zip(fc) {
+            let (Ok(t4), Ok([f0, f1, f2, f3])) = (<[f32; 4]>::try_from(t4), <[P; 4]>::try_from(f4))
+            else {
+                continue;
+            };
+            let vt = f32x4::from(t4) - mv;
+            let vf = f32x4::from([f0, f1, f2, f3].map(|p| f32::from(p.into()))) - mv;
+            sf += vf;
+            sff += vf * vf;
+            sft += vf * vt;
+        }
+        for (t, f) in tr.iter().zip(fr) {
+            let vt = t - m;
+            let vf = f32::from((*f).into()) - m;
+            a += vf;
+            b += vf * vf;
+            c += vf * vt;
+        }
+    }
+    let sum = |v: f32x4| {
+        let [x0, x1, x2, x3] = v.to_array();
+        (x0 + x2) + (x1 + x3)
+    };
+    [a + sum(sf), b + sum(sff), c + sum(sft)]
+}

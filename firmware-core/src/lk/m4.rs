@@ -196,3 +196,26 @@ pub(super) fn clipped_window_bytes(
 ) -> Option<u32> {
     None
 }
+
+/// The frame's sums of a search's ZNCC at one offset: `[sum vf, sum vf^2, sum vf vt]` with
+/// `vf = f - m`, `vt = t - m`, over the template `t` (rows of `tw`) and the frame window's
+/// `rows` (each `tw` long).
+#[inline(always)]
+pub(super) fn zncc_sums<'a, P: Pixel>(
+    t: &[f32],
+    tw: usize,
+    rows: impl Iterator<Item = &'a [P]>,
+    m: f32,
+) -> [f32; 3] {
+    let (mut a, mut b, mut c) = (0.0f32, 0.0f32, 0.0f32);
+    for (t, f) in t.chunks_exact(tw.max(1)).zip(rows) {
+        for (t, f) in t.iter().zip(f) {
+            let vt = t - m;
+            let vf = f32::from((*f).into()) - m;
+            a += vf;
+            b += vf * vf;
+            c += vf * vt;
+        }
+    }
+    [a, b, c]
+}

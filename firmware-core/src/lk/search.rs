@@ -22,11 +22,16 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         // a rival is a match at least half the template's larger side from the best
         let apart = (tw.max(th) / 2).max(2);
         let mut best = Ranked::default();
+        let sums = self.template_sums();
         let consider = |dx: i64, dy: i64, block: i64, best: &mut Ranked| {
             if (dx - cx).abs() > r || (dy - cy).abs() > r {
                 return;
             }
-            if let Some(s) = self.zncc_at(frame, dx, dy, block) {
+            let score = match block {
+                1 => self.zncc_pixels(frame, dx, dy, sums),
+                _ => self.zncc_at(frame, dx, dy, block),
+            };
+            if let Some(s) = score {
                 best.offer((s, dx, dy), apart);
             }
         };
@@ -66,6 +71,54 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         }
         // saturation is judged by the refinement that follows
         Ok((x as f32, y as f32))
+    }
+
+    /// The template's own sums of a search's ZNCC, `(sum vt, sum vt^2)` with `vt = t - mean`,
+    /// the same at every offset.
+    pub(super) fn template_sums(&self) -> (f32, f32) {
+        let n = usize::from(self.config.width) * usize::from(self.config.height);
+        let m = self.t_mean;
+        self.t
+            .get(..n)
+            .unwrap_or_default()
+            .iter()
+            .fold((0.0, 0.0), |(a, b), t| (a + (t - m), b + (t - m) * (t - m)))
+    }
+
+    /// [`Self::zncc_at`] with blocks of one pixel, the template's sums given
+    /// ([`Self::template_sums`]): the frame's sums in the backend's lanes
+    /// (`kernels::zncc_sums`), so that a search costs a few operations per pixel and offset
+    /// instead of a bounds-checked loop's tens. The same ZNCC to `f32` rounding (summed in
+    /// another order).
+    pub(super) fn zncc_pixels<P: Pixel>(
+        &self,
+        frame: &Frame<'_, P>,
+        dx: i64,
+        dy: i64,
+        (st, stt): (f32, f32),
+    ) -> Option<f32> {
+        let (tw, th) = (
+            usize::from(self.config.width),
+            usize::from(self.config.height),
+        );
+        let (x0, y0) = (i64::from(self.origin.0) + dx, i64::from(self.origin.1) + dy);
+        if x0 < 0 || y0 < 0 {
+            return None;
+        }
+        let (x0, y0) = (x0 as usize, y0 as usize);
+        if x0 + tw > frame.width() || y0 + th > frame.height() {
+            return None;
+        }
+        let t = self.t.get(..tw * th)?;
+        let rows = (y0..y0 + th).map_while(|y| frame.row(y)?.get(x0..x0 + tw));
+        let [sf, sff, sft] = kernels::zncc_sums(t, tw, rows, self.t_mean);
+        let n = (tw * th) as f32;
+        let (vt, vf) = (stt - st * st / n, sff - sf * sf / n);
+        if vt > 0.0 && vf > 0.0 {
+            Some((sft - st * sf / n) / sqrtf(vt * vf))
+        } else {
+            Some(0.0)
+        }
     }
 
     /// ZNCC of `block x block` sums of the template and of the frame window displaced by

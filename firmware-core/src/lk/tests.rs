@@ -830,3 +830,83 @@ fn a_striped_window_is_aperture_limited_and_measured_across_its_stripes() {
         );
     }
 }
+
+#[test]
+fn the_searchs_pixel_zncc_is_the_block_zncc_of_blocks_of_one() {
+    // the lanes' sums against the plain per-pixel loop, at offsets all over the range,
+    // 8-bit and 16-bit frames, and none outside the frame
+    let t = tracker(8, Interpolation::Bicubic);
+    let img = speckle(0.7, -2.2, 200.0);
+    let sums = t.template_sums();
+    // 16 bits: a template of 16-bit frames
+    let to16 = |px: &[u8]| -> Vec<u16> { px.iter().map(|&v| u16::from(v) * 97 + 3).collect() };
+    let (reference, wide) = (to16(&speckle(0.0, 0.0, 200.0)), to16(&img));
+    let f16 = Frame::new(&wide, FW, FH, FW).unwrap();
+    let mut t16 = t.clone();
+    t16.set_template(
+        &Frame::new(&reference, FW, FH, FW).unwrap(),
+        44 - 15,
+        40 - 15,
+    )
+    .unwrap();
+    let sums16 = t16.template_sums();
+    let mut seen = 0;
+    for dy in -12i64..=12 {
+        for dx in -12i64..=12 {
+            let (a, b) = (
+                t.zncc_pixels(&frame(&img), dx, dy, sums),
+                t.zncc_at(&frame(&img), dx, dy, 1),
+            );
+            assert_eq!(a.is_some(), b.is_some(), "{dx},{dy}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a - b).abs() < 2e-5, "{dx},{dy}: {a} {b}");
+                seen += 1;
+            }
+            let (c, d) = (
+                t16.zncc_pixels(&f16, dx, dy, sums16),
+                t16.zncc_at(&f16, dx, dy, 1),
+            );
+            assert_eq!(c.is_some(), d.is_some());
+            if let (Some(c), Some(d)) = (c, d) {
+                assert!((c - d).abs() < 2e-5, "{dx},{dy}: {c} {d}");
+            }
+        }
+    }
+    // the window (31 px at 29, 25 in a 96 x 80 frame) fits at every offset up to 12 px
+    assert_eq!(seen, 25 * 25);
+    // at the true whole-pixel shift the match is near perfect
+    assert!(t.zncc_pixels(&frame(&img), 1, -2, sums).unwrap() > 0.95);
+    assert_eq!(t.zncc_pixels(&frame(&img), -40, 0, sums), None);
+    assert_eq!(t.zncc_pixels(&frame(&img), 0, 60, sums), None);
+}
+
+#[test]
+fn both_backends_sum_a_search_offset_as_f64_does() {
+    // windows 5 to 21 px wide (remainders of the four lanes 0 to 3), 8-bit frame rows
+    for tw in [5usize, 8, 13, 21] {
+        let th = 7;
+        let t: Vec<f32> = (0..tw * th)
+            .map(|k| ((k * 37) % 251) as f32 * 0.9)
+            .collect();
+        let f: Vec<u8> = (0..tw * th).map(|k| ((k * 53 + 11) % 256) as u8).collect();
+        let m = 101.5f32;
+        let (mut a, mut b, mut c) = (0.0f64, 0.0f64, 0.0f64);
+        for (t, f) in t.iter().zip(&f) {
+            let (vt, vf) = (f64::from(*t) - f64::from(m), f64::from(*f) - f64::from(m));
+            a += vf;
+            b += vf * vf;
+            c += vf * vt;
+        }
+        for got in [
+            m4::zncc_sums(&t, tw, f.chunks_exact(tw), m),
+            lanes::zncc_sums(&t, tw, f.chunks_exact(tw), m),
+        ] {
+            for (g, want) in got.iter().zip([a, b, c]) {
+                assert!(
+                    (f64::from(*g) - want).abs() <= 1e-6 * want.abs().max(1e3),
+                    "{tw}: {got:?} {a} {b} {c}"
+                );
+            }
+        }
+    }
+}
