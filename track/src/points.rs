@@ -250,7 +250,7 @@ pub enum PointTracker {
     },
 }
 
-use vibcam_chain::lk::{HostLk, LK_PIXELS, LK_ROW};
+use vibcam_chain::lk::{AnyLk, LK_PIXELS, LK_ROW};
 
 /// What tracking the points found, beside the tracks.
 #[derive(Debug, Clone, PartialEq)]
@@ -291,20 +291,41 @@ pub fn look_alikes(frame: &GreyFrame, points: &[Point]) -> Vec<(usize, usize)> {
         (norm > 0.0).then(|| v.iter().map(|x| (x - m) / norm).collect())
     };
     let windows: Vec<Option<Vec<f64>>> = points.iter().map(pixels).collect();
-    let mut pairs = Vec::new();
-    for a in 0..points.len() {
-        for b in a + 1..points.len() {
-            if let (Some(wa), Some(wb), true) =
-                (&windows[a], &windows[b], points[a].size == points[b].size)
-            {
-                let zncc: f64 = wa.iter().zip(wb).map(|(x, y)| x * y).sum();
-                if zncc >= 0.9 {
-                    pairs.push((a, b));
-                }
-            }
+    // every pair (hundreds of thousands for a dense field): each target's row of pairs on
+    // its own core, in target order
+    use rayon::prelude::*;
+    (0..points.len())
+        .into_par_iter()
+        .flat_map_iter(|a| {
+            let windows = &windows;
+            (a + 1..points.len()).filter_map(move |b| {
+                let (Some(wa), Some(wb), true) =
+                    (&windows[a], &windows[b], points[a].size == points[b].size)
+                else {
+                    return None;
+                };
+                (dot(wa, wb) >= 0.9).then_some((a, b))
+            })
+        })
+        .collect()
+}
+
+/// `sum x_i y_i` in four running sums (so that it vectorises), added pairwise at the end.
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (xc, yc) = (x.chunks_exact(4), y.chunks_exact(4));
+    let tail: f64 = xc
+        .remainder()
+        .iter()
+        .zip(yc.remainder())
+        .map(|(a, b)| a * b)
+        .sum();
+    for (a, b) in xc.zip(yc) {
+        for ((s, a), b) in acc.iter_mut().zip(a).zip(b) {
+            *s += a * b;
         }
     }
-    pairs
+    (acc[0] + acc[2]) + (acc[1] + acc[3]) + tail
 }
 
 /// The groups `--tracker lk` followed targets in.
@@ -699,7 +720,7 @@ fn lk_trackers(
     points: &[Point],
     config: &CentroidConfig,
     search_px: Option<u16>,
-) -> anyhow::Result<Vec<Box<HostLk>>> {
+) -> anyhow::Result<Vec<AnyLk>> {
     lk_trackers_sampled(points, config, search_px, None)
 }
 
@@ -710,7 +731,7 @@ fn lk_trackers_sampled(
     config: &CentroidConfig,
     search_px: Option<u16>,
     interpolation: Option<firmware_core::lk::Interpolation>,
-) -> anyhow::Result<Vec<Box<HostLk>>> {
+) -> anyhow::Result<Vec<AnyLk>> {
     use firmware_core::lk::LkConfig;
     points
         .iter()
@@ -727,15 +748,14 @@ fn lk_trackers_sampled(
                 cfg.interpolation = i;
             }
             cfg.saturation = config.saturation.unwrap_or(0);
-            let t = HostLk::try_new(cfg).map_err(|e| {
+            AnyLk::try_new(cfg).map_err(|e| {
                 bad_input(format!(
                     "target {}: {e} ($tracker lk windows: at most {} pixels wide and \
                      {LK_PIXELS} pixels in all)",
                     p.target,
                     LK_ROW - 7
                 ))
-            })?;
-            Ok(Box::new(t))
+            })
         })
         .collect()
 }
@@ -743,7 +763,7 @@ fn lk_trackers_sampled(
 /// Each tracker's template from its point's window in the first frame; per target why it was
 /// refused (a flat window, or one at the frame's edge), if it was.
 fn set_templates(
-    trackers: &mut [Box<HostLk>],
+    trackers: &mut [AnyLk],
     points: &[Point],
     frame: &GreyFrame,
     label: &str,
@@ -773,7 +793,7 @@ pub fn lk_refusals(points: &[Point], frame: &GreyFrame) -> anyhow::Result<Vec<Op
     // buffers for the largest window: one per point of a dense field would be hundreds of MB);
     // the threshold plays no part in Lucas-Kanade; no saturation level: the full scale
     let mut refused = Vec::with_capacity(points.len());
-    let mut tracker: Vec<Box<HostLk>> = Vec::new();
+    let mut tracker: Vec<AnyLk> = Vec::new();
     for (i, p) in points.iter().enumerate() {
         let one = std::slice::from_ref(p);
         if i == 0 || points[i - 1].size != p.size {
@@ -891,7 +911,7 @@ pub const APERTURE_RATIO: f64 = 0.01;
 /// edge): they measure the motion across the edges, not along them.
 fn aperture_warning(
     points: &[Point],
-    trackers: &[Box<HostLk>],
+    trackers: &[AnyLk],
     refused: &[Option<Flags>],
 ) -> Vec<String> {
     // per image axis measured: the targets whose window measures that axis only
@@ -961,7 +981,7 @@ fn alone_warning(points: &[Point], alike: &[(usize, usize)], groups: &[Vec<usize
 /// verified one, whether its last position was taken away, and its window's origin in the
 /// first frame.
 struct Checks {
-    back: Vec<Box<HostLk>>,
+    back: Vec<AnyLk>,
     prev: Option<GreyFrame>,
     verified: Vec<Option<(f32, f32)>>,
     last_good: Vec<Option<(f32, f32)>>,
@@ -1070,7 +1090,7 @@ type Checked = Vec<(firmware_core::lk::LkResult, Evidence)>;
 /// those members lost.
 fn track_frame_lk(
     frame: &GreyFrame,
-    (trackers, checks): (&mut [Box<HostLk>], &mut Checks),
+    (trackers, checks): (&mut [AnyLk], &mut Checks),
     refused: &[Option<Flags>],
     (groups, templates): (&[Vec<usize>], &[BlockTemplate]),
     search_cap: Option<&[u16]>,
@@ -1142,7 +1162,7 @@ fn track_frame_lk(
 fn recover(
     frame: &GreyFrame,
     integral: &Integral,
-    trackers: &mut [Box<HostLk>],
+    trackers: &mut [AnyLk],
     checks: &Checks,
     (members, failed): (&[usize], &[usize]),
     (refused, templates): (&[Option<Flags>], &[BlockTemplate]),
@@ -1193,7 +1213,7 @@ fn recover(
 /// either way. Target `t` (0-based) names it in errors.
 fn forward_backward_check(
     (frame, prev): (&GreyFrame, Option<&GreyFrame>),
-    back: &mut HostLk,
+    back: &mut AnyLk,
     (r, before): (&firmware_core::lk::LkResult, Option<(f32, f32)>),
     origin: (u32, u32),
 ) -> anyhow::Result<Evidence> {
