@@ -7,7 +7,7 @@
 //! per block row, the first setup's references and then every setup's other points (the
 //! global numbering of [`super::setups::layout`]). Its poles, stable poles and clusters are
 //! SSI's, with shapes over every point at once; the intervals from the jackknife leaving the
-//! same block out of every setup.
+//! same half of the blocks out of every setup.
 //!
 //! The map asks the references' rows to span the model: the highest order is at most the
 //! references times the block rows.
