@@ -18,7 +18,8 @@ The six outputs are the masses' displacements (or velocities, `--quantity`; acce
 those of forces held over each sample, the force's own share included), each with white
 measurement noise of `--noise` times its own RMS. Per record a wide CSV
 (`t_s,1..6`) goes through `modal --no-plots`; each reported mode is matched to the nearest true
-mode within 3 %. Writes DIR/chain-ensemble.md (and keeps DIR/records/ with each record's
+mode within 3 %. "covered" counts `x +- 1.96 u`; the last column the reported intervals' own
+ends (Student's t of the jackknife). Writes DIR/chain-ensemble.md (and keeps DIR/records/ with each record's
 `modal` output).
 """
 import argparse
@@ -192,13 +193,19 @@ def main():
                 continue
             dmp = float(r["damping"]) if r["damping"] else float("nan")
             du = float(r["damping_u"]) if r.get("damping_u") else float("nan")
-            found.setdefault((r["method"], j), []).append((f, float(r["f_hz_u"]), dmp, du))
+            num = lambda k: float(r[k]) if r.get(k) else float("nan")  # noqa: E731
+            # whether the reported 95 % interval's own ends (Student's t) hold the truth
+            f_in = num("f_hz_lo") <= f_true[j] <= num("f_hz_hi")
+            d_in = num("damping_lo") <= DAMPING[j] <= num("damping_hi")
+            found.setdefault((r["method"], j), []).append(
+                (f, float(r["f_hz_u"]), dmp, du, f_in, d_in))
         print(f"record {rec + 1}/{args.records}", file=sys.stderr)
     lines = [f"# Chain ensemble: {args.records} records of {args.minutes} min at {args.fs} Hz, "
              f"{args.quantity}, noise {args.noise}", "",
              "| method | mode | truth f, damping | found | f bias % (sd) | f covered | "
-             "f width/spread | damping bias % | damping covered | damping width/spread |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "f width/spread | damping bias % | damping covered | damping width/spread | "
+             "held within the reported ends: f, damping |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for (method, j), rows in sorted(found.items()):
         v = np.array(rows)
         f0, z0 = f_true[j], DAMPING[j]
@@ -211,9 +218,11 @@ def main():
         db = (dv[:, 2].mean() / z0 - 1) * 100 if len(dv) else float("nan")
         dcov = np.mean(abs(dv[:, 2] - z0) <= 1.96 * dv[:, 3]) * 100 if len(dv) else float("nan")
         dw = dv[:, 3].mean() / dv[:, 2].std(ddof=1) if len(dv) > 1 else float("nan")
+        f_ends = np.mean(v[:, 4]) * 100
+        d_ends = np.mean(dv[:, 5]) * 100 if len(dv) else float("nan")
         lines.append(f"| {method} | {j + 1} | {f0:.4f}, {z0:.3f} | {len(v)} | {fb:+.3f} "
                      f"({fsd:.3f}) | {fcov:.0f} % | {fw:.2f} | {db:+.1f} | {dcov:.0f} % | "
-                     f"{dw:.2f} |")
+                     f"{dw:.2f} | {f_ends:.0f} %, {d_ends:.0f} % |")
     text = "\n".join(lines) + "\n"
     (out / "chain-ensemble.md").write_text(text)
     print(text)
