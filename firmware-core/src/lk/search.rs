@@ -112,13 +112,7 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
         let t = self.t.get(..tw * th)?;
         let rows = (y0..y0 + th).map_while(|y| frame.row(y)?.get(x0..x0 + tw));
         let [sf, sff, sft] = kernels::zncc_sums(t, tw, rows, self.t_mean);
-        let n = (tw * th) as f32;
-        let (vt, vf) = (stt - st * st / n, sff - sf * sf / n);
-        if vt > 0.0 && vf > 0.0 {
-            Some((sft - st * sf / n) / sqrtf(vt * vf))
-        } else {
-            Some(0.0)
-        }
+        Some(zncc((st, stt), (sf, sff, sft), (tw * th) as f32))
     }
 
     /// ZNCC of `block x block` sums of the template and of the frame window displaced by
@@ -156,13 +150,19 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 sft += vf * vt;
             }
         }
-        let n = (bw * bh) as f32;
-        let (vt, vf) = (stt - st * st / n, sff - sf * sf / n);
-        if vt > 0.0 && vf > 0.0 {
-            Some((sft - st * sf / n) / sqrtf(vt * vf))
-        } else {
-            Some(0.0)
-        }
+        Some(zncc((st, stt), (sf, sff, sft), (bw * bh) as f32))
+    }
+}
+
+/// The ZNCC of `n` pairs from their sums: the template's `(sum t, sum t^2)` and the frame's
+/// `(sum f, sum f^2, sum f t)` (both offset by the same constant); 0 when either is flat.
+#[inline]
+fn zncc((st, stt): (f32, f32), (sf, sff, sft): (f32, f32, f32), n: f32) -> f32 {
+    let (vt, vf) = (stt - st * st / n, sff - sf * sf / n);
+    if vt > 0.0 && vf > 0.0 {
+        (sft - st * sf / n) / sqrtf(vt * vf)
+    } else {
+        0.0
     }
 }
 

@@ -160,7 +160,8 @@ pub const HALF_SAMPLES: usize = 20;
 /// `count` of them in complementary pairs (each group left out equally often), drawn by a fixed
 /// generator so that a record always gets the same intervals.
 pub fn half_samples(groups: usize, d: usize, count: usize) -> Vec<Vec<usize>> {
-    let all = (0..d).fold(1usize, |c, i| c * (groups - i) / (i + 1));
+    // C(groups, d), saturating (only its comparison with `count` matters)
+    let all = (0..d).fold(1usize, |c, i| c.saturating_mul(groups - i) / (i + 1));
     if all <= count {
         return (0..1usize << groups)
             .filter(|m| m.count_ones() as usize == d)
