@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Several setups merged by PoSER and by PreGER: ours (`host-harness modal --references
 --setup --merge poser|preger`) beside pyOMA-2's `MultiSetup_PoSER` and `MultiSetup_PreGER`
-(`SSI_MS`) on the same files, and both beside the truth. Run on demand (and
-in CI with --check); the table goes to docs/validation.md §10.
+on the same files, and both beside the truth. Run on demand (and in CI with --check); the
+tables go to docs/validation.md §10.
 
     python3 scripts/peer_multisetup.py OUT --harness target/release/host-harness [--check]
 
@@ -10,13 +10,15 @@ Three `simulate-field` records of the five-storey shear frame (seeds 11, 12, 13;
 3 % noise) play three setups of one structure: each keeps storeys 1 and 2 (the references)
 and one other (setup 1 storey 3, setup 2 storey 4 in the first column, setup 3 storey 5 in the
 last), so that each setup's reference columns are elsewhere in its file. Both sides run
-SSI-cov with 30 block rows and orders up to 40; pyOMA-2's parameters are taken at our merged
-SSI frequencies (`mpe` with `sel_freq`, `order_in="find_min"`), merged by its PoSER or
-identified together by its PreGER. The
-global points of both are the references, then each setup's other point (storeys 1 to 5).
-Writes OUT/s1.csv, s2.csv, s3.csv, truth.csv and peer-multisetup.md (replaced only with
---force). Exit status 1 with --check when a merged SSI mode of ours is more than one line from
-pyOMA-2's or the truth's, or a global shape's MAC with the truth is under 0.99.
+SSI-cov with 30 block rows and orders up to 40, merged by PoSER or identified together by
+PreGER (`SSI_MS`); with PreGER also FDD and EFDD of the global spectra (pyOMA-2's `FDD_MS`
+and `EFDD_MS`: segments of 2048, periodograms, half overlap). pyOMA-2's parameters are taken
+at our merged frequencies of each method (`mpe` with `sel_freq`; SSI `order_in="find_min"`).
+The global points of both are the references, then each setup's other point (storeys 1 to
+5). Writes OUT/s1.csv, s2.csv, s3.csv, truth.csv and peer-multisetup.md (replaced only with
+--force). Exit status 1 with --check when a merged mode of ours is more than one line from the
+truth's (SSI also from pyOMA-2's), a method misses a mode, or a global shape's MAC with the
+truth is under 0.99.
 """
 import argparse
 import csv
@@ -81,39 +83,51 @@ def main():
     lines, failures = [], []
     for merge in ("poser", "preger"):
         ours, ours_s = run_ours(harness, files, refs, merge)
-        fn, xi, phi, peer_s = run_peer(files, refs, merge, [f for f, _, _ in ours])
+        peer, peer_s = run_peer(files, refs, merge, ours)
         fs = read_wide(files[0])[1]
         df = fs / NPERSEG
         what = {"poser": "three setups' SSI-cov, mpe and PoSER",
-                "preger": "PreGER's SSI-cov of the three setups together, and mpe"}[merge]
+                "preger": "PreGER's SSI-cov of the three setups together, FDD_MS and EFDD_MS "
+                          "of its global spectra, and mpe"}[merge]
         lines += [f"**{merge}**: three setups of {len(read_wide(files[0])[0])} samples at "
                   f"{fs:g} Hz (lines of {df:.4f} Hz); references storeys 1 and 2. Wall time: "
                   f"ours {ours_s:.2f} s (the `modal` process, three setups, no figures), "
                   f"pyOMA-2 {peer_s:.2f} s ({what}).", "",
-                  "| mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | ours damping "
-                  "| pyOMA-2 damping | MAC ours/pyOMA-2 | MAC ours/truth | MAC pyOMA-2/truth |",
-                  "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-        for i, (f, z, shape) in enumerate(ours):
-            k = int(np.argmin(np.abs(fn - f)))
-            t = min(truth.values(), key=lambda v: abs(v[0] - f))
-            m_peer, m_true = mac(shape, phi[:, k]), mac(shape, t[2])
-            m_peer_true = mac(phi[:, k], t[2])
-            lines.append(f"| {i + 1} | {t[0]:.4f}, {t[1]:.4f} | {f:.4f} | {fn[k]:.4f} | "
-                         f"{abs(f - fn[k]) / df:.2f} | {z:.4f} | {xi[k]:.4f} | {m_peer:.5f} | "
-                         f"{m_true:.5f} | {m_peer_true:.5f} |")
-            if abs(f - fn[k]) > df or abs(f - t[0]) > df:
-                failures.append(f"{merge} mode {i + 1}: {f:.4f} Hz, pyOMA-2 {fn[k]:.4f}, "
-                                f"truth {t[0]:.4f}")
-            if m_true < 0.99:
-                failures.append(f"{merge} mode {i + 1}: MAC with the truth {m_true:.4f}")
-        if len(ours) != len(truth):
-            failures.append(f"{merge}: {len(ours)} merged SSI modes, the truth has {len(truth)}")
+                  "| method | mode | truth f, damping | ours f | pyOMA-2 f | diff, lines | "
+                  "ours damping | pyOMA-2 damping | MAC ours/pyOMA-2 | MAC ours/truth | "
+                  "MAC pyOMA-2/truth |",
+                  "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        for method, (fn, xi, phi) in peer.items():
+            for i, (f, z, shape) in enumerate(ours[method]):
+                k = int(np.argmin(np.abs(fn - f)))
+                t = min(truth.values(), key=lambda v: abs(v[0] - f))
+                m_peer, m_true = mac(shape, phi[:, k]), mac(shape, t[2])
+                m_peer_true = mac(phi[:, k], t[2])
+                zs = "" if z is None else f"{z:.4f}"
+                zp = "" if xi is None else f"{xi[k]:.4f}"
+                lines.append(f"| {method} | {i + 1} | {t[0]:.4f}, {t[1]:.4f} | {f:.4f} | "
+                             f"{fn[k]:.4f} | {abs(f - fn[k]) / df:.2f} | {zs} | {zp} | "
+                             f"{m_peer:.5f} | {m_true:.5f} | {m_peer_true:.5f} |")
+                # SSI is checked beside pyOMA-2 and the truth; FDD (a line on a damped bell's
+                # flat top) and EFDD (pyOMA-2's is biased, docs/method.md §3.12) beside the
+                # truth only
+                off_peer = method == "ssi" and abs(f - fn[k]) > df
+                if off_peer or abs(f - t[0]) > df:
+                    failures.append(f"{merge} {method} mode {i + 1}: {f:.4f} Hz, pyOMA-2 "
+                                    f"{fn[k]:.4f}, truth {t[0]:.4f}")
+                if m_true < 0.99:
+                    failures.append(f"{merge} {method} mode {i + 1}: MAC with the truth "
+                                    f"{m_true:.4f}")
+            if len(ours[method]) != len(truth):
+                failures.append(f"{merge}: {len(ours[method])} merged {method} modes, the truth "
+                                f"has {len(truth)}")
         lines.append("")
     finish(lines, failures, md, args.check)
 
 
 def run_ours(harness, files, refs, merge):
-    """Our merged SSI modes `(f, damping, shape)` and the `modal` process's wall time."""
+    """Our merged modes per method, `{method: [(f, damping or None, shape)]}`, and the `modal`
+    process's wall time."""
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [harness, "modal", "--displacement", str(files[0]), "--references",
                ",".join(str(c + 1) for c in refs[0]), "--nperseg", str(NPERSEG), "--no-plots",
@@ -123,22 +137,25 @@ def run_ours(harness, files, refs, merge):
         t0 = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True)
         took = time.perf_counter() - t0
-        modes = [m for m in csv.DictReader(open(Path(tmp) / "m" / "modes.csv"))
-                 if m["method"] == "ssi"]
-        shapes = [r for r in csv.DictReader(open(Path(tmp) / "m" / "shapes.csv"))
-                  if r["method"] == "ssi"]
-    ours = []
+        modes = list(csv.DictReader(open(Path(tmp) / "m" / "modes.csv")))
+        shapes = list(csv.DictReader(open(Path(tmp) / "m" / "shapes.csv")))
+    ours = {}
     for m in modes:
-        shape = [complex(float(r["re"]), float(r["im"])) for r in shapes if r["mode"] == m["mode"]]
-        ours.append((float(m["f_hz"]), float(m["damping"]), shape))
+        shape = [complex(float(r["re"]), float(r["im"])) for r in shapes
+                 if r["mode"] == m["mode"] and r["method"] == m["method"]]
+        z = float(m["damping"]) if m["damping"] else None
+        ours.setdefault(m["method"], []).append((float(m["f_hz"]), z, shape))
     return ours, took
 
 
-def run_peer(files, refs, merge, sel):
-    """pyOMA-2's merged SSI-cov (30 block rows, orders to 40) at our frequencies `sel`:
-    frequencies, damping, global shapes (columns) and its wall time."""
-    from pyoma2.algorithms import SSI, SSI_MS
+def run_peer(files, refs, merge, ours):
+    """pyOMA-2's merged modes at our frequencies: SSI-cov (30 block rows, orders to 40) by
+    PoSER or PreGER, and with PreGER FDD_MS and EFDD_MS of its global spectra (our segments,
+    periodograms, half overlap); `{method: (frequencies, damping or None, global shapes as
+    columns)}` and its wall time."""
+    from pyoma2.algorithms import EFDD_MS, FDD_MS, SSI, SSI_MS
     from pyoma2.setup import MultiSetup_PoSER, MultiSetup_PreGER, SingleSetup
+    sel = {m: [f for f, _, _ in ours.get(m, [])] for m in ("ssi", "fdd", "efdd")}
     t0 = time.perf_counter()
     if merge == "poser":
         singles = []
@@ -147,19 +164,28 @@ def run_peer(files, refs, merge, sel):
             ss = SingleSetup(data, fs=fs)
             ss.add_algorithms(SSI(name="SSI", br=30, ordmax=40, method="cov"))
             ss.run_all()
-            ss.mpe("SSI", sel_freq=sel, order_in="find_min")
+            ss.mpe("SSI", sel_freq=sel["ssi"], order_in="find_min")
             singles.append(ss)
         msp = MultiSetup_PoSER(ref_ind=refs, single_setups=singles, names=["SSI"])
-        res = msp.merge_results()["SSI"]
+        results = {"ssi": msp.merge_results()["SSI"]}
     else:
         data = [read_wide(f)[0] for f in files]
         msp = MultiSetup_PreGER(fs=read_wide(files[0])[1], ref_ind=refs, datasets=data)
-        msp.add_algorithms(SSI_MS(name="SSI", br=30, ordmax=40, method="cov"))
+        msp.add_algorithms(SSI_MS(name="SSI", br=30, ordmax=40, method="cov"),
+                           FDD_MS(name="FDD", nxseg=NPERSEG, method_SD="per", pov=0.5),
+                           EFDD_MS(name="EFDD", nxseg=NPERSEG, method_SD="per", pov=0.5))
         msp.run_all()
-        msp.mpe("SSI", sel_freq=sel, order_in="find_min")
-        res = msp.algorithms["SSI"].result
+        msp.mpe("SSI", sel_freq=sel["ssi"], order_in="find_min")
+        msp.mpe("FDD", sel_freq=sel["fdd"])
+        msp.mpe("EFDD", sel_freq=sel["efdd"])
+        results = {m: msp.algorithms[m.upper()].result for m in ("ssi", "fdd", "efdd")}
     took = time.perf_counter() - t0
-    return np.atleast_1d(res.Fn), np.atleast_1d(res.Xi), np.asarray(res.Phi), took
+    out = {}
+    for m, r in results.items():
+        xi = getattr(r, "Xi", None)
+        out[m] = (np.atleast_1d(r.Fn), None if xi is None else np.atleast_1d(xi),
+                  np.asarray(r.Phi))
+    return out, took
 
 
 if __name__ == "__main__":

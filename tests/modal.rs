@@ -572,8 +572,8 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
         "{report}"
     );
     let truth = truth(&tmp.path().join("r21"));
-    let ssi_modes_are_the_truth = |out: &Path| {
-        let found: Vec<_> = modes(out).into_iter().filter(|m| m.0 == "ssi").collect();
+    let modes_are_the_truth = |out: &Path, method: &str, mac_min: f64| {
+        let found: Vec<_> = modes(out).into_iter().filter(|m| m.0 == method).collect();
         assert_eq!(found.len(), 5, "{found:?}");
         let shapes = std::fs::read_to_string(out.join("shapes.csv")).unwrap();
         for (m, (f, _, shape)) in found.iter().zip(&truth) {
@@ -581,7 +581,7 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
             let got: Vec<f64> = shapes
                 .lines()
                 .map(|l| l.split(',').collect::<Vec<_>>())
-                .filter(|c| c[7] == "ssi" && c[0] == m.1.to_string())
+                .filter(|c| c[7] == method && c[0] == m.1.to_string())
                 .map(|c| c[4].parse().unwrap())
                 .collect();
             assert_eq!(got.len(), 5);
@@ -589,16 +589,16 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
             let mac = ab * ab
                 / (got.iter().map(|a| a * a).sum::<f64>()
                     * shape.iter().map(|b| b * b).sum::<f64>());
-            assert!(mac >= 0.99, "mode {}: MAC {mac}", m.1);
+            assert!(mac >= mac_min, "{method} mode {}: MAC {mac}", m.1);
         }
     };
-    ssi_modes_are_the_truth(&out);
+    modes_are_the_truth(&out, "ssi", 0.99);
     let parts = std::fs::read_to_string(out.join("setups.csv")).unwrap();
     assert!(parts.starts_with("method,mode,setup,f_hz,damping,scale_re,scale_im,reference_mac\n"));
     assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 10);
     // the same setups with SSI's modes by PreGER: one model of both records (60 block rows, so
-    // that the one reference's rows are 1.5 times the highest order, 40), no SSI parts per
-    // setup
+    // that the one reference's rows are 1.5 times the highest order, 40), and FDD's and EFDD's
+    // by the spectral PreGER (one global cross-spectral matrix): no parts per setup
     let pre = tmp.path().join("p");
     assert_ok(&harness(&words(
         "modal --displacement {} --references 1 --setup {} --merge preger --no-plots --out {}",
@@ -610,10 +610,21 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
         "{report}"
     );
     assert!(report.contains("PreGER: 60 block rows"), "{report}");
-    ssi_modes_are_the_truth(&pre);
+    assert!(
+        report.contains("FDD's and EFDD's by the spectral PreGER"),
+        "{report}"
+    );
+    modes_are_the_truth(&pre, "ssi", 0.99);
+    // with one reference the spectral PreGER's shape at a line is each point's transmissibility
+    // to it there, which the tail of a stronger neighbouring mode enters (pyOMA-2's
+    // `SD_PreGER` as well): on these 5-minute records the weakest mode's global shape has
+    // MAC 0.976 (PoSER's FDD 0.987, which loses EFDD's second mode); 0.99 and more on every
+    // mode of 10-minute setups with two references (docs/validation.md §10)
+    modes_are_the_truth(&pre, "efdd", 0.97);
     let parts = std::fs::read_to_string(pre.join("setups.csv")).unwrap();
-    assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 0);
-    assert!(parts.lines().any(|l| l.starts_with("efdd,")), "{parts}");
+    for method in ["ssi,", "fdd,", "efdd,"] {
+        assert!(!parts.lines().any(|l| l.starts_with(method)), "{parts}");
+    }
     // refusals
     let o = harness(&words(
         "modal --displacement {} --setup {} --out {}",

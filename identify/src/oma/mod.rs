@@ -20,6 +20,7 @@ pub mod many;
 pub mod modes;
 pub mod plscf;
 pub mod preger;
+pub mod preger_spectral;
 pub mod setups;
 pub mod ssi;
 pub mod ssi_dat;

@@ -168,6 +168,27 @@ fn poles(
     Ok(ssi::poles_of_orders(points(setups), n, s.fs_hz, s.ssi, o_of)?.0)
 }
 
+/// Each setup's records divided by its own power of two ([`super::record_scale`]), with it.
+pub(super) fn scaled_setups(setups: &[Record<'_>]) -> anyhow::Result<Vec<(Vec<Vec<f64>>, f64)>> {
+    if setups.is_empty() {
+        return Err(vibcam_readers::bad_input("PreGER: no setup to analyse"));
+    }
+    setups
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let scale = super::record_scale(r.channels)
+                .map_err(|e| anyhow::anyhow!("setup {}: {e}", i + 1))?;
+            let c = r
+                .channels
+                .iter()
+                .map(|c| c.iter().map(|v| v / scale).collect())
+                .collect();
+            Ok((c, scale))
+        })
+        .collect()
+}
+
 /// PreGER over `setups` (at least one, each of at least one reference and the same count)
 /// with the first setup's settings `s`: SSI's modes on the global points, their clusters
 /// (rejected ones to `rejected`, bands as SSI's), intervals by the jackknife over `s.groups`
@@ -180,20 +201,11 @@ pub fn identify(
 ) -> anyhow::Result<Found> {
     // each setup by its own power of two (a factor common to a setup's channels cancels in
     // its map)
-    let scaled: Vec<Vec<Vec<f64>>> = setups
-        .iter()
-        .map(|r| {
-            let k = super::record_scale(r.channels)?;
-            Ok(r.channels
-                .iter()
-                .map(|c| c.iter().map(|v| v / k).collect())
-                .collect())
-        })
-        .collect::<anyhow::Result<_>>()?;
+    let scaled = scaled_setups(setups)?;
     let setups: Vec<Record<'_>> = setups
         .iter()
         .zip(&scaled)
-        .map(|(r, c)| Record {
+        .map(|(r, (c, _))| Record {
             channels: c,
             references: r.references,
         })
@@ -254,7 +266,7 @@ pub fn identify(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::modal::mac;
     use crate::oma::setups::{layout, poser, Setup};
@@ -264,7 +276,7 @@ mod tests {
     /// The pair of [`crate::oma::test_records::two_setups`] (references: setup 1's channels
     /// 1 and 2, setup 2's 4 and 2) by PreGER and by PoSER, the two numbering the points
     /// alike.
-    fn both(
+    pub(crate) fn both(
         [one, two]: [&[Vec<f64>]; 2],
         s: &OmaSettings,
         rejected: &mut Vec<String>,
@@ -379,11 +391,7 @@ mod tests {
             }
         }
         let stats = |v: &[(f64, f64, f64)], pick: fn(&(f64, f64, f64)) -> f64| {
-            let x: Vec<f64> = v.iter().map(pick).collect();
-            let mean = x.iter().sum::<f64>() / x.len() as f64;
-            let sd =
-                (x.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (x.len() - 1) as f64).sqrt();
-            (mean, sd)
+            crate::oma::test_records::mean_sd(v.iter().map(pick))
         };
         println!("| mode | truth f, damping | method | mean f | sd f | mean u(f) | mean damping | sd damping |");
         println!("|---:|---|---|---:|---:|---:|---:|---:|");

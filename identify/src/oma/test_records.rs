@@ -63,3 +63,11 @@ pub fn two_setups(seeds: (u64, u64)) -> [Vec<Vec<f64>>; 2] {
         record([4, 1, 5, 0], seeds.1, 2.5),
     ]
 }
+
+/// The mean and sample standard deviation of `x` (a Monte Carlo's column).
+pub fn mean_sd(x: impl Iterator<Item = f64>) -> (f64, f64) {
+    let x: Vec<f64> = x.collect();
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let sd = (x.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (x.len() - 1) as f64).sqrt();
+    (mean, sd)
+}

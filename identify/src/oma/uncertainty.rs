@@ -260,12 +260,51 @@ pub fn of_modes(
     groups: usize,
     notes: &mut Vec<String>,
 ) -> anyhow::Result<Vec<Uncertainty>> {
-    let mut out = vec![Uncertainty::default(); modes.len()];
     if groups < 3 {
-        return Ok(out);
+        return Ok(vec![Uncertainty::default(); modes.len()]);
     }
-    // each peak's EFDD estimate of the whole record: where its replicates' fits start
-    let starts: Vec<Start> = peaks
+    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
+        let range = group(g, groups, whole.segments);
+        let n = range.len();
+        let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
+        Ok((whole.without(&part), n))
+    };
+    let starts = efdd_starts(modes, peaks);
+    let spectral = spectral_replicates((whole.segments, &replicate), s, (peaks, &starts), groups)?;
+    let ssi = ssi_replicates(channels, s, (modes, lone), groups, notes)?;
+    Ok(intervals(
+        modes,
+        peaks,
+        (spectral.as_ref(), ssi.as_ref()),
+        notes,
+    ))
+}
+
+/// A replicate of a cross-spectral matrix: the matrix without group `g` of `groups` of its
+/// segments, and the segments left out.
+pub type ReplicateOf<'a> = dyn Fn(usize, usize) -> anyhow::Result<(Csd, usize)> + 'a;
+
+/// The intervals of FDD and EFDD modes found on a cross-spectral matrix that is not one
+/// record's ([`super::preger_spectral`]): `segments` its least number of
+/// segments, `replicate` each group's replicate; the rest as [`of_modes`].
+pub fn of_spectral_modes(
+    (segments, replicate): (usize, &ReplicateOf<'_>),
+    s: &OmaSettings,
+    modes: &[OmaMode],
+    peaks: &[Peak],
+    notes: &mut Vec<String>,
+) -> anyhow::Result<Vec<Uncertainty>> {
+    if s.groups < 3 {
+        return Ok(vec![Uncertainty::default(); modes.len()]);
+    }
+    let starts = efdd_starts(modes, peaks);
+    let spectral = spectral_replicates((segments, replicate), s, (peaks, &starts), s.groups)?;
+    Ok(intervals(modes, peaks, (spectral.as_ref(), None), notes))
+}
+
+/// Each peak's EFDD estimate of the whole record: where its replicates' fits start.
+fn efdd_starts(modes: &[OmaMode], peaks: &[Peak]) -> Vec<Start> {
+    peaks
         .iter()
         .enumerate()
         .map(|(i, p)| {
@@ -274,17 +313,23 @@ pub fn of_modes(
                 .find(|m| m.method == Method::Efdd && m.mode == p.mode_number(i))
                 .and_then(|m| m.damping.map(|z| (m.f_hz, z)))
         })
-        .collect();
-    let spectral = spectral_replicates((channels, whole), s, (peaks, &starts), groups)?;
-    let ssi = ssi_replicates(channels, s, (modes, lone), groups, notes)?;
+        .collect()
+}
+
+/// Every mode's intervals from the replicates made.
+fn intervals(
+    modes: &[OmaMode],
+    peaks: &[Peak],
+    (spectral, ssi): (Option<&SpectralReplicates>, Option<&SsiReplicates>),
+    notes: &mut Vec<String>,
+) -> Vec<Uncertainty> {
+    let mut out = vec![Uncertainty::default(); modes.len()];
     for (m, u) in modes.iter().zip(out.iter_mut()) {
-        let reps = mode_replicates(m, modes, peaks, (spectral.as_ref(), ssi.as_ref()));
-        let Some((reps, scheme)) = reps else {
-            continue;
-        };
-        *u = mode_intervals(m, &reps, scheme, notes);
+        if let Some((reps, scheme)) = mode_replicates(m, modes, peaks, (spectral, ssi)) {
+            *u = mode_intervals(m, &reps, scheme, notes);
+        }
     }
-    Ok(out)
+    out
 }
 
 /// A mode's intervals from its replicates (made as `scheme` says): FDD's amplitude and shape;
@@ -440,14 +485,13 @@ type SpectralReplicates = (Vec<Vec<Replicate>>, Vec<usize>);
 /// group left out (14 segments in 10 groups: four of two). `None` with fewer Welch segments
 /// than groups.
 fn spectral_replicates(
-    (channels, whole): (&[Vec<f64>], &Csd),
+    (segments, replicate_of): (usize, &ReplicateOf<'_>),
     s: &OmaSettings,
     (peaks, starts): (&[Peak], &[Start]),
     groups: usize,
 ) -> anyhow::Result<Option<SpectralReplicates>> {
     // as many groups as segments on a short record (overlapping segments share samples, so
     // a group of one is not quite independent of its neighbours), and none under four
-    let segments = whole.segments;
     let groups = groups.min(segments);
     if groups < 4 || peaks.is_empty() {
         return Ok(None);
@@ -456,10 +500,8 @@ fn spectral_replicates(
     let mut out = Vec::with_capacity(groups);
     let mut sizes = Vec::with_capacity(groups);
     for g in 0..groups {
-        let range = group(g, groups, segments);
-        sizes.push(range.len());
-        let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
-        let replicate: Csd = whole.without(&part);
+        let (replicate, size) = replicate_of(g, groups)?;
+        sizes.push(size);
         let svd: Svd = fdd::decompose(&replicate)?;
         let lines = svd.freq_hz.len();
         let reps = peaks

@@ -1,15 +1,18 @@
 //! `modal` over several setups (docs/method.md §3.12, "Several setups"): each setup's records
-//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's modes from
-//! every setup's records together by PreGER ([`vibcam_identify::oma::preger`]) and the other
-//! methods' by PoSER; one result whose targets are the global points (the
-//! references first, then each setup's others) and the rows of `setups.csv` (each setup's part in each
-//! mode PoSER merged); the figures are the first setup's (the stabilisation diagram PreGER's).
+//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's, FDD's and
+//! EFDD's modes from every setup's records together by PreGER
+//! ([`vibcam_identify::oma::preger`], [`vibcam_identify::oma::preger_spectral`]) and the
+//! other methods' by PoSER; one result whose targets are the global points (the references
+//! first, then each setup's others) and the rows of `setups.csv` (each setup's part in each
+//! mode PoSER merged); the figures are the first setup's (PreGER's stabilisation diagram and
+//! singular values).
 
 use super::input::Records;
 use super::{analyze, Method, OmaResult, OmaSettings};
 use crate::export::oma::OmaSetupRow;
 use std::fmt::Write as _;
 use vibcam_identify::oma::preger::{self, Record};
+use vibcam_identify::oma::preger_spectral;
 use vibcam_identify::oma::setups::{layout, poser, Setup};
 
 /// How several setups are merged (`$merge`).
@@ -17,7 +20,7 @@ use vibcam_identify::oma::setups::{layout, poser, Setup};
 pub enum Merge {
     /// Every method's modes by PoSER.
     Poser,
-    /// SSI's by PreGER, the others' by PoSER.
+    /// SSI's, FDD's and EFDD's by PreGER, the others' by PoSER.
     Preger,
 }
 
@@ -65,7 +68,7 @@ pub fn compute(setups: &[SetupRecords], merge: Merge) -> anyhow::Result<Merged> 
             .iter()
             .map(|r| {
                 let mut r = r.clone();
-                r.modes.retain(|m| m.method != Method::Ssi);
+                r.modes.retain(|m| !together_by_preger(m.method));
                 r
             })
             .collect(),
@@ -126,9 +129,15 @@ pub fn compute(setups: &[SetupRecords], merge: Merge) -> anyhow::Result<Merged> 
     })
 }
 
-/// SSI's modes of every setup's records together (PreGER, with setup 1's settings and
-/// PreGER's block rows) in `result`, with its poles and clusters; its notes and rejected
-/// clusters added.
+/// Whether `$merge preger` identifies the method's modes on every setup's records together
+/// (SSI by PreGER, FDD and EFDD by the spectral PreGER); the others are merged by PoSER.
+fn together_by_preger(m: Method) -> bool {
+    matches!(m, Method::Ssi | Method::Fdd | Method::Efdd)
+}
+
+/// SSI's, FDD's and EFDD's modes of every setup's records together (PreGER, with setup 1's
+/// settings and PreGER's block rows; the spectral PreGER) in `result`, with the SSI poles and
+/// clusters and the global spectra; their notes and rejected peaks and clusters added.
 fn together(setups: &[SetupRecords], result: &mut OmaResult) -> anyhow::Result<()> {
     let records: Vec<Record<'_>> = setups
         .iter()
@@ -150,10 +159,17 @@ fn together(setups: &[SetupRecords], result: &mut OmaResult) -> anyhow::Result<(
         ));
     }
     let found = preger::identify(&records, &s, &mut notes, &mut rejected)?;
+    let spectral =
+        preger_spectral::identify(&records, &s, &found.modes, &mut notes, &mut rejected)?;
     result.notes.extend(notes);
     result.rejected.extend(rejected);
-    result.modes.retain(|m| m.method != Method::Ssi);
+    result.modes.retain(|m| !together_by_preger(m.method));
     result.modes.extend(found.modes);
+    result.modes.extend(spectral.modes);
+    result.csd = spectral.csd;
+    result.svd = spectral.svd;
+    result.peaks = spectral.peaks.iter().map(|p| p.line).collect();
+    result.quantity = spectral.quantity;
     result
         .modes
         .sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
@@ -181,8 +197,11 @@ fn setups_text(
         Merge::Preger => format!(
             "{} setups: SSI's modes by PreGER (one model of every setup's records: each setup's \
              observability matrix mapped onto setup 1's at the references; the stabilisation \
-             diagram is this model's), the other methods' merged by PoSER ({poser}); the other \
-             figures are setup 1's\n",
+             diagram is this model's); FDD's and EFDD's by the spectral PreGER (one global \
+             cross-spectral matrix: each setup's spectra at its other points carried onto \
+             the references' mean spectrum by its transmissibility to them; the singular \
+             values plotted are this matrix's); the other methods' merged by PoSER ({poser}); \
+             the other figures are setup 1's\n",
             setups.len()
         ),
     };
