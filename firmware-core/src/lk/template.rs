@@ -271,14 +271,30 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                     }
                     next += 1;
                 }
-                for i in 0..pw {
+                // the taps' rows, once per row: each pixel their weighted sum, in order
+                let mut rows: [&[f32]; 5] = [&[]; 5];
+                for (k, r) in rows.iter_mut().enumerate().take(taps) {
+                    let at = slot(y + k - half);
+                    *r = ring.get(at..at + pw).unwrap_or(&[]);
+                }
+                let out = self.coef.get_mut(j * pw..j * pw + pw).unwrap_or(&mut []);
+                for (i, c) in out.iter_mut().enumerate() {
                     let mut v = 0.0;
-                    for (k, w) in kernel.iter().take(taps).enumerate() {
-                        v += w * ring.get(slot(y + k - half) + i).copied().unwrap_or(0.0);
+                    for (w, r) in kernel.iter().zip(&rows).take(taps) {
+                        v += w * r.get(i).copied().unwrap_or(0.0);
                     }
-                    if let Some(c) = self.coef.get_mut(j * pw + i) {
-                        *c = v;
-                    }
+                    *c = v;
+                }
+            }
+            // the template is the smoothed frame over the window: the padded window's inside,
+            // before the prefilter turns it into coefficients
+            for j in 0..th {
+                let from = (j + SPLINE_MARGIN) * pw + SPLINE_MARGIN;
+                if let (Some(t), Some(c)) = (
+                    self.t.get_mut(j * tw..j * tw + tw),
+                    self.coef.get(from..from + tw),
+                ) {
+                    t.iter_mut().zip(c).for_each(|(t, c)| *t = *c);
                 }
             }
             prefilter(&mut self.coef, pw, ph);
@@ -300,15 +316,37 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
                 (dy(i - 1) + 4.0 * dy(i) + dy(i + 1)) / 6.0,
             )
         };
-        // the smoothed frame over the window and one pixel around it, a row at a time: the
-        // frame's rows smoothed along x once each (a ring of `taps` rows), combined along y
-        // into a ring of three smoothed rows
+        let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        if spline {
+            // the template taken above, the spline's slopes
+            let at = self
+                .t
+                .iter()
+                .zip(self.gx.iter_mut().zip(self.gy.iter_mut()))
+                .take(tw * th);
+            let (mut i, mut j) = (0i64, 0i64);
+            for (&v, (a, b)) in at {
+                let (gx, gy) = spline_grad(i, j);
+                i += 1;
+                if i == tw as i64 {
+                    (i, j) = (0, j + 1);
+                }
+                *a = gx;
+                *b = gy;
+                sum += v;
+                sxx += gx * gx;
+                sxy += gx * gy;
+                syy += gy * gy;
+            }
+        }
+        // without the spline: the smoothed frame over the window and one pixel around it, a
+        // row at a time: the frame's rows smoothed along x once each (a ring of `taps` rows),
+        // combined along y into a ring of three smoothed rows; central differences
         let (h_ring, s_ring) = self.ring.split_at_mut(5);
         let (x_first, width) = (x0u - 1, tw + 2);
         let mut h_next = y0u - 1 - half;
         let mut s_next = y0u - 1;
-        let (mut sxx, mut sxy, mut syy, mut sum) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
-        for j in 0..th {
+        for j in (0..th).filter(|_| !spline) {
             let y = y0u + j;
             while s_next <= y + 1 {
                 while h_next <= s_next + half {
@@ -347,16 +385,10 @@ impl<const N: usize, const W: usize> LkTracker<N, W> {
             let at = mid
                 .windows(3)
                 .zip(up.iter().skip(1).zip(down.iter().skip(1)));
-            for (i, ((m, (u, d)), (t, (a, b)))) in at
-                .zip(t.iter_mut().zip(gxs.iter_mut().zip(gys.iter_mut())))
-                .enumerate()
+            for ((m, (u, d)), (t, (a, b))) in
+                at.zip(t.iter_mut().zip(gxs.iter_mut().zip(gys.iter_mut())))
             {
-                // central differences of the smoothed frame, or the spline's slopes
-                let (gx, gy) = if spline {
-                    spline_grad(i as i64, j as i64)
-                } else {
-                    (0.5 * (m[2] - m[0]), 0.5 * (d - u))
-                };
+                let (gx, gy) = (0.5 * (m[2] - m[0]), 0.5 * (d - u));
                 let v = m[1];
                 *t = v;
                 *a = gx;
