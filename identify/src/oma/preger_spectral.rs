@@ -26,7 +26,8 @@ use num_complex::Complex64;
 pub struct SpectralFound {
     /// The global cross-spectral matrix `(G G^H)^(1/2)`, in the first setup's unit squared.
     pub csd: Csd,
-    /// Its singular values and vectors.
+    /// Its singular values (the references' count of them: `G`'s rank is at most that) and
+    /// vectors.
     pub svd: Svd,
     /// The peaks taken.
     pub peaks: Vec<Peak>,
@@ -63,7 +64,12 @@ pub fn identify(
         .collect();
     let references: Vec<&[usize]> = setups.iter().map(|r| r.references).collect();
     let global = combine(&csds, &references, &weights);
-    let svd = fdd::decompose(&global)?;
+    let mut svd = fdd::decompose(&global)?;
+    // G has as many columns as references: the other singular values are rounding
+    let rank = references.first().map_or(0, |r| r.len()).max(1);
+    for line in &mut svd.s {
+        line.truncate(rank);
+    }
     let peaks = if s.bands.is_empty() {
         modes::automatic_peaks(&svd, s, ssi, rejected)
     } else {
