@@ -12,8 +12,10 @@ and one other (setup 1 storey 3, setup 2 storey 4 in the first column, setup 3 s
 last), so that each setup's reference columns are elsewhere in its file. Both sides run
 SSI-cov with 30 block rows and orders up to 40, merged by PoSER or identified together by
 PreGER (`SSI_MS`); with PreGER also FDD and EFDD of the global spectra (pyOMA-2's `FDD_MS`
-and `EFDD_MS`: segments of 2048, periodograms, half overlap). pyOMA-2's parameters are taken
-at our merged frequencies of each method (`mpe` with `sel_freq`; SSI `order_in="find_min"`).
+and `EFDD_MS`: segments of 2048, periodograms, half overlap) and pLSCF (ours `--plscf`,
+pyOMA-2's `pLSCF_MS(ordmax=20, method_SD="cor")` read at its order 19). pyOMA-2's
+parameters are taken at our merged frequencies of each method (`mpe` with `sel_freq`; SSI
+`order_in="find_min"`).
 The global points of both are the references, then each setup's other point (storeys 1 to
 5). Writes OUT/s1.csv, s2.csv, s3.csv, truth.csv and peer-multisetup.md (replaced only with
 --force). Exit status 1 with --check when a merged mode of ours is more than one line from the
@@ -87,8 +89,8 @@ def main():
         fs = read_wide(files[0])[1]
         df = fs / NPERSEG
         what = {"poser": "three setups' SSI-cov, mpe and PoSER",
-                "preger": "PreGER's SSI-cov of the three setups together, FDD_MS and EFDD_MS "
-                          "of its global spectra, and mpe"}[merge]
+                "preger": "PreGER's SSI-cov of the three setups together, FDD_MS, EFDD_MS "
+                          "and pLSCF_MS of its global spectra, and mpe"}[merge]
         lines += [f"**{merge}**: three setups of {len(read_wide(files[0])[0])} samples at "
                   f"{fs:g} Hz (lines of {df:.4f} Hz); references storeys 1 and 2. Wall time: "
                   f"ours {ours_s:.2f} s (the `modal` process, three setups, no figures), "
@@ -132,6 +134,8 @@ def run_ours(harness, files, refs, merge):
         cmd = [harness, "modal", "--displacement", str(files[0]), "--references",
                ",".join(str(c + 1) for c in refs[0]), "--nperseg", str(NPERSEG), "--no-plots",
                "--merge", merge, "--out", str(Path(tmp) / "m")]
+        if merge == "preger":
+            cmd.append("--plscf")
         for f, r in zip(files[1:], refs[1:]):
             cmd += ["--setup", f"{f}:{','.join(str(c + 1) for c in r)}"]
         t0 = time.perf_counter()
@@ -153,9 +157,9 @@ def run_peer(files, refs, merge, ours):
     PoSER or PreGER, and with PreGER FDD_MS and EFDD_MS of its global spectra (our segments,
     periodograms, half overlap); `{method: (frequencies, damping or None, global shapes as
     columns)}` and its wall time."""
-    from pyoma2.algorithms import EFDD_MS, FDD_MS, SSI, SSI_MS
+    from pyoma2.algorithms import EFDD_MS, FDD_MS, SSI, SSI_MS, pLSCF_MS
     from pyoma2.setup import MultiSetup_PoSER, MultiSetup_PreGER, SingleSetup
-    sel = {m: [f for f, _, _ in ours.get(m, [])] for m in ("ssi", "fdd", "efdd")}
+    sel = {m: [f for f, _, _ in ours.get(m, [])] for m in ("ssi", "fdd", "efdd", "plscf")}
     t0 = time.perf_counter()
     if merge == "poser":
         singles = []
@@ -173,12 +177,14 @@ def run_peer(files, refs, merge, ours):
         msp = MultiSetup_PreGER(fs=read_wide(files[0])[1], ref_ind=refs, datasets=data)
         msp.add_algorithms(SSI_MS(name="SSI", br=30, ordmax=40, method="cov"),
                            FDD_MS(name="FDD", nxseg=NPERSEG, method_SD="per", pov=0.5),
-                           EFDD_MS(name="EFDD", nxseg=NPERSEG, method_SD="per", pov=0.5))
+                           EFDD_MS(name="EFDD", nxseg=NPERSEG, method_SD="per", pov=0.5),
+                           pLSCF_MS(name="PLSCF", ordmax=20, nxseg=NPERSEG, method_SD="cor"))
         msp.run_all()
         msp.mpe("SSI", sel_freq=sel["ssi"], order_in="find_min")
         msp.mpe("FDD", sel_freq=sel["fdd"])
         msp.mpe("EFDD", sel_freq=sel["efdd"])
-        results = {m: msp.algorithms[m.upper()].result for m in ("ssi", "fdd", "efdd")}
+        msp.mpe("PLSCF", sel_freq=sel["plscf"], order=19)
+        results = {m: msp.algorithms[m.upper()].result for m in ("ssi", "fdd", "efdd", "plscf")}
     took = time.perf_counter() - t0
     out = {}
     for m, r in results.items():

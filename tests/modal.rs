@@ -598,10 +598,12 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
     assert_eq!(parts.lines().filter(|l| l.starts_with("ssi,")).count(), 10);
     // the same setups with SSI's modes by PreGER: one model of both records (60 block rows, so
     // that the one reference's rows are 1.5 times the highest order, 40), and FDD's and EFDD's
-    // by the spectral PreGER (one global cross-spectral matrix): no parts per setup
+    // (and pLSCF's) by the spectral PreGER (one global cross-spectral matrix): no parts per
+    // setup
     let pre = tmp.path().join("p");
     assert_ok(&harness(&words(
-        "modal --displacement {} --references 1 --setup {} --merge preger --no-plots --out {}",
+        "modal --displacement {} --references 1 --setup {} --merge preger --plscf --no-plots \
+         --out {}",
         &[s1, &setup2, pre.to_str().unwrap()],
     )));
     let report = std::fs::read_to_string(pre.join("report.txt")).unwrap();
@@ -611,7 +613,7 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
     );
     assert!(report.contains("PreGER: 60 block rows"), "{report}");
     assert!(
-        report.contains("FDD's and EFDD's by the spectral PreGER"),
+        report.contains("FDD's, EFDD's and pLSCF's by the spectral PreGER"),
         "{report}"
     );
     modes_are_the_truth(&pre, "ssi", 0.99);
@@ -621,8 +623,14 @@ fn two_setups_sharing_a_reference_give_the_global_shapes() {
     // MAC 0.976 (PoSER's FDD 0.987, which loses EFDD's second mode); 0.99 and more on every
     // mode of 10-minute setups with two references (docs/validation.md §10)
     modes_are_the_truth(&pre, "efdd", 0.97);
+    // pLSCF on the global matrix's reference column
+    modes_are_the_truth(&pre, "plscf", 0.99);
+    assert!(
+        report.contains("on the half-spectra of references 1 "),
+        "{report}"
+    );
     let parts = std::fs::read_to_string(pre.join("setups.csv")).unwrap();
-    for method in ["ssi,", "fdd,", "efdd,"] {
+    for method in ["ssi,", "fdd,", "efdd,", "plscf,"] {
         assert!(!parts.lines().any(|l| l.starts_with(method)), "{parts}");
     }
     // refusals

@@ -568,8 +568,9 @@ pub const SETTINGS: &[Setting] = &[
         help: "How several setups are merged: `poser` (each setup identified alone, its modes \
                matched and scaled at the references) or `preger` (SSI identifies every setup's \
                records together, each setup's observability matrix mapped onto the first's at \
-               the references; FDD and EFDD on one global cross-spectral matrix, each setup's \
-               spectra carried onto the references' mean; pLSCF still by PoSER).",
+               the references; FDD, EFDD and pLSCF on one global cross-spectral matrix, each \
+               setup's spectra carried onto the references' mean; free decays still by \
+               PoSER).",
     },
     Setting {
         key: "plscf",

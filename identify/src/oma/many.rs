@@ -65,6 +65,7 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
     let refs = references(channels, REFERENCES);
     let chosen: Vec<Vec<f64>> = refs.iter().map(|&i| channels[i].clone()).collect();
     let mut r = super::analyze(&chosen, s)?;
+    r.plscf_references = r.plscf_references.iter().map(|&i| refs[i]).collect();
     let lines: Vec<usize> = r
         .modes
         .iter()

@@ -221,6 +221,8 @@ pub struct OmaResult {
     pub notes: Vec<String>,
     /// The quantity EFDD's bells were fitted as, and how it was chosen.
     pub quantity: modes::QuantityChoice,
+    /// pLSCF's reference channels, 0-based (empty when it did not run).
+    pub plscf_references: Vec<usize>,
 }
 
 impl OmaResult {
@@ -400,6 +402,10 @@ fn analyze_scaled(
     let plscf = plscf::plscf_modes((channels, &csd), s, &found, &mut notes, &mut rejected)?;
     found.extend(plscf);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
+    let plscf_references = match s.plscf {
+        Some(_) => plscf::references(&csd),
+        None => Vec::new(),
+    };
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
     notes.extend(common_motion_notes(&found, &svd, s));
     Ok(OmaResult {
@@ -413,6 +419,7 @@ fn analyze_scaled(
         rejected,
         notes,
         quantity,
+        plscf_references,
     })
 }
 

@@ -156,13 +156,35 @@ pub fn fitted_rule(rule: LscfRule, csd: &Csd, band: (f64, f64)) -> (LscfRule, us
 }
 
 /// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without it)
-/// over [`band`] (of the modes `found` by the other methods): every stable cluster
-/// ([`super::cluster`], the rules of SSI's) without bands (those rejected go to `rejected`), or the
-/// fullest in each band; each mode's 95 % intervals of frequency and damping from the jackknife
-/// over groups of Welch segments (each left out in turn, the replicate's cluster nearest the mode
-/// within three half-power bandwidths or 1 % and a MAC of 0.8 taken), as EFDD's.
+/// over [`band`] (of the modes `found` by the other methods), on the half-spectra of
+/// [`references`]: as [`plscf_of`], the replicates each without a group of the record's Welch
+/// segments.
 pub fn plscf_modes(
     (channels, csd): (&[Vec<f64>], &Csd),
+    s: &super::OmaSettings,
+    found: &[super::OmaMode],
+    notes: &mut Vec<String>,
+    rejected: &mut Vec<String>,
+) -> anyhow::Result<Vec<super::OmaMode>> {
+    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
+        let range = uncertainty::group(g, groups, csd.segments);
+        let n = range.len();
+        let part = super::csd::of_segments(channels, s.fs_hz, s.csd, range)?;
+        Ok((csd.without(&part), n))
+    };
+    let refs = references(csd);
+    plscf_of((csd, &refs, &replicate), s, found, notes, rejected)
+}
+
+/// The pLSCF modes of the cross-spectral matrix `csd` on the half-spectra of its columns
+/// `refs`, for `s` (its `plscf` rule; none without it) over [`band`] (of the modes `found` by
+/// the other methods): every stable cluster ([`super::cluster`], the rules of SSI's) without
+/// bands (those rejected go to `rejected`), or the fullest in each band; each mode's 95 %
+/// intervals of frequency and damping from the jackknife over groups of Welch segments (each
+/// group's `replicate` in turn, the replicate's cluster nearest the mode within three
+/// half-power bandwidths or 1 % and a MAC of 0.8 taken), as EFDD's.
+pub fn plscf_of(
+    (csd, refs, replicate): (&Csd, &[usize], &uncertainty::ReplicateOf<'_>),
     s: &super::OmaSettings,
     found: &[super::OmaMode],
     notes: &mut Vec<String>,
@@ -181,9 +203,8 @@ pub fn plscf_modes(
         ));
         return Ok(Vec::new());
     }
-    let refs = references(csd);
     let clusters = |m: &Csd| -> anyhow::Result<(Vec<SsiMode>, Vec<cluster::Rejected>)> {
-        let h = half_spectra(m, s.csd.window, s.csd.nperseg, &refs)?;
+        let h = half_spectra(m, s.csd.window, s.csd.nperseg, refs)?;
         let p = poles(&h, s.fs_hz, band, rule)?;
         Ok(cluster::cluster(&p, s.cluster))
     };
@@ -207,7 +228,7 @@ pub fn plscf_modes(
             super::modes::of_cluster(super::Method::Plscf, chosen, &s.bands, evidence)
         })
         .collect();
-    jackknife_modes((channels, csd), s, &clusters, &mut modes, notes)?;
+    jackknife_modes((csd.segments, replicate), s, &clusters, &mut modes, notes)?;
     Ok(modes)
 }
 
@@ -236,26 +257,25 @@ pub fn band(s: &super::OmaSettings, found: &[super::OmaMode]) -> (f64, f64) {
 /// The clusters of a cross-spectral matrix's half-spectra: kept and rejected.
 type Clusters<'a> = dyn Fn(&Csd) -> anyhow::Result<(Vec<SsiMode>, Vec<cluster::Rejected>)> + 'a;
 
-/// The jackknife intervals of `modes` over groups of the Welch segments of `csd`
-/// ([`plscf_modes`]).
+/// The jackknife intervals of `modes` over groups of the `segments` Welch segments, each
+/// group's `replicate` ([`plscf_of`]).
 fn jackknife_modes(
-    (channels, csd): (&[Vec<f64>], &Csd),
+    (segments, replicate): (usize, &uncertainty::ReplicateOf<'_>),
     s: &super::OmaSettings,
     clusters: &Clusters<'_>,
     modes: &mut [super::OmaMode],
     notes: &mut Vec<String>,
 ) -> anyhow::Result<()> {
-    let groups = s.groups.min(csd.segments);
+    let groups = s.groups.min(segments);
     if groups < 4 || modes.is_empty() {
         return Ok(());
     }
     let mut reps: Vec<Vec<Option<(f64, f64)>>> = vec![Vec::with_capacity(groups); modes.len()];
     let mut sizes = Vec::with_capacity(groups);
     for g in 0..groups {
-        let range = uncertainty::group(g, groups, csd.segments);
-        sizes.push(range.len());
-        let part = super::csd::of_segments(channels, s.fs_hz, s.csd, range)?;
-        let (kept, _) = clusters(&csd.without(&part))?;
+        let (without, size) = replicate(g, groups)?;
+        sizes.push(size);
+        let (kept, _) = clusters(&without)?;
         for (m, r) in modes.iter().zip(reps.iter_mut()) {
             let z = m.damping.unwrap_or(0.01);
             let reach = (3.0 * 2.0 * z * m.f_hz).max(0.01 * m.f_hz);

@@ -14,6 +14,7 @@
 use super::csd::{self, Csd};
 use super::fdd::{self, Svd};
 use super::modes::{self, Peak, QuantityChoice};
+use super::plscf;
 use super::preger::{scaled_setups, Record};
 use super::uncertainty::{self, group};
 use super::{EfddRule, OmaMode, OmaSettings};
@@ -21,7 +22,7 @@ use nalgebra::DMatrix;
 use num_complex::Complex64;
 
 /// What the spectral PreGER found: the global matrix and its decomposition, the peaks and the
-/// FDD and EFDD modes with shapes on the global points (intervals included).
+/// FDD, EFDD (and pLSCF) modes with shapes on the global points (intervals included).
 #[derive(Debug, Clone)]
 pub struct SpectralFound {
     /// The global cross-spectral matrix `(G G^H)^(1/2)`, in the first setup's unit squared.
@@ -35,14 +36,82 @@ pub struct SpectralFound {
     pub modes: Vec<OmaMode>,
     /// The quantity EFDD's bells were fitted as.
     pub quantity: QuantityChoice,
+    /// pLSCF's references among the global points (0-based; empty when it did not run).
+    pub plscf_references: Vec<usize>,
 }
 
 /// A singular value of a setup's references' matrix under this fraction of its largest is
 /// left out of the pseudo-inverse (a line where fewer modes than references move them).
 const PINV_RELATIVE: f64 = 1e-12;
 
-/// FDD and EFDD of every setup's records together, with the settings `s` (the first setup's)
-/// and `ssi` the SSI modes that support weak peaks (PreGER's, on the global points).
+/// Every setup's records (scaled), cross-spectral matrices, weights and references: what
+/// the global matrices and their replicates are made of.
+struct Setups<'a> {
+    scaled: Vec<(Vec<Vec<f64>>, f64)>,
+    csds: Vec<Csd>,
+    weights: Vec<f64>,
+    references: Vec<&'a [usize]>,
+}
+
+impl<'a> Setups<'a> {
+    fn of(setups: &[Record<'a>], s: &OmaSettings) -> anyhow::Result<Setups<'a>> {
+        let scaled = scaled_setups(setups)?;
+        let csds: Vec<Csd> = scaled
+            .iter()
+            .enumerate()
+            .map(|(i, (c, _))| {
+                csd::csd_matrix(c, s.fs_hz, s.csd)
+                    .map_err(|e| anyhow::anyhow!("setup {}: {e}", i + 1))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        let weights = scaled
+            .iter()
+            .map(|(_, scale)| (scale / scaled[0].1).powi(2))
+            .collect();
+        Ok(Setups {
+            scaled,
+            csds,
+            weights,
+            references: setups.iter().map(|r| r.references).collect(),
+        })
+    }
+
+    /// The global matrices ([`combine`]).
+    fn global(&self) -> (Csd, Csd) {
+        combine(&self.csds, &self.references, &self.weights)
+    }
+
+    /// The global matrices without group `g` of `groups` of every setup's Welch segments, and
+    /// the segments left out.
+    fn without(
+        &self,
+        g: usize,
+        groups: usize,
+        s: &OmaSettings,
+    ) -> anyhow::Result<((Csd, Csd), usize)> {
+        let mut size = 0;
+        let parts: Vec<Csd> = self
+            .scaled
+            .iter()
+            .zip(&self.csds)
+            .map(|((c, _), whole)| {
+                let range = group(g, groups, whole.segments);
+                size += range.len();
+                Ok(whole.without(&csd::of_segments(c, s.fs_hz, s.csd, range)?))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        Ok((combine(&parts, &self.references, &self.weights), size))
+    }
+
+    /// The least number of segments of a setup.
+    fn segments(&self) -> usize {
+        self.csds.iter().map(|c| c.segments).min().unwrap_or(0)
+    }
+}
+
+/// FDD, EFDD (and pLSCF with `s.plscf`) of every setup's records together, with the settings
+/// `s` (the first setup's) and `ssi` the SSI modes that support weak peaks (PreGER's, on the
+/// global points).
 pub fn identify(
     setups: &[Record<'_>],
     s: &OmaSettings,
@@ -50,23 +119,11 @@ pub fn identify(
     notes: &mut Vec<String>,
     rejected: &mut Vec<String>,
 ) -> anyhow::Result<SpectralFound> {
-    let scaled = scaled_setups(setups)?;
-    let csds: Vec<Csd> = scaled
-        .iter()
-        .enumerate()
-        .map(|(i, (c, _))| {
-            csd::csd_matrix(c, s.fs_hz, s.csd).map_err(|e| anyhow::anyhow!("setup {}: {e}", i + 1))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    let weights: Vec<f64> = scaled
-        .iter()
-        .map(|(_, scale)| (scale / scaled[0].1).powi(2))
-        .collect();
-    let references: Vec<&[usize]> = setups.iter().map(|r| r.references).collect();
-    let global = combine(&csds, &references, &weights);
+    let all = Setups::of(setups, s)?;
+    let (global, columns) = all.global();
     let mut svd = fdd::decompose(&global)?;
     // G has as many columns as references: the other singular values are rounding
-    let rank = references.first().map_or(0, |r| r.len()).max(1);
+    let rank = all.references.first().map_or(0, |r| r.len()).max(1);
     for line in &mut svd.s {
         line.truncate(rank);
     }
@@ -84,31 +141,24 @@ pub fn identify(
         ..s.clone()
     };
     let mut found = modes::fdd_modes(&svd, &peaks, s, notes);
+    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
+        all.without(g, groups, s)
+            .map(|((square, _), n)| (square, n))
+    };
+    let intervals =
+        uncertainty::of_spectral_modes((all.segments(), &replicate), s, &found, &peaks, notes)?;
+    for (m, u) in found.iter_mut().zip(intervals) {
+        m.uncertainty = u;
+    }
+    let (plscf, plscf_references) =
+        plscf_of(&all, (&columns, rank), s, (&found, ssi), (notes, rejected))?;
+    found.extend(plscf);
     for m in &mut found {
         m.evidence = format!(
             "{}; spectral PreGER over {} setups",
             m.evidence,
             setups.len()
         );
-    }
-    let segments = csds.iter().map(|c| c.segments).min().unwrap_or(0);
-    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
-        let mut size = 0;
-        let parts: Vec<Csd> = scaled
-            .iter()
-            .zip(&csds)
-            .map(|((c, _), whole)| {
-                let range = group(g, groups, whole.segments);
-                size += range.len();
-                Ok(whole.without(&csd::of_segments(c, s.fs_hz, s.csd, range)?))
-            })
-            .collect::<anyhow::Result<_>>()?;
-        Ok((combine(&parts, &references, &weights), size))
-    };
-    let intervals =
-        uncertainty::of_spectral_modes((segments, &replicate), s, &found, &peaks, notes)?;
-    for (m, u) in found.iter_mut().zip(intervals) {
-        m.uncertainty = u;
     }
     Ok(unscaled(
         SpectralFound {
@@ -117,9 +167,42 @@ pub fn identify(
             peaks,
             modes: found,
             quantity,
+            plscf_references,
         },
-        scaled[0].1.powi(2),
+        all.scaled[0].1.powi(2),
     ))
+}
+
+/// pLSCF on the global matrix's reference columns (`columns`, the first `refs` of them; at
+/// most [`plscf::MAX_REFERENCES`], those of most power), its band from the modes found by FDD,
+/// EFDD and SSI: its modes and the references used.
+fn plscf_of(
+    all: &Setups<'_>,
+    (columns, refs): (&Csd, usize),
+    s: &OmaSettings,
+    (fdd, ssi): (&[OmaMode], &[OmaMode]),
+    (notes, rejected): (&mut Vec<String>, &mut Vec<String>),
+) -> anyhow::Result<(Vec<OmaMode>, Vec<usize>)> {
+    if s.plscf.is_none() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let k = columns.k;
+    let mut power: Vec<(usize, f64)> = (0..refs.min(k))
+        .map(|i| (i, columns.g.iter().map(|m| m[i * k + i].re).sum::<f64>()))
+        .collect();
+    power.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let mut chosen: Vec<usize> = power
+        .iter()
+        .take(plscf::MAX_REFERENCES)
+        .map(|p| p.0)
+        .collect();
+    chosen.sort_unstable();
+    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
+        all.without(g, groups, s).map(|((_, cols), n)| (cols, n))
+    };
+    let others: Vec<OmaMode> = fdd.iter().chain(ssi).cloned().collect();
+    let found = plscf::plscf_of((columns, &chosen, &replicate), s, &others, notes, rejected)?;
+    Ok((found, chosen))
 }
 
 /// The spectra and amplitudes of `f` (found on records divided by a scale) times `power`, the
@@ -145,37 +228,48 @@ fn unscaled(mut f: SpectralFound, power: f64) -> SpectralFound {
     f
 }
 
-/// The global matrix of the setups' matrices `csds` (same lines), their `references` (the
+/// The global matrices of the setups' matrices `csds` (same lines), their `references` (the
 /// same points, in the same order) and `weights` (each setup's unit squared over the
-/// first's), line by line ([`global_line`]); segments the least of the setups'.
-pub fn combine(csds: &[Csd], references: &[&[usize]], weights: &[f64]) -> Csd {
+/// first's), line by line (`global_line`): `(G G^H)^(1/2)`, and `G` itself as the first `R`
+/// columns of an `N x N` matrix (the others zero: the references' columns, which pLSCF's
+/// half-spectra read); segments the least of the setups'.
+pub fn combine(csds: &[Csd], references: &[&[usize]], weights: &[f64]) -> (Csd, Csd) {
     let lines = csds.first().map_or(0, |c| c.g.len());
     let mut k = 0;
-    let g = (0..lines)
+    let (square, columns): (Vec<_>, Vec<_>) = (0..lines)
         .map(|l| {
-            let line = global_line(
+            let (g, h) = global_line(
                 csds.iter()
                     .zip(references)
                     .zip(weights)
                     .map(|((c, &r), &w)| (c.k, c.g[l].as_slice(), r, w)),
             );
-            k = line.nrows();
-            line.transpose().iter().copied().collect()
+            k = h.nrows();
+            let mut cols = vec![Complex64::new(0.0, 0.0); k * k];
+            for i in 0..g.nrows() {
+                for j in 0..g.ncols() {
+                    if let Some(c) = cols.get_mut(i * k + j) {
+                        *c = g[(i, j)];
+                    }
+                }
+            }
+            (h.transpose().iter().copied().collect(), cols)
         })
-        .collect();
-    Csd {
+        .unzip();
+    let of = |g| Csd {
         freq_hz: csds.first().map_or_else(Vec::new, |c| c.freq_hz.clone()),
         k,
         g,
         segments: csds.iter().map(|c| c.segments).min().unwrap_or(0),
-    }
+    };
+    (of(square), of(columns))
 }
 
-/// One line of the global matrix: from each setup `(channels, its matrix row-major, its
-/// references, its weight)`, `(G G^H)^(1/2)` of the `N x R` matrix `G` (the module's).
+/// One line of the global matrices: from each setup `(channels, its matrix row-major, its
+/// references, its weight)`, the `N x R` matrix `G` (the module's) and `(G G^H)^(1/2)`.
 fn global_line<'a>(
     setups: impl Iterator<Item = (usize, &'a [Complex64], &'a [usize], f64)> + Clone,
-) -> DMatrix<Complex64> {
+) -> (DMatrix<Complex64>, DMatrix<Complex64>) {
     let parts: Vec<_> = setups
         .map(|(k, m, refs, w)| {
             let s = DMatrix::from_fn(k, k, |i, j| m[i * k + j]);
@@ -206,7 +300,8 @@ fn global_line<'a>(
         g.rows_mut(row, b.nrows()).copy_from(b);
         row += b.nrows();
     }
-    square_root_of_gram(g)
+    let h = square_root_of_gram(g.clone());
+    (g, h)
 }
 
 /// `(G G^H)^(1/2)` of `g`: `U S U^H` from its thin singular value decomposition, made exactly
@@ -271,8 +366,19 @@ mod tests {
         let s1 = csd_of(spectral(&phis, &[5.0, 0.01], &[0, 1, 2]), 3);
         // setup 2's columns: point 3, reference 1, point 4, reference 0
         let s2 = csd_of(spectral(&phis, &[15.0, 0.03], &[3, 1, 4, 0]), 4);
-        let g = combine(&[s1, s2], &[&[0, 1], &[3, 1]], &[1.0, 1.0]);
-        assert_eq!(g.k, 5);
+        let (g, columns) = combine(&[s1, s2], &[&[0, 1], &[3, 1]], &[1.0, 1.0]);
+        assert_eq!((g.k, columns.k), (5, 5));
+        // G's columns are the references' (the others zero), near 10 phi phi_ref^H
+        for i in 0..5 {
+            for j in 0..5 {
+                let v = columns.g[0][i * 5 + j];
+                let want = match j < 2 {
+                    true => phi[i] * phi[j].conj() * 10.0,
+                    false => Complex64::new(0.0, 0.0),
+                };
+                assert!((v - want).norm() < 0.05, "{i} {j}: {v} {want}");
+            }
+        }
         let svd = fdd::decompose(&g).unwrap();
         let u = &svd.u1[0];
         assert!(crate::modal::mac(u, &phi) > 0.9999, "{u:?}");
@@ -287,12 +393,15 @@ mod tests {
         );
     }
 
-    /// EFDD's modes of the pair of [`crate::oma::test_records::two_setups`] (seeds `seeds`)
-    /// by the spectral PreGER, and PoSER's of the same records.
-    fn efdd_of_pair(seeds: (u64, u64)) -> (Vec<OmaMode>, Vec<OmaMode>) {
-        let s = OmaSettings::new(50.0, 30_000, None);
+    /// The modes of `method` of the pair of [`crate::oma::test_records::two_setups`] (seeds
+    /// `seeds`) by the spectral PreGER, and PoSER's of the same records (settings `s`).
+    fn of_pair(
+        seeds: (u64, u64),
+        s: &OmaSettings,
+        method: super::super::Method,
+    ) -> (Vec<OmaMode>, Vec<OmaMode>) {
         let [one, two] = crate::oma::test_records::two_setups(seeds);
-        let (ssi, merged) = crate::oma::preger::tests::both([&one, &two], &s, &mut Vec::new());
+        let (ssi, merged) = crate::oma::preger::tests::both([&one, &two], s, &mut Vec::new());
         let records = [
             Record {
                 channels: &one,
@@ -303,14 +412,47 @@ mod tests {
                 references: &[3, 1],
             },
         ];
-        let found = identify(&records, &s, &ssi.modes, &mut Vec::new(), &mut Vec::new()).unwrap();
-        let efdd = |m: &[OmaMode]| -> Vec<OmaMode> {
-            m.iter()
-                .filter(|m| m.method == super::super::Method::Efdd)
-                .cloned()
-                .collect()
+        let found = identify(&records, s, &ssi.modes, &mut Vec::new(), &mut Vec::new()).unwrap();
+        let of = |m: &[OmaMode]| -> Vec<OmaMode> {
+            m.iter().filter(|m| m.method == method).cloned().collect()
         };
-        (efdd(&found.modes), efdd(&merged.modes))
+        (of(&found.modes), of(&merged.modes))
+    }
+
+    /// EFDD's modes of a pair of setups ([`of_pair`]) with the default settings.
+    fn efdd_of_pair(seeds: (u64, u64)) -> (Vec<OmaMode>, Vec<OmaMode>) {
+        let s = OmaSettings::new(50.0, 30_000, None);
+        of_pair(seeds, &s, super::super::Method::Efdd)
+    }
+
+    /// pLSCF on the global matrix's reference columns (the poly-reference model of the two
+    /// references): both modes at their frequencies with intervals holding them, the shapes
+    /// over all six points (MAC > 0.995), PoSER's pLSCF of the same records agreeing.
+    #[test]
+    fn two_setups_give_plscf_modes_with_global_shapes() {
+        let mut s = OmaSettings::new(50.0, 30_000, None);
+        s.plscf = Some(crate::oma::lscf::LscfRule {
+            max_order: 20,
+            ..Default::default()
+        });
+        let (found, poser) = of_pair((100, 200), &s, super::super::Method::Plscf);
+        let truth = crate::oma::test_records::SIX_POINTS;
+        assert_eq!(found.len(), truth.len(), "{found:?}");
+        for ((f, z, shape), m) in truth.iter().zip(&found) {
+            let want: Vec<Complex64> = shape.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+            assert!((m.f_hz - f).abs() < 0.005 * f, "{m:?}");
+            assert!((m.damping.unwrap() - z).abs() < 0.3 * z, "{m:?}");
+            let c = crate::modal::mac(&m.shape, &want);
+            assert!(c > 0.995, "{f} Hz: MAC {c} {:?}", m.shape);
+            let i = m.uncertainty.f_hz.expect("an interval");
+            assert!(i.lo <= *f && *f <= i.hi, "{f} Hz: {i:?}");
+            assert!(m.evidence.contains("references 1, 2"), "{}", m.evidence);
+            let p = poser
+                .iter()
+                .find(|p| (p.f_hz - f).abs() < 0.01 * f)
+                .unwrap();
+            assert!(crate::modal::mac(&p.shape, &m.shape) > 0.99, "{p:?} {m:?}");
+        }
     }
 
     /// Six points, two modes, two setups (setup 2's records 2.5 times larger, its references
@@ -416,9 +558,13 @@ mod tests {
                 *v += 0.01;
             }
         }
-        let one = combine(&[csd_of(with_noise.clone(), 3)], &[&[0, 1, 2]], &[1.0]);
+        let (one, columns) = combine(&[csd_of(with_noise.clone(), 3)], &[&[0, 1, 2]], &[1.0]);
         for (a, b) in one.g[0].iter().zip(&with_noise) {
             assert!((a - b).norm() < 1e-9, "{a} {b}");
+        }
+        // and G itself is the matrix: every column a reference's
+        for (a, b) in columns.g[0].iter().zip(&with_noise) {
+            assert!((a - b).norm() < 1e-12, "{a} {b}");
         }
     }
 }

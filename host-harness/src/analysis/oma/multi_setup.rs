@@ -1,6 +1,6 @@
 //! `modal` over several setups (docs/method.md §3.12, "Several setups"): each setup's records
-//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's, FDD's and
-//! EFDD's modes from every setup's records together by PreGER
+//! analysed alone, merged by PoSER ([`vibcam_identify::oma::setups`]), or SSI's, FDD's,
+//! EFDD's and pLSCF's modes from every setup's records together by PreGER
 //! ([`vibcam_identify::oma::preger`], [`vibcam_identify::oma::preger_spectral`]) and the
 //! other methods' by PoSER; one result whose targets are the global points (the references
 //! first, then each setup's others) and the rows of `setups.csv` (each setup's part in each
@@ -20,7 +20,7 @@ use vibcam_identify::oma::setups::{layout, poser, Setup};
 pub enum Merge {
     /// Every method's modes by PoSER.
     Poser,
-    /// SSI's, FDD's and EFDD's by PreGER, the others' by PoSER.
+    /// SSI's, FDD's, EFDD's and pLSCF's by PreGER, the free decays' by PoSER.
     Preger,
 }
 
@@ -130,14 +130,16 @@ pub fn compute(setups: &[SetupRecords], merge: Merge) -> anyhow::Result<Merged> 
 }
 
 /// Whether `$merge preger` identifies the method's modes on every setup's records together
-/// (SSI by PreGER, FDD and EFDD by the spectral PreGER); the others are merged by PoSER.
+/// (SSI by PreGER, FDD, EFDD and pLSCF by the spectral PreGER); the others (the free decays')
+/// are merged by PoSER.
 fn together_by_preger(m: Method) -> bool {
-    matches!(m, Method::Ssi | Method::Fdd | Method::Efdd)
+    matches!(m, Method::Ssi | Method::Fdd | Method::Efdd | Method::Plscf)
 }
 
-/// SSI's, FDD's and EFDD's modes of every setup's records together (PreGER, with setup 1's
-/// settings and PreGER's block rows; the spectral PreGER) in `result`, with the SSI poles and
-/// clusters and the global spectra; their notes and rejected peaks and clusters added.
+/// SSI's, FDD's, EFDD's and pLSCF's modes of every setup's records together (PreGER, with
+/// setup 1's settings and PreGER's block rows; the spectral PreGER) in `result`, with the SSI
+/// poles and clusters and the global spectra; their notes and rejected peaks and clusters
+/// added.
 fn together(setups: &[SetupRecords], result: &mut OmaResult) -> anyhow::Result<()> {
     let records: Vec<Record<'_>> = setups
         .iter()
@@ -170,6 +172,7 @@ fn together(setups: &[SetupRecords], result: &mut OmaResult) -> anyhow::Result<(
     result.svd = spectral.svd;
     result.peaks = spectral.peaks.iter().map(|p| p.line).collect();
     result.quantity = spectral.quantity;
+    result.plscf_references = spectral.plscf_references;
     result
         .modes
         .sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
@@ -197,10 +200,10 @@ fn setups_text(
         Merge::Preger => format!(
             "{} setups: SSI's modes by PreGER (one model of every setup's records: each setup's \
              observability matrix mapped onto setup 1's at the references; the stabilisation \
-             diagram is this model's); FDD's and EFDD's by the spectral PreGER (one global \
-             cross-spectral matrix: each setup's spectra at its other points carried onto \
-             the references' mean spectrum by its transmissibility to them; the singular \
-             values plotted are this matrix's); the other methods' merged by PoSER ({poser}); \
+             diagram is this model's); FDD's, EFDD's and pLSCF's by the spectral PreGER (one \
+             global cross-spectral matrix: each setup's spectra at its other points carried \
+             onto the references' mean spectrum by its transmissibility to them; the singular \
+             values plotted are this matrix's); the free decays' merged by PoSER ({poser}); \
              the other figures are setup 1's\n",
             setups.len()
         ),

@@ -591,7 +591,7 @@ fn plscf_text(o: &mut String, r: &OmaResult, s: &OmaSettings) {
         .collect();
     let band = super::plscf::band(s, &others);
     let (rule, _) = super::plscf::fitted_rule(rule, &r.csd, band);
-    let refs = super::plscf::references(&r.csd);
+    let refs = &r.plscf_references;
     let orders = crate::analysis::ema::lscf::orders(rule, refs.len());
     let _ = writeln!(
         o,
