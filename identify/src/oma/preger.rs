@@ -168,6 +168,15 @@ fn poles(
     Ok(ssi::poles_of_orders(points(setups), n, s.fs_hz, s.ssi, o_of)?.0)
 }
 
+/// `e` with setup `i` (0-based) named, still the user's to fix when it was.
+pub(super) fn in_setup(i: usize, e: anyhow::Error) -> anyhow::Error {
+    let msg = format!("setup {}: {e}", i + 1);
+    match e.chain().any(|c| c.is::<vibcam_readers::BadInput>()) {
+        true => vibcam_readers::bad_input(msg),
+        false => anyhow::anyhow!(msg),
+    }
+}
+
 /// Each setup's records divided by its own power of two ([`super::record_scale`]), with it.
 pub(super) fn scaled_setups(setups: &[Record<'_>]) -> anyhow::Result<Vec<(Vec<Vec<f64>>, f64)>> {
     if setups.is_empty() {
@@ -177,8 +186,7 @@ pub(super) fn scaled_setups(setups: &[Record<'_>]) -> anyhow::Result<Vec<(Vec<Ve
         .iter()
         .enumerate()
         .map(|(i, r)| {
-            let scale = super::record_scale(r.channels)
-                .map_err(|e| anyhow::anyhow!("setup {}: {e}", i + 1))?;
+            let scale = super::record_scale(r.channels).map_err(|e| in_setup(i, e))?;
             let c = r
                 .channels
                 .iter()
@@ -337,6 +345,26 @@ pub(crate) mod tests {
             assert!(mac(&p.shape, &m.shape) > 0.99, "{p:?} {m:?}");
             assert!((p.f_hz - m.f_hz).abs() < 0.005 * f, "{p:?} {m:?}");
         }
+    }
+
+    /// A setup's record the user must fix is named and stays the user's to fix (exit 2); an
+    /// internal error stays internal.
+    #[test]
+    fn a_setups_errors_name_it_and_keep_their_class() {
+        let flat = vec![vec![0.0; 100]; 2];
+        let records = [Record {
+            channels: &flat,
+            references: &[0],
+        }];
+        let e = scaled_setups(&records).unwrap_err();
+        assert!(
+            e.to_string().starts_with("setup 1: the records' RMS"),
+            "{e}"
+        );
+        assert!(e.chain().any(|c| c.is::<vibcam_readers::BadInput>()));
+        let e = in_setup(2, anyhow::anyhow!("internal"));
+        assert_eq!(e.to_string(), "setup 3: internal");
+        assert!(!e.chain().any(|c| c.is::<vibcam_readers::BadInput>()));
     }
 
     /// One setup alone: PreGER is SSI of that setup (the same poles, order for order, up to

@@ -1,5 +1,6 @@
-//! FDD and EFDD of several setups identified together by the spectral PreGER (as pyOMA-2's
-//! `SD_PreGER` under `FDD_MS` and `EFDD_MS`; docs/method.md §3.12, "Several setups"): per
+//! FDD, EFDD and pLSCF of several setups identified together by the spectral PreGER (as
+//! pyOMA-2's `SD_PreGER` under `FDD_MS`, `EFDD_MS` and `pLSCF_MS`; docs/method.md §3.12,
+//! "Several setups"): per
 //! line, each setup's cross-spectral matrix `S_s` (its own records) is split at its references
 //! into `B_s = S_s[ref, ref]` and `A_s = S_s[other, ref]`; the references' mean spectrum
 //! `Bbar` (the setups' `B_s` averaged) is the first block of the global matrix and each
@@ -8,14 +9,15 @@
 //! points (the numbering of [`super::setups::layout`]) against the `R` references. FDD takes
 //! `G`'s singular values and left singular vectors; here `G` is made the `N x N` Hermitian
 //! matrix `(G G^H)^(1/2) = U S U^H` (the same singular values and vectors), so that the peaks,
-//! bells, EFDD fits and intervals are FDD's and EFDD's unchanged. The intervals are the
-//! jackknife's with the same group of Welch segments left out of every setup.
+//! bells, EFDD fits and intervals are FDD's and EFDD's unchanged; pLSCF fits the half-spectra
+//! of `G`'s columns, the references'. The intervals are the jackknife's with the same group of
+//! Welch segments left out of every setup.
 
 use super::csd::{self, Csd};
 use super::fdd::{self, Svd};
 use super::modes::{self, Peak, QuantityChoice};
 use super::plscf;
-use super::preger::{scaled_setups, Record};
+use super::preger::{in_setup, scaled_setups, Record};
 use super::uncertainty::{self, group};
 use super::{EfddRule, OmaMode, OmaSettings};
 use nalgebra::DMatrix;
@@ -32,7 +34,7 @@ pub struct SpectralFound {
     pub svd: Svd,
     /// The peaks taken.
     pub peaks: Vec<Peak>,
-    /// The FDD and EFDD modes.
+    /// The FDD, EFDD and pLSCF modes.
     pub modes: Vec<OmaMode>,
     /// The quantity EFDD's bells were fitted as.
     pub quantity: QuantityChoice,
@@ -59,10 +61,7 @@ impl<'a> Setups<'a> {
         let csds: Vec<Csd> = scaled
             .iter()
             .enumerate()
-            .map(|(i, (c, _))| {
-                csd::csd_matrix(c, s.fs_hz, s.csd)
-                    .map_err(|e| anyhow::anyhow!("setup {}: {e}", i + 1))
-            })
+            .map(|(i, (c, _))| csd::csd_matrix(c, s.fs_hz, s.csd).map_err(|e| in_setup(i, e)))
             .collect::<anyhow::Result<_>>()?;
         let weights = scaled
             .iter()
