@@ -43,7 +43,10 @@ impl Moments {
                     let (r1, r2) = (row(j, oy), row(j, oy2));
                     for (ox, cx) in c.iter_mut().enumerate() {
                         let a = r1.get(ox..ox + tw).unwrap_or(&[]);
-                        for (ox2, cxy) in cx.iter_mut().enumerate() {
+                        // on one row of lags the products are symmetric: the upper half
+                        // only (the same products in the same order), mirrored below
+                        let from = if oy2 == oy { ox } else { 0 };
+                        for (ox2, cxy) in cx.iter_mut().enumerate().skip(from) {
                             let b = r2.get(ox2..ox2 + tw).unwrap_or(&[]);
                             let mut d = 0.0f32;
                             for (u, v) in a.iter().zip(b) {
@@ -53,6 +56,14 @@ impl Moments {
                         }
                         if oy2 == oy {
                             s[ox] += a.iter().sum::<f32>();
+                        }
+                    }
+                }
+                if oy2 == oy {
+                    let upper = c;
+                    for (ox, cx) in c.iter_mut().enumerate() {
+                        for (ox2, v) in cx.iter_mut().enumerate().take(ox) {
+                            *v = upper[ox2][ox];
                         }
                     }
                 }
