@@ -891,7 +891,9 @@ def modal(
     half-spectra too; ``ssi``: ``"cov"`` or ``"dat"``, with ``ssi_block_rows`` and
     ``ssi_max_order``. Several setups of one structure: ``references`` the targets of
     ``displacement`` every setup shares, ``setups`` the others as ``[(file, [targets in
-    references' order]), ...]``, ``merge`` ``"poser"`` or ``"preger"``. ``poles``: a CSV with
+    references' order]), ...]``, ``merge`` ``"poser"`` (each setup alone, merged) or
+    ``"preger"`` (SSI, FDD, EFDD and pLSCF of every setup together; docs/method.md §3.12,
+    "Several setups"). ``poles``: a CSV with
     ``f_hz`` and ``damping`` (poles picked on the page's stabilisation diagram, or an earlier
     ``modes.csv``): SSI's modes exactly these, each one's shape the diagram's stable pole
     nearest it. ``out``: also write the command's files there (``force`` replaces an earlier
