@@ -327,31 +327,42 @@ pub fn analyze(channels: &[Vec<f64>], s: &OmaSettings) -> anyhow::Result<OmaResu
     if channels.len() > many::MAX_FULL_CHANNELS {
         return many::analyze(channels, s);
     }
-    let scale = record_scale(channels)?;
-    let scaled: Vec<Vec<f64>> = channels
-        .iter()
-        .map(|c| c.iter().map(|v| v / scale).collect())
-        .collect();
+    let (scaled, scale) = scaled_record(channels)?;
     // found on the records as given (the decays' amplitudes in their unit; the rule is one
     // of ratios)
     let decays = decay::find_decays(channels);
     let mut r = analyze_scaled(&scaled, &decays, s)?;
-    let power = scale * scale;
-    for line in &mut r.csd.g {
+    scale_back((&mut r.csd, &mut r.svd, &mut r.modes), scale * scale);
+    Ok(r)
+}
+
+/// `channels` divided by their power of two ([`record_scale`]), and that scale.
+pub(crate) fn scaled_record(channels: &[Vec<f64>]) -> anyhow::Result<(Vec<Vec<f64>>, f64)> {
+    let scale = record_scale(channels)?;
+    let scaled = channels
+        .iter()
+        .map(|c| c.iter().map(|v| v / scale).collect())
+        .collect();
+    Ok((scaled, scale))
+}
+
+/// The spectra, singular values and amplitudes found on scaled records ([`scaled_record`])
+/// back in the records' unit: times `power`, the scale squared.
+pub(crate) fn scale_back((csd, svd, modes): (&mut Csd, &mut fdd::Svd, &mut [OmaMode]), power: f64) {
+    for line in &mut csd.g {
         for v in line.iter_mut() {
             *v *= power;
         }
     }
-    for line in &mut r.svd.s {
+    for line in &mut svd.s {
         for v in line.iter_mut() {
             *v *= power;
         }
     }
-    for m in &mut r.modes {
+    for m in modes {
         m.amplitude = m.amplitude.map(|a| a * power);
         m.uncertainty.amplitude = m.uncertainty.amplitude.map(|i| i.scaled(power));
     }
-    Ok(r)
 }
 
 /// [`analyze`] of records of RMS near 1: SSI-cov first (its modes support the peaks that
@@ -399,13 +410,10 @@ fn analyze_scaled(
     }
     // the decays' and pLSCF's own intervals (the jackknife over the decays, over segments)
     found.extend(decay_modes);
-    let plscf = plscf::plscf_modes((channels, &csd), s, &found, &mut notes, &mut rejected)?;
+    let (plscf, plscf_references) =
+        plscf::plscf_modes((channels, &csd), s, &found, &mut notes, &mut rejected)?;
     found.extend(plscf);
     found.sort_by(|a, b| a.method.cmp(&b.method).then(a.f_hz.total_cmp(&b.f_hz)));
-    let plscf_references = match s.plscf {
-        Some(_) => plscf::references(&csd),
-        None => Vec::new(),
-    };
     notes.extend(harmonic_notes(&found, csd.df_hz(), s.source));
     notes.extend(common_motion_notes(&found, &svd, s));
     Ok(OmaResult {

@@ -56,8 +56,13 @@ pub struct HalfSpectra {
 /// The reference channels of `csd`: every channel up to [`MAX_REFERENCES`], else those of
 /// most power, in channel order.
 pub fn references(csd: &Csd) -> Vec<usize> {
+    references_among(csd, csd.k)
+}
+
+/// The reference channels among the first `n` of `csd`, as [`references`] chooses them.
+pub fn references_among(csd: &Csd, n: usize) -> Vec<usize> {
     let k = csd.k;
-    let mut power: Vec<(usize, f64)> = (0..k)
+    let mut power: Vec<(usize, f64)> = (0..n.min(k))
         .map(|i| (i, csd.g.iter().map(|m| m[i * k + i].re).sum::<f64>()))
         .collect();
     power.sort_by(|a, b| b.1.total_cmp(&a.1));
@@ -158,22 +163,21 @@ pub fn fitted_rule(rule: LscfRule, csd: &Csd, band: (f64, f64)) -> (LscfRule, us
 /// The pLSCF modes of `channels` (their matrix `csd`) for `s` (its `plscf` rule; none without it)
 /// over [`band`] (of the modes `found` by the other methods), on the half-spectra of
 /// [`references`]: as [`plscf_of`], the replicates each without a group of the record's Welch
-/// segments.
+/// segments; and the references (none without the rule).
 pub fn plscf_modes(
     (channels, csd): (&[Vec<f64>], &Csd),
     s: &super::OmaSettings,
     found: &[super::OmaMode],
     notes: &mut Vec<String>,
     rejected: &mut Vec<String>,
-) -> anyhow::Result<Vec<super::OmaMode>> {
-    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
-        let range = uncertainty::group(g, groups, csd.segments);
-        let n = range.len();
-        let part = super::csd::of_segments(channels, s.fs_hz, s.csd, range)?;
-        Ok((csd.without(&part), n))
-    };
+) -> anyhow::Result<(Vec<super::OmaMode>, Vec<usize>)> {
+    if s.plscf.is_none() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let replicate = uncertainty::of_record(channels, csd, s);
     let refs = references(csd);
-    plscf_of((csd, &refs, &replicate), s, found, notes, rejected)
+    let modes = plscf_of((csd, &refs, &replicate), s, found, notes, rejected)?;
+    Ok((modes, refs))
 }
 
 /// The pLSCF modes of the cross-spectral matrix `csd` on the half-spectra of its columns

@@ -177,7 +177,7 @@ pub(super) fn in_setup(i: usize, e: anyhow::Error) -> anyhow::Error {
     }
 }
 
-/// Each setup's records divided by its own power of two ([`super::record_scale`]), with it.
+/// Each setup's records divided by its own power of two ([`super::scaled_record`]), with it.
 pub(super) fn scaled_setups(setups: &[Record<'_>]) -> anyhow::Result<Vec<(Vec<Vec<f64>>, f64)>> {
     if setups.is_empty() {
         return Err(vibcam_readers::bad_input("PreGER: no setup to analyse"));
@@ -185,15 +185,7 @@ pub(super) fn scaled_setups(setups: &[Record<'_>]) -> anyhow::Result<Vec<(Vec<Ve
     setups
         .iter()
         .enumerate()
-        .map(|(i, r)| {
-            let scale = super::record_scale(r.channels).map_err(|e| in_setup(i, e))?;
-            let c = r
-                .channels
-                .iter()
-                .map(|c| c.iter().map(|v| v / scale).collect())
-                .collect();
-            Ok((c, scale))
-        })
+        .map(|(i, r)| super::scaled_record(r.channels).map_err(|e| in_setup(i, e)))
         .collect()
 }
 

@@ -185,17 +185,7 @@ fn plscf_of(
     if s.plscf.is_none() {
         return Ok((Vec::new(), Vec::new()));
     }
-    let k = columns.k;
-    let mut power: Vec<(usize, f64)> = (0..refs.min(k))
-        .map(|i| (i, columns.g.iter().map(|m| m[i * k + i].re).sum::<f64>()))
-        .collect();
-    power.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let mut chosen: Vec<usize> = power
-        .iter()
-        .take(plscf::MAX_REFERENCES)
-        .map(|p| p.0)
-        .collect();
-    chosen.sort_unstable();
+    let chosen = plscf::references_among(columns, refs);
     let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
         all.without(g, groups, s).map(|((_, cols), n)| (cols, n))
     };
@@ -204,25 +194,12 @@ fn plscf_of(
     Ok((found, chosen))
 }
 
-/// The spectra and amplitudes of `f` (found on records divided by a scale) times `power`, the
-/// scale squared.
+/// `f` (found on records divided by a scale) back in the first setup's unit: times `power`,
+/// the scale squared ([`super::scale_back`], and the peaks' values).
 fn unscaled(mut f: SpectralFound, power: f64) -> SpectralFound {
-    for line in &mut f.csd.g {
-        for v in line.iter_mut() {
-            *v *= power;
-        }
-    }
-    for line in &mut f.svd.s {
-        for v in line.iter_mut() {
-            *v *= power;
-        }
-    }
+    super::scale_back((&mut f.csd, &mut f.svd, &mut f.modes), power);
     for p in &mut f.peaks {
         p.value *= power;
-    }
-    for m in &mut f.modes {
-        m.amplitude = m.amplitude.map(|a| a * power);
-        m.uncertainty.amplitude = m.uncertainty.amplitude.map(|i| i.scaled(power));
     }
     f
 }
@@ -244,15 +221,14 @@ pub fn combine(csds: &[Csd], references: &[&[usize]], weights: &[f64]) -> (Csd, 
                     .map(|((c, &r), &w)| (c.k, c.g[l].as_slice(), r, w)),
             );
             k = h.nrows();
-            let mut cols = vec![Complex64::new(0.0, 0.0); k * k];
-            for i in 0..g.nrows() {
-                for j in 0..g.ncols() {
-                    if let Some(c) = cols.get_mut(i * k + j) {
-                        *c = g[(i, j)];
-                    }
-                }
-            }
-            (h.transpose().iter().copied().collect(), cols)
+            // row-major: the transposes' column-major storage
+            let cols = g
+                .resize_horizontally(k, Complex64::new(0.0, 0.0))
+                .transpose();
+            (
+                h.transpose().iter().copied().collect(),
+                cols.iter().copied().collect(),
+            )
         })
         .unzip();
     let of = |g| Csd {

@@ -263,12 +263,7 @@ pub fn of_modes(
     if groups < 3 {
         return Ok(vec![Uncertainty::default(); modes.len()]);
     }
-    let replicate = |g: usize, groups: usize| -> anyhow::Result<(Csd, usize)> {
-        let range = group(g, groups, whole.segments);
-        let n = range.len();
-        let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
-        Ok((whole.without(&part), n))
-    };
+    let replicate = of_record(channels, whole, s);
     let starts = efdd_starts(modes, peaks);
     let spectral = spectral_replicates((whole.segments, &replicate), s, (peaks, &starts), groups)?;
     let ssi = ssi_replicates(channels, s, (modes, lone), groups, notes)?;
@@ -283,6 +278,21 @@ pub fn of_modes(
 /// A replicate of a cross-spectral matrix: the matrix without group `g` of `groups` of its
 /// segments, and the segments left out.
 pub type ReplicateOf<'a> = dyn Fn(usize, usize) -> anyhow::Result<(Csd, usize)> + 'a;
+
+/// The replicates ([`ReplicateOf`]) of one record's matrix `whole` of `channels` (settings
+/// `s`): the segments of the group left out transformed again and taken off `whole`.
+pub fn of_record<'a>(
+    channels: &'a [Vec<f64>],
+    whole: &'a Csd,
+    s: &'a OmaSettings,
+) -> impl Fn(usize, usize) -> anyhow::Result<(Csd, usize)> + 'a {
+    move |g, groups| {
+        let range = group(g, groups, whole.segments);
+        let n = range.len();
+        let part = csd::of_segments(channels, s.fs_hz, s.csd, range)?;
+        Ok((whole.without(&part), n))
+    }
+}
 
 /// The intervals of FDD and EFDD modes found on a cross-spectral matrix that is not one
 /// record's ([`super::preger_spectral`]): `segments` its least number of
